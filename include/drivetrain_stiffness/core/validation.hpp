@@ -1,0 +1,37 @@
+// Input validation shared by every core class: each check throws InvalidInput with a message
+// that names the field and the offending value, so a bad YAML key or a bad topic value is
+// reported precisely instead of surfacing later as a NaN.
+#pragma once
+
+#include <stdexcept>
+#include <string>
+
+namespace drivetrain_stiffness {
+
+/// Thrown for any input that is not physically or geometrically admissible.
+class InvalidInput : public std::invalid_argument {
+ public:
+  using std::invalid_argument::invalid_argument;
+};
+
+/// Thrown when a well-formed input has no admissible solution (e.g. a load the bearing cannot carry).
+class UnreachableLoad : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+/// Formats a double with enough digits to reproduce it (used in every error message).
+std::string formatValue(double value);
+
+/// Throws InvalidInput("<field> = <value>: <why>").
+[[noreturn]] void throwInvalid(const std::string& field, double value, const std::string& why);
+
+void requireFinite(const std::string& field, double value);
+void requirePositive(const std::string& field, double value);
+void requireNonNegative(const std::string& field, double value);
+/// lower < value < upper (open interval).
+void requireInOpenRange(const std::string& field, double value, double lower, double upper);
+/// lower <= value < upper.
+void requireInHalfOpenRange(const std::string& field, double value, double lower, double upper);
+
+}  // namespace drivetrain_stiffness

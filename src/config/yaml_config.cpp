@@ -1,0 +1,198 @@
+#include "drivetrain_stiffness/config/yaml_config.hpp"
+
+#include <cmath>
+#include <set>
+
+#include "drivetrain_stiffness/core/validation.hpp"
+
+namespace drivetrain_stiffness {
+namespace {
+constexpr double kDegToRad = M_PI / 180.0;
+
+const std::set<std::string> kBearingKeys = {
+    "type", "balls", "ball_diameter", "pitch_diameter", "inner_groove_conformity",
+    "outer_groove_conformity", "diametral_clearance", "contact_angle_deg", "youngs_modulus",
+    "poisson_ratio", "width", "ellipticity", "max_contact_pressure", "bore_diameter",
+    "outside_diameter", "inner_raceway_diameter", "outer_raceway_diameter", "shaft_bore_diameter",
+    "housing_outside_diameter", "shaft_youngs_modulus", "shaft_poisson_ratio",
+    "housing_youngs_modulus", "housing_poisson_ratio", "inner_interference", "outer_interference",
+    "arrangement", "tilt", "axial_preload", "radial_preload"};
+const std::set<std::string> kRigBearingKeys = {"name", "shaft", "mesh_load_share", "file"};
+
+std::string key(const std::string& where, const std::string& name) { return where + "." + name; }
+
+void rejectUnknownKeys(const YAML::Node& node, const std::string& where,
+                       const std::set<std::string>& a, const std::set<std::string>& b = {}) {
+  for (const auto& item : node) {
+    const std::string name = item.first.as<std::string>();
+    if (!a.count(name) && !b.count(name)) throw InvalidInput(key(where, name) + ": unknown key");
+  }
+}
+
+double readDouble(const YAML::Node& node, const std::string& where, const std::string& name) {
+  const YAML::Node value = node[name];
+  if (!value) throw InvalidInput(key(where, name) + ": required key is missing");
+  try {
+    return value.as<double>();
+  } catch (const YAML::Exception&) {
+    throw InvalidInput(key(where, name) + " = '" + YAML::Dump(value) + "': not a number");
+  }
+}
+
+double readDouble(const YAML::Node& node, const std::string& where, const std::string& name, double fallback) {
+  return node[name] ? readDouble(node, where, name) : fallback;
+}
+
+int readInt(const YAML::Node& node, const std::string& where, const std::string& name) {
+  const double v = readDouble(node, where, name);
+  if (!std::isfinite(v) || v != std::floor(v) || std::abs(v) > 1e6) throwInvalid(key(where, name), v, "must be an integer");
+  return static_cast<int>(v);
+}
+
+std::string readString(const YAML::Node& node, const std::string& where, const std::string& name,
+                       const std::string& fallback) {
+  if (!node[name]) return fallback;
+  try {
+    return node[name].as<std::string>();
+  } catch (const YAML::Exception&) {
+    throw InvalidInput(key(where, name) + ": must be a string");
+  }
+}
+
+// Prefixes the field named in a core InvalidInput message with the YAML location.
+template <typename F>
+auto withContext(const std::string& where, F&& f) -> decltype(f()) {
+  try {
+    return f();
+  } catch (const InvalidInput& e) {
+    throw InvalidInput(where + ": " + e.what());
+  }
+}
+
+YAML::Node loadFile(const std::string& path) {
+  try {
+    return YAML::LoadFile(path);
+  } catch (const YAML::BadFile&) {
+    throw InvalidInput(path + ": cannot open file");
+  } catch (const YAML::Exception& e) {
+    throw InvalidInput(path + ": YAML syntax error at line " + std::to_string(e.mark.line + 1) + ": " + e.msg);
+  }
+}
+
+std::string directoryOf(const std::string& path) {
+  const auto slash = path.find_last_of('/');
+  return slash == std::string::npos ? "." : path.substr(0, slash);
+}
+
+}  // namespace
+
+BearingSupportConfig parseBearing(const YAML::Node& node, const std::string& where) {
+  if (!node || !node.IsMap()) throw InvalidInput(where + ": must be a mapping of bearing keys");
+  rejectUnknownKeys(node, where, kBearingKeys, kRigBearingKeys);
+  BearingSupportConfig cfg;
+  BallBearingSpec& s = cfg.spec;
+  s.type = parseBearingType(key(where, "type"), readString(node, where, "type", "angular_contact"));
+  s.balls = readInt(node, where, "balls");
+  s.ball_diameter = readDouble(node, where, "ball_diameter");
+  s.pitch_diameter = readDouble(node, where, "pitch_diameter");
+  s.inner_groove_conformity = readDouble(node, where, "inner_groove_conformity");
+  s.outer_groove_conformity = readDouble(node, where, "outer_groove_conformity");
+  if (node["diametral_clearance"] && node["contact_angle_deg"]) {
+    throw InvalidInput(where + ": give diametral_clearance or contact_angle_deg, not both");
+  }
+  if (node["diametral_clearance"]) s.diametral_clearance = readDouble(node, where, "diametral_clearance");
+  else if (node["contact_angle_deg"]) s.contact_angle = readDouble(node, where, "contact_angle_deg") * kDegToRad;
+  else throw InvalidInput(where + ": one of diametral_clearance or contact_angle_deg is required");
+  s.width = readDouble(node, where, "width", 0.0);
+  s.material.youngs_modulus = readDouble(node, where, "youngs_modulus");
+  s.material.poisson_ratio = readDouble(node, where, "poisson_ratio");
+  s.ellipticity = parseEllipticityMethod(key(where, "ellipticity"), readString(node, where, "ellipticity", "exact"));
+  s.max_contact_pressure = readDouble(node, where, "max_contact_pressure", s.max_contact_pressure);
+
+  if (node["bore_diameter"] || node["outside_diameter"]) {
+    FitGeometry g;
+    g.bore_diameter = readDouble(node, where, "bore_diameter");
+    g.outside_diameter = readDouble(node, where, "outside_diameter");
+    // Groove-bottom diameters default to d_m -/+ D (zero-clearance groove bottoms).
+    g.inner_raceway_diameter = readDouble(node, where, "inner_raceway_diameter", s.pitch_diameter - s.ball_diameter);
+    g.outer_raceway_diameter = readDouble(node, where, "outer_raceway_diameter", s.pitch_diameter + s.ball_diameter);
+    g.shaft_bore_diameter = readDouble(node, where, "shaft_bore_diameter", 0.0);
+    g.housing_outside_diameter = readDouble(node, where, "housing_outside_diameter", INFINITY);
+    g.shaft = {readDouble(node, where, "shaft_youngs_modulus", s.material.youngs_modulus),
+               readDouble(node, where, "shaft_poisson_ratio", s.material.poisson_ratio)};
+    g.housing = {readDouble(node, where, "housing_youngs_modulus", s.material.youngs_modulus),
+                 readDouble(node, where, "housing_poisson_ratio", s.material.poisson_ratio)};
+    s.fit = g;
+  }
+  cfg.arrangement = parseArrangement(key(where, "arrangement"), readString(node, where, "arrangement", "single"));
+  cfg.tilt = parseTiltCondition(key(where, "tilt"), readString(node, where, "tilt", "constrained"));
+  cfg.axial_preload = readDouble(node, where, "axial_preload", 0.0);
+  cfg.radial_preload = readDouble(node, where, "radial_preload", 0.0);
+  cfg.interference.inner = readDouble(node, where, "inner_interference", 0.0);
+  cfg.interference.outer = readDouble(node, where, "outer_interference", 0.0);
+  requireNonNegative(key(where, "radial_preload"), cfg.radial_preload);
+  // Build once so that every geometric and preload check runs at load time.
+  withContext(where, [&] { return BearingSupport(cfg.spec, cfg.arrangement, cfg.axial_preload, cfg.interference, cfg.tilt); });
+  return cfg;
+}
+
+BearingSupportConfig loadBearingFile(const std::string& path) {
+  const YAML::Node root = loadFile(path);
+  if (!root.IsMap() || !root["bearing"]) throw InvalidInput(path + ": needs a top-level 'bearing:' block");
+  BearingSupportConfig cfg = parseBearing(root["bearing"], path + ": bearing");
+  cfg.name = readString(root["bearing"], "bearing", "name", "bearing");
+  return cfg;
+}
+
+RigConfig loadRigFile(const std::string& path) {
+  const YAML::Node root = loadFile(path);
+  const std::string where = path;
+  if (!root.IsMap() || !root["gears"] || !root["bearings"]) {
+    throw InvalidInput(path + ": needs top-level 'gears:' and 'bearings:' blocks");
+  }
+  RigConfig rig;
+  const YAML::Node gears = root["gears"];
+  rig.gears.module = readDouble(gears, where + ": gears", "module");
+  rig.gears.pressure_angle = readDouble(gears, where + ": gears", "pressure_angle_deg") * kDegToRad;
+  const YAML::Node teeth = gears["teeth"];
+  if (!teeth || !teeth.IsSequence() || teeth.size() != 2) throw InvalidInput(where + ": gears.teeth: must be [pinion, gear]");
+  for (int i = 0; i < 2; ++i) {
+    const double z = teeth[i].as<double>();
+    if (z != std::floor(z)) throwInvalid(where + ": gears.teeth[" + std::to_string(i) + "]", z, "must be an integer");
+    rig.gears.teeth[i] = static_cast<int>(z);
+  }
+  withContext(where, [&] { validateGearPair(rig.gears); return 0; });
+
+  const YAML::Node list = root["bearings"];
+  if (!list.IsSequence() || list.size() == 0) throw InvalidInput(where + ": bearings: must be a non-empty list");
+  std::set<std::string> names;
+  for (std::size_t i = 0; i < list.size(); ++i) {
+    const std::string entry = where + ": bearings[" + std::to_string(i) + "]";
+    YAML::Node node = YAML::Clone(list[i]);
+    if (!node.IsMap()) throw InvalidInput(entry + ": must be a mapping");
+    if (node["file"]) {  // keys of the entry override those of the referenced bearing file
+      const std::string name = node["file"].as<std::string>();
+      const std::string file = !name.empty() && name[0] == '/' ? name : directoryOf(path) + "/" + name;
+      const YAML::Node base = loadFile(file);
+      if (!base["bearing"]) throw InvalidInput(file + ": needs a top-level 'bearing:' block");
+      YAML::Node merged = YAML::Clone(base["bearing"]);
+      for (const auto& kv : node) {
+        if (kv.first.as<std::string>() != "file") merged[kv.first.as<std::string>()] = kv.second;
+      }
+      node = merged;
+    }
+    BearingSupportConfig cfg = parseBearing(node, entry);
+    cfg.name = readString(node, entry, "name", "");
+    if (cfg.name.empty()) throw InvalidInput(entry + ".name: required");
+    if (!names.insert(cfg.name).second) throw InvalidInput(entry + ".name = '" + cfg.name + "': duplicate name");
+    const std::string shaft = readString(node, entry, "shaft", "pinion");
+    if (shaft != "pinion" && shaft != "gear") throw InvalidInput(entry + ".shaft = '" + shaft + "': must be 'pinion' or 'gear'");
+    cfg.shaft = shaft == "pinion" ? 0 : 1;
+    cfg.mesh_load_share = readDouble(node, entry, "mesh_load_share", 1.0);
+    requireInHalfOpenRange(entry + ".mesh_load_share", cfg.mesh_load_share, 0.0, 1.0 + 1e-12);
+    rig.bearings.push_back(cfg);
+  }
+  return rig;
+}
+
+}  // namespace drivetrain_stiffness

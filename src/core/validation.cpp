@@ -1,0 +1,47 @@
+#include "drivetrain_stiffness/core/validation.hpp"
+
+#include <cmath>
+#include <sstream>
+
+namespace drivetrain_stiffness {
+
+std::string formatValue(double value) {
+  std::ostringstream out;
+  out.precision(10);
+  out << value;
+  return out.str();
+}
+
+void throwInvalid(const std::string& field, double value, const std::string& why) {
+  throw InvalidInput(field + " = " + formatValue(value) + ": " + why);
+}
+
+void requireFinite(const std::string& field, double value) {
+  if (!std::isfinite(value)) throwInvalid(field, value, "must be a finite number");
+}
+
+void requirePositive(const std::string& field, double value) {
+  requireFinite(field, value);
+  if (!(value > 0.0)) throwInvalid(field, value, "must be > 0");
+}
+
+void requireNonNegative(const std::string& field, double value) {
+  requireFinite(field, value);
+  if (value < 0.0) throwInvalid(field, value, "must be >= 0");
+}
+
+void requireInOpenRange(const std::string& field, double value, double lower, double upper) {
+  requireFinite(field, value);
+  if (!(value > lower && value < upper)) {
+    throwInvalid(field, value, "must lie in (" + formatValue(lower) + ", " + formatValue(upper) + ")");
+  }
+}
+
+void requireInHalfOpenRange(const std::string& field, double value, double lower, double upper) {
+  requireFinite(field, value);
+  if (!(value >= lower && value < upper)) {
+    throwInvalid(field, value, "must lie in [" + formatValue(lower) + ", " + formatValue(upper) + ")");
+  }
+}
+
+}  // namespace drivetrain_stiffness
