@@ -9,28 +9,9 @@
 
 #include <yaml-cpp/yaml.h>
 
-#include "drivetrain_stiffness/core/bearing_support.hpp"
-#include "drivetrain_stiffness/core/gear_geometry.hpp"
+#include "drivetrain_stiffness/core/rig_config.hpp"
 
 namespace drivetrain_stiffness {
-
-/// One bearing support of the rig with its operating settings (the `preload` topic updates them).
-struct BearingSupportConfig {
-  std::string name;                        ///< e.g. "pinion_bearing"
-  BallBearingSpec spec;
-  Arrangement arrangement = Arrangement::kSingle;
-  TiltCondition tilt = TiltCondition::kConstrained;
-  double axial_preload = 0.0;              ///< [N]
-  double radial_preload = 0.0;             ///< external radial load besides the mesh force [N]
-  Interference interference;               ///< diametral [m]
-  int shaft = 0;                           ///< 0 pinion, 1 gear
-  double mesh_load_share = 1.0;            ///< fraction of the mesh force this support reacts
-};
-
-struct RigConfig {
-  GearPairSpec gears;
-  std::vector<BearingSupportConfig> bearings;
-};
 
 /// Parses a `bearing:` mapping (keys in the README); `where` prefixes error messages.
 BearingSupportConfig parseBearing(const YAML::Node& node, const std::string& where);

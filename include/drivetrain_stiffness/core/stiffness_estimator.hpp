@@ -1,0 +1,77 @@
+// The online bearing-stiffness estimator, free of ROS: it holds one BearingSupport per rig
+// support, takes the measured pinion torque and the preload settings as plain values, and returns
+// the updated stiffness. Updates are transactional: an input that fails validation (InvalidInput)
+// or has no admissible equilibrium (UnreachableLoad) throws and leaves the previous state intact,
+// so one bad sample can never poison later estimates. Each support is warm-started from its last
+// solution. No clock is read: the caller stamps the results.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "drivetrain_stiffness/core/rig_config.hpp"
+
+namespace drivetrain_stiffness {
+
+/// Operating settings of one support as carried by the preload input (SI units).
+struct PreloadSetting {
+  std::string name;
+  double axial_preload = 0.0;       ///< [N]
+  double radial_preload = 0.0;      ///< [N]
+  double inner_interference = 0.0;  ///< diametral [m]
+  double outer_interference = 0.0;  ///< diametral [m]
+};
+
+/// Input plausibility limits; anything beyond is rejected as absurd.
+struct EstimatorLimits {
+  double max_abs_torque = 100.0;       ///< [N·m]
+  double max_preload = 1e5;            ///< [N]
+  double max_interference = 1e-3;      ///< [m]
+};
+
+struct SupportEstimate {
+  std::string name;
+  double radial_load = 0.0;  ///< radial preload + share of |mesh force| [N]
+  double axial_load = 0.0;   ///< axial preload (single) or 0 (pair) [N]
+  BearingSolution solution;
+};
+
+struct StiffnessEstimate {
+  double torque = 0.0;       ///< pinion input torque [N·m]
+  double mesh_force = 0.0;   ///< |T| / r_b,pinion [N]
+  std::vector<SupportEstimate> supports;
+};
+
+class StiffnessEstimator {
+ public:
+  /// Validates the rig and limits and solves the initial state (torque 0, preloads from the config).
+  StiffnessEstimator(const RigConfig& rig, const EstimatorLimits& limits = {});
+
+  /// New pinion torque [N·m]; the mesh force F = |T| / r_b (seed 000 eq 14) loads every support
+  /// radially in proportion to its mesh_load_share, on top of its radial preload.
+  const StiffnessEstimate& setTorque(double torque);
+  /// New settings for the named supports (others keep theirs). Unknown names are an error.
+  const StiffnessEstimate& setPreloads(const std::vector<PreloadSetting>& settings);
+  /// Back to the configured preloads and zero torque (e.g. after a time jump).
+  const StiffnessEstimate& reset();
+
+  const StiffnessEstimate& current() const { return estimate_; }
+  const RigConfig& rig() const { return rig_; }
+
+ private:
+  struct Support {
+    BearingSupportConfig config;
+    std::shared_ptr<const BearingSupport> model;
+  };
+  /// Solves all supports for `torque` with `supports`; throws without touching the state.
+  StiffnessEstimate solveAll(double torque, const std::vector<Support>& supports) const;
+  static std::shared_ptr<const BearingSupport> build(const BearingSupportConfig& c);
+
+  RigConfig rig_;
+  EstimatorLimits limits_;
+  std::vector<Support> supports_;
+  StiffnessEstimate estimate_;
+};
+
+}  // namespace drivetrain_stiffness

@@ -1,0 +1,47 @@
+// ROS wrapper of the core StiffnessEstimator: reads and validates its parameters once, owns the
+// subscribers, publishers and diagnostics, and converts messages at the edges. All physics lives
+// in the core library; this class only decides what to accept and what to publish.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <string>
+
+#include <diagnostic_updater/diagnostic_updater.h>
+#include <geometry_msgs/WrenchStamped.h>
+#include <ros/ros.h>
+
+#include "drivetrain_stiffness/Preload.h"
+#include "drivetrain_stiffness/Stiffness.h"
+#include "drivetrain_stiffness/core/stiffness_estimator.hpp"
+
+namespace drivetrain_stiffness {
+
+class StiffnessEstimatorRos {
+ public:
+  /// Throws InvalidInput (naming the parameter) when a parameter or the gearbox file is invalid.
+  StiffnessEstimatorRos(ros::NodeHandle nh, ros::NodeHandle pnh);
+
+ private:
+  void onTorque(const geometry_msgs::WrenchStamped::ConstPtr& msg);
+  void onPreload(const drivetrain_stiffness::Preload::ConstPtr& msg);
+  void publish(const std_msgs::Header& header, const StiffnessEstimate& estimate);
+  void reject(const std::string& topic, const std::string& reason);
+  void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status);
+
+  std::unique_ptr<StiffnessEstimator> estimator_;
+  ros::Subscriber torque_sub_, preload_sub_;
+  ros::Publisher stiffness_pub_;
+  ros::Timer diagnostic_timer_;
+  diagnostic_updater::Updater diagnostics_;
+  std::mutex mutex_;  // callbacks may run on several spinner threads (nodelet)
+
+  std::uint64_t accepted_torque_ = 0, rejected_torque_ = 0;
+  std::uint64_t accepted_preload_ = 0, rejected_preload_ = 0;
+  std::uint64_t unreachable_ = 0;
+  std::uint64_t rejected_at_last_report_ = 0;
+  std::string last_rejection_;
+};
+
+}  // namespace drivetrain_stiffness

@@ -1,0 +1,99 @@
+#include "drivetrain_stiffness/core/stiffness_estimator.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "drivetrain_stiffness/core/validation.hpp"
+
+namespace drivetrain_stiffness {
+
+StiffnessEstimator::StiffnessEstimator(const RigConfig& rig, const EstimatorLimits& limits)
+    : rig_(rig), limits_(limits) {
+  requirePositive("max_abs_torque", limits.max_abs_torque);
+  requirePositive("max_preload", limits.max_preload);
+  requirePositive("max_interference", limits.max_interference);
+  validateGearPair(rig.gears);
+  if (rig.bearings.empty()) throw InvalidInput("bearings: at least one support is required");
+  reset();
+}
+
+std::shared_ptr<const BearingSupport> StiffnessEstimator::build(const BearingSupportConfig& c) {
+  return std::make_shared<const BearingSupport>(c.spec, c.arrangement, c.axial_preload, c.interference, c.tilt);
+}
+
+const StiffnessEstimate& StiffnessEstimator::reset() {
+  std::vector<Support> supports;
+  for (const BearingSupportConfig& c : rig_.bearings) supports.push_back({c, build(c)});
+  estimate_ = solveAll(0.0, supports);
+  supports_ = std::move(supports);
+  return estimate_;
+}
+
+StiffnessEstimate StiffnessEstimator::solveAll(double torque, const std::vector<Support>& supports) const {
+  StiffnessEstimate next;
+  next.torque = torque;
+  next.mesh_force = std::abs(meshForce(rig_.gears, 0, torque));
+  for (std::size_t i = 0; i < supports.size(); ++i) {
+    const Support& s = supports[i];
+    SupportEstimate e;
+    e.name = s.config.name;
+    e.radial_load = s.config.radial_preload + s.config.mesh_load_share * next.mesh_force;
+    e.axial_load = s.config.arrangement == Arrangement::kSingle ? s.config.axial_preload : 0.0;
+    Vector5d load = Vector5d::Zero();
+    load[kUx] = e.radial_load;
+    // Warm start from the previous solution of the same support when its model is unchanged.
+    const bool warm = i < estimate_.supports.size() && i < supports_.size() && supports_[i].model == s.model;
+    const Vector5d* start = warm ? &estimate_.supports[i].solution.displacement : nullptr;
+    try {
+      e.solution = s.model->solve(load, start);
+    } catch (const UnreachableLoad& error) {
+      throw UnreachableLoad(s.config.name + ": " + error.what());
+    }
+    next.supports.push_back(std::move(e));
+  }
+  return next;
+}
+
+const StiffnessEstimate& StiffnessEstimator::setTorque(double torque) {
+  requireFinite("torque", torque);
+  if (std::abs(torque) > limits_.max_abs_torque) {
+    throwInvalid("torque", torque, "exceeds max_abs_torque = " + formatValue(limits_.max_abs_torque) + " N·m");
+  }
+  estimate_ = solveAll(torque, supports_);
+  return estimate_;
+}
+
+const StiffnessEstimate& StiffnessEstimator::setPreloads(const std::vector<PreloadSetting>& settings) {
+  std::vector<Support> next = supports_;
+  for (const PreloadSetting& p : settings) {
+    auto it = std::find_if(next.begin(), next.end(), [&](const Support& s) { return s.config.name == p.name; });
+    if (it == next.end()) throw InvalidInput("preload.name = '" + p.name + "': no such bearing support");
+    const std::string prefix = "preload[" + p.name + "].";
+    auto check = [&](const std::string& field, double value, double limit) {
+      requireNonNegative(prefix + field, value);
+      if (value > limit) throwInvalid(prefix + field, value, "exceeds the limit " + formatValue(limit));
+    };
+    check("axial_preload", p.axial_preload, limits_.max_preload);
+    check("radial_preload", p.radial_preload, limits_.max_preload);
+    check("inner_interference", p.inner_interference, limits_.max_interference);
+    check("outer_interference", p.outer_interference, limits_.max_interference);
+    BearingSupportConfig c = it->config;
+    const bool geometry_changed = c.axial_preload != p.axial_preload || c.interference.inner != p.inner_interference ||
+                                  c.interference.outer != p.outer_interference;
+    c.axial_preload = p.axial_preload;
+    c.radial_preload = p.radial_preload;
+    c.interference = {p.inner_interference, p.outer_interference};
+    try {
+      *it = {c, geometry_changed ? build(c) : it->model};
+    } catch (const InvalidInput& e) {
+      throw InvalidInput(prefix + " " + e.what());
+    } catch (const UnreachableLoad& e) {
+      throw UnreachableLoad(prefix + " " + e.what());
+    }
+  }
+  estimate_ = solveAll(estimate_.torque, next);
+  supports_ = std::move(next);
+  return estimate_;
+}
+
+}  // namespace drivetrain_stiffness

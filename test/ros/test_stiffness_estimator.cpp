@@ -1,0 +1,142 @@
+// Graph-level test of the stiffness_estimator node: good inputs give the core library's answer
+// with the input's header; NaN, negative and absurd inputs are rejected, counted on /diagnostics,
+// and do not disturb the next good answer.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <diagnostic_msgs/DiagnosticArray.h>
+#include <geometry_msgs/WrenchStamped.h>
+#include <ros/ros.h>
+
+#include "drivetrain_stiffness/Preload.h"
+#include "drivetrain_stiffness/Stiffness.h"
+#include "drivetrain_stiffness/config/yaml_config.hpp"
+#include "drivetrain_stiffness/core/stiffness_estimator.hpp"
+
+using namespace drivetrain_stiffness;
+
+class NodeTest : public testing::Test {
+ protected:
+  void SetUp() override {
+    ros::NodeHandle pnh("~");
+    std::string path;
+    ASSERT_TRUE(pnh.getParam("gearbox_config", path));
+    reference_ = std::make_unique<StiffnessEstimator>(loadRigFile(path));
+    stiffness_sub_ = nh_.subscribe<Stiffness>("stiffness", 100, [this](const Stiffness::ConstPtr& m) { received_.push_back(*m); });
+    diag_sub_ = nh_.subscribe<diagnostic_msgs::DiagnosticArray>("/diagnostics", 100,
+        [this](const diagnostic_msgs::DiagnosticArray::ConstPtr& m) { diagnostics_.push_back(*m); });
+    torque_pub_ = nh_.advertise<geometry_msgs::WrenchStamped>("torque", 10);
+    preload_pub_ = nh_.advertise<Preload>("preload", 10);
+    ASSERT_TRUE(waitFor([&] { return torque_pub_.getNumSubscribers() > 0 && preload_pub_.getNumSubscribers() > 0 &&
+                                     stiffness_sub_.getNumPublishers() > 0; }, 20.0));
+  }
+
+  template <typename F>
+  bool waitFor(F done, double seconds) {
+    const ros::WallTime end = ros::WallTime::now() + ros::WallDuration(seconds);
+    while (ros::ok() && ros::WallTime::now() < end) {
+      ros::spinOnce();
+      if (done()) return true;
+      ros::WallDuration(0.005).sleep();
+    }
+    return done();
+  }
+
+  void sendTorque(double torque, double stamp) {
+    geometry_msgs::WrenchStamped m;
+    m.header.stamp = ros::Time(stamp);
+    m.header.frame_id = "pinion";
+    m.wrench.torque.z = torque;
+    torque_pub_.publish(m);
+  }
+
+  Preload preload(double stamp, double axial, double radial, double inner, double outer) {
+    Preload m;
+    m.header.stamp = ros::Time(stamp);
+    for (const char* name : {"pinion_bearing", "gear_bearing"}) {
+      BearingPreload b;
+      b.name = name;
+      b.axial_preload = axial;
+      b.radial_preload = radial;
+      b.inner_interference = inner;
+      b.outer_interference = outer;
+      m.bearings.push_back(b);
+    }
+    return m;
+  }
+
+  // Expects exactly one new stiffness message, stamped `stamp`, equal to the reference estimate.
+  void expectAnswer(double stamp, const StiffnessEstimate& expected) {
+    const std::size_t before = received_.size();
+    ASSERT_TRUE(waitFor([&] { return received_.size() > before; }, 5.0)) << "no stiffness for stamp " << stamp;
+    const Stiffness& s = received_.back();
+    EXPECT_DOUBLE_EQ(s.header.stamp.toSec(), stamp);
+    ASSERT_EQ(s.bearings.size(), expected.supports.size());
+    for (std::size_t i = 0; i < s.bearings.size(); ++i) {
+      const double k = expected.supports[i].solution.radialStiffness();
+      EXPECT_NEAR(s.bearings[i].radial_stiffness, k, 1e-9 * k) << s.bearings[i].name;
+      EXPECT_TRUE(std::isfinite(s.bearings[i].radial_stiffness));
+      for (double v : s.bearings[i].stiffness_matrix) EXPECT_TRUE(std::isfinite(v));
+    }
+  }
+
+  // Waits for a diagnostics status whose key `key` reaches at least `count`.
+  bool diagnosticCountAtLeast(const std::string& key, int count) {
+    return waitFor([&] {
+      for (const auto& array : diagnostics_)
+        for (const auto& status : array.status)
+          for (const auto& kv : status.values)
+            if (kv.key == key && std::stoi(kv.value) >= count) return true;
+      return false;
+    }, 5.0);
+  }
+
+  bool noMessageFor(double seconds) {
+    const std::size_t before = received_.size();
+    waitFor([] { return false; }, seconds);
+    return received_.size() == before;
+  }
+
+  ros::NodeHandle nh_;
+  std::unique_ptr<StiffnessEstimator> reference_;
+  ros::Subscriber stiffness_sub_, diag_sub_;
+  ros::Publisher torque_pub_, preload_pub_;
+  std::vector<Stiffness> received_;
+  std::vector<diagnostic_msgs::DiagnosticArray> diagnostics_;
+};
+
+TEST_F(NodeTest, AnswersGoodInputAndSurvivesBadInput) {
+  // 1. Preload then torque: the node's answer equals the core library's.
+  preload_pub_.publish(preload(10.0, 1200.0, 800.0, 5e-6, 5e-6));
+  reference_->setPreloads({{"pinion_bearing", 1200.0, 800.0, 5e-6, 5e-6}, {"gear_bearing", 1200.0, 800.0, 5e-6, 5e-6}});
+  expectAnswer(10.0, reference_->current());
+  sendTorque(0.5, 11.0);
+  expectAnswer(11.0, reference_->setTorque(0.5));
+
+  // 2. NaN torque, absurd torque, negative and NaN preload, unknown bearing: no output, counted.
+  sendTorque(std::nan(""), 12.0);
+  sendTorque(1e9, 12.1);
+  preload_pub_.publish(preload(12.2, -5.0, 800.0, 5e-6, 5e-6));
+  preload_pub_.publish(preload(12.3, 1200.0, std::nan(""), 5e-6, 5e-6));
+  Preload unknown = preload(12.4, 1200.0, 800.0, 5e-6, 5e-6);
+  unknown.bearings[0].name = "no_such_bearing";
+  preload_pub_.publish(unknown);
+  EXPECT_TRUE(noMessageFor(0.5));
+  EXPECT_TRUE(diagnosticCountAtLeast("rejected_torque", 2));
+  EXPECT_TRUE(diagnosticCountAtLeast("rejected_preload", 3));
+  bool warned = false;
+  for (const auto& array : diagnostics_)
+    for (const auto& status : array.status)
+      warned |= status.level == diagnostic_msgs::DiagnosticStatus::WARN && status.message.find("rejected") != std::string::npos;
+  EXPECT_TRUE(warned);
+
+  // 3. The next good input is answered correctly: state was not poisoned.
+  sendTorque(0.25, 13.0);
+  expectAnswer(13.0, reference_->setTorque(0.25));
+}
+
+int main(int argc, char** argv) {
+  testing::InitGoogleTest(&argc, argv);
+  ros::init(argc, argv, "stiffness_estimator_rostest");
+  return RUN_ALL_TESTS();
+}
