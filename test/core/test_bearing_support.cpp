@@ -7,6 +7,7 @@
 #include <random>
 
 #include "bearing_fixtures.hpp"
+#include "drivetrain_stiffness/config/yaml_config.hpp"
 #include "drivetrain_stiffness/core/bearing_support.hpp"
 #include "drivetrain_stiffness/core/validation.hpp"
 
@@ -206,4 +207,27 @@ TEST(BearingSupport, Seed000ShrinkRangeTrend) {
   const double k_outer = kr(2e-6, 8e-6);
   EXPECT_GT(k_outer, k_lo);
   EXPECT_NEAR((k_outer - k_lo) / (k_hi - k_lo), 1.0, 0.5);                 // inner and outer alike
+}
+
+// Seed 000 section 4.1 (Fig 5) on the servo-size bearing shipped for its gearbox, loads in the
+// seed's range [400, 2000] N: the radial stiffness rises with the axial preload at every radial
+// load, and rises with the radial load once the radial load has lifted balls off (the seed's
+// regime; in the preload-dominated regime it falls instead, as seed 003 reports: see
+// docs/bearing_model.md for why both seeds are right in their own regime).
+TEST(BearingSupport, Seed000PreloadTrendsForServoBearing) {
+  const BearingSupportConfig c = loadBearingFile(std::string(DRIVETRAIN_SOURCE_DIR) + "/config/bearings/servo_7000ac.yaml");
+  auto kr = [&](double fa, double fr) {
+    return BearingSupport(c.spec, c.arrangement, fa, c.interference, c.tilt).solve(load(fr, 0.0)).radialStiffness();
+  };
+  for (double fr : {400.0, 800.0, 1200.0}) {
+    EXPECT_LT(kr(400.0, fr), kr(1000.0, fr)) << fr;
+    EXPECT_LT(kr(1000.0, fr), kr(2000.0, fr)) << fr;
+  }
+  double previous = 0.0;
+  for (double fr = 800.0; fr <= 2000.0; fr += 400.0) {  // Fa = 400 N: balls lifted off from 800 N on
+    const BearingSolution sol = BearingSupport(c.spec, c.arrangement, 400.0, c.interference, c.tilt).solve(load(fr, 0.0));
+    EXPECT_LT(sol.balls_in_contact, c.spec.balls);
+    EXPECT_GT(sol.radialStiffness(), previous) << fr;
+    previous = sol.radialStiffness();
+  }
 }
