@@ -120,13 +120,12 @@ BallBearing::BallBearing(const BallBearingSpec& spec, const Interference& interf
 BearingEvaluation BallBearing::evaluate(const Vector5d& q, double axial_offset) const {
   BearingEvaluation out;
   const double a0 = d_.a0, ri = d_.ri;
-  const double az_common = axial_offset + q[kUz];
   double k[5][5] = {};  // accumulate in plain arrays, fold into Eigen at the end
   double f[5] = {};
   for (int j = 0; j < spec_.balls; ++j) {
     const double c = cos_psi_[j], s = sin_psi_[j];
-    const double ar = d_.ar0 + q[kUx] * c + q[kUy] * s;
-    const double az = az_common + ri * (q[kThetaX] * s - q[kThetaY] * c);
+    double ar, az;
+    separation(j, q, axial_offset, ar, az);
     const double l = std::sqrt(ar * ar + az * az);
     const double delta = l - a0;
     if (delta <= 0.0) continue;
@@ -163,9 +162,8 @@ BearingEvaluation BallBearing::evaluate(const Vector5d& q, double axial_offset) 
 std::vector<BallState> BallBearing::balls(const Vector5d& q, double axial_offset) const {
   std::vector<BallState> out(spec_.balls);
   for (int j = 0; j < spec_.balls; ++j) {
-    const double c = cos_psi_[j], s = sin_psi_[j];
-    const double ar = d_.ar0 + q[kUx] * c + q[kUy] * s;
-    const double az = axial_offset + q[kUz] + d_.ri * (q[kThetaX] * s - q[kThetaY] * c);
+    double ar, az;
+    separation(j, q, axial_offset, ar, az);
     BallState& b = out[j];
     b.azimuth = 2.0 * kPi * j / spec_.balls;
     b.contact_angle = std::atan2(az, ar);

@@ -37,40 +37,36 @@ StiffnessEstimatorRos::StiffnessEstimatorRos(ros::NodeHandle nh, ros::NodeHandle
   ROS_INFO("stiffness_estimator: %zu bearing supports from %s", estimator_->rig().bearings.size(), gearbox_config.c_str());
 }
 
-void StiffnessEstimatorRos::onTorque(const geometry_msgs::WrenchStamped::ConstPtr& msg) {
+template <typename Update>
+void StiffnessEstimatorRos::apply(const std::string& topic, const std_msgs::Header& header, std::uint64_t& accepted,
+                                  std::uint64_t& rejected, Update update) {
   std::lock_guard<std::mutex> lock(mutex_);
   try {
-    const StiffnessEstimate& estimate = estimator_->setTorque(msg->wrench.torque.z);
-    ++accepted_torque_;
-    publish(msg->header, estimate);
+    const StiffnessEstimate& estimate = update();
+    ++accepted;
+    publish(header, estimate);
   } catch (const InvalidInput& e) {
-    ++rejected_torque_;
-    reject("torque", e.what());
+    ++rejected;
+    reject(topic, e.what());
   } catch (const UnreachableLoad& e) {
-    ++rejected_torque_;
+    ++rejected;
     ++unreachable_;
-    reject("torque", e.what());
+    reject(topic, e.what());
   }
 }
 
+void StiffnessEstimatorRos::onTorque(const geometry_msgs::WrenchStamped::ConstPtr& msg) {
+  apply("torque", msg->header, accepted_torque_, rejected_torque_,
+        [&]() -> const StiffnessEstimate& { return estimator_->setTorque(msg->wrench.torque.z); });
+}
+
 void StiffnessEstimatorRos::onPreload(const drivetrain_stiffness::Preload::ConstPtr& msg) {
-  std::lock_guard<std::mutex> lock(mutex_);
   std::vector<PreloadSetting> settings;
   for (const auto& b : msg->bearings) {
     settings.push_back({b.name, b.axial_preload, b.radial_preload, b.inner_interference, b.outer_interference});
   }
-  try {
-    const StiffnessEstimate& estimate = estimator_->setPreloads(settings);
-    ++accepted_preload_;
-    publish(msg->header, estimate);
-  } catch (const InvalidInput& e) {
-    ++rejected_preload_;
-    reject("preload", e.what());
-  } catch (const UnreachableLoad& e) {
-    ++rejected_preload_;
-    ++unreachable_;
-    reject("preload", e.what());
-  }
+  apply("preload", msg->header, accepted_preload_, rejected_preload_,
+        [&]() -> const StiffnessEstimate& { return estimator_->setPreloads(settings); });
 }
 
 void StiffnessEstimatorRos::publish(const std_msgs::Header& header, const StiffnessEstimate& estimate) {

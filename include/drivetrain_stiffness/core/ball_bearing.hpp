@@ -123,6 +123,11 @@ class BallBearing {
     double alpha_free = 0, ri = 0, ar0 = 0;
   };
   static Derived derive(const BallBearingSpec& spec, const Interference& interference);
+  /// Radial and axial separation (a_r, a_z) of the groove curvature centres of ball j.
+  void separation(int j, const Vector5d& q, double axial_offset, double& ar, double& az) const {
+    ar = d_.ar0 + q[kUx] * cos_psi_[j] + q[kUy] * sin_psi_[j];
+    az = axial_offset + q[kUz] + d_.ri * (q[kThetaX] * sin_psi_[j] - q[kThetaY] * cos_psi_[j]);
+  }
 
   BallBearingSpec spec_;
   Derived d_;

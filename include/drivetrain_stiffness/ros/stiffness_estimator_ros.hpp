@@ -26,6 +26,10 @@ class StiffnessEstimatorRos {
  private:
   void onTorque(const geometry_msgs::WrenchStamped::ConstPtr& msg);
   void onPreload(const drivetrain_stiffness::Preload::ConstPtr& msg);
+  /// Runs one estimator update under the lock: publishes on success, counts and reports a rejection.
+  template <typename Update>
+  void apply(const std::string& topic, const std_msgs::Header& header, std::uint64_t& accepted,
+             std::uint64_t& rejected, Update update);
   void publish(const std_msgs::Header& header, const StiffnessEstimate& estimate);
   void reject(const std::string& topic, const std::string& reason);
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status);
