@@ -95,28 +95,25 @@ Vector5d BearingSupport::coldStart(const Vector5d& load) const {
   const BallBearing& b = bearing_;
   const double z = b.spec().balls;
   Vector5d q = Vector5d::Zero();
-  double delta_axial = 0.0, alpha = b.freeContactAngle(), l = b.grooveCentreDistance();
+  // Axial approach of every row: from the closed-form axial solution (single bearing) or the
+  // assembly offset (pair), at the centred radial separation a_r = A - Pd'/2.
+  double uz_row = offset_;
   if (arrangement_ == Arrangement::kSingle) {
-    const double fz = load[kUz];
-    const double uz = b.axialDisplacementForLoad(std::abs(fz));
-    q[kUz] = std::copysign(uz, fz);
-    const double ar = b.grooveCentreDistance() - b.mountedClearance() / 2.0;
-    l = std::hypot(ar, uz);
-    delta_axial = std::max(l - b.grooveCentreDistance(), 0.0);
-    alpha = std::atan2(uz, ar);
-  } else {
-    const double ar = b.grooveCentreDistance() - b.mountedClearance() / 2.0;
-    l = std::hypot(ar, offset_);
-    delta_axial = std::max(l - b.grooveCentreDistance(), 0.0);
-    alpha = std::atan2(offset_, ar);
+    uz_row = b.axialDisplacementForLoad(std::abs(load[kUz]));
+    q[kUz] = std::copysign(uz_row, load[kUz]);
   }
+  const double ar = b.grooveCentreDistance() - b.mountedClearance() / 2.0;
+  const double l = std::hypot(ar, uz_row);
+  const double delta_axial = std::max(l - b.grooveCentreDistance(), 0.0);
+  const double alpha = std::atan2(uz_row, ar);
   const double radial = std::hypot(load[kUx], load[kUy]);
   if (radial > 0.0) {
     const double eps = delta_axial / l;
     const double kr = rows() * 0.5 * z * b.loadDeflectionConstant() * std::sqrt(delta_axial) *
                       (1.5 * std::cos(alpha) * std::cos(alpha) + eps * std::sin(alpha) * std::sin(alpha));
-    // Stribeck's Q_max = 5 F_r / (Z cos alpha) for a bearing with clearance (Harris & Kotzalas,
-    // Essential Concepts, ch. 7) gives the radial approach when there is no axial preload.
+    // Stribeck's Q_max = 5 F_r / (Z cos alpha), the usual allowance for clearance (Harris &
+    // Kotzalas, load-distribution chapter), gives the radial approach when there is no preload.
+    // Only a starting point: the Newton solve decides the answer.
     const double qmax = 5.0 * radial / (rows() * z * std::max(std::cos(alpha), 0.2));
     const double u_stribeck = std::pow(qmax / b.loadDeflectionConstant(), 2.0 / 3.0) +
                               std::max(b.mountedClearance(), 0.0) / 2.0;
