@@ -1,6 +1,7 @@
 #include "drivetrain_stiffness/config/yaml_config.hpp"
 
 #include <cmath>
+#include <array>
 #include <set>
 
 #include "drivetrain_stiffness/core/validation.hpp"
@@ -136,6 +137,85 @@ BearingSupportConfig parseBearing(const YAML::Node& node, const std::string& whe
   return cfg;
 }
 
+namespace {
+const std::set<std::string> kGearKeys = {
+    "module", "pressure_angle_deg", "helix_angle_deg", "teeth", "profile_shift", "face_width",
+    "center_distance", "addendum_coefficient", "tool_dedendum_coefficient", "youngs_modulus",
+    "poisson_ratio", "bore_diameter"};
+const std::set<std::string> kAntiBacklashKeys = {"spring_stiffness", "preload_torque", "loaded_gear_face_width"};
+const std::set<std::string> kMeshKeys = {"model", "samples"};
+
+std::array<double, 2> readPair(const YAML::Node& node, const std::string& where, const std::string& name,
+                               std::array<double, 2> fallback) {
+  const YAML::Node v = node[name];
+  if (!v) return fallback;
+  if (!v.IsSequence() || v.size() != 2) throw InvalidInput(key(where, name) + ": must be [pinion, gear]");
+  std::array<double, 2> out{};
+  for (int i = 0; i < 2; ++i) {
+    try {
+      out[i] = v[i].as<double>();
+    } catch (const YAML::Exception&) {
+      throw InvalidInput(key(where, name) + "[" + std::to_string(i) + "] = '" + YAML::Dump(v[i]) + "': not a number");
+    }
+  }
+  return out;
+}
+}  // namespace
+
+void parseGears(const YAML::Node& root, const std::string& file, RigConfig& rig) {
+  const std::string where = file + ": gears";
+  const YAML::Node gears = root["gears"];
+  if (!gears || !gears.IsMap()) throw InvalidInput(file + ": needs a 'gears:' mapping");
+  rejectUnknownKeys(gears, where, kGearKeys);
+  GearPairSpec& g = rig.gears;
+  g.module = readDouble(gears, where, "module");
+  g.pressure_angle = readDouble(gears, where, "pressure_angle_deg") * kDegToRad;
+  g.helix_angle = readDouble(gears, where, "helix_angle_deg", 0.0) * kDegToRad;
+  if (!gears["teeth"]) throw InvalidInput(where + ".teeth: required key is missing");
+  const std::array<double, 2> teeth = readPair(gears, where, "teeth", {0.0, 0.0});
+  for (int i = 0; i < 2; ++i) {
+    if (teeth[i] != std::floor(teeth[i]) || std::abs(teeth[i]) > 1e6) {
+      throwInvalid(where + ".teeth[" + std::to_string(i) + "]", teeth[i], "must be an integer");
+    }
+    g.teeth[i] = static_cast<int>(teeth[i]);
+  }
+  g.profile_shift = readPair(gears, where, "profile_shift", {0.0, 0.0});
+  g.face_width = readDouble(gears, where, "face_width", 0.0);
+  if (gears["center_distance"]) g.center_distance = readDouble(gears, where, "center_distance");
+  g.addendum_coefficient = readDouble(gears, where, "addendum_coefficient", g.addendum_coefficient);
+  g.tool_dedendum_coefficient = readDouble(gears, where, "tool_dedendum_coefficient", g.tool_dedendum_coefficient);
+  g.material.youngs_modulus = readDouble(gears, where, "youngs_modulus", g.material.youngs_modulus);
+  g.material.poisson_ratio = readDouble(gears, where, "poisson_ratio", g.material.poisson_ratio);
+  g.bore_diameter = readPair(gears, where, "bore_diameter", {0.0, 0.0});
+  withContext(file, [&] { return SpurGearGeometry(g); });  // every geometric check at load time
+
+  if (const YAML::Node ab = root["anti_backlash"]) {
+    const std::string w = file + ": anti_backlash";
+    if (!ab.IsMap()) throw InvalidInput(w + ": must be a mapping");
+    rejectUnknownKeys(ab, w, kAntiBacklashKeys);
+    rig.anti_backlash.spring_stiffness = readDouble(ab, w, "spring_stiffness");
+    rig.anti_backlash.preload_torque = readDouble(ab, w, "preload_torque");
+    rig.anti_backlash.loaded_gear_face_width = readDouble(ab, w, "loaded_gear_face_width", 0.0);
+    requirePositive("anti_backlash.spring_stiffness", rig.anti_backlash.spring_stiffness);
+    requireNonNegative("anti_backlash.preload_torque", rig.anti_backlash.preload_torque);
+  }
+  if (const YAML::Node mesh = root["mesh"]) {
+    if (!mesh.IsMap()) throw InvalidInput(file + ": mesh: must be a mapping");
+    rejectUnknownKeys(mesh, file + ": mesh", kMeshKeys);
+    rig.mesh_model = parseMeshStiffnessModel("mesh.model", readString(mesh, "mesh", "model", "potential_energy"));
+    if (mesh["samples"]) rig.mesh_samples = readInt(mesh, file + ": mesh", "samples");
+    if (rig.mesh_samples < 16 || rig.mesh_samples > 100000) throwInvalid("mesh.samples", rig.mesh_samples, "must be in [16, 100000]");
+  }
+}
+
+RigConfig loadGearFile(const std::string& path) {
+  const YAML::Node root = loadFile(path);
+  if (!root.IsMap()) throw InvalidInput(path + ": needs a top-level mapping with 'gears:'");
+  RigConfig rig;
+  parseGears(root, path, rig);
+  return rig;
+}
+
 BearingSupportConfig loadBearingFile(const std::string& path) {
   const YAML::Node root = loadFile(path);
   if (!root.IsMap() || !root["bearing"]) throw InvalidInput(path + ": needs a top-level 'bearing:' block");
@@ -150,18 +230,14 @@ RigConfig loadRigFile(const std::string& path) {
   if (!root.IsMap() || !root["gears"] || !root["bearings"]) {
     throw InvalidInput(path + ": needs top-level 'gears:' and 'bearings:' blocks");
   }
-  RigConfig rig;
-  const YAML::Node gears = root["gears"];
-  rig.gears.module = readDouble(gears, where + ": gears", "module");
-  rig.gears.pressure_angle = readDouble(gears, where + ": gears", "pressure_angle_deg") * kDegToRad;
-  const YAML::Node teeth = gears["teeth"];
-  if (!teeth || !teeth.IsSequence() || teeth.size() != 2) throw InvalidInput(where + ": gears.teeth: must be [pinion, gear]");
-  for (int i = 0; i < 2; ++i) {
-    const double z = teeth[i].as<double>();
-    if (z != std::floor(z)) throwInvalid(where + ": gears.teeth[" + std::to_string(i) + "]", z, "must be an integer");
-    rig.gears.teeth[i] = static_cast<int>(z);
+  for (const auto& item : root) {
+    const std::string name = item.first.as<std::string>();
+    if (name != "gears" && name != "bearings" && name != "anti_backlash" && name != "mesh") {
+      throw InvalidInput(path + ": " + name + ": unknown top-level key");
+    }
   }
-  withContext(where, [&] { validateGearPair(rig.gears); return 0; });
+  RigConfig rig;
+  parseGears(root, where, rig);
 
   const YAML::Node list = root["bearings"];
   if (!list.IsSequence() || list.size() == 0) throw InvalidInput(where + ": bearings: must be a non-empty list");

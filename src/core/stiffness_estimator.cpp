@@ -8,13 +8,33 @@
 namespace drivetrain_stiffness {
 
 StiffnessEstimator::StiffnessEstimator(const RigConfig& rig, const EstimatorLimits& limits)
-    : rig_(rig), limits_(limits) {
+    : rig_(rig), limits_(limits), mesh_(rig.gears, rig.anti_backlash, rig.mesh_model, rig.mesh_samples) {
   requirePositive("max_abs_torque", limits.max_abs_torque);
   requirePositive("max_preload", limits.max_preload);
   requirePositive("max_interference", limits.max_interference);
-  validateGearPair(rig.gears);
   if (rig.bearings.empty()) throw InvalidInput("bearings: at least one support is required");
+  // Period means of k1 and k_chain, computed once: they decide the flank state of the mean
+  // stiffness (the table itself is fixed until the gear parameters change).
+  const int n = 512;
+  for (int i = 0; i < n; ++i) {
+    const CompositeMesh c = mesh_.at((i + 0.5) / n, 0.0);
+    mean_k1_kchain_[0] += c.k1 / n;
+    mean_k1_kchain_[1] += c.k_chain / n;
+  }
   reset();
+}
+
+MeshEstimate StiffnessEstimator::meshAt(double signed_mesh_force, double pinion_angle) const {
+  MeshEstimate m;
+  m.phase = mesh_.geometry().phase(pinion_angle);
+  m.current = mesh_.at(m.phase, signed_mesh_force);
+  const double k1 = mean_k1_kchain_[0], kc = mean_k1_kchain_[1];
+  switch (mesh_.flankContact(signed_mesh_force, k1, kc)) {
+    case FlankContact::kBoth: m.mean = k1 + kc; break;
+    case FlankContact::kDriveOnly: m.mean = k1; break;
+    case FlankContact::kBackOnly: m.mean = kc; break;
+  }
+  return m;
 }
 
 std::shared_ptr<const BearingSupport> StiffnessEstimator::build(const BearingSupportConfig& c) {
@@ -24,15 +44,18 @@ std::shared_ptr<const BearingSupport> StiffnessEstimator::build(const BearingSup
 const StiffnessEstimate& StiffnessEstimator::reset() {
   std::vector<Support> supports;
   for (const BearingSupportConfig& c : rig_.bearings) supports.push_back({c, build(c)});
-  estimate_ = solveAll(0.0, supports);
+  estimate_ = solveAll(0.0, 0.0, supports);
   supports_ = std::move(supports);
   return estimate_;
 }
 
-StiffnessEstimate StiffnessEstimator::solveAll(double torque, const std::vector<Support>& supports) const {
+StiffnessEstimate StiffnessEstimator::solveAll(double torque, double pinion_angle,
+                                               const std::vector<Support>& supports) const {
   StiffnessEstimate next;
   next.torque = torque;
-  next.mesh_force = std::abs(meshForce(rig_.gears, 0, torque));
+  const double signed_force = meshForce(rig_.gears, 0, torque);
+  next.mesh_force = std::abs(signed_force);
+  next.mesh = meshAt(signed_force, pinion_angle);
   for (std::size_t i = 0; i < supports.size(); ++i) {
     const Support& s = supports[i];
     SupportEstimate e;
@@ -54,12 +77,14 @@ StiffnessEstimate StiffnessEstimator::solveAll(double torque, const std::vector<
   return next;
 }
 
-const StiffnessEstimate& StiffnessEstimator::setTorque(double torque) {
+const StiffnessEstimate& StiffnessEstimator::setTorque(double torque, double pinion_angle) {
   requireFinite("torque", torque);
+  requireFinite("pinion_angle", pinion_angle);
   if (std::abs(torque) > limits_.max_abs_torque) {
     throwInvalid("torque", torque, "exceeds max_abs_torque = " + formatValue(limits_.max_abs_torque) + " N·m");
   }
-  estimate_ = solveAll(torque, supports_);
+  estimate_ = solveAll(torque, pinion_angle, supports_);
+  last_pinion_angle_ = pinion_angle;
   return estimate_;
 }
 
@@ -91,7 +116,7 @@ const StiffnessEstimate& StiffnessEstimator::setPreloads(const std::vector<Prelo
       throw UnreachableLoad(prefix + " " + e.what());
     }
   }
-  estimate_ = solveAll(estimate_.torque, next);
+  estimate_ = solveAll(estimate_.torque, last_pinion_angle_, next);
   supports_ = std::move(next);
   return estimate_;
 }

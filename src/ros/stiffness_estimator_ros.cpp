@@ -25,6 +25,10 @@ StiffnessEstimatorRos::StiffnessEstimatorRos(ros::NodeHandle nh, ros::NodeHandle
   limits.max_preload = positiveParam(pnh, "max_preload", limits.max_preload);
   limits.max_interference = positiveParam(pnh, "max_interference", limits.max_interference);
   estimator_ = std::make_unique<StiffnessEstimator>(loadRigFile(gearbox_config), limits);
+  double speed_rpm = 1000.0;  // seed 000 Table 1
+  pnh.param("pinion_speed_rpm", speed_rpm, speed_rpm);
+  requireFinite("~pinion_speed_rpm", speed_rpm);
+  pinion_speed_ = speed_rpm * 2.0 * M_PI / 60.0;
 
   diagnostics_.setHardwareID("drivetrain_stiffness");
   diagnostics_.add("stiffness_estimator", this, &StiffnessEstimatorRos::diagnose);
@@ -57,7 +61,7 @@ void StiffnessEstimatorRos::apply(const std::string& topic, const std_msgs::Head
 
 void StiffnessEstimatorRos::onTorque(const geometry_msgs::WrenchStamped::ConstPtr& msg) {
   apply("torque", msg->header, accepted_torque_, rejected_torque_,
-        [&]() -> const StiffnessEstimate& { return estimator_->setTorque(msg->wrench.torque.z); });
+        [&]() -> const StiffnessEstimate& { return estimator_->setTorque(msg->wrench.torque.z, pinionAngle(msg->header.stamp)); });
 }
 
 void StiffnessEstimatorRos::onPreload(const drivetrain_stiffness::Preload::ConstPtr& msg) {
@@ -69,11 +73,25 @@ void StiffnessEstimatorRos::onPreload(const drivetrain_stiffness::Preload::Const
         [&]() -> const StiffnessEstimate& { return estimator_->setPreloads(settings); });
 }
 
+double StiffnessEstimatorRos::pinionAngle(const ros::Time& stamp) {
+  // Until the dynamics integrate the rotation (issue 4), the pinion turns at the nominal speed:
+  // angle = omega (t - t0) with t0 the first torque stamp, so replayed data give the same phases.
+  if (!angle_origin_) angle_origin_ = stamp;
+  return pinion_speed_ * (stamp - *angle_origin_).toSec();
+}
+
 void StiffnessEstimatorRos::publish(const std_msgs::Header& header, const StiffnessEstimate& estimate) {
   drivetrain_stiffness::Stiffness out;
   out.header = header;
   out.torque = estimate.torque;
   out.mesh_force = estimate.mesh_force;
+  out.mesh_phase = estimate.mesh.phase;
+  out.mesh_stiffness = estimate.mesh.current.composite;
+  out.mesh_stiffness_mean = estimate.mesh.mean;
+  out.mesh_stiffness_drive = estimate.mesh.current.k1;
+  out.mesh_stiffness_back = estimate.mesh.current.k2;
+  out.drive_flank_loaded = estimate.mesh.current.contact != FlankContact::kBackOnly;
+  out.back_flank_loaded = estimate.mesh.current.contact != FlankContact::kDriveOnly;
   for (const SupportEstimate& s : estimate.supports) {
     drivetrain_stiffness::BearingStiffness b;
     const BearingSolution& sol = s.solution;

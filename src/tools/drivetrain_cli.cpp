@@ -2,6 +2,7 @@
 // non-zero exit code. No ROS needed.
 //   drivetrain_cli bearing --config FILE [--fr N] [--fa N] [--moment N·m] [--tilt free|constrained] [--preload N]
 //                          [--inner-interference m] [--outer-interference m]
+//   drivetrain_cli mesh --config FILE [--model potential_energy|kuang_yang|iso6336] [--samples N] [--torque N·m]
 #include <CLI/CLI.hpp>
 #include <iostream>
 #include <optional>
@@ -43,6 +44,23 @@ int runBearing(const BearingArgs& args) {
   return 0;
 }
 
+struct MeshArgs {
+  std::string config;
+  std::optional<std::string> model;
+  int samples = 100;
+  double torque = 0.0;
+};
+
+int runMesh(const MeshArgs& args) {
+  ds::RigConfig rig = ds::loadGearFile(args.config);
+  if (args.model) rig.mesh_model = ds::parseMeshStiffnessModel("--model", *args.model);
+  if (args.samples < 1 || args.samples > 100000) ds::throwInvalid("--samples", args.samples, "must be in [1, 100000]");
+  const ds::AntiBacklashMesh mesh(rig.gears, rig.anti_backlash, rig.mesh_model, rig.mesh_samples);
+  const double force = ds::meshForce(rig.gears, 0, args.torque);  // pinion torque -> LOA force
+  std::cout << ds::meshJson(mesh, args.samples, force).dump(2) << std::endl;
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -60,6 +78,13 @@ int main(int argc, char** argv) {
   cmd->add_option("--inner-interference", bearing.inner_interference, "diametral inner-ring interference [m]");
   cmd->add_option("--outer-interference", bearing.outer_interference, "diametral outer-ring interference [m]");
 
+  MeshArgs mesh;
+  auto* mesh_cmd = app.add_subcommand("mesh", "involute geometry and (anti-backlash composite) mesh stiffness over one mesh period");
+  mesh_cmd->add_option("--config", mesh.config, "YAML file with 'gears:' (and optionally 'anti_backlash:', 'mesh:')")->required();
+  mesh_cmd->add_option("--model", mesh.model, "potential_energy (default), kuang_yang (unverified) or iso6336");
+  mesh_cmd->add_option("--samples", mesh.samples, "phases printed over one mesh period (default 100)");
+  mesh_cmd->add_option("--torque", mesh.torque, "pinion torque [N·m] setting the flank state (default 0)");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -67,6 +92,7 @@ int main(int argc, char** argv) {
   }
   try {
     if (app.got_subcommand(cmd)) return runBearing(bearing);
+    if (app.got_subcommand(mesh_cmd)) return runMesh(mesh);
   } catch (const ds::InvalidInput& e) {
     std::cerr << "drivetrain_cli: invalid input: " << e.what() << std::endl;
     return 2;

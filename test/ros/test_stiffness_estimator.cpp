@@ -78,6 +78,12 @@ class NodeTest : public testing::Test {
       EXPECT_TRUE(std::isfinite(s.bearings[i].radial_stiffness));
       for (double v : s.bearings[i].stiffness_matrix) EXPECT_TRUE(std::isfinite(v));
     }
+    EXPECT_NEAR(s.mesh_phase, expected.mesh.phase, 1e-9);
+    EXPECT_NEAR(s.mesh_stiffness, expected.mesh.current.composite, 1e-6 * expected.mesh.current.composite);
+    EXPECT_NEAR(s.mesh_stiffness_mean, expected.mesh.mean, 1e-6 * expected.mesh.mean);
+    EXPECT_TRUE(s.drive_flank_loaded);
+    EXPECT_TRUE(s.back_flank_loaded);  // 0.5 N m is far inside the anti-backlash preload window
+    EXPECT_GT(s.mesh_stiffness, 5e7);
   }
 
   // Waits for a diagnostics status whose key `key` reaches at least `count`.
@@ -110,8 +116,10 @@ TEST_F(NodeTest, AnswersGoodInputAndSurvivesBadInput) {
   preload_pub_.publish(preload(10.0, 1200.0, 800.0, 5e-6, 5e-6));
   reference_->setPreloads({{"pinion_bearing", 1200.0, 800.0, 5e-6, 5e-6}, {"gear_bearing", 1200.0, 800.0, 5e-6, 5e-6}});
   expectAnswer(10.0, reference_->current());
+  // The node's pinion angle is omega (t - t0), t0 = the first torque stamp, omega = ~pinion_speed_rpm.
+  const double omega = 1000.0 * 2 * M_PI / 60;
   sendTorque(0.5, 11.0);
-  expectAnswer(11.0, reference_->setTorque(0.5));
+  expectAnswer(11.0, reference_->setTorque(0.5, 0.0));
 
   // 2. NaN torque, absurd torque, negative and NaN preload, unknown bearing: no output, counted.
   sendTorque(std::nan(""), 12.0);
@@ -131,8 +139,8 @@ TEST_F(NodeTest, AnswersGoodInputAndSurvivesBadInput) {
   EXPECT_TRUE(warned);
 
   // 3. The next good input is answered correctly: state was not poisoned.
-  sendTorque(0.25, 13.0);
-  expectAnswer(13.0, reference_->setTorque(0.25));
+  sendTorque(0.25, 13.0137);
+  expectAnswer(13.0137, reference_->setTorque(0.25, omega * 2.0137));
 }
 
 int main(int argc, char** argv) {

@@ -17,6 +17,10 @@ namespace drivetrain_stiffness {
 BearingSupportConfig parseBearing(const YAML::Node& node, const std::string& where);
 /// Loads a file with a top-level `bearing:` block (config/bearings/*.yaml).
 BearingSupportConfig loadBearingFile(const std::string& path);
+/// Parses a `gears:` mapping (and optional `anti_backlash:` / `mesh:` siblings of `root`).
+void parseGears(const YAML::Node& root, const std::string& where, RigConfig& rig);
+/// Loads a file with `gears:` (and optionally `anti_backlash:`, `mesh:`); `bearings:` is ignored.
+RigConfig loadGearFile(const std::string& path);
 /// Loads a gearbox file with `gears:` and `bearings:` (config/gearboxes/*.yaml). A bearing entry
 /// may hold its keys inline or name a bearing file with `file:` (relative to the gearbox file).
 RigConfig loadRigFile(const std::string& path);

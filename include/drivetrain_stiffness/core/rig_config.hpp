@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "drivetrain_stiffness/core/bearing_support.hpp"
+#include "drivetrain_stiffness/core/anti_backlash_mesh.hpp"
 #include "drivetrain_stiffness/core/gear_geometry.hpp"
 
 namespace drivetrain_stiffness {
@@ -25,6 +26,9 @@ struct BearingSupportConfig {
 
 struct RigConfig {
   GearPairSpec gears;
+  AntiBacklashSpec anti_backlash;          ///< spring_stiffness 0 = an ordinary (single) gear
+  MeshStiffnessModel mesh_model = MeshStiffnessModel::kPotentialEnergy;
+  int mesh_samples = 256;                  ///< table samples over the path of contact
   std::vector<BearingSupportConfig> bearings;
 };
 

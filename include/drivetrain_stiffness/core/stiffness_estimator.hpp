@@ -6,6 +6,7 @@
 // solution. No clock is read: the caller stamps the results.
 #pragma once
 
+#include <array>
 #include <memory>
 #include <string>
 #include <vector>
@@ -37,10 +38,17 @@ struct SupportEstimate {
   BearingSolution solution;
 };
 
+struct MeshEstimate {
+  double phase = 0.0;          ///< mesh phase in [0, 1)
+  CompositeMesh current;       ///< k1, k2, k_chain, composite and flank state at this phase and load
+  double mean = 0.0;           ///< composite stiffness averaged over a mesh period, same flank state [N/m]
+};
+
 struct StiffnessEstimate {
   double torque = 0.0;       ///< pinion input torque [N·m]
   double mesh_force = 0.0;   ///< |T| / r_b,pinion [N]
   std::vector<SupportEstimate> supports;
+  MeshEstimate mesh;
 };
 
 class StiffnessEstimator {
@@ -48,9 +56,10 @@ class StiffnessEstimator {
   /// Validates the rig and limits and solves the initial state (torque 0, preloads from the config).
   StiffnessEstimator(const RigConfig& rig, const EstimatorLimits& limits = {});
 
-  /// New pinion torque [N·m]; the mesh force F = |T| / r_b (seed 000 eq 14) loads every support
-  /// radially in proportion to its mesh_load_share, on top of its radial preload.
-  const StiffnessEstimate& setTorque(double torque);
+  /// New pinion torque [N·m] at pinion angle [rad]; the mesh force F = |T| / r_b (seed 000 eq 14)
+  /// loads every support radially in proportion to its mesh_load_share, on top of its radial
+  /// preload, and with its sign sets the anti-backlash flank state.
+  const StiffnessEstimate& setTorque(double torque, double pinion_angle = 0.0);
   /// New settings for the named supports (others keep theirs). Unknown names are an error.
   const StiffnessEstimate& setPreloads(const std::vector<PreloadSetting>& settings);
   /// Back to the configured preloads and zero torque (e.g. after a time jump).
@@ -58,6 +67,7 @@ class StiffnessEstimator {
 
   const StiffnessEstimate& current() const { return estimate_; }
   const RigConfig& rig() const { return rig_; }
+  const AntiBacklashMesh& mesh() const { return mesh_; }
 
  private:
   struct Support {
@@ -65,13 +75,17 @@ class StiffnessEstimator {
     std::shared_ptr<const BearingSupport> model;
   };
   /// Solves all supports for `torque` with `supports`; throws without touching the state.
-  StiffnessEstimate solveAll(double torque, const std::vector<Support>& supports) const;
+  StiffnessEstimate solveAll(double torque, double pinion_angle, const std::vector<Support>& supports) const;
+  MeshEstimate meshAt(double signed_mesh_force, double pinion_angle) const;
   static std::shared_ptr<const BearingSupport> build(const BearingSupportConfig& c);
 
   RigConfig rig_;
   EstimatorLimits limits_;
+  AntiBacklashMesh mesh_;
+  std::array<double, 3> mean_k1_kchain_{};  ///< period means of k1, k_chain (for the flank state) and k1 + k_chain
   std::vector<Support> supports_;
   StiffnessEstimate estimate_;
+  double last_pinion_angle_ = 0.0;
 };
 
 }  // namespace drivetrain_stiffness

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <string>
 
 #include <diagnostic_updater/diagnostic_updater.h>
@@ -31,6 +32,7 @@ class StiffnessEstimatorRos {
   void apply(const std::string& topic, const std_msgs::Header& header, std::uint64_t& accepted,
              std::uint64_t& rejected, Update update);
   void publish(const std_msgs::Header& header, const StiffnessEstimate& estimate);
+  double pinionAngle(const ros::Time& stamp);
   void reject(const std::string& topic, const std::string& reason);
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status);
 
@@ -46,6 +48,8 @@ class StiffnessEstimatorRos {
   std::uint64_t unreachable_ = 0;
   std::uint64_t rejected_at_last_report_ = 0;
   std::string last_rejection_;
+  double pinion_speed_ = 0.0;                 // [rad/s]
+  std::optional<ros::Time> angle_origin_;
 };
 
 }  // namespace drivetrain_stiffness

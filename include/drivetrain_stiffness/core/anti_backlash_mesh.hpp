@@ -1,0 +1,85 @@
+// Composite mesh stiffness of a scissor (anti-backlash) gear, seed 000 eqs 1-2.
+//
+// The pinion meshes with the fixed half g1 on its drive flank (stiffness k1, the gear shaft's load
+// path) and with the loaded half g2 on its back flank (k2); g2 is pushed against the pinion by the
+// preloaded spring k_te with preload torque T_p, so the back path is k_c = k_te k2 / (k_te + k2).
+// With F_p = T_p / r_b,gear the spring's preload along the line of action, the equilibrium of the
+// pinion and of g2 for a relative approach x (derived in docs/gear_model.md section 3) gives
+//   drive-flank force F1 = F_p + k1 x,  back-flank force F2 = F_p - k_c x,  F1 - F2 = F_m,
+// so both flanks carry load, and k_s = k1 + k_c (seed 000 eq 1), while
+//   -F_p (1 + k_c/k1) <= F_m <= F_p (1 + k1/k_c).
+// Above the upper bound the back flank (g2) unloads: single-flank mesh k1, with the backlash of
+// seed 000 eq 17 on the back side. Below the lower bound (torque reversal beyond the preload) the
+// drive flank (g1) unloads and the reversed load runs through the spring: k_s = k_c.
+#pragma once
+
+#include <array>
+#include <memory>
+#include <vector>
+
+#include "drivetrain_stiffness/core/mesh_stiffness.hpp"
+
+namespace drivetrain_stiffness {
+
+struct AntiBacklashSpec {
+  double spring_stiffness = 0.0;   ///< k_te along the line of action [N/m] (seed 000 Table 1: 1e4 N/mm);
+                                   ///< 0 = an ordinary gear (drive flank only)
+  double preload_torque = 0.0;     ///< T_p about the gear axis [N·m] (seed 000 Table 1: 1000 N·mm)
+  double loaded_gear_face_width = 0.0;  ///< face width of g2 [m]; 0 = the pair's face width
+};
+
+enum class FlankContact { kBoth, kDriveOnly, kBackOnly };
+const char* toString(FlankContact contact);
+
+struct CompositeMesh {
+  double k1 = 0.0;          ///< drive flank (pinion-g1) [N/m]
+  double k2 = 0.0;          ///< back flank (pinion-g2) [N/m]
+  double k_chain = 0.0;     ///< k_te k2 / (k_te + k2) [N/m]
+  double composite = 0.0;   ///< stiffness of the mesh for this flank state [N/m]
+  FlankContact contact = FlankContact::kBoth;
+  int drive_pairs = 0, back_pairs = 0;
+};
+
+class AntiBacklashMesh {
+ public:
+  /// Builds the drive and back tables (potential-energy etc. per `model`) with `samples` points.
+  AntiBacklashMesh(const GearPairSpec& gears, const AntiBacklashSpec& spec, MeshStiffnessModel model, int samples = 256);
+
+  const SpurGearGeometry& geometry() const { return geometry_; }
+  const AntiBacklashSpec& spec() const { return spec_; }
+  MeshStiffnessModel model() const { return model_; }
+  bool verified() const { return verified_; }
+  double preloadForce() const { return preload_force_; }  ///< F_p = T_p / r_b,gear [N]
+
+  /// Flank state for mesh force F_m [N] along the LOA (positive: pinion drives) at given k1, k_c.
+  FlankContact flankContact(double mesh_force, double k1, double k_chain) const;
+  /// Composite stiffness at mesh phase `phase` in [0, 1) under mesh force F_m [N], from the phase
+  /// table: segments between the exact switching phases of both flanks, each sampled uniformly, so
+  /// the single/double steps stay sharp and the lookup needs no division.
+  CompositeMesh at(double phase, double mesh_force) const;
+  /// The same from the pair tables directly (reference for the phase table; slower).
+  CompositeMesh exactAt(double phase, double mesh_force) const;
+  /// Phases in [0, 1) where the number of drive or back pairs in contact changes.
+  const std::vector<double>& switchingPhases() const { return breaks_; }
+  /// Drive-flank-only table (the ordinary gear pair) and the g2 table.
+  const MeshStiffnessTable& driveTable() const { return *drive_; }
+  const MeshStiffnessTable& backTable() const { return *back_; }
+
+ private:
+  SpurGearGeometry geometry_;
+  AntiBacklashSpec spec_;
+  MeshStiffnessModel model_;
+  bool verified_ = true;
+  double preload_force_ = 0.0;
+  std::unique_ptr<MeshStiffnessTable> drive_, back_;
+
+  struct Segment {
+    double start = 0.0, scale = 0.0;  ///< scale = (samples - 1) / width
+    int drive_pairs = 0, back_pairs = 0;
+    std::vector<std::array<double, 3>> values;  ///< k1, k2, k_chain at uniform phases
+  };
+  std::vector<double> breaks_;
+  std::vector<Segment> segments_;
+};
+
+}  // namespace drivetrain_stiffness
