@@ -149,17 +149,19 @@ TEST(AntiBacklashMesh, FlankCriterionBothSides) {
   EXPECT_NEAR(nominal.k_chain, 1e7 * nominal.k2 / (1e7 + nominal.k2), 1e-6);
   const double upper = mesh.preloadForce() * (1 + nominal.k1 / nominal.k_chain);
   const double lower = -mesh.preloadForce() * (1 + nominal.k_chain / nominal.k1);
-  EXPECT_EQ(mesh.at(phi, upper * 0.999).contact, FlankContact::kBoth);
-  EXPECT_EQ(mesh.at(phi, upper * 1.001).contact, FlankContact::kDriveOnly);
-  EXPECT_NEAR(mesh.at(phi, upper * 1.001).composite, nominal.k1, 1e-6);
-  EXPECT_EQ(mesh.at(phi, lower * 0.999).contact, FlankContact::kBoth);
-  EXPECT_EQ(mesh.at(phi, lower * 1.001).contact, FlankContact::kBackOnly);
-  EXPECT_NEAR(mesh.at(phi, lower * 1.001).composite, nominal.k_chain, 1e-6);
+  EXPECT_EQ(mesh.exactAt(phi, upper * 0.999).contact, FlankContact::kBoth);
+  EXPECT_EQ(mesh.at(phi, upper * 0.999).contact, FlankContact::kBoth);  // the phase table agrees
+  EXPECT_EQ(mesh.exactAt(phi, upper * 1.001).contact, FlankContact::kDriveOnly);
+  EXPECT_NEAR(mesh.exactAt(phi, upper * 1.001).composite, nominal.k1, 1e-6);
+  EXPECT_EQ(mesh.exactAt(phi, lower * 0.999).contact, FlankContact::kBoth);
+  EXPECT_EQ(mesh.exactAt(phi, lower * 1.001).contact, FlankContact::kBackOnly);
+  EXPECT_NEAR(mesh.exactAt(phi, lower * 1.001).composite, nominal.k_chain, 1e-6);
   // At the bounds the unloading flank's force is zero: F2 = F_p - k_c x, F1 = F_p + k1 x, x = F_m / (k1 + k_c).
   const double x_up = upper / (nominal.k1 + nominal.k_chain), x_lo = lower / (nominal.k1 + nominal.k_chain);
   EXPECT_NEAR(mesh.preloadForce() - nominal.k_chain * x_up, 0.0, 1e-9);
   EXPECT_NEAR(mesh.preloadForce() + nominal.k1 * x_lo, 0.0, 1e-9);
   EXPECT_THROW(mesh.at(phi, NAN), InvalidInput);
+  EXPECT_THROW(mesh.exactAt(phi, NAN), InvalidInput);
   EXPECT_THROW(AntiBacklashMesh(test::seedPair(), AntiBacklashSpec{-1.0, 1.0, 0.0}, MeshStiffnessModel::kIso6336), InvalidInput);
 }
 
