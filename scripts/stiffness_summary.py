@@ -22,7 +22,8 @@ class Summary:
             self.printed_at = t
             parts = ["%s kr=%.4g N/m (Fr=%.0f N, Fa=%.0f N)" % (b.name, b.radial_stiffness, b.radial_load, b.axial_load)
                      for b in msg.bearings]
-            print("t=%5.2f s  T=%.4f N*m  Fm=%.2f N  %s" % (t, msg.torque, msg.mesh_force, "; ".join(parts)), flush=True)
+            print("t=%5.2f s  T=%.4f N*m  Fm=%.2f N  mesh ks=%.4g N/m (phase %.2f)  %s" % (
+                t, msg.torque, msg.mesh_force, msg.mesh_stiffness, msg.mesh_phase, "; ".join(parts)), flush=True)
 
 
 def main():
