@@ -74,6 +74,15 @@ FlankContact AntiBacklashMesh::flankContact(double mesh_force, double k1, double
   return FlankContact::kBoth;
 }
 
+void AntiBacklashMesh::applyFlankState(CompositeMesh& c, double mesh_force) const {
+  c.contact = flankContact(mesh_force, c.k1, c.k_chain);
+  switch (c.contact) {
+    case FlankContact::kBoth: c.composite = c.k1 + c.k_chain; break;  // seed 000 eq 1
+    case FlankContact::kDriveOnly: c.composite = c.k1; break;
+    case FlankContact::kBackOnly: c.composite = c.k_chain; break;
+  }
+}
+
 CompositeMesh AntiBacklashMesh::at(double phase, double mesh_force) const {
   // Hot path: check without building the field-name string unless the check fails.
   if (!std::isfinite(mesh_force)) throwInvalid("mesh_force", mesh_force, "must be a finite number");
@@ -95,12 +104,7 @@ CompositeMesh AntiBacklashMesh::at(double phase, double mesh_force) const {
   out.k_chain = lo[2] + w * (hi[2] - lo[2]);
   out.drive_pairs = seg.drive_pairs;
   out.back_pairs = seg.back_pairs;
-  out.contact = flankContact(mesh_force, out.k1, out.k_chain);
-  switch (out.contact) {
-    case FlankContact::kBoth: out.composite = out.k1 + out.k_chain; break;  // seed 000 eq 1
-    case FlankContact::kDriveOnly: out.composite = out.k1; break;
-    case FlankContact::kBackOnly: out.composite = out.k_chain; break;
-  }
+  applyFlankState(out, mesh_force);
   return out;
 }
 
@@ -118,12 +122,7 @@ CompositeMesh AntiBacklashMesh::exactAt(double phase, double mesh_force) const {
     out.k2 = 0.0;
     out.back_pairs = 0;
   }
-  out.contact = flankContact(mesh_force, out.k1, out.k_chain);
-  switch (out.contact) {
-    case FlankContact::kBoth: out.composite = out.k1 + out.k_chain; break;  // seed 000 eq 1
-    case FlankContact::kDriveOnly: out.composite = out.k1; break;
-    case FlankContact::kBackOnly: out.composite = out.k_chain; break;
-  }
+  applyFlankState(out, mesh_force);
   return out;
 }
 

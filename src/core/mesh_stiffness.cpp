@@ -262,22 +262,4 @@ double MeshStiffnessTable::drive(double phase) const {
   return k;
 }
 
-double MeshStiffnessTable::back(double phase) const {
-  std::array<double, 3> s;
-  const int n = geometry_.backPairs(phase, s);
-  double k = 0.0;
-  for (int i = 0; i < n; ++i) k += pair(s[i]);
-  return k;
-}
-
-int MeshStiffnessTable::drivePairs(double phase) const {
-  std::array<double, 3> s;
-  return geometry_.drivePairs(phase, s);
-}
-
-int MeshStiffnessTable::backPairs(double phase) const {
-  std::array<double, 3> s;
-  return geometry_.backPairs(phase, s);
-}
-
 }  // namespace drivetrain_stiffness

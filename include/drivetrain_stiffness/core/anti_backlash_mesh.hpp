@@ -66,6 +66,9 @@ class AntiBacklashMesh {
   const MeshStiffnessTable& backTable() const { return *back_; }
 
  private:
+  /// Sets the flank state and the composite stiffness of `c` for mesh force F_m.
+  void applyFlankState(CompositeMesh& c, double mesh_force) const;
+
   SpurGearGeometry geometry_;
   AntiBacklashSpec spec_;
   MeshStiffnessModel model_;

@@ -79,9 +79,6 @@ class MeshStiffnessTable {
   MeshStiffnessTable(const SpurGearGeometry& geometry, const ToothPairStiffness& model, int samples = 256);
   double pair(double s) const;                ///< one pair at LOA position s [N/m]
   double drive(double phase) const;           ///< drive-flank mesh stiffness at phase [N/m]
-  double back(double phase) const;            ///< back-flank mesh stiffness at phase [N/m]
-  int drivePairs(double phase) const;         ///< pairs in contact on the drive flank
-  int backPairs(double phase) const;
   const SpurGearGeometry& geometry() const { return geometry_; }
   int samples() const { return static_cast<int>(values_.size()); }
 
