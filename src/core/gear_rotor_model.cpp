@@ -1,0 +1,150 @@
+#include "drivetrain_stiffness/core/gear_rotor_model.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "drivetrain_stiffness/core/validation.hpp"
+
+namespace drivetrain_stiffness {
+namespace {
+
+// A compressive contact: spring force s = k g for g > 0 (g the penetration), damper c g' clipped so
+// the total stays in [0, 2 s] (never pulls, never more than doubles the spring force: Modelica
+// ElastoBacklash). Returns the force and, through the pointers, d(force)/dg and d(force)/dg'.
+double contact(double k, double c, double g, double g_rate, double* dk, double* dc, int* closed) {
+  if (!(g > 0.0) || k <= 0.0) {
+    *dk = *dc = 0.0;
+    *closed = 0;
+    return 0.0;
+  }
+  *closed = 1;
+  const double spring = k * g;
+  const double total = spring + c * g_rate;
+  if (total < 0.0) { *dk = *dc = 0.0; return 0.0; }
+  if (total > 2.0 * spring) { *dk = 2.0 * k; *dc = 0.0; return 2.0 * spring; }
+  *dk = k;
+  *dc = c;
+  return total;
+}
+
+}  // namespace
+
+void GearRotorParameters::validate() const {
+  requirePositive("dynamics.pinion_mass", pinion_mass);
+  requirePositive("dynamics.gear_mass", gear_mass);
+  requirePositive("dynamics.pinion_inertia", pinion_inertia);
+  requirePositive("dynamics.gear_inertia", gear_inertia);
+  requirePositive("dynamics.pinion_base_radius", pinion_base_radius);
+  requirePositive("dynamics.gear_base_radius", gear_base_radius);
+  for (int i = 0; i < 2; ++i) {
+    const std::string n = "[" + std::to_string(i) + "]";
+    requireNonNegative("dynamics.bearing_stiffness" + n, bearing_stiffness[i]);
+    requireNonNegative("dynamics.bearing_damping" + n, bearing_damping[i]);
+    requireNonNegative("dynamics.bearing_clearance" + n, bearing_clearance[i]);
+  }
+  requireNonNegative("dynamics.mesh_damping", mesh_damping);
+}
+
+double GearRotorParameters::equivalentMass() const {
+  return 1.0 / (pinion_base_radius * pinion_base_radius / pinion_inertia +
+                gear_base_radius * gear_base_radius / gear_inertia);
+}
+
+double ConstantExcitation::nextSwitch(double) const { return std::numeric_limits<double>::infinity(); }
+
+GearRotorModel::GearRotorModel(const GearRotorParameters& p, std::shared_ptr<const GearExcitation> excitation)
+    : p_(p), excitation_(std::move(excitation)) {
+  p_.validate();
+  if (!excitation_) throw InvalidInput("excitation: missing");
+  m_s_ = p_.equivalentMass();
+}
+
+GearRotorForces GearRotorModel::forces(double t, const State6& y) const {
+  MeshInstant m;
+  excitation_->at(t, m);
+  GearRotorForces f;
+  f.delta = y[2] + y[0] - y[1] - m.te;
+  f.delta_rate = y[5] + y[3] - y[4] - m.te_rate;
+  double dk, dc;
+  const double k_sum = m.k_drive + m.k_back;
+  if (m.k_back > 0.0 || m.preload_force > 0.0) {
+    // Anti-backlash: drive flank penetration g1 = delta + F_p/k1, back path g2 = F_p/k_c - delta.
+    // Mesh damping shared in proportion to the flank stiffness.
+    const double c1 = k_sum > 0.0 ? p_.mesh_damping * m.k_drive / k_sum : 0.0;
+    const double c2 = p_.mesh_damping - c1;
+    const double g1 = m.k_drive > 0.0 ? f.delta + m.preload_force / m.k_drive : -1.0;
+    const double g2 = m.k_back > 0.0 ? m.preload_force / m.k_back - f.delta : -1.0;
+    f.drive_flank = contact(m.k_drive, c1, g1, f.delta_rate, &dk, &dc, &f.regime.code[0]);
+    f.mesh_slope = dk;
+    f.mesh_damping_slope = dc;
+    f.back_flank = contact(m.k_back, c2, g2, -f.delta_rate, &dk, &dc, &f.regime.code[1]);
+  } else {
+    // Ordinary gear with backlash b (seed 000 eq 17): drive flank for delta > b, back flank for delta < -b.
+    f.drive_flank = contact(m.k_drive, p_.mesh_damping, f.delta - m.backlash, f.delta_rate, &dk, &dc, &f.regime.code[0]);
+    f.mesh_slope = dk;
+    f.mesh_damping_slope = dc;
+    f.back_flank = contact(m.k_drive, p_.mesh_damping, -f.delta - m.backlash, -f.delta_rate, &dk, &dc, &f.regime.code[1]);
+  }
+  // F = F1 - F2 with g2 decreasing in delta: both slopes add.
+  f.mesh = f.drive_flank - f.back_flank;
+  f.mesh_slope += dk;
+  f.mesh_damping_slope += dc;
+  f.drive_force = m.drive_force;
+  for (int i = 0; i < 2; ++i) {
+    const double x = y[i], v = y[3 + i], u = p_.bearing_clearance[i];
+    const double k = p_.bearing_stiffness[i], c = p_.bearing_damping[i];
+    int plus = 0, minus = 0;
+    double dk2, dc2;
+    const double fp = contact(k, c, x - u, v, &dk, &dc, &plus);
+    const double fm = contact(k, c, -x - u, -v, &dk2, &dc2, &minus);
+    f.bearing[i] = fp - fm;  // restoring force on the shaft is -bearing[i]
+    f.bearing_slope[i] = dk + dk2;
+    f.bearing_damping_slope[i] = dc + dc2;
+    f.regime.code[2 + i] = plus - minus;
+  }
+  return f;
+}
+
+void GearRotorModel::rhs(double t, const State6& y, State6& dydt) const {
+  const GearRotorForces f = forces(t, y);
+  dydt[0] = y[3];
+  dydt[1] = y[4];
+  dydt[2] = y[5];
+  dydt[3] = (-f.bearing[0] - f.mesh) / p_.pinion_mass;
+  dydt[4] = (-f.bearing[1] + f.mesh) / p_.gear_mass;
+  dydt[5] = (f.drive_force - f.mesh) / m_s_;
+}
+
+Matrix6 GearRotorModel::jacobian(double t, const State6& y) const {
+  // Exact inside the contact regime at (t, y): the forces are piecewise linear in (delta, delta')
+  // and (x_b, x_b'), with delta = x + x_p - x_g - e.
+  const GearRotorForces f = forces(t, y);
+  Matrix6 j = Matrix6::Zero();
+  j(0, 3) = j(1, 4) = j(2, 5) = 1.0;
+  const Eigen::Vector3d d_delta(1.0, -1.0, 1.0);  // d delta / d (x_p, x_g, x)
+  const Eigen::Vector3d inv_m(1.0 / p_.pinion_mass, 1.0 / p_.gear_mass, 1.0 / m_s_);
+  const Eigen::Vector3d sign(-1.0, 1.0, -1.0);    // mesh force enters pinion -, gear +, x -
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) {
+      j(3 + r, c) = sign[r] * f.mesh_slope * d_delta[c] * inv_m[r];
+      j(3 + r, 3 + c) = sign[r] * f.mesh_damping_slope * d_delta[c] * inv_m[r];
+    }
+  }
+  for (int i = 0; i < 2; ++i) {
+    j(3 + i, i) -= f.bearing_slope[i] * inv_m[i];
+    j(3 + i, 3 + i) -= f.bearing_damping_slope[i] * inv_m[i];
+  }
+  return j;
+}
+
+double GearRotorModel::energy(double t, const State6& y) const {
+  MeshInstant m;
+  excitation_->at(t, m);
+  const double delta = y[2] + y[0] - y[1] - m.te;
+  const double ks = m.k_drive + m.k_back;
+  return 0.5 * (p_.pinion_mass * y[3] * y[3] + p_.gear_mass * y[4] * y[4] + m_s_ * y[5] * y[5]) +
+         0.5 * (p_.bearing_stiffness[0] * y[0] * y[0] + p_.bearing_stiffness[1] * y[1] * y[1] + ks * delta * delta);
+}
+
+}  // namespace drivetrain_stiffness

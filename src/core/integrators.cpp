@@ -1,0 +1,257 @@
+#include "drivetrain_stiffness/core/integrators.hpp"
+
+#include <Eigen/LU>
+#include <algorithm>
+#include <cmath>
+
+#include "drivetrain_stiffness/core/validation.hpp"
+
+namespace drivetrain_stiffness {
+namespace {
+
+void checkState(const State6& y, double t, double h, IntegratorMethod method, const IntegratorOptions& o) {
+  if (!y.allFinite() || y.head<3>().cwiseAbs().maxCoeff() > o.divergence_limit) {
+    throw UnstableIntegration(std::string("integrator ") + toString(method) + " diverged at t = " + formatValue(t) +
+                              " s with step " + formatValue(h) + " s: the step is beyond the stability limit of the "
+                              "stiffest mode (explicit methods: h < 2.79 / omega_max) or the model has no bounded response");
+  }
+}
+
+// Output grid: observe every grid time t0 + k interval in (previous step end, t_next], evaluated
+// by `value` (the state, or the dense output inside a step).
+template <typename Value>
+void emit(double t_next, double t0, double interval, long& next_index, const Observer& observe, Value value) {
+  for (double t_out = t0 + next_index * interval; t_out <= t_next + 1e-9 * interval; t_out = t0 + next_index * interval) {
+    observe(t_out, value(std::min(t_out, t_next)));
+    ++next_index;
+  }
+}
+
+long fixedStepCount(double span, double h, double interval, long* per_output) {
+  const double n_out = interval / h;
+  *per_output = std::lround(n_out);
+  if (*per_output < 1 || std::abs(n_out - *per_output) > 1e-6 * n_out) {
+    throwInvalid("output_interval", interval, "must be a whole multiple of the step " + formatValue(h));
+  }
+  const double n = span / h;
+  if (std::abs(n - std::round(n)) > 1e-6 * std::max(1.0, n)) {
+    throwInvalid("duration", span, "must be a whole multiple of the step " + formatValue(h));
+  }
+  return std::lround(n);
+}
+
+// ---- Dormand-Prince 5(4) coefficients (Dormand & Prince, J. Comput. Appl. Math. 6 (1980) 19; dense
+// output after Hairer, Norsett & Wanner, Solving ODEs I, sec. II.6, routine DOPRI5). ----
+constexpr double c2 = 1.0 / 5, c3 = 3.0 / 10, c4 = 4.0 / 5, c5 = 8.0 / 9;
+constexpr double a21 = 1.0 / 5;
+constexpr double a31 = 3.0 / 40, a32 = 9.0 / 40;
+constexpr double a41 = 44.0 / 45, a42 = -56.0 / 15, a43 = 32.0 / 9;
+constexpr double a51 = 19372.0 / 6561, a52 = -25360.0 / 2187, a53 = 64448.0 / 6561, a54 = -212.0 / 729;
+constexpr double a61 = 9017.0 / 3168, a62 = -355.0 / 33, a63 = 46732.0 / 5247, a64 = 49.0 / 176, a65 = -5103.0 / 18656;
+constexpr double a71 = 35.0 / 384, a73 = 500.0 / 1113, a74 = 125.0 / 192, a75 = -2187.0 / 6784, a76 = 11.0 / 84;
+constexpr double e1 = 71.0 / 57600, e3 = -71.0 / 16695, e4 = 71.0 / 1920, e5 = -17253.0 / 339200, e6 = 22.0 / 525, e7 = -1.0 / 40;
+constexpr double d1 = -12715105075.0 / 11282082432, d3 = 87487479700.0 / 32700410799, d4 = -10690763975.0 / 1880347072,
+                 d5 = 701980252875.0 / 199316789632, d6 = -1453857185.0 / 822651844, d7 = 69997945.0 / 29380423;
+
+struct DenseStep {
+  State6 r1, r2, r3, r4, r5;
+  double t = 0.0, h = 0.0;
+  State6 at(double time) const {
+    const double s = (time - t) / h, s1 = 1.0 - s;
+    return r1 + s * (r2 + s1 * (r3 + s * (r4 + s1 * r5)));
+  }
+};
+
+class Dopri5 {
+ public:
+  Dopri5(const GearRotorModel& m, const IntegratorOptions& o, IntegrationStats& st) : m_(m), o_(o), st_(st) {}
+
+  // One attempted step of size h from (t, y) with k1 = f(t, y). Fills y_new, k7 = f(t+h, y_new), the
+  // dense output and returns the scaled error norm.
+  double attempt(double t, const State6& y, const State6& k1, double h, State6& y_new, State6& k7, DenseStep& dense) {
+    State6 k2, k3, k4, k5, k6;
+    m_.rhs(t + c2 * h, y + h * a21 * k1, k2);
+    m_.rhs(t + c3 * h, y + h * (a31 * k1 + a32 * k2), k3);
+    m_.rhs(t + c4 * h, y + h * (a41 * k1 + a42 * k2 + a43 * k3), k4);
+    m_.rhs(t + c5 * h, y + h * (a51 * k1 + a52 * k2 + a53 * k3 + a54 * k4), k5);
+    m_.rhs(t + h, y + h * (a61 * k1 + a62 * k2 + a63 * k3 + a64 * k4 + a65 * k5), k6);
+    y_new = y + h * (a71 * k1 + a73 * k3 + a74 * k4 + a75 * k5 + a76 * k6);
+    m_.rhs(t + h, y_new, k7);
+    st_.rhs_evaluations += 6;
+    const State6 err = h * (e1 * k1 + e3 * k3 + e4 * k4 + e5 * k5 + e6 * k6 + e7 * k7);
+    dense.t = t;
+    dense.h = h;
+    dense.r1 = y;
+    dense.r2 = y_new - y;
+    dense.r3 = h * k1 - dense.r2;
+    dense.r4 = dense.r2 - h * k7 - dense.r3;
+    dense.r5 = h * (d1 * k1 + d3 * k3 + d4 * k4 + d5 * k5 + d6 * k6 + d7 * k7);
+    double sum = 0.0;
+    for (int i = 0; i < 6; ++i) {
+      const double scale = o_.absolute_tolerance * (i < 3 ? 1.0 : vel_scale_) +
+                           o_.relative_tolerance * std::max(std::abs(y[i]), std::abs(y_new[i]));
+      sum += (err[i] / scale) * (err[i] / scale);
+    }
+    return std::sqrt(sum / 6.0);
+  }
+
+  void setVelocityScale(double s) { vel_scale_ = s; }
+
+ private:
+  const GearRotorModel& m_;
+  const IntegratorOptions& o_;
+  IntegrationStats& st_;
+  double vel_scale_ = 1.0;
+};
+
+ContactRegime regimeAt(const GearRotorModel& m, double t, const State6& y) { return m.forces(t, y).regime; }
+
+}  // namespace
+
+IntegratorMethod parseIntegratorMethod(const std::string& field, const std::string& text) {
+  if (text == "rk4") return IntegratorMethod::kRk4;
+  if (text == "trapezoidal") return IntegratorMethod::kTrapezoidal;
+  if (text == "dopri5") return IntegratorMethod::kDopri5;
+  throw InvalidInput(field + " = '" + text + "': must be 'rk4', 'trapezoidal' or 'dopri5'");
+}
+
+const char* toString(IntegratorMethod m) {
+  switch (m) {
+    case IntegratorMethod::kRk4: return "rk4";
+    case IntegratorMethod::kTrapezoidal: return "trapezoidal";
+    case IntegratorMethod::kDopri5: return "dopri5";
+  }
+  return "?";
+}
+
+State6 integrate(const GearRotorModel& model, IntegratorMethod method, const IntegratorOptions& o, double t0,
+                 const State6& y0, double t_end, double interval, const Observer& observe, IntegrationStats* stats_out) {
+  requireFinite("t0", t0);
+  requireFinite("t_end", t_end);
+  if (!(t_end >= t0)) throwInvalid("t_end", t_end, "must be >= t0 = " + formatValue(t0) + " (time must not run backwards)");
+  requirePositive("output_interval", interval);
+  requirePositive("step", o.step);
+  if (!y0.allFinite()) throw InvalidInput("initial state: contains a non-finite value");
+  IntegrationStats stats;
+  long next_out = 0;
+  if (observe) { observe(t0, y0); next_out = 1; }
+  State6 y = y0;
+
+  if (method == IntegratorMethod::kRk4 || method == IntegratorMethod::kTrapezoidal) {
+    long per_output = 1;
+    const double h = o.step;
+    const long n = fixedStepCount(t_end - t0, h, interval, &per_output);
+    State6 k1, k2, k3, k4;
+    for (long i = 0; i < n; ++i) {
+      const double t = t0 + i * h;  // no accumulated round-off in t
+      if (method == IntegratorMethod::kRk4) {
+        model.rhs(t, y, k1);
+        model.rhs(t + 0.5 * h, y + 0.5 * h * k1, k2);
+        model.rhs(t + 0.5 * h, y + 0.5 * h * k2, k3);
+        model.rhs(t + h, y + h * k3, k4);
+        y += h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4);
+        stats.rhs_evaluations += 4;
+      } else {
+        // y1 = y0 + h/2 (f(t, y0) + f(t + h, y1)): Newton on g(y1) = y1 - y0 - h/2 (f0 + f(y1)).
+        model.rhs(t, y, k1);
+        State6 y1 = y + h * k1;  // explicit Euler predictor
+        // The forces are piecewise linear and the Jacobian exact within a contact regime, so Newton
+        // ends in one or two iterations unless the step crosses a contact change.
+        for (int it = 0; it < 12; ++it) {
+          model.rhs(t + h, y1, k2);
+          const State6 g = y1 - y - 0.5 * h * (k1 + k2);
+          const Matrix6 a = Matrix6::Identity() - 0.5 * h * model.jacobian(t + h, y1);
+          const State6 dy = a.partialPivLu().solve(-g);
+          y1 += dy;
+          ++stats.newton_iterations;
+          stats.rhs_evaluations += 2;
+          const double scale = 1e-14 * (y1.head<3>().cwiseAbs().maxCoeff() + 1e-15);
+          const double vscale = 1e-14 * (y1.tail<3>().cwiseAbs().maxCoeff() + 1e-12);
+          if (dy.head<3>().cwiseAbs().maxCoeff() <= scale && dy.tail<3>().cwiseAbs().maxCoeff() <= vscale) break;
+        }
+        y = y1;
+      }
+      ++stats.steps;
+      checkState(y, t + h, h, method, o);
+      if (observe && (i + 1) % per_output == 0) observe(t0 + (i + 1) * h, y);
+    }
+    if (stats_out) *stats_out = stats;
+    return y;
+  }
+
+  // ---- dopri5 ----
+  IntegrationStats& st = stats;
+  Dopri5 dp(model, o, st);
+  // Velocities are compared with displacements through the fastest natural scale: omega_ref = sqrt(k/m).
+  MeshInstant mi;
+  model.excitation().at(t0, mi);
+  const GearRotorParameters& p = model.parameters();
+  const double k_ref = std::max({mi.k_drive + mi.k_back, p.bearing_stiffness[0], p.bearing_stiffness[1], 1.0});
+  const double m_ref = std::min({model.equivalentMass(), p.pinion_mass, p.gear_mass});
+  dp.setVelocityScale(std::sqrt(k_ref / m_ref));
+  double t = t0, h = std::min(o.step, o.max_step);
+  State6 k1, y_new, k7;
+  model.rhs(t, y, k1);
+  ++st.rhs_evaluations;
+  DenseStep dense;
+  double err_prev = 1e-4;
+  while (t < t_end) {
+    const double switch_time = model.excitation().nextSwitch(t);
+    double h_try = std::min({h, o.max_step, t_end - t});
+    bool hits_switch = false;
+    if (switch_time - t <= h_try) { h_try = switch_time - t; hits_switch = true; }
+    if (h_try < 1e-16 * std::max(1.0, std::abs(t))) {  // degenerate: step onto the switch
+      t = hits_switch ? switch_time : t_end;
+      model.rhs(t, y, k1);
+      continue;
+    }
+    const double err = dp.attempt(t, y, k1, h_try, y_new, k7, dense);
+    if (!(err <= 1.0)) {
+      ++st.rejected;
+      if (!std::isfinite(err)) { h = 0.1 * h_try; } else { h = h_try * std::max(0.2, 0.9 * std::pow(err, -0.2)); }
+      if (h < 1e-15 * std::max(1.0, std::abs(t))) checkState(State6::Constant(NAN), t, h, IntegratorMethod::kDopri5, o);
+      continue;
+    }
+    double t_new = t + h_try;
+    if (o.locate_events) {
+      const ContactRegime r0 = regimeAt(model, t, y);
+      if (regimeAt(model, t_new, y_new) != r0) {
+        // Earliest contact change on the dense output, by bisection in time.
+        double lo = t, hi = t_new;
+        for (int i = 0; i < 60 && hi - lo > 1e-14 * std::max(1.0, std::abs(t)); ++i) {
+          const double mid = 0.5 * (lo + hi);
+          if (regimeAt(model, mid, dense.at(mid)) == r0) lo = mid; else hi = mid;
+        }
+        if (hi - t > 1e-9 * h_try) {
+          // Redo the step up to the event so no step straddles the kink; the next step starts on it.
+          const double h_event = hi - t;
+          dp.attempt(t, y, k1, h_event, y_new, k7, dense);
+          t_new = t + h_event;
+          h_try = h_event;
+          ++st.events;
+        }
+      }
+    }
+    checkState(y_new, t_new, h_try, IntegratorMethod::kDopri5, o);
+    if (observe) emit(t_new, t0, interval, next_out, observe, [&](double tq) { return dense.at(tq); });
+    t = t_new;
+    y = y_new;
+    k1 = k7;
+    ++st.steps;
+    if (hits_switch && h_try == switch_time - dense.t) {
+      // A tooth entered or left: the right-hand side jumps, so FSAL's k7 is stale.
+      model.rhs(t, y, k1);
+      ++st.rhs_evaluations;
+      ++st.events;
+    }
+    // PI controller (Hairer et al., sec. IV.2): h_new = h err^-0.7/5 err_prev^0.4/5.
+    const double e = std::max(err, 1e-10);
+    const double fac = 0.9 * std::pow(e, -0.14) * std::pow(err_prev, 0.08);
+    h = h_try * std::clamp(fac, 0.2, 10.0);
+    err_prev = e;
+  }
+  if (stats_out) *stats_out = st;
+  return y;
+}
+
+}  // namespace drivetrain_stiffness
