@@ -144,6 +144,9 @@ const std::set<std::string> kGearKeys = {
     "poisson_ratio", "bore_diameter"};
 const std::set<std::string> kAntiBacklashKeys = {"spring_stiffness", "preload_torque", "loaded_gear_face_width"};
 const std::set<std::string> kMeshKeys = {"model", "samples"};
+const std::set<std::string> kDynamicsKeys = {
+    "pinion_mass", "gear_mass", "pinion_inertia", "gear_inertia", "mesh_damping_ratio",
+    "bearing_damping_ratio", "bearing_clearance", "speed_rpm", "transmission_error_amplitude", "backlash", "torque"};
 
 std::array<double, 2> readPair(const YAML::Node& node, const std::string& where, const std::string& name,
                                std::array<double, 2> fallback) {
@@ -208,11 +211,44 @@ void parseGears(const YAML::Node& root, const std::string& file, RigConfig& rig)
   }
 }
 
+static void parseDynamics(const YAML::Node& root, const std::string& file, RigConfig& rig) {
+  const YAML::Node d = root["dynamics"];
+  if (!d) return;
+  const std::string w = file + ": dynamics";
+  if (!d.IsMap()) throw InvalidInput(w + ": must be a mapping");
+  rejectUnknownKeys(d, w, kDynamicsKeys);
+  DynamicsConfig& c = rig.dynamics;
+  c.present = true;
+  c.pinion_mass = readDouble(d, w, "pinion_mass");
+  c.gear_mass = readDouble(d, w, "gear_mass");
+  c.pinion_inertia = readDouble(d, w, "pinion_inertia");
+  c.gear_inertia = readDouble(d, w, "gear_inertia");
+  c.mesh_damping_ratio = readDouble(d, w, "mesh_damping_ratio", c.mesh_damping_ratio);
+  c.bearing_damping_ratio = readDouble(d, w, "bearing_damping_ratio", c.bearing_damping_ratio);
+  c.bearing_clearance = readPair(d, w, "bearing_clearance", c.bearing_clearance);
+  c.speed_rpm = readDouble(d, w, "speed_rpm", c.speed_rpm);
+  c.transmission_error_amplitude = readDouble(d, w, "transmission_error_amplitude", c.transmission_error_amplitude);
+  c.backlash = readDouble(d, w, "backlash", c.backlash);
+  c.torque = readDouble(d, w, "torque", c.torque);
+  requirePositive("dynamics.pinion_mass", c.pinion_mass);
+  requirePositive("dynamics.gear_mass", c.gear_mass);
+  requirePositive("dynamics.pinion_inertia", c.pinion_inertia);
+  requirePositive("dynamics.gear_inertia", c.gear_inertia);
+  requireInHalfOpenRange("dynamics.mesh_damping_ratio", c.mesh_damping_ratio, 0.0, 1.0);
+  requireInHalfOpenRange("dynamics.bearing_damping_ratio", c.bearing_damping_ratio, 0.0, 1.0);
+  for (int i = 0; i < 2; ++i) requireNonNegative("dynamics.bearing_clearance[" + std::to_string(i) + "]", c.bearing_clearance[i]);
+  requirePositive("dynamics.speed_rpm", c.speed_rpm);
+  requireNonNegative("dynamics.transmission_error_amplitude", c.transmission_error_amplitude);
+  requireNonNegative("dynamics.backlash", c.backlash);
+  requireFinite("dynamics.torque", c.torque);
+}
+
 RigConfig loadGearFile(const std::string& path) {
   const YAML::Node root = loadFile(path);
   if (!root.IsMap()) throw InvalidInput(path + ": needs a top-level mapping with 'gears:'");
   RigConfig rig;
   parseGears(root, path, rig);
+  parseDynamics(root, path, rig);
   return rig;
 }
 
@@ -232,12 +268,13 @@ RigConfig loadRigFile(const std::string& path) {
   }
   for (const auto& item : root) {
     const std::string name = item.first.as<std::string>();
-    if (name != "gears" && name != "bearings" && name != "anti_backlash" && name != "mesh") {
+    if (name != "gears" && name != "bearings" && name != "anti_backlash" && name != "mesh" && name != "dynamics") {
       throw InvalidInput(path + ": " + name + ": unknown top-level key");
     }
   }
   RigConfig rig;
   parseGears(root, where, rig);
+  parseDynamics(root, where, rig);
 
   const YAML::Node list = root["bearings"];
   if (!list.IsSequence() || list.size() == 0) throw InvalidInput(where + ": bearings: must be a non-empty list");

@@ -1,0 +1,54 @@
+// Excitation of the gear-rotor model from the rig: pinion torque input (constant, sine, steps,
+// chirp), the mean load torque that balances it, the anti-backlash mesh stiffness looked up by
+// mesh phase (pinion turning at a nominal speed), and a manufacturing transmission error at the
+// mesh frequency. Tooth-count switches are reported as exact time events.
+#pragma once
+
+#include <memory>
+#include <vector>
+
+#include "drivetrain_stiffness/core/anti_backlash_mesh.hpp"
+#include "drivetrain_stiffness/core/gear_rotor_model.hpp"
+
+namespace drivetrain_stiffness {
+
+/// Pinion input torque T_p(t) [N·m].
+struct TorqueProfile {
+  enum class Kind { kConstant, kSine, kSteps, kChirp };
+  Kind kind = Kind::kConstant;
+  double mean = 0.0;             ///< [N·m]; also sets the balancing load torque T_g = mean r_g / r_p
+  double amplitude = 0.0;        ///< sine / chirp amplitude [N·m]
+  double frequency = 0.0;        ///< sine frequency [Hz]
+  double chirp_start = 0.0, chirp_end = 0.0, chirp_duration = 1.0;  ///< linear chirp [Hz, Hz, s]
+  std::vector<std::pair<double, double>> steps;  ///< (time [s], torque [N·m]) from that time on
+  double at(double t) const;
+  /// Validates the numbers (finite, non-negative frequencies, ordered steps); names the field.
+  void validate() const;
+};
+
+struct RigExcitationSpec {
+  double speed = 0.0;                 ///< pinion speed [rad/s] (sets the mesh phase)
+  double initial_phase = 0.0;         ///< mesh phase at t = 0
+  double te_amplitude = 0.0;          ///< manufacturing TE amplitude at the mesh frequency [m]
+  double backlash = 0.0;              ///< half backlash of an ordinary gear [m] (seed 000 eq 17 b)
+  TorqueProfile torque;
+};
+
+class RigExcitation : public GearExcitation {
+ public:
+  RigExcitation(std::shared_ptr<const AntiBacklashMesh> mesh, const GearRotorParameters& params,
+                const RigExcitationSpec& spec);
+  void at(double t, MeshInstant& out) const override;
+  double nextSwitch(double t) const override;
+  double meshFrequency() const { return mesh_frequency_; }  ///< [Hz]
+  const AntiBacklashMesh& mesh() const { return *mesh_; }
+  const RigExcitationSpec& spec() const { return spec_; }
+
+ private:
+  std::shared_ptr<const AntiBacklashMesh> mesh_;
+  RigExcitationSpec spec_;
+  double mesh_frequency_ = 0.0, r_p_over_i_p_ = 0.0, load_term_ = 0.0, m_s_ = 0.0;
+  std::vector<double> switches_;
+};
+
+}  // namespace drivetrain_stiffness

@@ -1,0 +1,213 @@
+#include "drivetrain_stiffness/core/scenes.hpp"
+
+#include <Eigen/Dense>
+#include <cmath>
+
+#include "drivetrain_stiffness/core/rig_excitation.hpp"
+#include "drivetrain_stiffness/core/stiffness_estimator.hpp"
+#include "drivetrain_stiffness/core/validation.hpp"
+
+namespace drivetrain_stiffness {
+namespace {
+constexpr double kTwoPi = 6.283185307179586;
+
+// Kahraman & Singh style excitation (gear.md section 3, the Fraunhofer-SCAI regression case):
+// k(tau) = k0 [1 - a1 cos(W tau) - a2 cos(2 W tau) - a3 cos(3 W tau)], dead zone of half-gap 1,
+// force F_m + F_te W^2 cos(W tau), unit equivalent mass.
+class OscillatorExcitation : public GearExcitation {
+ public:
+  OscillatorExcitation(double w, double f_m, double f_te, std::array<double, 3> ripple)
+      : w_(w), f_m_(f_m), f_te_(f_te), ripple_(ripple) {}
+  void at(double t, MeshInstant& out) const override {
+    out.k_drive = 1.0 - ripple_[0] * std::cos(w_ * t) - ripple_[1] * std::cos(2 * w_ * t) - ripple_[2] * std::cos(3 * w_ * t);
+    out.k_back = 0.0;
+    out.preload_force = 0.0;
+    out.backlash = 1.0;
+    out.te = out.te_rate = 0.0;
+    out.drive_force = f_m_ + f_te_ * w_ * w_ * std::cos(w_ * t);
+    out.phase = std::fmod(w_ * t / kTwoPi, 1.0);
+    out.segment = 0;
+  }
+  double nextSwitch(double) const override { return INFINITY; }
+
+ private:
+  double w_, f_m_, f_te_;
+  std::array<double, 3> ripple_;
+};
+
+Scene oscillatorScene(const std::string& name, double w, double zeta, double f_m, double f_te, std::array<double, 3> ripple,
+                      int periods, const std::string& description) {
+  // Unit equivalent mass (r_p = r_g = 1, I_p = I_g = 2 gives m_s = 1); the shafts are made
+  // immovable (huge masses, no bearing stiffness) so the model reduces to the single DOF x.
+  GearRotorParameters p;
+  p.pinion_mass = p.gear_mass = 1e12;
+  p.pinion_inertia = p.gear_inertia = 2.0;
+  p.pinion_base_radius = p.gear_base_radius = 1.0;
+  p.mesh_damping = 2.0 * zeta;
+  Scene s;
+  s.name = name;
+  s.description = description;
+  s.model = std::make_shared<GearRotorModel>(p, std::make_shared<OscillatorExcitation>(w, f_m, f_te, ripple));
+  s.initial = State6::Zero();
+  s.initial[2] = 1.0 + f_m;  // start just in contact
+  s.duration = periods * kTwoPi / w;
+  s.output_interval = 0.015;  // gear.md: the regression case samples at d tau = 0.015
+  s.duration = std::round(s.duration / s.output_interval) * s.output_interval;
+  s.transient = 0.5 * s.duration;
+  s.suggested_step = 0.015 / 5;
+  s.units = "dimensionless";
+  return s;
+}
+
+// Radial stiffness of the supports on each shaft at the mean torque, from the bearing model.
+std::array<double, 2> bearingStiffness(const RigConfig& rig, double torque) {
+  StiffnessEstimator estimator(rig);
+  const StiffnessEstimate& e = estimator.setTorque(torque);
+  std::array<double, 2> k{{0.0, 0.0}};
+  for (std::size_t i = 0; i < e.supports.size(); ++i) k[rig.bearings[i].shaft] += e.supports[i].solution.radialStiffness();
+  return k;
+}
+
+struct RigSceneSetup {
+  RigConfig rig;
+  RigExcitationSpec excitation;
+  double duration = 0.03;
+  double bearing_scale = 1.0;    ///< multiply the bearing-model stiffness
+  bool parametric = false;       ///< choose the speed for mesh frequency = 2 f_1
+};
+
+Scene rigScene(const std::string& name, const std::string& description, RigSceneSetup setup) {
+  const RigConfig& rig = setup.rig;
+  const DynamicsConfig& d = rig.dynamics;
+  auto mesh = std::make_shared<AntiBacklashMesh>(rig.gears, rig.anti_backlash, rig.mesh_model, rig.mesh_samples);
+  GearRotorParameters p;
+  p.pinion_mass = d.pinion_mass;
+  p.gear_mass = d.gear_mass;
+  p.pinion_inertia = d.pinion_inertia;
+  p.gear_inertia = d.gear_inertia;
+  p.pinion_base_radius = mesh->geometry().baseRadius(0);
+  p.gear_base_radius = mesh->geometry().baseRadius(1);
+  const std::array<double, 2> kb = bearingStiffness(rig, setup.excitation.torque.mean);
+  double k_mean = 0.0;
+  for (int i = 0; i < 256; ++i) {
+    const CompositeMesh c = mesh->at((i + 0.5) / 256, 0.0);
+    k_mean += (c.k1 + (rig.anti_backlash.spring_stiffness > 0 ? c.k_chain : 0.0)) / 256;
+  }
+  for (int i = 0; i < 2; ++i) {
+    p.bearing_stiffness[i] = setup.bearing_scale > 0 ? kb[i] * setup.bearing_scale : 0.0;
+    if (setup.bearing_scale > 1e3) p.bearing_stiffness[i] = setup.bearing_scale * k_mean;  // near-rigid: ratio to the mesh
+    const double m = i == 0 ? p.pinion_mass : p.gear_mass;
+    p.bearing_damping[i] = 2.0 * d.bearing_damping_ratio * std::sqrt(p.bearing_stiffness[i] * m);
+    p.bearing_clearance[i] = d.bearing_clearance[i];
+  }
+  p.mesh_damping = 2.0 * d.mesh_damping_ratio * std::sqrt(k_mean * p.equivalentMass());
+  if (setup.parametric) {
+    // Lowest natural frequency of the linearised system (docs/model.md), mesh frequency = 2 f_1.
+    Eigen::Matrix3d mm = Eigen::Vector3d(p.pinion_mass, p.gear_mass, p.equivalentMass()).asDiagonal();
+    Eigen::Matrix3d kk;
+    kk << p.bearing_stiffness[0] + k_mean, -k_mean, k_mean, -k_mean, p.bearing_stiffness[1] + k_mean, -k_mean, k_mean, -k_mean, k_mean;
+    const double f1 = std::sqrt(Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::Matrix3d>(kk, mm).eigenvalues()[0]) / kTwoPi;
+    setup.excitation.speed = 2.0 * f1 * kTwoPi / rig.gears.teeth[0];
+  }
+  Scene s;
+  s.name = name;
+  s.description = description;
+  auto excitation = std::make_shared<RigExcitation>(mesh, p, setup.excitation);
+  s.model = std::make_shared<GearRotorModel>(p, excitation);
+  s.initial = staticEquilibrium(*s.model, 0.0);
+  s.duration = setup.duration;
+  s.output_interval = 1e-5;
+  s.transient = 0.3 * s.duration;
+  // Explicit methods: 20 steps per period of the stiffest mode, rounded to divide the output interval.
+  const double w_max = std::sqrt(std::max({(k_mean + p.bearing_stiffness[0]) / p.pinion_mass,
+                                           (k_mean + p.bearing_stiffness[1]) / p.gear_mass, 2.0 * k_mean / p.equivalentMass()}));
+  const double h = kTwoPi / w_max / 20.0;
+  s.suggested_step = s.output_interval / std::ceil(s.output_interval / h);
+  return s;
+}
+
+}  // namespace
+
+std::vector<std::string> sceneNames() {
+  return {"nominal", "torque_steps", "low_preload", "bearing_rattle", "near_rigid_bearings",
+          "parametric_resonance", "kahraman_singh", "chaotic"};
+}
+
+State6 staticEquilibrium(const GearRotorModel& model, double t) {
+  MeshInstant m;
+  model.excitation().at(t, m);
+  const GearRotorParameters& p = model.parameters();
+  const double ks = m.k_drive + m.k_back;
+  Eigen::Matrix3d k;
+  k << p.bearing_stiffness[0] + ks, -ks, ks, -ks, p.bearing_stiffness[1] + ks, -ks, ks, -ks, ks;
+  // Mesh force k_s (delta) with delta = x + x_p - x_g - e: the TE enters as k_s e on each row.
+  const Eigen::Vector3d f(ks * m.te, -ks * m.te, m.drive_force + ks * m.te);
+  State6 y = State6::Zero();
+  const Eigen::FullPivLU<Eigen::Matrix3d> lu(k);
+  if (lu.rank() == 3) y.head<3>() = lu.solve(f);
+  return y;
+}
+
+Scene makeScene(const std::string& name, const RigConfig& rig_in) {
+  if (name == "kahraman_singh") {
+    return oscillatorScene(name, 0.5, 0.05, 0.1, 0.01, {0.2, 0.1, 0.05}, 200,
+                           "dimensionless backlash oscillator, k = 1 - 0.2 cos W t - 0.1 cos 2W t - 0.05 cos 3W t, "
+                           "zeta 0.05, F_m 0.1, F_te 0.01, W = 0.5 (gear.md section 3)");
+  }
+  if (name == "chaotic") {
+    return oscillatorScene(name, 1.4, 0.02, 0.02, 0.02, {0.3, 0.0, 0.0}, 300,
+                           "backlash oscillator at low load and damping with 30 % stiffness ripple: double-sided "
+                           "impacts; irregular, not verified against a published bifurcation diagram");
+  }
+  if (!rig_in.dynamics.present) throw InvalidInput("scene '" + name + "': the gearbox file has no 'dynamics:' block");
+  RigSceneSetup setup;
+  setup.rig = rig_in;
+  const DynamicsConfig& d = rig_in.dynamics;
+  setup.excitation.speed = d.speed_rpm * kTwoPi / 60.0;
+  setup.excitation.te_amplitude = d.transmission_error_amplitude;
+  setup.excitation.backlash = d.backlash;
+  setup.excitation.torque.mean = d.torque;
+  if (name == "nominal") {
+    return rigScene(name, "seed 000 Table 1: 1000 rpm, 0.1 N m, TE at mesh frequency", setup);
+  }
+  if (name == "torque_steps") {
+    setup.excitation.torque.kind = TorqueProfile::Kind::kSteps;
+    setup.excitation.torque.steps = {{5e-3, 0.5}, {10e-3, -0.3}, {15e-3, d.torque}};
+    setup.duration = 0.02;
+    return rigScene(name, "torque steps 0.1 -> 0.5 -> -0.3 -> 0.1 N m at 5, 10, 15 ms", setup);
+  }
+  if (name == "low_preload") {
+    setup.rig.anti_backlash.preload_torque = 0.01;
+    setup.excitation.torque.kind = TorqueProfile::Kind::kSine;
+    setup.excitation.torque.amplitude = 0.8 * d.torque;
+    setup.excitation.torque.frequency = 500.0;
+    setup.duration = 0.02;
+    return rigScene(name, "spring preload 0.01 N m (F_p 0.89 N) under 0.1 +- 0.08 N m at 500 Hz: the g2 flank separates and re-impacts", setup);
+  }
+  if (name == "bearing_rattle") {
+    // Zero mean load: only a torque fluctuation pushes the shafts (a TE alone is absorbed by the
+    // torsional coordinate, whose mode is far above the mesh frequency). +-0.05 N m at 500 Hz moves
+    // a free shaft about F/(m w^2) = 26 um, more than its 10 um clearance: it rattles.
+    setup.rig.dynamics.bearing_clearance = {10e-6, 10e-6};
+    setup.excitation.torque.mean = 0.0;
+    setup.excitation.torque.kind = TorqueProfile::Kind::kSine;
+    setup.excitation.torque.amplitude = 0.05;
+    setup.excitation.torque.frequency = 500.0;
+    setup.duration = 0.02;
+    return rigScene(name, "zero mean torque, +-0.05 N m at 500 Hz, 10 um radial bearing clearance: the shafts rattle in the clearance", setup);
+  }
+  if (name == "near_rigid_bearings") {
+    setup.bearing_scale = 1e4;
+    setup.duration = 0.003;
+    return rigScene(name, "bearing stiffness 1e4 x the mean mesh stiffness", setup);
+  }
+  if (name == "parametric_resonance") {
+    setup.parametric = true;
+    setup.duration = 0.01;
+    return rigScene(name, "mesh frequency at twice the lowest natural frequency", setup);
+  }
+  throw InvalidInput("scene = '" + name + "': unknown (nominal, torque_steps, low_preload, bearing_rattle, "
+                     "near_rigid_bearings, parametric_resonance, kahraman_singh, chaotic)");
+}
+
+}  // namespace drivetrain_stiffness
