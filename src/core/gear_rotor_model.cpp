@@ -94,6 +94,14 @@ GearRotorForces GearRotorModel::forces(double t, const State6& y) const {
   for (int i = 0; i < 2; ++i) {
     const double x = y[i], v = y[3 + i], u = p_.bearing_clearance[i];
     const double k = p_.bearing_stiffness[i], c = p_.bearing_damping[i];
+    if (u == 0.0) {
+      // No clearance: a preloaded bearing is a bilateral spring-damper (balls loaded all round).
+      f.bearing[i] = k * x + c * v;
+      f.bearing_slope[i] = k;
+      f.bearing_damping_slope[i] = c;
+      f.regime.code[2 + i] = 0;
+      continue;
+    }
     int plus = 0, minus = 0;
     double dk2, dc2;
     const double fp = contact(k, c, x - u, v, &dk, &dc, &plus);

@@ -7,7 +7,8 @@
 // [-spring, +spring]):
 //  - anti-backlash mesh: F = F1 - F2, F1 = drive flank k1 (delta + F_p/k1), F2 = back path
 //    k_c (F_p/k_c - delta) (docs/model.md); an ordinary gear: the dead zone of seed 000 eq 17;
-//  - bearings: k_r f_b(x) with the radial clearance dead zone of seed 000 eq 17.
+//  - bearings: k_r f_b(x) with the radial clearance dead zone of seed 000 eq 17 when u_r > 0; a
+//    bilateral linear spring-damper when u_r = 0 (a preloaded bearing).
 // No clock is read: time is an argument, and the mesh phase comes from the excitation.
 #pragma once
 
