@@ -1,0 +1,202 @@
+// drivetrain_bench: speed against error for every method on every scene, side by side with the
+// peers a user would otherwise pick (Boost.odeint, SUNDIALS CVODE). For each scene a
+// tight-tolerance dopri5 run (rtol 1e-12) is the reference; every other run reports
+//   {scene, method, setting, step, wall_s, sim_s, rtf, err_rms_rel, steps}
+// as one JSON line, err_rms_rel = RMS(delta - delta_ref) / RMS(delta_ref) over the samples after
+// the scene's transient. With --plot it also writes one PNG of error against real-time factor per
+// scene (scripts/plot_bench.py, matplotlib).
+//   drivetrain_bench [--config FILE] [--scenes a,b,...] [--out DIR] [--plot] [--quick]
+#include <CLI/CLI.hpp>
+#include <chrono>
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <iostream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "drivetrain_stiffness/config/yaml_config.hpp"
+#include "drivetrain_stiffness/core/scenes.hpp"
+#include "peer_integrators.hpp"
+
+namespace ds = drivetrain_stiffness;
+
+namespace {
+
+std::string fmt(double v) {
+  std::ostringstream o;
+  o << v;
+  return o.str();
+}
+
+struct Samples {
+  std::vector<double> t;
+  std::vector<ds::State6> y;
+};
+
+struct Timed {
+  double wall = 0.0;
+  long steps = 0;
+  Samples samples;
+};
+
+// Runs `fn` (which fills samples and returns steps) until 0.05 s or 3 repeats; keeps the best wall time.
+template <typename F>
+Timed timed(F fn) {
+  Timed best;
+  best.wall = INFINITY;
+  double total = 0.0;
+  for (int rep = 0; rep < 3 && total < 0.05; ++rep) {
+    Samples s;
+    const auto start = std::chrono::steady_clock::now();
+    const long steps = fn(s);
+    const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    total += wall;
+    if (wall < best.wall) best = Timed{wall, steps, std::move(s)};
+  }
+  return best;
+}
+
+std::vector<double> deltas(const ds::Scene& scene, const Samples& s) {
+  std::vector<double> d;
+  for (std::size_t i = 0; i < s.t.size(); ++i) {
+    if (s.t[i] >= scene.transient) d.push_back(scene.model->forces(s.t[i], s.y[i]).delta);
+  }
+  return d;
+}
+
+double rmsError(const std::vector<double>& d, const std::vector<double>& ref) {
+  if (d.size() != ref.size() || ref.empty()) return NAN;
+  double e = 0.0, r = 0.0;
+  for (std::size_t i = 0; i < d.size(); ++i) {
+    e += (d[i] - ref[i]) * (d[i] - ref[i]);
+    r += ref[i] * ref[i];
+  }
+  return std::sqrt(e / r);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"drivetrain_bench: speed against error of every method and peer on every scene (JSON lines)"};
+  std::string config = std::string(DRIVETRAIN_SOURCE_DIR) + "/config/gearboxes/seed_servo.yaml";
+  std::string scenes_arg, out_dir = ".";
+  bool plot = false, quick = false;
+  app.add_option("--config", config, "gearbox YAML with gears, bearings and dynamics");
+  app.add_option("--scenes", scenes_arg, "comma-separated scene names (default: all)");
+  app.add_option("--out", out_dir, "directory for bench.jsonl and the PNG plots");
+  app.add_flag("--plot", plot, "write bench_<scene>.png with scripts/plot_bench.py (python3-matplotlib)");
+  app.add_flag("--quick", quick, "fewer settings per method");
+  CLI11_PARSE(app, argc, argv);
+
+  std::vector<std::string> names = ds::sceneNames();
+  if (!scenes_arg.empty()) {
+    names.clear();
+    std::stringstream ss(scenes_arg);
+    for (std::string n; std::getline(ss, n, ',');) names.push_back(n);
+  }
+  const ds::RigConfig rig = ds::loadRigFile(config);
+  const std::string jsonl = out_dir + "/bench.jsonl";
+  std::ofstream file(jsonl);
+  if (!file) {
+    std::cerr << "drivetrain_bench: cannot write " << jsonl << std::endl;
+    return 2;
+  }
+
+  for (const std::string& name : names) {
+    const ds::Scene scene = ds::makeScene(name, rig);
+    const bool si = scene.units == "SI";
+    const double abs_per_rel = si ? 1e-6 : 1e-2;  // displacement scale: ~1 um (SI) or the unit gap
+    auto record = [&](const Samples& s) {
+      return [&s](double t, const ds::State6& y) {
+        const_cast<Samples&>(s).t.push_back(t);
+        const_cast<Samples&>(s).y.push_back(y);
+      };
+    };
+    ds::IntegratorOptions ref_opt;
+    ref_opt.relative_tolerance = 1e-12;
+    ref_opt.absolute_tolerance = 1e-12 * abs_per_rel;
+    ref_opt.max_step = si ? 1e-4 : 0.1;
+    if (!si) ref_opt.divergence_limit = 1e3;
+    Samples ref_samples;
+    ds::integrate(*scene.model, ds::IntegratorMethod::kDopri5, ref_opt, 0.0, scene.initial, scene.duration,
+                  scene.output_interval, record(ref_samples));
+    const std::vector<double> ref = deltas(scene, ref_samples);
+
+    auto report = [&](const std::string& method, const std::string& setting, double step, const Timed& r,
+                      const std::string& error) {
+      nlohmann::json j = {{"scene", name}, {"method", method}, {"setting", setting},
+                          {"step", step > 0 ? nlohmann::json(step) : nlohmann::json(nullptr)},
+                          {"sim_s", scene.duration}, {"units", scene.units}};
+      if (!error.empty()) {
+        j["error"] = error;
+      } else {
+        const double err = rmsError(deltas(scene, r.samples), ref);
+        j["wall_s"] = r.wall;
+        j["rtf"] = scene.duration / r.wall;
+        j["err_rms_rel"] = name == "chaotic" || !std::isfinite(err) ? nlohmann::json(nullptr) : nlohmann::json(err);
+        j["steps"] = r.steps;
+      }
+      std::cout << j.dump() << std::endl;
+      file << j.dump() << "\n";
+    };
+    auto ours = [&](ds::IntegratorMethod m, const ds::IntegratorOptions& o, const std::string& setting) {
+      try {
+        const Timed r = timed([&](Samples& s) {
+          ds::IntegrationStats st;
+          ds::integrate(*scene.model, m, o, 0.0, scene.initial, scene.duration, scene.output_interval, record(s), &st);
+          return st.steps;
+        });
+        report(ds::toString(m), setting, m == ds::IntegratorMethod::kDopri5 ? 0.0 : o.step, r, "");
+      } catch (const std::exception& e) {
+        report(ds::toString(m), setting, m == ds::IntegratorMethod::kDopri5 ? 0.0 : o.step, Timed{}, e.what());
+      }
+    };
+    auto peer = [&](const std::string& label, double rtol, auto fn) {
+      try {
+        const Timed r = timed([&](Samples& s) {
+          return fn(*scene.model, scene.initial, scene.duration, scene.output_interval, rtol, rtol * abs_per_rel, record(s)).steps;
+        });
+        report(label, "rtol=" + fmt(rtol), 0.0, r, "");
+      } catch (const std::exception& e) {
+        report(label, "rtol=" + fmt(rtol), 0.0, Timed{}, e.what());
+      }
+    };
+
+    const std::vector<double> tolerances = quick ? std::vector<double>{1e-5, 1e-8} : std::vector<double>{1e-3, 1e-5, 1e-7, 1e-9};
+    for (double rtol : tolerances) {
+      ds::IntegratorOptions o = ref_opt;
+      o.relative_tolerance = rtol;
+      o.absolute_tolerance = rtol * abs_per_rel;
+      ours(ds::IntegratorMethod::kDopri5, o, "rtol=" + fmt(rtol));
+    }
+    for (double factor : quick ? std::vector<double>{1.0} : std::vector<double>{1.0, 0.5, 0.25}) {
+      ds::IntegratorOptions o = ref_opt;
+      o.step = scene.suggested_step * factor;
+      ours(ds::IntegratorMethod::kRk4, o, "h=" + fmt(factor) + "x suggested");
+    }
+    for (double factor : quick ? std::vector<double>{1.0} : std::vector<double>{1.0, 0.25}) {
+      ds::IntegratorOptions o = ref_opt;
+      o.step = scene.suggested_step * factor;
+      ours(ds::IntegratorMethod::kTrapezoidal, o, "h=" + fmt(factor) + "x suggested");
+    }
+    for (double rtol : quick ? std::vector<double>{1e-7} : std::vector<double>{1e-5, 1e-7, 1e-9}) {
+      peer("odeint_dopri5", rtol, ds::bench::odeintDopri5);
+    }
+    for (double rtol : quick ? std::vector<double>{1e-5} : std::vector<double>{1e-3, 1e-5, 1e-7}) {
+      peer("odeint_rosenbrock4", rtol, ds::bench::odeintRosenbrock4);
+    }
+    for (double rtol : quick ? std::vector<double>{1e-7} : std::vector<double>{1e-5, 1e-7, 1e-9}) {
+      peer("cvode_bdf", rtol, ds::bench::cvodeBdf);
+    }
+  }
+  file.close();
+  if (plot) {
+    const std::string cmd = "/usr/bin/python3 '" + std::string(DRIVETRAIN_SOURCE_DIR) + "/scripts/plot_bench.py' '" + jsonl + "' '" + out_dir + "'";
+    if (std::system(cmd.c_str()) != 0) {
+      std::cerr << "drivetrain_bench: plotting failed (is python3-matplotlib installed?)" << std::endl;
+      return 3;
+    }
+  }
+  return 0;
+}
