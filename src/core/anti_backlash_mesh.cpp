@@ -74,6 +74,17 @@ FlankContact AntiBacklashMesh::flankContact(double mesh_force, double k1, double
   return FlankContact::kBoth;
 }
 
+std::vector<double> AntiBacklashMesh::tableNodePhases() const {
+  std::vector<double> nodes;
+  for (const Segment& seg : segments_) {
+    for (std::size_t j = 0; j < seg.values.size(); ++j) nodes.push_back(seg.start + j / seg.scale);
+  }
+  std::sort(nodes.begin(), nodes.end());
+  nodes.erase(std::unique(nodes.begin(), nodes.end(), [](double a, double b) { return b - a < 1e-12; }), nodes.end());
+  while (!nodes.empty() && nodes.back() >= 1.0) nodes.pop_back();
+  return nodes;
+}
+
 void AntiBacklashMesh::applyFlankState(CompositeMesh& c, double mesh_force) const {
   c.contact = flankContact(mesh_force, c.k1, c.k_chain);
   switch (c.contact) {

@@ -61,6 +61,9 @@ class AntiBacklashMesh {
   CompositeMesh exactAt(double phase, double mesh_force) const;
   /// Phases in [0, 1) where the number of drive or back pairs in contact changes.
   const std::vector<double>& switchingPhases() const { return breaks_; }
+  /// All phases in [0, 1) where the phase table's interpolation has a node (its slope may change),
+  /// switching phases included, sorted. Between two of them k1, k2, k_c are linear in phase.
+  std::vector<double> tableNodePhases() const;
   /// Drive-flank-only table (the ordinary gear pair) and the g2 table.
   const MeshStiffnessTable& driveTable() const { return *drive_; }
   const MeshStiffnessTable& backTable() const { return *back_; }

@@ -7,6 +7,8 @@
 //    fourth-order dense output; tooth-count switches are hit exactly (time events), contact
 //    changes (flank lift-off, bearing clearance) are located on the dense output and the step is
 //    redone up to them (state events). The reference method.
+//  - exponential: exact-exponential propagation in the linear regime (exponential_integrator.hpp),
+//    for scenes whose contacts stay closed; hands over to dopri5 if one opens.
 // Every method checks each step: a non-finite state or a state beyond `divergence_limit` throws
 // UnstableIntegration naming the method, the step and the time, never returns NaN.
 #pragma once
@@ -19,7 +21,7 @@
 
 namespace drivetrain_stiffness {
 
-enum class IntegratorMethod { kRk4, kTrapezoidal, kDopri5 };
+enum class IntegratorMethod { kRk4, kTrapezoidal, kDopri5, kExponential };
 IntegratorMethod parseIntegratorMethod(const std::string& field, const std::string& text);
 const char* toString(IntegratorMethod method);
 
@@ -35,10 +37,13 @@ struct IntegratorOptions {
   double max_step = 1e-3;          ///< dopri5 [s]
   double divergence_limit = 1e-2;  ///< |displacement| beyond this [m] counts as blow-up
   bool locate_events = true;       ///< dopri5: locate contact changes
+  double magnus_step_factor = 1.0; ///< exponential: Magnus step <= factor / omega_max
 };
 
 struct IntegrationStats {
   long steps = 0, rejected = 0, rhs_evaluations = 0, events = 0, newton_iterations = 0;
+  long fallbacks = 0;              ///< exponential: runs handed to dopri5 when a contact opened
+  double fallback_from = -1.0;     ///< time of that hand-over [s], -1 if none
 };
 
 /// Called at each output time with the state.

@@ -1,0 +1,219 @@
+#include "drivetrain_stiffness/core/exponential_integrator.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <unsupported/Eigen/MatrixFunctions>
+
+#include "drivetrain_stiffness/core/validation.hpp"
+
+namespace drivetrain_stiffness {
+namespace {
+constexpr double kTwoPi = 6.283185307179586;
+// State indices of the augmented system.
+enum : int { kXp = 0, kXg, kX, kVp, kVg, kV, kSin, kCos, kOne, kU, kUdot };
+}  // namespace
+
+PeriodicExponentialPropagator::PeriodicExponentialPropagator(const GearRotorModel& model, double t0,
+                                                             double output_interval, double step_factor)
+    : model_(model), t0_(t0), interval_(output_interval) {
+  excitation_ = dynamic_cast<const RigExcitation*>(&model.excitation());
+  if (!excitation_) throw InvalidInput("method exponential: needs a rig excitation (mesh stiffness periodic in the mesh phase)");
+  const GearRotorParameters& p = model.parameters();
+  if (p.bearing_clearance[0] > 0.0 || p.bearing_clearance[1] > 0.0) {
+    throw InvalidInput("method exponential: bearing clearance makes the model nonlinear at every crossing; use dopri5");
+  }
+  requireFinite("t0", t0);
+  requirePositive("output_interval", output_interval);
+  requirePositive("magnus_step_factor", step_factor);
+  const RigExcitationSpec& spec = excitation_->spec();
+  const double period = 1.0 / excitation_->meshFrequency();
+  const double n_real = period / output_interval;
+  const long n = std::lround(n_real);
+  if (n < 1 || std::abs(n_real - n) > 1e-9 * n_real) {
+    throwInvalid("output_interval", output_interval, "must divide the mesh period " + formatValue(period) + " s");
+  }
+  te_amplitude_ = spec.te_amplitude;
+  te_omega_ = kTwoPi * excitation_->meshFrequency();
+  te_phase_ = kTwoPi * spec.initial_phase;
+  torque_gain_ = model.equivalentMass() * p.pinion_base_radius / p.pinion_inertia;
+  MeshInstant m;
+  excitation_->at(t0, m);
+  mean_force_ = m.drive_force - torque_gain_ * (spec.torque.at(t0) - spec.torque.mean);
+
+  // Stiffest natural scale bounds the Magnus step (convergence needs the integral of ||A|| < pi).
+  double k_max = 0.0;
+  for (int i = 0; i < 64; ++i) {
+    MeshInstant mi;
+    excitation_->at(t0 + period * (i + 0.5) / 64, mi);
+    k_max = std::max(k_max, mi.k_drive + mi.k_back);
+  }
+  const double w_max = std::sqrt(std::max({(k_max + p.bearing_stiffness[0]) / p.pinion_mass,
+                                           (k_max + p.bearing_stiffness[1]) / p.gear_mass,
+                                           2.0 * k_max / model.equivalentMass(), te_omega_ * te_omega_}));
+  const double h_max = step_factor / w_max;
+
+  // Pieces end exactly on the tooth-count switches and on every node of the phase table, so that
+  // A(t) is linear in t inside each piece and the Gauss-point Magnus step keeps its order.
+  std::vector<double> kinks;
+  {
+    const std::vector<double> nodes = excitation_->mesh().tableNodePhases();
+    const double f = excitation_->meshFrequency(), phase0 = spec.initial_phase;
+    const double first_turn = std::floor(phase0 + f * t0);
+    for (int cycle = 0; cycle <= 1; ++cycle) {
+      for (double node : nodes) {
+        const double t = (first_turn + cycle + node - phase0) / f;
+        if (t > t0 && t < t0 + period) kinks.push_back(t);
+      }
+    }
+    for (double t = excitation_->nextSwitch(t0); t < t0 + period; t = excitation_->nextSwitch(t)) kinks.push_back(t);
+    std::sort(kinks.begin(), kinks.end());
+  }
+
+  // Balance the state before exponentiating: displacements in um, velocities in um * omega_max,
+  // the generator states (sin, cos, 1) and the torque O(1). The exponential is accurate normwise,
+  // so without this the O(1) forcing columns would pollute the 1e-7 m displacements.
+  Eigen::Matrix<double, 11, 1> scale;
+  scale << 1e-6, 1e-6, 1e-6, 1e-6 * w_max, 1e-6 * w_max, 1e-6 * w_max, 1.0, 1.0, 1.0, 1.0, 1.0 / output_interval;
+  const Matrix11 d = scale.asDiagonal(), d_inv = scale.cwiseInverse().asDiagonal();
+
+  propagators_.resize(n);
+  k1_.resize(n);
+  kc_.resize(n);
+  backlash_offset_.resize(n);
+  const double c_g = 0.5 - std::sqrt(3.0) / 6.0, c_g2 = 0.5 + std::sqrt(3.0) / 6.0;
+  for (long j = 0; j < n; ++j) {
+    const double a = t0 + j * output_interval, b = a + output_interval;
+    MeshInstant mj;
+    excitation_->at(a, mj);
+    k1_[j] = mj.k_drive;
+    kc_[j] = mj.k_back;
+    backlash_offset_[j] = mj.backlash;
+    std::vector<double> cuts = {a};
+    for (auto it = std::upper_bound(kinks.begin(), kinks.end(), a); it != kinks.end() && *it < b; ++it) {
+      if (*it - cuts.back() > 1e-12 * output_interval) cuts.push_back(*it);
+    }
+    if (b - cuts.back() <= 1e-12 * output_interval) cuts.pop_back();
+    cuts.push_back(b);
+    Matrix11 phi = Matrix11::Identity();
+    for (std::size_t c = 0; c + 1 < cuts.size(); ++c) {
+      const double len = cuts[c + 1] - cuts[c];
+      const int steps = std::max(1, static_cast<int>(std::ceil(len / h_max)));
+      const double h = len / steps;
+      for (int s = 0; s < steps; ++s) {
+        const double t = cuts[c] + s * h;
+        const Matrix11 a1 = systemMatrix(t + c_g * h), a2 = systemMatrix(t + c_g2 * h);
+        // Omega = h/2 (A1 + A2) + sqrt(3) h^2 / 12 [A2, A1]  (4th-order Magnus, Gauss points).
+        const Matrix11 omega = 0.5 * h * (a1 + a2) + std::sqrt(3.0) / 12.0 * h * h * (a2 * a1 - a1 * a2);
+        phi = (d_inv * omega * d).exp() * phi;  // in balanced units
+        ++magnus_steps_;
+      }
+    }
+    propagators_[j] = (d * phi * d_inv).topRows<9>();
+  }
+}
+
+PeriodicExponentialPropagator::Matrix11 PeriodicExponentialPropagator::systemMatrix(double t) const {
+  MeshInstant m;
+  excitation_->at(t, m);
+  const GearRotorParameters& p = model_.parameters();
+  const double ks = m.k_drive + m.k_back, cs = p.mesh_damping;
+  const bool anti_backlash = m.k_back > 0.0 || m.preload_force > 0.0;
+  // Mesh force F = ks delta + cs delta' (both flanks closed: F_p cancels) or k1 (delta - b) + c delta'
+  // (ordinary gear on its drive flank), delta = x + x_p - x_g - A sin, delta' = v + v_p - v_g - A w cos.
+  Eigen::Matrix<double, 1, 11> f = Eigen::Matrix<double, 1, 11>::Zero();
+  f[kXp] = ks;
+  f[kXg] = -ks;
+  f[kX] = ks;
+  f[kVp] = cs;
+  f[kVg] = -cs;
+  f[kV] = cs;
+  f[kSin] = -ks * te_amplitude_;
+  f[kCos] = -cs * te_amplitude_ * te_omega_;
+  if (!anti_backlash) f[kOne] = -m.k_drive * m.backlash;
+  Matrix11 a = Matrix11::Zero();
+  a(kXp, kVp) = a(kXg, kVg) = a(kX, kV) = 1.0;
+  a.row(kVp) = -f / p.pinion_mass;
+  a(kVp, kXp) -= p.bearing_stiffness[0] / p.pinion_mass;
+  a(kVp, kVp) -= p.bearing_damping[0] / p.pinion_mass;
+  a.row(kVg) = f / p.gear_mass;
+  a(kVg, kXg) -= p.bearing_stiffness[1] / p.gear_mass;
+  a(kVg, kVg) -= p.bearing_damping[1] / p.gear_mass;
+  const double ms = model_.equivalentMass();
+  a.row(kV) = -f / ms;
+  a(kV, kOne) += mean_force_ / ms;
+  a(kV, kU) += torque_gain_ / ms;
+  a(kSin, kCos) = te_omega_;
+  a(kCos, kSin) = -te_omega_;
+  a(kU, kUdot) = 1.0;
+  return a;
+}
+
+bool PeriodicExponentialPropagator::linearRegime(int j, const Eigen::Matrix<double, 9, 1>& z) const {
+  const GearRotorParameters& p = model_.parameters();
+  const double delta = z[kX] + z[kXp] - z[kXg] - te_amplitude_ * z[kSin];
+  const double rate = z[kV] + z[kVp] - z[kVg] - te_amplitude_ * te_omega_ * z[kCos];
+  const double k1 = k1_[j], kc = kc_[j], fp = excitation_->mesh().preloadForce();
+  if (kc > 0.0 || fp > 0.0) {
+    const double c1 = p.mesh_damping * k1 / (k1 + kc), c2 = p.mesh_damping - c1;
+    const double s1 = fp + k1 * delta, s2 = fp - kc * delta;
+    const double t1 = s1 + c1 * rate, t2 = s2 - c2 * rate;
+    return s1 > 0.0 && s2 > 0.0 && t1 >= 0.0 && t1 <= 2.0 * s1 && t2 >= 0.0 && t2 <= 2.0 * s2;
+  }
+  const double g = delta - backlash_offset_[j];
+  const double total = k1 * g + p.mesh_damping * rate;
+  return g > 0.0 && total >= 0.0 && total <= 2.0 * k1 * g;
+}
+
+State6 PeriodicExponentialPropagator::run(const State6& y0, double t_end, const Observer& observe,
+                                          const IntegratorOptions& fallback, IntegrationStats* stats) const {
+  if (!y0.allFinite()) throw InvalidInput("initial state: contains a non-finite value");
+  const double span = t_end - t0_;
+  const long k_end = std::lround(span / interval_);
+  if (k_end < 0 || std::abs(span - k_end * interval_) > 1e-9 * std::max(interval_, span)) {
+    throwInvalid("t_end", t_end, "must be t0 plus a whole number of output intervals " + formatValue(interval_));
+  }
+  IntegrationStats st;
+  const TorqueProfile& torque = excitation_->spec().torque;
+  Eigen::Matrix<double, 9, 1> z;
+  z.head<6>() = y0;
+  z[kSin] = std::sin(te_omega_ * t0_ + te_phase_);
+  z[kCos] = std::cos(te_omega_ * t0_ + te_phase_);
+  z[kOne] = 1.0;
+  if (observe) observe(t0_, y0);
+  const int n = static_cast<int>(propagators_.size());
+  double u = torque.at(t0_) - torque.mean;
+  Eigen::Matrix<double, 11, 1> w;
+  for (long k = 0; k < k_end; ++k) {
+    const double t_next = t0_ + (k + 1) * interval_;
+    const double u_next = torque.at(t_next) - torque.mean;
+    w.head<9>() = z;
+    w[kU] = u;
+    w[kUdot] = (u_next - u) / interval_;
+    const Eigen::Matrix<double, 9, 1> z_next = propagators_[k % n] * w;
+    if (!linearRegime(static_cast<int>((k + 1) % n), z_next)) {
+      // A contact opened: dopri5 takes over from the last sample in the linear regime.
+      const double t_k = t0_ + k * interval_;
+      IntegrationStats rest;
+      bool first = true;
+      const State6 y_end = integrate(model_, IntegratorMethod::kDopri5, fallback, t_k, z.head<6>(), t_end, interval_,
+                                     [&](double t, const State6& y) { if (!first && observe) observe(t, y); first = false; },
+                                     &rest);
+      st.steps += rest.steps;
+      st.rhs_evaluations += rest.rhs_evaluations;
+      st.events += rest.events;
+      st.fallbacks = 1;
+      st.fallback_from = t_k;
+      if (stats) *stats = st;
+      return y_end;
+    }
+    z = z_next;
+    u = u_next;
+    ++st.steps;
+    if (!z.allFinite()) throw UnstableIntegration("integrator exponential produced a non-finite state at t = " + formatValue(t_next));
+    if (observe) observe(t_next, z.head<6>());
+  }
+  if (stats) *stats = st;
+  return z.head<6>();
+}
+
+}  // namespace drivetrain_stiffness
