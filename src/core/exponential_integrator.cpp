@@ -9,6 +9,13 @@
 namespace drivetrain_stiffness {
 namespace {
 constexpr double kTwoPi = 6.283185307179586;
+
+bool stepInside(const TorqueProfile& torque, double a, double b) {
+  for (const auto& s : torque.steps) {
+    if (s.first > a && s.first <= b) return true;
+  }
+  return false;
+}
 // State indices of the augmented system.
 enum : int { kXp = 0, kXg, kX, kVp, kVg, kV, kSin, kCos, kOne, kU, kUdot };
 }  // namespace
@@ -186,6 +193,22 @@ State6 PeriodicExponentialPropagator::run(const State6& y0, double t_end, const 
   for (long k = 0; k < k_end; ++k) {
     const double t_next = t0_ + (k + 1) * interval_;
     const double u_next = torque.at(t_next) - torque.mean;
+    if (torque.kind == TorqueProfile::Kind::kSteps && stepInside(torque, t_next - interval_, t_next)) {
+      // A torque step inside this interval: a first-order hold would smear it, so this one
+      // interval is integrated by dopri5 (exact switch time) and the propagation resumes after it.
+      IntegrationStats part;
+      const State6 y_next = integrate(model_, IntegratorMethod::kDopri5, fallback, t_next - interval_, z.head<6>(),
+                                      t_next, interval_, nullptr, &part);
+      st.rhs_evaluations += part.rhs_evaluations;
+      z.head<6>() = y_next;
+      z[kSin] = std::sin(te_omega_ * t_next + te_phase_);
+      z[kCos] = std::cos(te_omega_ * t_next + te_phase_);
+      u = u_next;
+      ++st.steps;
+      ++st.events;
+      if (observe) observe(t_next, y_next);
+      continue;
+    }
     w.head<9>() = z;
     w[kU] = u;
     w[kUdot] = (u_next - u) / interval_;

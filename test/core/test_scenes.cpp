@@ -145,6 +145,14 @@ TEST(Scenes, ExponentialMethod) {
   EXPECT_EQ(st.fallbacks, 1);  // the g2 flank opens: dopri5 takes over
   EXPECT_LT(relErr(low_exp, low_ref), 1e-5);
 
+  // Torque steps: the interval holding a step is integrated by dopri5, so the step stays sharp.
+  const Scene steps = makeScene("torque_steps", rig());
+  const std::vector<double> steps_ref = deltas(steps, IntegratorMethod::kDopri5, ref, nullptr);
+  const std::vector<double> steps_exp = deltas(steps, IntegratorMethod::kExponential, handover, &st);
+  ASSERT_EQ(steps_exp.size(), steps_ref.size());
+  EXPECT_EQ(st.fallbacks, 0);
+  EXPECT_LT(relErr(steps_exp, steps_ref), 1e-7);
+
   const Scene rattle = makeScene("bearing_rattle", rig());
   EXPECT_THROW(integrate(*rattle.model, IntegratorMethod::kExponential, IntegratorOptions{}, 0.0, rattle.initial,
                          rattle.duration, rattle.output_interval, nullptr), InvalidInput);

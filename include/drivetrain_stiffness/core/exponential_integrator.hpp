@@ -4,7 +4,9 @@
 // ordinary gear; bearings without clearance) the model is linear with coefficients periodic in the
 // mesh phase: z' = A(t) z + b u(t) with the augmented state z = [y; sin; cos; 1] (the TE at mesh
 // frequency generated exactly by its own two states, the mean load by the constant state) and the
-// torque fluctuation u(t) entering with a first-order hold. One mesh period is split at the
+// torque fluctuation u(t) entering with a first-order hold (exact for constant torque; an output
+// interval that contains a torque step is integrated by dopri5 instead, so steps stay sharp; a
+// smooth fluctuation carries the hold's O(dt^2) error). One mesh period is split at the
 // output samples and at the tooth-count switches; each piece is propagated by 4th-order Magnus
 // steps (Gauss points, Blanes, Casas, Oteo & Ros, Phys. Rep. 470 (2009) 151, eq. 4.4) and the
 // products over each output interval are stored. Streaming then costs one 9x11 matrix-vector
