@@ -42,7 +42,7 @@ PeriodicExponentialPropagator::PeriodicExponentialPropagator(const GearRotorMode
   te_amplitude_ = spec.te_amplitude;
   te_omega_ = kTwoPi * excitation_->meshFrequency();
   te_phase_ = kTwoPi * spec.initial_phase;
-  torque_gain_ = model.equivalentMass() * p.pinion_base_radius / p.pinion_inertia;
+  torque_gain_ = excitation_->torqueGain();
   MeshInstant m;
   excitation_->at(t0, m);
   mean_force_ = m.drive_force - torque_gain_ * (spec.torque.at(t0) - spec.torque.mean);
@@ -169,6 +169,28 @@ bool PeriodicExponentialPropagator::linearRegime(int j, const Eigen::Matrix<doub
   const double g = delta - backlash_offset_[j];
   const double total = k1 * g + p.mesh_damping * rate;
   return g > 0.0 && total >= 0.0 && total <= 2.0 * k1 * g;
+}
+
+PeriodicExponentialPropagator::Augmented PeriodicExponentialPropagator::augment(double t, const State6& y) const {
+  Augmented z;
+  z.head<6>() = y;
+  z[kSin] = std::sin(te_omega_ * t + te_phase_);
+  z[kCos] = std::cos(te_omega_ * t + te_phase_);
+  z[kOne] = 1.0;
+  return z;
+}
+
+bool PeriodicExponentialPropagator::step(long k, Augmented& z, double torque_k, double torque_next) const {
+  const long n = static_cast<long>(propagators_.size());
+  const double mean = excitation_->spec().torque.mean;
+  Eigen::Matrix<double, 11, 1> w;
+  w.head<9>() = z;
+  w[kU] = torque_k - mean;
+  w[kUdot] = (torque_next - torque_k) / interval_;
+  const Augmented next = propagators_[((k % n) + n) % n] * w;
+  if (!next.allFinite() || !linearRegime(static_cast<int>((((k + 1) % n) + n) % n), next)) return false;
+  z = next;
+  return true;
 }
 
 State6 PeriodicExponentialPropagator::run(const State6& y0, double t_end, const Observer& observe,

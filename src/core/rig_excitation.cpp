@@ -29,6 +29,7 @@ double TorqueProfile::at(double t) const {
                            kTwoPi * chirp_end * std::max(0.0, t - chirp_duration);
       return mean + amplitude * std::sin(phase);
     }
+    case Kind::kLive: return live ? *live : mean;
   }
   return mean;
 }
@@ -61,11 +62,17 @@ RigExcitation::RigExcitation(std::shared_ptr<const AntiBacklashMesh> mesh, const
   requireNonNegative("backlash", spec.backlash);
   mesh_frequency_ = spec.speed * mesh_->geometry().spec().teeth[0] / kTwoPi;
   m_s_ = params.equivalentMass();
-  r_p_over_i_p_ = params.pinion_base_radius / params.pinion_inertia;
-  // Load torque balancing the mean input: T_g = T_pm r_g / r_p (docs/model.md); its term
-  // m_s r_g T_g / I_g in the drive force is constant.
-  const double t_g = spec.torque.mean * params.gear_base_radius / params.pinion_base_radius;
-  load_term_ = m_s_ * params.gear_base_radius * t_g / params.gear_inertia;
+  if (spec.balanced_load) {
+    // m_s (r_p T_p / I_p + r_g T_g / I_g) with T_g = T_p r_g / r_p equals T_p / r_p (docs/model.md).
+    torque_gain_ = 1.0 / params.pinion_base_radius;
+    load_term_ = 0.0;
+  } else {
+    torque_gain_ = m_s_ * params.pinion_base_radius / params.pinion_inertia;
+    // Load torque balancing the mean input: T_g = T_pm r_g / r_p (docs/model.md); its term
+    // m_s r_g T_g / I_g in the drive force is constant.
+    const double t_g = spec.torque.mean * params.gear_base_radius / params.pinion_base_radius;
+    load_term_ = m_s_ * params.gear_base_radius * t_g / params.gear_inertia;
+  }
   switches_ = mesh_->switchingPhases();
 }
 
@@ -81,7 +88,7 @@ void RigExcitation::at(double t, MeshInstant& out) const {
   const double w = kTwoPi * mesh_frequency_;
   out.te = spec_.te_amplitude * std::sin(w * t + kTwoPi * spec_.initial_phase);
   out.te_rate = spec_.te_amplitude * w * std::cos(w * t + kTwoPi * spec_.initial_phase);
-  out.drive_force = m_s_ * r_p_over_i_p_ * spec_.torque.at(t) + load_term_;
+  out.drive_force = torque_gain_ * spec_.torque.at(t) + load_term_;
   const auto it = std::upper_bound(switches_.begin(), switches_.end(), out.phase);
   out.segment = static_cast<int>(whole) * static_cast<int>(switches_.size()) + static_cast<int>(it - switches_.begin());
 }

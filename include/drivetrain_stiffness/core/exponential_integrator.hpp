@@ -34,6 +34,15 @@ class PeriodicExponentialPropagator {
   int intervalsPerPeriod() const { return static_cast<int>(propagators_.size()); }
   long magnusSteps() const { return magnus_steps_; }
 
+  using Augmented = Eigen::Matrix<double, 9, 1>;
+  /// [y; sin; cos; 1] at time t (the TE generator states in phase with the excitation).
+  Augmented augment(double t, const State6& y) const;
+  /// One output interval: from z at sample k (time t0 + k dt) with torques u_k, u_k+1 [N·m] at its
+  /// ends; returns false, leaving z untouched, if the contacts leave the linear regime.
+  bool step(long k, Augmented& z, double torque_k, double torque_next) const;
+  double t0() const { return t0_; }
+  double outputInterval() const { return interval_; }
+
   /// Streams from (t0, y0) to t_end on the output grid; falls back to dopri5 (`fallback`) from
   /// the last linear sample if a contact opens. Returns the final state.
   State6 run(const State6& y0, double t_end, const Observer& observe, const IntegratorOptions& fallback,

@@ -14,13 +14,14 @@ namespace drivetrain_stiffness {
 
 /// Pinion input torque T_p(t) [N·m].
 struct TorqueProfile {
-  enum class Kind { kConstant, kSine, kSteps, kChirp };
+  enum class Kind { kConstant, kSine, kSteps, kChirp, kLive };
   Kind kind = Kind::kConstant;
   double mean = 0.0;             ///< [N·m]; also sets the balancing load torque T_g = mean r_g / r_p
   double amplitude = 0.0;        ///< sine / chirp amplitude [N·m]
   double frequency = 0.0;        ///< sine frequency [Hz]
   double chirp_start = 0.0, chirp_end = 0.0, chirp_duration = 1.0;  ///< linear chirp [Hz, Hz, s]
   std::vector<std::pair<double, double>> steps;  ///< (time [s], torque [N·m]) from that time on
+  std::shared_ptr<double> live;  ///< kLive: the measured torque, held until the next measurement
   double at(double t) const;
   /// Validates the numbers (finite, non-negative frequencies, ordered steps); names the field.
   void validate() const;
@@ -31,6 +32,10 @@ struct RigExcitationSpec {
   double initial_phase = 0.0;         ///< mesh phase at t = 0
   double te_amplitude = 0.0;          ///< manufacturing TE amplitude at the mesh frequency [m]
   double backlash = 0.0;              ///< half backlash of an ordinary gear [m] (seed 000 eq 17 b)
+  /// false: the load torque is fixed at the mean input (T_g = T_pm r_g / r_p) and fluctuations act on
+  /// the pinion alone (scenes). true: the load follows the input quasi-statically (a speed-controlled
+  /// rig), so the drive force is T_p / r_p (the live node).
+  bool balanced_load = false;
   TorqueProfile torque;
 };
 
@@ -41,13 +46,15 @@ class RigExcitation : public GearExcitation {
   void at(double t, MeshInstant& out) const override;
   double nextSwitch(double t) const override;
   double meshFrequency() const { return mesh_frequency_; }  ///< [Hz]
+  /// d(drive force)/d(pinion torque) [1/m]: m_s r_p / I_p, or 1 / r_p with a balanced load.
+  double torqueGain() const { return torque_gain_; }
   const AntiBacklashMesh& mesh() const { return *mesh_; }
   const RigExcitationSpec& spec() const { return spec_; }
 
  private:
   std::shared_ptr<const AntiBacklashMesh> mesh_;
   RigExcitationSpec spec_;
-  double mesh_frequency_ = 0.0, r_p_over_i_p_ = 0.0, load_term_ = 0.0, m_s_ = 0.0;
+  double mesh_frequency_ = 0.0, torque_gain_ = 0.0, load_term_ = 0.0, m_s_ = 0.0;
   std::vector<double> switches_;
 };
 

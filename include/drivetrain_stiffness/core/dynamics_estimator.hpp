@@ -1,0 +1,76 @@
+// Online integration of the 3-DOF model between rig inputs (ROS-free; time is an argument).
+//
+// The state lives on a fixed output grid (the requested rate rounded so that a whole number of
+// samples fits one mesh period). advanceTo(t) integrates from the last sample to the last grid
+// point <= t with the measured torque held (zero-order hold, applied from the next sample: latency
+// <= one output interval) and the load following it quasi-statically (drive force T / r_p), using
+// the exact-exponential propagators while the contacts stay closed and dopri5 for any interval in
+// which they do not. The mesh phase counts from the last reset (the gear angle is not measured;
+// the node assumes the nominal speed). Times are absolute seconds of the caller's clock; internally
+// they are taken relative to the reset time so that 1e9-second epochs keep full phase resolution.
+#pragma once
+
+#include <array>
+#include <functional>
+#include <memory>
+
+#include "drivetrain_stiffness/core/exponential_integrator.hpp"
+#include "drivetrain_stiffness/core/rig_config.hpp"
+
+namespace drivetrain_stiffness {
+
+struct DynamicsSample {
+  double t = 0.0;               ///< absolute time of the sample [s]
+  State6 state = State6::Zero();
+  double dynamic_te = 0.0;      ///< mesh deflection delta along the LOA [m]
+  double static_te = 0.0;       ///< quasi-static deflection F_m / k_s(phase) [m]
+  double mesh_force = 0.0;      ///< [N]
+  double phase = 0.0;           ///< mesh phase [-]
+  double torque = 0.0;          ///< held pinion torque [N·m]
+  bool drive_flank_loaded = false, back_flank_loaded = false;
+};
+
+class DynamicsEstimator {
+ public:
+  /// rig needs a dynamics block; bearing stiffness [N/m] per shaft; output rate [Hz].
+  DynamicsEstimator(const RigConfig& rig, const std::array<double, 2>& bearing_stiffness, double output_rate);
+
+  /// Restart at static equilibrium under `torque` at absolute time t.
+  void reset(double t, double torque);
+  /// Integrates to absolute time t (>= time(), else InvalidInput: reset on time jumps), calling
+  /// sink for each output sample.
+  void advanceTo(double t, const std::function<void(const DynamicsSample&)>& sink);
+  /// New measured torque, applied from the next output sample.
+  void setTorque(double torque);
+  /// Rebuilds the model (and the propagators) when a stiffness changes by more than 1 %.
+  void setBearingStiffness(const std::array<double, 2>& k);
+
+  bool started() const { return started_; }
+  double time() const { return origin_ + k_ * interval_; }  ///< time of the current state
+  double outputInterval() const { return interval_; }
+  long rebuilds() const { return rebuilds_; }
+  long fallbackIntervals() const { return fallback_intervals_; }
+  bool exact() const { return propagator_ != nullptr; }  ///< exponential propagation available
+  const GearRotorModel& model() const { return *model_; }  ///< time relative to the last reset
+  const State6& state() const { return y_; }
+
+ private:
+  void build();
+  DynamicsSample sample(double t_rel, const State6& y) const;
+
+  RigConfig rig_;
+  std::array<double, 2> bearing_stiffness_;
+  double requested_rate_;
+  std::shared_ptr<double> torque_;
+  std::shared_ptr<const AntiBacklashMesh> mesh_;
+  std::shared_ptr<const GearRotorModel> model_;
+  std::unique_ptr<PeriodicExponentialPropagator> propagator_;
+  IntegratorOptions fallback_;
+  double interval_ = 0.0, origin_ = 0.0;
+  long k_ = 0;
+  State6 y_ = State6::Zero();
+  bool started_ = false;
+  long rebuilds_ = 0, fallback_intervals_ = 0;
+};
+
+}  // namespace drivetrain_stiffness

@@ -1,0 +1,141 @@
+#include "drivetrain_stiffness/core/dynamics_estimator.hpp"
+
+#include <cmath>
+
+#include "drivetrain_stiffness/core/scenes.hpp"
+#include "drivetrain_stiffness/core/validation.hpp"
+
+namespace drivetrain_stiffness {
+namespace {
+constexpr double kTwoPi = 6.283185307179586;
+}
+
+DynamicsEstimator::DynamicsEstimator(const RigConfig& rig, const std::array<double, 2>& bearing_stiffness,
+                                     double output_rate)
+    : rig_(rig), bearing_stiffness_(bearing_stiffness), requested_rate_(output_rate), torque_(std::make_shared<double>(0.0)) {
+  if (!rig.dynamics.present) throw InvalidInput("dynamics: the gearbox file has no 'dynamics:' block");
+  requirePositive("output_rate", output_rate);
+  for (int i = 0; i < 2; ++i) requireNonNegative("bearing_stiffness[" + std::to_string(i) + "]", bearing_stiffness[i]);
+  mesh_ = std::make_shared<AntiBacklashMesh>(rig.gears, rig.anti_backlash, rig.mesh_model, rig.mesh_samples);
+  fallback_.relative_tolerance = 1e-8;
+  fallback_.absolute_tolerance = 1e-15;
+  fallback_.max_step = 1e-4;
+  build();
+}
+
+void DynamicsEstimator::build() {
+  const DynamicsConfig& d = rig_.dynamics;
+  GearRotorParameters p;
+  p.pinion_mass = d.pinion_mass;
+  p.gear_mass = d.gear_mass;
+  p.pinion_inertia = d.pinion_inertia;
+  p.gear_inertia = d.gear_inertia;
+  p.pinion_base_radius = mesh_->geometry().baseRadius(0);
+  p.gear_base_radius = mesh_->geometry().baseRadius(1);
+  double k_mean = 0.0;
+  for (int i = 0; i < 256; ++i) {
+    const CompositeMesh c = mesh_->at((i + 0.5) / 256, 0.0);
+    k_mean += (c.k1 + (rig_.anti_backlash.spring_stiffness > 0 ? c.k_chain : 0.0)) / 256;
+  }
+  for (int i = 0; i < 2; ++i) {
+    p.bearing_stiffness[i] = bearing_stiffness_[i];
+    const double m = i == 0 ? p.pinion_mass : p.gear_mass;
+    p.bearing_damping[i] = 2.0 * d.bearing_damping_ratio * std::sqrt(p.bearing_stiffness[i] * m);
+    p.bearing_clearance[i] = d.bearing_clearance[i];
+  }
+  p.mesh_damping = 2.0 * d.mesh_damping_ratio * std::sqrt(k_mean * p.equivalentMass());
+  RigExcitationSpec spec;
+  spec.speed = d.speed_rpm * kTwoPi / 60.0;
+  spec.te_amplitude = d.transmission_error_amplitude;
+  spec.backlash = d.backlash;
+  spec.balanced_load = true;
+  spec.torque.kind = TorqueProfile::Kind::kLive;
+  spec.torque.mean = d.torque;
+  spec.torque.live = torque_;
+  auto excitation = std::make_shared<RigExcitation>(mesh_, p, spec);
+  model_ = std::make_shared<GearRotorModel>(p, excitation);
+  const double period = 1.0 / excitation->meshFrequency();
+  const double per_period = std::max(1.0, std::round(period * requested_rate_));
+  interval_ = period / per_period;
+  propagator_.reset();
+  if (d.bearing_clearance[0] == 0.0 && d.bearing_clearance[1] == 0.0) {
+    propagator_ = std::make_unique<PeriodicExponentialPropagator>(*model_, 0.0, interval_);
+  }
+  ++rebuilds_;
+}
+
+void DynamicsEstimator::reset(double t, double torque) {
+  requireFinite("t", t);
+  requireFinite("torque", torque);
+  origin_ = t;
+  k_ = 0;
+  *torque_ = torque;
+  y_ = staticEquilibrium(*model_, 0.0);
+  started_ = true;
+}
+
+void DynamicsEstimator::setTorque(double torque) {
+  requireFinite("torque", torque);
+  *torque_ = torque;
+}
+
+void DynamicsEstimator::setBearingStiffness(const std::array<double, 2>& k) {
+  for (int i = 0; i < 2; ++i) requireNonNegative("bearing_stiffness[" + std::to_string(i) + "]", k[i]);
+  bool changed = false;
+  for (int i = 0; i < 2; ++i) changed |= std::abs(k[i] - bearing_stiffness_[i]) > 0.01 * std::max(bearing_stiffness_[i], 1.0);
+  if (!changed) return;
+  bearing_stiffness_ = k;
+  // Keep the state and the time; the new model continues from it (its phase grid restarts at the
+  // current sample, which is a whole number of intervals from the origin).
+  const double t_now = time();
+  build();
+  origin_ = t_now;
+  k_ = 0;
+}
+
+DynamicsSample DynamicsEstimator::sample(double t_rel, const State6& y) const {
+  DynamicsSample s;
+  s.t = origin_ + t_rel;
+  s.state = y;
+  const GearRotorForces f = model_->forces(t_rel, y);
+  MeshInstant m;
+  model_->excitation().at(t_rel, m);
+  s.dynamic_te = f.delta;
+  s.mesh_force = f.mesh;
+  s.phase = m.phase;
+  s.torque = *torque_;
+  const double ks = m.k_drive + m.k_back;
+  s.static_te = ks > 0.0 ? m.drive_force / ks : 0.0;
+  s.drive_flank_loaded = f.regime.code[0] == 1;
+  s.back_flank_loaded = f.regime.code[1] == 1;
+  return s;
+}
+
+void DynamicsEstimator::advanceTo(double t, const std::function<void(const DynamicsSample&)>& sink) {
+  requireFinite("t", t);
+  if (!started_) throw InvalidInput("dynamics: advanceTo before reset");
+  if (t < time() - 1e-12) {
+    throw InvalidInput("t = " + formatValue(t) + ": before the current time " + formatValue(time()) + " (time went backwards; reset)");
+  }
+  const long k_end = static_cast<long>(std::floor((t - origin_) / interval_ + 1e-9));
+  const double torque = *torque_;
+  while (k_ < k_end) {
+    const double t_k = k_ * interval_, t_next = (k_ + 1) * interval_;
+    bool done = false;
+    if (propagator_) {
+      PeriodicExponentialPropagator::Augmented z = propagator_->augment(t_k, y_);
+      if (propagator_->step(k_, z, torque, torque)) {
+        y_ = z.head<6>();
+        done = true;
+      }
+    }
+    if (!done) {
+      y_ = integrate(*model_, IntegratorMethod::kDopri5, fallback_, t_k, y_, t_next, interval_, nullptr);
+      ++fallback_intervals_;
+    }
+    ++k_;
+    if (sink) sink(sample(t_next, y_));
+  }
+}
+
+}  // namespace drivetrain_stiffness
