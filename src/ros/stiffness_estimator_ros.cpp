@@ -24,7 +24,14 @@ StiffnessEstimatorRos::StiffnessEstimatorRos(ros::NodeHandle nh, ros::NodeHandle
   limits.max_abs_torque = positiveParam(pnh, "max_abs_torque", limits.max_abs_torque);
   limits.max_preload = positiveParam(pnh, "max_preload", limits.max_preload);
   limits.max_interference = positiveParam(pnh, "max_interference", limits.max_interference);
-  estimator_ = std::make_unique<StiffnessEstimator>(loadRigFile(gearbox_config), limits);
+  const RigConfig rig = loadRigFile(gearbox_config);
+  estimator_ = std::make_unique<StiffnessEstimator>(rig, limits);
+  bool dynamics = rig.dynamics.present;
+  pnh.param("dynamics", dynamics, dynamics);
+  if (dynamics) {
+    const double rate = positiveParam(pnh, "output_rate", 1000.0);
+    dynamics_ = std::make_unique<DynamicsEstimator>(rig, shaftBearingStiffness(), rate);
+  }
   double speed_rpm = 1000.0;  // seed 000 Table 1
   pnh.param("pinion_speed_rpm", speed_rpm, speed_rpm);
   requireFinite("~pinion_speed_rpm", speed_rpm);
@@ -33,6 +40,8 @@ StiffnessEstimatorRos::StiffnessEstimatorRos(ros::NodeHandle nh, ros::NodeHandle
   diagnostics_.setHardwareID("drivetrain_stiffness");
   diagnostics_.add("stiffness_estimator", this, &StiffnessEstimatorRos::diagnose);
   stiffness_pub_ = nh.advertise<drivetrain_stiffness::Stiffness>("stiffness", 10);
+  // A torque input can release many samples at once (the gap since the previous input).
+  te_pub_ = nh.advertise<drivetrain_stiffness::TransmissionError>("transmission_error", 10000);
   // Relative topic names, so launch files can remap and namespace them (wiki.ros.org/Names).
   torque_sub_ = nh.subscribe("torque", 100, &StiffnessEstimatorRos::onTorque, this, ros::TransportHints().tcpNoDelay());
   preload_sub_ = nh.subscribe("preload", 10, &StiffnessEstimatorRos::onPreload, this);
@@ -42,13 +51,13 @@ StiffnessEstimatorRos::StiffnessEstimatorRos(ros::NodeHandle nh, ros::NodeHandle
 }
 
 template <typename Update>
-void StiffnessEstimatorRos::apply(const std::string& topic, const std_msgs::Header& header, std::uint64_t& accepted,
+bool StiffnessEstimatorRos::apply(const std::string& topic, const std_msgs::Header& header, std::uint64_t& accepted,
                                   std::uint64_t& rejected, Update update) {
-  std::lock_guard<std::mutex> lock(mutex_);
   try {
     const StiffnessEstimate& estimate = update();
     ++accepted;
     publish(header, estimate);
+    return true;
   } catch (const InvalidInput& e) {
     ++rejected;
     reject(topic, e.what());
@@ -57,14 +66,65 @@ void StiffnessEstimatorRos::apply(const std::string& topic, const std_msgs::Head
     ++unreachable_;
     reject(topic, e.what());
   }
+  return false;
 }
 
 void StiffnessEstimatorRos::onTorque(const geometry_msgs::WrenchStamped::ConstPtr& msg) {
-  apply("torque", msg->header, accepted_torque_, rejected_torque_,
+  std::lock_guard<std::mutex> lock(mutex_);
+  const bool accepted = apply("torque", msg->header, accepted_torque_, rejected_torque_,
         [&]() -> const StiffnessEstimate& { return estimator_->setTorque(msg->wrench.torque.z, pinionAngle(msg->header.stamp)); });
+  if (accepted && dynamics_) advanceDynamics(msg->header.stamp, msg->wrench.torque.z);
+}
+
+std::array<double, 2> StiffnessEstimatorRos::shaftBearingStiffness() const {
+  std::array<double, 2> k{{0.0, 0.0}};
+  const StiffnessEstimate& e = estimator_->current();
+  for (std::size_t i = 0; i < e.supports.size(); ++i) k[estimator_->rig().bearings[i].shaft] += e.supports[i].solution.radialStiffness();
+  return k;
+}
+
+void StiffnessEstimatorRos::advanceDynamics(const ros::Time& stamp, double torque) {
+  try {
+    const double t = stamp.toSec();
+    if (!dynamics_->started() || t < dynamics_->time()) {
+      if (dynamics_->started()) {
+        ++time_jumps_;
+        last_rejection_ = "time went backwards to " + std::to_string(t) + " s: dynamics reset";
+      }
+      dynamics_->reset(t, torque);
+      return;
+    }
+    dynamics_->setBearingStiffness(shaftBearingStiffness());
+    const double sim = t - dynamics_->time();
+    const ros::WallTime start = ros::WallTime::now();
+    dynamics_->advanceTo(t, [&](const DynamicsSample& s) {
+      drivetrain_stiffness::TransmissionError m;
+      m.header.stamp = ros::Time(s.t);
+      m.header.frame_id = "pinion";
+      m.dynamic_te = s.dynamic_te;
+      m.static_te = s.static_te;
+      m.x_p = s.state[0];
+      m.x_g = s.state[1];
+      m.x = s.state[2];
+      m.mesh_force = s.mesh_force;
+      m.mesh_phase = s.phase;
+      m.torque = s.torque;
+      m.drive_flank_loaded = s.drive_flank_loaded;
+      m.back_flank_loaded = s.back_flank_loaded;
+      te_pub_.publish(m);
+      ++te_published_;
+    });
+    dynamics_sim_s_ += sim;
+    dynamics_wall_s_ += (ros::WallTime::now() - start).toSec();
+    dynamics_->setTorque(torque);
+  } catch (const std::exception& e) {
+    ++dynamics_errors_;
+    last_rejection_ = std::string("dynamics: ") + e.what();
+  }
 }
 
 void StiffnessEstimatorRos::onPreload(const drivetrain_stiffness::Preload::ConstPtr& msg) {
+  std::lock_guard<std::mutex> lock(mutex_);
   std::vector<PreloadSetting> settings;
   for (const auto& b : msg->bearings) {
     settings.push_back({b.name, b.axial_preload, b.radial_preload, b.inner_interference, b.outer_interference});
@@ -136,6 +196,20 @@ void StiffnessEstimatorRos::diagnose(diagnostic_updater::DiagnosticStatusWrapper
   status.add("last_rejection", last_rejection_);
   for (const SupportEstimate& s : estimator_->current().supports) {
     status.add(s.name + ".radial_stiffness [N/m]", s.solution.radialStiffness());
+  }
+  if (dynamics_) {
+    status.add("transmission_error_published", te_published_);
+    status.add("dynamics_output_interval [s]", dynamics_->outputInterval());
+    status.add("dynamics_exact_propagation", dynamics_->exact() ? "yes" : "no (bearing clearance: dopri5)");
+    status.add("dynamics_dopri5_intervals", dynamics_->fallbackIntervals());
+    status.add("dynamics_rebuilds", dynamics_->rebuilds());
+    status.add("time_jumps_reset", time_jumps_);
+    status.add("dynamics_errors", dynamics_errors_);
+    const double rtf = dynamics_wall_s_ > 0.0 ? dynamics_sim_s_ / dynamics_wall_s_ : 0.0;
+    status.add("dynamics_realtime_factor", rtf);
+    // Real-time margin: the fraction of wall time left over while keeping up with the rig.
+    status.add("dynamics_realtime_margin", rtf > 0.0 ? 1.0 - 1.0 / rtf : 0.0);
+    if (rtf > 0.0 && rtf < 1.0) status.mergeSummary(diagnostic_msgs::DiagnosticStatus::WARN, "dynamics slower than real time");
   }
 }
 

@@ -10,7 +10,9 @@
 
 #include "drivetrain_stiffness/Preload.h"
 #include "drivetrain_stiffness/Stiffness.h"
+#include "drivetrain_stiffness/TransmissionError.h"
 #include "drivetrain_stiffness/config/yaml_config.hpp"
+#include "drivetrain_stiffness/core/dynamics_estimator.hpp"
 #include "drivetrain_stiffness/core/stiffness_estimator.hpp"
 
 using namespace drivetrain_stiffness;
@@ -19,12 +21,13 @@ class NodeTest : public testing::Test {
  protected:
   void SetUp() override {
     ros::NodeHandle pnh("~");
-    std::string path;
-    ASSERT_TRUE(pnh.getParam("gearbox_config", path));
-    reference_ = std::make_unique<StiffnessEstimator>(loadRigFile(path));
+    ASSERT_TRUE(pnh.getParam("gearbox_config", path_));
+    reference_ = std::make_unique<StiffnessEstimator>(loadRigFile(path_));
     stiffness_sub_ = nh_.subscribe<Stiffness>("stiffness", 100, [this](const Stiffness::ConstPtr& m) { received_.push_back(*m); });
     diag_sub_ = nh_.subscribe<diagnostic_msgs::DiagnosticArray>("/diagnostics", 100,
         [this](const diagnostic_msgs::DiagnosticArray::ConstPtr& m) { diagnostics_.push_back(*m); });
+    te_sub_ = nh_.subscribe<TransmissionError>("transmission_error", 10000,
+        [this](const TransmissionError::ConstPtr& m) { te_.push_back(*m); });
     torque_pub_ = nh_.advertise<geometry_msgs::WrenchStamped>("torque", 10);
     preload_pub_ = nh_.advertise<Preload>("preload", 10);
     ASSERT_TRUE(waitFor([&] { return torque_pub_.getNumSubscribers() > 0 && preload_pub_.getNumSubscribers() > 0 &&
@@ -103,9 +106,18 @@ class NodeTest : public testing::Test {
     return received_.size() == before;
   }
 
+  static std::array<double, 2> shaftStiffness(const StiffnessEstimator& e) {
+    std::array<double, 2> k{{0.0, 0.0}};
+    for (std::size_t i = 0; i < e.current().supports.size(); ++i)
+      k[e.rig().bearings[i].shaft] += e.current().supports[i].solution.radialStiffness();
+    return k;
+  }
+
   ros::NodeHandle nh_;
+  std::string path_;
   std::unique_ptr<StiffnessEstimator> reference_;
-  ros::Subscriber stiffness_sub_, diag_sub_;
+  ros::Subscriber stiffness_sub_, diag_sub_, te_sub_;
+  std::vector<TransmissionError> te_;
   ros::Publisher torque_pub_, preload_pub_;
   std::vector<Stiffness> received_;
   std::vector<diagnostic_msgs::DiagnosticArray> diagnostics_;
@@ -141,6 +153,33 @@ TEST_F(NodeTest, AnswersGoodInputAndSurvivesBadInput) {
   // 3. The next good input is answered correctly: state was not poisoned.
   sendTorque(0.25, 13.0137);
   expectAnswer(13.0137, reference_->setTorque(0.25, omega * 2.0137));
+
+  // 4. Dynamics: the first torque (t = 11) started the model; this one released every 1 ms sample
+  // in (11, 13.0137] with the 0.5 N m held: 2013 transmission_error messages, stamped on the grid.
+  ASSERT_TRUE(waitFor([&] { return te_.size() >= 2013; }, 10.0)) << te_.size();
+  EXPECT_EQ(te_.size(), 2013u);
+  EXPECT_NEAR(te_.front().header.stamp.toSec(), 11.001, 1e-6);
+  EXPECT_NEAR(te_.back().header.stamp.toSec(), 13.013, 1e-6);
+  for (const TransmissionError& m : te_) {
+    EXPECT_TRUE(std::isfinite(m.dynamic_te) && std::isfinite(m.x) && std::isfinite(m.mesh_force));
+    EXPECT_TRUE(m.drive_flank_loaded && m.back_flank_loaded);
+    EXPECT_DOUBLE_EQ(m.torque, 0.5);
+  }
+  // Replay what the node did with the core class: built with the bearing stiffness at start-up
+  // (configured preloads, no torque), started at t = 11 under 0.5 N m, then given the stiffness of
+  // the current estimate (preloads 1200/800 N, 0.25 N m) before advancing to 13.0137 s.
+  const RigConfig rig = loadRigFile(path_);
+  DynamicsEstimator replay(rig, shaftStiffness(StiffnessEstimator(rig)), 1000.0);
+  replay.reset(11.0, 0.5);
+  replay.setBearingStiffness(shaftStiffness(*reference_));
+  std::vector<DynamicsSample> expected;
+  replay.advanceTo(13.0137, [&](const DynamicsSample& d) { expected.push_back(d); });
+  ASSERT_EQ(expected.size(), te_.size());
+  for (std::size_t i = 0; i < te_.size(); ++i) {
+    EXPECT_NEAR(te_[i].dynamic_te, expected[i].dynamic_te, 1e-12 * std::abs(expected[i].dynamic_te) + 1e-18) << i;
+    EXPECT_NEAR(te_[i].mesh_force, expected[i].mesh_force, 1e-9 * std::abs(expected[i].mesh_force) + 1e-12) << i;
+  }
+  EXPECT_TRUE(diagnosticCountAtLeast("transmission_error_published", 2013));
 }
 
 int main(int argc, char** argv) {

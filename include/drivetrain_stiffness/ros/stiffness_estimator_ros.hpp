@@ -15,6 +15,8 @@
 
 #include "drivetrain_stiffness/Preload.h"
 #include "drivetrain_stiffness/Stiffness.h"
+#include "drivetrain_stiffness/TransmissionError.h"
+#include "drivetrain_stiffness/core/dynamics_estimator.hpp"
 #include "drivetrain_stiffness/core/stiffness_estimator.hpp"
 
 namespace drivetrain_stiffness {
@@ -28,9 +30,14 @@ class StiffnessEstimatorRos {
   void onTorque(const geometry_msgs::WrenchStamped::ConstPtr& msg);
   void onPreload(const drivetrain_stiffness::Preload::ConstPtr& msg);
   /// Runs one estimator update under the lock: publishes on success, counts and reports a rejection.
+  /// Returns whether the input was accepted.
   template <typename Update>
-  void apply(const std::string& topic, const std_msgs::Header& header, std::uint64_t& accepted,
+  bool apply(const std::string& topic, const std_msgs::Header& header, std::uint64_t& accepted,
              std::uint64_t& rejected, Update update);
+  /// Integrates the dynamics up to `stamp` with the previous torque, publishing every sample, then
+  /// holds `torque`. Resets on the first input and when time went backwards.
+  void advanceDynamics(const ros::Time& stamp, double torque);
+  std::array<double, 2> shaftBearingStiffness() const;
   void publish(const std_msgs::Header& header, const StiffnessEstimate& estimate);
   double pinionAngle(const ros::Time& stamp);
   void reject(const std::string& topic, const std::string& reason);
@@ -38,7 +45,10 @@ class StiffnessEstimatorRos {
 
   std::unique_ptr<StiffnessEstimator> estimator_;
   ros::Subscriber torque_sub_, preload_sub_;
-  ros::Publisher stiffness_pub_;
+  ros::Publisher stiffness_pub_, te_pub_;
+  std::unique_ptr<DynamicsEstimator> dynamics_;
+  std::uint64_t te_published_ = 0, time_jumps_ = 0, dynamics_errors_ = 0;
+  double dynamics_sim_s_ = 0.0, dynamics_wall_s_ = 0.0;  // totals for the real-time factor
   ros::Timer diagnostic_timer_;
   diagnostic_updater::Updater diagnostics_;
   std::mutex mutex_;  // callbacks may run on several spinner threads (nodelet)
