@@ -64,11 +64,11 @@ TEST(Scenes, EveryMethodBoundedOrRefusesOnEveryScene) {
         EXPECT_GT(r.peak_delta, 0.0) << name;
         if (m == IntegratorMethod::kDopri5) {
           reference = r.peak_delta;
-        } else if (name != "chaotic") {
-          // Fixed steps cross impacts without locating them, which costs accuracy where impacts
-          // dominate (the rattling shafts hit their clearance about 170 times in 20 ms).
-          const double tolerance = name == "bearing_rattle" ? 0.10 : 0.02;
-          EXPECT_NEAR(r.peak_delta / reference, 1.0, tolerance) << name << " " << toString(m);
+        } else if (name != "chaotic" && name != "bearing_rattle") {
+          // Regular motion: the methods agree. Not compared: chaotic, and bearing_rattle, whose
+          // impacts (about 170 in 20 ms) make the trajectory sensitive to any perturbation - two
+          // dopri5 references at rtol 1e-9 and 1e-12 differ by 10 % (drivetrain_bench).
+          EXPECT_NEAR(r.peak_delta / reference, 1.0, 0.02) << name << " " << toString(m);
         }
       } catch (const UnstableIntegration& e) {
         ADD_FAILURE() << name << " " << toString(m) << " refused at its own suggested step: " << e.what();

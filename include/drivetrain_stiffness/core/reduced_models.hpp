@@ -1,0 +1,47 @@
+// Reduced fidelities of the gear-rotor model, and the `auto` choice among all methods.
+//
+//  - quasi_static: the torsional mode (tens of kHz) is taken as always in equilibrium: m_s -> 0 in
+//    m_s x'' + F = F_drive gives F = F_drive, so delta = F_drive / k_s(phase) (the static TE) and
+//    each shaft is a damped oscillator on its bearing driven by -/+ F_drive alone; x follows from
+//    delta = x + x_p - x_g - e. Valid when the excitation is far below the torsional mode.
+//  - linear_modal: the stiffness held at its mean over a mesh period (no parametric excitation):
+//    a linear time-invariant system, propagated exactly by one matrix exponential per output
+//    interval (TE generator and first-order-hold torque as in the exponential method).
+//  - auto: runs each candidate, cheapest first (quasi_static, linear_modal, exponential when the
+//    model can be linear, dopri5 at rtol = bound / 100), over a pilot window against a tight dopri5
+//    pilot, and uses the first whose relative RMS error of delta meets half the bound.
+#pragma once
+
+#include <string>
+
+#include "drivetrain_stiffness/core/integrators.hpp"
+#include "drivetrain_stiffness/core/rig_excitation.hpp"
+
+namespace drivetrain_stiffness {
+
+enum class Fidelity { kFull, kQuasiStatic, kLinearModal };
+const char* toString(Fidelity f);
+
+/// Integrates a reduced fidelity (the model must use a RigExcitation) on the output grid.
+State6 integrateReduced(const GearRotorModel& model, Fidelity fidelity, double t0, const State6& y0, double t_end,
+                        double output_interval, const Observer& observe);
+
+struct AutoChoice {
+  Fidelity fidelity = Fidelity::kFull;
+  IntegratorMethod method = IntegratorMethod::kDopri5;
+  double relative_tolerance = 0.0;   ///< for dopri5
+  double pilot_duration = 0.0;       ///< [s]
+  std::vector<std::pair<std::string, double>> pilot_errors;  ///< candidate, relative RMS error of delta
+  std::string reason;
+};
+
+/// Picks the cheapest fidelity and method whose pilot error meets `error_bound` (relative RMS of
+/// delta). The pilot covers `pilot_duration` from (t0, y0).
+AutoChoice chooseAutomatically(const GearRotorModel& model, double t0, const State6& y0, double output_interval,
+                               double pilot_duration, double error_bound);
+
+/// Runs `choice` (from chooseAutomatically) over the whole span.
+State6 integrateChoice(const GearRotorModel& model, const AutoChoice& choice, double t0, const State6& y0, double t_end,
+                       double output_interval, const Observer& observe, IntegrationStats* stats = nullptr);
+
+}  // namespace drivetrain_stiffness

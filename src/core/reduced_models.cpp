@@ -1,0 +1,228 @@
+#include "drivetrain_stiffness/core/reduced_models.hpp"
+
+#include <cmath>
+#include <unsupported/Eigen/MatrixFunctions>
+
+#include "drivetrain_stiffness/core/validation.hpp"
+
+namespace drivetrain_stiffness {
+namespace {
+constexpr double kTwoPi = 6.283185307179586;
+
+const RigExcitation& rigExcitation(const GearRotorModel& model, const char* what) {
+  const auto* e = dynamic_cast<const RigExcitation*>(&model.excitation());
+  if (!e) throw InvalidInput(std::string("fidelity ") + what + ": needs a rig excitation");
+  return *e;
+}
+
+long gridCount(double t0, double t_end, double interval) {
+  requirePositive("output_interval", interval);
+  const double n = (t_end - t0) / interval;
+  if (!(n >= 0.0) || std::abs(n - std::round(n)) > 1e-6 * std::max(1.0, n)) {
+    throwInvalid("t_end", t_end, "must be t0 plus a whole number of output intervals");
+  }
+  return std::lround(n);
+}
+
+double meanStiffness(const RigExcitation& e) {
+  double k = 0.0;
+  const int n = 512;
+  for (int i = 0; i < n; ++i) {
+    MeshInstant m;
+    e.at((i + 0.5) / n / e.meshFrequency(), m);
+    k += (m.k_drive + m.k_back) / n;
+  }
+  return k;
+}
+
+// One shaft on its bearing, m x'' + c x' + k x = f(t), f linear over the interval (first-order
+// hold): exact propagation through the exponential of [[0,1,0,0],[-k/m,-c/m,1/m,0],[0,0,0,1],[0,0,0,0]].
+struct ShaftPropagator {
+  Eigen::Matrix4d phi;
+  ShaftPropagator(double m, double c, double k, double h) {
+    Eigen::Matrix4d a = Eigen::Matrix4d::Zero();
+    a(0, 1) = 1.0;
+    a(1, 0) = -k / m;
+    a(1, 1) = -c / m;
+    a(1, 2) = 1.0 / m;
+    a(2, 3) = 1.0;
+    // Balance displacement (um) against force (N): the exponential is accurate normwise.
+    const Eigen::Vector4d s(1e-6, 1e-6 * std::sqrt(std::max(k, 1.0) / m), 1.0, 1.0 / h);
+    phi = s.asDiagonal() * (s.cwiseInverse().asDiagonal() * (a * h) * s.asDiagonal()).exp() * s.cwiseInverse().asDiagonal();
+  }
+  void step(double& x, double& v, double f0, double f1, double h) const {
+    Eigen::Vector4d z(x, v, f0, (f1 - f0) / h);
+    z = phi * z;
+    x = z[0];
+    v = z[1];
+  }
+};
+
+}  // namespace
+
+const char* toString(Fidelity f) {
+  switch (f) {
+    case Fidelity::kFull: return "full";
+    case Fidelity::kQuasiStatic: return "quasi_static";
+    case Fidelity::kLinearModal: return "linear_modal";
+  }
+  return "?";
+}
+
+State6 integrateReduced(const GearRotorModel& model, Fidelity fidelity, double t0, const State6& y0, double t_end,
+                        double interval, const Observer& observe) {
+  const long n = gridCount(t0, t_end, interval);
+  if (!y0.allFinite()) throw InvalidInput("initial state: contains a non-finite value");
+  const GearRotorParameters& p = model.parameters();
+  State6 y = y0;
+  if (observe) observe(t0, y0);
+  if (fidelity == Fidelity::kQuasiStatic) {
+    rigExcitation(model, "quasi_static");
+    const ShaftPropagator pin(p.pinion_mass, p.bearing_damping[0], p.bearing_stiffness[0], interval);
+    const ShaftPropagator gear(p.gear_mass, p.bearing_damping[1], p.bearing_stiffness[1], interval);
+    MeshInstant m;
+    model.excitation().at(t0, m);
+    double f = m.drive_force;
+    for (long k = 0; k < n; ++k) {
+      const double t = t0 + (k + 1) * interval;
+      model.excitation().at(t, m);
+      pin.step(y[0], y[3], -f, -m.drive_force, interval);   // the pinion is pushed back by the mesh force
+      gear.step(y[1], y[4], f, m.drive_force, interval);
+      f = m.drive_force;
+      const double ks = m.k_drive + m.k_back;
+      const double delta = ks > 0.0 ? m.drive_force / ks + (m.k_back > 0.0 ? 0.0 : m.backlash) : 0.0;
+      const double x_new = delta - y[0] + y[1] + m.te;
+      y[5] = (x_new - y[2]) / interval;  // torsional rate from the samples (the mode itself is not modelled)
+      y[2] = x_new;
+      if (observe) observe(t, y);
+    }
+    return y;
+  }
+  if (fidelity == Fidelity::kLinearModal) {
+    const RigExcitation& e = rigExcitation(model, "linear_modal");
+    const double ks = meanStiffness(e), cs = p.mesh_damping, ms = model.equivalentMass();
+    const double a_te = e.spec().te_amplitude, w = kTwoPi * e.meshFrequency(), psi = kTwoPi * e.spec().initial_phase;
+    const TorqueProfile& torque = e.spec().torque;
+    MeshInstant m0;
+    e.at(t0, m0);
+    const double gain = e.torqueGain();
+    const double mean_force = m0.drive_force - gain * (torque.at(t0) - torque.mean);
+    // State [x_p x_g x v_p v_g v sin cos 1 u u'] as in the exponential method, stiffness at its mean.
+    Eigen::Matrix<double, 11, 11> a = Eigen::Matrix<double, 11, 11>::Zero();
+    Eigen::Matrix<double, 1, 11> f = Eigen::Matrix<double, 1, 11>::Zero();
+    f << ks, -ks, ks, cs, -cs, cs, -ks * a_te, -cs * a_te * w, 0, 0, 0;
+    a(0, 3) = a(1, 4) = a(2, 5) = 1.0;
+    a.row(3) = -f / p.pinion_mass;
+    a(3, 0) -= p.bearing_stiffness[0] / p.pinion_mass;
+    a(3, 3) -= p.bearing_damping[0] / p.pinion_mass;
+    a.row(4) = f / p.gear_mass;
+    a(4, 1) -= p.bearing_stiffness[1] / p.gear_mass;
+    a(4, 4) -= p.bearing_damping[1] / p.gear_mass;
+    a.row(5) = -f / ms;
+    a(5, 8) += mean_force / ms;
+    a(5, 9) += gain / ms;
+    a(6, 7) = w;
+    a(7, 6) = -w;
+    a(9, 10) = 1.0;
+    const double w_max = std::sqrt(std::max({(ks + p.bearing_stiffness[0]) / p.pinion_mass,
+                                             (ks + p.bearing_stiffness[1]) / p.gear_mass, 2.0 * ks / ms}));
+    Eigen::Matrix<double, 11, 1> s;
+    s << 1e-6, 1e-6, 1e-6, 1e-6 * w_max, 1e-6 * w_max, 1e-6 * w_max, 1, 1, 1, 1, 1.0 / interval;
+    const Eigen::Matrix<double, 11, 11> phi =
+        s.asDiagonal() * (s.cwiseInverse().asDiagonal() * (a * interval) * s.asDiagonal()).exp() * s.cwiseInverse().asDiagonal();
+    Eigen::Matrix<double, 11, 1> z;
+    z.head<6>() = y;
+    z[6] = std::sin(w * t0 + psi);
+    z[7] = std::cos(w * t0 + psi);
+    z[8] = 1.0;
+    double u = torque.at(t0) - torque.mean;
+    for (long k = 0; k < n; ++k) {
+      const double t = t0 + (k + 1) * interval;
+      const double u_next = torque.at(t) - torque.mean;
+      z[9] = u;
+      z[10] = (u_next - u) / interval;
+      z = phi * z;
+      u = u_next;
+      if (observe) observe(t, z.head<6>());
+    }
+    return z.head<6>();
+  }
+  throw InvalidInput("integrateReduced: use integrate() for the full model");
+}
+
+AutoChoice chooseAutomatically(const GearRotorModel& model, double t0, const State6& y0, double interval,
+                               double pilot_duration, double error_bound) {
+  requirePositive("error_bound", error_bound);
+  requirePositive("pilot_duration", pilot_duration);
+  AutoChoice choice;
+  choice.pilot_duration = std::round(pilot_duration / interval) * interval;
+  const double t_end = t0 + choice.pilot_duration;
+  auto deltas = [&](auto run) {
+    std::vector<double> d;
+    run([&](double t, const State6& y) { d.push_back(model.forces(t, y).delta); });
+    return d;
+  };
+  IntegratorOptions tight;
+  tight.relative_tolerance = 1e-11;
+  tight.absolute_tolerance = 1e-17;
+  tight.max_step = 1e-4;
+  const std::vector<double> reference =
+      deltas([&](const Observer& o) { integrate(model, IntegratorMethod::kDopri5, tight, t0, y0, t_end, interval, o); });
+  auto error = [&](const std::vector<double>& d) {
+    double e = 0.0, r = 0.0;
+    for (std::size_t i = 0; i < reference.size() && i < d.size(); ++i) {
+      e += (d[i] - reference[i]) * (d[i] - reference[i]);
+      r += reference[i] * reference[i];
+    }
+    return d.size() == reference.size() && r > 0.0 ? std::sqrt(e / r) : INFINITY;
+  };
+  const bool rig = dynamic_cast<const RigExcitation*>(&model.excitation()) != nullptr;
+  auto accept = [&](const std::string& name, double err) {
+    choice.pilot_errors.emplace_back(name, err);
+    return err <= 0.5 * error_bound;
+  };
+  if (rig) {
+    for (Fidelity f : {Fidelity::kQuasiStatic, Fidelity::kLinearModal}) {
+      const double err = error(deltas([&](const Observer& o) { integrateReduced(model, f, t0, y0, t_end, interval, o); }));
+      if (accept(toString(f), err)) {
+        choice.fidelity = f;
+        choice.reason = std::string(toString(f)) + " meets the bound on the pilot";
+        return choice;
+      }
+    }
+    try {
+      IntegratorOptions o;
+      const double err = error(deltas([&](const Observer& ob) { integrate(model, IntegratorMethod::kExponential, o, t0, y0, t_end, interval, ob); }));
+      if (accept("exponential", err)) {
+        choice.method = IntegratorMethod::kExponential;
+        choice.reason = "full model, exact exponential propagation (contacts closed) meets the bound";
+        return choice;
+      }
+    } catch (const InvalidInput&) {
+      choice.pilot_errors.emplace_back("exponential (not applicable)", INFINITY);
+    }
+  }
+  choice.method = IntegratorMethod::kDopri5;
+  choice.relative_tolerance = std::max(error_bound / 100.0, 1e-11);
+  IntegratorOptions o = tight;
+  o.relative_tolerance = choice.relative_tolerance;
+  o.absolute_tolerance = choice.relative_tolerance * 1e-6;
+  choice.pilot_errors.emplace_back("dopri5", error(deltas([&](const Observer& ob) {
+    integrate(model, IntegratorMethod::kDopri5, o, t0, y0, t_end, interval, ob); })));
+  choice.reason = "full model with dopri5 (events located) at rtol = bound / 100";
+  return choice;
+}
+
+State6 integrateChoice(const GearRotorModel& model, const AutoChoice& choice, double t0, const State6& y0, double t_end,
+                       double interval, const Observer& observe, IntegrationStats* stats) {
+  if (choice.fidelity != Fidelity::kFull) return integrateReduced(model, choice.fidelity, t0, y0, t_end, interval, observe);
+  IntegratorOptions o;
+  o.max_step = 1e-4;
+  if (choice.method == IntegratorMethod::kDopri5) {
+    o.relative_tolerance = choice.relative_tolerance;
+    o.absolute_tolerance = choice.relative_tolerance * 1e-6;
+  }
+  return integrate(model, choice.method, o, t0, y0, t_end, interval, observe, stats);
+}
+
+}  // namespace drivetrain_stiffness

@@ -1,0 +1,116 @@
+// Reduced fidelities and the automatic choice, against the limits they stand for.
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
+#include <complex>
+
+#include "drivetrain_stiffness/config/yaml_config.hpp"
+#include "drivetrain_stiffness/core/reduced_models.hpp"
+#include "drivetrain_stiffness/core/scenes.hpp"
+
+using namespace drivetrain_stiffness;
+
+namespace {
+const RigConfig& rig() {
+  static const RigConfig r = loadRigFile(std::string(DRIVETRAIN_SOURCE_DIR) + "/config/gearboxes/seed_servo.yaml");
+  return r;
+}
+
+std::vector<double> deltas(const GearRotorModel& m, const Scene& s, const std::function<void(const Observer&)>& run) {
+  std::vector<double> d;
+  run([&](double t, const State6& y) { if (t >= s.transient) d.push_back(m.forces(t, y).delta); });
+  return d;
+}
+
+double relErr(const std::vector<double>& a, const std::vector<double>& b) {
+  double e = 0, r = 0;
+  for (std::size_t i = 0; i < b.size(); ++i) { e += (a[i] - b[i]) * (a[i] - b[i]); r += b[i] * b[i]; }
+  return std::sqrt(e / r);
+}
+
+// The nominal scene's model with the gear inertias scaled (a lighter torsional mode).
+std::shared_ptr<GearRotorModel> withInertiaScale(const Scene& s, double scale) {
+  GearRotorParameters p = s.model->parameters();
+  p.pinion_inertia *= scale;
+  p.gear_inertia *= scale;
+  const auto& e = dynamic_cast<const RigExcitation&>(s.model->excitation());
+  auto mesh = std::shared_ptr<const AntiBacklashMesh>(&e.mesh(), [](const AntiBacklashMesh*) {});
+  return std::make_shared<GearRotorModel>(p, std::make_shared<RigExcitation>(mesh, p, e.spec()));
+}
+}  // namespace
+
+// Quasi-static torsion is the m_s -> 0 limit: its error against the full model falls as the
+// torsional mode stiffens (inertias scaled by 1e-2 raise it tenfold).
+TEST(ReducedModels, QuasiStaticIsTheLightTorsionLimit) {
+  const Scene s = makeScene("nominal", rig());
+  IntegratorOptions o;
+  o.relative_tolerance = 1e-10;
+  o.absolute_tolerance = 1e-16;
+  auto errorFor = [&](double scale) {
+    const auto model = withInertiaScale(s, scale);
+    const State6 y0 = staticEquilibrium(*model, 0.0);
+    const auto full = deltas(*model, s, [&](const Observer& ob) { integrate(*model, IntegratorMethod::kExponential, o, 0.0, y0, s.duration, s.output_interval, ob); });
+    const auto qs = deltas(*model, s, [&](const Observer& ob) { integrateReduced(*model, Fidelity::kQuasiStatic, 0.0, y0, s.duration, s.output_interval, ob); });
+    return relErr(qs, full);
+  };
+  const double coarse = errorFor(1.0), fine = errorFor(1e-2);
+  EXPECT_LT(coarse, 0.2);
+  EXPECT_LT(fine, 0.5 * coarse);
+}
+
+// Linear modal (mean stiffness, LTI): its steady-state response to the TE at the mesh frequency
+// equals the analytic frequency response q = (K - w^2 M + i w C)^-1 f of docs/model.md's matrices,
+// with the TE entering the mesh force as -(k_s + i w c_s) A on (x_p, x_g, x) with signs (-1, +1, -1).
+TEST(ReducedModels, LinearModalMatchesAnalyticFrequencyResponse) {
+  const Scene s = makeScene("nominal", rig());
+  const auto& e = dynamic_cast<const RigExcitation&>(s.model->excitation());
+  const GearRotorParameters& p = s.model->parameters();
+  double ks = 0.0;
+  for (int i = 0; i < 512; ++i) {
+    MeshInstant m;
+    e.at((i + 0.5) / 512 / e.meshFrequency(), m);
+    ks += (m.k_drive + m.k_back) / 512;
+  }
+  const double w = 2 * M_PI * e.meshFrequency(), a = e.spec().te_amplitude, cs = p.mesh_damping, ms = s.model->equivalentMass();
+  using C = std::complex<double>;
+  Eigen::Matrix3cd d;
+  const C kc(ks, w * cs);
+  d << C(p.bearing_stiffness[0] - w * w * p.pinion_mass, w * p.bearing_damping[0]) + kc, -kc, kc,
+       -kc, C(p.bearing_stiffness[1] - w * w * p.gear_mass, w * p.bearing_damping[1]) + kc, -kc,
+       kc, -kc, -w * w * ms + kc;
+  const Eigen::Vector3cd f = kc * a * Eigen::Vector3cd(1.0, -1.0, 1.0);  // e(t) = A sin(w t) = Im(A e^{iwt})
+  const Eigen::Vector3cd q = d.partialPivLu().solve(f);
+  const C delta_amp = q[2] + q[0] - q[1] - a;  // delta = x + x_p - x_g - e
+  // Simulate long enough for the transient to decay and fit A sin + B cos + mean over the last periods.
+  const double period = 1.0 / e.meshFrequency();
+  std::vector<std::pair<double, double>> samples;
+  integrateReduced(*s.model, Fidelity::kLinearModal, 0.0, s.initial, 200 * period, s.output_interval,
+                   [&](double t, const State6& y) { if (t > 190 * period) samples.emplace_back(t, s.model->forces(t, y).delta); });
+  Eigen::MatrixXd basis(samples.size(), 3);
+  Eigen::VectorXd values(samples.size());
+  for (std::size_t i = 0; i < samples.size(); ++i) {
+    basis(i, 0) = std::sin(w * samples[i].first);
+    basis(i, 1) = std::cos(w * samples[i].first);
+    basis(i, 2) = 1.0;
+    values[i] = samples[i].second;
+  }
+  const Eigen::Vector3d fit = basis.colPivHouseholderQr().solve(values);
+  EXPECT_NEAR(std::hypot(fit[0], fit[1]) / std::abs(delta_amp), 1.0, 1e-6);
+  MeshInstant m0;
+  e.at(0.0, m0);
+  EXPECT_NEAR(fit[2] / (m0.drive_force / ks), 1.0, 1e-6);  // mean deflection F_m / k_mean
+}
+
+TEST(ReducedModels, AutomaticChoiceIsTheCheapestThatMeetsTheBound) {
+  const Scene s = makeScene("nominal", rig());
+  const double pilot = 4.0 / (1000.0 / 60 * 20);
+  EXPECT_EQ(chooseAutomatically(*s.model, 0.0, s.initial, s.output_interval, pilot, 0.5).fidelity, Fidelity::kQuasiStatic);
+  const AutoChoice tight = chooseAutomatically(*s.model, 0.0, s.initial, s.output_interval, pilot, 1e-6);
+  EXPECT_EQ(tight.fidelity, Fidelity::kFull);
+  EXPECT_EQ(tight.method, IntegratorMethod::kExponential);
+  EXPECT_FALSE(tight.reason.empty());
+  const Scene rattle = makeScene("bearing_rattle", rig());
+  const AutoChoice r = chooseAutomatically(*rattle.model, 0.0, rattle.initial, rattle.output_interval, pilot, 1e-3);
+  EXPECT_EQ(r.method, IntegratorMethod::kDopri5);  // clearance: no exact propagation
+  EXPECT_NEAR(r.relative_tolerance, 1e-5, 1e-18);
+}
