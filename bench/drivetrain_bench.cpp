@@ -17,6 +17,7 @@
 
 #include "drivetrain_stiffness/config/yaml_config.hpp"
 #include "drivetrain_stiffness/core/exponential_integrator.hpp"
+#include "drivetrain_stiffness/core/reduced_models.hpp"
 #include "drivetrain_stiffness/core/scenes.hpp"
 #include "peer_integrators.hpp"
 
@@ -193,6 +194,35 @@ int main(int argc, char** argv) {
         file << j.dump() << "\n";
       } catch (const std::exception& e) {
         report("exponential", setting, 0.0, Timed{}, e.what());
+      }
+    }
+
+    // Reduced fidelities (rig scenes only): model only what the scene needs.
+    for (ds::Fidelity f : {ds::Fidelity::kQuasiStatic, ds::Fidelity::kLinearModal}) {
+      try {
+        const Timed r = timed([&](Samples& s) {
+          ds::integrateReduced(*scene.model, f, 0.0, scene.initial, scene.duration, scene.output_interval, record(s));
+          return std::lround(scene.duration / scene.output_interval);
+        });
+        report(ds::toString(f), "reduced model", 0.0, r, "");
+      } catch (const std::exception& e) {
+        report(ds::toString(f), "reduced model", 0.0, Timed{}, e.what());
+      }
+    }
+    // auto at two error bounds; the wall time includes the pilot runs that made the choice.
+    for (double bound : {1e-2, 1e-6}) {
+      try {
+        ds::AutoChoice chosen;
+        const Timed r = timed([&](Samples& s) {
+          const double pilot = std::min(scene.duration, 40.0 * scene.output_interval);
+          chosen = ds::chooseAutomatically(*scene.model, 0.0, scene.initial, scene.output_interval, pilot, bound);
+          ds::IntegrationStats st;
+          ds::integrateChoice(*scene.model, chosen, 0.0, scene.initial, scene.duration, scene.output_interval, record(s), &st);
+          return st.steps;
+        });
+        report("auto", "bound=" + fmt(bound) + " -> " + ds::toString(chosen.fidelity) + "/" + ds::toString(chosen.method), 0.0, r, "");
+      } catch (const std::exception& e) {
+        report("auto", "bound=" + fmt(bound), 0.0, Timed{}, e.what());
       }
     }
 

@@ -3,8 +3,8 @@
 //   drivetrain_cli bearing --config FILE [--fr N] [--fa N] [--moment N·m] [--tilt free|constrained] [--preload N]
 //                          [--inner-interference m] [--outer-interference m]
 //   drivetrain_cli mesh --config FILE [--model potential_energy|kuang_yang|iso6336] [--samples N] [--torque N·m]
-//   drivetrain_cli simulate --config FILE --scene NAME [--method dopri5|rk4|trapezoidal] [--step S] [--duration S]
-//                           [--rtol R] [--out CSV]
+//   drivetrain_cli simulate --config FILE --scene NAME [--method dopri5|rk4|trapezoidal|exponential|quasi_static|
+//                           linear_modal|auto] [--error-bound E] [--step S] [--duration S] [--rtol R] [--out CSV]
 #include <CLI/CLI.hpp>
 #include <chrono>
 #include <cmath>
@@ -14,6 +14,7 @@
 
 #include "drivetrain_stiffness/config/json_report.hpp"
 #include "drivetrain_stiffness/config/yaml_config.hpp"
+#include "drivetrain_stiffness/core/reduced_models.hpp"
 #include "drivetrain_stiffness/core/scenes.hpp"
 #include "drivetrain_stiffness/core/validation.hpp"
 
@@ -70,7 +71,7 @@ int runMesh(const MeshArgs& args) {
 struct SimulateArgs {
   std::string config, scene, method = "dopri5";
   std::optional<double> step, duration;
-  double rtol = 1e-8;
+  double rtol = 1e-8, error_bound = 1e-6;
   std::optional<std::string> out;
 };
 
@@ -89,11 +90,14 @@ int runSimulate(const SimulateArgs& args) {
     scene.duration = std::round(*args.duration / scene.output_interval) * scene.output_interval;
     scene.transient = std::min(scene.transient, 0.3 * scene.duration);
   }
-  const ds::IntegratorMethod method = ds::parseIntegratorMethod("--method", args.method);
+  const bool reduced = args.method == "quasi_static" || args.method == "linear_modal";
+  const bool automatic = args.method == "auto";
+  const ds::IntegratorMethod method =
+      reduced || automatic ? ds::IntegratorMethod::kDopri5 : ds::parseIntegratorMethod("--method", args.method);
   ds::IntegratorOptions o;
   o.step = args.step ? *args.step : scene.suggested_step;
   ds::requirePositive("--step", o.step);
-  if (method != ds::IntegratorMethod::kDopri5) {
+  if (method == ds::IntegratorMethod::kRk4 || method == ds::IntegratorMethod::kTrapezoidal) {
     // Fixed steps: sample every whole number of steps and end on a step.
     scene.output_interval = o.step * std::max(1.0, std::round(scene.output_interval / o.step));
     scene.duration = o.step * std::max(1.0, std::round(scene.duration / o.step));
@@ -114,27 +118,43 @@ int runSimulate(const SimulateArgs& args) {
   SignalStats delta, xp, xg, x;
   ds::IntegrationStats stats;
   const auto start = std::chrono::steady_clock::now();
-  ds::integrate(*scene.model, method, o, 0.0, scene.initial, scene.duration, scene.output_interval,
-                [&](double t, const ds::State6& y) {
-                  const ds::GearRotorForces f = scene.model->forces(t, y);
-                  if (t >= scene.transient) {
-                    delta.add(f.delta);
-                    xp.add(y[0]);
-                    xg.add(y[1]);
-                    x.add(y[2]);
-                  }
-                  if (csv.is_open()) {
-                    ds::MeshInstant m;
-                    scene.model->excitation().at(t, m);
-                    csv << t << ',' << y[0] << ',' << y[1] << ',' << y[2] << ',' << f.delta << ',' << f.mesh << ','
-                        << f.drive_flank << ',' << f.back_flank << ',' << m.k_drive << ',' << m.k_back << ',' << m.phase << '\n';
-                  }
-                },
-                &stats);
+  const ds::Observer observe = [&](double t, const ds::State6& y) {
+    const ds::GearRotorForces f = scene.model->forces(t, y);
+    if (t >= scene.transient) {
+      delta.add(f.delta);
+      xp.add(y[0]);
+      xg.add(y[1]);
+      x.add(y[2]);
+    }
+    if (csv.is_open()) {
+      ds::MeshInstant m;
+      scene.model->excitation().at(t, m);
+      csv << t << ',' << y[0] << ',' << y[1] << ',' << y[2] << ',' << f.delta << ',' << f.mesh << ','
+          << f.drive_flank << ',' << f.back_flank << ',' << m.k_drive << ',' << m.k_back << ',' << m.phase << '\n';
+    }
+  };
+  nlohmann::json chosen = nullptr;
+  if (reduced) {
+    ds::integrateReduced(*scene.model, args.method == "quasi_static" ? ds::Fidelity::kQuasiStatic : ds::Fidelity::kLinearModal,
+                         0.0, scene.initial, scene.duration, scene.output_interval, observe);
+  } else if (automatic) {
+    const double pilot = std::min(scene.duration, 40.0 * scene.output_interval);
+    const ds::AutoChoice c = ds::chooseAutomatically(*scene.model, 0.0, scene.initial, scene.output_interval, pilot, args.error_bound);
+    nlohmann::json pilots = nlohmann::json::object();
+    for (const auto& e : c.pilot_errors) pilots[e.first] = std::isfinite(e.second) ? nlohmann::json(e.second) : nlohmann::json(nullptr);
+    chosen = {{"fidelity", ds::toString(c.fidelity)}, {"method", ds::toString(c.method)},
+              {"relative_tolerance", c.fidelity == ds::Fidelity::kFull && c.method == ds::IntegratorMethod::kDopri5 ? nlohmann::json(c.relative_tolerance) : nlohmann::json(nullptr)},
+              {"error_bound", args.error_bound}, {"pilot_s", c.pilot_duration}, {"pilot_errors", pilots}, {"reason", c.reason}};
+    ds::integrateChoice(*scene.model, c, 0.0, scene.initial, scene.duration, scene.output_interval, observe, &stats);
+  } else {
+    ds::integrate(*scene.model, method, o, 0.0, scene.initial, scene.duration, scene.output_interval, observe, &stats);
+  }
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   const nlohmann::json out = {
       {"scene", scene.name}, {"description", scene.description}, {"units", scene.units},
-      {"method", ds::toString(method)}, {"step", method == ds::IntegratorMethod::kDopri5 ? nlohmann::json(nullptr) : nlohmann::json(o.step)},
+      {"method", reduced || automatic ? args.method : std::string(ds::toString(method))},
+      {"auto", chosen},
+      {"step", method == ds::IntegratorMethod::kRk4 || method == ds::IntegratorMethod::kTrapezoidal ? nlohmann::json(o.step) : nlohmann::json(nullptr)},
       {"relative_tolerance", method == ds::IntegratorMethod::kDopri5 ? nlohmann::json(o.relative_tolerance) : nlohmann::json(nullptr)},
       {"sim_s", scene.duration}, {"wall_s", wall}, {"rtf", scene.duration / wall},
       {"steps", stats.steps}, {"rejected", stats.rejected}, {"rhs_evaluations", stats.rhs_evaluations}, {"events", stats.events},
@@ -174,7 +194,9 @@ int main(int argc, char** argv) {
   sim_cmd->add_option("--config", sim.config, "gearbox YAML with gears, bearings and dynamics")->required();
   sim_cmd->add_option("--scene", sim.scene, "nominal, torque_steps, low_preload, bearing_rattle, near_rigid_bearings, "
                                             "parametric_resonance, kahraman_singh, chaotic")->required();
-  sim_cmd->add_option("--method", sim.method, "dopri5 (default, adaptive with events), rk4, trapezoidal");
+  sim_cmd->add_option("--method", sim.method, "dopri5 (default, adaptive with events), rk4, trapezoidal, exponential "
+                                              "(exact in the linear regime), quasi_static, linear_modal, auto");
+  sim_cmd->add_option("--error-bound", sim.error_bound, "auto: relative RMS error of delta to meet (default 1e-6)");
   sim_cmd->add_option("--step", sim.step, "fixed step [s] for rk4/trapezoidal (default: the scene's, 20 per stiffest period)");
   sim_cmd->add_option("--duration", sim.duration, "simulated time [s] (default: the scene's)");
   sim_cmd->add_option("--rtol", sim.rtol, "dopri5 relative tolerance (default 1e-8)");
