@@ -217,4 +217,44 @@ Scene makeScene(const std::string& name, const RigConfig& rig_in) {
                      "near_rigid_bearings, parametric_resonance, kahraman_singh, chaotic)");
 }
 
+std::vector<SweepPoint> sweepOscillator(const OscillatorSweepSpec& spec, const std::vector<double>& frequencies) {
+  requireInHalfOpenRange("sweep.zeta", spec.zeta, 0.0, 1.0);
+  requireFinite("sweep.mean_force", spec.mean_force);
+  requireFinite("sweep.te_force", spec.te_force);
+  if (spec.settle < 1 || spec.measure < 1) throw InvalidInput("sweep: settle and measure must be >= 1 period");
+  GearRotorParameters p;
+  p.pinion_mass = p.gear_mass = 1e12;
+  p.pinion_inertia = p.gear_inertia = 2.0;
+  p.pinion_base_radius = p.gear_base_radius = 1.0;
+  p.mesh_damping = 2.0 * spec.zeta;
+  IntegratorOptions o;
+  o.relative_tolerance = 1e-9;
+  o.absolute_tolerance = 1e-11;
+  o.max_step = 0.1;
+  o.divergence_limit = 1e3;
+  State6 y = State6::Zero();
+  y[2] = 1.0 + spec.mean_force;
+  std::vector<SweepPoint> out;
+  for (double w : frequencies) {
+    requirePositive("sweep.frequency", w);
+    const GearRotorModel model(p, std::make_shared<OscillatorExcitation>(w, spec.mean_force, spec.te_force, spec.ripple));
+    const double period = kTwoPi / w;
+    SweepPoint pt;
+    pt.frequency = w;
+    pt.min_x = INFINITY;
+    pt.max_x = -INFINITY;
+    y = integrate(model, IntegratorMethod::kDopri5, o, 0.0, y, (spec.settle + spec.measure) * period, period / 50,
+                  [&](double t, const State6& s) {
+                    if (t >= spec.settle * period) {
+                      pt.min_x = std::min(pt.min_x, s[2]);
+                      pt.max_x = std::max(pt.max_x, s[2]);
+                    }
+                  });
+    pt.peak_to_peak = pt.max_x - pt.min_x;
+    pt.regime = pt.min_x < -1.0 ? "double_sided_impact" : pt.min_x < 1.0 ? "single_sided_impact" : "no_impact";
+    out.push_back(pt);
+  }
+  return out;
+}
+
 }  // namespace drivetrain_stiffness

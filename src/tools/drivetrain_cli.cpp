@@ -10,6 +10,7 @@
 #include <cmath>
 #include <fstream>
 #include <iostream>
+#include <sstream>
 #include <optional>
 
 #include "drivetrain_stiffness/config/json_report.hpp"
@@ -73,6 +74,7 @@ struct SimulateArgs {
   std::optional<double> step, duration;
   double rtol = 1e-8, error_bound = 1e-6;
   std::optional<std::string> out;
+  std::optional<std::string> sweep;  // "start:stop:step" for the oscillator scenes
 };
 
 struct SignalStats {
@@ -82,7 +84,36 @@ struct SignalStats {
   nlohmann::json json() const { return {{"rms", n ? std::sqrt(sum2 / n) : 0.0}, {"peak", peak}}; }
 };
 
+// Up- and down-sweep of the backlash oscillator (kahraman_singh), JSON with both branches.
+int runSweep(const SimulateArgs& args) {
+  double start = 0, stop = 0, step = 0;
+  char c1 = 0, c2 = 0;
+  std::istringstream in(*args.sweep);
+  if (!(in >> start >> c1 >> stop >> c2 >> step) || c1 != ':' || c2 != ':' || !(step > 0) || !(stop > start) || start <= 0) {
+    throw ds::InvalidInput("--sweep = '" + *args.sweep + "': expected start:stop:step with 0 < start < stop, step > 0");
+  }
+  if (args.scene != "kahraman_singh") throw ds::InvalidInput("--sweep: only for --scene kahraman_singh");
+  std::vector<double> up;
+  const long n = static_cast<long>(std::floor((stop - start) / step + 1e-9));
+  for (long i = 0; i <= n; ++i) up.push_back(start + i * step);  // no accumulated rounding
+  const std::vector<double> down(up.rbegin(), up.rend());
+  const ds::OscillatorSweepSpec spec;
+  auto branch = [](const std::vector<ds::SweepPoint>& v) {
+    nlohmann::json a = nlohmann::json::array();
+    for (const ds::SweepPoint& p : v)
+      a.push_back({{"frequency", p.frequency}, {"peak_to_peak", p.peak_to_peak}, {"min_x", p.min_x}, {"max_x", p.max_x}, {"regime", p.regime}});
+    return a;
+  };
+  const nlohmann::json out = {{"scene", args.scene}, {"units", "dimensionless"},
+                              {"parameters", {{"zeta", spec.zeta}, {"mean_force", spec.mean_force}, {"te_force", spec.te_force},
+                                              {"ripple", spec.ripple}, {"settle_periods", spec.settle}, {"measure_periods", spec.measure}}},
+                              {"up", branch(ds::sweepOscillator(spec, up))}, {"down", branch(ds::sweepOscillator(spec, down))}};
+  std::cout << out.dump(2) << std::endl;
+  return 0;
+}
+
 int runSimulate(const SimulateArgs& args) {
+  if (args.sweep) return runSweep(args);
   const ds::RigConfig rig = ds::loadRigFile(args.config);
   ds::Scene scene = ds::makeScene(args.scene, rig);
   if (args.duration) {
@@ -201,6 +232,7 @@ int main(int argc, char** argv) {
   sim_cmd->add_option("--duration", sim.duration, "simulated time [s] (default: the scene's)");
   sim_cmd->add_option("--rtol", sim.rtol, "dopri5 relative tolerance (default 1e-8)");
   sim_cmd->add_option("--out", sim.out, "write the time series to this CSV file");
+  sim_cmd->add_option("--sweep", sim.sweep, "kahraman_singh only: up- and down-sweep start:stop:step of the frequency W");
 
   try {
     app.parse(argc, argv);

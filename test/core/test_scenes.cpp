@@ -175,3 +175,29 @@ TEST(Scenes, Dopri5DeliversEverySampleThroughFlankImpacts) {
   EXPECT_EQ(samples, std::lround(s.duration / s.output_interval) + 1);
   EXPECT_NEAR(last, s.duration, 1e-9 * s.duration);
 }
+
+// The backlash oscillator's softening resonance jumps: sweeping up, the response stays on the
+// small no-impact branch and jumps up to the impacting branch; sweeping down from above, it stays
+// on the impacting branch well below that frequency (hysteresis). Away from the window both
+// sweeps agree.
+TEST(Scenes, KahramanSinghSweepShowsJumpHysteresis) {
+  std::vector<double> up;
+  for (int i = 0; i <= 14; ++i) up.push_back(0.5 + 0.05 * i);
+  const std::vector<double> down(up.rbegin(), up.rend());
+  const OscillatorSweepSpec spec;
+  const std::vector<SweepPoint> u = sweepOscillator(spec, up), d = sweepOscillator(spec, down);
+  auto at = [](const std::vector<SweepPoint>& v, double w) {
+    for (const SweepPoint& p : v)
+      if (std::abs(p.frequency - w) < 1e-9) return p;
+    return SweepPoint{};
+  };
+  const SweepPoint up06 = at(u, 0.6), down06 = at(d, 0.6);
+  EXPECT_EQ(up06.regime, "no_impact");
+  EXPECT_NE(down06.regime, "no_impact");
+  EXPECT_GT(down06.peak_to_peak, 3.0 * up06.peak_to_peak);
+  EXPECT_NEAR(at(u, 1.1).peak_to_peak / at(d, 1.1).peak_to_peak, 1.0, 0.01);
+  // The up-sweep jumps somewhere in the window: a rise of at least 2x between neighbours.
+  bool jump = false;
+  for (std::size_t i = 1; i < u.size(); ++i) jump |= u[i].peak_to_peak > 2.0 * u[i - 1].peak_to_peak;
+  EXPECT_TRUE(jump);
+}

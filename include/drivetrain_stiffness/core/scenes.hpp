@@ -10,6 +10,7 @@
 //   chaotic              the same oscillator at low load, low damping, strong stiffness ripple
 #pragma once
 
+#include <array>
 #include <memory>
 #include <string>
 #include <vector>
@@ -37,5 +38,23 @@ Scene makeScene(const std::string& name, const RigConfig& rig);
 
 /// Static equilibrium of the linearised model at t (K q = f), the start state of SI scenes.
 State6 staticEquilibrium(const GearRotorModel& model, double t);
+
+/// Frequency sweep of the dimensionless backlash oscillator (Kahraman & Singh style): at each
+/// frequency W the oscillator runs `settle` periods from the state the previous frequency left
+/// (continuation, as a slow sweep would), then `measure` periods in which the response is
+/// recorded. Up- and down-sweeps expose the jump (hysteresis) of the softening backlash resonance.
+struct SweepPoint {
+  double frequency = 0.0;        ///< W (dimensionless)
+  double peak_to_peak = 0.0;     ///< of x over the measured periods
+  double min_x = 0.0, max_x = 0.0;
+  std::string regime;            ///< "no_impact", "single_sided_impact" (x < 1) or "double_sided_impact" (x < -1)
+};
+struct OscillatorSweepSpec {
+  double zeta = 0.05, mean_force = 0.1, te_force = 0.05;
+  std::array<double, 3> ripple{{0.2, 0.1, 0.05}};
+  int settle = 100, measure = 50;
+};
+/// Runs the frequencies in the order given (ascending for an up-sweep, descending for down).
+std::vector<SweepPoint> sweepOscillator(const OscillatorSweepSpec& spec, const std::vector<double>& frequencies);
 
 }  // namespace drivetrain_stiffness
