@@ -163,8 +163,8 @@ Scene makeScene(const std::string& name, const RigConfig& rig_in) {
   }
   if (name == "chaotic") {
     return oscillatorScene(name, 1.4, 0.02, 0.02, 0.02, {0.3, 0.0, 0.0}, 300,
-                           "backlash oscillator at low load and damping with 30 % stiffness ripple: double-sided "
-                           "impacts; irregular, not verified against a published bifurcation diagram");
+                           "backlash oscillator at low load and damping with 30 % stiffness ripple: impacts, sensitive "
+                           "dependence on the initial state (a 1e-9 perturbation grows to O(1): positive Lyapunov exponent)");
   }
   if (!rig_in.dynamics.present) throw InvalidInput("scene '" + name + "': the gearbox file has no 'dynamics:' block");
   RigSceneSetup setup;
