@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """Prints a summary of the stiffness estimates every 0.5 s and a final table, then exits."""
 import rospy
-from drivetrain_stiffness.msg import Stiffness
+from drivetrain_stiffness.msg import Stiffness, TransmissionError
 
 
 class Summary:
@@ -10,7 +10,16 @@ class Summary:
         self.last = None
         self.first_stamp = None
         self.printed_at = -1.0
+        self.te_count = 0
+        self.te_peak = 0.0
+        self.te_last = None
         rospy.Subscriber("stiffness", Stiffness, self.on_stiffness, queue_size=1000)
+        rospy.Subscriber("transmission_error", TransmissionError, self.on_te, queue_size=10000)
+
+    def on_te(self, msg):
+        self.te_count += 1
+        self.te_peak = max(self.te_peak, abs(msg.dynamic_te))
+        self.te_last = msg
 
     def on_stiffness(self, msg):
         self.count += 1
@@ -43,6 +52,11 @@ def main():
         print("  %-15s radial %.4g N/m  axial %.4g N/m  tilt %.4g N*m/rad  balls in contact %d  p_max %.3g Pa"
               % (b.name, b.radial_stiffness, b.axial_stiffness, b.tilt_stiffness, b.balls_in_contact,
                  b.max_contact_pressure), flush=True)
+    if summary.te_last is not None:
+        m = summary.te_last
+        print("transmission_error: %d samples; peak |dynamic TE| %.4g m; last: dynamic %.4g m, static %.4g m, "
+              "mesh force %.2f N, flanks drive=%s back=%s" % (summary.te_count, summary.te_peak, m.dynamic_te, m.static_te,
+                                                             m.mesh_force, m.drive_flank_loaded, m.back_flank_loaded), flush=True)
     rospy.signal_shutdown("summary done")
 
 
