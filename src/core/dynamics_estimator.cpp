@@ -25,25 +25,7 @@ DynamicsEstimator::DynamicsEstimator(const RigConfig& rig, const std::array<doub
 
 void DynamicsEstimator::build() {
   const DynamicsConfig& d = rig_.dynamics;
-  GearRotorParameters p;
-  p.pinion_mass = d.pinion_mass;
-  p.gear_mass = d.gear_mass;
-  p.pinion_inertia = d.pinion_inertia;
-  p.gear_inertia = d.gear_inertia;
-  p.pinion_base_radius = mesh_->geometry().baseRadius(0);
-  p.gear_base_radius = mesh_->geometry().baseRadius(1);
-  double k_mean = 0.0;
-  for (int i = 0; i < 256; ++i) {
-    const CompositeMesh c = mesh_->at((i + 0.5) / 256, 0.0);
-    k_mean += (c.k1 + (rig_.anti_backlash.spring_stiffness > 0 ? c.k_chain : 0.0)) / 256;
-  }
-  for (int i = 0; i < 2; ++i) {
-    p.bearing_stiffness[i] = bearing_stiffness_[i];
-    const double m = i == 0 ? p.pinion_mass : p.gear_mass;
-    p.bearing_damping[i] = 2.0 * d.bearing_damping_ratio * std::sqrt(p.bearing_stiffness[i] * m);
-    p.bearing_clearance[i] = d.bearing_clearance[i];
-  }
-  p.mesh_damping = 2.0 * d.mesh_damping_ratio * std::sqrt(k_mean * p.equivalentMass());
+  const GearRotorParameters p = rigRotorParameters(rig_, *mesh_, bearing_stiffness_);
   RigExcitationSpec spec;
   spec.speed = d.speed_rpm * kTwoPi / 60.0;
   spec.te_amplitude = d.transmission_error_amplitude;

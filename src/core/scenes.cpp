@@ -78,29 +78,14 @@ struct RigSceneSetup {
 
 Scene rigScene(const std::string& name, const std::string& description, RigSceneSetup setup) {
   const RigConfig& rig = setup.rig;
-  const DynamicsConfig& d = rig.dynamics;
   auto mesh = std::make_shared<AntiBacklashMesh>(rig.gears, rig.anti_backlash, rig.mesh_model, rig.mesh_samples);
-  GearRotorParameters p;
-  p.pinion_mass = d.pinion_mass;
-  p.gear_mass = d.gear_mass;
-  p.pinion_inertia = d.pinion_inertia;
-  p.gear_inertia = d.gear_inertia;
-  p.pinion_base_radius = mesh->geometry().baseRadius(0);
-  p.gear_base_radius = mesh->geometry().baseRadius(1);
-  const std::array<double, 2> kb = bearingStiffness(rig, setup.excitation.torque.mean);
-  double k_mean = 0.0;
-  for (int i = 0; i < 256; ++i) {
-    const CompositeMesh c = mesh->at((i + 0.5) / 256, 0.0);
-    k_mean += (c.k1 + (rig.anti_backlash.spring_stiffness > 0 ? c.k_chain : 0.0)) / 256;
+  const double k_mean = meanMeshStiffness(*mesh);
+  std::array<double, 2> kb = bearingStiffness(rig, setup.excitation.torque.mean);
+  for (double& k : kb) {
+    // near-rigid scenes give the bearing stiffness as a ratio to the mesh
+    k = setup.bearing_scale > 1e3 ? setup.bearing_scale * k_mean : k * setup.bearing_scale;
   }
-  for (int i = 0; i < 2; ++i) {
-    p.bearing_stiffness[i] = setup.bearing_scale > 0 ? kb[i] * setup.bearing_scale : 0.0;
-    if (setup.bearing_scale > 1e3) p.bearing_stiffness[i] = setup.bearing_scale * k_mean;  // near-rigid: ratio to the mesh
-    const double m = i == 0 ? p.pinion_mass : p.gear_mass;
-    p.bearing_damping[i] = 2.0 * d.bearing_damping_ratio * std::sqrt(p.bearing_stiffness[i] * m);
-    p.bearing_clearance[i] = d.bearing_clearance[i];
-  }
-  p.mesh_damping = 2.0 * d.mesh_damping_ratio * std::sqrt(k_mean * p.equivalentMass());
+  const GearRotorParameters p = rigRotorParameters(rig, *mesh, kb);
   if (setup.parametric) {
     // Lowest natural frequency of the linearised system (docs/model.md), mesh frequency = 2 f_1.
     Eigen::Matrix3d mm = Eigen::Vector3d(p.pinion_mass, p.gear_mass, p.equivalentMass()).asDiagonal();
@@ -138,6 +123,36 @@ Scene rigScene(const std::string& name, const std::string& description, RigScene
 std::vector<std::string> sceneNames() {
   return {"nominal", "torque_steps", "low_preload", "bearing_rattle", "near_rigid_bearings",
           "parametric_resonance", "kahraman_singh", "chaotic"};
+}
+
+double meanMeshStiffness(const AntiBacklashMesh& mesh) {
+  double k = 0.0;
+  const int n = 256;
+  for (int i = 0; i < n; ++i) {
+    const CompositeMesh c = mesh.at((i + 0.5) / n, 0.0);
+    k += (c.k1 + (mesh.spec().spring_stiffness > 0 ? c.k_chain : 0.0)) / n;
+  }
+  return k;
+}
+
+GearRotorParameters rigRotorParameters(const RigConfig& rig, const AntiBacklashMesh& mesh,
+                                       const std::array<double, 2>& bearing_stiffness) {
+  const DynamicsConfig& d = rig.dynamics;
+  GearRotorParameters p;
+  p.pinion_mass = d.pinion_mass;
+  p.gear_mass = d.gear_mass;
+  p.pinion_inertia = d.pinion_inertia;
+  p.gear_inertia = d.gear_inertia;
+  p.pinion_base_radius = mesh.geometry().baseRadius(0);
+  p.gear_base_radius = mesh.geometry().baseRadius(1);
+  for (int i = 0; i < 2; ++i) {
+    p.bearing_stiffness[i] = bearing_stiffness[i];
+    const double m = i == 0 ? p.pinion_mass : p.gear_mass;
+    p.bearing_damping[i] = 2.0 * d.bearing_damping_ratio * std::sqrt(p.bearing_stiffness[i] * m);
+    p.bearing_clearance[i] = d.bearing_clearance[i];
+  }
+  p.mesh_damping = 2.0 * d.mesh_damping_ratio * std::sqrt(meanMeshStiffness(mesh) * p.equivalentMass());
+  return p;
 }
 
 State6 staticEquilibrium(const GearRotorModel& model, double t) {

@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "drivetrain_stiffness/core/anti_backlash_mesh.hpp"
 #include "drivetrain_stiffness/core/integrators.hpp"
 #include "drivetrain_stiffness/core/rig_config.hpp"
 
@@ -35,6 +36,15 @@ std::vector<std::string> sceneNames();
 /// Builds a scene from the rig (gears, anti-backlash, bearings, `dynamics:` block). Throws
 /// InvalidInput for an unknown name or a rig without a dynamics block.
 Scene makeScene(const std::string& name, const RigConfig& rig);
+
+/// Mean mesh stiffness over one period: k1, plus k_c for an anti-backlash gear [N/m].
+double meanMeshStiffness(const AntiBacklashMesh& mesh);
+
+/// The rotor parameters of a rig: masses and inertias from its `dynamics:` block, base radii from
+/// the gears, the given bearing stiffness per shaft, and damping from the configured ratios
+/// (c_s = 2 zeta sqrt(k_mean m_s) for the torsional mode, c_b = 2 zeta sqrt(k_r m) per shaft).
+GearRotorParameters rigRotorParameters(const RigConfig& rig, const AntiBacklashMesh& mesh,
+                                       const std::array<double, 2>& bearing_stiffness);
 
 /// Static equilibrium of the linearised model at t (K q = f), the start state of SI scenes.
 State6 staticEquilibrium(const GearRotorModel& model, double t);
