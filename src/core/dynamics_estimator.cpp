@@ -67,12 +67,9 @@ void DynamicsEstimator::setBearingStiffness(const std::array<double, 2>& k) {
   for (int i = 0; i < 2; ++i) changed |= std::abs(k[i] - bearing_stiffness_[i]) > 0.01 * std::max(bearing_stiffness_[i], 1.0);
   if (!changed) return;
   bearing_stiffness_ = k;
-  // Keep the state and the time; the new model continues from it (its phase grid restarts at the
-  // current sample, which is a whole number of intervals from the origin).
-  const double t_now = time();
+  // Keep the state, the origin and the sample index: the rebuilt model's phase and output grid
+  // both count from the same origin, so the mesh phase continues without a jump.
   build();
-  origin_ = t_now;
-  k_ = 0;
 }
 
 DynamicsSample DynamicsEstimator::sample(double t_rel, const State6& y) const {
@@ -99,7 +96,12 @@ void DynamicsEstimator::advanceTo(double t, const std::function<void(const Dynam
   if (t < time() - 1e-12) {
     throw InvalidInput("t = " + formatValue(t) + ": before the current time " + formatValue(time()) + " (time went backwards; reset)");
   }
-  const long k_end = static_cast<long>(std::floor((t - origin_) / interval_ + 1e-9));
+  const double samples = std::floor((t - origin_) / interval_ + 1e-9) - k_;
+  if (samples > kMaxSamplesPerAdvance) {
+    throw InvalidInput("t = " + formatValue(t) + ": a gap of " + formatValue(t - time()) + " s (" + formatValue(samples) +
+                       " samples) is too long to integrate in one call; reset at the new time instead");
+  }
+  const long k_end = k_ + static_cast<long>(samples);
   const double torque = *torque_;
   while (k_ < k_end) {
     const double t_k = k_ * interval_, t_next = (k_ + 1) * interval_;

@@ -188,7 +188,10 @@ bool PeriodicExponentialPropagator::step(long k, Augmented& z, double torque_k, 
   w[kU] = torque_k - mean;
   w[kUdot] = (torque_next - torque_k) / interval_;
   const Augmented next = propagators_[((k % n) + n) % n] * w;
-  if (!next.allFinite() || !linearRegime(static_cast<int>((((k + 1) % n) + n) % n), next)) return false;
+  if (!next.allFinite() || next.head<3>().cwiseAbs().maxCoeff() > divergence_limit_) {
+    throw UnstableIntegration("integrator exponential: displacement beyond the divergence limit at sample " + std::to_string(k + 1));
+  }
+  if (!linearRegime(static_cast<int>((((k + 1) % n) + n) % n), next)) return false;
   z = next;
   return true;
 }
@@ -254,7 +257,9 @@ State6 PeriodicExponentialPropagator::run(const State6& y0, double t_end, const 
     z = z_next;
     u = u_next;
     ++st.steps;
-    if (!z.allFinite()) throw UnstableIntegration("integrator exponential produced a non-finite state at t = " + formatValue(t_next));
+    if (!z.allFinite() || z.head<3>().cwiseAbs().maxCoeff() > fallback.divergence_limit) {
+      throw UnstableIntegration("integrator exponential diverged at t = " + formatValue(t_next) + " s (no bounded response)");
+    }
     if (observe) observe(t_next, z.head<6>());
   }
   if (stats) *stats = st;

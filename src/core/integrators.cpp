@@ -70,15 +70,19 @@ class Dopri5 {
 
   // One attempted step of size h from (t, y) with k1 = f(t, y). Fills y_new, k7 = f(t+h, y_new), the
   // dense output and returns the scaled error norm.
-  double attempt(double t, const State6& y, const State6& k1, double h, State6& y_new, State6& k7, DenseStep& dense) {
+  // `ends_on_switch`: the step ends exactly on a jump of the right-hand side; its last stages are
+  // evaluated just before it, on the side the step belongs to.
+  double attempt(double t, const State6& y, const State6& k1, double h, State6& y_new, State6& k7, DenseStep& dense,
+                 bool ends_on_switch = false) {
     State6 k2, k3, k4, k5, k6;
+    const double t_end = ends_on_switch ? std::nextafter(t + h, t) : t + h;
     m_.rhs(t + c2 * h, y + h * a21 * k1, k2);
     m_.rhs(t + c3 * h, y + h * (a31 * k1 + a32 * k2), k3);
     m_.rhs(t + c4 * h, y + h * (a41 * k1 + a42 * k2 + a43 * k3), k4);
     m_.rhs(t + c5 * h, y + h * (a51 * k1 + a52 * k2 + a53 * k3 + a54 * k4), k5);
-    m_.rhs(t + h, y + h * (a61 * k1 + a62 * k2 + a63 * k3 + a64 * k4 + a65 * k5), k6);
+    m_.rhs(t_end, y + h * (a61 * k1 + a62 * k2 + a63 * k3 + a64 * k4 + a65 * k5), k6);
     y_new = y + h * (a71 * k1 + a73 * k3 + a74 * k4 + a75 * k5 + a76 * k6);
-    m_.rhs(t + h, y_new, k7);
+    m_.rhs(t_end, y_new, k7);
     st_.rhs_evaluations += 6;
     const State6 err = h * (e1 * k1 + e3 * k3 + e4 * k4 + e5 * k5 + e6 * k6 + e7 * k7);
     dense.t = t;
@@ -165,7 +169,8 @@ State6 integrate(const GearRotorModel& model, IntegratorMethod method, const Int
         State6 y1 = y + h * k1;  // explicit Euler predictor
         // The forces are piecewise linear and the Jacobian exact within a contact regime, so Newton
         // ends in one or two iterations unless the step crosses a contact change.
-        for (int it = 0; it < 12; ++it) {
+        bool converged = false;
+        for (int it = 0; it < 12 && !converged; ++it) {
           model.rhs(t + h, y1, k2);
           const State6 g = y1 - y - 0.5 * h * (k1 + k2);
           const Matrix6 a = Matrix6::Identity() - 0.5 * h * model.jacobian(t + h, y1);
@@ -175,8 +180,11 @@ State6 integrate(const GearRotorModel& model, IntegratorMethod method, const Int
           stats.rhs_evaluations += 2;
           const double scale = 1e-14 * (y1.head<3>().cwiseAbs().maxCoeff() + 1e-15);
           const double vscale = 1e-14 * (y1.tail<3>().cwiseAbs().maxCoeff() + 1e-12);
-          if (dy.head<3>().cwiseAbs().maxCoeff() <= scale && dy.tail<3>().cwiseAbs().maxCoeff() <= vscale) break;
+          converged = dy.head<3>().cwiseAbs().maxCoeff() <= scale && dy.tail<3>().cwiseAbs().maxCoeff() <= vscale;
         }
+        // A contact change inside the step can make Newton cycle between regimes: the step is kept
+        // (bounded) but counted, so a caller can see how often it happened.
+        if (!converged) ++stats.newton_failures;
         y = y1;
       }
       ++stats.steps;
@@ -218,11 +226,15 @@ State6 integrate(const GearRotorModel& model, IntegratorMethod method, const Int
       if (t_end - t < tiny) break;  // at the end (to rounding)
       h_try = tiny;  // a step shrunk by an event right at the step start: take the smallest step, never skip
     }
-    const double err = dp.attempt(t, y, k1, h_try, y_new, k7, dense);
+    const double err = dp.attempt(t, y, k1, h_try, y_new, k7, dense, hits_switch);
     if (!(err <= 1.0)) {
       ++st.rejected;
+      if (h_try <= tiny) {
+        throw UnstableIntegration("integrator dopri5: step size underflow at t = " + formatValue(t) +
+                                  " s (the error test fails at the smallest step " + formatValue(h_try) +
+                                  " s; tolerances too tight for double precision, or a discontinuity the step cannot resolve)");
+      }
       if (!std::isfinite(err)) { h = 0.1 * h_try; } else { h = h_try * std::max(0.2, 0.9 * std::pow(err, -0.2)); }
-      if (h < 1e-15 * std::max(1.0, std::abs(t))) checkState(State6::Constant(NAN), t, h, IntegratorMethod::kDopri5, o);
       continue;
     }
     double t_new = t + h_try;
@@ -239,6 +251,7 @@ State6 integrate(const GearRotorModel& model, IntegratorMethod method, const Int
           // Redo the step up to the event so no step straddles the kink; the next step starts on it.
           const double h_event = hi - t;
           dp.attempt(t, y, k1, h_event, y_new, k7, dense);
+          hits_switch = false;
           t_new = t + h_event;
           h_try = h_event;
           ++st.events;
@@ -247,12 +260,12 @@ State6 integrate(const GearRotorModel& model, IntegratorMethod method, const Int
     }
     checkState(y_new, t_new, h_try, IntegratorMethod::kDopri5, o);
     if (observe) emit(t_new, t0, interval, next_out, observe, [&](double tq) { return dense.at(tq); });
-    t = t_new;
+    t = hits_switch ? switch_time : t_new;  // land exactly on the switch
     y = y_new;
     k1 = k7;
     ++st.steps;
-    if (hits_switch && h_try == switch_time - dense.t) {
-      // A tooth entered or left: the right-hand side jumps, so FSAL's k7 is stale.
+    if (hits_switch) {
+      // A tooth entered or left: the right-hand side jumps and k7 was taken on the old side.
       model.rhs(t, y, k1);
       ++st.rhs_evaluations;
       ++st.events;

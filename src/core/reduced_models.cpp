@@ -90,7 +90,8 @@ State6 integrateReduced(const GearRotorModel& model, Fidelity fidelity, double t
       gear.step(y[1], y[4], f, m.drive_force, interval);
       f = m.drive_force;
       const double ks = m.k_drive + m.k_back;
-      const double delta = ks > 0.0 ? m.drive_force / ks + (m.k_back > 0.0 ? 0.0 : m.backlash) : 0.0;
+      const bool ordinary = m.k_back == 0.0 && m.preload_force == 0.0;
+      const double delta = ks > 0.0 ? m.drive_force / ks + (ordinary ? std::copysign(m.backlash, m.drive_force) : 0.0) : 0.0;
       const double x_new = delta - y[0] + y[1] + m.te;
       y[5] = (x_new - y[2]) / interval;  // torsional rate from the samples (the mode itself is not modelled)
       y[2] = x_new;
@@ -110,7 +111,10 @@ State6 integrateReduced(const GearRotorModel& model, Fidelity fidelity, double t
     // State [x_p x_g x v_p v_g v sin cos 1 u u'] as in the exponential method, stiffness at its mean.
     Eigen::Matrix<double, 11, 11> a = Eigen::Matrix<double, 11, 11>::Zero();
     Eigen::Matrix<double, 1, 11> f = Eigen::Matrix<double, 1, 11>::Zero();
-    f << ks, -ks, ks, cs, -cs, cs, -ks * a_te, -cs * a_te * w, 0, 0, 0;
+    // An ordinary gear closes its backlash b on the loaded flank: F = k_s (delta - b sign F).
+    const bool ordinary = m0.k_back == 0.0 && m0.preload_force == 0.0;
+    const double offset = ordinary ? std::copysign(m0.backlash, m0.drive_force) : 0.0;
+    f << ks, -ks, ks, cs, -cs, cs, -ks * a_te, -cs * a_te * w, -ks * offset, 0, 0;
     a(0, 3) = a(1, 4) = a(2, 5) = 1.0;
     a.row(3) = -f / p.pinion_mass;
     a(3, 0) -= p.bearing_stiffness[0] / p.pinion_mass;
@@ -155,7 +159,8 @@ AutoChoice chooseAutomatically(const GearRotorModel& model, double t0, const Sta
   requirePositive("error_bound", error_bound);
   requirePositive("pilot_duration", pilot_duration);
   AutoChoice choice;
-  choice.pilot_duration = std::round(pilot_duration / interval) * interval;
+  // At least four output samples, or the comparison would be on the start state alone.
+  choice.pilot_duration = std::max(4.0, std::round(pilot_duration / interval)) * interval;
   const double t_end = t0 + choice.pilot_duration;
   auto deltas = [&](auto run) {
     std::vector<double> d;

@@ -89,8 +89,6 @@ void RigExcitation::at(double t, MeshInstant& out) const {
   out.te = spec_.te_amplitude * std::sin(w * t + kTwoPi * spec_.initial_phase);
   out.te_rate = spec_.te_amplitude * w * std::cos(w * t + kTwoPi * spec_.initial_phase);
   out.drive_force = torque_gain_ * spec_.torque.at(t) + load_term_;
-  const auto it = std::upper_bound(switches_.begin(), switches_.end(), out.phase);
-  out.segment = static_cast<int>(whole) * static_cast<int>(switches_.size()) + static_cast<int>(it - switches_.begin());
 }
 
 double RigExcitation::nextSwitch(double t) const {
@@ -98,7 +96,7 @@ double RigExcitation::nextSwitch(double t) const {
   const double whole = std::floor(turns), phase = turns - whole;
   double next = whole + 1.0 + (switches_.empty() ? 0.0 : switches_.front());
   for (double s : switches_) {
-    if (s > phase + 1e-12) { next = whole + s; break; }
+    if (s > phase) { next = whole + s; break; }  // however close: a skipped switch would be straddled
   }
   double time = (next - spec_.initial_phase) / mesh_frequency_;
   // Torque steps are switches of the right-hand side too.

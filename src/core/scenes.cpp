@@ -26,7 +26,6 @@ class OscillatorExcitation : public GearExcitation {
     out.te = out.te_rate = 0.0;
     out.drive_force = f_m_ + f_te_ * w_ * w_ * std::cos(w_ * t);
     out.phase = std::fmod(w_ * t / kTwoPi, 1.0);
-    out.segment = 0;
   }
   double nextSwitch(double) const override { return INFINITY; }
 
@@ -146,6 +145,10 @@ GearRotorParameters rigRotorParameters(const RigConfig& rig, const AntiBacklashM
   p.pinion_base_radius = mesh.geometry().baseRadius(0);
   p.gear_base_radius = mesh.geometry().baseRadius(1);
   for (int i = 0; i < 2; ++i) {
+    if (!(bearing_stiffness[i] > 0.0)) {
+      throwInvalid(std::string("bearing stiffness of the ") + (i == 0 ? "pinion" : "gear") + " shaft", bearing_stiffness[i],
+                   "the 3-DOF model needs each shaft supported (give that shaft a bearing in 'bearings:')");
+    }
     p.bearing_stiffness[i] = bearing_stiffness[i];
     const double m = i == 0 ? p.pinion_mass : p.gear_mass;
     p.bearing_damping[i] = 2.0 * d.bearing_damping_ratio * std::sqrt(p.bearing_stiffness[i] * m);
@@ -162,11 +165,17 @@ State6 staticEquilibrium(const GearRotorModel& model, double t) {
   const double ks = m.k_drive + m.k_back;
   Eigen::Matrix3d k;
   k << p.bearing_stiffness[0] + ks, -ks, ks, -ks, p.bearing_stiffness[1] + ks, -ks, ks, -ks, ks;
-  // Mesh force k_s (delta) with delta = x + x_p - x_g - e: the TE enters as k_s e on each row.
-  const Eigen::Vector3d f(ks * m.te, -ks * m.te, m.drive_force + ks * m.te);
+  // Mesh force k_s (delta - o) with delta = x + x_p - x_g - e and o the backlash an ordinary gear
+  // must close on the loaded flank (b sign(F), seed 000 eq 17): e + o enters as k_s (e + o) on each row.
+  const bool ordinary = m.k_back == 0.0 && m.preload_force == 0.0;
+  const double offset = m.te + (ordinary ? std::copysign(m.backlash, m.drive_force) : 0.0);
+  const Eigen::Vector3d f(ks * offset, -ks * offset, m.drive_force + ks * offset);
   State6 y = State6::Zero();
   const Eigen::FullPivLU<Eigen::Matrix3d> lu(k);
-  if (lu.rank() == 3) y.head<3>() = lu.solve(f);
+  if (lu.rank() < 3) {
+    throw InvalidInput("static equilibrium: the stiffness matrix is singular (a shaft without bearing stiffness, or no mesh stiffness)");
+  }
+  y.head<3>() = lu.solve(f);
   return y;
 }
 

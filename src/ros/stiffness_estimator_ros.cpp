@@ -30,9 +30,11 @@ StiffnessEstimatorRos::StiffnessEstimatorRos(ros::NodeHandle nh, ros::NodeHandle
   pnh.param("dynamics", dynamics, dynamics);
   if (dynamics) {
     const double rate = positiveParam(pnh, "output_rate", 1000.0);
+    max_gap_ = positiveParam(pnh, "max_gap", 1.0);
     dynamics_ = std::make_unique<DynamicsEstimator>(rig, shaftBearingStiffness(), rate);
   }
-  double speed_rpm = 1000.0;  // seed 000 Table 1
+  // One speed for both mesh phases (stiffness and dynamics): the dynamics block's, unless overridden.
+  double speed_rpm = rig.dynamics.present ? rig.dynamics.speed_rpm : 1000.0;  // seed 000 Table 1
   pnh.param("pinion_speed_rpm", speed_rpm, speed_rpm);
   requireFinite("~pinion_speed_rpm", speed_rpm);
   pinion_speed_ = speed_rpm * 2.0 * M_PI / 60.0;
@@ -86,12 +88,18 @@ std::array<double, 2> StiffnessEstimatorRos::shaftBearingStiffness() const {
 void StiffnessEstimatorRos::advanceDynamics(const ros::Time& stamp, double torque) {
   try {
     const double t = stamp.toSec();
-    if (!dynamics_->started() || t < dynamics_->time()) {
-      if (dynamics_->started()) {
+    const bool backwards = dynamics_->started() && t < dynamics_->time();
+    const bool gap = dynamics_->started() && t - dynamics_->time() > max_gap_;
+    if (!dynamics_->started() || backwards || gap) {
+      // Documented rule: time going back (a looping bag) or a gap longer than ~max_gap (a paused
+      // rig, a stamp of 0 before real ones) restarts the model at this input instead of integrating.
+      if (backwards || gap) {
         ++time_jumps_;
-        last_rejection_ = "time went backwards to " + std::to_string(t) + " s: dynamics reset";
+        last_rejection_ = std::string(backwards ? "time went backwards" : "input gap longer than ~max_gap") + " to " +
+                          std::to_string(t) + " s: dynamics reset";
       }
       dynamics_->reset(t, torque);
+      angle_origin_ = stamp;  // the stiffness message's mesh phase restarts with the dynamics
       return;
     }
     dynamics_->setBearingStiffness(shaftBearingStiffness());
@@ -116,7 +124,12 @@ void StiffnessEstimatorRos::advanceDynamics(const ros::Time& stamp, double torqu
     });
     dynamics_sim_s_ += sim;
     dynamics_wall_s_ += (ros::WallTime::now() - start).toSec();
-    dynamics_->setTorque(torque);
+  } catch (const std::exception& e) {
+    ++dynamics_errors_;
+    last_rejection_ = std::string("dynamics: ") + e.what();
+  }
+  try {
+    dynamics_->setTorque(torque);  // the new torque holds from here on, whatever happened above
   } catch (const std::exception& e) {
     ++dynamics_errors_;
     last_rejection_ = std::string("dynamics: ") + e.what();

@@ -93,3 +93,49 @@ TEST(DynamicsEstimator, RefusesTimeGoingBackwards) {
   est.reset(5.0, 0.1);  // the caller's documented answer to a jump back
   EXPECT_NO_THROW(est.advanceTo(5.01, nullptr));
 }
+
+// Review findings, each pinned by a test.
+// A gap too long to integrate (a stamp of 0 followed by a wall-clock stamp) is refused at once.
+TEST(DynamicsEstimator, RefusesAGapTooLongToIntegrate) {
+  DynamicsEstimator est(rig(), {1.2e8, 1.2e8}, 1000.0);
+  est.reset(0.0, 0.1);
+  EXPECT_THROW(est.advanceTo(1.7e9, nullptr), InvalidInput);
+  EXPECT_NEAR(est.time(), 0.0, 1e-12);  // nothing was integrated
+}
+
+// A shaft without bearing stiffness cannot carry the model: rejected, not integrated to 180 m.
+TEST(DynamicsEstimator, RejectsAnUnsupportedShaft) {
+  EXPECT_THROW(DynamicsEstimator(rig(), {1.2e8, 0.0}, 1000.0), InvalidInput);
+}
+
+// A bearing-stiffness update keeps the mesh phase running: at 1 kHz and a 3 ms mesh period the
+// phase advances by 1/3 per sample before and after the rebuild.
+TEST(DynamicsEstimator, StiffnessUpdateKeepsThePhase) {
+  DynamicsEstimator est(rig(), {1.2e8, 1.2e8}, 1000.0);
+  est.reset(0.0, 0.1);
+  std::vector<double> phases;
+  auto keep = [&](const DynamicsSample& s) { phases.push_back(s.phase); };
+  est.advanceTo(0.0015, keep);
+  est.setBearingStiffness({1.4e8, 1.4e8});
+  EXPECT_EQ(est.rebuilds(), 2);
+  est.advanceTo(0.0035, keep);
+  ASSERT_EQ(phases.size(), 3u);
+  for (std::size_t i = 1; i < phases.size(); ++i) EXPECT_NEAR(std::fmod(phases[i] - phases[i - 1] + 1.0, 1.0), 1.0 / 3.0, 1e-9);
+}
+
+// An ordinary gear (no anti-backlash spring) with backlash starts loaded on its drive flank, stays
+// on the exact path, and its deflection carries the backlash: delta = F / k_s + b.
+TEST(DynamicsEstimator, OrdinaryGearWithBacklash) {
+  const RigConfig ordinary = loadRigFile(std::string(DRIVETRAIN_SOURCE_DIR) + "/test/data/ordinary_servo.yaml");
+  DynamicsEstimator est(ordinary, {1.2e8, 1.2e8}, 1000.0);
+  est.reset(0.0, 0.1);
+  std::vector<DynamicsSample> out;
+  est.advanceTo(0.06, [&](const DynamicsSample& s) { out.push_back(s); });
+  EXPECT_EQ(est.fallbackIntervals(), 0);
+  for (const DynamicsSample& s : out) {
+    EXPECT_TRUE(s.drive_flank_loaded);
+    EXPECT_FALSE(s.back_flank_loaded);
+    EXPECT_GT(s.dynamic_te, 5e-6);  // the 5 um backlash is closed first
+  }
+  EXPECT_NEAR(out.back().dynamic_te - 5e-6, out.back().static_te, 0.3 * out.back().static_te);
+}

@@ -114,3 +114,36 @@ TEST(ReducedModels, AutomaticChoiceIsTheCheapestThatMeetsTheBound) {
   EXPECT_EQ(r.method, IntegratorMethod::kDopri5);  // clearance: no exact propagation
   EXPECT_NEAR(r.relative_tolerance, 1e-5, 1e-18);
 }
+
+// Review findings: the backlash offset of an ordinary gear in both reduced models (and its sign
+// under a reversed load), and a pilot too short to compare anything.
+TEST(ReducedModels, OrdinaryGearBacklashOffset) {
+  const RigConfig ordinary = loadRigFile(std::string(DRIVETRAIN_SOURCE_DIR) + "/test/data/ordinary_servo.yaml");
+  for (double torque : {0.1, -0.1}) {
+    RigConfig r = ordinary;
+    r.dynamics.torque = torque;
+    const Scene s = makeScene("nominal", r);
+    const auto& e = dynamic_cast<const RigExcitation&>(s.model->excitation());
+    MeshInstant m;
+    e.at(0.0, m);
+    const double b = std::copysign(5e-6, m.drive_force);
+    for (Fidelity f : {Fidelity::kQuasiStatic, Fidelity::kLinearModal}) {
+      double mean = 0.0;
+      long n = 0;
+      integrateReduced(*s.model, f, 0.0, s.initial, s.duration, s.output_interval, [&](double t, const State6& y) {
+        if (t >= s.transient) { mean += s.model->forces(t, y).delta; ++n; }
+      });
+      mean /= n;
+      // Mean deflection: the backlash plus the elastic part (k_s between single and double pair).
+      EXPECT_GT(mean * b, 0.0) << toString(f) << " torque " << torque;
+      EXPECT_NEAR(mean - b, m.drive_force / 1.2e8, 0.5 * std::abs(m.drive_force / 1.2e8)) << toString(f) << " " << torque;
+    }
+  }
+}
+
+TEST(ReducedModels, ShortPilotStillCompares) {
+  const Scene s = makeScene("nominal", rig());
+  const AutoChoice c = chooseAutomatically(*s.model, 0.0, s.initial, s.output_interval, 0.3 * s.output_interval, 1e-9);
+  EXPECT_NE(c.fidelity, Fidelity::kQuasiStatic);  // once chosen on the start state alone
+  EXPECT_GE(c.pilot_duration, 4 * s.output_interval * (1 - 1e-12));
+}

@@ -233,3 +233,22 @@ TEST(Scenes, ChaoticSceneHasSensitiveDependence) {
   // Growth by 1e5 in t_chaotic: lambda = ln(1e5) / t > 0 (about 0.07 per unit time here).
   EXPECT_GT(std::log(1e5) / t_chaotic, 0.01);
 }
+
+// Review finding: at rtol 1e-12 / atol 1e-19 a tooth switch 1e-12 turn ahead was skipped and the
+// smallest step straddled it, rejected forever. The switch is now hit exactly.
+TEST(Scenes, Dopri5TightTolerancesFinish) {
+  const Scene s = makeScene("nominal", rig());
+  IntegratorOptions o;
+  o.relative_tolerance = 1e-12;
+  o.absolute_tolerance = 1e-19;
+  o.max_step = 1e-4;
+  long samples = 0;
+  try {
+    integrate(*s.model, IntegratorMethod::kDopri5, o, 0.0, s.initial, s.duration, s.output_interval,
+              [&](double, const State6&) { ++samples; });
+    EXPECT_EQ(samples, std::lround(s.duration / s.output_interval) + 1);
+  } catch (const UnstableIntegration& e) {
+    // Acceptable: a clear refusal (step-size underflow), never a hang.
+    EXPECT_NE(std::string(e.what()).find("underflow"), std::string::npos) << e.what();
+  }
+}

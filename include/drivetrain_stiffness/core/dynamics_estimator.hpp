@@ -38,7 +38,10 @@ class DynamicsEstimator {
   /// Restart at static equilibrium under `torque` at absolute time t.
   void reset(double t, double torque);
   /// Integrates to absolute time t (>= time(), else InvalidInput: reset on time jumps), calling
-  /// sink for each output sample.
+  /// sink for each output sample. A gap of more than kMaxSamplesPerAdvance samples is refused
+  /// (InvalidInput) rather than integrated: the caller resets (a stamp of 0 followed by a wall-clock
+  /// stamp would otherwise ask for 1e12 samples).
+  static constexpr double kMaxSamplesPerAdvance = 1e7;
   void advanceTo(double t, const std::function<void(const DynamicsSample&)>& sink);
   /// New measured torque, applied from the next output sample.
   void setTorque(double torque);

@@ -61,6 +61,7 @@ class PeriodicExponentialPropagator {
   std::vector<Propagator> propagators_;
   std::vector<double> k1_, kc_, backlash_offset_;  // at the sample times of one period
   long magnus_steps_ = 0;
+  double divergence_limit_ = IntegratorOptions{}.divergence_limit;  ///< [m], for step()
 };
 
 }  // namespace drivetrain_stiffness

@@ -48,7 +48,6 @@ struct MeshInstant {
   double te_rate = 0.0;          ///< de/dt [m/s]
   double drive_force = 0.0;      ///< F_m + F_d: m_s (r_p T_p / I_p + r_g T_g / I_g) [N]
   double phase = 0.0;            ///< mesh phase [-]
-  int segment = 0;               ///< index of the smooth stiffness segment (changes at tooth-count switches)
 };
 
 /// Supplies MeshInstant as a function of time (torque input, mesh stiffness by phase, TE).
@@ -56,7 +55,8 @@ class GearExcitation {
  public:
   virtual ~GearExcitation() = default;
   virtual void at(double t, MeshInstant& out) const = 0;
-  /// Next time > t at which `segment` changes (a tooth enters or leaves contact); +inf if never.
+  /// Next time > t at which the right-hand side jumps (a tooth enters or leaves contact, a torque
+  /// step); +inf if never.
   virtual double nextSwitch(double t) const = 0;
 };
 

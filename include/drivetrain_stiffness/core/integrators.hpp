@@ -43,6 +43,7 @@ struct IntegratorOptions {
 struct IntegrationStats {
   long steps = 0, rejected = 0, rhs_evaluations = 0, events = 0, newton_iterations = 0;
   long fallbacks = 0;              ///< exponential: runs handed to dopri5 when a contact opened
+  long newton_failures = 0;        ///< trapezoidal: steps whose Newton iteration did not converge
   double fallback_from = -1.0;     ///< time of that hand-over [s], -1 if none
 };
 

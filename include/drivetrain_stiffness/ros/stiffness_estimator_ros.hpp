@@ -49,6 +49,7 @@ class StiffnessEstimatorRos {
   std::unique_ptr<DynamicsEstimator> dynamics_;
   std::uint64_t te_published_ = 0, time_jumps_ = 0, dynamics_errors_ = 0;
   double dynamics_sim_s_ = 0.0, dynamics_wall_s_ = 0.0;  // totals for the real-time factor
+  double max_gap_ = 1.0;  // [s] an input gap longer than this restarts the dynamics
   ros::Timer diagnostic_timer_;
   diagnostic_updater::Updater diagnostics_;
   std::mutex mutex_;  // callbacks may run on several spinner threads (nodelet)
