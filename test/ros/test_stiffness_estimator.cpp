@@ -180,6 +180,14 @@ TEST_F(NodeTest, AnswersGoodInputAndSurvivesBadInput) {
     EXPECT_NEAR(te_[i].mesh_force, expected[i].mesh_force, 1e-9 * std::abs(expected[i].mesh_force) + 1e-12) << i;
   }
   EXPECT_TRUE(diagnosticCountAtLeast("transmission_error_published", 2013));
+
+  // 5. A gap beyond ~max_gap (5 s here) restarts the dynamics instead of integrating it: the stiffness
+  // answer still comes, no transmission_error sample is released, and the restart is counted.
+  const std::size_t te_before = te_.size();
+  sendTorque(0.3, 23.5);
+  expectAnswer(23.5, reference_->setTorque(0.3, omega * 12.5));
+  EXPECT_TRUE(diagnosticCountAtLeast("time_jumps_reset", 1));
+  EXPECT_EQ(te_.size(), te_before);
 }
 
 int main(int argc, char** argv) {
