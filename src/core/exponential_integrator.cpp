@@ -171,6 +171,13 @@ bool PeriodicExponentialPropagator::linearRegime(int j, const Eigen::Matrix<doub
   return g > 0.0 && total >= 0.0 && total <= 2.0 * k1 * g;
 }
 
+Matrix6 PeriodicExponentialPropagator::monodromy() const {
+  // The state block of each interval propagator does not depend on the forcing columns.
+  Matrix6 phi = Matrix6::Identity();
+  for (const Propagator& p : propagators_) phi = p.block<6, 6>(0, 0) * phi;
+  return phi;
+}
+
 PeriodicExponentialPropagator::Augmented PeriodicExponentialPropagator::augment(double t, const State6& y) const {
   Augmented z;
   z.head<6>() = y;

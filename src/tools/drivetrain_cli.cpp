@@ -3,6 +3,7 @@
 //   drivetrain_cli bearing --config FILE [--fr N] [--fa N] [--moment N·m] [--tilt free|constrained] [--preload N]
 //                          [--inner-interference m] [--outer-interference m]
 //   drivetrain_cli mesh --config FILE [--model potential_energy|kuang_yang|iso6336] [--samples N] [--torque N·m]
+//   drivetrain_cli modes --config FILE [--torque N·m] [--preload N]
 //   drivetrain_cli simulate --config FILE --scene NAME [--method dopri5|rk4|trapezoidal|exponential|quasi_static|
 //                           linear_modal|auto] [--error-bound E] [--step S] [--duration S] [--rtol R] [--out CSV]
 #include <CLI/CLI.hpp>
@@ -15,7 +16,10 @@
 
 #include "drivetrain_stiffness/config/json_report.hpp"
 #include "drivetrain_stiffness/config/yaml_config.hpp"
+#include "drivetrain_stiffness/core/dynamics_estimator.hpp"
+#include "drivetrain_stiffness/core/modal_analysis.hpp"
 #include "drivetrain_stiffness/core/reduced_models.hpp"
+#include "drivetrain_stiffness/core/stiffness_estimator.hpp"
 #include "drivetrain_stiffness/core/scenes.hpp"
 #include "drivetrain_stiffness/core/validation.hpp"
 
@@ -196,6 +200,68 @@ int runSimulate(const SimulateArgs& args) {
   return 0;
 }
 
+struct ModesArgs {
+  std::string config;
+  double torque = 0.1;
+  std::optional<double> preload;
+};
+
+// Modal analysis at the operating point: bearing stiffness from the bearing model at this torque
+// and preload, mesh stiffness at its mean and at its single- and double-pair extremes.
+int runModes(const ModesArgs& args) {
+  ds::RigConfig rig = ds::loadRigFile(args.config);
+  if (!rig.dynamics.present) throw ds::InvalidInput(args.config + ": modes needs a 'dynamics:' block (masses, inertias)");
+  ds::requireFinite("--torque", args.torque);
+  if (args.preload) {
+    ds::requireNonNegative("--preload", *args.preload);
+    for (auto& b : rig.bearings) b.axial_preload = *args.preload;
+  }
+  ds::StiffnessEstimator estimator(rig);
+  const ds::StiffnessEstimate& e = estimator.setTorque(args.torque);
+  std::array<double, 2> kb{{0.0, 0.0}};
+  for (std::size_t i = 0; i < e.supports.size(); ++i) kb[rig.bearings[i].shaft] += e.supports[i].solution.radialStiffness();
+  const ds::AntiBacklashMesh& mesh = estimator.mesh();
+  const double force = ds::meshForce(rig.gears, 0, args.torque);
+  double k_min = INFINITY, k_max = 0.0;
+  for (int i = 0; i < 1024; ++i) {
+    const double k = mesh.at((i + 0.5) / 1024, force).composite;
+    k_min = std::min(k_min, k);
+    k_max = std::max(k_max, k);
+  }
+  const ds::GearRotorParameters p = ds::rigRotorParameters(rig, mesh, kb);
+  auto modesJson = [&](double ks) {
+    nlohmann::json list = nlohmann::json::array();
+    for (const ds::Mode& m : ds::modalAnalysis(p, ks)) {
+      list.push_back({{"natural_frequency_hz", m.natural_frequency}, {"damped_frequency_hz", m.damped_frequency},
+                      {"damping_ratio", m.damping_ratio}, {"dominant_coordinate", m.dominant},
+                      {"shape", {m.shape[0], m.shape[1], m.shape[2]}}});
+    }
+    return list;
+  };
+  nlohmann::json floquet_json = nullptr;
+  if (rig.dynamics.bearing_clearance[0] == 0.0 && rig.dynamics.bearing_clearance[1] == 0.0) {
+    ds::DynamicsEstimator dynamics(rig, kb, 1000.0);
+    const auto& ex = dynamic_cast<const ds::RigExcitation&>(dynamics.model().excitation());
+    dynamics.reset(0.0, args.torque);
+    const ds::FloquetResult f = ds::floquet(dynamics.model(), dynamics.state(), 0.0, 1.0 / ex.meshFrequency());
+    floquet_json = {{"max_multiplier_modulus", f.max_modulus}, {"margin", f.margin},
+                    {"mesh_frequency_hz", ex.meshFrequency()}, {"stable", f.margin > 0.0}};
+  }
+  const nlohmann::json out = {
+      {"masses", {{"pinion_mass", p.pinion_mass}, {"gear_mass", p.gear_mass}, {"equivalent_mass", p.equivalentMass()},
+                  {"pinion_inertia", p.pinion_inertia}, {"gear_inertia", p.gear_inertia}}},
+      {"stiffness", {{"pinion_bearing", kb[0]}, {"gear_bearing", kb[1]}, {"mesh_mean", ds::meanMeshStiffness(mesh)},
+                     {"mesh_min", k_min}, {"mesh_max", k_max}}},
+      {"damping", {{"mesh", p.mesh_damping}, {"pinion_bearing", p.bearing_damping[0]}, {"gear_bearing", p.bearing_damping[1]}}},
+      {"torque", args.torque},
+      {"modes", {{"mesh_mean", modesJson(ds::meanMeshStiffness(mesh))}, {"mesh_single_pair", modesJson(k_min)},
+                 {"mesh_double_pair", modesJson(k_max)}}},
+      {"floquet", floquet_json},
+      {"units", "Hz, N/m, kg, kg m^2, N s/m"}};
+  std::cout << out.dump(2) << std::endl;
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -234,6 +300,12 @@ int main(int argc, char** argv) {
   sim_cmd->add_option("--out", sim.out, "write the time series to this CSV file");
   sim_cmd->add_option("--sweep", sim.sweep, "kahraman_singh only: up- and down-sweep start:stop:step of the frequency W");
 
+  ModesArgs modes;
+  auto* modes_cmd = app.add_subcommand("modes", "natural and damped frequencies, damping ratios, mode shapes, Floquet margin");
+  modes_cmd->add_option("--config", modes.config, "gearbox YAML with gears, bearings and dynamics")->required();
+  modes_cmd->add_option("--torque", modes.torque, "pinion torque [N·m] (default 0.1)");
+  modes_cmd->add_option("--preload", modes.preload, "axial preload of every bearing [N], overrides the file");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -243,6 +315,7 @@ int main(int argc, char** argv) {
     if (app.got_subcommand(cmd)) return runBearing(bearing);
     if (app.got_subcommand(mesh_cmd)) return runMesh(mesh);
     if (app.got_subcommand(sim_cmd)) return runSimulate(sim);
+    if (app.got_subcommand(modes_cmd)) return runModes(modes);
   } catch (const ds::InvalidInput& e) {
     std::cerr << "drivetrain_cli: invalid input: " << e.what() << std::endl;
     return 2;

@@ -40,6 +40,8 @@ class PeriodicExponentialPropagator {
   /// One output interval: from z at sample k (time t0 + k dt) with torques u_k, u_k+1 [N·m] at its
   /// ends; returns false, leaving z untouched, if the contacts leave the linear regime.
   bool step(long k, Augmented& z, double torque_k, double torque_next) const;
+  /// Homogeneous propagator over one mesh period (the monodromy matrix of the linear regime).
+  Matrix6 monodromy() const;
   double t0() const { return t0_; }
   double outputInterval() const { return interval_; }
 
