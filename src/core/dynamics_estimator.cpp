@@ -1,6 +1,8 @@
 #include "drivetrain_stiffness/core/dynamics_estimator.hpp"
 
+#include <Eigen/Eigenvalues>
 #include <cmath>
+#include <complex>
 
 #include "drivetrain_stiffness/core/scenes.hpp"
 #include "drivetrain_stiffness/core/validation.hpp"
@@ -70,6 +72,13 @@ void DynamicsEstimator::setBearingStiffness(const std::array<double, 2>& k) {
   // Keep the state, the origin and the sample index: the rebuilt model's phase and output grid
   // both count from the same origin, so the mesh phase continues without a jump.
   build();
+}
+
+bool DynamicsEstimator::floquetMargin(double* margin) const {
+  if (!propagator_) return false;
+  const Eigen::Matrix<std::complex<double>, 6, 1> mu = Eigen::EigenSolver<Matrix6>(propagator_->monodromy(), false).eigenvalues();
+  *margin = 1.0 - mu.cwiseAbs().maxCoeff();
+  return true;
 }
 
 DynamicsSample DynamicsEstimator::sample(double t_rel, const State6& y) const {

@@ -1,6 +1,8 @@
 #include "drivetrain_stiffness/ros/stiffness_estimator_ros.hpp"
 
 #include "drivetrain_stiffness/config/yaml_config.hpp"
+#include "drivetrain_stiffness/core/modal_analysis.hpp"
+#include "drivetrain_stiffness/core/scenes.hpp"
 #include "drivetrain_stiffness/core/validation.hpp"
 
 namespace drivetrain_stiffness {
@@ -26,6 +28,7 @@ StiffnessEstimatorRos::StiffnessEstimatorRos(ros::NodeHandle nh, ros::NodeHandle
   limits.max_interference = positiveParam(pnh, "max_interference", limits.max_interference);
   const RigConfig rig = loadRigFile(gearbox_config);
   estimator_ = std::make_unique<StiffnessEstimator>(rig, limits);
+  resonance_threshold_ = positiveParam(pnh, "resonance_threshold", 0.01);
   bool dynamics = rig.dynamics.present;
   pnh.param("dynamics", dynamics, dynamics);
   if (dynamics) {
@@ -44,6 +47,7 @@ StiffnessEstimatorRos::StiffnessEstimatorRos(ros::NodeHandle nh, ros::NodeHandle
   stiffness_pub_ = nh.advertise<drivetrain_stiffness::Stiffness>("stiffness", 10);
   // A torque input can release many samples at once (the gap since the previous input).
   te_pub_ = nh.advertise<drivetrain_stiffness::TransmissionError>("transmission_error", 10000);
+  resonance_pub_ = nh.advertise<drivetrain_stiffness::Resonance>("resonance", 10, true);  // latched: the last estimate
   // Relative topic names, so launch files can remap and namespace them (wiki.ros.org/Names).
   torque_sub_ = nh.subscribe("torque", 100, &StiffnessEstimatorRos::onTorque, this, ros::TransportHints().tcpNoDelay());
   preload_sub_ = nh.subscribe("preload", 10, &StiffnessEstimatorRos::onPreload, this);
@@ -59,6 +63,17 @@ bool StiffnessEstimatorRos::apply(const std::string& topic, const std_msgs::Head
     const StiffnessEstimate& estimate = update();
     ++accepted;
     publish(header, estimate);
+    if (dynamics_) {
+      // Every accepted input hands the new bearing stiffness to the dynamics (the model is rebuilt
+      // only when it moved by more than 1 %), then the resonance estimate is refreshed.
+      try {
+        dynamics_->setBearingStiffness(shaftBearingStiffness());
+      } catch (const std::exception& e) {
+        ++dynamics_errors_;
+        last_rejection_ = std::string("dynamics: ") + e.what();
+      }
+      updateResonance(header, estimate);
+    }
     return true;
   } catch (const InvalidInput& e) {
     ++rejected;
@@ -102,7 +117,6 @@ void StiffnessEstimatorRos::advanceDynamics(const ros::Time& stamp, double torqu
       angle_origin_ = stamp;  // the stiffness message's mesh phase restarts with the dynamics
       return;
     }
-    dynamics_->setBearingStiffness(shaftBearingStiffness());
     const double sim = t - dynamics_->time();
     const ros::WallTime start = ros::WallTime::now();
     dynamics_->advanceTo(t, [&](const DynamicsSample& s) {
@@ -144,6 +158,40 @@ void StiffnessEstimatorRos::onPreload(const drivetrain_stiffness::Preload::Const
   }
   apply("preload", msg->header, accepted_preload_, rejected_preload_,
         [&]() -> const StiffnessEstimate& { return estimator_->setPreloads(settings); });
+}
+
+void StiffnessEstimatorRos::updateResonance(const std_msgs::Header& header, const StiffnessEstimate& estimate) {
+  try {
+    const std::array<double, 2> kb = shaftBearingStiffness();
+    const GearRotorParameters p = rigRotorParameters(estimator_->rig(), estimator_->mesh(), kb);
+    const std::array<Mode, 3> modes = modalAnalysis(p, estimate.mesh.mean);
+    bool moved = last_resonance_hz_.size() != modes.size();
+    for (std::size_t i = 0; !moved && i < modes.size(); ++i) {
+      moved = std::abs(modes[i].natural_frequency - last_resonance_hz_[i]) > resonance_threshold_ * last_resonance_hz_[i];
+    }
+    if (!moved) return;
+    drivetrain_stiffness::Resonance r;
+    r.header = header;
+    last_resonance_hz_.clear();
+    for (const Mode& m : modes) {
+      if (!std::isfinite(m.natural_frequency) || !std::isfinite(m.damping_ratio)) return;  // never NaN on a topic
+      r.frequencies_hz.push_back(m.natural_frequency);
+      r.damped_frequencies_hz.push_back(m.damped_frequency);
+      r.damping_ratios.push_back(m.damping_ratio);
+      r.dominant_coordinate.push_back(m.dominant);
+      last_resonance_hz_.push_back(m.natural_frequency);
+    }
+    double margin = 0.0;
+    r.floquet_valid = dynamics_->floquetMargin(&margin) && std::isfinite(margin);
+    r.floquet_margin = r.floquet_valid ? margin : 0.0;
+    r.source = "modal: bearing model at this load, mean composite mesh stiffness of the flank state; "
+               "Floquet: exact monodromy of the mesh period";
+    resonance_pub_.publish(r);
+    ++resonance_published_;
+  } catch (const std::exception& e) {
+    ++dynamics_errors_;
+    last_rejection_ = std::string("resonance: ") + e.what();
+  }
 }
 
 double StiffnessEstimatorRos::pinionAngle(const ros::Time& stamp) {
@@ -218,6 +266,7 @@ void StiffnessEstimatorRos::diagnose(diagnostic_updater::DiagnosticStatusWrapper
     status.add("dynamics_rebuilds", dynamics_->rebuilds());
     status.add("time_jumps_reset", time_jumps_);
     status.add("dynamics_errors", dynamics_errors_);
+    status.add("resonance_published", resonance_published_);
     const double rtf = dynamics_wall_s_ > 0.0 ? dynamics_sim_s_ / dynamics_wall_s_ : 0.0;
     status.add("dynamics_realtime_factor", rtf);
     // Real-time margin: the fraction of wall time left over while keeping up with the rig.

@@ -9,6 +9,7 @@
 #include <ros/ros.h>
 
 #include "drivetrain_stiffness/Preload.h"
+#include "drivetrain_stiffness/Resonance.h"
 #include "drivetrain_stiffness/Stiffness.h"
 #include "drivetrain_stiffness/TransmissionError.h"
 #include "drivetrain_stiffness/config/yaml_config.hpp"
@@ -26,6 +27,7 @@ class NodeTest : public testing::Test {
     stiffness_sub_ = nh_.subscribe<Stiffness>("stiffness", 100, [this](const Stiffness::ConstPtr& m) { received_.push_back(*m); });
     diag_sub_ = nh_.subscribe<diagnostic_msgs::DiagnosticArray>("/diagnostics", 100,
         [this](const diagnostic_msgs::DiagnosticArray::ConstPtr& m) { diagnostics_.push_back(*m); });
+    resonance_sub_ = nh_.subscribe<Resonance>("resonance", 100, [this](const Resonance::ConstPtr& m) { resonance_.push_back(*m); });
     te_sub_ = nh_.subscribe<TransmissionError>("transmission_error", 10000,
         [this](const TransmissionError::ConstPtr& m) { te_.push_back(*m); });
     torque_pub_ = nh_.advertise<geometry_msgs::WrenchStamped>("torque", 10);
@@ -116,7 +118,8 @@ class NodeTest : public testing::Test {
   ros::NodeHandle nh_;
   std::string path_;
   std::unique_ptr<StiffnessEstimator> reference_;
-  ros::Subscriber stiffness_sub_, diag_sub_, te_sub_;
+  ros::Subscriber stiffness_sub_, diag_sub_, te_sub_, resonance_sub_;
+  std::vector<Resonance> resonance_;
   std::vector<TransmissionError> te_;
   ros::Publisher torque_pub_, preload_pub_;
   std::vector<Stiffness> received_;
@@ -128,10 +131,23 @@ TEST_F(NodeTest, AnswersGoodInputAndSurvivesBadInput) {
   preload_pub_.publish(preload(10.0, 1200.0, 800.0, 5e-6, 5e-6));
   reference_->setPreloads({{"pinion_bearing", 1200.0, 800.0, 5e-6, 5e-6}, {"gear_bearing", 1200.0, 800.0, 5e-6, 5e-6}});
   expectAnswer(10.0, reference_->current());
+  std::vector<std::array<double, 2>> stiffness_after_input = {shaftStiffness(*reference_)};
   // The node's pinion angle is omega (t - t0), t0 = the first torque stamp, omega = ~pinion_speed_rpm.
   const double omega = 1000.0 * 2 * M_PI / 60;
   sendTorque(0.5, 11.0);
   expectAnswer(11.0, reference_->setTorque(0.5, 0.0));
+  stiffness_after_input.push_back(shaftStiffness(*reference_));
+
+  // 1b. A resonance estimate came with the first answer: three finite modes, the torsional one
+  // (dominated by x) near 60 kHz with the seed's masses, and a stable Floquet margin.
+  ASSERT_TRUE(waitFor([&] { return !resonance_.empty(); }, 5.0));
+  const Resonance& res = resonance_.back();
+  ASSERT_EQ(res.frequencies_hz.size(), 3u);
+  for (double f : res.frequencies_hz) EXPECT_TRUE(std::isfinite(f) && f > 0.0);
+  EXPECT_EQ(res.dominant_coordinate[2], "x");
+  EXPECT_NEAR(res.frequencies_hz[2], 60e3, 10e3);
+  EXPECT_TRUE(res.floquet_valid);
+  EXPECT_GT(res.floquet_margin, 0.0);
 
   // 2. NaN torque, absurd torque, negative and NaN preload, unknown bearing: no output, counted.
   sendTorque(std::nan(""), 12.0);
@@ -153,6 +169,7 @@ TEST_F(NodeTest, AnswersGoodInputAndSurvivesBadInput) {
   // 3. The next good input is answered correctly: state was not poisoned.
   sendTorque(0.25, 13.0137);
   expectAnswer(13.0137, reference_->setTorque(0.25, omega * 2.0137));
+  stiffness_after_input.push_back(shaftStiffness(*reference_));
 
   // 4. Dynamics: the first torque (t = 11) started the model; this one released every 1 ms sample
   // in (11, 13.0137] with the 0.5 N m held: 2013 transmission_error messages, stamped on the grid.
@@ -166,12 +183,15 @@ TEST_F(NodeTest, AnswersGoodInputAndSurvivesBadInput) {
     EXPECT_DOUBLE_EQ(m.torque, 0.5);
   }
   // Replay what the node did with the core class: built with the bearing stiffness at start-up
-  // (configured preloads, no torque), started at t = 11 under 0.5 N m, then given the stiffness of
-  // the current estimate (preloads 1200/800 N, 0.25 N m) before advancing to 13.0137 s.
+  // (configured preloads, no torque); every accepted input first hands over the new stiffness
+  // (preload at 10 s, torque 0.5 N m at 11 s, which also starts the model, torque 0.25 N m at
+  // 13.0137 s), then the model advances.
   const RigConfig rig = loadRigFile(path_);
   DynamicsEstimator replay(rig, shaftStiffness(StiffnessEstimator(rig)), 1000.0);
+  replay.setBearingStiffness(stiffness_after_input[0]);
+  replay.setBearingStiffness(stiffness_after_input[1]);
   replay.reset(11.0, 0.5);
-  replay.setBearingStiffness(shaftStiffness(*reference_));
+  replay.setBearingStiffness(stiffness_after_input[2]);
   std::vector<DynamicsSample> expected;
   replay.advanceTo(13.0137, [&](const DynamicsSample& d) { expected.push_back(d); });
   ASSERT_EQ(expected.size(), te_.size());

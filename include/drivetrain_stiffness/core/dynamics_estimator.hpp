@@ -55,6 +55,9 @@ class DynamicsEstimator {
   long fallbackIntervals() const { return fallback_intervals_; }
   bool exact() const { return propagator_ != nullptr; }  ///< exponential propagation available
   const GearRotorModel& model() const { return *model_; }  ///< time relative to the last reset
+  /// 1 - max |Floquet multiplier| of the current model over one mesh period, from the exact
+  /// propagators (a few 6x6 products); false if there is no linear regime (bearing clearance).
+  bool floquetMargin(double* margin) const;
   const State6& state() const { return y_; }
 
  private:

@@ -14,6 +14,7 @@
 #include <ros/ros.h>
 
 #include "drivetrain_stiffness/Preload.h"
+#include "drivetrain_stiffness/Resonance.h"
 #include "drivetrain_stiffness/Stiffness.h"
 #include "drivetrain_stiffness/TransmissionError.h"
 #include "drivetrain_stiffness/core/dynamics_estimator.hpp"
@@ -38,6 +39,8 @@ class StiffnessEstimatorRos {
   /// holds `torque`. Resets on the first input and when time went backwards.
   void advanceDynamics(const ros::Time& stamp, double torque);
   std::array<double, 2> shaftBearingStiffness() const;
+  /// Publishes `resonance` when a natural frequency moved by more than ~resonance_threshold.
+  void updateResonance(const std_msgs::Header& header, const StiffnessEstimate& estimate);
   void publish(const std_msgs::Header& header, const StiffnessEstimate& estimate);
   double pinionAngle(const ros::Time& stamp);
   void reject(const std::string& topic, const std::string& reason);
@@ -45,7 +48,10 @@ class StiffnessEstimatorRos {
 
   std::unique_ptr<StiffnessEstimator> estimator_;
   ros::Subscriber torque_sub_, preload_sub_;
-  ros::Publisher stiffness_pub_, te_pub_;
+  ros::Publisher stiffness_pub_, te_pub_, resonance_pub_;
+  std::vector<double> last_resonance_hz_;
+  double resonance_threshold_ = 0.01;
+  std::uint64_t resonance_published_ = 0;
   std::unique_ptr<DynamicsEstimator> dynamics_;
   std::uint64_t te_published_ = 0, time_jumps_ = 0, dynamics_errors_ = 0;
   double dynamics_sim_s_ = 0.0, dynamics_wall_s_ = 0.0;  // totals for the real-time factor
