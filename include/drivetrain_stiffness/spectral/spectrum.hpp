@@ -1,0 +1,34 @@
+// Amplitude spectra and peak picking (FFTW), for the resonance estimates of issue 5.
+//
+// amplitudeSpectrum: one-sided spectrum of a real signal (mean removed, Hann window), scaled so a
+// sine of amplitude A shows a peak of height A (2 |X_k| / sum of the window).
+// topPeaks: the largest local maxima above DC, each refined below the bin spacing by fitting a
+// parabola to the log amplitudes of the three bins around it (Gaussian interpolation; its bias for
+// the Hann window is bounded in test_spectrum.cpp).
+#pragma once
+
+#include <vector>
+
+namespace drivetrain_stiffness {
+
+struct Spectrum {
+  std::vector<double> frequency;  ///< [Hz]
+  std::vector<double> amplitude;  ///< same unit as the signal
+  double resolution = 0.0;        ///< bin spacing [Hz]
+};
+
+struct SpectralPeak {
+  double frequency = 0.0;  ///< [Hz], interpolated
+  double amplitude = 0.0;  ///< interpolated
+};
+
+/// x sampled every dt [s]; at least 8 samples, all finite (InvalidInput otherwise).
+Spectrum amplitudeSpectrum(const std::vector<double>& x, double dt);
+
+/// The n largest peaks (local maxima at least `min_separation` bins apart), strongest first.
+std::vector<SpectralPeak> topPeaks(const Spectrum& s, int n, int min_separation = 3);
+
+/// Peaks of a sampled curve y(x) on a uniform grid (a frequency sweep's RMS), same refinement.
+std::vector<SpectralPeak> curvePeaks(const std::vector<double>& x, const std::vector<double>& y, int n);
+
+}  // namespace drivetrain_stiffness
