@@ -4,6 +4,7 @@
 //                          [--inner-interference m] [--outer-interference m]
 //   drivetrain_cli mesh --config FILE [--model potential_energy|kuang_yang|iso6336] [--samples N] [--torque N·m]
 //   drivetrain_cli modes --config FILE [--torque N·m] [--preload N]
+//   drivetrain_cli sweep --config FILE [--start Hz] [--stop Hz] [--step Hz] [--amplitude N·m] [--fidelity F] [--out CSV]
 //   drivetrain_cli simulate --config FILE --scene NAME [--method dopri5|rk4|trapezoidal|exponential|quasi_static|
 //                           linear_modal|auto] [--error-bound E] [--step S] [--duration S] [--rtol R] [--out CSV]
 #include <CLI/CLI.hpp>
@@ -22,6 +23,7 @@
 #include "drivetrain_stiffness/core/stiffness_estimator.hpp"
 #include "drivetrain_stiffness/core/scenes.hpp"
 #include "drivetrain_stiffness/core/validation.hpp"
+#include "drivetrain_stiffness/spectral/frequency_sweep.hpp"
 
 namespace ds = drivetrain_stiffness;
 
@@ -262,6 +264,43 @@ int runModes(const ModesArgs& args) {
   return 0;
 }
 
+struct SweepArgs {
+  std::string config, fidelity = "full";
+  ds::SweepSpec spec;
+  std::optional<std::string> out;
+};
+
+// Frequency sweep of a sine torque fluctuation (seed 000 section 4.2): RMS per coordinate and
+// the top three resonance peaks, refined below the step.
+int runTorqueSweep(const SweepArgs& args) {
+  const ds::RigConfig rig = ds::loadRigFile(args.config);
+  ds::SweepSpec spec = args.spec;
+  if (args.fidelity == "full") spec.fidelity = ds::Fidelity::kFull;
+  else if (args.fidelity == "linear_modal") spec.fidelity = ds::Fidelity::kLinearModal;
+  else if (args.fidelity == "quasi_static") spec.fidelity = ds::Fidelity::kQuasiStatic;
+  else throw ds::InvalidInput("--fidelity = '" + args.fidelity + "': must be full, linear_modal or quasi_static");
+  const ds::SweepOutput sweep = ds::torqueSweep(rig, spec);
+  static const char* kNames[3] = {"x_p", "x_g", "x"};
+  nlohmann::json coords = nlohmann::json::object();
+  for (int c = 0; c < 3; ++c) {
+    nlohmann::json peaks = nlohmann::json::array();
+    for (const ds::SpectralPeak& p : sweep.peaks[c]) peaks.push_back({{"frequency_hz", p.frequency}, {"rms", p.amplitude}});
+    coords[kNames[c]] = {{"rms", sweep.rms[c]}, {"peaks", peaks}};
+  }
+  if (args.out) {
+    std::ofstream csv(*args.out);
+    if (!csv) throw ds::InvalidInput("--out = '" + *args.out + "': cannot write");
+    csv << "frequency_hz,rms_x_p,rms_x_g,rms_x\n";
+    for (std::size_t i = 0; i < sweep.frequency.size(); ++i)
+      csv << sweep.frequency[i] << ',' << sweep.rms[0][i] << ',' << sweep.rms[1][i] << ',' << sweep.rms[2][i] << '\n';
+  }
+  const nlohmann::json out = {{"fidelity", args.fidelity}, {"frequency_hz", sweep.frequency}, {"coordinates", coords},
+                              {"torque_amplitude", spec.torque_amplitude}, {"settle_s", spec.settle}, {"measure_s", spec.measure},
+                              {"units", "Hz, m (RMS about the mean)"}};
+  std::cout << out.dump(2) << std::endl;
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -306,6 +345,16 @@ int main(int argc, char** argv) {
   modes_cmd->add_option("--torque", modes.torque, "pinion torque [N·m] (default 0.1)");
   modes_cmd->add_option("--preload", modes.preload, "axial preload of every bearing [N], overrides the file");
 
+  SweepArgs sweep;
+  auto* sweep_cmd = app.add_subcommand("sweep", "frequency sweep of a sine torque fluctuation: RMS and resonance peaks");
+  sweep_cmd->add_option("--config", sweep.config, "gearbox YAML with gears, bearings and dynamics")->required();
+  sweep_cmd->add_option("--start", sweep.spec.start, "first frequency [Hz] (default 60)");
+  sweep_cmd->add_option("--stop", sweep.spec.stop, "last frequency [Hz] (default 3000: seed 000 section 4.2)");
+  sweep_cmd->add_option("--step", sweep.spec.step, "frequency step [Hz] (default 60)");
+  sweep_cmd->add_option("--amplitude", sweep.spec.torque_amplitude, "torque fluctuation amplitude [N·m] (default 0.05)");
+  sweep_cmd->add_option("--fidelity", sweep.fidelity, "full (dopri5, default), linear_modal or quasi_static");
+  sweep_cmd->add_option("--out", sweep.out, "write frequency and RMS per coordinate to this CSV");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -316,6 +365,7 @@ int main(int argc, char** argv) {
     if (app.got_subcommand(mesh_cmd)) return runMesh(mesh);
     if (app.got_subcommand(sim_cmd)) return runSimulate(sim);
     if (app.got_subcommand(modes_cmd)) return runModes(modes);
+    if (app.got_subcommand(sweep_cmd)) return runTorqueSweep(sweep);
   } catch (const ds::InvalidInput& e) {
     std::cerr << "drivetrain_cli: invalid input: " << e.what() << std::endl;
     return 2;
