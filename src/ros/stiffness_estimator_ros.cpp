@@ -35,6 +35,10 @@ StiffnessEstimatorRos::StiffnessEstimatorRos(ros::NodeHandle nh, ros::NodeHandle
     const double rate = positiveParam(pnh, "output_rate", 1000.0);
     max_gap_ = positiveParam(pnh, "max_gap", 1.0);
     dynamics_ = std::make_unique<DynamicsEstimator>(rig, shaftBearingStiffness(), rate);
+    int window = 1024, hop = 256;
+    pnh.param("spectrum_window", window, window);
+    pnh.param("spectrum_hop", hop, hop);
+    te_spectrum_ = std::make_unique<SlidingSpectrum>(window, hop, dynamics_->outputInterval(), 3);
   }
   // One speed for both mesh phases (stiffness and dynamics): the dynamics block's, unless overridden.
   double speed_rpm = rig.dynamics.present ? rig.dynamics.speed_rpm : 1000.0;  // seed 000 Table 1
@@ -48,6 +52,7 @@ StiffnessEstimatorRos::StiffnessEstimatorRos(ros::NodeHandle nh, ros::NodeHandle
   // A torque input can release many samples at once (the gap since the previous input).
   te_pub_ = nh.advertise<drivetrain_stiffness::TransmissionError>("transmission_error", 10000);
   resonance_pub_ = nh.advertise<drivetrain_stiffness::Resonance>("resonance", 10, true);  // latched: the last estimate
+  spectrum_pub_ = nh.advertise<drivetrain_stiffness::SpectralPeaks>("te_spectrum", 100);
   // Relative topic names, so launch files can remap and namespace them (wiki.ros.org/Names).
   torque_sub_ = nh.subscribe("torque", 100, &StiffnessEstimatorRos::onTorque, this, ros::TransportHints().tcpNoDelay());
   preload_sub_ = nh.subscribe("preload", 10, &StiffnessEstimatorRos::onPreload, this);
@@ -114,6 +119,7 @@ void StiffnessEstimatorRos::advanceDynamics(const ros::Time& stamp, double torqu
                           std::to_string(t) + " s: dynamics reset";
       }
       dynamics_->reset(t, torque);
+      te_spectrum_->reset();  // a new window: no samples from before the restart
       angle_origin_ = stamp;  // the stiffness message's mesh phase restarts with the dynamics
       return;
     }
@@ -135,6 +141,17 @@ void StiffnessEstimatorRos::advanceDynamics(const ros::Time& stamp, double torqu
       m.back_flank_loaded = s.back_flank_loaded;
       te_pub_.publish(m);
       ++te_published_;
+      if (te_spectrum_->push(s.dynamic_te)) {
+        drivetrain_stiffness::SpectralPeaks peaks;
+        peaks.header = m.header;
+        for (const SpectralPeak& p : te_spectrum_->peaks()) {
+          peaks.frequencies_hz.push_back(p.frequency);
+          peaks.amplitudes.push_back(p.amplitude);
+        }
+        peaks.window_s = te_spectrum_->windowSeconds();
+        peaks.resolution_hz = te_spectrum_->resolution();
+        spectrum_pub_.publish(peaks);
+      }
     });
     dynamics_sim_s_ += sim;
     dynamics_wall_s_ += (ros::WallTime::now() - start).toSec();

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "drivetrain_stiffness/core/validation.hpp"
+#include "drivetrain_stiffness/spectral/sliding_spectrum.hpp"
 #include "drivetrain_stiffness/spectral/spectrum.hpp"
 
 using namespace drivetrain_stiffness;
@@ -47,4 +48,27 @@ TEST(Spectrum, RejectsBadSignals) {
   x[5] = NAN;
   EXPECT_THROW(amplitudeSpectrum(x, 1e-3), InvalidInput);
   EXPECT_THROW(amplitudeSpectrum(std::vector<double>(64, 0.0), 0.0), InvalidInput);
+}
+
+// Sliding window: the first peaks appear after a full window, then every hop; a sine that changes
+// frequency is followed once the window has slid past the change.
+TEST(SlidingSpectrum, FollowsTheLatestWindow) {
+  const double dt = 1e-3;
+  SlidingSpectrum s(1024, 256, dt, 2);
+  EXPECT_NEAR(s.resolution(), 1.0 / 1.024, 1e-12);
+  int updates = 0;
+  for (int i = 0; i < 2048; ++i) {
+    const double f = i < 1024 ? 100.3 : 333.3;
+    updates += s.push(1e-6 * std::sin(2 * M_PI * f * i * dt));
+    if (i == 1023) {
+      ASSERT_FALSE(s.peaks().empty());
+      EXPECT_NEAR(s.peaks()[0].frequency, 100.3, 0.05 * s.resolution());
+    }
+  }
+  EXPECT_EQ(updates, 5);  // at 1024, 1280, 1536, 1792, 2048 samples
+  EXPECT_NEAR(s.peaks()[0].frequency, 333.3, 0.05 * s.resolution());
+  EXPECT_NEAR(s.peaks()[0].amplitude, 1e-6, 0.02e-6);
+  EXPECT_THROW(s.push(NAN), InvalidInput);
+  EXPECT_THROW(SlidingSpectrum(4, 1, dt), InvalidInput);
+  EXPECT_THROW(SlidingSpectrum(64, 65, dt), InvalidInput);
 }

@@ -10,6 +10,7 @@
 
 #include "drivetrain_stiffness/Preload.h"
 #include "drivetrain_stiffness/Resonance.h"
+#include "drivetrain_stiffness/SpectralPeaks.h"
 #include "drivetrain_stiffness/Stiffness.h"
 #include "drivetrain_stiffness/TransmissionError.h"
 #include "drivetrain_stiffness/config/yaml_config.hpp"
@@ -27,6 +28,7 @@ class NodeTest : public testing::Test {
     stiffness_sub_ = nh_.subscribe<Stiffness>("stiffness", 100, [this](const Stiffness::ConstPtr& m) { received_.push_back(*m); });
     diag_sub_ = nh_.subscribe<diagnostic_msgs::DiagnosticArray>("/diagnostics", 100,
         [this](const diagnostic_msgs::DiagnosticArray::ConstPtr& m) { diagnostics_.push_back(*m); });
+    spectrum_sub_ = nh_.subscribe<SpectralPeaks>("te_spectrum", 100, [this](const SpectralPeaks::ConstPtr& m) { spectra_.push_back(*m); });
     resonance_sub_ = nh_.subscribe<Resonance>("resonance", 100, [this](const Resonance::ConstPtr& m) { resonance_.push_back(*m); });
     te_sub_ = nh_.subscribe<TransmissionError>("transmission_error", 10000,
         [this](const TransmissionError::ConstPtr& m) { te_.push_back(*m); });
@@ -118,7 +120,8 @@ class NodeTest : public testing::Test {
   ros::NodeHandle nh_;
   std::string path_;
   std::unique_ptr<StiffnessEstimator> reference_;
-  ros::Subscriber stiffness_sub_, diag_sub_, te_sub_, resonance_sub_;
+  ros::Subscriber stiffness_sub_, diag_sub_, te_sub_, resonance_sub_, spectrum_sub_;
+  std::vector<SpectralPeaks> spectra_;
   std::vector<Resonance> resonance_;
   std::vector<TransmissionError> te_;
   ros::Publisher torque_pub_, preload_pub_;
@@ -200,6 +203,14 @@ TEST_F(NodeTest, AnswersGoodInputAndSurvivesBadInput) {
     EXPECT_NEAR(te_[i].mesh_force, expected[i].mesh_force, 1e-9 * std::abs(expected[i].mesh_force) + 1e-12) << i;
   }
   EXPECT_TRUE(diagnosticCountAtLeast("transmission_error_published", 2013));
+  // Sliding spectrum of the predicted TE (1024-sample window, hop 256): updates after 1024, 1280,
+  // 1536, 1792 samples; the mesh frequency 1000 rpm * 20 / 60 = 333.3 Hz (where the TE excitation
+  // sits) is among the three peaks.
+  ASSERT_TRUE(waitFor([&] { return spectra_.size() >= 4; }, 5.0)) << spectra_.size();
+  EXPECT_EQ(spectra_.size(), 4u);
+  bool mesh_peak = false;
+  for (double f : spectra_.back().frequencies_hz) mesh_peak |= std::abs(f - 1000.0 * 20 / 60) < spectra_.back().resolution_hz;
+  EXPECT_TRUE(mesh_peak);
 
   // 5. A gap beyond ~max_gap (5 s here) restarts the dynamics instead of integrating it: the stiffness
   // answer still comes, no transmission_error sample is released, and the restart is counted.

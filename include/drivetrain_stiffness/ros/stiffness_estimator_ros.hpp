@@ -15,6 +15,8 @@
 
 #include "drivetrain_stiffness/Preload.h"
 #include "drivetrain_stiffness/Resonance.h"
+#include "drivetrain_stiffness/SpectralPeaks.h"
+#include "drivetrain_stiffness/spectral/sliding_spectrum.hpp"
 #include "drivetrain_stiffness/Stiffness.h"
 #include "drivetrain_stiffness/TransmissionError.h"
 #include "drivetrain_stiffness/core/dynamics_estimator.hpp"
@@ -48,7 +50,8 @@ class StiffnessEstimatorRos {
 
   std::unique_ptr<StiffnessEstimator> estimator_;
   ros::Subscriber torque_sub_, preload_sub_;
-  ros::Publisher stiffness_pub_, te_pub_, resonance_pub_;
+  ros::Publisher stiffness_pub_, te_pub_, resonance_pub_, spectrum_pub_;
+  std::unique_ptr<SlidingSpectrum> te_spectrum_;
   std::vector<double> last_resonance_hz_;
   double resonance_threshold_ = 0.01;
   std::uint64_t resonance_published_ = 0;
