@@ -7,6 +7,7 @@
 //   drivetrain_cli sweep --config FILE [--start Hz] [--stop Hz] [--step Hz] [--amplitude N·m] [--fidelity F] [--out CSV]
 //   drivetrain_cli simulate --config FILE --scene NAME [--method dopri5|rk4|trapezoidal|exponential|quasi_static|
 //                           linear_modal|auto] [--error-bound E] [--step S] [--duration S] [--rtol R] [--out CSV]
+//   drivetrain_cli study NAME --config FILE --out DIR [--no-png] [--plot-script PY]
 #include <CLI/CLI.hpp>
 #include <chrono>
 #include <cmath>
@@ -24,6 +25,8 @@
 #include "drivetrain_stiffness/core/scenes.hpp"
 #include "drivetrain_stiffness/core/validation.hpp"
 #include "drivetrain_stiffness/spectral/frequency_sweep.hpp"
+#include "drivetrain_stiffness/studies/parameter_studies.hpp"
+#include "study_command.hpp"
 
 namespace ds = drivetrain_stiffness;
 
@@ -355,6 +358,16 @@ int main(int argc, char** argv) {
   sweep_cmd->add_option("--fidelity", sweep.fidelity, "full (dopri5, default), linear_modal or quasi_static");
   sweep_cmd->add_option("--out", sweep.out, "write frequency and RMS per coordinate to this CSV");
 
+  ds::StudyArgs study;
+  study.plot_script = DRIVETRAIN_PLOT_STUDY_SCRIPT;
+  auto* study_cmd = app.add_subcommand("study", "a seed 000 parameter study (Figs 4, 5, 9, 10, 11) to CSV and PNG");
+  study_cmd->add_option("name", study.name, "bearing_shrink, bearing_preload, rms_sweep, resonance_shrink or resonance_preload")
+      ->required()->check(CLI::IsMember(ds::studyNames()));
+  study_cmd->add_option("--config", study.config, "gearbox YAML with gears, bearings and dynamics")->required();
+  study_cmd->add_option("--out", study.out, "output directory (created if missing)")->required();
+  study_cmd->add_flag("!--no-png", study.png, "write the CSV only");
+  study_cmd->add_option("--plot-script", study.plot_script, "matplotlib script: SCRIPT CSV PNG");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -366,6 +379,7 @@ int main(int argc, char** argv) {
     if (app.got_subcommand(sim_cmd)) return runSimulate(sim);
     if (app.got_subcommand(modes_cmd)) return runModes(modes);
     if (app.got_subcommand(sweep_cmd)) return runTorqueSweep(sweep);
+    if (app.got_subcommand(study_cmd)) return ds::runStudyCommand(study);
   } catch (const ds::InvalidInput& e) {
     std::cerr << "drivetrain_cli: invalid input: " << e.what() << std::endl;
     return 2;
