@@ -4,7 +4,8 @@
 //                          [--inner-interference m] [--outer-interference m]
 //   drivetrain_cli mesh --config FILE [--model potential_energy|kuang_yang|iso6336] [--samples N] [--torque N·m]
 //   drivetrain_cli modes --config FILE [--torque N·m] [--preload N]
-//   drivetrain_cli sweep --config FILE [--start Hz] [--stop Hz] [--step Hz] [--amplitude N·m] [--fidelity F] [--out CSV]
+//   drivetrain_cli sweep --config FILE [--start Hz] [--stop Hz] [--step Hz] [--amplitude N·m] [--fidelity F]
+//                        [--direction up|down|both] [--out CSV]
 //   drivetrain_cli simulate --config FILE --scene NAME [--method dopri5|rk4|trapezoidal|exponential|quasi_static|
 //                           linear_modal|auto] [--error-bound E] [--step S] [--duration S] [--rtol R] [--out CSV]
 //   drivetrain_cli study NAME --config FILE --out DIR [--no-png] [--plot-script PY]
@@ -268,7 +269,7 @@ int runModes(const ModesArgs& args) {
 }
 
 struct SweepArgs {
-  std::string config, fidelity = "full";
+  std::string config, fidelity = "full", direction = "up";
   ds::SweepSpec spec;
   std::optional<std::string> out;
 };
@@ -282,23 +283,46 @@ int runTorqueSweep(const SweepArgs& args) {
   else if (args.fidelity == "linear_modal") spec.fidelity = ds::Fidelity::kLinearModal;
   else if (args.fidelity == "quasi_static") spec.fidelity = ds::Fidelity::kQuasiStatic;
   else throw ds::InvalidInput("--fidelity = '" + args.fidelity + "': must be full, linear_modal or quasi_static");
+  if (args.direction == "up") spec.direction = ds::SweepDirection::kUp;
+  else if (args.direction == "down") spec.direction = ds::SweepDirection::kDown;
+  else if (args.direction == "both") spec.direction = ds::SweepDirection::kBoth;
+  else throw ds::InvalidInput("--direction = '" + args.direction + "': must be up, down or both");
   const ds::SweepOutput sweep = ds::torqueSweep(rig, spec);
   static const char* kNames[3] = {"x_p", "x_g", "x"};
   nlohmann::json coords = nlohmann::json::object();
   for (int c = 0; c < 3; ++c) {
     nlohmann::json peaks = nlohmann::json::array();
     for (const ds::SpectralPeak& p : sweep.peaks[c]) peaks.push_back({{"frequency_hz", p.frequency}, {"rms", p.amplitude}});
-    coords[kNames[c]] = {{"rms", sweep.rms[c]}, {"peaks", peaks}};
+    nlohmann::json spectrum = nlohmann::json::array();
+    for (const ds::SpectralPeak& p : sweep.spectrum_peaks[c])
+      spectrum.push_back({{"frequency_hz", p.frequency}, {"amplitude", p.amplitude}});
+    coords[kNames[c]] = {{"rms", sweep.rms[c]}, {"peaks", peaks}, {"spectrum_peaks", spectrum}};
+    if (!sweep.rms_down[c].empty()) {
+      // Largest up/down disagreement relative to the larger RMS: a jump (two branches) when large.
+      double worst = 0.0;
+      for (std::size_t i = 0; i < sweep.rms[c].size(); ++i) {
+        const double a = sweep.rms[c][i], b = sweep.rms_down[c][i];
+        if (std::max(a, b) > 0.0) worst = std::max(worst, std::abs(a - b) / std::max(a, b));
+      }
+      coords[kNames[c]]["rms_down"] = sweep.rms_down[c];
+      coords[kNames[c]]["max_up_down_difference"] = worst;
+    }
   }
   if (args.out) {
     std::ofstream csv(*args.out);
     if (!csv) throw ds::InvalidInput("--out = '" + *args.out + "': cannot write");
-    csv << "frequency_hz,rms_x_p,rms_x_g,rms_x\n";
-    for (std::size_t i = 0; i < sweep.frequency.size(); ++i)
-      csv << sweep.frequency[i] << ',' << sweep.rms[0][i] << ',' << sweep.rms[1][i] << ',' << sweep.rms[2][i] << '\n';
+    const bool both = !sweep.rms_down[0].empty();
+    csv << "frequency_hz,rms_x_p_m,rms_x_g_m,rms_x_m" << (both ? ",rms_down_x_p_m,rms_down_x_g_m,rms_down_x_m" : "") << '\n';
+    for (std::size_t i = 0; i < sweep.frequency.size(); ++i) {
+      csv << sweep.frequency[i] << ',' << sweep.rms[0][i] << ',' << sweep.rms[1][i] << ',' << sweep.rms[2][i];
+      if (both) csv << ',' << sweep.rms_down[0][i] << ',' << sweep.rms_down[1][i] << ',' << sweep.rms_down[2][i];
+      csv << '\n';
+    }
   }
   const nlohmann::json out = {{"fidelity", args.fidelity}, {"frequency_hz", sweep.frequency}, {"coordinates", coords},
                               {"torque_amplitude", spec.torque_amplitude}, {"settle_s", spec.settle}, {"measure_s", spec.measure},
+                              {"direction", args.direction}, {"sample_interval_s", sweep.sample_interval},
+                              {"spectrum_resolution_hz", sweep.spectrum_resolution},
                               {"units", "Hz, m (RMS about the mean)"}};
   std::cout << out.dump(2) << std::endl;
   return 0;
@@ -356,6 +380,7 @@ int main(int argc, char** argv) {
   sweep_cmd->add_option("--step", sweep.spec.step, "frequency step [Hz] (default 60)");
   sweep_cmd->add_option("--amplitude", sweep.spec.torque_amplitude, "torque fluctuation amplitude [N·m] (default 0.05)");
   sweep_cmd->add_option("--fidelity", sweep.fidelity, "full (dopri5, default), linear_modal or quasi_static");
+  sweep_cmd->add_option("--direction", sweep.direction, "up (default), down, or both (up then down, for jumps)");
   sweep_cmd->add_option("--out", sweep.out, "write frequency and RMS per coordinate to this CSV");
 
   ds::StudyArgs study;

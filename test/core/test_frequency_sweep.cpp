@@ -36,6 +36,44 @@ TEST(FrequencySweep, LinearPeaksMatchModalFrequencies) {
   }
 }
 
+// A linear system has one steady state, so stepping up and stepping down must give the same RMS
+// at every frequency (the sweep carries the state over, so a window that is not whole periods or
+// unsettled transients would show here). The nonlinear anti-backlash model keeps both flanks in
+// contact at this amplitude, so it has no jump either.
+TEST(FrequencySweep, UpAndDownAgreeWithoutJumps) {
+  const RigConfig rig = loadRigFile(std::string(DRIVETRAIN_SOURCE_DIR) + "/config/gearboxes/seed_servo.yaml");
+  for (Fidelity fidelity : {Fidelity::kLinearModal, Fidelity::kFull}) {
+    SweepSpec spec;
+    spec.start = 300.0;
+    spec.stop = 3000.0;
+    spec.step = 300.0;
+    spec.fidelity = fidelity;
+    spec.direction = SweepDirection::kBoth;
+    const SweepOutput sweep = torqueSweep(rig, spec);
+    for (int c = 0; c < 3; ++c) {
+      ASSERT_EQ(sweep.rms_down[c].size(), sweep.rms[c].size());
+      for (std::size_t i = 0; i < sweep.rms[c].size(); ++i)
+        EXPECT_NEAR(sweep.rms_down[c][i] / sweep.rms[c][i], 1.0, 0.01)
+            << toString(fidelity) << " coordinate " << c << " at " << sweep.frequency[i] << " Hz";
+    }
+  }
+}
+
+// The spectrum of the whole record of x carries the manufacturing TE at the mesh frequency
+// f_mesh = z_p n / 60 = 20 * 1000 / 60 = 333.33 Hz (seed 000 Table 1: z_p = 20, 1000 rpm) as its
+// strongest line, within one bin.
+TEST(FrequencySweep, RecordSpectrumShowsMeshFrequency) {
+  const RigConfig rig = loadRigFile(std::string(DRIVETRAIN_SOURCE_DIR) + "/config/gearboxes/seed_servo.yaml");
+  SweepSpec spec;
+  spec.start = 600.0;
+  spec.stop = 1200.0;
+  spec.step = 300.0;
+  spec.fidelity = Fidelity::kLinearModal;
+  const SweepOutput sweep = torqueSweep(rig, spec);
+  ASSERT_FALSE(sweep.spectrum_peaks[2].empty());
+  EXPECT_NEAR(sweep.spectrum_peaks[2][0].frequency, 20.0 * 1000.0 / 60.0, sweep.spectrum_resolution);
+}
+
 TEST(FrequencySweep, RejectsBadRanges) {
   const RigConfig rig = loadRigFile(std::string(DRIVETRAIN_SOURCE_DIR) + "/config/gearboxes/seed_servo.yaml");
   SweepSpec spec;
