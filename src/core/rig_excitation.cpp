@@ -14,7 +14,7 @@ constexpr double kTwoPi = 6.283185307179586;
 double TorqueProfile::at(double t) const {
   switch (kind) {
     case Kind::kConstant: return mean;
-    case Kind::kSine: return mean + amplitude * std::sin(kTwoPi * frequency * t);
+    case Kind::kSine: return mean + amplitude * std::sin(kTwoPi * frequency * t + phase);
     case Kind::kSteps: {
       double torque = mean;
       for (const auto& s : steps) {

@@ -48,10 +48,17 @@ SweepOutput torqueSweep(const RigConfig& rig, const SweepSpec& spec) {
   State6 y;
   bool started = false;
   std::array<std::vector<double>, 3> record;
+  // The record spectrum is skipped beyond 4 Mi samples (96 MiB for three coordinates): a sweep
+  // through the kHz mesh mode would otherwise hold hundreds of MB.
+  constexpr std::size_t kMaxRecord = std::size_t{1} << 22;
+  bool record_truncated = false;
   // Runs one direction; returns RMS per coordinate in the order of `order`.
   auto run = [&](const std::vector<double>& order, bool keep_record) {
     std::array<std::vector<double>, 3> rms;
     for (double f : order) {
+      // Continuous torque at the step: 2 pi f_new t + phi_new = 2 pi f_old t + phi_old (mod 2 pi),
+      // so the step itself does not kick the system onto another branch.
+      if (started) ex.torque.phase = std::remainder(kTwoPi * (ex.torque.frequency - f) * t + ex.torque.phase, kTwoPi);
       ex.torque.frequency = f;
       const auto excitation = std::make_shared<RigExcitation>(mesh, p, ex);
       const GearRotorModel model(p, excitation);
@@ -81,7 +88,13 @@ SweepOutput torqueSweep(const RigConfig& rig, const SweepSpec& spec) {
       std::array<double, 3> sum{}, sum2{};
       long count = 0;
       const Observer observe = [&](double ti, const State6& yi) {
-        if (keep_record && ti > t) for (int c = 0; c < 3; ++c) record[c].push_back(yi[c]);
+        if (keep_record && ti > t) {
+          if (record[0].size() < kMaxRecord) {
+            for (int c = 0; c < 3; ++c) record[c].push_back(yi[c]);
+          } else {
+            record_truncated = true;
+          }
+        }
         if (ti < t_measure) return;
         for (int c = 0; c < 3; ++c) {
           sum[c] += yi[c];
@@ -123,15 +136,21 @@ SweepOutput torqueSweep(const RigConfig& rig, const SweepSpec& spec) {
   }
   if (out.frequency.size() >= 3) {
     for (int c = 0; c < 3; ++c) {
-      // A "peak" less than 2 % above the curve's floor is window ripple (the TE and the excitation
-      // are never both whole in the window), not a resonance: on the seed rig the x RMS is flat
-      // within 0.43 % over 60-3000 Hz.
-      const double floor = *std::min_element(out.rms[c].begin(), out.rms[c].end());
-      for (const SpectralPeak& pk : curvePeaks(out.frequency, out.rms[c], 3))
-        if (pk.amplitude > 1.02 * floor) out.peaks[c].push_back(pk);
+      // A "peak" that rises less than 2 % above the higher of the two minima separating it from
+      // higher ground (or the curve's end) on either side, i.e. with under 2 % prominence, is window ripple, not a
+      // resonance: on the seed rig the x RMS is flat within 0.43 % over 60-3000 Hz.
+      const std::vector<double>& y = out.rms[c];
+      for (const SpectralPeak& pk : curvePeaks(out.frequency, y, 3)) {
+        const auto i = static_cast<long>(std::lround((pk.frequency - out.frequency.front()) / spec.step));
+        const long top = std::clamp(i, 0L, static_cast<long>(y.size()) - 1);
+        double left = y[top], right = y[top];
+        for (long j = top - 1; j >= 0 && y[j] <= y[top]; --j) left = std::min(left, y[j]);
+        for (long j = top + 1; j < static_cast<long>(y.size()) && y[j] <= y[top]; ++j) right = std::min(right, y[j]);
+        if (pk.amplitude > 1.02 * std::max(left, right)) out.peaks[c].push_back(pk);
+      }
     }
   }
-  if (record[0].size() >= 8) {
+  if (!record_truncated && record[0].size() >= 8) {
     for (int c = 0; c < 3; ++c) {
       const Spectrum s = amplitudeSpectrum(record[c], dt);
       out.spectrum_peaks[c] = topPeaks(s, 3);

@@ -1,12 +1,12 @@
 #include "study_command.hpp"
 
 #include <spawn.h>
-#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <cerrno>
 #include <cstring>
+#include <filesystem>
 #include <iostream>
 #include <nlohmann/json.hpp>
 #include <vector>
@@ -21,39 +21,57 @@ namespace drivetrain_stiffness {
 namespace {
 
 /// Runs `python3 script csv png` without a shell (paths are passed verbatim, never interpreted).
-/// Debian's /usr/bin/python3 first: a pyenv python earlier on PATH usually lacks matplotlib.
+/// Debian's /usr/bin/python3 first: a pyenv python earlier on PATH usually lacks matplotlib. The
+/// script's stdout goes to our stderr, so it cannot corrupt the JSON on stdout.
 void plot(const std::string& script, const std::string& csv, const std::string& png) {
   const std::string python = ::access("/usr/bin/python3", X_OK) == 0 ? "/usr/bin/python3" : "python3";
   std::vector<std::string> argv_s{python, script, csv, png};
   std::vector<char*> argv;
   for (std::string& a : argv_s) argv.push_back(a.data());
   argv.push_back(nullptr);
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_adddup2(&actions, STDERR_FILENO, STDOUT_FILENO);
   pid_t pid = 0;
-  const int rc = posix_spawnp(&pid, python.c_str(), nullptr, nullptr, argv.data(), environ);
-  if (rc != 0) throw InvalidInput("--plot-script: cannot start python3: " + std::string(std::strerror(rc)));
+  const int rc = posix_spawnp(&pid, python.c_str(), &actions, nullptr, argv.data(), environ);
+  posix_spawn_file_actions_destroy(&actions);
+  if (rc != 0) throw InvalidInput("--plot-script: cannot start " + python + ": " + std::strerror(rc));
   int status = 0;
-  if (waitpid(pid, &status, 0) < 0 || !WIFEXITED(status) || WEXITSTATUS(status) != 0)
-    throw InvalidInput("--plot-script = '" + script + "' failed for '" + csv + "' (the CSV is written; use --no-png to skip plots)");
+  pid_t waited = 0;
+  do {
+    waited = waitpid(pid, &status, 0);
+  } while (waited < 0 && errno == EINTR);
+  if (waited < 0 || !WIFEXITED(status) || WEXITSTATUS(status) != 0)
+    throw InvalidInput("--plot-script = '" + script + "' failed for '" + csv +
+                       "' (the CSV is written; install python3-matplotlib or use --no-png)");
+}
+
+/// The compiled-in script (source tree), else the installed copy next to this executable.
+std::string findPlotScript(const std::string& configured) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  if (fs::exists(configured, ec)) return configured;
+  const fs::path beside = fs::read_symlink("/proc/self/exe", ec).parent_path() / "plot_study.py";
+  if (!ec && fs::exists(beside, ec)) return beside.string();
+  return configured;  // the error names the configured path
 }
 
 }  // namespace
 
 int runStudyCommand(const StudyArgs& args) {
   const RigConfig rig = loadRigFile(args.config);
-  struct stat st {};
-  if (::stat(args.out.c_str(), &st) != 0) {
-    if (::mkdir(args.out.c_str(), 0755) != 0)
-      throw InvalidInput("--out = '" + args.out + "': cannot create directory: " + std::strerror(errno));
-  } else if (!S_ISDIR(st.st_mode)) {
-    throw InvalidInput("--out = '" + args.out + "': exists and is not a directory");
-  }
-  const StudyTable table = runStudy(args.name, rig);
+  const StudyTable table = runStudy(args.name, rig);  // before touching the file system
+  if (table.rows.empty()) throw InvalidInput("study '" + args.name + "' produced no rows");
+  std::error_code ec;
+  std::filesystem::create_directories(args.out, ec);
+  if (ec || !std::filesystem::is_directory(args.out))
+    throw InvalidInput("--out = '" + args.out + "': not a directory and cannot be created" + (ec ? ": " + ec.message() : ""));
   const std::string csv = args.out + "/" + table.name + ".csv";
   writeStudyCsv(table, csv);
   nlohmann::json png = nullptr;
   if (args.png) {
     const std::string path = args.out + "/" + table.name + ".png";
-    plot(args.plot_script, csv, path);
+    plot(findPlotScript(args.plot_script), csv, path);
     png = path;
   }
   nlohmann::json first = nlohmann::json::object(), last = nlohmann::json::object();

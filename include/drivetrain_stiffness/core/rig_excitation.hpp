@@ -19,6 +19,7 @@ struct TorqueProfile {
   double mean = 0.0;             ///< [N·m]; also sets the balancing load torque T_g = mean r_g / r_p
   double amplitude = 0.0;        ///< sine / chirp amplitude [N·m]
   double frequency = 0.0;        ///< sine frequency [Hz]
+  double phase = 0.0;            ///< sine phase at t = 0 [rad] (a stepped sweep keeps the sine continuous)
   double chirp_start = 0.0, chirp_end = 0.0, chirp_duration = 1.0;  ///< linear chirp [Hz, Hz, s]
   std::vector<std::pair<double, double>> steps;  ///< (time [s], torque [N·m]) from that time on
   std::shared_ptr<double> live;  ///< kLive: the measured torque, held until the next measurement

@@ -35,7 +35,10 @@ struct SweepOutput {
   /// Down sweep, in the same (ascending) frequency order; empty unless direction is kBoth.
   std::array<std::vector<double>, 3> rms_down;
   /// Amplitude spectrum of the whole first-direction record per coordinate (seed 000 Fig 8b, d, f):
-  /// its top three peaks, and the bin spacing [Hz].
+  /// its top three peaks, and the bin spacing [Hz]. Only lines present throughout the record (the
+  /// mesh frequency and its harmonics) have meaningful heights: each sweep tone is there only for
+  /// its dwell, so its height depends on the dwell and on where it sits under the Hann taper.
+  /// Empty when the record would exceed 4 Mi samples.
   std::array<std::vector<SpectralPeak>, 3> spectrum_peaks;
   double spectrum_resolution = 0.0;
   double sample_interval = 0.0;                      ///< common output step of the record [s]
