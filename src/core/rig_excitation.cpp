@@ -11,6 +11,11 @@ namespace {
 constexpr double kTwoPi = 6.283185307179586;
 }
 
+void TorqueProfile::retune(double new_frequency, double t) {
+  phase = std::remainder(kTwoPi * (frequency - new_frequency) * t + phase, kTwoPi);
+  frequency = new_frequency;
+}
+
 double TorqueProfile::at(double t) const {
   switch (kind) {
     case Kind::kConstant: return mean;

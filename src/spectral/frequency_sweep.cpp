@@ -58,8 +58,8 @@ SweepOutput torqueSweep(const RigConfig& rig, const SweepSpec& spec) {
     for (double f : order) {
       // Continuous torque at the step: 2 pi f_new t + phi_new = 2 pi f_old t + phi_old (mod 2 pi),
       // so the step itself does not kick the system onto another branch.
-      if (started) ex.torque.phase = std::remainder(kTwoPi * (ex.torque.frequency - f) * t + ex.torque.phase, kTwoPi);
-      ex.torque.frequency = f;
+      if (started) ex.torque.retune(f, t);
+      else ex.torque.frequency = f;
       const auto excitation = std::make_shared<RigExcitation>(mesh, p, ex);
       const GearRotorModel model(p, excitation);
       if (!started) {

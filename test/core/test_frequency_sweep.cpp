@@ -74,6 +74,26 @@ TEST(FrequencySweep, RecordSpectrumShowsMeshFrequency) {
   EXPECT_NEAR(sweep.spectrum_peaks[2][0].frequency, 20.0 * 1000.0 / 60.0, sweep.spectrum_resolution);
 }
 
+// A stepped sweep must not kick the system at each step: retuning keeps the torque and its sign of
+// slope continuous at the switch time, also late in a long record (large 2 pi f t).
+TEST(FrequencySweep, RetuneKeepsTorqueContinuous) {
+  TorqueProfile torque;
+  torque.kind = TorqueProfile::Kind::kSine;
+  torque.mean = 0.1;
+  torque.amplitude = 0.05;
+  torque.frequency = 60.0;
+  for (double t : {0.0137, 1.2345, 4.321}) {
+    for (double f_new : {120.0, 2940.0, 61.0}) {
+      TorqueProfile next = torque;
+      next.retune(f_new, t);
+      EXPECT_NEAR(next.at(t), torque.at(t), 1e-12) << t << " " << f_new;
+      EXPECT_EQ(next.frequency, f_new);
+      const double h = 1e-7;  // the new sine continues in the same direction
+      EXPECT_GT((next.at(t + h) - next.at(t)) * (torque.at(t) - torque.at(t - h)), 0.0) << t << " " << f_new;
+    }
+  }
+}
+
 TEST(FrequencySweep, RejectsBadRanges) {
   const RigConfig rig = loadRigFile(std::string(DRIVETRAIN_SOURCE_DIR) + "/config/gearboxes/seed_servo.yaml");
   SweepSpec spec;

@@ -26,6 +26,9 @@ struct TorqueProfile {
   double at(double t) const;
   /// Validates the numbers (finite, non-negative frequencies, ordered steps); names the field.
   void validate() const;
+  /// Switches a sine to `new_frequency` at time t keeping the torque continuous there:
+  /// 2 pi f_new t + phi_new = 2 pi f_old t + phi_old (mod 2 pi). Used by stepped sweeps.
+  void retune(double new_frequency, double t);
 };
 
 struct RigExcitationSpec {
