@@ -121,4 +121,11 @@ const StiffnessEstimate& StiffnessEstimator::setPreloads(const std::vector<Prelo
   return estimate_;
 }
 
+std::array<double, 2> StiffnessEstimator::shaftRadialStiffness() const {
+  std::array<double, 2> k{{0.0, 0.0}};
+  for (std::size_t i = 0; i < estimate_.supports.size(); ++i)
+    k[rig_.bearings[i].shaft] += estimate_.supports[i].solution.radialStiffness();
+  return k;
+}
+
 }  // namespace drivetrain_stiffness

@@ -98,12 +98,7 @@ void StiffnessEstimatorRos::onTorque(const geometry_msgs::WrenchStamped::ConstPt
   if (accepted && dynamics_) advanceDynamics(msg->header.stamp, msg->wrench.torque.z);
 }
 
-std::array<double, 2> StiffnessEstimatorRos::shaftBearingStiffness() const {
-  std::array<double, 2> k{{0.0, 0.0}};
-  const StiffnessEstimate& e = estimator_->current();
-  for (std::size_t i = 0; i < e.supports.size(); ++i) k[estimator_->rig().bearings[i].shaft] += e.supports[i].solution.radialStiffness();
-  return k;
-}
+std::array<double, 2> StiffnessEstimatorRos::shaftBearingStiffness() const { return estimator_->shaftRadialStiffness(); }
 
 void StiffnessEstimatorRos::advanceDynamics(const ros::Time& stamp, double torque) {
   try {

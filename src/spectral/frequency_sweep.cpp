@@ -23,9 +23,8 @@ SweepOutput torqueSweep(const RigConfig& rig, const SweepSpec& spec) {
   const DynamicsConfig& d = rig.dynamics;
   auto mesh = std::make_shared<AntiBacklashMesh>(rig.gears, rig.anti_backlash, rig.mesh_model, rig.mesh_samples);
   StiffnessEstimator estimator(rig);
-  const StiffnessEstimate& e = estimator.setTorque(d.torque);
-  std::array<double, 2> kb{{0.0, 0.0}};
-  for (std::size_t i = 0; i < e.supports.size(); ++i) kb[rig.bearings[i].shaft] += e.supports[i].solution.radialStiffness();
+  estimator.setTorque(d.torque);
+  const std::array<double, 2> kb = estimator.shaftRadialStiffness();
   const GearRotorParameters p = rigRotorParameters(rig, *mesh, kb);
 
   // One output step for the whole sweep (the record is one signal for the spectrum): at least 20

@@ -81,9 +81,8 @@ StudyTable bearingSurface(const RigConfig& rig, bool shrink) {
 /// Natural frequencies at the mean composite mesh stiffness (the linear modes of seed 000 eq 15-18)
 /// with the bearing stiffness of each shaft summed over its supports.
 std::vector<double> resonanceRow(double x, StiffnessEstimator& estimator, const RigConfig& rig, const Settings& s) {
-  const StiffnessEstimate& e = solveAt(estimator, rig, s);
-  std::array<double, 2> kb{{0.0, 0.0}};
-  for (std::size_t i = 0; i < e.supports.size(); ++i) kb[rig.bearings[i].shaft] += e.supports[i].solution.radialStiffness();
+  solveAt(estimator, rig, s);
+  const std::array<double, 2> kb = estimator.shaftRadialStiffness();
   const double km = meanMeshStiffness(estimator.mesh());
   const std::array<Mode, 3> modes = modalAnalysis(rigRotorParameters(rig, estimator.mesh(), kb), km);
   std::vector<double> row{x, kb[0], kb[1], km};

@@ -223,9 +223,8 @@ int runModes(const ModesArgs& args) {
     for (auto& b : rig.bearings) b.axial_preload = *args.preload;
   }
   ds::StiffnessEstimator estimator(rig);
-  const ds::StiffnessEstimate& e = estimator.setTorque(args.torque);
-  std::array<double, 2> kb{{0.0, 0.0}};
-  for (std::size_t i = 0; i < e.supports.size(); ++i) kb[rig.bearings[i].shaft] += e.supports[i].solution.radialStiffness();
+  estimator.setTorque(args.torque);
+  const std::array<double, 2> kb = estimator.shaftRadialStiffness();
   const ds::AntiBacklashMesh& mesh = estimator.mesh();
   const double force = ds::meshForce(rig.gears, 0, args.torque);
   double k_min = INFINITY, k_max = 0.0;

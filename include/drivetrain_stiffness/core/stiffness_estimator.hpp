@@ -66,6 +66,9 @@ class StiffnessEstimator {
   const StiffnessEstimate& reset();
 
   const StiffnessEstimate& current() const { return estimate_; }
+  /// Current radial stiffness per shaft (pinion, gear) [N/m]: the supports of each shaft in
+  /// parallel, as the 3-DOF model's k_r1, k_r2 (seed 000 eq 15).
+  std::array<double, 2> shaftRadialStiffness() const;
   const RigConfig& rig() const { return rig_; }
   const AntiBacklashMesh& mesh() const { return mesh_; }
 
