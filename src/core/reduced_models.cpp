@@ -60,6 +60,13 @@ struct ShaftPropagator {
 
 }  // namespace
 
+Fidelity parseFidelity(const std::string& field, const std::string& text) {
+  if (text == "full") return Fidelity::kFull;
+  if (text == "quasi_static") return Fidelity::kQuasiStatic;
+  if (text == "linear_modal") return Fidelity::kLinearModal;
+  throw InvalidInput(field + " = '" + text + "': must be 'full', 'quasi_static' or 'linear_modal'");
+}
+
 const char* toString(Fidelity f) {
   switch (f) {
     case Fidelity::kFull: return "full";

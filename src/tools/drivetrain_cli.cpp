@@ -176,7 +176,7 @@ int runSimulate(const SimulateArgs& args) {
   };
   nlohmann::json chosen = nullptr;
   if (reduced) {
-    ds::integrateReduced(*scene.model, args.method == "quasi_static" ? ds::Fidelity::kQuasiStatic : ds::Fidelity::kLinearModal,
+    ds::integrateReduced(*scene.model, ds::parseFidelity("--method", args.method),
                          0.0, scene.initial, scene.duration, scene.output_interval, observe);
   } else if (automatic) {
     const double pilot = std::min(scene.duration, 40.0 * scene.output_interval);
@@ -278,10 +278,7 @@ struct SweepArgs {
 int runTorqueSweep(const SweepArgs& args) {
   const ds::RigConfig rig = ds::loadRigFile(args.config);
   ds::SweepSpec spec = args.spec;
-  if (args.fidelity == "full") spec.fidelity = ds::Fidelity::kFull;
-  else if (args.fidelity == "linear_modal") spec.fidelity = ds::Fidelity::kLinearModal;
-  else if (args.fidelity == "quasi_static") spec.fidelity = ds::Fidelity::kQuasiStatic;
-  else throw ds::InvalidInput("--fidelity = '" + args.fidelity + "': must be full, linear_modal or quasi_static");
+  spec.fidelity = ds::parseFidelity("--fidelity", args.fidelity);
   if (args.direction == "up") spec.direction = ds::SweepDirection::kUp;
   else if (args.direction == "down") spec.direction = ds::SweepDirection::kDown;
   else if (args.direction == "both") spec.direction = ds::SweepDirection::kBoth;

@@ -7,6 +7,7 @@
 #include "drivetrain_stiffness/config/yaml_config.hpp"
 #include "drivetrain_stiffness/core/reduced_models.hpp"
 #include "drivetrain_stiffness/core/scenes.hpp"
+#include "drivetrain_stiffness/core/validation.hpp"
 
 using namespace drivetrain_stiffness;
 
@@ -146,4 +147,16 @@ TEST(ReducedModels, ShortPilotStillCompares) {
   const AutoChoice c = chooseAutomatically(*s.model, 0.0, s.initial, s.output_interval, 0.3 * s.output_interval, 1e-9);
   EXPECT_NE(c.fidelity, Fidelity::kQuasiStatic);  // once chosen on the start state alone
   EXPECT_GE(c.pilot_duration, 4 * s.output_interval * (1 - 1e-12));
+}
+
+// The names the CLI accepts are the names toString prints, and a wrong one is named in the error.
+TEST(ReducedModels, ParseFidelityRoundTripsAndNamesTheField) {
+  for (Fidelity f : {Fidelity::kFull, Fidelity::kQuasiStatic, Fidelity::kLinearModal})
+    EXPECT_EQ(parseFidelity("--fidelity", toString(f)), f);
+  try {
+    parseFidelity("--fidelity", "modal");
+    FAIL() << "no throw";
+  } catch (const InvalidInput& e) {
+    EXPECT_NE(std::string(e.what()).find("--fidelity = 'modal'"), std::string::npos) << e.what();
+  }
 }

@@ -21,6 +21,8 @@ namespace drivetrain_stiffness {
 
 enum class Fidelity { kFull, kQuasiStatic, kLinearModal };
 const char* toString(Fidelity f);
+/// "full", "quasi_static" or "linear_modal"; anything else throws InvalidInput naming `field`.
+Fidelity parseFidelity(const std::string& field, const std::string& text);
 
 /// Integrates a reduced fidelity (the model must use a RigExcitation) on the output grid.
 State6 integrateReduced(const GearRotorModel& model, Fidelity fidelity, double t0, const State6& y0, double t_end,
