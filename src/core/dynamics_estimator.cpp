@@ -74,6 +74,16 @@ void DynamicsEstimator::setBearingStiffness(const std::array<double, 2>& k) {
   build();
 }
 
+void DynamicsEstimator::setDamping(double mesh_damping_ratio, double bearing_damping_ratio) {
+  requireNonNegative("mesh_damping_ratio", mesh_damping_ratio);
+  requireNonNegative("bearing_damping_ratio", bearing_damping_ratio);
+  rig_.dynamics.mesh_damping_ratio = mesh_damping_ratio;
+  rig_.dynamics.bearing_damping_ratio = bearing_damping_ratio;
+  build();  // keeps state, origin and sample index, as setBearingStiffness does
+}
+
+void DynamicsEstimator::setFidelity(Fidelity fidelity) { fidelity_ = fidelity; }
+
 bool DynamicsEstimator::floquetMargin(double* margin) const {
   if (!propagator_) return false;
   const Eigen::Matrix<std::complex<double>, 6, 1> mu = Eigen::EigenSolver<Matrix6>(propagator_->monodromy(), false).eigenvalues();
@@ -112,6 +122,18 @@ void DynamicsEstimator::advanceTo(double t, const std::function<void(const Dynam
   }
   const long k_end = k_ + static_cast<long>(samples);
   const double torque = *torque_;
+  if (fidelity_ != Fidelity::kFull && k_end > k_) {
+    // Reduced fidelities run on the same grid; the observer's first call is the start state.
+    const long k0 = k_;
+    y_ = integrateReduced(*model_, fidelity_, k0 * interval_, y_, k_end * interval_, interval_,
+                          [&](double t_rel, const State6& y) {
+                            if (t_rel <= k0 * interval_) return;
+                            ++k_;
+                            if (sink) sink(sample(t_rel, y));
+                          });
+    k_ = k_end;
+    return;
+  }
   while (k_ < k_end) {
     const double t_k = k_ * interval_, t_next = (k_ + 1) * interval_;
     bool done = false;

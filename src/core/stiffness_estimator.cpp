@@ -12,6 +12,8 @@ StiffnessEstimator::StiffnessEstimator(const RigConfig& rig, const EstimatorLimi
   requirePositive("max_abs_torque", limits.max_abs_torque);
   requirePositive("max_preload", limits.max_preload);
   requirePositive("max_interference", limits.max_interference);
+  requireNonNegative("load_tolerance", limits.load_tolerance);
+  if (limits.load_tolerance > 0.1) throwInvalid("load_tolerance", limits.load_tolerance, "must be <= 0.1");
   if (rig.bearings.empty()) throw InvalidInput("bearings: at least one support is required");
   // Period means of k1 and k_chain, computed once: they decide the flank state of the mean
   // stiffness (the table itself is fixed until the gear parameters change).
@@ -66,6 +68,13 @@ StiffnessEstimate StiffnessEstimator::solveAll(double torque, double pinion_angl
     load[kUx] = e.radial_load;
     // Warm start from the previous solution of the same support when its model is unchanged.
     const bool warm = i < estimate_.supports.size() && i < supports_.size() && supports_[i].model == s.model;
+    if (warm && limits_.load_tolerance > 0.0 && supports_[i].config.radial_preload == s.config.radial_preload) {
+      const SupportEstimate& last = estimate_.supports[i];
+      if (std::abs(e.radial_load - last.radial_load) <= limits_.load_tolerance * (last.radial_load + s.config.axial_preload)) {
+        next.supports.push_back(last);  // the solution and the load it was solved for
+        continue;
+      }
+    }
     const Vector5d* start = warm ? &estimate_.supports[i].solution.displacement : nullptr;
     try {
       e.solution = s.model->solve(load, start);

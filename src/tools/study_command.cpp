@@ -1,11 +1,7 @@
 #include "study_command.hpp"
 
-#include <spawn.h>
-#include <sys/wait.h>
-#include <unistd.h>
+#include "python_script.hpp"  // NOLINT(build/include_subdir)
 
-#include <cerrno>
-#include <cstring>
 #include <filesystem>
 #include <iostream>
 #include <nlohmann/json.hpp>
@@ -15,48 +11,7 @@
 #include "drivetrain_stiffness/core/validation.hpp"
 #include "drivetrain_stiffness/studies/parameter_studies.hpp"
 
-extern char** environ;
-
 namespace drivetrain_stiffness {
-namespace {
-
-/// Runs `python3 script csv png` without a shell (paths are passed verbatim, never interpreted).
-/// Debian's /usr/bin/python3 first: a pyenv python earlier on PATH usually lacks matplotlib. The
-/// script's stdout goes to our stderr, so it cannot corrupt the JSON on stdout.
-void plot(const std::string& script, const std::string& csv, const std::string& png) {
-  const std::string python = ::access("/usr/bin/python3", X_OK) == 0 ? "/usr/bin/python3" : "python3";
-  std::vector<std::string> argv_s{python, script, csv, png};
-  std::vector<char*> argv;
-  for (std::string& a : argv_s) argv.push_back(a.data());
-  argv.push_back(nullptr);
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  posix_spawn_file_actions_adddup2(&actions, STDERR_FILENO, STDOUT_FILENO);
-  pid_t pid = 0;
-  const int rc = posix_spawnp(&pid, python.c_str(), &actions, nullptr, argv.data(), environ);
-  posix_spawn_file_actions_destroy(&actions);
-  if (rc != 0) throw InvalidInput("--plot-script: cannot start " + python + ": " + std::strerror(rc));
-  int status = 0;
-  pid_t waited = 0;
-  do {
-    waited = waitpid(pid, &status, 0);
-  } while (waited < 0 && errno == EINTR);
-  if (waited < 0 || !WIFEXITED(status) || WEXITSTATUS(status) != 0)
-    throw InvalidInput("--plot-script = '" + script + "' failed for '" + csv +
-                       "' (the CSV is written; install python3-matplotlib or use --no-png)");
-}
-
-/// The compiled-in script (source tree), else the installed copy next to this executable.
-std::string findPlotScript(const std::string& configured) {
-  namespace fs = std::filesystem;
-  std::error_code ec;
-  if (fs::exists(configured, ec)) return configured;
-  const fs::path beside = fs::read_symlink("/proc/self/exe", ec).parent_path() / "plot_study.py";
-  if (!ec && fs::exists(beside, ec)) return beside.string();
-  return configured;  // the error names the configured path
-}
-
-}  // namespace
 
 int runStudyCommand(const StudyArgs& args) {
   const RigConfig rig = loadRigFile(args.config);
@@ -71,7 +26,7 @@ int runStudyCommand(const StudyArgs& args) {
   nlohmann::json png = nullptr;
   if (args.png) {
     const std::string path = args.out + "/" + table.name + ".png";
-    plot(findPlotScript(args.plot_script), csv, path);
+    runPythonScript("--plot-script", findScript(args.plot_script, "plot_study.py"), {csv, path});
     png = path;
   }
   nlohmann::json first = nlohmann::json::object(), last = nlohmann::json::object();

@@ -15,6 +15,7 @@
 #include <memory>
 
 #include "drivetrain_stiffness/core/exponential_integrator.hpp"
+#include "drivetrain_stiffness/core/reduced_models.hpp"
 #include "drivetrain_stiffness/core/rig_config.hpp"
 
 namespace drivetrain_stiffness {
@@ -47,6 +48,12 @@ class DynamicsEstimator {
   void setTorque(double torque);
   /// Rebuilds the model (and the propagators) when a stiffness changes by more than 1 %.
   void setBearingStiffness(const std::array<double, 2>& k);
+  /// Damping ratios of the dynamics block (mesh, bearings); the model is rebuilt, the state kept.
+  void setDamping(double mesh_damping_ratio, double bearing_damping_ratio);
+  /// full: exact-exponential / dopri5; quasi_static and linear_modal: reduced_models.hpp. The
+  /// state carries over (a reduced model starts from the full state at the switch).
+  void setFidelity(Fidelity fidelity);
+  Fidelity fidelity() const { return fidelity_; }
 
   bool started() const { return started_; }
   double time() const { return origin_ + k_ * interval_; }  ///< time of the current state
@@ -76,6 +83,7 @@ class DynamicsEstimator {
   long k_ = 0;
   State6 y_ = State6::Zero();
   bool started_ = false;
+  Fidelity fidelity_ = Fidelity::kFull;
   long rebuilds_ = 0, fallback_intervals_ = 0;
 };
 

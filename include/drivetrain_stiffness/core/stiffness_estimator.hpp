@@ -29,6 +29,10 @@ struct EstimatorLimits {
   double max_abs_torque = 100.0;       ///< [N·m]
   double max_preload = 1e5;            ///< [N]
   double max_interference = 1e-3;      ///< [m]
+  /// [-] A support is re-solved only when its radial load moved by more than this fraction of its
+  /// total load (radial + axial preload) since its last solve; 0 = every update. Ball-contact
+  /// stiffness grows as Q^(1/3) (Hertz), so the stiffness lags the exact one by about tol / 3.
+  double load_tolerance = 0.0;
 };
 
 struct SupportEstimate {

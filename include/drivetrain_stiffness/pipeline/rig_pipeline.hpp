@@ -1,0 +1,167 @@
+// The online estimation pipeline, free of ROS: what the node, the nodelet and the bag replay tool
+// all run. It takes the rig's inputs (torque, preload) with their stamps and the caller's clock,
+// applies the time and value rules below, keeps the bearing and mesh stiffness up to date
+// (StiffnessEstimator), integrates the 3-DOF dynamics between torque inputs (DynamicsEstimator),
+// refreshes the resonance estimate and the sliding TE spectrum, and hands every output to a sink.
+// It never reads a clock: stamps and "now" are arguments, so a replay with the recorded stamps is
+// bit-identical to the live run that saw the same inputs in the same order.
+//
+// Time rules (docs/ros_interface.md §Time):
+//  1. A zero stamp is rejected (the publisher forgot to stamp; its time is unknown).
+//  2. A torque stamp earlier than the last accepted one by at most ~stamp_jump_back is out of order:
+//     rejected (the dynamics cannot integrate backwards). Earlier by more: the source restarted
+//     (a looping or re-recorded bag): full reset, then the input is accepted.
+//  3. Equal stamps (a burst) are accepted: no time passes; the last torque is the one held.
+//  4. A forward gap longer than ~max_gap restarts the dynamics at the new input.
+//  5. The caller's clock (ROS time, or the bag's record time in the replay) going back by more
+//     than ~clock_jump_back resets everything (tf2's and robot_localization's rule for looped bags).
+//  6. Preload stamps follow rules 1, 2 and 5 on their own stream; an older preload never overrides
+//     a newer one.
+// Value rules: NaN, Inf, negative and absurd values are rejected by the core classes
+// (InvalidInput naming the field); the state is left as it was. Every input is counted.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "drivetrain_stiffness/core/dynamics_estimator.hpp"
+#include "drivetrain_stiffness/core/modal_analysis.hpp"
+#include "drivetrain_stiffness/core/reduced_models.hpp"
+#include "drivetrain_stiffness/core/stiffness_estimator.hpp"
+#include "drivetrain_stiffness/spectral/sliding_spectrum.hpp"
+
+namespace drivetrain_stiffness {
+
+/// A time stamp as integer nanoseconds since the epoch of the caller's clock. Differences are
+/// exact (a double at 1.7e9 s only resolves 2.4e-7 s); toSec() equals ros::Time::toSec().
+struct Stamp {
+  std::int64_t ns = 0;
+  static Stamp fromSecNsec(std::int64_t sec, std::int64_t nsec) { return {sec * 1000000000LL + nsec}; }
+  std::int64_t sec() const { return ns / 1000000000LL; }
+  std::int64_t nsec() const { return ns % 1000000000LL; }
+  double toSec() const { return static_cast<double>(sec()) + 1e-9 * static_cast<double>(nsec()); }
+  bool isZero() const { return ns == 0; }
+};
+inline bool operator<(Stamp a, Stamp b) { return a.ns < b.ns; }
+inline bool operator==(Stamp a, Stamp b) { return a.ns == b.ns; }
+/// Exact difference a - b [s].
+inline double secondsBetween(Stamp a, Stamp b) { return Stamp{a.ns - b.ns}.toSec(); }
+
+/// Settings of the pipeline (the node's private parameters). validate() names the field and value.
+struct PipelineOptions {
+  EstimatorLimits limits = onlineLimits();  ///< limits.load_tolerance: ~bearing_load_tolerance
+  static EstimatorLimits onlineLimits() {
+    EstimatorLimits l;
+    // 1e-3 of the support load: the stiffness lags by ~3e-4, far inside the 1 % at which the
+    // dynamics rebuild and the resonance republishes; ripple no longer re-solves every bearing.
+    l.load_tolerance = 1e-3;
+    return l;
+  }
+  bool dynamics = true;              ///< integrate the 3-DOF model (needs the gearbox's dynamics block)
+  Fidelity fidelity = Fidelity::kFull;
+  double output_rate = 1000.0;       ///< [Hz] transmission_error rate, rounded to divide the mesh period
+  double max_gap = 1.0;              ///< [s] a longer forward input gap restarts the dynamics
+  double stamp_jump_back = 1.0;      ///< [s] a stamp further back than this restarts everything
+  double clock_jump_back = 0.0;      ///< [s] the clock going back by more than this resets everything
+  double resonance_threshold = 0.01; ///< [-] relative frequency change that republishes resonance
+  int spectrum_window = 1024;        ///< [samples] TE spectrum window
+  int spectrum_hop = 256;            ///< [samples] between spectra
+  double pinion_speed_rpm = 1000.0;  ///< [rpm] nominal speed for the mesh phase
+  double stiffness_rate = 0.0;       ///< [Hz] largest stiffness output rate; 0 = every accepted input
+  void validate() const;
+};
+
+/// The resonance estimate at an operating point.
+struct ResonanceEstimate {
+  std::array<Mode, 3> modes;
+  bool floquet_valid = false;
+  double floquet_margin = 0.0;  ///< 1 - max |Floquet multiplier| (0 when not valid)
+};
+
+/// Receives the pipeline's outputs; every method is optional.
+class PipelineSink {
+ public:
+  virtual ~PipelineSink() = default;
+  /// After an accepted input (throttled to ~stiffness_rate); stamp = the input's.
+  virtual void stiffness(Stamp /*stamp*/, const StiffnessEstimate& /*estimate*/) {}
+  /// One transmission-error sample on the output grid (its time is sample.t, seconds).
+  virtual void transmissionError(const DynamicsSample& /*sample*/) {}
+  /// New TE spectrum peaks; stamp of the newest sample in the window (sample.t of that sample).
+  virtual void spectrum(double /*t*/, const SlidingSpectrum& /*spectrum*/) {}
+  /// The resonance estimate moved by more than the threshold (or after a reset); stamp = the input's.
+  virtual void resonance(Stamp /*stamp*/, const ResonanceEstimate& /*estimate*/) {}
+};
+
+/// Why an input was not accepted (kAccepted otherwise).
+enum class InputOutcome { kAccepted, kZeroStamp, kOutOfOrder, kInvalidValue, kUnreachableLoad };
+const char* toString(InputOutcome outcome);
+
+/// Counters of everything the pipeline saw; nothing is dropped without being counted here.
+struct PipelineCounters {
+  std::uint64_t accepted_torque = 0, rejected_torque = 0;
+  std::uint64_t accepted_preload = 0, rejected_preload = 0;
+  std::uint64_t zero_stamps = 0, out_of_order = 0, invalid_values = 0, unreachable_loads = 0;
+  std::uint64_t clock_resets = 0, stamp_resets = 0, gap_restarts = 0;
+  std::uint64_t dynamics_errors = 0;
+  std::uint64_t stiffness_out = 0, stiffness_coalesced = 0;  ///< published, and skipped by ~stiffness_rate
+  std::uint64_t te_out = 0, spectra_out = 0, resonance_out = 0;
+  std::uint64_t modal_updates = 0;  ///< modal analyses actually run (see RigPipeline::updateResonance)
+  double simulated_s = 0.0;         ///< model time integrated
+  std::string last_event;           ///< last rejection or reset, with its reason
+};
+
+class RigPipeline {
+ public:
+  /// Throws InvalidInput naming the field for an invalid rig or option.
+  RigPipeline(const RigConfig& rig, const PipelineOptions& options);
+
+  /// The caller's clock (ROS time now, or the bag's record time). Returns true if it went back
+  /// by more than ~clock_jump_back and everything was reset.
+  bool observeClock(Stamp now, PipelineSink& sink);
+  InputOutcome torque(Stamp stamp, double torque, PipelineSink& sink);
+  InputOutcome preload(Stamp stamp, const std::vector<PreloadSetting>& settings, PipelineSink& sink);
+  /// Back to the configured preloads, zero torque, dynamics restarted at the next torque input.
+  void reset(const std::string& reason);
+
+  /// Run-time settings (dynamic_reconfigure). Validated; the dynamics keep their state.
+  void setDamping(double mesh_damping_ratio, double bearing_damping_ratio);
+  void setFidelity(Fidelity fidelity);
+  void setStiffnessRate(double hz);
+
+  const PipelineCounters& counters() const { return counters_; }
+  const PipelineOptions& options() const { return options_; }
+  const StiffnessEstimator& estimator() const { return *estimator_; }
+  const DynamicsEstimator* dynamics() const { return dynamics_.get(); }
+  const RigConfig& rig() const { return rig_; }
+  const std::optional<ResonanceEstimate>& lastResonance() const { return last_resonance_; }
+  /// Nominal pinion angle since the dynamics origin at `stamp` [rad] (the gear angle is not measured).
+  double pinionAngle(Stamp stamp) const;
+
+ private:
+  InputOutcome reject(InputOutcome why, const std::string& topic, const std::string& reason, std::uint64_t& rejected);
+  /// Rules 1, 2 and 5 for one stream; returns kAccepted or the rejection (counted by the caller).
+  InputOutcome checkStamp(Stamp stamp, std::optional<Stamp>& last, const std::string& topic, PipelineSink& sink);
+  void afterUpdate(Stamp stamp, const StiffnessEstimate& estimate, PipelineSink& sink);
+  void advanceDynamics(Stamp stamp, double torque, PipelineSink& sink);
+  void updateResonance(Stamp stamp, const StiffnessEstimate& estimate, PipelineSink& sink);
+  void dynamicsError(const std::string& where, const std::exception& e);
+
+  RigConfig rig_;
+  PipelineOptions options_;
+  std::unique_ptr<StiffnessEstimator> estimator_;
+  std::unique_ptr<DynamicsEstimator> dynamics_;
+  std::unique_ptr<SlidingSpectrum> te_spectrum_;
+  PipelineCounters counters_;
+  std::optional<Stamp> last_torque_, last_preload_, last_clock_, last_stiffness_out_;
+  std::optional<Stamp> angle_origin_;
+  double pinion_speed_ = 0.0;  ///< [rad/s]
+  std::optional<ResonanceEstimate> last_resonance_;
+  /// Spring stiffnesses (bearing per shaft, mean mesh) at the last published resonance.
+  std::array<double, 3> springs_at_resonance_{};
+};
+
+}  // namespace drivetrain_stiffness

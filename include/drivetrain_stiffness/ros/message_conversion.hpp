@@ -1,0 +1,23 @@
+// Conversions from the ROS-free pipeline's outputs to this package's messages, shared by the node,
+// the nodelet and the bag replay tool so that all three publish exactly the same fields.
+#pragma once
+
+#include <ros/time.h>
+
+#include "drivetrain_stiffness/Resonance.h"
+#include "drivetrain_stiffness/SpectralPeaks.h"
+#include "drivetrain_stiffness/Stiffness.h"
+#include "drivetrain_stiffness/TransmissionError.h"
+#include "drivetrain_stiffness/pipeline/rig_pipeline.hpp"
+
+namespace drivetrain_stiffness {
+
+inline ros::Time toRosTime(Stamp s) { return ros::Time(static_cast<std::uint32_t>(s.sec()), static_cast<std::uint32_t>(s.nsec())); }
+inline Stamp fromRosTime(const ros::Time& t) { return Stamp::fromSecNsec(t.sec, t.nsec); }
+
+drivetrain_stiffness::Stiffness toStiffnessMsg(Stamp stamp, const std::string& frame_id, const StiffnessEstimate& estimate);
+drivetrain_stiffness::TransmissionError toTransmissionErrorMsg(const std::string& frame_id, const DynamicsSample& s);
+drivetrain_stiffness::SpectralPeaks toSpectralPeaksMsg(double t, const std::string& frame_id, const SlidingSpectrum& spectrum);
+drivetrain_stiffness::Resonance toResonanceMsg(Stamp stamp, const std::string& frame_id, const ResonanceEstimate& r);
+
+}  // namespace drivetrain_stiffness

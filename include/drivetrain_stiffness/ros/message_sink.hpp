@@ -1,0 +1,53 @@
+// The pipeline's outputs as ROS messages: converts each output (message_conversion.hpp), adds the
+// tf frames and rviz markers at ~tf_rate (decided on sample time, so a replay makes the same
+// choices as the live node), and hands everything to emit*(), which the node implements by
+// publishing and the replay tool by writing a bag and CSV files.
+#pragma once
+
+#include <optional>
+#include <vector>
+
+#include <geometry_msgs/TransformStamped.h>
+#include <visualization_msgs/MarkerArray.h>
+
+#include "drivetrain_stiffness/ros/message_conversion.hpp"
+#include "drivetrain_stiffness/ros/rig_visualization.hpp"
+
+namespace drivetrain_stiffness {
+
+struct OutputSettings {
+  VisualizationFrames frames;
+  double exaggeration = 2e4;  ///< display scale of displacements [-], >= 1
+  double tf_rate = 30.0;      ///< [Hz] tf and marker rate (on sample time); 0 = none
+};
+
+class MessageSink : public PipelineSink {
+ public:
+  /// The pipeline supplies the rig geometry, the nominal pinion angle and the last resonance.
+  MessageSink(const RigPipeline& pipeline, const OutputSettings& settings);
+
+  void stiffness(Stamp stamp, const StiffnessEstimate& estimate) override;
+  void transmissionError(const DynamicsSample& sample) override;
+  void spectrum(double t, const SlidingSpectrum& spectrum) override;
+  void resonance(Stamp stamp, const ResonanceEstimate& estimate) override;
+
+  void setExaggeration(double exaggeration);  ///< InvalidInput if < 1
+  void setTfRate(double hz);                  ///< InvalidInput if negative
+  const OutputSettings& settings() const { return settings_; }
+
+ protected:
+  virtual void emitStiffness(const drivetrain_stiffness::Stiffness& msg) = 0;
+  virtual void emitTransmissionError(const drivetrain_stiffness::TransmissionError& msg) = 0;
+  virtual void emitSpectrum(const drivetrain_stiffness::SpectralPeaks& msg) = 0;
+  virtual void emitResonance(const drivetrain_stiffness::Resonance& msg) = 0;
+  virtual void emitTransforms(const std::vector<geometry_msgs::TransformStamped>& transforms) = 0;
+  virtual void emitMarkers(const visualization_msgs::MarkerArray& markers) = 0;
+
+ private:
+  const RigPipeline& pipeline_;
+  OutputSettings settings_;
+  RigVisualizer visualizer_;
+  std::optional<double> last_tf_t_;
+};
+
+}  // namespace drivetrain_stiffness

@@ -1,0 +1,64 @@
+// The node's private parameters, read the same way from the ROS parameter server (the node and
+// nodelet) and from the same YAML file loaded by hand (drivetrain_replay --params), so both run
+// the pipeline with identical settings. `get(name, fallback)` returns the value or the fallback
+// and throws InvalidInput naming the parameter when it has the wrong type.
+#pragma once
+
+#include <string>
+
+#include "drivetrain_stiffness/core/validation.hpp"
+#include "drivetrain_stiffness/pipeline/rig_pipeline.hpp"
+#include "drivetrain_stiffness/ros/message_sink.hpp"
+
+namespace drivetrain_stiffness {
+
+template <typename Get>
+PipelineOptions readPipelineOptions(const Get& get, const RigConfig& rig) {
+  PipelineOptions o;
+  o.limits.max_abs_torque = get("max_abs_torque", o.limits.max_abs_torque);
+  o.limits.max_preload = get("max_preload", o.limits.max_preload);
+  o.limits.max_interference = get("max_interference", o.limits.max_interference);
+  o.limits.load_tolerance = get("bearing_load_tolerance", o.limits.load_tolerance);
+  o.dynamics = get("dynamics", rig.dynamics.present);
+  o.fidelity = parseFidelity("~fidelity", get("fidelity", std::string("full")));
+  o.output_rate = get("output_rate", o.output_rate);
+  o.max_gap = get("max_gap", o.max_gap);
+  o.stamp_jump_back = get("stamp_jump_back", o.stamp_jump_back);
+  o.clock_jump_back = get("clock_jump_back", o.clock_jump_back);
+  o.resonance_threshold = get("resonance_threshold", o.resonance_threshold);
+  o.spectrum_window = get("spectrum_window", o.spectrum_window);
+  o.spectrum_hop = get("spectrum_hop", o.spectrum_hop);
+  // One speed for both mesh phases (stiffness and dynamics): the dynamics block's, unless overridden.
+  o.pinion_speed_rpm = get("pinion_speed_rpm", rig.dynamics.present ? rig.dynamics.speed_rpm : 1000.0);
+  o.stiffness_rate = get("stiffness_rate", o.stiffness_rate);
+  try {
+    o.validate();
+  } catch (const InvalidInput& e) {
+    throw InvalidInput(std::string("parameter ~") + e.what());
+  }
+  return o;
+}
+
+template <typename Get>
+OutputSettings readOutputSettings(const Get& get) {
+  OutputSettings s;
+  s.frames.rig = get("rig_frame", s.frames.rig);
+  s.frames.pinion = get("pinion_frame", s.frames.pinion);
+  s.frames.gear = get("gear_frame", s.frames.gear);
+  for (const std::string* f : {&s.frames.rig, &s.frames.pinion, &s.frames.gear}) {
+    if (f->empty() || f->front() == '/') {
+      throw InvalidInput("parameter ~*_frame = '" + *f + "': must be a non-empty frame id without a leading '/'");
+    }
+  }
+  s.exaggeration = get("exaggeration", s.exaggeration);
+  if (!(s.exaggeration >= 1.0 && s.exaggeration <= 1e8)) {
+    throw InvalidInput("parameter ~exaggeration = " + formatValue(s.exaggeration) + ": must be in [1, 1e8]");
+  }
+  s.tf_rate = get("tf_rate", s.tf_rate);
+  if (!(s.tf_rate >= 0.0 && s.tf_rate <= 1000.0)) {
+    throw InvalidInput("parameter ~tf_rate = " + formatValue(s.tf_rate) + ": must be in [0, 1000] Hz");
+  }
+  return s;
+}
+
+}  // namespace drivetrain_stiffness

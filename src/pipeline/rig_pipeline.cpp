@@ -1,0 +1,286 @@
+#include "drivetrain_stiffness/pipeline/rig_pipeline.hpp"
+
+#include <cmath>
+
+#include "drivetrain_stiffness/core/scenes.hpp"
+#include "drivetrain_stiffness/core/validation.hpp"
+
+namespace drivetrain_stiffness {
+namespace {
+constexpr double kTwoPi = 6.283185307179586;
+}
+
+const char* toString(InputOutcome outcome) {
+  switch (outcome) {
+    case InputOutcome::kAccepted: return "accepted";
+    case InputOutcome::kZeroStamp: return "zero stamp";
+    case InputOutcome::kOutOfOrder: return "out of order";
+    case InputOutcome::kInvalidValue: return "invalid value";
+    case InputOutcome::kUnreachableLoad: return "unreachable load";
+  }
+  return "?";
+}
+
+void PipelineOptions::validate() const {
+  requirePositive("max_abs_torque", limits.max_abs_torque);
+  requirePositive("max_preload", limits.max_preload);
+  requirePositive("max_interference", limits.max_interference);
+  requireNonNegative("bearing_load_tolerance", limits.load_tolerance);
+  if (limits.load_tolerance > 0.1) {
+    throw InvalidInput("bearing_load_tolerance = " + formatValue(limits.load_tolerance) + ": must be <= 0.1");
+  }
+  requirePositive("output_rate", output_rate);
+  if (output_rate > 1e6) throw InvalidInput("output_rate = " + formatValue(output_rate) + ": must be <= 1e6 Hz");
+  requirePositive("max_gap", max_gap);
+  requireNonNegative("stamp_jump_back", stamp_jump_back);
+  requireNonNegative("clock_jump_back", clock_jump_back);
+  requirePositive("resonance_threshold", resonance_threshold);
+  if (resonance_threshold >= 1.0) {
+    throw InvalidInput("resonance_threshold = " + formatValue(resonance_threshold) + ": must be < 1 (relative)");
+  }
+  if (spectrum_window < 8 || spectrum_window > (1 << 20)) {
+    throw InvalidInput("spectrum_window = " + std::to_string(spectrum_window) + ": must be in [8, 1048576] samples");
+  }
+  if (spectrum_hop < 1 || spectrum_hop > spectrum_window) {
+    throw InvalidInput("spectrum_hop = " + std::to_string(spectrum_hop) + ": must be in [1, spectrum_window]");
+  }
+  requireFinite("pinion_speed_rpm", pinion_speed_rpm);
+  if (std::abs(pinion_speed_rpm) > 1e5) {
+    throw InvalidInput("pinion_speed_rpm = " + formatValue(pinion_speed_rpm) + ": must be within +-1e5 rpm");
+  }
+  requireNonNegative("stiffness_rate", stiffness_rate);
+}
+
+RigPipeline::RigPipeline(const RigConfig& rig, const PipelineOptions& options) : rig_(rig), options_(options) {
+  options_.validate();
+  estimator_ = std::make_unique<StiffnessEstimator>(rig_, options_.limits);
+  pinion_speed_ = options_.pinion_speed_rpm * kTwoPi / 60.0;
+  if (options_.dynamics) {
+    dynamics_ = std::make_unique<DynamicsEstimator>(rig_, estimator_->shaftRadialStiffness(), options_.output_rate);
+    dynamics_->setFidelity(options_.fidelity);
+    te_spectrum_ = std::make_unique<SlidingSpectrum>(options_.spectrum_window, options_.spectrum_hop,
+                                                     dynamics_->outputInterval(), 3);
+  }
+}
+
+void RigPipeline::reset(const std::string& reason) {
+  estimator_->reset();
+  if (te_spectrum_) te_spectrum_->reset();
+  // The dynamics restart at the next torque input (DynamicsEstimator::reset needs its time).
+  if (dynamics_) dynamics_ = std::make_unique<DynamicsEstimator>(rig_, estimator_->shaftRadialStiffness(), options_.output_rate);
+  if (dynamics_) dynamics_->setFidelity(options_.fidelity);
+  last_torque_.reset();
+  last_preload_.reset();
+  last_stiffness_out_.reset();
+  angle_origin_.reset();
+  last_resonance_.reset();  // the next accepted input republishes the resonance
+  counters_.last_event = "reset: " + reason;
+}
+
+bool RigPipeline::observeClock(Stamp now, PipelineSink& /*sink*/) {
+  const bool back = last_clock_ && secondsBetween(*last_clock_, now) > options_.clock_jump_back;
+  if (back) {
+    ++counters_.clock_resets;
+    reset("clock went back from " + formatValue(last_clock_->toSec()) + " s to " + formatValue(now.toSec()) + " s");
+  }
+  last_clock_ = now;
+  return back;
+}
+
+InputOutcome RigPipeline::reject(InputOutcome why, const std::string& topic, const std::string& reason,
+                                 std::uint64_t& rejected) {
+  ++rejected;
+  switch (why) {
+    case InputOutcome::kZeroStamp: ++counters_.zero_stamps; break;
+    case InputOutcome::kOutOfOrder: ++counters_.out_of_order; break;
+    case InputOutcome::kInvalidValue: ++counters_.invalid_values; break;
+    case InputOutcome::kUnreachableLoad: ++counters_.unreachable_loads; break;
+    case InputOutcome::kAccepted: break;
+  }
+  counters_.last_event = topic + " rejected (" + toString(why) + "): " + reason;
+  return why;
+}
+
+InputOutcome RigPipeline::checkStamp(Stamp stamp, std::optional<Stamp>& last, const std::string& topic,
+                                     PipelineSink& /*sink*/) {
+  if (stamp.isZero()) return InputOutcome::kZeroStamp;
+  if (last && stamp < *last) {
+    const double back = secondsBetween(*last, stamp);
+    if (back <= options_.stamp_jump_back) return InputOutcome::kOutOfOrder;
+    ++counters_.stamp_resets;
+    reset(topic + " stamp went back by " + formatValue(back) + " s (more than ~stamp_jump_back): source restarted");
+  }
+  return InputOutcome::kAccepted;
+}
+
+double RigPipeline::pinionAngle(Stamp stamp) const {
+  return angle_origin_ ? pinion_speed_ * secondsBetween(stamp, *angle_origin_) : 0.0;
+}
+
+InputOutcome RigPipeline::torque(Stamp stamp, double torque, PipelineSink& sink) {
+  const InputOutcome time_ok = checkStamp(stamp, last_torque_, "torque", sink);
+  if (time_ok != InputOutcome::kAccepted) {
+    return reject(time_ok, "torque", "stamp " + formatValue(stamp.toSec()) + " s", counters_.rejected_torque);
+  }
+  // The mesh phase counts from the first torque input after a (re)start, as the dynamics do.
+  if (!angle_origin_) angle_origin_ = stamp;
+  try {
+    const StiffnessEstimate& estimate = estimator_->setTorque(torque, pinionAngle(stamp));
+    ++counters_.accepted_torque;
+    last_torque_ = stamp;
+    afterUpdate(stamp, estimate, sink);
+  } catch (const InvalidInput& e) {
+    return reject(InputOutcome::kInvalidValue, "torque", e.what(), counters_.rejected_torque);
+  } catch (const UnreachableLoad& e) {
+    return reject(InputOutcome::kUnreachableLoad, "torque", e.what(), counters_.rejected_torque);
+  }
+  if (dynamics_) advanceDynamics(stamp, torque, sink);
+  return InputOutcome::kAccepted;
+}
+
+InputOutcome RigPipeline::preload(Stamp stamp, const std::vector<PreloadSetting>& settings, PipelineSink& sink) {
+  const InputOutcome time_ok = checkStamp(stamp, last_preload_, "preload", sink);
+  if (time_ok != InputOutcome::kAccepted) {
+    return reject(time_ok, "preload", "stamp " + formatValue(stamp.toSec()) + " s", counters_.rejected_preload);
+  }
+  try {
+    const StiffnessEstimate& estimate = estimator_->setPreloads(settings);
+    ++counters_.accepted_preload;
+    last_preload_ = stamp;
+    afterUpdate(stamp, estimate, sink);
+  } catch (const InvalidInput& e) {
+    return reject(InputOutcome::kInvalidValue, "preload", e.what(), counters_.rejected_preload);
+  } catch (const UnreachableLoad& e) {
+    return reject(InputOutcome::kUnreachableLoad, "preload", e.what(), counters_.rejected_preload);
+  }
+  return InputOutcome::kAccepted;
+}
+
+void RigPipeline::afterUpdate(Stamp stamp, const StiffnessEstimate& estimate, PipelineSink& sink) {
+  // Coalescing by stamp, not by wall time, so a replay coalesces exactly as the live node did.
+  const bool due = options_.stiffness_rate <= 0.0 || !last_stiffness_out_ || stamp < *last_stiffness_out_ ||
+                   secondsBetween(stamp, *last_stiffness_out_) >= 1.0 / options_.stiffness_rate;
+  if (due) {
+    sink.stiffness(stamp, estimate);
+    last_stiffness_out_ = stamp;
+    ++counters_.stiffness_out;
+  } else {
+    ++counters_.stiffness_coalesced;
+  }
+  if (!dynamics_) return;
+  // Every accepted input hands the new bearing stiffness to the dynamics (rebuilt only when it
+  // moved by more than 1 %), then the resonance estimate is refreshed.
+  try {
+    dynamics_->setBearingStiffness(estimator_->shaftRadialStiffness());
+  } catch (const std::exception& e) {
+    dynamicsError("dynamics", e);
+  }
+  updateResonance(stamp, estimate, sink);
+}
+
+void RigPipeline::dynamicsError(const std::string& where, const std::exception& e) {
+  ++counters_.dynamics_errors;
+  counters_.last_event = where + ": " + e.what();
+}
+
+void RigPipeline::advanceDynamics(Stamp stamp, double torque, PipelineSink& sink) {
+  const double t = stamp.toSec();
+  try {
+    const bool gap = dynamics_->started() && t - dynamics_->time() > options_.max_gap;
+    if (!dynamics_->started() || gap) {
+      // Rule 4: a paused rig restarts the model at this input instead of integrating the gap.
+      if (gap) {
+        ++counters_.gap_restarts;
+        counters_.last_event = "input gap of " + formatValue(t - dynamics_->time()) + " s (more than ~max_gap): dynamics restarted";
+      }
+      dynamics_->reset(t, torque);
+      te_spectrum_->reset();  // a new window: no samples from before the restart
+      angle_origin_ = stamp;  // the stiffness message's mesh phase restarts with the dynamics
+      return;
+    }
+    const double from = dynamics_->time();
+    dynamics_->advanceTo(t, [&](const DynamicsSample& s) {
+      sink.transmissionError(s);
+      ++counters_.te_out;
+      if (te_spectrum_->push(s.dynamic_te)) {
+        sink.spectrum(s.t, *te_spectrum_);
+        ++counters_.spectra_out;
+      }
+    });
+    counters_.simulated_s += dynamics_->time() - from;
+  } catch (const std::exception& e) {
+    dynamicsError("dynamics", e);
+  }
+  try {
+    dynamics_->setTorque(torque);  // the new torque holds from here on, whatever happened above
+  } catch (const std::exception& e) {
+    dynamicsError("dynamics", e);
+  }
+}
+
+void RigPipeline::updateResonance(Stamp stamp, const StiffnessEstimate& estimate, PipelineSink& sink) {
+  try {
+    const std::array<double, 2> kb = estimator_->shaftRadialStiffness();
+    const std::array<double, 3> springs{kb[0], kb[1], estimate.mesh.mean};
+    // Skip the modal analysis when it cannot change the decision: K = sum k_i B_i with B_i >= 0,
+    // so springs within a factor (1 +- eps) of those at the last publication bound every
+    // eigenvalue omega^2 within the same factor (Courant-Fischer), and each frequency within
+    // sqrt(1 +- eps), i.e. closer than eps = ~resonance_threshold: no republication would follow.
+    if (last_resonance_) {
+      bool within = true;
+      for (int i = 0; i < 3 && within; ++i) {
+        within = std::abs(springs[i] - springs_at_resonance_[i]) <= options_.resonance_threshold * springs_at_resonance_[i];
+      }
+      if (within) return;
+    }
+    const GearRotorParameters p = rigRotorParameters(rig_, estimator_->mesh(), kb);
+    ResonanceEstimate r;
+    r.modes = modalAnalysis(p, estimate.mesh.mean);
+    ++counters_.modal_updates;
+    bool moved = !last_resonance_;
+    for (std::size_t i = 0; !moved && i < r.modes.size(); ++i) {
+      const double last = last_resonance_->modes[i].natural_frequency;
+      moved = std::abs(r.modes[i].natural_frequency - last) > options_.resonance_threshold * last;
+    }
+    if (!moved) return;
+    for (const Mode& m : r.modes) {
+      if (!std::isfinite(m.natural_frequency) || !std::isfinite(m.damping_ratio) || !std::isfinite(m.damped_frequency)) {
+        throw InvalidInput("resonance: a modal result is not finite (not published)");  // never NaN on a topic
+      }
+    }
+    double margin = 0.0;
+    r.floquet_valid = dynamics_->floquetMargin(&margin) && std::isfinite(margin);
+    r.floquet_margin = r.floquet_valid ? margin : 0.0;
+    last_resonance_ = r;
+    springs_at_resonance_ = springs;
+    sink.resonance(stamp, r);
+    ++counters_.resonance_out;
+  } catch (const std::exception& e) {
+    dynamicsError("resonance", e);
+  }
+}
+
+void RigPipeline::setDamping(double mesh_damping_ratio, double bearing_damping_ratio) {
+  requireNonNegative("mesh_damping_ratio", mesh_damping_ratio);
+  requireNonNegative("bearing_damping_ratio", bearing_damping_ratio);
+  if (mesh_damping_ratio > 1.0 || bearing_damping_ratio > 1.0) {
+    throw InvalidInput("damping ratios (" + formatValue(mesh_damping_ratio) + ", " + formatValue(bearing_damping_ratio) +
+                       "): must be <= 1");
+  }
+  rig_.dynamics.mesh_damping_ratio = mesh_damping_ratio;
+  rig_.dynamics.bearing_damping_ratio = bearing_damping_ratio;
+  if (dynamics_) dynamics_->setDamping(mesh_damping_ratio, bearing_damping_ratio);
+  last_resonance_.reset();  // damped frequencies and ratios changed: republish at the next input
+}
+
+void RigPipeline::setFidelity(Fidelity fidelity) {
+  options_.fidelity = fidelity;
+  if (dynamics_) dynamics_->setFidelity(fidelity);
+}
+
+void RigPipeline::setStiffnessRate(double hz) {
+  requireNonNegative("stiffness_rate", hz);
+  options_.stiffness_rate = hz;
+}
+
+}  // namespace drivetrain_stiffness

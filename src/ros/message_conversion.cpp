@@ -1,0 +1,97 @@
+#include "drivetrain_stiffness/ros/message_conversion.hpp"
+
+namespace drivetrain_stiffness {
+
+drivetrain_stiffness::Stiffness toStiffnessMsg(Stamp stamp, const std::string& frame_id, const StiffnessEstimate& estimate) {
+  drivetrain_stiffness::Stiffness out;
+  out.header.stamp = toRosTime(stamp);
+  out.header.frame_id = frame_id;
+  out.torque = estimate.torque;
+  out.mesh_force = estimate.mesh_force;
+  out.mesh_phase = estimate.mesh.phase;
+  out.mesh_stiffness = estimate.mesh.current.composite;
+  out.mesh_stiffness_mean = estimate.mesh.mean;
+  out.mesh_stiffness_drive = estimate.mesh.current.k1;
+  out.mesh_stiffness_back = estimate.mesh.current.k2;
+  out.drive_flank_loaded = estimate.mesh.current.contact != FlankContact::kBackOnly;
+  out.back_flank_loaded = estimate.mesh.current.contact != FlankContact::kDriveOnly;
+  for (const SupportEstimate& s : estimate.supports) {
+    drivetrain_stiffness::BearingStiffness b;
+    const BearingSolution& sol = s.solution;
+    b.name = s.name;
+    b.radial_stiffness = sol.radialStiffness();
+    b.axial_stiffness = sol.axialStiffness();
+    b.tilt_stiffness = sol.tiltStiffness();
+    b.radial_load = s.radial_load;
+    b.axial_load = s.axial_load;
+    b.radial_displacement = sol.displacement[kUx];
+    b.axial_displacement = sol.displacement[kUz];
+    b.max_contact_pressure = sol.max_contact_pressure;
+    b.balls_in_contact = static_cast<std::uint32_t>(sol.balls_in_contact);
+    b.iterations = static_cast<std::uint32_t>(sol.iterations);
+    for (int i = 0; i < 5; ++i)
+      for (int j = 0; j < 5; ++j) b.stiffness_matrix[5 * i + j] = sol.stiffness(i, j);
+    out.bearings.push_back(b);
+  }
+  // Flat copies of the first two supports (pinion side, gear side), for rqt_plot and PlotJuggler.
+  if (!estimate.supports.empty()) out.radial_stiffness_0 = out.bearings[0].radial_stiffness;
+  if (estimate.supports.size() > 1) out.radial_stiffness_1 = out.bearings[1].radial_stiffness;
+  return out;
+}
+
+drivetrain_stiffness::TransmissionError toTransmissionErrorMsg(const std::string& frame_id, const DynamicsSample& s) {
+  drivetrain_stiffness::TransmissionError m;
+  m.header.stamp = ros::Time(s.t);
+  m.header.frame_id = frame_id;
+  m.dynamic_te = s.dynamic_te;
+  m.static_te = s.static_te;
+  m.x_p = s.state[0];
+  m.x_g = s.state[1];
+  m.x = s.state[2];
+  m.mesh_force = s.mesh_force;
+  m.mesh_phase = s.phase;
+  m.torque = s.torque;
+  m.drive_flank_loaded = s.drive_flank_loaded;
+  m.back_flank_loaded = s.back_flank_loaded;
+  return m;
+}
+
+drivetrain_stiffness::SpectralPeaks toSpectralPeaksMsg(double t, const std::string& frame_id, const SlidingSpectrum& spectrum) {
+  drivetrain_stiffness::SpectralPeaks peaks;
+  peaks.header.stamp = ros::Time(t);
+  peaks.header.frame_id = frame_id;
+  for (const SpectralPeak& p : spectrum.peaks()) {
+    peaks.frequencies_hz.push_back(p.frequency);
+    peaks.amplitudes.push_back(p.amplitude);
+  }
+  // Flat copies of the strongest peak, for plotting tools that do not index arrays.
+  if (!spectrum.peaks().empty()) {
+    peaks.peak_frequency_hz = spectrum.peaks().front().frequency;
+    peaks.peak_amplitude = spectrum.peaks().front().amplitude;
+  }
+  peaks.window_s = spectrum.windowSeconds();
+  peaks.resolution_hz = spectrum.resolution();
+  return peaks;
+}
+
+drivetrain_stiffness::Resonance toResonanceMsg(Stamp stamp, const std::string& frame_id, const ResonanceEstimate& r) {
+  drivetrain_stiffness::Resonance msg;
+  msg.header.stamp = toRosTime(stamp);
+  msg.header.frame_id = frame_id;
+  for (const Mode& m : r.modes) {
+    msg.frequencies_hz.push_back(m.natural_frequency);
+    msg.damped_frequencies_hz.push_back(m.damped_frequency);
+    msg.damping_ratios.push_back(m.damping_ratio);
+    msg.dominant_coordinate.push_back(m.dominant);
+  }
+  msg.f1_hz = r.modes[0].natural_frequency;
+  msg.f2_hz = r.modes[1].natural_frequency;
+  msg.f3_hz = r.modes[2].natural_frequency;
+  msg.floquet_valid = r.floquet_valid;
+  msg.floquet_margin = r.floquet_margin;
+  msg.source = "modal: bearing model at this load, mean composite mesh stiffness of the flank state; "
+               "Floquet: exact monodromy of the mesh period";
+  return msg;
+}
+
+}  // namespace drivetrain_stiffness

@@ -1,0 +1,174 @@
+// drivetrain_replay: offline analysis of a recorded bag with the node's own pipeline (RigPipeline,
+// the same class the stiffness_estimator node runs). Reads torque and preload with rosbag::View in
+// record-time order, feeds them with their recorded stamps at full speed (no master, no /clock;
+// the record time plays the role of the node's ROS clock for the clock-jump rule), and writes the
+// node's output topics to a bag, CSV files and a short report with plots. Identical inputs give
+// bit-identical outputs (nothing depends on the wall clock except the printed speed).
+//   drivetrain_replay --bag rig.bag --config config/gearboxes/seed_servo.yaml --out out.bag --report report/
+#include <CLI/CLI.hpp>
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <nlohmann/json.hpp>
+
+#include <geometry_msgs/WrenchStamped.h>
+#include <rosbag/view.h>
+#include <yaml-cpp/yaml.h>
+
+#include "drivetrain_stiffness/Preload.h"
+#include "drivetrain_stiffness/config/yaml_config.hpp"
+#include "drivetrain_stiffness/ros/node_parameters.hpp"
+#include "python_script.hpp"  // NOLINT(build/include_subdir)
+#include "replay_writer.hpp"  // NOLINT(build/include_subdir)
+
+namespace drivetrain_stiffness {
+namespace {
+
+/// The node's parameter file (config/stiffness_estimator.yaml) read as the node would see it.
+class YamlParams {
+ public:
+  explicit YamlParams(const std::string& path) {
+    if (path.empty()) return;
+    try {
+      root_ = YAML::LoadFile(path);
+    } catch (const YAML::Exception& e) {
+      throw InvalidInput("--params = '" + path + "': " + e.what());
+    }
+    if (!root_.IsMap() && !root_.IsNull()) throw InvalidInput("--params = '" + path + "': not a map of parameters");
+  }
+  template <typename T>
+  T operator()(const std::string& name, const T& fallback) const {
+    if (!root_.IsMap() || !root_[name]) return fallback;
+    try {
+      return root_[name].as<T>();
+    } catch (const YAML::Exception&) {
+      throw InvalidInput("parameter ~" + name + ": has the wrong type");
+    }
+  }
+
+ private:
+  YAML::Node root_;
+};
+
+bool topicMatches(const std::string& topic, const std::string& wanted) {
+  return topic == wanted || topic == "/" + wanted || "/" + topic == wanted;
+}
+
+void ensureDirectory(const std::string& option, const std::string& dir) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec || !std::filesystem::is_directory(dir)) throw InvalidInput(option + " = '" + dir + "': not a directory and cannot be created");
+}
+
+nlohmann::json countersJson(const PipelineCounters& c) {
+  return {{"accepted_torque", c.accepted_torque},     {"rejected_torque", c.rejected_torque},
+          {"accepted_preload", c.accepted_preload},   {"rejected_preload", c.rejected_preload},
+          {"rejected_zero_stamp", c.zero_stamps},     {"rejected_out_of_order", c.out_of_order},
+          {"rejected_invalid_value", c.invalid_values}, {"unreachable_loads", c.unreachable_loads},
+          {"clock_jump_resets", c.clock_resets},      {"stamp_jump_resets", c.stamp_resets},
+          {"gap_restarts", c.gap_restarts},           {"dynamics_errors", c.dynamics_errors},
+          {"stiffness_published", c.stiffness_out},   {"stiffness_coalesced", c.stiffness_coalesced},
+          {"transmission_error_published", c.te_out}, {"te_spectra_published", c.spectra_out},
+          {"resonance_published", c.resonance_out},   {"modal_updates", c.modal_updates},
+          {"simulated_s", c.simulated_s},             {"last_event", c.last_event}};
+}
+
+int run(int argc, char** argv) {
+  CLI::App app{"Replays a recorded bag through the stiffness estimator's pipeline (no master needed)"};
+  std::string bag_path, config, params, out_bag, csv_dir, report_dir, torque_topic = "torque", preload_topic = "preload";
+  std::string plot_script = DRIVETRAIN_PLOT_REPLAY_SCRIPT;
+  bool plots = true;
+  app.add_option("--bag", bag_path, "Recorded bag with the rig's torque and preload")->required();
+  app.add_option("--config", config, "Gearbox YAML, as the node's ~gearbox_config")->required();
+  app.add_option("--params", params, "The node's parameter YAML (e.g. config/stiffness_estimator.yaml)");
+  app.add_option("--out", out_bag, "Bag to write with the node's output topics");
+  app.add_option("--csv", csv_dir, "Directory for one CSV file per output topic");
+  app.add_option("--report", report_dir, "Directory for summary.json, report.md and PNG plots (CSV in DIR/csv unless --csv)");
+  app.add_option("--torque-topic", torque_topic, "geometry_msgs/WrenchStamped, torque.z [N*m]");
+  app.add_option("--preload-topic", preload_topic, "drivetrain_stiffness/Preload");
+  app.add_option("--plot-script", plot_script, "matplotlib script: CSV_DIR OUT_DIR");
+  app.add_flag("!--no-plots", plots, "Write the report without PNG plots");
+  CLI11_PARSE(app, argc, argv);
+
+  const RigConfig rig = loadRigFile(config);
+  const YamlParams get(params);
+  RigPipeline pipeline(rig, readPipelineOptions(get, rig));
+  if (!report_dir.empty()) {
+    ensureDirectory("--report", report_dir);
+    if (csv_dir.empty()) csv_dir = report_dir + "/csv";
+  }
+  if (!csv_dir.empty()) ensureDirectory("--csv", csv_dir);
+
+  rosbag::Bag in;
+  try {
+    in.open(bag_path, rosbag::bagmode::Read);
+  } catch (const rosbag::BagException& e) {
+    throw InvalidInput("--bag = '" + bag_path + "': " + e.what());
+  }
+  ReplayWriter writer(pipeline, readOutputSettings(get), out_bag, csv_dir);
+  rosbag::View view(in, [&](const rosbag::ConnectionInfo* c) {
+    return topicMatches(c->topic, torque_topic) || topicMatches(c->topic, preload_topic);
+  });
+  std::uint64_t messages = 0, wrong_type = 0;
+  std::optional<ros::Time> first, last;
+  const auto start = std::chrono::steady_clock::now();  // only for the printed speed
+  for (const rosbag::MessageInstance& m : view) {
+    ++messages;
+    if (!first) first = m.getTime();
+    last = m.getTime();
+    pipeline.observeClock(fromRosTime(m.getTime()), writer);
+    if (topicMatches(m.getTopic(), torque_topic)) {
+      if (auto w = m.instantiate<geometry_msgs::WrenchStamped>()) {
+        pipeline.torque(fromRosTime(w->header.stamp), w->wrench.torque.z, writer);
+        continue;
+      }
+    } else if (auto p = m.instantiate<drivetrain_stiffness::Preload>()) {
+      std::vector<PreloadSetting> settings;
+      for (const auto& b : p->bearings) {
+        settings.push_back({b.name, b.axial_preload, b.radial_preload, b.inner_interference, b.outer_interference});
+      }
+      pipeline.preload(fromRosTime(p->header.stamp), settings, writer);
+      continue;
+    }
+    ++wrong_type;  // counted and reported, never silently skipped
+  }
+  writer.close();
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const double span = first ? (*last - *first).toSec() : 0.0;
+
+  nlohmann::json summary;
+  summary["bag"] = bag_path;
+  summary["messages"] = messages;
+  summary["wrong_type"] = wrong_type;
+  summary["span_s"] = span;
+  summary["counters"] = countersJson(pipeline.counters());
+  if (const auto& r = pipeline.lastResonance()) {
+    for (const Mode& mode : r->modes) summary["final_resonance_hz"].push_back(mode.natural_frequency);
+    summary["final_floquet_margin"] = r->floquet_valid ? nlohmann::json(r->floquet_margin) : nlohmann::json(nullptr);
+  }
+  for (const SupportEstimate& s : pipeline.estimator().current().supports) {
+    summary["final_radial_stiffness"][s.name] = s.solution.radialStiffness();
+  }
+  // Speed: separate from the outputs above, which must stay identical between runs.
+  nlohmann::json speed = {{"wall_s", wall}, {"realtime_factor", wall > 0.0 ? span / wall : 0.0}};
+  if (!report_dir.empty()) {
+    std::ofstream(report_dir + "/summary.json") << summary.dump(2) << "\n";
+    if (plots) runPythonScript("--plot-script", findScript(plot_script, "plot_replay.py"), {csv_dir, report_dir, bag_path});
+  }
+  summary["speed"] = speed;
+  std::cout << summary.dump(2) << std::endl;
+  return wrong_type > 0 ? 3 : 0;
+}
+
+}  // namespace
+}  // namespace drivetrain_stiffness
+
+int main(int argc, char** argv) {
+  try {
+    return drivetrain_stiffness::run(argc, argv);
+  } catch (const std::exception& e) {
+    std::cerr << "drivetrain_replay: " << e.what() << "\n";
+    return 1;
+  }
+}

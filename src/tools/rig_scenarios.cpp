@@ -1,0 +1,102 @@
+#include "rig_scenarios.hpp"  // NOLINT(build/include_subdir)
+
+#include <cmath>
+#include <limits>
+
+#include "drivetrain_stiffness/core/validation.hpp"
+
+namespace drivetrain_stiffness {
+namespace {
+constexpr double kTwoPi = 6.283185307179586;
+
+std::vector<PreloadSetting> preloadOfAll(const RigConfig& rig, double axial) {
+  std::vector<PreloadSetting> out;
+  for (const BearingSupportConfig& b : rig.bearings) {
+    out.push_back({b.name, axial, b.radial_preload, b.interference.inner, b.interference.outer});
+  }
+  return out;
+}
+
+double configuredAxial(const RigConfig& rig) { return rig.bearings.empty() ? 0.0 : rig.bearings.front().axial_preload; }
+
+}  // namespace
+
+std::string scenarioHelp() {
+  return "torque_ripple: mean torque (gearbox dynamics.torque) with 6th and 12th shaft-order ripple (5 % and 2 %) at "
+         "the nominal speed, preload re-sent at 1 Hz\n"
+         "torque_steps: 0.05, 0.1, 0.2, -0.1 (reversal onto the anti-backlash flank) and 0.1 N*m, equal dwell\n"
+         "preload_ramp: axial preload of every support ramped 200 -> 2000 N at 10 Hz, constant torque\n"
+         "speed_sweep: mesh-order torque ripple (5 %) whose frequency sweeps 5 -> 11 kHz, through the transverse "
+         "modes (use --rate >= 25000)\n"
+         "faults: torque_ripple with a NaN, an Inf, an absurd torque, a zero stamp, an out-of-order stamp, a burst of "
+         "equal stamps and a 2 s jump back of the stamps (a looped recording) injected\n";
+}
+
+std::vector<RigEvent> makeScenario(const RigConfig& rig, const ScenarioSpec& spec) {
+  requirePositive("duration", spec.duration);
+  requirePositive("rate", spec.torque_rate);
+  const long n = std::lround(spec.duration * spec.torque_rate);
+  if (n < 2 || n > 100000000) throw InvalidInput("duration * rate = " + std::to_string(n) + ": must be in [2, 1e8] samples");
+  const double dt = 1.0 / spec.torque_rate;
+  const double mean = rig.dynamics.present ? rig.dynamics.torque : 0.1;  // seed 000 Table 1: 0.1 N*m
+  const double shaft_hz = (rig.dynamics.present ? rig.dynamics.speed_rpm : 1000.0) / 60.0;
+  std::vector<RigEvent> events;
+  const std::string& s = spec.name;
+  auto ripple = [&](double t) {
+    // Servo motors ripple at multiples of six per electrical revolution; with one pole pair
+    // that is the 6th and 12th shaft order.
+    return mean * (1.0 + 0.05 * std::sin(kTwoPi * 6.0 * shaft_hz * t) + 0.02 * std::sin(kTwoPi * 12.0 * shaft_hz * t));
+  };
+  if (s == "torque_ripple" || s == "faults") {
+    for (long k = 0; k < n; ++k) {
+      const double t = k * dt;
+      if (k % std::max(1L, std::lround(spec.torque_rate)) == 0) events.push_back({t, std::nullopt, preloadOfAll(rig, configuredAxial(rig))});
+      events.push_back({t, ripple(t), {}});
+    }
+    if (s == "faults") {
+      // Injected after the clean stream, each at its own time, so every rule is visible in the counters.
+      const double nan = std::numeric_limits<double>::quiet_NaN(), inf = std::numeric_limits<double>::infinity();
+      const double t1 = 0.25 * spec.duration;
+      events.push_back({t1 + 0.1 * dt, nan, {}});
+      events.push_back({t1 + 0.2 * dt, inf, {}});
+      events.push_back({t1 + 0.3 * dt, 1e6, {}});                    // absurd (over max_abs_torque)
+      events.push_back({t1 + 0.4 * dt, mean, {}, true});             // zero stamp
+      events.push_back({t1 + 0.5 * dt, mean, {}, false, -0.5});      // 0.5 s late: out of order
+      for (int i = 0; i < 5; ++i) events.push_back({t1 + 0.6 * dt, mean, {}, false, 0.0});  // burst, equal stamps
+      std::vector<PreloadSetting> bad = preloadOfAll(rig, -100.0);   // negative preload
+      events.push_back({t1 + 0.7 * dt, std::nullopt, bad});
+      // From 3/4 on, the stamps run 2 s behind (a recording that looped): one reset, then accepted.
+      for (RigEvent& e : events) {
+        if (e.t >= 0.75 * spec.duration && !e.zero_stamp) e.stamp_offset -= 2.0;
+      }
+    }
+  } else if (s == "torque_steps") {
+    const double levels[] = {0.5, 1.0, 2.0, -1.0, 1.0};
+    events.push_back({0.0, std::nullopt, preloadOfAll(rig, configuredAxial(rig))});
+    for (long k = 0; k < n; ++k) {
+      const int step = std::min<int>(4, static_cast<int>(5 * k / n));
+      events.push_back({k * dt, mean * levels[step], {}});
+    }
+  } else if (s == "preload_ramp") {
+    const long every = std::max(1L, std::lround(spec.torque_rate / 10.0));
+    for (long k = 0; k < n; ++k) {
+      const double t = k * dt;
+      if (k % every == 0) events.push_back({t, std::nullopt, preloadOfAll(rig, 200.0 + 1800.0 * t / spec.duration)});
+      events.push_back({t, mean, {}});
+    }
+  } else if (s == "speed_sweep") {
+    // Linear chirp 5 -> 11 kHz: phase = 2 pi (f0 t + (f1 - f0) t^2 / (2 T)).
+    const double f0 = 5000.0, f1 = 11000.0;
+    events.push_back({0.0, std::nullopt, preloadOfAll(rig, configuredAxial(rig))});
+    for (long k = 0; k < n; ++k) {
+      const double t = k * dt;
+      const double phase = kTwoPi * (f0 * t + 0.5 * (f1 - f0) * t * t / spec.duration);
+      events.push_back({t, mean * (1.0 + 0.05 * std::sin(phase)), {}});
+    }
+  } else {
+    throw InvalidInput("scenario = '" + s + "': unknown; one of:\n" + scenarioHelp());
+  }
+  return events;
+}
+
+}  // namespace drivetrain_stiffness
