@@ -1,0 +1,1 @@
+# Soak test and latency tool: filled in by the load-test work.

@@ -1,0 +1,1 @@
+# Replay, scenario, launch and rviz tests.
