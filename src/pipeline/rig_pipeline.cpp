@@ -184,8 +184,8 @@ void RigPipeline::dynamicsError(const std::string& where, const std::exception& 
 }
 
 void RigPipeline::advanceDynamics(Stamp stamp, double torque, PipelineSink& sink) {
-  const double t = stamp.toSec();
   try {
+    const double t = dynamics_->started() ? secondsBetween(stamp, dynamics_epoch_) : 0.0;
     const bool gap = dynamics_->started() && t - dynamics_->time() > options_.max_gap;
     if (!dynamics_->started() || gap) {
       // Rule 4: a paused rig restarts the model at this input instead of integrating the gap.
@@ -193,17 +193,21 @@ void RigPipeline::advanceDynamics(Stamp stamp, double torque, PipelineSink& sink
         ++counters_.gap_restarts;
         counters_.last_event = "input gap of " + formatValue(t - dynamics_->time()) + " s (more than ~max_gap): dynamics restarted";
       }
-      dynamics_->reset(t, torque);
+      dynamics_epoch_ = stamp;
+      dynamics_->reset(0.0, torque);
       te_spectrum_->reset();  // a new window: no samples from before the restart
       angle_origin_ = stamp;  // the stiffness message's mesh phase restarts with the dynamics
       return;
     }
     const double from = dynamics_->time();
-    dynamics_->advanceTo(t, [&](const DynamicsSample& s) {
-      sink.transmissionError(s);
+    dynamics_->advanceTo(t, [&](const DynamicsSample& relative) {
+      DynamicsSample s = relative;
+      const Stamp sample_stamp{dynamics_epoch_.ns + std::llround(relative.t * 1e9)};
+      s.t = sample_stamp.toSec();
+      sink.transmissionError(sample_stamp, s);
       ++counters_.te_out;
       if (te_spectrum_->push(s.dynamic_te)) {
-        sink.spectrum(s.t, *te_spectrum_);
+        sink.spectrum(sample_stamp, *te_spectrum_);
         ++counters_.spectra_out;
       }
     });

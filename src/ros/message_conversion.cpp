@@ -39,9 +39,9 @@ drivetrain_stiffness::Stiffness toStiffnessMsg(Stamp stamp, const std::string& f
   return out;
 }
 
-drivetrain_stiffness::TransmissionError toTransmissionErrorMsg(const std::string& frame_id, const DynamicsSample& s) {
+drivetrain_stiffness::TransmissionError toTransmissionErrorMsg(Stamp stamp, const std::string& frame_id, const DynamicsSample& s) {
   drivetrain_stiffness::TransmissionError m;
-  m.header.stamp = ros::Time(s.t);
+  m.header.stamp = toRosTime(stamp);
   m.header.frame_id = frame_id;
   m.dynamic_te = s.dynamic_te;
   m.static_te = s.static_te;
@@ -56,9 +56,9 @@ drivetrain_stiffness::TransmissionError toTransmissionErrorMsg(const std::string
   return m;
 }
 
-drivetrain_stiffness::SpectralPeaks toSpectralPeaksMsg(double t, const std::string& frame_id, const SlidingSpectrum& spectrum) {
+drivetrain_stiffness::SpectralPeaks toSpectralPeaksMsg(Stamp stamp, const std::string& frame_id, const SlidingSpectrum& spectrum) {
   drivetrain_stiffness::SpectralPeaks peaks;
-  peaks.header.stamp = ros::Time(t);
+  peaks.header.stamp = toRosTime(stamp);
   peaks.header.frame_id = frame_id;
   for (const SpectralPeak& p : spectrum.peaks()) {
     peaks.frequencies_hz.push_back(p.frequency);

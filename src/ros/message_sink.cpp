@@ -36,18 +36,18 @@ void MessageSink::stiffness(Stamp stamp, const StiffnessEstimate& estimate) {
   emitStiffness(toStiffnessMsg(stamp, settings_.frames.rig, estimate));
 }
 
-void MessageSink::transmissionError(const DynamicsSample& sample) {
-  emitTransmissionError(toTransmissionErrorMsg(settings_.frames.pinion, sample));
+void MessageSink::transmissionError(Stamp stamp, const DynamicsSample& sample) {
+  emitTransmissionError(toTransmissionErrorMsg(stamp, settings_.frames.pinion, sample));
   if (settings_.tf_rate <= 0.0) return;
-  if (last_tf_t_ && sample.t >= *last_tf_t_ && sample.t - *last_tf_t_ < 1.0 / settings_.tf_rate) return;
-  last_tf_t_ = sample.t;
-  const Stamp stamp{static_cast<std::int64_t>(std::llround(sample.t * 1e9))};
-  emitTransforms(visualizer_.transforms(sample, pipeline_.pinionAngle(stamp)));
-  emitMarkers(visualizer_.markers(sample, pipeline_.lastResonance()));
+  // Decided on sample stamps, so a replay draws the same frames as the live node.
+  if (last_tf_ && !(stamp < *last_tf_) && secondsBetween(stamp, *last_tf_) < 1.0 / settings_.tf_rate) return;
+  last_tf_ = stamp;
+  emitTransforms(visualizer_.transforms(toRosTime(stamp), sample, pipeline_.pinionAngle(stamp)));
+  emitMarkers(visualizer_.markers(toRosTime(stamp), sample, pipeline_.lastResonance()));
 }
 
-void MessageSink::spectrum(double t, const SlidingSpectrum& spectrum) {
-  emitSpectrum(toSpectralPeaksMsg(t, settings_.frames.pinion, spectrum));
+void MessageSink::spectrum(Stamp stamp, const SlidingSpectrum& spectrum) {
+  emitSpectrum(toSpectralPeaksMsg(stamp, settings_.frames.pinion, spectrum));
 }
 
 void MessageSink::resonance(Stamp stamp, const ResonanceEstimate& estimate) {

@@ -58,8 +58,8 @@ void RigVisualizer::setExaggeration(double exaggeration) {
   exaggeration_ = exaggeration;
 }
 
-std::vector<geometry_msgs::TransformStamped> RigVisualizer::transforms(const DynamicsSample& s, double pinion_angle) const {
-  const ros::Time stamp(s.t);
+std::vector<geometry_msgs::TransformStamped> RigVisualizer::transforms(const ros::Time& stamp, const DynamicsSample& s,
+                                                                      double pinion_angle) const {
   std::vector<geometry_msgs::TransformStamped> out(2);
   // Pinion: transverse displacement x_p along the line of action; nominal rotation.
   out[0].header.stamp = stamp;
@@ -79,9 +79,8 @@ std::vector<geometry_msgs::TransformStamped> RigVisualizer::transforms(const Dyn
   return out;
 }
 
-visualization_msgs::MarkerArray RigVisualizer::markers(const DynamicsSample& s,
+visualization_msgs::MarkerArray RigVisualizer::markers(const ros::Time& stamp, const DynamicsSample& s,
                                                        const std::optional<ResonanceEstimate>& resonance) const {
-  const ros::Time stamp(s.t);
   visualization_msgs::MarkerArray out;
   const std::string* frames[2] = {&frames_.pinion, &frames_.gear};
   const float colours[2][3] = {{0.2f, 0.45f, 0.85f}, {0.6f, 0.6f, 0.62f}};

@@ -73,9 +73,9 @@ StiffnessEstimatorRos::StiffnessEstimatorRos(ros::NodeHandle nh, ros::NodeHandle
   if (queue < 1 || queue > 1000000) {
     throw InvalidInput("~torque_queue_size = " + std::to_string(queue) + ": must be in [1, 1000000]");
   }
-  const double diagnostic_period = readParam(pnh, "diagnostic_period", 1.0);  // read again by the updater
-  if (!(diagnostic_period > 0.0 && diagnostic_period <= 60.0)) {
-    throw InvalidInput("~diagnostic_period = " + formatValue(diagnostic_period) + ": must be in (0, 60] s");
+  diagnostic_period_ = readParam(pnh, "diagnostic_period", diagnostic_period_);
+  if (!(diagnostic_period_ > 0.0 && diagnostic_period_ <= 60.0)) {
+    throw InvalidInput("~diagnostic_period = " + formatValue(diagnostic_period_) + ": must be in (0, 60] s");
   }
 
   // dynamic_reconfigure starts from the parameter server: seed it with the gearbox's damping so the
@@ -162,15 +162,14 @@ void StiffnessEstimatorRos::onDiagnosticTimer() {
     std::lock_guard<std::mutex> lock(mutex_);
     observeClock();  // also while no input arrives (a paused, looping bag)
   }
-  // diagnostic_updater schedules its next run on ROS time: after a jump back it would stay silent
-  // for the length of the jump (robot_localization forces an update in that case too).
-  const ros::Time now = ros::Time::now();
-  if (now < last_diagnostic_clock_) {
+  // diagnostic_updater schedules its runs on ROS time, which stops when a bag ends and jumps back
+  // when it loops (it would then stay silent for the length of the jump; robot_localization forces
+  // an update for the same reason). /diagnostics is about the process, so it runs on wall time.
+  const ros::WallTime wall = ros::WallTime::now();
+  if ((wall - last_diagnostic_wall_).toSec() >= diagnostic_period_) {
+    last_diagnostic_wall_ = wall;
     diagnostics_.force_update();
-  } else {
-    diagnostics_.update();
   }
-  last_diagnostic_clock_ = now;
 }
 
 void StiffnessEstimatorRos::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) {

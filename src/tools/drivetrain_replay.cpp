@@ -84,10 +84,10 @@ int run(int argc, char** argv) {
   app.add_option("--params", params, "The node's parameter YAML (e.g. config/stiffness_estimator.yaml)");
   app.add_option("--out", out_bag, "Bag to write with the node's output topics");
   app.add_option("--csv", csv_dir, "Directory for one CSV file per output topic");
-  app.add_option("--report", report_dir, "Directory for summary.json, report.md and PNG plots (CSV in DIR/csv unless --csv)");
+  app.add_option("--report", report_dir, "Directory for summary.json, report.md and PNG plots (CSV in DIR/csv, outputs in DIR/outputs.bag unless --csv, --out)");
   app.add_option("--torque-topic", torque_topic, "geometry_msgs/WrenchStamped, torque.z [N*m]");
   app.add_option("--preload-topic", preload_topic, "drivetrain_stiffness/Preload");
-  app.add_option("--plot-script", plot_script, "matplotlib script: CSV_DIR OUT_DIR");
+  app.add_option("--plot-script", plot_script, "matplotlib script: OUTPUT_BAG REPORT_DIR INPUT_BAG");
   app.add_flag("!--no-plots", plots, "Write the report without PNG plots");
   CLI11_PARSE(app, argc, argv);
 
@@ -97,6 +97,7 @@ int run(int argc, char** argv) {
   if (!report_dir.empty()) {
     ensureDirectory("--report", report_dir);
     if (csv_dir.empty()) csv_dir = report_dir + "/csv";
+    if (out_bag.empty()) out_bag = report_dir + "/outputs.bag";  // what the report's plots read
   }
   if (!csv_dir.empty()) ensureDirectory("--csv", csv_dir);
 
@@ -154,7 +155,7 @@ int run(int argc, char** argv) {
   nlohmann::json speed = {{"wall_s", wall}, {"realtime_factor", wall > 0.0 ? span / wall : 0.0}};
   if (!report_dir.empty()) {
     std::ofstream(report_dir + "/summary.json") << summary.dump(2) << "\n";
-    if (plots) runPythonScript("--plot-script", findScript(plot_script, "plot_replay.py"), {csv_dir, report_dir, bag_path});
+    if (plots) runPythonScript("--plot-script", findScript(plot_script, "plot_replay.py"), {out_bag, report_dir, bag_path});
   }
   summary["speed"] = speed;
   std::cout << summary.dump(2) << std::endl;

@@ -29,7 +29,7 @@ std::string scenarioHelp() {
          "speed_sweep: mesh-order torque ripple (5 %) whose frequency sweeps 5 -> 11 kHz, through the transverse "
          "modes (use --rate >= 25000)\n"
          "faults: torque_ripple with a NaN, an Inf, an absurd torque, a zero stamp, an out-of-order stamp, a burst of "
-         "equal stamps and a 2 s jump back of the stamps (a looped recording) injected\n";
+         "equal stamps and a jump back of the stamps by 0.6 duration (a looped recording) injected\n";
 }
 
 std::vector<RigEvent> makeScenario(const RigConfig& rig, const ScenarioSpec& spec) {
@@ -65,9 +65,10 @@ std::vector<RigEvent> makeScenario(const RigConfig& rig, const ScenarioSpec& spe
       for (int i = 0; i < 5; ++i) events.push_back({t1 + 0.6 * dt, mean, {}, false, 0.0});  // burst, equal stamps
       std::vector<PreloadSetting> bad = preloadOfAll(rig, -100.0);   // negative preload
       events.push_back({t1 + 0.7 * dt, std::nullopt, bad});
-      // From 3/4 on, the stamps run 2 s behind (a recording that looped): one reset, then accepted.
+      // From 3/4 on, the stamps run 0.6 duration behind (a recording that looped; more than the default
+      // ~stamp_jump_back of 1 s for durations over 1.7 s): one reset, then accepted.
       for (RigEvent& e : events) {
-        if (e.t >= 0.75 * spec.duration && !e.zero_stamp) e.stamp_offset -= 2.0;
+        if (e.t >= 0.75 * spec.duration && !e.zero_stamp) e.stamp_offset -= 0.6 * spec.duration;
       }
     }
   } else if (s == "torque_steps") {

@@ -88,10 +88,10 @@ class PipelineSink {
   virtual ~PipelineSink() = default;
   /// After an accepted input (throttled to ~stiffness_rate); stamp = the input's.
   virtual void stiffness(Stamp /*stamp*/, const StiffnessEstimate& /*estimate*/) {}
-  /// One transmission-error sample on the output grid (its time is sample.t, seconds).
-  virtual void transmissionError(const DynamicsSample& /*sample*/) {}
-  /// New TE spectrum peaks; stamp of the newest sample in the window (sample.t of that sample).
-  virtual void spectrum(double /*t*/, const SlidingSpectrum& /*spectrum*/) {}
+  /// One transmission-error sample on the output grid, at `stamp` (exact; sample.t = stamp.toSec()).
+  virtual void transmissionError(Stamp /*stamp*/, const DynamicsSample& /*sample*/) {}
+  /// New TE spectrum peaks; stamp of the newest sample in the window.
+  virtual void spectrum(Stamp /*stamp*/, const SlidingSpectrum& /*spectrum*/) {}
   /// The resonance estimate moved by more than the threshold (or after a reset); stamp = the input's.
   virtual void resonance(Stamp /*stamp*/, const ResonanceEstimate& /*estimate*/) {}
 };
@@ -158,6 +158,9 @@ class RigPipeline {
   PipelineCounters counters_;
   std::optional<Stamp> last_torque_, last_preload_, last_clock_, last_stiffness_out_;
   std::optional<Stamp> angle_origin_;
+  /// The dynamics run on seconds since this stamp (the last restart): at a 1.7e9 s epoch a double
+  /// resolves only 2.4e-7 s, enough to put an input exactly on a grid point one sample short.
+  Stamp dynamics_epoch_;
   double pinion_speed_ = 0.0;  ///< [rad/s]
   std::optional<ResonanceEstimate> last_resonance_;
   /// Spring stiffnesses (bearing per shaft, mean mesh) at the last published resonance.

@@ -16,8 +16,8 @@ inline ros::Time toRosTime(Stamp s) { return ros::Time(static_cast<std::uint32_t
 inline Stamp fromRosTime(const ros::Time& t) { return Stamp::fromSecNsec(t.sec, t.nsec); }
 
 drivetrain_stiffness::Stiffness toStiffnessMsg(Stamp stamp, const std::string& frame_id, const StiffnessEstimate& estimate);
-drivetrain_stiffness::TransmissionError toTransmissionErrorMsg(const std::string& frame_id, const DynamicsSample& s);
-drivetrain_stiffness::SpectralPeaks toSpectralPeaksMsg(double t, const std::string& frame_id, const SlidingSpectrum& spectrum);
+drivetrain_stiffness::TransmissionError toTransmissionErrorMsg(Stamp stamp, const std::string& frame_id, const DynamicsSample& s);
+drivetrain_stiffness::SpectralPeaks toSpectralPeaksMsg(Stamp stamp, const std::string& frame_id, const SlidingSpectrum& spectrum);
 drivetrain_stiffness::Resonance toResonanceMsg(Stamp stamp, const std::string& frame_id, const ResonanceEstimate& r);
 
 }  // namespace drivetrain_stiffness

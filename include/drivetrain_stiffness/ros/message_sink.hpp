@@ -27,8 +27,8 @@ class MessageSink : public PipelineSink {
   MessageSink(const RigPipeline& pipeline, const OutputSettings& settings);
 
   void stiffness(Stamp stamp, const StiffnessEstimate& estimate) override;
-  void transmissionError(const DynamicsSample& sample) override;
-  void spectrum(double t, const SlidingSpectrum& spectrum) override;
+  void transmissionError(Stamp stamp, const DynamicsSample& sample) override;
+  void spectrum(Stamp stamp, const SlidingSpectrum& spectrum) override;
   void resonance(Stamp stamp, const ResonanceEstimate& estimate) override;
 
   void setExaggeration(double exaggeration);  ///< InvalidInput if < 1
@@ -47,7 +47,7 @@ class MessageSink : public PipelineSink {
   const RigPipeline& pipeline_;
   OutputSettings settings_;
   RigVisualizer visualizer_;
-  std::optional<double> last_tf_t_;
+  std::optional<Stamp> last_tf_;
 };
 
 }  // namespace drivetrain_stiffness

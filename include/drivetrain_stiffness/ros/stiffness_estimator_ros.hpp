@@ -55,7 +55,8 @@ class StiffnessEstimatorRos {
   std::uint64_t rejected_at_last_report_ = 0, resets_at_last_report_ = 0;
   double processing_s_ = 0.0, max_processing_s_ = 0.0;
   std::uint64_t processed_ = 0;
-  ros::Time last_diagnostic_clock_;
+  double diagnostic_period_ = 1.0;  // [s] wall time between /diagnostics publications
+  ros::WallTime last_diagnostic_wall_;
 };
 
 }  // namespace drivetrain_stiffness

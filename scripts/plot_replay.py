@@ -1,0 +1,120 @@
+#!/usr/bin/python3
+"""Report of a stiffness-estimator run from a bag of its outputs (drivetrain_replay --out, or
+`rosbag record` of a live run): transmission error, stiffness and resonance against time, as PNG
+plots plus report.md with the key figures.
+
+usage: plot_replay.py OUTPUT_BAG REPORT_DIR [INPUT_BAG]
+Times are seconds since the first output stamp; SI units (TE in m shown in um)."""
+import math
+import os
+import sys
+
+import matplotlib
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import rosbag  # noqa: E402
+
+
+def read(bag_path):
+    te, st, res = [], [], []
+    with rosbag.Bag(bag_path) as bag:
+        for topic, m, _ in bag.read_messages(topics=["/transmission_error", "/stiffness", "/resonance"]):
+            t = m.header.stamp.to_sec()
+            if topic == "/transmission_error":
+                te.append((t, m.dynamic_te, m.static_te, m.mesh_force))
+            elif topic == "/stiffness":
+                st.append((t, m.mesh_stiffness, m.mesh_stiffness_mean, [b.radial_stiffness for b in m.bearings],
+                           [b.name for b in m.bearings], m.torque))
+            else:
+                res.append((t, list(m.frequencies_hz), list(m.dominant_coordinate), m.floquet_margin if m.floquet_valid else None))
+    return te, st, res
+
+
+def main():
+    if len(sys.argv) < 3:
+        sys.exit(__doc__)
+    out_bag, report = sys.argv[1], sys.argv[2]
+    source = sys.argv[3] if len(sys.argv) > 3 else out_bag
+    os.makedirs(report, exist_ok=True)
+    te, st, res = read(out_bag)
+    starts = [s[0][0] for s in (te, st, res) if s]
+    if not starts:
+        sys.exit("plot_replay.py: no /transmission_error, /stiffness or /resonance in " + out_bag)
+    t0 = min(starts)
+
+    fig, ax = plt.subplots(2, 1, figsize=(9, 6), sharex=True)
+    if te:
+        ax[0].plot([r[0] - t0 for r in te], [1e6 * r[1] for r in te], lw=0.6, label="dynamic TE")
+        ax[0].plot([r[0] - t0 for r in te], [1e6 * r[2] for r in te], lw=0.6, label="static TE")
+        ax[1].plot([r[0] - t0 for r in te], [r[3] for r in te], lw=0.6, color="C3")
+    ax[0].set_ylabel("mesh deflection [um]")
+    ax[0].legend(loc="upper right")
+    ax[1].set_ylabel("mesh force [N]")
+    ax[1].set_xlabel("time [s]")
+    ax[0].set_title("Predicted transmission error (3-DOF model)")
+    fig.tight_layout()
+    fig.savefig(os.path.join(report, "transmission_error.png"), dpi=110)
+    plt.close(fig)
+
+    fig, ax = plt.subplots(2, 1, figsize=(9, 6), sharex=True)
+    if st:
+        for i, name in enumerate(st[0][4]):
+            ax[0].plot([r[0] - t0 for r in st], [r[3][i] / 1e6 for r in st], lw=0.8, label=name)
+        ax[1].plot([r[0] - t0 for r in st], [r[1] / 1e6 for r in st], lw=0.5, label="at the mesh phase")
+        ax[1].plot([r[0] - t0 for r in st], [r[2] / 1e6 for r in st], lw=1.0, label="period mean")
+        ax[0].legend(loc="best")
+        ax[1].legend(loc="best")
+    ax[0].set_ylabel("bearing radial stiffness [N/um]")
+    ax[1].set_ylabel("composite mesh stiffness [N/um]")
+    ax[1].set_xlabel("time [s]")
+    ax[0].set_title("Stiffness estimates")
+    fig.tight_layout()
+    fig.savefig(os.path.join(report, "stiffness.png"), dpi=110)
+    plt.close(fig)
+
+    fig, ax = plt.subplots(figsize=(9, 4))
+    if res:
+        t_end = max(starts + [te[-1][0] if te else t0, st[-1][0] if st else t0])
+        for k in range(len(res[0][1])):
+            xs, ys = [], []
+            for j, r in enumerate(res):  # a latched estimate holds until the next one
+                t_next = res[j + 1][0] if j + 1 < len(res) else t_end
+                xs += [r[0] - t0, t_next - t0]
+                ys += [r[1][k] / 1e3, r[1][k] / 1e3]
+            ax.plot(xs, ys, lw=1.2, label="mode %d (%s)" % (k + 1, res[-1][2][k]))
+        ax.set_yscale("log")
+        ax.legend(loc="best")
+    ax.set_ylabel("natural frequency [kHz]")
+    ax.set_xlabel("time [s]")
+    ax.set_title("Resonance estimates")
+    fig.tight_layout()
+    fig.savefig(os.path.join(report, "resonance.png"), dpi=110)
+    plt.close(fig)
+
+    with open(os.path.join(report, "report.md"), "w") as f:
+        f.write("# Stiffness estimator report\n\nSource: `%s`; outputs: `%s`.\n\n" % (source, out_bag))
+        f.write("| quantity | value |\n|---|---|\n")
+        f.write("| span of outputs | %.3f s |\n" % (max(r[0] for r in te + st) - t0 if te or st else 0.0))
+        f.write("| transmission_error samples | %d |\n| stiffness messages | %d |\n| resonance updates | %d |\n"
+                % (len(te), len(st), len(res)))
+        if te:
+            d = [r[1] for r in te]
+            mean = sum(d) / len(d)
+            rms = math.sqrt(sum((x - mean) ** 2 for x in d) / len(d))
+            f.write("| dynamic TE mean / RMS about mean / peak-to-peak | %.4g / %.4g / %.4g um |\n"
+                    % (1e6 * mean, 1e6 * rms, 1e6 * (max(d) - min(d))))
+        if st:
+            for i, name in enumerate(st[-1][4]):
+                f.write("| %s radial stiffness, first / last | %.4g / %.4g N/um |\n"
+                        % (name, st[0][3][i] / 1e6, st[-1][3][i] / 1e6))
+        if res:
+            f.write("| last resonance estimate | %s |\n" % ", ".join(
+                "%.0f Hz (%s)" % (fr, dom) for fr, dom in zip(res[-1][1], res[-1][2])))
+            if res[-1][3] is not None:
+                f.write("| Floquet margin | %.3f |\n" % res[-1][3])
+        f.write("\n![transmission error](transmission_error.png)\n\n![stiffness](stiffness.png)\n\n"
+                "![resonance](resonance.png)\n")
+
+
+if __name__ == "__main__":
+    main()

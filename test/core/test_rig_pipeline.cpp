@@ -1,0 +1,289 @@
+// The online pipeline shared by the node, the nodelet and drivetrain_replay: its documented time
+// rules (zero stamps, out-of-order stamps, bursts, gaps, clock and stamp jumps back), value rules
+// (nothing non-finite reaches a sink, the state is never poisoned), determinism, and the two
+// shortcuts it takes for speed, each checked against the exact computation it replaces.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+
+#include "drivetrain_stiffness/config/yaml_config.hpp"
+#include "drivetrain_stiffness/core/scenes.hpp"
+#include "drivetrain_stiffness/core/validation.hpp"
+#include "drivetrain_stiffness/pipeline/rig_pipeline.hpp"
+
+using namespace drivetrain_stiffness;
+
+namespace {
+
+const RigConfig& rig() {
+  static const RigConfig r = loadRigFile(std::string(DRIVETRAIN_SOURCE_DIR) + "/config/gearboxes/seed_servo.yaml");
+  return r;
+}
+
+constexpr std::int64_t kEpoch = 1767225600LL * 1000000000LL;  // 2026-01-01: a wall-clock epoch
+Stamp at(double seconds) { return Stamp{kEpoch + std::llround(seconds * 1e9)}; }
+
+// Records everything, and fails the test on any non-finite number.
+struct Recorder : PipelineSink {
+  std::vector<std::pair<Stamp, StiffnessEstimate>> stiffness_out;
+  std::vector<DynamicsSample> te;
+  std::vector<Stamp> te_stamps;
+  std::vector<std::pair<Stamp, ResonanceEstimate>> resonance_out;
+  int spectra = 0;
+  void stiffness(Stamp s, const StiffnessEstimate& e) override {
+    for (const SupportEstimate& b : e.supports) EXPECT_TRUE(std::isfinite(b.solution.radialStiffness()));
+    EXPECT_TRUE(std::isfinite(e.mesh.current.composite));
+    stiffness_out.emplace_back(s, e);
+  }
+  void transmissionError(Stamp stamp, const DynamicsSample& s) override {
+    EXPECT_EQ(s.t, stamp.toSec());
+    te_stamps.push_back(stamp);
+    EXPECT_TRUE(s.state.allFinite() && std::isfinite(s.dynamic_te) && std::isfinite(s.mesh_force));
+    te.push_back(s);
+  }
+  void spectrum(Stamp, const SlidingSpectrum&) override { ++spectra; }
+  void resonance(Stamp s, const ResonanceEstimate& r) override {
+    for (const Mode& m : r.modes) EXPECT_TRUE(std::isfinite(m.natural_frequency) && std::isfinite(m.damping_ratio));
+    resonance_out.emplace_back(s, r);
+  }
+};
+
+std::vector<PreloadSetting> preloads(double axial) {
+  return {{"pinion_bearing", axial, 1000.0, 0.0, 0.0}, {"gear_bearing", axial, 1000.0, 0.0, 0.0}};
+}
+
+}  // namespace
+
+TEST(RigPipeline, OptionsAreValidatedWithTheFieldNamed) {
+  PipelineOptions o;
+  o.output_rate = -1.0;
+  try {
+    RigPipeline p(rig(), o);
+    FAIL() << "accepted a negative output_rate";
+  } catch (const InvalidInput& e) {
+    EXPECT_NE(std::string(e.what()).find("output_rate"), std::string::npos) << e.what();
+  }
+  o = PipelineOptions{};
+  o.spectrum_hop = 0;
+  EXPECT_THROW(RigPipeline(rig(), o), InvalidInput);
+  o = PipelineOptions{};
+  o.resonance_threshold = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_THROW(RigPipeline(rig(), o), InvalidInput);
+  o = PipelineOptions{};
+  o.limits.load_tolerance = 0.5;
+  EXPECT_THROW(RigPipeline(rig(), o), InvalidInput);
+}
+
+// Rule 1 and the value rules: a zero stamp, NaN, Inf and absurd torques, a negative preload and an
+// unknown bearing are rejected and counted by reason; the next good input is answered exactly as if
+// they had never come (the state is not poisoned).
+TEST(RigPipeline, BadInputsAreCountedAndDoNotPoisonTheState) {
+  RigPipeline clean(rig(), PipelineOptions{}), dirty(rig(), PipelineOptions{});
+  Recorder a, b;
+  ASSERT_EQ(clean.torque(at(0.0), 0.1, a), InputOutcome::kAccepted);
+  ASSERT_EQ(dirty.torque(at(0.0), 0.1, b), InputOutcome::kAccepted);
+  EXPECT_EQ(dirty.torque(Stamp{0}, 0.1, b), InputOutcome::kZeroStamp);
+  EXPECT_EQ(dirty.torque(at(0.01), std::numeric_limits<double>::quiet_NaN(), b), InputOutcome::kInvalidValue);
+  EXPECT_EQ(dirty.torque(at(0.02), std::numeric_limits<double>::infinity(), b), InputOutcome::kInvalidValue);
+  EXPECT_EQ(dirty.torque(at(0.03), 1e9, b), InputOutcome::kInvalidValue);
+  EXPECT_EQ(dirty.preload(at(0.04), preloads(-5.0), b), InputOutcome::kInvalidValue);
+  EXPECT_EQ(dirty.preload(at(0.05), {{"no_such_bearing", 100.0, 0.0, 0.0, 0.0}}, b), InputOutcome::kInvalidValue);
+  const PipelineCounters& c = dirty.counters();
+  EXPECT_EQ(c.zero_stamps, 1u);
+  EXPECT_EQ(c.invalid_values, 5u);
+  EXPECT_EQ(c.rejected_torque, 4u);
+  EXPECT_EQ(c.rejected_preload, 2u);
+  EXPECT_NE(c.last_event.find("no_such_bearing"), std::string::npos) << c.last_event;
+  ASSERT_EQ(clean.torque(at(0.1), 0.2, a), InputOutcome::kAccepted);
+  ASSERT_EQ(dirty.torque(at(0.1), 0.2, b), InputOutcome::kAccepted);
+  ASSERT_EQ(a.te.size(), b.te.size());
+  for (std::size_t i = 0; i < a.te.size(); ++i) EXPECT_EQ(a.te[i].dynamic_te, b.te[i].dynamic_te) << i;
+  EXPECT_EQ(a.stiffness_out.back().second.supports[0].solution.radialStiffness(),
+            b.stiffness_out.back().second.supports[0].solution.radialStiffness());
+}
+
+// Rules 2 and 3: a late stamp within ~stamp_jump_back is rejected (the dynamics cannot go back);
+// equal stamps are accepted without releasing samples and the last torque is the one held; a stamp
+// further back restarts everything and is then accepted.
+TEST(RigPipeline, OutOfOrderBurstAndStampJumpBack) {
+  RigPipeline p(rig(), PipelineOptions{});
+  Recorder r;
+  ASSERT_EQ(p.torque(at(1.0), 0.1, r), InputOutcome::kAccepted);
+  ASSERT_EQ(p.torque(at(1.010), 0.1, r), InputOutcome::kAccepted);
+  EXPECT_EQ(r.te.size(), 10u);  // (1.000, 1.010] on the 1 ms grid
+  EXPECT_EQ(p.torque(at(1.005), 0.1, r), InputOutcome::kOutOfOrder);
+  EXPECT_EQ(p.counters().out_of_order, 1u);
+  const std::size_t before = r.te.size();
+  for (double torque : {0.11, 0.12, 0.13}) ASSERT_EQ(p.torque(at(1.010), torque, r), InputOutcome::kAccepted);
+  EXPECT_EQ(r.te.size(), before);  // no time passed
+  ASSERT_EQ(p.torque(at(1.012), 0.2, r), InputOutcome::kAccepted);
+  ASSERT_EQ(r.te.size(), before + 2);
+  EXPECT_EQ(r.te.back().torque, 0.13);  // zero-order hold of the last of the burst
+  // Back by 2 s > ~stamp_jump_back (1 s): a restart, counted, and the input accepted.
+  ASSERT_EQ(p.torque(at(-1.0), 0.1, r), InputOutcome::kAccepted);
+  EXPECT_EQ(p.counters().stamp_resets, 1u);
+  ASSERT_EQ(p.torque(at(-0.99), 0.1, r), InputOutcome::kAccepted);
+  EXPECT_NEAR(r.te.back().t, at(-0.99).toSec(), 1e-6);
+}
+
+// Rule 4: a forward gap longer than ~max_gap restarts the dynamics instead of integrating it.
+TEST(RigPipeline, LongGapRestartsTheDynamics) {
+  PipelineOptions o;
+  o.max_gap = 0.5;
+  RigPipeline p(rig(), o);
+  Recorder r;
+  p.torque(at(0.0), 0.1, r);
+  p.torque(at(0.1), 0.1, r);
+  const std::size_t before = r.te.size();
+  EXPECT_EQ(p.torque(at(10.0), 0.1, r), InputOutcome::kAccepted);
+  EXPECT_EQ(r.te.size(), before);
+  EXPECT_EQ(p.counters().gap_restarts, 1u);
+  p.torque(at(10.003), 0.1, r);
+  EXPECT_EQ(r.te.size(), before + 3);
+}
+
+// Rule 5: the caller's clock going back (a looping bag) resets estimator and dynamics: the
+// configured preloads return, and the replayed inputs are accepted again; a clock that only
+// repeats itself does not reset.
+TEST(RigPipeline, ClockJumpBackResetsEverything) {
+  RigPipeline p(rig(), PipelineOptions{});
+  Recorder r;
+  const double configured_k = p.estimator().current().supports[0].solution.radialStiffness();
+  p.observeClock(at(0.0), r);
+  p.preload(at(0.0), preloads(2000.0), r);
+  p.torque(at(0.0), 0.1, r);
+  p.observeClock(at(0.5), r);
+  p.torque(at(0.5), 0.1, r);
+  EXPECT_FALSE(p.observeClock(at(0.5), r));
+  EXPECT_GT(std::abs(p.estimator().current().supports[0].solution.radialStiffness() - configured_k), 1e-3 * configured_k);
+  EXPECT_TRUE(p.observeClock(at(0.0), r));
+  EXPECT_EQ(p.counters().clock_resets, 1u);
+  EXPECT_NEAR(p.estimator().current().supports[0].solution.radialStiffness(), configured_k, 1e-9 * configured_k);
+  EXPECT_FALSE(p.dynamics()->started());
+  EXPECT_EQ(p.torque(at(0.0), 0.1, r), InputOutcome::kAccepted);  // the loop's first input again
+  EXPECT_EQ(p.counters().out_of_order, 0u);
+}
+
+// Same inputs, same order: bit-identical outputs (what makes drivetrain_replay reproducible).
+TEST(RigPipeline, Deterministic) {
+  auto run = [] {
+    RigPipeline p(rig(), PipelineOptions{});
+    Recorder r;
+    p.preload(at(0.0), preloads(800.0), r);
+    for (int k = 0; k < 400; ++k) p.torque(at(k * 1e-3), 0.1 + 0.01 * std::sin(0.7 * k), r);
+    p.preload(at(0.4), preloads(1500.0), r);
+    for (int k = 400; k < 800; ++k) p.torque(at(k * 1e-3), 0.1 + 0.01 * std::sin(0.7 * k), r);
+    return r;
+  };
+  const Recorder a = run(), b = run();
+  ASSERT_EQ(a.te.size(), b.te.size());
+  for (std::size_t i = 0; i < a.te.size(); ++i) {
+    EXPECT_EQ(a.te[i].t, b.te[i].t);
+    EXPECT_EQ(a.te[i].dynamic_te, b.te[i].dynamic_te);
+  }
+  ASSERT_EQ(a.resonance_out.size(), b.resonance_out.size());
+  EXPECT_GE(a.resonance_out.size(), 2u);  // the 800 -> 1500 N preload step moves the modes > 1 %
+}
+
+// The resonance shortcut (skip the modal analysis while every spring is within the threshold of
+// its value at the last publication; Courant-Fischer bounds the frequencies) must publish exactly
+// when an analysis at every input would have: recompute the modes here for every accepted input
+// with an independent estimator and apply the threshold rule by hand.
+TEST(RigPipeline, ResonanceShortcutPublishesExactlyWhenTheFullRuleWould) {
+  PipelineOptions o;
+  o.limits.load_tolerance = 0.0;  // the independent estimator below re-solves every input
+  RigPipeline p(rig(), o);
+  Recorder r;
+  StiffnessEstimator reference(rig(), o.limits);
+  std::vector<Stamp> expected;
+  std::vector<double> published;
+  auto check = [&](Stamp s, const StiffnessEstimate& e) {
+    const std::array<double, 2> kb = reference.shaftRadialStiffness();
+    const std::array<Mode, 3> modes = modalAnalysis(rigRotorParameters(rig(), reference.mesh(), kb), e.mesh.mean);
+    bool moved = published.empty();
+    for (std::size_t i = 0; !moved && i < 3; ++i) {
+      moved = std::abs(modes[i].natural_frequency - published[i]) > o.resonance_threshold * published[i];
+    }
+    if (!moved) return;
+    published = {modes[0].natural_frequency, modes[1].natural_frequency, modes[2].natural_frequency};
+    expected.push_back(s);
+  };
+  const double omega = 1000.0 * 2.0 * M_PI / 60.0;
+  for (int k = 0; k < 200; ++k) {
+    const double t = 0.02 * k;
+    if (k % 10 == 0) {
+      const double axial = 200.0 + 9.0 * k;  // 200 -> 1991 N: a preload ramp
+      ASSERT_EQ(p.preload(at(t), preloads(axial), r), InputOutcome::kAccepted);
+      check(at(t), reference.setPreloads(preloads(axial)));
+    }
+    const double torque = 0.1 + 0.4 * std::sin(0.05 * k);  // large swings: the bearing load moves too
+    ASSERT_EQ(p.torque(at(t), torque, r), InputOutcome::kAccepted);
+    check(at(t), reference.setTorque(torque, omega * t));
+  }
+  ASSERT_EQ(r.resonance_out.size(), expected.size());
+  EXPECT_GE(expected.size(), 5u);  // the ramp moves f1 by several per cent
+  for (std::size_t i = 0; i < expected.size(); ++i) EXPECT_EQ(r.resonance_out[i].first.ns, expected[i].ns) << i;
+  EXPECT_LT(p.counters().modal_updates, 400u);  // and it did skip analyses (400 accepted inputs)
+}
+
+// The bearing shortcut (~bearing_load_tolerance): between re-solves the stiffness lags the exact
+// one; for Hertz contact (k ~ Q^(1/3)) the lag is about tol / 3 of the support's load share.
+TEST(RigPipeline, BearingLoadToleranceBoundsTheStiffnessLag) {
+  EstimatorLimits exact_limits, shortcut_limits;
+  shortcut_limits.load_tolerance = 1e-3;
+  StiffnessEstimator exact(rig(), exact_limits), shortcut(rig(), shortcut_limits);
+  double worst = 0.0;
+  int skipped = 0;
+  for (int k = 0; k < 2000; ++k) {
+    const double torque = 0.1 * (1.0 + 0.05 * std::sin(2 * M_PI * 100.0 * k * 1e-3));  // 5 % ripple
+    const double ke = exact.setTorque(torque).supports[0].solution.radialStiffness();
+    const StiffnessEstimate& s = shortcut.setTorque(torque);
+    skipped += s.supports[0].radial_load != exact.current().supports[0].radial_load;
+    worst = std::max(worst, std::abs(s.supports[0].solution.radialStiffness() - ke) / ke);
+  }
+  EXPECT_GT(skipped, 1000);      // the shortcut is taken for most inputs of a 5 % ripple...
+  EXPECT_LT(worst, 1e-3 / 3.0);  // ...and the stiffness stays within tol / 3 of the exact solve
+  EXPECT_GT(worst, 0.0);
+}
+
+// Fidelities switch at run time on the same grid; quasi-static means the torsional mode is in
+// equilibrium, so the predicted deflection equals the static one F / k_s exactly (reduced_models.hpp).
+TEST(RigPipeline, FidelityAndDampingSwitchAtRunTime) {
+  RigPipeline p(rig(), PipelineOptions{});
+  Recorder r;
+  p.torque(at(0.0), 0.1, r);
+  p.torque(at(0.05), 0.1, r);
+  p.setFidelity(Fidelity::kQuasiStatic);
+  p.torque(at(0.1), 0.1, r);
+  ASSERT_EQ(r.te.size(), 100u);
+  for (std::size_t i = 50; i < 100; ++i) {
+    EXPECT_NEAR(r.te[i].dynamic_te, r.te[i].static_te, 1e-12 * std::abs(r.te[i].static_te)) << i;
+  }
+  EXPECT_EQ(r.te_stamps[99].ns - r.te_stamps[49].ns, 50000000);  // the grid continues, exactly
+  p.setFidelity(Fidelity::kFull);
+  p.setDamping(0.1, 0.05);
+  const std::size_t published = r.resonance_out.size();
+  p.torque(at(0.11), 0.1, r);
+  ASSERT_EQ(r.te.size(), 110u);
+  // The mesh phase continues across the rebuild: 1 ms steps of 1/3 of the 3 ms mesh period.
+  EXPECT_NEAR(std::fmod(r.te[100].phase - r.te[99].phase + 1.0, 1.0), 1.0 / 3.0, 1e-9);
+  EXPECT_THROW(p.setDamping(-0.1, 0.05), InvalidInput);
+  EXPECT_THROW(p.setDamping(0.1, 2.0), InvalidInput);
+  // A damping change republishes the resonance at the next input with the new ratios.
+  ASSERT_EQ(r.resonance_out.size(), published + 1);
+  EXPECT_NEAR(r.resonance_out.back().second.modes[2].damping_ratio, 0.1, 0.02);  // the torsional mode
+}
+
+// Stiffness coalescing (~stiffness_rate) is decided on stamps, so a replay coalesces the same way,
+// and every input is still counted.
+TEST(RigPipeline, StiffnessRateCoalescesOnStamps) {
+  PipelineOptions o;
+  o.stiffness_rate = 100.0;
+  RigPipeline p(rig(), o);
+  Recorder r;
+  for (int k = 0; k < 1000; ++k) p.torque(at(k * 1e-3), 0.1, r);
+  EXPECT_EQ(r.stiffness_out.size(), 100u);
+  EXPECT_EQ(p.counters().stiffness_out + p.counters().stiffness_coalesced, 1000u);
+  EXPECT_EQ(p.counters().accepted_torque, 1000u);
+}
