@@ -1,1 +1,51 @@
-# Replay, scenario, launch and rviz tests.
+# Replay, scenario, launch and rviz tests (included from CMakeLists.txt inside CATKIN_ENABLE_TESTING).
+set(DEVEL_BIN ${CATKIN_DEVEL_PREFIX}/lib/${PROJECT_NAME})
+
+add_test(NAME replay_bit_identical_and_counts_faults
+  COMMAND ${CMAKE_CURRENT_SOURCE_DIR}/test/replay/check_replay.sh ${DEVEL_BIN} ${CMAKE_CURRENT_SOURCE_DIR}
+          ${CMAKE_CURRENT_BINARY_DIR}/replay_test)
+
+add_test(NAME rig_sim_reproduces_bundled_bags
+  COMMAND ${CMAKE_CURRENT_SOURCE_DIR}/test/replay/check_scenario_bags.sh ${DEVEL_BIN} ${CMAKE_CURRENT_SOURCE_DIR}
+          ${CMAKE_CURRENT_BINARY_DIR}/scenario_test)
+
+# The report: summary, markdown and the three plots (matplotlib from Debian's python3).
+add_test(NAME replay_report
+  COMMAND ${CATKIN_DEVEL_PREFIX}/env.sh ${DEVEL_BIN}/drivetrain_replay --bag ${CMAKE_CURRENT_SOURCE_DIR}/test/data/preload_ramp.bag
+          --config ${CMAKE_CURRENT_SOURCE_DIR}/config/gearboxes/seed_servo.yaml --report ${CMAKE_CURRENT_BINARY_DIR}/replay_report)
+add_test(NAME replay_report_files
+  COMMAND ${CMAKE_COMMAND} -E md5sum ${CMAKE_CURRENT_BINARY_DIR}/replay_report/transmission_error.png
+          ${CMAKE_CURRENT_BINARY_DIR}/replay_report/stiffness.png ${CMAKE_CURRENT_BINARY_DIR}/replay_report/resonance.png
+          ${CMAKE_CURRENT_BINARY_DIR}/replay_report/report.md ${CMAKE_CURRENT_BINARY_DIR}/replay_report/summary.json)
+set_tests_properties(replay_report_files PROPERTIES DEPENDS replay_report)
+
+add_test(NAME replay_rejects_missing_bag
+  COMMAND ${DEVEL_BIN}/drivetrain_replay --bag ${CMAKE_CURRENT_BINARY_DIR}/no_such.bag
+          --config ${CMAKE_CURRENT_SOURCE_DIR}/config/gearboxes/seed_servo.yaml)
+set_tests_properties(replay_rejects_missing_bag PROPERTIES PASS_REGULAR_EXPRESSION "--bag = '.*no_such.bag'")
+add_test(NAME replay_rejects_bad_params
+  COMMAND ${DEVEL_BIN}/drivetrain_replay --bag ${CMAKE_CURRENT_SOURCE_DIR}/test/data/torque_steps.bag
+          --config ${CMAKE_CURRENT_SOURCE_DIR}/config/gearboxes/seed_servo.yaml --params ${CMAKE_CURRENT_SOURCE_DIR}/test/data/bad_node_params.yaml)
+set_tests_properties(replay_rejects_bad_params PROPERTIES PASS_REGULAR_EXPRESSION "parameter ~output_rate = -1000")
+
+# replay.launch on sim time with a looping bag: outputs stamped in the bag's time, and the clock
+# jumping back at each loop resets the estimator, said on /diagnostics.
+add_rostest_gtest(replay_launch_rostest test/ros/replay_launch.test test/ros/test_replay_launch.cpp)
+target_link_libraries(replay_launch_rostest ${catkin_LIBRARIES})
+add_dependencies(replay_launch_rostest stiffness_estimator ${PROJECT_NAME}_generate_messages_cpp)
+
+# The node as a nodelet, its run-time reconfiguration, its start-up validation and its stamp rules.
+add_rostest_gtest(graph_robustness_rostest test/ros/graph_robustness.test test/ros/test_graph_robustness.cpp)
+target_link_libraries(graph_robustness_rostest ${PROJECT_NAME}_ros ${catkin_LIBRARIES})
+add_dependencies(graph_robustness_rostest stiffness_estimator ${PROJECT_NAME}_nodelet)
+
+# rviz with config/drivetrain.rviz under Xvfb, fed by replay.launch; the screenshot must show the markers.
+find_program(XVFB_PROGRAM Xvfb)
+find_program(RVIZ_PROGRAM rviz)
+if(XVFB_PROGRAM AND RVIZ_PROGRAM)
+  add_test(NAME rviz_screenshot
+    COMMAND ${CATKIN_DEVEL_PREFIX}/env.sh ${CMAKE_CURRENT_SOURCE_DIR}/scripts/rviz_screenshot ${CMAKE_CURRENT_BINARY_DIR}/rviz_screenshot.png)
+  set_tests_properties(rviz_screenshot PROPERTIES TIMEOUT 120)  # the exit code says whether the markers showed
+else()
+  message(WARNING "rviz_screenshot test not registered: needs Xvfb (xvfb) and rviz")
+endif()

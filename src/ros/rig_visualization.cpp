@@ -120,9 +120,9 @@ visualization_msgs::MarkerArray RigVisualizer::markers(const ros::Time& stamp, c
   // The current resonance estimate as text above the mesh.
   visualization_msgs::Marker text = marker(frames_.rig, stamp, "resonance", 0, visualization_msgs::Marker::TEXT_VIEW_FACING);
   text.pose.position.x = 0.5 * center_distance_;
-  text.pose.position.y = 1.3 * r_tip_[1];
+  text.pose.position.y = r_tip_[1] + 0.5 * r_pitch_[0];
   text.pose.position.z = face_width_;
-  text.scale.z = 0.25 * r_pitch_[0];  // text height
+  text.scale.z = 0.12 * r_pitch_[0];  // text height
   text.color.r = text.color.g = text.color.b = 1.0f;
   char line[160];
   std::snprintf(line, sizeof line, "F_mesh %.2f N  TE %.3g um (x%.0f)", s.mesh_force, 1e6 * s.dynamic_te, exaggeration_);
