@@ -49,3 +49,7 @@ if(XVFB_PROGRAM AND RVIZ_PROGRAM)
 else()
   message(WARNING "rviz_screenshot test not registered: needs Xvfb (xvfb) and rviz")
 endif()
+
+# The rqt perspective and the README's plot paths name flat numeric message fields.
+add_test(NAME plot_paths_are_flat_numeric_fields
+  COMMAND /usr/bin/python3 ${CMAKE_CURRENT_SOURCE_DIR}/test/replay/check_plot_fields.py ${CMAKE_CURRENT_SOURCE_DIR})
