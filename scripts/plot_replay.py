@@ -30,6 +30,16 @@ def read(bag_path):
     return te, st, res
 
 
+def moving_mean(values, n):
+    out, acc = [], 0.0
+    for i, v in enumerate(values):
+        acc += v
+        if i >= n:
+            acc -= values[i - n]
+        out.append(acc / min(i + 1, n))
+    return out
+
+
 def main():
     if len(sys.argv) < 3:
         sys.exit(__doc__)
@@ -44,11 +54,16 @@ def main():
 
     fig, ax = plt.subplots(2, 1, figsize=(9, 6), sharex=True)
     if te:
-        ax[0].plot([r[0] - t0 for r in te], [1e6 * r[1] for r in te], lw=0.6, label="dynamic TE")
-        ax[0].plot([r[0] - t0 for r in te], [1e6 * r[2] for r in te], lw=0.6, label="static TE")
-        ax[1].plot([r[0] - t0 for r in te], [r[3] for r in te], lw=0.6, color="C3")
+        # The output grid samples the mesh period at a few phases only: dots for the samples, lines
+        # for the mean over a sliding window of whole mesh periods' worth of samples.
+        ts = [r[0] - t0 for r in te]
+        for k, (col, label, scale, axis) in enumerate(((1, "dynamic TE", 1e6, 0), (2, "static TE", 1e6, 0), (3, "mesh force", 1.0, 1))):
+            ys = [scale * r[col] for r in te]
+            ax[axis].plot(ts, ys, ".", ms=1.5, color="C%d" % k, alpha=0.35)
+            ax[axis].plot(ts, moving_mean(ys, 30), lw=1.4, color="C%d" % k, label=label + " (30-sample mean)")
+        ax[0].legend(loc="upper right", fontsize=8)
+        ax[1].legend(loc="upper right", fontsize=8)
     ax[0].set_ylabel("mesh deflection [um]")
-    ax[0].legend(loc="upper right")
     ax[1].set_ylabel("mesh force [N]")
     ax[1].set_xlabel("time [s]")
     ax[0].set_title("Predicted transmission error (3-DOF model)")

@@ -95,12 +95,13 @@ DynamicsSample DynamicsEstimator::sample(double t_rel, const State6& y) const {
   DynamicsSample s;
   s.t = origin_ + t_rel;
   s.state = y;
-  const GearRotorForces f = model_->forces(t_rel, y);
+  s.dynamic_te = model_->forces(t_rel, y).delta;  // from the state: continuous
+  // On a tooth switch the force, static TE and flank flags jump: report the right limit.
   MeshInstant m;
-  model_->excitation().at(t_rel, m);
-  s.dynamic_te = f.delta;
+  const double t_eval = meshForSample(model_->excitation(), t_rel, interval_, m);
+  const GearRotorForces f = model_->forces(t_eval, y);
   s.mesh_force = f.mesh;
-  s.phase = m.phase;
+  s.phase = m.phase < 1e-6 ? 0.0 : m.phase;  // the switch itself, not 1e-6 of an interval after it
   s.torque = *torque_;
   const double ks = m.k_drive + m.k_back;
   s.static_te = ks > 0.0 ? m.drive_force / ks : 0.0;

@@ -155,4 +155,17 @@ double GearRotorModel::energy(double t, const State6& y) const {
          0.5 * (p_.bearing_stiffness[0] * y[0] * y[0] + p_.bearing_stiffness[1] * y[1] * y[1] + ks * delta * delta);
 }
 
+double meshForSample(const GearExcitation& excitation, double t, double interval, MeshInstant& m) {
+  excitation.at(t, m);
+  if (std::min(m.phase, 1.0 - m.phase) >= 1e-7) return t;
+  const MeshInstant at_t = m;
+  const double after = t + 1e-6 * interval;
+  excitation.at(after, m);
+  // Only the stiffness side changes; the continuous inputs stay those at t.
+  m.te = at_t.te;
+  m.te_rate = at_t.te_rate;
+  m.drive_force = at_t.drive_force;
+  return after;
+}
+
 }  // namespace drivetrain_stiffness

@@ -92,7 +92,7 @@ State6 integrateReduced(const GearRotorModel& model, Fidelity fidelity, double t
     double f = m.drive_force;
     for (long k = 0; k < n; ++k) {
       const double t = t0 + (k + 1) * interval;
-      model.excitation().at(t, m);
+      meshForSample(model.excitation(), t, interval, m);  // on a tooth switch: the right limit
       pin.step(y[0], y[3], -f, -m.drive_force, interval);   // the pinion is pushed back by the mesh force
       gear.step(y[1], y[4], f, m.drive_force, interval);
       f = m.drive_force;
