@@ -53,3 +53,7 @@ endif()
 # The rqt perspective and the README's plot paths name flat numeric message fields.
 add_test(NAME plot_paths_are_flat_numeric_fields
   COMMAND /usr/bin/python3 ${CMAKE_CURRENT_SOURCE_DIR}/test/replay/check_plot_fields.py ${CMAKE_CURRENT_SOURCE_DIR})
+
+# The README names every message field, parameter, launch argument and reconfigure setting.
+add_test(NAME readme_documents_the_ros_interface
+  COMMAND /usr/bin/python3 ${CMAKE_CURRENT_SOURCE_DIR}/test/replay/check_readme_coverage.py ${CMAKE_CURRENT_SOURCE_DIR})

@@ -37,7 +37,9 @@ class StiffnessEstimatorRos::Publishers : public MessageSink {
  public:
   Publishers(ros::NodeHandle& nh, const RigPipeline& pipeline, const OutputSettings& settings)
       : MessageSink(pipeline, settings) {
-    stiffness_ = nh.advertise<drivetrain_stiffness::Stiffness>("stiffness", 100);
+    // Deep queues: at 10 kHz a subscriber stalled for 10 ms would otherwise lose messages to
+    // roscpp's publisher queue, the one place data could vanish without a count.
+    stiffness_ = nh.advertise<drivetrain_stiffness::Stiffness>("stiffness", 10000);
     // A torque input can release many samples at once (the gap since the previous input).
     te_ = nh.advertise<drivetrain_stiffness::TransmissionError>("transmission_error", 10000);
     resonance_ = nh.advertise<drivetrain_stiffness::Resonance>("resonance", 10, true);  // latched: the last estimate

@@ -1,4 +1,4 @@
-// Documented rig input scenarios (docs/ros_interface.md §Sample data), as plain timed events:
+// Documented rig input scenarios (README, "drivetrain_rig_sim"), as plain timed events:
 // what drivetrain_rig_sim writes to bags and the tests feed to the pipeline. ROS-free.
 #pragma once
 

@@ -6,7 +6,7 @@
 // It never reads a clock: stamps and "now" are arguments, so a replay with the recorded stamps is
 // bit-identical to the live run that saw the same inputs in the same order.
 //
-// Time rules (docs/ros_interface.md §Time):
+// Time rules (README, "Time and input rules"):
 //  1. A zero stamp is rejected (the publisher forgot to stamp; its time is unknown).
 //  2. A torque stamp earlier than the last accepted one by at most ~stamp_jump_back is out of order:
 //     rejected (the dynamics cannot integrate backwards). Earlier by more: the source restarted
