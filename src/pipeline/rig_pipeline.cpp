@@ -117,43 +117,40 @@ double RigPipeline::pinionAngle(Stamp stamp) const {
   return angle_origin_ ? pinion_speed_ * secondsBetween(stamp, *angle_origin_) : 0.0;
 }
 
-InputOutcome RigPipeline::torque(Stamp stamp, double torque, PipelineSink& sink) {
-  const InputOutcome time_ok = checkStamp(stamp, last_torque_, "torque", sink);
+template <typename Update>
+InputOutcome RigPipeline::apply(const char* topic, Stamp stamp, std::optional<Stamp>& last, std::uint64_t& accepted,
+                                std::uint64_t& rejected, PipelineSink& sink, Update update) {
+  const InputOutcome time_ok = checkStamp(stamp, last, topic, sink);
   if (time_ok != InputOutcome::kAccepted) {
-    return reject(time_ok, "torque", "stamp " + formatValue(stamp.toSec()) + " s", counters_.rejected_torque);
+    return reject(time_ok, topic, "stamp " + formatValue(stamp.toSec()) + " s", rejected);
   }
-  // The mesh phase counts from the first torque input after a (re)start, as the dynamics do.
-  if (!angle_origin_) angle_origin_ = stamp;
   try {
-    const StiffnessEstimate& estimate = estimator_->setTorque(torque, pinionAngle(stamp));
-    ++counters_.accepted_torque;
-    last_torque_ = stamp;
+    const StiffnessEstimate& estimate = update();  // transactional: throws without changing the state
+    ++accepted;
+    last = stamp;
     afterUpdate(stamp, estimate, sink);
   } catch (const InvalidInput& e) {
-    return reject(InputOutcome::kInvalidValue, "torque", e.what(), counters_.rejected_torque);
+    return reject(InputOutcome::kInvalidValue, topic, e.what(), rejected);
   } catch (const UnreachableLoad& e) {
-    return reject(InputOutcome::kUnreachableLoad, "torque", e.what(), counters_.rejected_torque);
+    return reject(InputOutcome::kUnreachableLoad, topic, e.what(), rejected);
   }
-  if (dynamics_) advanceDynamics(stamp, torque, sink);
   return InputOutcome::kAccepted;
 }
 
+InputOutcome RigPipeline::torque(Stamp stamp, double torque, PipelineSink& sink) {
+  const InputOutcome outcome = apply("torque", stamp, last_torque_, counters_.accepted_torque, counters_.rejected_torque, sink,
+                                     [&]() -> const StiffnessEstimate& {
+    // The mesh phase counts from the first torque input after a (re)start, as the dynamics do.
+    if (!angle_origin_) angle_origin_ = stamp;
+    return estimator_->setTorque(torque, pinionAngle(stamp));
+  });
+  if (outcome == InputOutcome::kAccepted && dynamics_) advanceDynamics(stamp, torque, sink);
+  return outcome;
+}
+
 InputOutcome RigPipeline::preload(Stamp stamp, const std::vector<PreloadSetting>& settings, PipelineSink& sink) {
-  const InputOutcome time_ok = checkStamp(stamp, last_preload_, "preload", sink);
-  if (time_ok != InputOutcome::kAccepted) {
-    return reject(time_ok, "preload", "stamp " + formatValue(stamp.toSec()) + " s", counters_.rejected_preload);
-  }
-  try {
-    const StiffnessEstimate& estimate = estimator_->setPreloads(settings);
-    ++counters_.accepted_preload;
-    last_preload_ = stamp;
-    afterUpdate(stamp, estimate, sink);
-  } catch (const InvalidInput& e) {
-    return reject(InputOutcome::kInvalidValue, "preload", e.what(), counters_.rejected_preload);
-  } catch (const UnreachableLoad& e) {
-    return reject(InputOutcome::kUnreachableLoad, "preload", e.what(), counters_.rejected_preload);
-  }
-  return InputOutcome::kAccepted;
+  return apply("preload", stamp, last_preload_, counters_.accepted_preload, counters_.rejected_preload, sink,
+               [&]() -> const StiffnessEstimate& { return estimator_->setPreloads(settings); });
 }
 
 void RigPipeline::afterUpdate(Stamp stamp, const StiffnessEstimate& estimate, PipelineSink& sink) {

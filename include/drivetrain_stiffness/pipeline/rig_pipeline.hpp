@@ -145,6 +145,10 @@ class RigPipeline {
   InputOutcome reject(InputOutcome why, const std::string& topic, const std::string& reason, std::uint64_t& rejected);
   /// Rules 1, 2 and 5 for one stream; returns kAccepted or the rejection (counted by the caller).
   InputOutcome checkStamp(Stamp stamp, std::optional<Stamp>& last, const std::string& topic, PipelineSink& sink);
+  /// Stamp rules, then `update` (a StiffnessEstimator call); counts and reports the outcome.
+  template <typename Update>
+  InputOutcome apply(const char* topic, Stamp stamp, std::optional<Stamp>& last, std::uint64_t& accepted,
+                     std::uint64_t& rejected, PipelineSink& sink, Update update);
   void afterUpdate(Stamp stamp, const StiffnessEstimate& estimate, PipelineSink& sink);
   void advanceDynamics(Stamp stamp, double torque, PipelineSink& sink);
   void updateResonance(Stamp stamp, const StiffnessEstimate& estimate, PipelineSink& sink);
