@@ -1,5 +1,7 @@
 #include "drivetrain_stiffness/ros/stiffness_estimator_ros.hpp"
 
+#include <time.h>
+
 #include <fstream>
 
 #include <tf2_ros/transform_broadcaster.h>
@@ -16,6 +18,12 @@
 
 namespace drivetrain_stiffness {
 namespace {
+
+double threadCpuSeconds() {
+  timespec t{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
+}
 
 double residentMemoryKb() {
   std::ifstream status("/proc/self/status");
@@ -111,27 +119,32 @@ void StiffnessEstimatorRos::observeClock() {
   }
 }
 
-void StiffnessEstimatorRos::finishInput(const ros::WallTime& start) {
+void StiffnessEstimatorRos::finishInput(const ros::WallTime& start, double cpu_start) {
   const double took = (ros::WallTime::now() - start).toSec();
+  const double cpu = threadCpuSeconds() - cpu_start;
   processing_s_ += took;
   max_processing_s_ = std::max(max_processing_s_, took);
+  max_processing_cpu_s_ = std::max(max_processing_cpu_s_, cpu);
   ++processed_;
   if (took > deadline_) ++missed_deadlines_;
+  if (cpu > deadline_) ++missed_deadlines_cpu_;
 }
 
 void StiffnessEstimatorRos::onTorque(const geometry_msgs::WrenchStamped::ConstPtr& msg) {
   const ros::WallTime start = ros::WallTime::now();
+  const double cpu_start = threadCpuSeconds();
   std::lock_guard<std::mutex> lock(mutex_);
   observeClock();
   const InputOutcome outcome = pipeline_->torque(fromRosTime(msg->header.stamp), msg->wrench.torque.z, *publishers_);
   if (outcome != InputOutcome::kAccepted) {
     ROS_WARN_THROTTLE(1.0, "stiffness_estimator: %s", pipeline_->counters().last_event.c_str());
   }
-  finishInput(start);
+  finishInput(start, cpu_start);
 }
 
 void StiffnessEstimatorRos::onPreload(const drivetrain_stiffness::Preload::ConstPtr& msg) {
   const ros::WallTime start = ros::WallTime::now();
+  const double cpu_start = threadCpuSeconds();
   std::lock_guard<std::mutex> lock(mutex_);
   observeClock();
   std::vector<PreloadSetting> settings;
@@ -141,7 +154,7 @@ void StiffnessEstimatorRos::onPreload(const drivetrain_stiffness::Preload::Const
   if (pipeline_->preload(fromRosTime(msg->header.stamp), settings, *publishers_) != InputOutcome::kAccepted) {
     ROS_WARN_THROTTLE(1.0, "stiffness_estimator: %s", pipeline_->counters().last_event.c_str());
   }
-  finishInput(start);
+  finishInput(start, cpu_start);
 }
 
 void StiffnessEstimatorRos::onReconfigure(drivetrain_stiffness::EstimatorConfig& config, std::uint32_t /*level*/) {
@@ -204,17 +217,19 @@ void StiffnessEstimatorRos::diagnose(diagnostic_updater::DiagnosticStatusWrapper
   status.add("stiffness_published", c.stiffness_out);
   status.add("stiffness_coalesced", c.stiffness_coalesced);
   status.add("missed_deadlines", missed_deadlines_);
+  status.add("missed_deadlines_cpu", missed_deadlines_cpu_);
   status.add("deadline [s]", deadline_);
   status.add("mean_processing [s]", processed_ ? processing_s_ / processed_ : 0.0);
   status.add("max_processing [s]", max_processing_s_);
+  status.add("max_processing_cpu [s]", max_processing_cpu_s_);
   status.add("resident_memory [kB]", residentMemoryKb());
   status.add("reconfigurations", reconfigurations_);
   for (const SupportEstimate& s : pipeline_->estimator().current().supports) {
     status.add(s.name + ".radial_stiffness [N/m]", s.solution.radialStiffness());
   }
   if (missed_deadlines_ > 0) {
-    status.mergeSummaryf(diagnostic_msgs::DiagnosticStatus::WARN, "%llu inputs took longer than ~deadline",
-                         static_cast<unsigned long long>(missed_deadlines_));
+    status.mergeSummaryf(diagnostic_msgs::DiagnosticStatus::WARN, "%llu inputs took longer than ~deadline (%llu in CPU time)",
+                         static_cast<unsigned long long>(missed_deadlines_), static_cast<unsigned long long>(missed_deadlines_cpu_));
   }
   if (const DynamicsEstimator* d = pipeline_->dynamics()) {
     status.add("dynamics_fidelity", toString(d->fidelity()));

@@ -5,10 +5,21 @@
 #include "drivetrain_stiffness/core/validation.hpp"
 
 namespace drivetrain_stiffness {
+namespace {
+int validWindow(int window) {
+  if (window < 8) throwInvalid("spectrum_window", window, "must be >= 8 samples");
+  return window;
+}
+}  // namespace
 
 SlidingSpectrum::SlidingSpectrum(int window, int hop, double dt, int peaks)
-    : window_(window), hop_(hop), n_peaks_(peaks), dt_(dt), ring_(window > 0 ? window : 0, 0.0) {
-  if (window < 8) throwInvalid("spectrum_window", window, "must be >= 8 samples");
+    : window_(window),
+      hop_(hop),
+      n_peaks_(peaks),
+      dt_(dt),
+      ring_(window > 0 ? window : 0, 0.0),
+      ordered_(ring_.size()),
+      analyzer_(validWindow(window), dt) {
   if (hop < 1 || hop > window) throwInvalid("spectrum_hop", hop, "must be in [1, spectrum_window]");
   if (peaks < 1) throwInvalid("spectrum_peaks", peaks, "must be >= 1");
   requirePositive("dt", dt);
@@ -25,9 +36,8 @@ bool SlidingSpectrum::push(double value) {
   ++count_;
   if (count_ < window_ || (count_ - window_) % hop_ != 0) return false;
   // Unroll the ring into time order: the oldest sample sits at count_ % window_.
-  std::vector<double> ordered(window_);
-  for (int i = 0; i < window_; ++i) ordered[i] = ring_[(count_ + i) % window_];
-  peaks_ = topPeaks(amplitudeSpectrum(ordered, dt_), n_peaks_);
+  for (int i = 0; i < window_; ++i) ordered_[i] = ring_[(count_ + i) % window_];
+  peaks_ = topPeaks(analyzer_.compute(ordered_), n_peaks_);
   return true;
 }
 

@@ -2,6 +2,8 @@
 
 #include <fftw3.h>
 
+#include <mutex>
+
 #include <algorithm>
 #include <cmath>
 #include <complex>
@@ -49,33 +51,61 @@ std::vector<SpectralPeak> peaksOf(const std::vector<double>& x, const std::vecto
 }
 }  // namespace
 
-Spectrum amplitudeSpectrum(const std::vector<double>& x, double dt) {
+namespace {
+std::mutex& plannerMutex() {  // FFTW's planner (plan creation and destruction) is not thread-safe
+  static std::mutex m;
+  return m;
+}
+}  // namespace
+
+struct SpectrumAnalyzer::Plan {
+  std::vector<std::complex<double>> out;
+  fftw_plan plan = nullptr;
+};
+
+SpectrumAnalyzer::SpectrumAnalyzer(int n, double dt) : n_(n) {
   requirePositive("dt", dt);
-  if (x.size() < 8) throwInvalid("samples", static_cast<double>(x.size()), "need at least 8 samples for a spectrum");
+  if (n < 8) throwInvalid("samples", n, "need at least 8 samples for a spectrum");
+  window_.resize(n);
+  in_.resize(n);
+  for (int i = 0; i < n; ++i) {
+    window_[i] = 0.5 - 0.5 * std::cos(2.0 * kPi * i / n);  // periodic Hann
+    window_sum_ += window_[i];
+  }
+  plan_ = new Plan;
+  plan_->out.resize(n / 2 + 1);
+  {
+    std::lock_guard<std::mutex> lock(plannerMutex());
+    plan_->plan = fftw_plan_dft_r2c_1d(n, in_.data(), reinterpret_cast<fftw_complex*>(plan_->out.data()), FFTW_ESTIMATE);
+  }
+  out_.resolution = 1.0 / (n * dt);
+  for (int k = 0; k <= n / 2; ++k) out_.frequency.push_back(k * out_.resolution);
+  out_.amplitude.assign(n / 2 + 1, 0.0);
+}
+
+SpectrumAnalyzer::~SpectrumAnalyzer() {
+  std::lock_guard<std::mutex> lock(plannerMutex());
+  fftw_destroy_plan(plan_->plan);
+  delete plan_;
+}
+
+const Spectrum& SpectrumAnalyzer::compute(const std::vector<double>& x) {
+  if (static_cast<int>(x.size()) != n_) throwInvalid("samples", static_cast<double>(x.size()), "must equal the analyzer length");
   double mean = 0.0;
   for (double v : x) {
     requireFinite("signal", v);
-    mean += v / x.size();
+    mean += v / n_;
   }
-  const int n = static_cast<int>(x.size());
-  std::vector<double> in(n);
-  double window_sum = 0.0;
-  for (int i = 0; i < n; ++i) {
-    const double w = 0.5 - 0.5 * std::cos(2.0 * kPi * i / n);  // periodic Hann
-    in[i] = (x[i] - mean) * w;
-    window_sum += w;
-  }
-  std::vector<std::complex<double>> out(n / 2 + 1);
-  fftw_plan plan = fftw_plan_dft_r2c_1d(n, in.data(), reinterpret_cast<fftw_complex*>(out.data()), FFTW_ESTIMATE);
-  fftw_execute(plan);
-  fftw_destroy_plan(plan);
-  Spectrum s;
-  s.resolution = 1.0 / (n * dt);
-  for (int k = 0; k <= n / 2; ++k) {
-    s.frequency.push_back(k * s.resolution);
-    s.amplitude.push_back(2.0 * std::abs(out[k]) / window_sum);
-  }
-  return s;
+  for (int i = 0; i < n_; ++i) in_[i] = (x[i] - mean) * window_[i];
+  fftw_execute(plan_->plan);  // executing a plan is thread-safe
+  for (int k = 0; k <= n_ / 2; ++k) out_.amplitude[k] = 2.0 * std::abs(plan_->out[k]) / window_sum_;
+  return out_;
+}
+
+Spectrum amplitudeSpectrum(const std::vector<double>& x, double dt) {
+  if (x.size() < 8) throwInvalid("samples", static_cast<double>(x.size()), "need at least 8 samples for a spectrum");
+  SpectrumAnalyzer analyzer(static_cast<int>(x.size()), dt);
+  return analyzer.compute(x);
 }
 
 std::vector<SpectralPeak> topPeaks(const Spectrum& s, int n, int min_separation) {

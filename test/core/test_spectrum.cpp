@@ -1,7 +1,9 @@
 // Spectra and peaks against synthetic signals whose answer is known.
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <cmath>
+#include <thread>
 
 #include "drivetrain_stiffness/core/validation.hpp"
 #include "drivetrain_stiffness/spectral/sliding_spectrum.hpp"
@@ -71,4 +73,36 @@ TEST(SlidingSpectrum, FollowsTheLatestWindow) {
   EXPECT_THROW(s.push(NAN), InvalidInput);
   EXPECT_THROW(SlidingSpectrum(4, 1, dt), InvalidInput);
   EXPECT_THROW(SlidingSpectrum(64, 65, dt), InvalidInput);
+}
+
+// The analyzer plans once and is reused (the node's sliding spectrum): each result equals a fresh
+// amplitudeSpectrum of the same samples, bit for bit, whatever came before; and analyzers can be
+// built on several threads at once (FFTW's planner is not thread-safe; they share one lock).
+TEST(SpectrumAnalyzer, ReusedPlanEqualsAFreshSpectrumAndPlansOnManyThreads) {
+  const int n = 256;
+  const double dt = 1e-3;
+  drivetrain_stiffness::SpectrumAnalyzer analyzer(n, dt);
+  for (double f : {50.0, 123.0, 333.3}) {
+    std::vector<double> x(n);
+    for (int i = 0; i < n; ++i) x[i] = std::sin(2 * M_PI * f * i * dt) + 0.1 * std::cos(0.37 * i);
+    const drivetrain_stiffness::Spectrum fresh = drivetrain_stiffness::amplitudeSpectrum(x, dt);
+    const drivetrain_stiffness::Spectrum& reused = analyzer.compute(x);
+    ASSERT_EQ(reused.amplitude.size(), fresh.amplitude.size());
+    for (std::size_t k = 0; k < fresh.amplitude.size(); ++k) EXPECT_EQ(reused.amplitude[k], fresh.amplitude[k]) << f << " " << k;
+  }
+  EXPECT_THROW(analyzer.compute(std::vector<double>(n - 1, 0.0)), drivetrain_stiffness::InvalidInput);
+  std::vector<std::thread> threads;
+  std::atomic<int> good{0};
+  for (int t = 0; t < 8; ++t) {
+    threads.emplace_back([&good, t] {
+      for (int i = 0; i < 20; ++i) {
+        drivetrain_stiffness::SpectrumAnalyzer a(64 + 8 * t, 1e-3);
+        std::vector<double> x(64 + 8 * t, 0.0);
+        x[3] = 1.0;
+        if (std::isfinite(a.compute(x).amplitude[1])) ++good;
+      }
+    });
+  }
+  for (std::thread& th : threads) th.join();
+  EXPECT_EQ(good.load(), 160);
 }

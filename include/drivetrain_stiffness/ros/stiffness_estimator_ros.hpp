@@ -36,8 +36,9 @@ class StiffnessEstimatorRos {
   void onReconfigure(drivetrain_stiffness::EstimatorConfig& config, std::uint32_t level);
   /// ROS time going back (a looping bag) resets the pipeline; called under the lock.
   void observeClock();
-  /// Counts the input as late when its processing took longer than ~deadline.
-  void finishInput(const ros::WallTime& start);
+  /// Counts the input as late when its processing took longer than ~deadline: in wall time (any
+  /// cause, preemption included) and in this thread's CPU time (the node's own cost).
+  void finishInput(const ros::WallTime& start, double cpu_start);
   void onDiagnosticTimer();
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status);
 
@@ -51,7 +52,8 @@ class StiffnessEstimatorRos {
   boost::recursive_mutex reconfigure_mutex_;  // dynamic_reconfigure::Server wants a boost mutex
   std::string gearbox_config_;
   double deadline_ = 1e-3;  // [s] processing time per input beyond which it counts as late
-  std::uint64_t missed_deadlines_ = 0, reconfigurations_ = 0;
+  std::uint64_t missed_deadlines_ = 0, missed_deadlines_cpu_ = 0, reconfigurations_ = 0;
+  double max_processing_cpu_s_ = 0.0;
   std::uint64_t rejected_at_last_report_ = 0, resets_at_last_report_ = 0;
   double processing_s_ = 0.0, max_processing_s_ = 0.0;
   std::uint64_t processed_ = 0;

@@ -24,7 +24,8 @@ class SlidingSpectrum {
  private:
   int window_, hop_, n_peaks_;
   double dt_;
-  std::vector<double> ring_;
+  std::vector<double> ring_, ordered_;
+  SpectrumAnalyzer analyzer_;  ///< plan made once: no planning inside the node's callbacks
   long count_ = 0;
   std::vector<SpectralPeak> peaks_;
 };

@@ -1,0 +1,211 @@
+#include "load_generator.hpp"
+
+#include <sys/prctl.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <thread>
+
+#include <geometry_msgs/WrenchStamped.h>
+
+namespace drivetrain_stiffness {
+namespace {
+
+/// Nearest-rank percentile of a sorted, non-empty vector: the smallest value with at least p % of
+/// the samples at or below it (no interpolation: every reported latency was actually observed).
+double percentile(const std::vector<double>& sorted, double p) {
+  const auto rank = static_cast<std::size_t>(std::ceil(p / 100.0 * static_cast<double>(sorted.size())));
+  return sorted[std::clamp<std::size_t>(rank, 1, sorted.size()) - 1];
+}
+
+/// Sleeps to just before the deadline, then spins: the sleep leaves the core to the node (the
+/// 2-core test machines), the spin absorbs the sleep's wake-up jitter.
+void waitUntil(const ros::WallTime& deadline) {
+  constexpr double kSpin = 20e-6;  // [s] typical nanosleep wake-up latency with 1 ns timer slack
+  const double left = (deadline - ros::WallTime::now()).toSec();
+  if (left > kSpin) ros::WallDuration(left - kSpin).sleep();
+  while (ros::WallTime::now() < deadline) std::this_thread::yield();
+}
+
+}  // namespace
+
+nlohmann::json toJson(const LoadResult& r) {
+  return {{"sent", r.sent},
+          {"answered", r.answered},
+          {"late_sends", r.late_sends},
+          {"max_send_lateness_s", r.max_send_lateness_s},
+          {"send_rate_hz", r.send_rate_hz},
+          {"latency_p50_s", r.latency_p50_s},  // NaN (nothing measured) is written as null
+          {"latency_p90_s", r.latency_p90_s},
+          {"latency_p99_s", r.latency_p99_s},
+          {"latency_max_s", r.latency_max_s},
+          {"diagnostics_seen", r.diagnostics_seen},
+          {"accepted_torque", r.accepted_torque},
+          {"rejected_torque", r.rejected_torque},
+          {"stiffness_published", r.stiffness_published},
+          {"missed_deadlines", r.missed_deadlines},
+          {"missed_deadlines_warmup", r.missed_deadlines_warmup},
+          {"missed_deadlines_cpu", r.missed_deadlines_cpu},
+          {"max_processing_cpu_s", r.max_processing_cpu_s},
+          {"max_processing_s", r.max_processing_s},
+          {"mean_processing_s", r.mean_processing_s},
+          {"rss_warmup_kb", r.rss_warmup_kb},
+          {"rss_end_kb", r.rss_end_kb}};
+}
+
+LoadGenerator::LoadGenerator(const ros::NodeHandle& nh, const LoadOptions& options) : options_(options), nh_(nh) {
+  nh_.setCallbackQueue(&queue_);
+  // Both queues hold every message of the run: a drop on our side (a slow callback thread, a
+  // backed-up socket) would otherwise be blamed on the node.
+  const double expected = options_.rate_hz * (options_.duration_s + options_.settle_timeout_s);
+  const auto queue = static_cast<std::uint32_t>(std::clamp(expected, 1000.0, 1e8));
+  torque_pub_ = nh_.advertise<geometry_msgs::WrenchStamped>("torque", queue);
+  stiffness_sub_ = nh_.subscribe("stiffness", queue, &LoadGenerator::onStiffness, this, ros::TransportHints().tcpNoDelay());
+  diagnostics_sub_ = nh_.subscribe("/diagnostics", 100, &LoadGenerator::onDiagnostics, this);
+  spinner_ = std::make_unique<ros::AsyncSpinner>(1, &queue_);
+  spinner_->start();
+}
+
+LoadGenerator::~LoadGenerator() {
+  spinner_->stop();  // before the members its callbacks use go away
+}
+
+template <typename F>
+bool LoadGenerator::waitFor(F done, double timeout_s) {
+  const ros::WallTime end = ros::WallTime::now() + ros::WallDuration(timeout_s);
+  while (ros::ok()) {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      if (done()) return true;
+    }
+    if (ros::WallTime::now() > end) return false;
+    ros::WallDuration(0.01).sleep();
+  }
+  return false;
+}
+
+bool LoadGenerator::connect() {
+  // One diagnostics report proves the node is up and its counters are readable.
+  const bool ok = waitFor([this] { return torque_pub_.getNumSubscribers() > 0 && stiffness_sub_.getNumPublishers() > 0 &&
+                                          diagnostics_received_ > 0; },
+                          options_.connect_timeout_s);
+  // getNumPublishers() counts our stiffness link before the node has finished its handshake: an
+  // answer sent meanwhile would be lost to us, not by the node.
+  if (ok) ros::WallDuration(0.5).sleep();
+  return ok;
+}
+
+void LoadGenerator::onStiffness(const Stiffness::ConstPtr& msg) {
+  const ros::Time now = ros::Time::now();  // before the lock: its wait is not the node's latency
+  std::lock_guard<std::mutex> lock(mutex_);
+  latencies_s_.push_back((now - msg->header.stamp).toSec());
+}
+
+void LoadGenerator::onDiagnostics(const diagnostic_msgs::DiagnosticArray::ConstPtr& msg) {
+  for (const auto& status : msg->status) {
+    if (status.name != options_.diagnostic_status) continue;
+    std::lock_guard<std::mutex> lock(mutex_);
+    ++diagnostics_received_;
+    diag_.diagnostics_seen = true;
+    for (const auto& kv : status.values) {
+      const char* v = kv.value.c_str();
+      if (kv.key == "accepted_torque") diag_.accepted_torque = std::strtoull(v, nullptr, 10);
+      else if (kv.key == "rejected_torque") diag_.rejected_torque = std::strtoull(v, nullptr, 10);
+      else if (kv.key == "missed_deadlines") diag_.missed_deadlines = std::strtoull(v, nullptr, 10);
+      else if (kv.key == "missed_deadlines_cpu") diag_.missed_deadlines_cpu = std::strtoull(v, nullptr, 10);
+      else if (kv.key == "max_processing_cpu [s]") diag_.max_processing_cpu_s = std::strtod(v, nullptr);
+      else if (kv.key == "stiffness_published") diag_.stiffness_published = std::strtoull(v, nullptr, 10);
+      else if (kv.key == "max_processing [s]") diag_.max_processing_s = std::strtod(v, nullptr);
+      else if (kv.key == "mean_processing [s]") diag_.mean_processing_s = std::strtod(v, nullptr);
+      else if (kv.key == "resident_memory [kB]") diag_.rss_end_kb = std::strtod(v, nullptr);
+    }
+    // The baseline: the first report after the warm-up (start-up allocations are done by then).
+    const bool warm = !warmup_end_.isZero() && ros::WallTime::now() >= warmup_end_;
+    if (warm && std::isnan(diag_.rss_warmup_kb)) {
+      diag_.rss_warmup_kb = diag_.rss_end_kb;
+      diag_.missed_deadlines_warmup = diag_.missed_deadlines;
+    }
+  }
+}
+
+LoadResult LoadGenerator::run() {
+  const double period = 1.0 / options_.rate_hz;  // [s]
+  const auto total = static_cast<std::uint64_t>(std::llround(options_.rate_hz * options_.duration_s));
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    latencies_s_.clear();
+    latencies_s_.reserve(total);  // no reallocation (and copy of up to MBs) inside the callback
+  }
+  // Linux lets a sleep overrun by the timer slack, 50 us by default: half a 10 kHz period.
+  prctl(PR_SET_TIMERSLACK, 1UL, 0UL, 0UL, 0UL);
+
+  LoadResult r;
+  geometry_msgs::WrenchStamped m;
+  m.header.frame_id = "pinion";
+  const ros::WallTime start = ros::WallTime::now();
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    warmup_end_ = start + ros::WallDuration(options_.warmup_s);
+  }
+  ros::WallTime first_send, last_send;
+  for (std::uint64_t i = 0; i < total && ros::ok(); ++i) {
+    // Absolute deadlines: a late send does not shift the ones after it (they catch up), so the
+    // count and the mean rate are exact; lateness is counted instead.
+    const double t = static_cast<double>(i) * period;  // [s] on the schedule
+    const ros::WallTime deadline = start + ros::WallDuration(t);
+    waitUntil(deadline);
+    const ros::WallTime now = ros::WallTime::now();
+    const double lateness = (now - deadline).toSec();
+    if (lateness > period) ++r.late_sends;  // its slot was missed
+    r.max_send_lateness_s = std::max(r.max_send_lateness_s, lateness);
+    m.header.stamp = ros::Time::now();
+    m.wrench.torque.z = options_.nominal_torque + options_.ripple_torque * std::sin(2.0 * M_PI * options_.ripple_hz * t);
+    torque_pub_.publish(m);
+    if (r.sent == 0) first_send = now;
+    last_send = now;
+    ++r.sent;
+  }
+  if (r.sent > 1) r.send_rate_hz = static_cast<double>(r.sent - 1) / (last_send - first_send).toSec();
+
+  // The answers still in flight, then two more reports: the second was surely made after the node
+  // processed the last input.
+  const std::uint64_t sent = r.sent;
+  waitFor([&] { return latencies_s_.size() >= sent; }, options_.settle_timeout_s);
+  std::uint64_t reports = 0;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    reports = diagnostics_received_;
+  }
+  waitFor([&] { return diagnostics_received_ >= reports + 2; }, options_.settle_timeout_s);
+
+  std::vector<double> latencies;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    latencies = latencies_s_;
+    const LoadResult d = diag_;
+    r.diagnostics_seen = d.diagnostics_seen;
+    r.rss_warmup_kb = d.rss_warmup_kb;
+    r.rss_end_kb = d.rss_end_kb;
+    r.accepted_torque = d.accepted_torque;
+    r.rejected_torque = d.rejected_torque;
+    r.missed_deadlines = d.missed_deadlines;
+    r.missed_deadlines_warmup = d.missed_deadlines_warmup;
+    r.missed_deadlines_cpu = d.missed_deadlines_cpu;
+    r.max_processing_cpu_s = d.max_processing_cpu_s;
+    r.stiffness_published = d.stiffness_published;
+    r.max_processing_s = d.max_processing_s;
+    r.mean_processing_s = d.mean_processing_s;
+  }
+  r.answered = latencies.size();
+  if (!latencies.empty()) {
+    std::sort(latencies.begin(), latencies.end());
+    r.latency_p50_s = percentile(latencies, 50.0);
+    r.latency_p90_s = percentile(latencies, 90.0);
+    r.latency_p99_s = percentile(latencies, 99.0);
+    r.latency_max_s = latencies.back();
+  }
+  return r;
+}
+
+}  // namespace drivetrain_stiffness
