@@ -47,6 +47,7 @@ nlohmann::json toJson(const LoadResult& r) {
           {"missed_deadlines", r.missed_deadlines},
           {"missed_deadlines_warmup", r.missed_deadlines_warmup},
           {"missed_deadlines_cpu", r.missed_deadlines_cpu},
+          {"missed_deadlines_cpu_warmup", r.missed_deadlines_cpu_warmup},
           {"max_processing_cpu_s", r.max_processing_cpu_s},
           {"max_processing_s", r.max_processing_s},
           {"mean_processing_s", r.mean_processing_s},
@@ -125,6 +126,7 @@ void LoadGenerator::onDiagnostics(const diagnostic_msgs::DiagnosticArray::ConstP
     if (warm && std::isnan(diag_.rss_warmup_kb)) {
       diag_.rss_warmup_kb = diag_.rss_end_kb;
       diag_.missed_deadlines_warmup = diag_.missed_deadlines;
+      diag_.missed_deadlines_cpu_warmup = diag_.missed_deadlines_cpu;
     }
   }
 }
@@ -192,6 +194,7 @@ LoadResult LoadGenerator::run() {
     r.missed_deadlines = d.missed_deadlines;
     r.missed_deadlines_warmup = d.missed_deadlines_warmup;
     r.missed_deadlines_cpu = d.missed_deadlines_cpu;
+    r.missed_deadlines_cpu_warmup = d.missed_deadlines_cpu_warmup;
     r.max_processing_cpu_s = d.max_processing_cpu_s;
     r.stiffness_published = d.stiffness_published;
     r.max_processing_s = d.max_processing_s;

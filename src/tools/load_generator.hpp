@@ -48,6 +48,7 @@ struct LoadResult {
   std::uint64_t accepted_torque = 0, rejected_torque = 0, missed_deadlines = 0, stiffness_published = 0;
   std::uint64_t missed_deadlines_warmup = 0;
   std::uint64_t missed_deadlines_cpu = 0;     ///< the node's own CPU time beyond ~deadline
+  std::uint64_t missed_deadlines_cpu_warmup = 0;  ///< of those, by the RSS baseline report
   double max_processing_cpu_s = kNone;  ///< of missed_deadlines, those by the RSS baseline report
   double max_processing_s = kNone, mean_processing_s = kNone;
 };
