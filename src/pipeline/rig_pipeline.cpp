@@ -21,6 +21,18 @@ const char* toString(InputOutcome outcome) {
   return "?";
 }
 
+std::vector<std::pair<std::string, std::uint64_t>> namedCounters(const PipelineCounters& c) {
+  return {{"accepted_torque", c.accepted_torque},         {"rejected_torque", c.rejected_torque},
+          {"accepted_preload", c.accepted_preload},       {"rejected_preload", c.rejected_preload},
+          {"rejected_zero_stamp", c.zero_stamps},         {"rejected_out_of_order", c.out_of_order},
+          {"rejected_invalid_value", c.invalid_values},   {"unreachable_loads", c.unreachable_loads},
+          {"clock_jump_resets", c.clock_resets},          {"stamp_jump_resets", c.stamp_resets},
+          {"gap_restarts", c.gap_restarts},               {"dynamics_errors", c.dynamics_errors},
+          {"stiffness_published", c.stiffness_out},       {"stiffness_coalesced", c.stiffness_coalesced},
+          {"transmission_error_published", c.te_out},     {"te_spectra_published", c.spectra_out},
+          {"resonance_published", c.resonance_out},       {"modal_updates", c.modal_updates}};
+}
+
 void PipelineOptions::validate() const {
   requirePositive("max_abs_torque", limits.max_abs_torque);
   requirePositive("max_preload", limits.max_preload);

@@ -202,20 +202,8 @@ void StiffnessEstimatorRos::diagnose(diagnostic_updater::DiagnosticStatusWrapper
   }
   rejected_at_last_report_ = rejected;
   resets_at_last_report_ = resets;
-  status.add("accepted_torque", c.accepted_torque);
-  status.add("rejected_torque", c.rejected_torque);
-  status.add("accepted_preload", c.accepted_preload);
-  status.add("rejected_preload", c.rejected_preload);
-  status.add("rejected_zero_stamp", c.zero_stamps);
-  status.add("rejected_out_of_order", c.out_of_order);
-  status.add("rejected_invalid_value", c.invalid_values);
-  status.add("unreachable_loads", c.unreachable_loads);
-  status.add("clock_jump_resets", c.clock_resets);
-  status.add("stamp_jump_resets", c.stamp_resets);
-  status.add("gap_restarts", c.gap_restarts);
+  for (const auto& [key, count] : namedCounters(c)) status.add(key, count);
   status.add("last_event", c.last_event);
-  status.add("stiffness_published", c.stiffness_out);
-  status.add("stiffness_coalesced", c.stiffness_coalesced);
   status.add("missed_deadlines", missed_deadlines_);
   status.add("missed_deadlines_cpu", missed_deadlines_cpu_);
   status.add("deadline [s]", deadline_);
@@ -233,15 +221,10 @@ void StiffnessEstimatorRos::diagnose(diagnostic_updater::DiagnosticStatusWrapper
   }
   if (const DynamicsEstimator* d = pipeline_->dynamics()) {
     status.add("dynamics_fidelity", toString(d->fidelity()));
-    status.add("transmission_error_published", c.te_out);
-    status.add("te_spectra_published", c.spectra_out);
     status.add("dynamics_output_interval [s]", d->outputInterval());
     status.add("dynamics_exact_propagation", d->exact() ? "yes" : "no (bearing clearance: dopri5)");
     status.add("dynamics_dopri5_intervals", d->fallbackIntervals());
     status.add("dynamics_rebuilds", d->rebuilds());
-    status.add("dynamics_errors", c.dynamics_errors);
-    status.add("resonance_published", c.resonance_out);
-    status.add("modal_updates", c.modal_updates);
     // Real-time factor: model time integrated per second of processing.
     const double rtf = processing_s_ > 0.0 ? c.simulated_s / processing_s_ : 0.0;
     status.add("realtime_factor", rtf);

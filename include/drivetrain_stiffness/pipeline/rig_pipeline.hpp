@@ -114,6 +114,9 @@ struct PipelineCounters {
   std::string last_event;           ///< last rejection or reset, with its reason
 };
 
+/// The counters by the names /diagnostics and drivetrain_replay's summary use (one list for both).
+std::vector<std::pair<std::string, std::uint64_t>> namedCounters(const PipelineCounters& c);
+
 class RigPipeline {
  public:
   /// Throws InvalidInput naming the field for an invalid rig or option.
