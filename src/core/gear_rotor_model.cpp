@@ -159,7 +159,12 @@ double meshForSample(const GearExcitation& excitation, double t, double interval
   excitation.at(t, m);
   if (std::min(m.phase, 1.0 - m.phase) >= 1e-7) return t;
   const MeshInstant at_t = m;
-  const double after = t + 1e-6 * interval;
+  // Step 1e-6 of a mesh period past the switch (the phase rate from one interval ahead), so the
+  // step stays well above the phase rounding at any output rate.
+  MeshInstant ahead;
+  excitation.at(t + interval, ahead);
+  const double advance = std::fmod(ahead.phase - at_t.phase + 2.0, 1.0);  // periods per interval
+  const double after = t + (advance > 1e-9 ? 1e-6 / advance : 1e-6) * interval;
   excitation.at(after, m);
   // Only the stiffness side changes; the continuous inputs stay those at t.
   m.te = at_t.te;

@@ -86,22 +86,17 @@ StiffnessEstimate StiffnessEstimator::solveAll(double torque, double pinion_angl
   return next;
 }
 
-const StiffnessEstimate& StiffnessEstimator::setTorque(double torque, double pinion_angle) {
+void StiffnessEstimator::validateTorque(double torque) const {
   requireFinite("torque", torque);
-  requireFinite("pinion_angle", pinion_angle);
   if (std::abs(torque) > limits_.max_abs_torque) {
     throwInvalid("torque", torque, "exceeds max_abs_torque = " + formatValue(limits_.max_abs_torque) + " N·m");
   }
-  estimate_ = solveAll(torque, pinion_angle, supports_);
-  last_pinion_angle_ = pinion_angle;
-  return estimate_;
 }
 
-const StiffnessEstimate& StiffnessEstimator::setPreloads(const std::vector<PreloadSetting>& settings) {
-  std::vector<Support> next = supports_;
+void StiffnessEstimator::validatePreloads(const std::vector<PreloadSetting>& settings) const {
   for (const PreloadSetting& p : settings) {
-    auto it = std::find_if(next.begin(), next.end(), [&](const Support& s) { return s.config.name == p.name; });
-    if (it == next.end()) throw InvalidInput("preload.name = '" + p.name + "': no such bearing support");
+    const bool known = std::any_of(supports_.begin(), supports_.end(), [&](const Support& s) { return s.config.name == p.name; });
+    if (!known) throw InvalidInput("preload.name = '" + p.name + "': no such bearing support");
     const std::string prefix = "preload[" + p.name + "].";
     auto check = [&](const std::string& field, double value, double limit) {
       requireNonNegative(prefix + field, value);
@@ -111,6 +106,23 @@ const StiffnessEstimate& StiffnessEstimator::setPreloads(const std::vector<Prelo
     check("radial_preload", p.radial_preload, limits_.max_preload);
     check("inner_interference", p.inner_interference, limits_.max_interference);
     check("outer_interference", p.outer_interference, limits_.max_interference);
+  }
+}
+
+const StiffnessEstimate& StiffnessEstimator::setTorque(double torque, double pinion_angle) {
+  validateTorque(torque);
+  requireFinite("pinion_angle", pinion_angle);
+  estimate_ = solveAll(torque, pinion_angle, supports_);
+  last_pinion_angle_ = pinion_angle;
+  return estimate_;
+}
+
+const StiffnessEstimate& StiffnessEstimator::setPreloads(const std::vector<PreloadSetting>& settings) {
+  validatePreloads(settings);
+  std::vector<Support> next = supports_;
+  for (const PreloadSetting& p : settings) {
+    auto it = std::find_if(next.begin(), next.end(), [&](const Support& s) { return s.config.name == p.name; });
+    const std::string prefix = "preload[" + p.name + "].";
     BearingSupportConfig c = it->config;
     const bool geometry_changed = c.axial_preload != p.axial_preload || c.interference.inner != p.inner_interference ||
                                   c.interference.outer != p.outer_interference;

@@ -44,6 +44,9 @@ void PipelineOptions::validate() const {
   requirePositive("output_rate", output_rate);
   if (output_rate > 1e6) throw InvalidInput("output_rate = " + formatValue(output_rate) + ": must be <= 1e6 Hz");
   requirePositive("max_gap", max_gap);
+  if (max_gap * output_rate > DynamicsEstimator::kMaxSamplesPerAdvance) {
+    throw InvalidInput("max_gap = " + formatValue(max_gap) + ": max_gap * output_rate must be <= 1e7 samples");
+  }
   requireNonNegative("stamp_jump_back", stamp_jump_back);
   requireNonNegative("clock_jump_back", clock_jump_back);
   requirePositive("resonance_threshold", resonance_threshold);
@@ -61,10 +64,18 @@ void PipelineOptions::validate() const {
     throw InvalidInput("pinion_speed_rpm = " + formatValue(pinion_speed_rpm) + ": must be within +-1e5 rpm");
   }
   requireNonNegative("stiffness_rate", stiffness_rate);
+  if (stiffness_rate > 1e5) throw InvalidInput("stiffness_rate = " + formatValue(stiffness_rate) + ": must be <= 1e5 Hz");
 }
 
 RigPipeline::RigPipeline(const RigConfig& rig, const PipelineOptions& options) : rig_(rig), options_(options) {
   options_.validate();
+  if (options_.dynamics && rig_.dynamics.present) {
+    // One speed for both mesh phases: the stiffness estimate's and the dynamics' (their grid too).
+    if (!(options_.pinion_speed_rpm > 0.0)) {
+      throw InvalidInput("pinion_speed_rpm = " + formatValue(options_.pinion_speed_rpm) + ": must be > 0 with dynamics");
+    }
+    rig_.dynamics.speed_rpm = options_.pinion_speed_rpm;
+  }
   estimator_ = std::make_unique<StiffnessEstimator>(rig_, options_.limits);
   pinion_speed_ = options_.pinion_speed_rpm * kTwoPi / 60.0;
   if (options_.dynamics) {
@@ -90,7 +101,11 @@ void RigPipeline::reset(const std::string& reason) {
 }
 
 bool RigPipeline::observeClock(Stamp now, PipelineSink& /*sink*/) {
-  const bool back = last_clock_ && secondsBetween(*last_clock_, now) > options_.clock_jump_back;
+  // A looping bag's first messages can arrive before its /clock jump (separate connections): if the
+  // stamps already restarted in the new timeline (rule 2), the data is consistent; no second reset.
+  const bool restarted = (!last_torque_ || !(now < *last_torque_)) && (!last_preload_ || !(now < *last_preload_)) &&
+                         (last_torque_ || last_preload_);
+  const bool back = last_clock_ && secondsBetween(*last_clock_, now) > options_.clock_jump_back && !restarted;
   if (back) {
     ++counters_.clock_resets;
     reset("clock went back from " + formatValue(last_clock_->toSec()) + " s to " + formatValue(now.toSec()) + " s");
@@ -129,9 +144,15 @@ double RigPipeline::pinionAngle(Stamp stamp) const {
   return angle_origin_ ? pinion_speed_ * secondsBetween(stamp, *angle_origin_) : 0.0;
 }
 
-template <typename Update>
+template <typename Validate, typename Update>
 InputOutcome RigPipeline::apply(const char* topic, Stamp stamp, std::optional<Stamp>& last, std::uint64_t& accepted,
-                                std::uint64_t& rejected, PipelineSink& sink, Update update) {
+                                std::uint64_t& rejected, PipelineSink& sink, Validate validate, Update update) {
+  // Values first: a bad value must not trigger a stamp-rule reset before it is refused.
+  try {
+    validate();
+  } catch (const InvalidInput& e) {
+    return reject(InputOutcome::kInvalidValue, topic, e.what(), rejected);
+  }
   const InputOutcome time_ok = checkStamp(stamp, last, topic, sink);
   if (time_ok != InputOutcome::kAccepted) {
     return reject(time_ok, topic, "stamp " + formatValue(stamp.toSec()) + " s", rejected);
@@ -150,18 +171,24 @@ InputOutcome RigPipeline::apply(const char* topic, Stamp stamp, std::optional<St
 }
 
 InputOutcome RigPipeline::torque(Stamp stamp, double torque, PipelineSink& sink) {
-  const InputOutcome outcome = apply("torque", stamp, last_torque_, counters_.accepted_torque, counters_.rejected_torque, sink,
-                                     [&]() -> const StiffnessEstimate& {
-    // The mesh phase counts from the first torque input after a (re)start, as the dynamics do.
-    if (!angle_origin_) angle_origin_ = stamp;
-    return estimator_->setTorque(torque, pinionAngle(stamp));
-  });
+  const InputOutcome outcome = apply(
+      "torque", stamp, last_torque_, counters_.accepted_torque, counters_.rejected_torque, sink,
+      [&] { estimator_->validateTorque(torque); },
+      [&]() -> const StiffnessEstimate& {
+        // The mesh phase counts from the first torque input after a (re)start, as the dynamics do;
+        // the origin is kept only if the input is accepted.
+        const Stamp origin = angle_origin_.value_or(stamp);
+        const StiffnessEstimate& e = estimator_->setTorque(torque, pinion_speed_ * secondsBetween(stamp, origin));
+        angle_origin_ = origin;
+        return e;
+      });
   if (outcome == InputOutcome::kAccepted && dynamics_) advanceDynamics(stamp, torque, sink);
   return outcome;
 }
 
 InputOutcome RigPipeline::preload(Stamp stamp, const std::vector<PreloadSetting>& settings, PipelineSink& sink) {
   return apply("preload", stamp, last_preload_, counters_.accepted_preload, counters_.rejected_preload, sink,
+               [&] { estimator_->validatePreloads(settings); },
                [&]() -> const StiffnessEstimate& { return estimator_->setPreloads(settings); });
 }
 
@@ -222,7 +249,17 @@ void RigPipeline::advanceDynamics(Stamp stamp, double torque, PipelineSink& sink
     });
     counters_.simulated_s += dynamics_->time() - from;
   } catch (const std::exception& e) {
-    dynamicsError("dynamics", e);
+    // The state stays at its last good sample and every later input would fail the same way:
+    // restart the model here (counted), as after a gap.
+    dynamicsError("dynamics (restarted at this input)", e);
+    try {
+      dynamics_epoch_ = stamp;
+      dynamics_->reset(0.0, torque);
+      te_spectrum_->reset();
+      angle_origin_ = stamp;
+    } catch (const std::exception& again) {
+      dynamicsError("dynamics", again);
+    }
   }
   try {
     dynamics_->setTorque(torque);  // the new torque holds from here on, whatever happened above

@@ -68,7 +68,10 @@ class StiffnessEstimatorRos::Publishers : public MessageSink {
   tf2_ros::TransformBroadcaster tf_;
 };
 
-StiffnessEstimatorRos::StiffnessEstimatorRos(ros::NodeHandle nh, ros::NodeHandle pnh) : diagnostics_(nh, pnh) {
+// The diagnostic status is named after the private namespace (the node's name, also for a nodelet,
+// where ros::this_node::getName() would be the manager's).
+StiffnessEstimatorRos::StiffnessEstimatorRos(ros::NodeHandle nh, ros::NodeHandle pnh)
+    : diagnostics_(nh, pnh, pnh.getNamespace()) {
   gearbox_config_ = readParam<std::string>(pnh, "gearbox_config", "");
   if (gearbox_config_.empty()) {
     throw InvalidInput("~gearbox_config: required parameter (path to a gearbox YAML file) is missing");
@@ -88,10 +91,11 @@ StiffnessEstimatorRos::StiffnessEstimatorRos(ros::NodeHandle nh, ros::NodeHandle
     throw InvalidInput("~diagnostic_period = " + formatValue(diagnostic_period_) + ": must be in (0, 60] s");
   }
 
-  // dynamic_reconfigure starts from the parameter server: seed it with the gearbox's damping so the
-  // .cfg defaults do not silently replace the file's values.
-  if (!pnh.hasParam("mesh_damping_ratio")) pnh.setParam("mesh_damping_ratio", rig.dynamics.mesh_damping_ratio);
-  if (!pnh.hasParam("bearing_damping_ratio")) pnh.setParam("bearing_damping_ratio", rig.dynamics.bearing_damping_ratio);
+  // dynamic_reconfigure starts from the parameter server: seed it with the gearbox's damping, every
+  // time (the server writes its values back, so a restart would otherwise reuse the last session's
+  // and the node would no longer match drivetrain_replay on the same files).
+  pnh.setParam("mesh_damping_ratio", rig.dynamics.mesh_damping_ratio);
+  pnh.setParam("bearing_damping_ratio", rig.dynamics.bearing_damping_ratio);
   pnh.setParam("fidelity", std::string(toString(pipeline_->options().fidelity)));
   pnh.setParam("exaggeration", publishers_->settings().exaggeration);
   pnh.setParam("stiffness_rate", pipeline_->options().stiffness_rate);
@@ -160,15 +164,27 @@ void StiffnessEstimatorRos::onPreload(const drivetrain_stiffness::Preload::Const
 void StiffnessEstimatorRos::onReconfigure(drivetrain_stiffness::EstimatorConfig& config, std::uint32_t /*level*/) {
   std::lock_guard<std::mutex> lock(mutex_);
   try {
-    pipeline_->setDamping(config.mesh_damping_ratio, config.bearing_damping_ratio);
-    pipeline_->setFidelity(parseFidelity("fidelity", config.fidelity));
+    // All or nothing: check every value before applying any (the .cfg ranges clamp rqt's requests;
+    // a hand-made one may still carry an unknown fidelity).
+    const Fidelity fidelity = parseFidelity("fidelity", config.fidelity);
+    for (const auto& [name, v] : {std::pair<const char*, double>{"mesh_damping_ratio", config.mesh_damping_ratio},
+                                  {"bearing_damping_ratio", config.bearing_damping_ratio}}) {
+      if (!(v >= 0.0 && v <= 1.0)) throw InvalidInput(std::string(name) + " = " + formatValue(v) + ": must be in [0, 1]");
+    }
+    if (!(config.exaggeration >= 1.0)) throw InvalidInput("exaggeration = " + formatValue(config.exaggeration) + ": must be >= 1");
+    if (!(config.stiffness_rate >= 0.0 && config.tf_rate >= 0.0)) throw InvalidInput("stiffness_rate, tf_rate: must be >= 0");
+    const bool damping_changed = !applied_config_ || applied_config_->mesh_damping_ratio != config.mesh_damping_ratio ||
+                                 applied_config_->bearing_damping_ratio != config.bearing_damping_ratio;
+    if (damping_changed) pipeline_->setDamping(config.mesh_damping_ratio, config.bearing_damping_ratio);
+    pipeline_->setFidelity(fidelity);
     pipeline_->setStiffnessRate(config.stiffness_rate);
     publishers_->setExaggeration(config.exaggeration);
     publishers_->setTfRate(config.tf_rate);
+    applied_config_ = config;
     ++reconfigurations_;
   } catch (const InvalidInput& e) {
-    // The .cfg ranges make this unreachable from rqt_reconfigure; a hand-made request still gets a reason.
-    ROS_ERROR("stiffness_estimator: reconfiguration refused: %s", e.what());
+    ROS_ERROR("stiffness_estimator: reconfiguration refused, settings unchanged: %s", e.what());
+    if (applied_config_) config = *applied_config_;  // what the server echoes back: the settings in force
   }
 }
 
@@ -215,10 +231,11 @@ void StiffnessEstimatorRos::diagnose(diagnostic_updater::DiagnosticStatusWrapper
   for (const SupportEstimate& s : pipeline_->estimator().current().supports) {
     status.add(s.name + ".radial_stiffness [N/m]", s.solution.radialStiffness());
   }
-  if (missed_deadlines_ > 0) {
-    status.mergeSummaryf(diagnostic_msgs::DiagnosticStatus::WARN, "%llu inputs took longer than ~deadline (%llu in CPU time)",
-                         static_cast<unsigned long long>(missed_deadlines_), static_cast<unsigned long long>(missed_deadlines_cpu_));
+  if (missed_deadlines_ > late_at_last_report_) {
+    status.mergeSummaryf(diagnostic_msgs::DiagnosticStatus::WARN, "%llu inputs took longer than ~deadline since last report",
+                         static_cast<unsigned long long>(missed_deadlines_ - late_at_last_report_));
   }
+  late_at_last_report_ = missed_deadlines_;
   if (const DynamicsEstimator* d = pipeline_->dynamics()) {
     status.add("dynamics_fidelity", toString(d->fidelity()));
     status.add("dynamics_output_interval [s]", d->outputInterval());

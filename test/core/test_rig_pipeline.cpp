@@ -287,3 +287,56 @@ TEST(RigPipeline, StiffnessRateCoalescesOnStamps) {
   EXPECT_EQ(p.counters().stiffness_out + p.counters().stiffness_coalesced, 1000u);
   EXPECT_EQ(p.counters().accepted_torque, 1000u);
 }
+
+// From an independent review: a bad value never acts through its stamp (no reset from a NaN with an
+// old stamp), and a rejected first torque does not set the mesh-phase origin.
+TEST(RigPipeline, BadValuesNeverActThroughTheirStamps) {
+  RigPipeline p(rig(), PipelineOptions{}), fresh(rig(), PipelineOptions{});
+  Recorder r, f;
+  EXPECT_EQ(p.torque(at(5.0), std::numeric_limits<double>::quiet_NaN(), r), InputOutcome::kInvalidValue);
+  ASSERT_EQ(p.torque(at(5.7), 0.1, r), InputOutcome::kAccepted);
+  ASSERT_EQ(fresh.torque(at(5.7), 0.1, f), InputOutcome::kAccepted);
+  EXPECT_EQ(r.stiffness_out.back().second.mesh.phase, f.stiffness_out.back().second.mesh.phase);  // origin 5.7, not 5.0
+  p.preload(at(5.8), preloads(1500.0), r);
+  const double k = p.estimator().current().supports[0].solution.radialStiffness();
+  EXPECT_EQ(p.torque(at(2.0), std::numeric_limits<double>::infinity(), r), InputOutcome::kInvalidValue);  // 3.7 s back
+  EXPECT_EQ(p.preload(at(2.0), preloads(-1.0), r), InputOutcome::kInvalidValue);
+  EXPECT_EQ(p.counters().stamp_resets, 0u);
+  EXPECT_EQ(p.estimator().current().supports[0].solution.radialStiffness(), k);  // preloads not reset
+}
+
+// ~pinion_speed_rpm drives the dynamics too (one speed for both mesh phases): at 2000 rpm the
+// 20-tooth pinion meshes at 666.7 Hz, so 1 kHz rounds to two samples per 1.5 ms period.
+TEST(RigPipeline, PinionSpeedReachesTheDynamics) {
+  PipelineOptions o;
+  o.pinion_speed_rpm = 2000.0;
+  RigPipeline p(rig(), o);
+  EXPECT_NEAR(p.dynamics()->outputInterval(), 0.75e-3, 1e-12);
+  Recorder r;
+  p.torque(at(0.0), 0.1, r);
+  p.torque(at(0.003), 0.1, r);
+  ASSERT_EQ(r.te.size(), 4u);
+  EXPECT_NEAR(std::fmod(r.te[2].phase - r.te[1].phase + 1.0, 1.0), 0.5, 1e-9);
+  o.pinion_speed_rpm = 0.0;
+  EXPECT_THROW(RigPipeline(rig(), o), InvalidInput);
+}
+
+// A looping bag whose first messages beat its /clock jump: the stamp rule restarts first, and the
+// clock jump that follows does not reset a second time (the preload of the new loop survives).
+TEST(RigPipeline, LoopStampsBeforeClockResetOnce) {
+  RigPipeline p(rig(), PipelineOptions{});
+  Recorder r;
+  p.observeClock(at(0.0), r);
+  p.preload(at(0.0), preloads(800.0), r);
+  p.torque(at(0.0), 0.1, r);
+  p.observeClock(at(3.0), r);
+  p.preload(at(2.0), preloads(800.0), r);  // re-sent, as rigs do
+  p.torque(at(3.0), 0.1, r);
+  // The loop restarts: its preload arrives before the clock says so.
+  ASSERT_EQ(p.preload(at(0.0), preloads(1500.0), r), InputOutcome::kAccepted);
+  EXPECT_EQ(p.counters().stamp_resets, 1u);
+  const double k = p.estimator().current().supports[0].solution.radialStiffness();
+  EXPECT_FALSE(p.observeClock(at(0.01), r));
+  EXPECT_EQ(p.counters().clock_resets, 0u);
+  EXPECT_EQ(p.estimator().current().supports[0].solution.radialStiffness(), k);
+}

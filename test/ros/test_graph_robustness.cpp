@@ -53,6 +53,9 @@ class GraphTest : public testing::Test {
     ASSERT_TRUE(waitWall([this] { return torque_pub_.getNumSubscribers() > 0 && stiffness_sub_.getNumPublishers() > 0 &&
                                          te_sub_.getNumPublishers() > 0; }, 30.0))
         << "the nodelet did not come up";
+    // getNumPublishers() counts a publisher once the master reports it, before the TCP link is up:
+    // messages sent in between are lost. Let the links settle (as the load generator does).
+    ros::WallDuration(0.5).sleep();
   }
   // Stamp = the epoch plus `offset` seconds, exact to the nanosecond (ros::Time(1.7e9 + 0.05) would
   // round 0.05 to 0.049999952 s: one grid sample short). offset < -1e9 gives the zero stamp.
@@ -166,6 +169,15 @@ TEST(StartupValidation, EveryBadParameterIsNamed) {
       {"bearing_load_tolerance", XmlRpc::XmlRpcValue(0.5), "bearing_load_tolerance"},
       {"resonance_threshold", XmlRpc::XmlRpcValue(2.0), "~resonance_threshold"},
       {"diagnostic_period", XmlRpc::XmlRpcValue(-1.0), "~diagnostic_period"},
+      {"max_abs_torque", XmlRpc::XmlRpcValue(0.0), "~max_abs_torque"},
+      {"max_gap", XmlRpc::XmlRpcValue(0.0), "~max_gap"},
+      {"max_gap", XmlRpc::XmlRpcValue(1e5), "max_gap * output_rate"},
+      {"stamp_jump_back", XmlRpc::XmlRpcValue(-1.0), "~stamp_jump_back"},
+      {"clock_jump_back", XmlRpc::XmlRpcValue(-1.0), "~clock_jump_back"},
+      {"pinion_speed_rpm", XmlRpc::XmlRpcValue(0.0), "pinion_speed_rpm"},
+      {"stiffness_rate", XmlRpc::XmlRpcValue(-1.0), "~stiffness_rate"},
+      {"dynamics", XmlRpc::XmlRpcValue("yes"), "~dynamics: has the wrong type"},
+      {"max_interference", XmlRpc::XmlRpcValue(-1e-3), "~max_interference"},
       {"gearbox_config", XmlRpc::XmlRpcValue("/no/such/gearbox.yaml"), "/no/such/gearbox.yaml"},
   };
   int index = 0;

@@ -62,7 +62,7 @@ class GearExcitation {
 
 /// Output samples on a grid that divides the mesh period land exactly on the tooth switch at phase
 /// 0, where the mesh stiffness jumps and rounding would pick either side at random. The convention
-/// for samples: the right limit. Fills `m` at t, or 1e-6 of an interval later when t is within
+/// for samples: the right limit. Fills `m` at t, or 1e-6 of a mesh period later when t is within
 /// 1e-7 of a period of a switch (beyond the phase rounding, ~1e-9 periods after 1e4 s, and far
 /// below what the state moves in), and returns the time used. te, te_rate and drive_force, which
 /// are continuous, stay those at t.

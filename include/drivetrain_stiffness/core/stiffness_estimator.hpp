@@ -66,6 +66,10 @@ class StiffnessEstimator {
   const StiffnessEstimate& setTorque(double torque, double pinion_angle = 0.0);
   /// New settings for the named supports (others keep theirs). Unknown names are an error.
   const StiffnessEstimate& setPreloads(const std::vector<PreloadSetting>& settings);
+  /// The value checks of setTorque / setPreloads alone (InvalidInput naming the field), without
+  /// solving: lets a caller refuse bad data before acting on its time stamp.
+  void validateTorque(double torque) const;
+  void validatePreloads(const std::vector<PreloadSetting>& settings) const;
   /// Back to the configured preloads and zero torque (e.g. after a time jump).
   const StiffnessEstimate& reset();
 

@@ -10,11 +10,13 @@
 //  1. A zero stamp is rejected (the publisher forgot to stamp; its time is unknown).
 //  2. A torque stamp earlier than the last accepted one by at most ~stamp_jump_back is out of order:
 //     rejected (the dynamics cannot integrate backwards). Earlier by more: the source restarted
-//     (a looping or re-recorded bag): full reset, then the input is accepted.
+//     (a looping or re-recorded bag): full reset, then the input is accepted. Values are checked
+//     before stamps, so a bad value never causes a reset.
 //  3. Equal stamps (a burst) are accepted: no time passes; the last torque is the one held.
 //  4. A forward gap longer than ~max_gap restarts the dynamics at the new input.
 //  5. The caller's clock (ROS time, or the bag's record time in the replay) going back by more
-//     than ~clock_jump_back resets everything (tf2's and robot_localization's rule for looped bags).
+//     than ~clock_jump_back resets everything (tf2's and robot_localization's rule for looped bags),
+//     unless the accepted stamps already restarted in the new timeline (rule 2 came first).
 //  6. Preload stamps follow rules 1, 2 and 5 on their own stream; an older preload never overrides
 //     a newer one.
 // Value rules: NaN, Inf, negative and absurd values are rejected by the core classes
@@ -148,10 +150,11 @@ class RigPipeline {
   InputOutcome reject(InputOutcome why, const std::string& topic, const std::string& reason, std::uint64_t& rejected);
   /// Rules 1, 2 and 5 for one stream; returns kAccepted or the rejection (counted by the caller).
   InputOutcome checkStamp(Stamp stamp, std::optional<Stamp>& last, const std::string& topic, PipelineSink& sink);
-  /// Stamp rules, then `update` (a StiffnessEstimator call); counts and reports the outcome.
-  template <typename Update>
+  /// `validate` (the value checks), the stamp rules, then `update` (a StiffnessEstimator call);
+  /// counts and reports the outcome.
+  template <typename Validate, typename Update>
   InputOutcome apply(const char* topic, Stamp stamp, std::optional<Stamp>& last, std::uint64_t& accepted,
-                     std::uint64_t& rejected, PipelineSink& sink, Update update);
+                     std::uint64_t& rejected, PipelineSink& sink, Validate validate, Update update);
   void afterUpdate(Stamp stamp, const StiffnessEstimate& estimate, PipelineSink& sink);
   void advanceDynamics(Stamp stamp, double torque, PipelineSink& sink);
   void updateResonance(Stamp stamp, const StiffnessEstimate& estimate, PipelineSink& sink);

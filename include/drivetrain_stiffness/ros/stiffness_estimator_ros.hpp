@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <string>
 
 #include <diagnostic_updater/diagnostic_updater.h>
@@ -48,13 +49,14 @@ class StiffnessEstimatorRos {
   ros::Subscriber torque_sub_, preload_sub_;
   diagnostic_updater::Updater diagnostics_;
   ros::WallTimer diagnostic_timer_;  // wall time: keeps running when sim time stops or jumps back
+  boost::recursive_mutex reconfigure_mutex_;  // dynamic_reconfigure::Server wants a boost mutex; outlives it
   std::unique_ptr<dynamic_reconfigure::Server<drivetrain_stiffness::EstimatorConfig>> reconfigure_;
-  boost::recursive_mutex reconfigure_mutex_;  // dynamic_reconfigure::Server wants a boost mutex
+  std::optional<drivetrain_stiffness::EstimatorConfig> applied_config_;  // the last accepted settings
   std::string gearbox_config_;
   double deadline_ = 1e-3;  // [s] processing time per input beyond which it counts as late
   std::uint64_t missed_deadlines_ = 0, missed_deadlines_cpu_ = 0, reconfigurations_ = 0;
   double max_processing_cpu_s_ = 0.0;
-  std::uint64_t rejected_at_last_report_ = 0, resets_at_last_report_ = 0;
+  std::uint64_t rejected_at_last_report_ = 0, resets_at_last_report_ = 0, late_at_last_report_ = 0;
   double processing_s_ = 0.0, max_processing_s_ = 0.0;
   std::uint64_t processed_ = 0;
   double diagnostic_period_ = 1.0;  // [s] wall time between /diagnostics publications
