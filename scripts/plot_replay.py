@@ -30,6 +30,17 @@ def read(bag_path):
     return te, st, res
 
 
+def finish(fig, axes, ylabels, title, path):
+    """Labels a column of panels sharing the time axis and writes the PNG."""
+    for a, label in zip(axes, ylabels):
+        a.set_ylabel(label)
+    axes[-1].set_xlabel("time [s]")
+    axes[0].set_title(title)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
 def moving_mean(values, n):
     out, acc = [], 0.0
     for i, v in enumerate(values):
@@ -63,13 +74,8 @@ def main():
             ax[axis].plot(ts, moving_mean(ys, 30), lw=1.4, color="C%d" % k, label=label + " (30-sample mean)")
         ax[0].legend(loc="upper right", fontsize=8)
         ax[1].legend(loc="upper right", fontsize=8)
-    ax[0].set_ylabel("mesh deflection [um]")
-    ax[1].set_ylabel("mesh force [N]")
-    ax[1].set_xlabel("time [s]")
-    ax[0].set_title("Predicted transmission error (3-DOF model)")
-    fig.tight_layout()
-    fig.savefig(os.path.join(report, "transmission_error.png"), dpi=110)
-    plt.close(fig)
+    finish(fig, ax, ["mesh deflection [um]", "mesh force [N]"], "Predicted transmission error (3-DOF model)",
+           os.path.join(report, "transmission_error.png"))
 
     fig, ax = plt.subplots(2, 1, figsize=(9, 6), sharex=True)
     if st:
@@ -79,13 +85,8 @@ def main():
         ax[1].plot([r[0] - t0 for r in st], [r[2] / 1e6 for r in st], lw=1.0, label="period mean")
         ax[0].legend(loc="best")
         ax[1].legend(loc="best")
-    ax[0].set_ylabel("bearing radial stiffness [N/um]")
-    ax[1].set_ylabel("composite mesh stiffness [N/um]")
-    ax[1].set_xlabel("time [s]")
-    ax[0].set_title("Stiffness estimates")
-    fig.tight_layout()
-    fig.savefig(os.path.join(report, "stiffness.png"), dpi=110)
-    plt.close(fig)
+    finish(fig, ax, ["bearing radial stiffness [N/um]", "composite mesh stiffness [N/um]"], "Stiffness estimates",
+           os.path.join(report, "stiffness.png"))
 
     fig, ax = plt.subplots(figsize=(9, 4))
     if res:
@@ -99,12 +100,7 @@ def main():
             ax.plot(xs, ys, lw=1.2, label="mode %d (%s)" % (k + 1, res[-1][2][k]))
         ax.set_yscale("log")
         ax.legend(loc="best")
-    ax.set_ylabel("natural frequency [kHz]")
-    ax.set_xlabel("time [s]")
-    ax.set_title("Resonance estimates")
-    fig.tight_layout()
-    fig.savefig(os.path.join(report, "resonance.png"), dpi=110)
-    plt.close(fig)
+    finish(fig, [ax], ["natural frequency [kHz]"], "Resonance estimates", os.path.join(report, "resonance.png"))
 
     with open(os.path.join(report, "report.md"), "w") as f:
         f.write("# Stiffness estimator report\n\nSource: `%s`; outputs: `%s`.\n\n" % (source, out_bag))

@@ -101,11 +101,14 @@ void RigPipeline::reset(const std::string& reason) {
 }
 
 bool RigPipeline::observeClock(Stamp now, PipelineSink& /*sink*/) {
-  // A looping bag's first messages can arrive before its /clock jump (separate connections): if the
-  // stamps already restarted in the new timeline (rule 2), the data is consistent; no second reset.
-  const bool restarted = (!last_torque_ || !(now < *last_torque_)) && (!last_preload_ || !(now < *last_preload_)) &&
-                         (last_torque_ || last_preload_);
-  const bool back = last_clock_ && secondsBetween(*last_clock_, now) > options_.clock_jump_back && !restarted;
+  // A looping bag's first messages can arrive before its /clock jump (separate connections, and
+  // /clock lags by up to its period): if the stamps already restarted (rule 2) since the last jump,
+  // that jump is the same restart; it is not reset a second time.
+  bool back = last_clock_ && secondsBetween(*last_clock_, now) > options_.clock_jump_back;
+  if (back && stamps_restarted_) {
+    stamps_restarted_ = false;
+    back = false;
+  }
   if (back) {
     ++counters_.clock_resets;
     reset("clock went back from " + formatValue(last_clock_->toSec()) + " s to " + formatValue(now.toSec()) + " s");
@@ -135,6 +138,7 @@ InputOutcome RigPipeline::checkStamp(Stamp stamp, std::optional<Stamp>& last, co
     const double back = secondsBetween(*last, stamp);
     if (back <= options_.stamp_jump_back) return InputOutcome::kOutOfOrder;
     ++counters_.stamp_resets;
+    stamps_restarted_ = true;
     reset(topic + " stamp went back by " + formatValue(back) + " s (more than ~stamp_jump_back): source restarted");
   }
   return InputOutcome::kAccepted;

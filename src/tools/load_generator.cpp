@@ -185,20 +185,13 @@ LoadResult LoadGenerator::run() {
   {
     std::lock_guard<std::mutex> lock(mutex_);
     latencies = latencies_s_;
-    const LoadResult d = diag_;
-    r.diagnostics_seen = d.diagnostics_seen;
-    r.rss_warmup_kb = d.rss_warmup_kb;
-    r.rss_end_kb = d.rss_end_kb;
-    r.accepted_torque = d.accepted_torque;
-    r.rejected_torque = d.rejected_torque;
-    r.missed_deadlines = d.missed_deadlines;
-    r.missed_deadlines_warmup = d.missed_deadlines_warmup;
-    r.missed_deadlines_cpu = d.missed_deadlines_cpu;
-    r.missed_deadlines_cpu_warmup = d.missed_deadlines_cpu_warmup;
-    r.max_processing_cpu_s = d.max_processing_cpu_s;
-    r.stiffness_published = d.stiffness_published;
-    r.max_processing_s = d.max_processing_s;
-    r.mean_processing_s = d.mean_processing_s;
+    // The node's side (diag_) plus what this generator measured itself (sends and latency).
+    const LoadResult sends = r;
+    r = diag_;
+    r.sent = sends.sent;
+    r.late_sends = sends.late_sends;
+    r.max_send_lateness_s = sends.max_send_lateness_s;
+    r.send_rate_hz = sends.send_rate_hz;
   }
   r.answered = latencies.size();
   if (!latencies.empty()) {

@@ -168,6 +168,7 @@ class RigPipeline {
   PipelineCounters counters_;
   std::optional<Stamp> last_torque_, last_preload_, last_clock_, last_stiffness_out_;
   std::optional<Stamp> angle_origin_;
+  bool stamps_restarted_ = false;  ///< rule 2 reset since the last clock jump (rule 5 then skips one)
   /// The dynamics run on seconds since this stamp (the last restart): at a 1.7e9 s epoch a double
   /// resolves only 2.4e-7 s, enough to put an input exactly on a grid point one sample short.
   Stamp dynamics_epoch_;
