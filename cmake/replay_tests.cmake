@@ -57,3 +57,8 @@ add_test(NAME plot_paths_are_flat_numeric_fields
 # The README names every message field, parameter, launch argument and reconfigure setting.
 add_test(NAME readme_documents_the_ros_interface
   COMMAND /usr/bin/python3 ${CMAKE_CURRENT_SOURCE_DIR}/test/replay/check_readme_coverage.py ${CMAKE_CURRENT_SOURCE_DIR})
+
+# A speed sweep through the resonances: the replayed response peaks at the node's modal estimates.
+add_test(NAME speed_sweep_peaks_at_the_estimated_modes
+  COMMAND ${CATKIN_DEVEL_PREFIX}/env.sh /usr/bin/python3 ${CMAKE_CURRENT_SOURCE_DIR}/test/replay/check_speed_sweep.py
+          ${DEVEL_BIN} ${CMAKE_CURRENT_SOURCE_DIR} ${CMAKE_CURRENT_BINARY_DIR}/speed_sweep_test)
