@@ -89,9 +89,16 @@ RigPipeline::RigPipeline(const RigConfig& rig, const PipelineOptions& options) :
 void RigPipeline::reset(const std::string& reason) {
   estimator_->reset();
   if (te_spectrum_) te_spectrum_->reset();
-  // The dynamics restart at the next torque input (DynamicsEstimator::reset needs its time).
-  if (dynamics_) dynamics_ = std::make_unique<DynamicsEstimator>(rig_, estimator_->shaftRadialStiffness(), options_.output_rate);
-  if (dynamics_) dynamics_->setFidelity(options_.fidelity);
+  if (dynamics_) {
+    // The dynamics restart at the next torque input (their reset needs its time), with the bearing
+    // stiffness of the configured preloads: rebuilt only if it moved by more than 1 %, as always.
+    dynamics_->stop();
+    try {
+      dynamics_->setBearingStiffness(estimator_->shaftRadialStiffness());
+    } catch (const std::exception& e) {
+      dynamicsError("dynamics", e);
+    }
+  }
   last_torque_.reset();
   last_preload_.reset();
   last_stiffness_out_.reset();
@@ -223,6 +230,13 @@ void RigPipeline::dynamicsError(const std::string& where, const std::exception& 
   counters_.last_event = where + ": " + e.what();
 }
 
+void RigPipeline::restartDynamics(Stamp stamp, double torque) {
+  dynamics_epoch_ = stamp;
+  dynamics_->reset(0.0, torque);
+  te_spectrum_->reset();  // a new window: no samples from before the restart
+  angle_origin_ = stamp;  // the stiffness message's mesh phase restarts with the dynamics
+}
+
 void RigPipeline::advanceDynamics(Stamp stamp, double torque, PipelineSink& sink) {
   try {
     const double t = dynamics_->started() ? secondsBetween(stamp, dynamics_epoch_) : 0.0;
@@ -233,10 +247,7 @@ void RigPipeline::advanceDynamics(Stamp stamp, double torque, PipelineSink& sink
         ++counters_.gap_restarts;
         counters_.last_event = "input gap of " + formatValue(t - dynamics_->time()) + " s (more than ~max_gap): dynamics restarted";
       }
-      dynamics_epoch_ = stamp;
-      dynamics_->reset(0.0, torque);
-      te_spectrum_->reset();  // a new window: no samples from before the restart
-      angle_origin_ = stamp;  // the stiffness message's mesh phase restarts with the dynamics
+      restartDynamics(stamp, torque);
       return;
     }
     const double from = dynamics_->time();
@@ -257,10 +268,7 @@ void RigPipeline::advanceDynamics(Stamp stamp, double torque, PipelineSink& sink
     // restart the model here (counted), as after a gap.
     dynamicsError("dynamics (restarted at this input)", e);
     try {
-      dynamics_epoch_ = stamp;
-      dynamics_->reset(0.0, torque);
-      te_spectrum_->reset();
-      angle_origin_ = stamp;
+      restartDynamics(stamp, torque);
     } catch (const std::exception& again) {
       dynamicsError("dynamics", again);
     }

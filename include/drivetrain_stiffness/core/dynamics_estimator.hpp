@@ -44,6 +44,8 @@ class DynamicsEstimator {
   /// stamp would otherwise ask for 1e12 samples).
   static constexpr double kMaxSamplesPerAdvance = 1e7;
   void advanceTo(double t, const std::function<void(const DynamicsSample&)>& sink);
+  /// Forget the state: started() is false until the next reset() (the model is kept).
+  void stop() { started_ = false; }
   /// New measured torque, applied from the next output sample.
   void setTorque(double torque);
   /// Rebuilds the model (and the propagators) when a stiffness changes by more than 1 %.

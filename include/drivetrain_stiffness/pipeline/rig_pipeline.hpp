@@ -157,6 +157,8 @@ class RigPipeline {
                      std::uint64_t& rejected, PipelineSink& sink, Validate validate, Update update);
   void afterUpdate(Stamp stamp, const StiffnessEstimate& estimate, PipelineSink& sink);
   void advanceDynamics(Stamp stamp, double torque, PipelineSink& sink);
+  /// Dynamics at static equilibrium under `torque` from `stamp` on (new epoch, empty spectrum).
+  void restartDynamics(Stamp stamp, double torque);
   void updateResonance(Stamp stamp, const StiffnessEstimate& estimate, PipelineSink& sink);
   void dynamicsError(const std::string& where, const std::exception& e);
 
