@@ -62,3 +62,9 @@ add_test(NAME readme_documents_the_ros_interface
 add_test(NAME speed_sweep_peaks_at_the_estimated_modes
   COMMAND ${CATKIN_DEVEL_PREFIX}/env.sh /usr/bin/python3 ${CMAKE_CURRENT_SOURCE_DIR}/test/replay/check_speed_sweep.py
           ${DEVEL_BIN} ${CMAKE_CURRENT_SOURCE_DIR} ${CMAKE_CURRENT_BINARY_DIR}/speed_sweep_test)
+
+# drivetrain_replay's bag writer writes the same bytes as rosbag::Bag, and rosbag::View reads them.
+catkin_add_gtest(bag_writer_tests test/ros/test_bag_writer.cpp)
+target_include_directories(bag_writer_tests PRIVATE ${CMAKE_CURRENT_SOURCE_DIR}/src/tools include)
+target_link_libraries(bag_writer_tests ${PROJECT_NAME}_bag_writer ${catkin_LIBRARIES})
+add_dependencies(bag_writer_tests ${PROJECT_NAME}_generate_messages_cpp)
