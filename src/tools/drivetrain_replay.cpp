@@ -73,11 +73,14 @@ int run(int argc, char** argv) {
   CLI::App app{"Replays a recorded bag through the stiffness estimator's pipeline (no master needed)"};
   std::string bag_path, config, params, out_bag, csv_dir, report_dir, torque_topic = "torque", preload_topic = "preload";
   std::string plot_script = DRIVETRAIN_PLOT_REPLAY_SCRIPT;
+  std::string compression = "lz4";
   bool plots = true;
   app.add_option("--bag", bag_path, "Recorded bag with the rig's torque and preload")->required();
   app.add_option("--config", config, "Gearbox YAML, as the node's ~gearbox_config")->required();
   app.add_option("--params", params, "The node's parameter YAML (e.g. config/stiffness_estimator.yaml)");
   app.add_option("--out", out_bag, "Bag to write with the node's output topics");
+  app.add_option("--compression", compression, "Chunk compression of --out: lz4 (as rosbag record --lz4) or none")
+      ->check(CLI::IsMember({"lz4", "none"}));
   app.add_option("--csv", csv_dir, "Directory for one CSV file per output topic");
   app.add_option("--report", report_dir, "Directory for summary.json, report.md and PNG plots (CSV in DIR/csv, outputs in DIR/outputs.bag unless --csv, --out)");
   app.add_option("--torque-topic", torque_topic, "geometry_msgs/WrenchStamped, torque.z [N*m]");
@@ -102,7 +105,8 @@ int run(int argc, char** argv) {
   } catch (const rosbag::BagException& e) {
     throw InvalidInput("--bag = '" + bag_path + "': " + e.what());
   }
-  ReplayWriter writer(pipeline, readOutputSettings(get), out_bag, csv_dir);
+  ReplayWriter writer(pipeline, readOutputSettings(get), out_bag,
+                      compression == "none" ? BagCompression::None : BagCompression::Lz4, csv_dir);
   rosbag::View view(in, [&](const rosbag::ConnectionInfo* c) {
     return topicMatches(c->topic, torque_topic) || topicMatches(c->topic, preload_topic);
   });

@@ -3,39 +3,59 @@
 // (std::to_chars), so identical inputs give identical bytes.
 #pragma once
 
+#include <cstdint>
 #include <cstdio>
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
-#include <rosbag/bag.h>
 
+#include "bag_writer.hpp"  // NOLINT(build/include_subdir)
 #include "drivetrain_stiffness/ros/message_sink.hpp"
 
 namespace drivetrain_stiffness {
 
+/// One CSV file whose rows are formatted and written on a background thread (OrderedWorker), in
+/// row order: the analysis thread only records the cells. Numbers in shortest round-trip form.
 class CsvFile {
  public:
   CsvFile(const std::string& path, const std::string& header);
-  ~CsvFile();
+  ~CsvFile();  ///< close() if it was not called; an error there is printed, not thrown
   CsvFile(const CsvFile&) = delete;
   CsvFile& operator=(const CsvFile&) = delete;
   CsvFile& stamp(const ros::Time& t);  ///< sec.nsec, exact
   CsvFile& number(double v);
   CsvFile& text(const std::string& s);
   void endRow();
+  void close();  ///< writes the rest; throws naming the path on an I/O error
 
  private:
-  void separator();
+  struct Cell {
+    enum class Kind : std::uint8_t { kNumber, kStamp, kText, kEndRow } kind;
+    std::uint32_t sec, nsec;  ///< stamp; for text, sec is the index into Block::texts
+    double number;
+  };
+  struct Block {
+    std::vector<Cell> cells;
+    std::vector<std::string> texts;
+  };
+  void handOver();
+  void format(Block& block);  ///< worker thread
+
+  std::string path_;
   std::FILE* file_ = nullptr;
-  std::string row_;
+  Block block_;
+  std::string formatted_;  ///< worker's buffer
+  bool closed_ = false;
+  OrderedWorker<Block> worker_;  ///< last: its thread uses the members above
 };
 
 class ReplayWriter : public MessageSink {
  public:
   /// out_bag and csv_dir may be empty (not written).
   ReplayWriter(const RigPipeline& pipeline, const OutputSettings& settings, const std::string& out_bag,
-               const std::string& csv_dir);
+               BagCompression compression, const std::string& csv_dir);
   void close();
 
  protected:
@@ -47,7 +67,7 @@ class ReplayWriter : public MessageSink {
   void emitMarkers(const visualization_msgs::MarkerArray& m) override;
 
  private:
-  std::unique_ptr<rosbag::Bag> bag_;
+  std::unique_ptr<BagWriter> bag_;
   std::unique_ptr<CsvFile> stiffness_csv_, te_csv_, spectrum_csv_, resonance_csv_;
   std::vector<std::string> bearing_names_;
 };
