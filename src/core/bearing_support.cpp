@@ -190,7 +190,10 @@ bool BearingSupport::newton(const Vector5d& load, Vector5d& q, int& iterations, 
 
 BearingSolution BearingSupport::solve(const Vector5d& external_load, const Vector5d* warm_start) const {
   static const char* kNames[5] = {"force_x", "force_y", "force_z", "moment_x", "moment_y"};
-  for (int i = 0; i < 5; ++i) requireFinite(std::string("load.") + kNames[i], external_load[i]);
+  for (int i = 0; i < 5; ++i) {
+    // The name is built only on failure: this runs on every stiffness update.
+    if (!std::isfinite(external_load[i])) throwNotFinite(std::string("load.") + kNames[i], external_load[i]);
+  }
   if (tilt_ == TiltCondition::kConstrained && (external_load[kThetaX] != 0.0 || external_load[kThetaY] != 0.0)) {
     throwInvalid(external_load[kThetaX] != 0.0 ? "load.moment_x" : "load.moment_y",
                  external_load[external_load[kThetaX] != 0.0 ? kThetaX : kThetaY],

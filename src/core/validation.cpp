@@ -16,8 +16,8 @@ void throwInvalid(const std::string& field, double value, const std::string& why
   throw InvalidInput(field + " = " + formatValue(value) + ": " + why);
 }
 
-void requireFinite(const std::string& field, double value) {
-  if (!std::isfinite(value)) throwInvalid(field, value, "must be a finite number");
+void throwNotFinite(std::string_view field, double value) {
+  throwInvalid(std::string(field), value, "must be a finite number");
 }
 
 void requirePositive(const std::string& field, double value) {

@@ -4,6 +4,12 @@ namespace drivetrain_stiffness {
 
 drivetrain_stiffness::Stiffness toStiffnessMsg(Stamp stamp, const std::string& frame_id, const StiffnessEstimate& estimate) {
   drivetrain_stiffness::Stiffness out;
+  fillStiffnessMsg(stamp, frame_id, estimate, out);
+  return out;
+}
+
+void fillStiffnessMsg(Stamp stamp, const std::string& frame_id, const StiffnessEstimate& estimate,
+                      drivetrain_stiffness::Stiffness& out) {
   out.header.stamp = toRosTime(stamp);
   out.header.frame_id = frame_id;
   out.torque = estimate.torque;
@@ -15,8 +21,10 @@ drivetrain_stiffness::Stiffness toStiffnessMsg(Stamp stamp, const std::string& f
   out.mesh_stiffness_back = estimate.mesh.current.k2;
   out.drive_flank_loaded = estimate.mesh.current.contact != FlankContact::kBackOnly;
   out.back_flank_loaded = estimate.mesh.current.contact != FlankContact::kDriveOnly;
-  for (const SupportEstimate& s : estimate.supports) {
-    drivetrain_stiffness::BearingStiffness b;
+  out.bearings.resize(estimate.supports.size());
+  for (std::size_t k = 0; k < estimate.supports.size(); ++k) {
+    const SupportEstimate& s = estimate.supports[k];
+    drivetrain_stiffness::BearingStiffness& b = out.bearings[k];
     const BearingSolution& sol = s.solution;
     b.name = s.name;
     b.radial_stiffness = sol.radialStiffness();
@@ -31,12 +39,10 @@ drivetrain_stiffness::Stiffness toStiffnessMsg(Stamp stamp, const std::string& f
     b.iterations = static_cast<std::uint32_t>(sol.iterations);
     for (int i = 0; i < 5; ++i)
       for (int j = 0; j < 5; ++j) b.stiffness_matrix[5 * i + j] = sol.stiffness(i, j);
-    out.bearings.push_back(b);
   }
   // Flat copies of the first two supports (pinion side, gear side), for rqt_plot and PlotJuggler.
-  if (!estimate.supports.empty()) out.radial_stiffness_0 = out.bearings[0].radial_stiffness;
-  if (estimate.supports.size() > 1) out.radial_stiffness_1 = out.bearings[1].radial_stiffness;
-  return out;
+  out.radial_stiffness_0 = estimate.supports.empty() ? 0.0 : out.bearings[0].radial_stiffness;
+  out.radial_stiffness_1 = estimate.supports.size() > 1 ? out.bearings[1].radial_stiffness : 0.0;
 }
 
 drivetrain_stiffness::TransmissionError toTransmissionErrorMsg(Stamp stamp, const std::string& frame_id, const DynamicsSample& s) {

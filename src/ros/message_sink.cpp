@@ -33,7 +33,8 @@ void MessageSink::setTfRate(double hz) {
 }
 
 void MessageSink::stiffness(Stamp stamp, const StiffnessEstimate& estimate) {
-  emitStiffness(toStiffnessMsg(stamp, settings_.frames.rig, estimate));
+  fillStiffnessMsg(stamp, settings_.frames.rig, estimate, stiffness_msg_);
+  emitStiffness(stiffness_msg_);
 }
 
 void MessageSink::transmissionError(Stamp stamp, const DynamicsSample& sample) {

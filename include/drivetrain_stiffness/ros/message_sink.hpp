@@ -48,6 +48,7 @@ class MessageSink : public PipelineSink {
   OutputSettings settings_;
   RigVisualizer visualizer_;
   std::optional<Stamp> last_tf_;
+  drivetrain_stiffness::Stiffness stiffness_msg_;  ///< refilled per update (publish serializes it at once)
 };
 
 }  // namespace drivetrain_stiffness
