@@ -88,6 +88,11 @@ class StiffnessEstimator {
   /// Solves all supports for `torque` with `supports`; throws without touching the state.
   StiffnessEstimate solveAll(double torque, double pinion_angle, const std::vector<Support>& supports) const;
   MeshEstimate meshAt(double signed_mesh_force, double pinion_angle) const;
+  /// Radial load of a support: its radial preload plus its share of the mesh force [N].
+  static double radialLoad(const BearingSupportConfig& c, double mesh_force);
+  /// The ~load_tolerance shortcut: support i's last solution still stands for `radial_load` with
+  /// the support `s` (same model and radial preload, load within the tolerance).
+  bool solutionStands(std::size_t i, const Support& s, double radial_load) const;
   static std::shared_ptr<const BearingSupport> build(const BearingSupportConfig& c);
 
   RigConfig rig_;
