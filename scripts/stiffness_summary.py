@@ -65,7 +65,6 @@ class Summary:
 
 
 def main():
-    rospy.init_node("stiffness_summary")
     idle = rospy.get_param("~idle_timeout", 2.0)       # [s] wall time without output that ends the run
     give_up = rospy.get_param("~start_timeout", 30.0)  # [s] wall time to wait for the first output
     summary = Summary()
@@ -102,4 +101,16 @@ def main():
 
 
 if __name__ == "__main__":
-    main()
+    rospy.init_node("stiffness_summary")
+    # ~done_file: written when the summary ends, "ok" or "failed" (also on an exception), so that
+    # scripts/demo can stop roslaunch with SIGINT, a normal shutdown, instead of roslaunch's red
+    # "REQUIRED process has died" that a required node's end prints. "" = not written.
+    done_file = rospy.get_param("~done_file", "")
+    status = "failed"
+    try:
+        main()
+        status = "ok"
+    finally:
+        if done_file:
+            with open(done_file, "w") as f:
+                f.write(status + "\n")
