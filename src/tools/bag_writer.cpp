@@ -246,17 +246,9 @@ void BagWriter::writeBytes(const void* data, std::size_t n) {
 void BagWriter::close() {
   if (closed_) return;
   closed_ = true;
-  std::exception_ptr error;
-  try {
+  std::exception_ptr error = worker_.flushAndFinish([this] {
     if (chunk_.messages > 0) handOver();
-  } catch (...) {
-    error = std::current_exception();
-  }
-  try {
-    worker_.finish();
-  } catch (...) {
-    if (!error) error = std::current_exception();
-  }
+  });
   if (!error) {
     try {
       // Index section (format 2.0, "Bag header": index_pos): every connection record, then one chunk

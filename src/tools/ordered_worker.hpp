@@ -41,6 +41,25 @@ class OrderedWorker {
     changed_.notify_all();
   }
 
+  /// The owners' close sequence: `flush` submits what the owner still holds, then finish(). Returns
+  /// the first error of the two (null if none) instead of throwing, so the owner can still close
+  /// its file before rethrowing.
+  template <typename Flush>
+  std::exception_ptr flushAndFinish(Flush flush) noexcept {
+    std::exception_ptr error;
+    try {
+      flush();
+    } catch (...) {
+      error = std::current_exception();
+    }
+    try {
+      finish();
+    } catch (...) {
+      if (!error) error = std::current_exception();
+    }
+    return error;
+  }
+
   /// Consumes what is queued, stops the thread, and rethrows the consumer's first error.
   void finish() {
     {

@@ -96,17 +96,9 @@ void CsvFile::format(Block& block) {
 void CsvFile::close() {
   if (closed_) return;
   closed_ = true;
-  std::exception_ptr error;
-  try {
+  std::exception_ptr error = worker_.flushAndFinish([this] {
     if (!block_.cells.empty()) handOver();
-  } catch (...) {
-    error = std::current_exception();
-  }
-  try {
-    worker_.finish();
-  } catch (...) {
-    if (!error) error = std::current_exception();
-  }
+  });
   if (std::fclose(file_) != 0 && !error) {
     error = std::make_exception_ptr(std::runtime_error("cannot write " + path_ + ": " + std::strerror(errno)));
   }
