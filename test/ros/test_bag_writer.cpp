@@ -69,6 +69,12 @@ std::map<std::string, int> writeStream(Writer& out) {
       out.write("/notes", t, text);
       ++counts["/notes"];
     }
+    if (i == 2000) {
+      std_msgs::String big;  // larger than the 4096-byte chunks: a chunk of its own, then a new one
+      big.data = std::string(10000, 'b');
+      out.write("/notes", t, big);
+      ++counts["/notes"];
+    }
     if (i == 1500) {
       geometry_msgs::WrenchStamped late;  // a topic first seen in a later chunk
       late.header.stamp = t;
