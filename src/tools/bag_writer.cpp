@@ -144,11 +144,12 @@ std::uint32_t BagWriter::connection(const std::string& topic, const char* dataty
   return id;
 }
 
-std::uint8_t* BagWriter::beginMessage(std::uint32_t conn, const ros::Time& time, std::uint32_t length) {
+void BagWriter::checkWritable(const std::string& topic, const ros::Time& time) const {
   if (closed_) throw std::logic_error("BagWriter: write after close of '" + path_ + "'");
-  if (time.isZero()) {
-    throw std::invalid_argument("BagWriter: record time 0 on topic '" + connections_[conn].topic + "' (a bag needs time > 0)");
-  }
+  if (time.isZero()) throw std::invalid_argument("BagWriter: record time 0 on topic '" + topic + "' (a bag needs time > 0)");
+}
+
+std::uint8_t* BagWriter::beginMessage(std::uint32_t conn, const ros::Time& time, std::uint32_t length) {
   Chunk& c = chunk_;
   if (c.messages++ == 0) {
     c.start = c.end = time;
@@ -179,10 +180,13 @@ void BagWriter::endMessage() {
 }
 
 void BagWriter::handOver() {
-  worker_.submit(std::move(chunk_));  // rethrows an earlier write error of the worker
+  // The next chunk is set up before submit(), which rethrows an earlier write error of the worker:
+  // a caller that catches it and writes on must find a valid (empty) chunk, not a moved-from one.
+  Chunk full = std::move(chunk_);
   chunk_ = Chunk{};
   chunk_.data.reserve(chunk_bytes_ + 64 * 1024);
   chunk_.index.resize(connections_.size());
+  worker_.submit(std::move(full));
 }
 
 void BagWriter::writeChunk(Chunk& chunk) {

@@ -45,6 +45,7 @@ class BagWriter {
   template <class M>
   void write(const std::string& topic, const ros::Time& time, const M& msg) {
     namespace mt = ros::message_traits;
+    checkWritable(topic, time);  // before connection(): a refused write leaves no connection behind, as in rosbag
     const std::uint32_t conn = connection(topic, mt::datatype(msg), mt::md5sum(msg), mt::definition(msg));
     const std::uint32_t length = ros::serialization::serializationLength(msg);
     ros::serialization::OStream out(beginMessage(conn, time, length), length);
@@ -78,6 +79,7 @@ class BagWriter {
   };
 
   std::uint32_t connection(const std::string& topic, const char* datatype, const char* md5sum, const char* definition);
+  void checkWritable(const std::string& topic, const ros::Time& time) const;
   std::uint8_t* beginMessage(std::uint32_t conn, const ros::Time& time, std::uint32_t length);
   void endMessage();
   void handOver();                ///< queues the current chunk for the worker

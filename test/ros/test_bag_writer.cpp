@@ -3,6 +3,9 @@
 // not, in one chunk and in many. rosbag::View must then read our bag back, by index, with the
 // values written. Needs no master.
 #include <gtest/gtest.h>
+#include <sys/resource.h>
+
+#include <csignal>
 
 #include <fstream>
 #include <functional>
@@ -209,6 +212,55 @@ TEST(BagWriter, BadUseGetsAClearError) {
   EXPECT_NE(open_error.find(missing), std::string::npos) << open_error;
   EXPECT_NE(errorOf<std::invalid_argument>([&] { ds::BagWriter w(tempPath("zero_chunk"), ds::BagCompression::None, 0); })
                 .find("chunk size = 0"), std::string::npos);
+}
+
+// A refused write (time 0, here on a topic not seen before) changes nothing: rosbag checks the time
+// before it makes a connection, so both bags must still be the same bytes.
+TEST(BagWriter, RefusedWriteLeavesNoTrace) {
+  const std::string ours = tempPath("refused_ours"), theirs = tempPath("refused_rosbag");
+  {
+    rosbag::Bag bag(theirs, rosbag::bagmode::Write);
+    writeStream(bag);
+    bag.close();
+  }
+  ds::BagWriter writer(ours, ds::BagCompression::None);
+  std_msgs::String text;
+  EXPECT_THROW(writer.write("/never_written", ros::Time(), text), std::invalid_argument);
+  writeStream(writer);
+  writer.close();
+  EXPECT_TRUE(fileBytes(ours) == fileBytes(theirs)) << "a refused write left a connection behind";
+}
+
+// The worker's write error (the file-size limit here, as a full disk) reaches the writer at a later
+// chunk hand-over; a caller that catches it and keeps writing (the replay's pipeline counts sink
+// errors and goes on) must get errors, not undefined behaviour, and close() must name the path.
+TEST(BagWriter, WritesAfterAWorkerErrorKeepFailingCleanly) {
+  struct rlimit old_limit {};
+  ASSERT_EQ(getrlimit(RLIMIT_FSIZE, &old_limit), 0);
+  void (*old_handler)(int) = std::signal(SIGXFSZ, SIG_IGN);  // EFBIG from write(), not a signal
+  struct rlimit limit = old_limit;
+  limit.rlim_cur = 16 * 1024;  // room for the header and a few 4 KiB chunks
+  ASSERT_EQ(setrlimit(RLIMIT_FSIZE, &limit), 0);
+  const std::string path = tempPath("fsize_limit");
+  int errors = 0;
+  std::string close_error;
+  {
+    ds::BagWriter writer(path, ds::BagCompression::None, 4096);
+    geometry_msgs::WrenchStamped torque;
+    for (int i = 0; i < 2000; ++i) {
+      try {
+        writer.write("/torque", recordTime(i), torque);
+      } catch (const std::runtime_error& e) {
+        ++errors;
+        EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
+      }
+    }
+    close_error = errorOf<std::runtime_error>([&] { writer.close(); });
+  }
+  setrlimit(RLIMIT_FSIZE, &old_limit);
+  std::signal(SIGXFSZ, old_handler);
+  EXPECT_GT(errors, 1) << "the error is reported again at every later hand-over";
+  EXPECT_NE(close_error.find(path), std::string::npos) << close_error;
 }
 
 TEST(BagWriter, DiskFullIsReportedWithThePath) {
