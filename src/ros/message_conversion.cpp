@@ -2,12 +2,6 @@
 
 namespace drivetrain_stiffness {
 
-drivetrain_stiffness::Stiffness toStiffnessMsg(Stamp stamp, const std::string& frame_id, const StiffnessEstimate& estimate) {
-  drivetrain_stiffness::Stiffness out;
-  fillStiffnessMsg(stamp, frame_id, estimate, out);
-  return out;
-}
-
 void fillStiffnessMsg(Stamp stamp, const std::string& frame_id, const StiffnessEstimate& estimate,
                       drivetrain_stiffness::Stiffness& out) {
   out.header.stamp = toRosTime(stamp);

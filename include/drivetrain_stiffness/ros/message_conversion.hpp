@@ -15,9 +15,8 @@ namespace drivetrain_stiffness {
 inline ros::Time toRosTime(Stamp s) { return ros::Time(static_cast<std::uint32_t>(s.sec()), static_cast<std::uint32_t>(s.nsec())); }
 inline Stamp fromRosTime(const ros::Time& t) { return Stamp::fromSecNsec(t.sec, t.nsec); }
 
-drivetrain_stiffness::Stiffness toStiffnessMsg(Stamp stamp, const std::string& frame_id, const StiffnessEstimate& estimate);
-/// The same into `out`, reusing its bearings array and strings: the sinks keep one message and
-/// refill it for every update (1 kHz and more) instead of allocating one per update.
+/// The stiffness message into `out`, reusing its bearings array and strings: the sinks keep one
+/// message and refill it for every update (1 kHz and more) instead of allocating one per update.
 void fillStiffnessMsg(Stamp stamp, const std::string& frame_id, const StiffnessEstimate& estimate,
                       drivetrain_stiffness::Stiffness& out);
 drivetrain_stiffness::TransmissionError toTransmissionErrorMsg(Stamp stamp, const std::string& frame_id, const DynamicsSample& s);
