@@ -121,9 +121,10 @@ const StiffnessEstimate& StiffnessEstimator::setTorque(double torque, double pin
   validateTorque(torque);
   requireFinite("pinion_angle", pinion_angle);
   const double signed_force = meshForce(rig_.gears, 0, torque);
+  const double mesh_force = std::abs(signed_force);
   bool all_stand = true;
   for (std::size_t i = 0; i < supports_.size() && all_stand; ++i) {
-    all_stand = solutionStands(i, supports_[i], radialLoad(supports_[i].config, std::abs(signed_force)));
+    all_stand = solutionStands(i, supports_[i], radialLoad(supports_[i].config, mesh_force));
   }
   if (all_stand) {
     // No support moved past ~load_tolerance: solveAll would copy every support's entry (name, ball
@@ -132,7 +133,7 @@ const StiffnessEstimate& StiffnessEstimator::setTorque(double torque, double pin
     // throw there leaves the state as it was.
     const MeshEstimate mesh = meshAt(signed_force, pinion_angle);
     estimate_.torque = torque;
-    estimate_.mesh_force = std::abs(signed_force);
+    estimate_.mesh_force = mesh_force;
     estimate_.mesh = mesh;
     last_pinion_angle_ = pinion_angle;
     return estimate_;
