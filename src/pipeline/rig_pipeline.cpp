@@ -17,6 +17,8 @@ const char* toString(InputOutcome outcome) {
     case InputOutcome::kOutOfOrder: return "out of order";
     case InputOutcome::kInvalidValue: return "invalid value";
     case InputOutcome::kUnreachableLoad: return "unreachable load";
+    case InputOutcome::kWrongFrame: return "wrong frame";
+    case InputOutcome::kStampRange: return "stamp outside ROS time";
   }
   return "?";
 }
@@ -26,6 +28,9 @@ std::vector<std::pair<std::string, std::uint64_t>> namedCounters(const PipelineC
           {"accepted_preload", c.accepted_preload},       {"rejected_preload", c.rejected_preload},
           {"rejected_zero_stamp", c.zero_stamps},         {"rejected_out_of_order", c.out_of_order},
           {"rejected_invalid_value", c.invalid_values},   {"unreachable_loads", c.unreachable_loads},
+          {"rejected_wrong_frame", c.wrong_frames},       {"rejected_stamp_range", c.stamps_out_of_range},
+          {"dropped_torque", c.dropped_torque},           {"dropped_preload", c.dropped_preload},
+          {"stiffness_shed", c.stiffness_shed},
           {"clock_jump_resets", c.clock_resets},          {"stamp_jump_resets", c.stamp_resets},
           {"gap_restarts", c.gap_restarts},               {"dynamics_errors", c.dynamics_errors},
           {"stiffness_published", c.stiffness_out},       {"stiffness_coalesced", c.stiffness_coalesced},
@@ -65,6 +70,9 @@ void PipelineOptions::validate() const {
   }
   requireNonNegative("stiffness_rate", stiffness_rate);
   if (stiffness_rate > 1e5) throw InvalidInput("stiffness_rate = " + formatValue(stiffness_rate) + ": must be <= 1e5 Hz");
+  if (!torque_frame.empty() && torque_frame.front() == '/') {
+    throw InvalidInput("torque_frame = '" + torque_frame + "': a frame id without a leading '/' (or empty: any frame)");
+  }
 }
 
 RigPipeline::RigPipeline(const RigConfig& rig, const PipelineOptions& options) : rig_(rig), options_(options) {
@@ -132,6 +140,8 @@ InputOutcome RigPipeline::reject(InputOutcome why, const std::string& topic, con
     case InputOutcome::kOutOfOrder: ++counters_.out_of_order; break;
     case InputOutcome::kInvalidValue: ++counters_.invalid_values; break;
     case InputOutcome::kUnreachableLoad: ++counters_.unreachable_loads; break;
+    case InputOutcome::kWrongFrame: ++counters_.wrong_frames; break;
+    case InputOutcome::kStampRange: ++counters_.stamps_out_of_range; break;
     case InputOutcome::kAccepted: break;
   }
   counters_.last_event = topic + " rejected (" + toString(why) + "): " + reason;
@@ -141,6 +151,7 @@ InputOutcome RigPipeline::reject(InputOutcome why, const std::string& topic, con
 InputOutcome RigPipeline::checkStamp(Stamp stamp, std::optional<Stamp>& last, const std::string& topic,
                                      PipelineSink& /*sink*/) {
   if (stamp.isZero()) return InputOutcome::kZeroStamp;
+  if (!stamp.inRosRange()) return InputOutcome::kStampRange;  // rule 7
   if (last && stamp < *last) {
     const double back = secondsBetween(*last, stamp);
     if (back <= options_.stamp_jump_back) return InputOutcome::kOutOfOrder;
@@ -169,10 +180,11 @@ InputOutcome RigPipeline::apply(const char* topic, Stamp stamp, std::optional<St
     return reject(time_ok, topic, "stamp " + formatValue(stamp.toSec()) + " s", rejected);
   }
   try {
-    const StiffnessEstimate& estimate = update();  // transactional: throws without changing the state
+    // Transactional: throws without changing the state. No estimate: a shed input (no stiffness update).
+    const StiffnessEstimate* estimate = update();
     ++accepted;
     last = stamp;
-    afterUpdate(stamp, estimate, sink);
+    if (estimate) afterUpdate(stamp, *estimate, sink);
   } catch (const InvalidInput& e) {
     return reject(InputOutcome::kInvalidValue, topic, e.what(), rejected);
   } catch (const UnreachableLoad& e) {
@@ -181,26 +193,48 @@ InputOutcome RigPipeline::apply(const char* topic, Stamp stamp, std::optional<St
   return InputOutcome::kAccepted;
 }
 
-InputOutcome RigPipeline::torque(Stamp stamp, double torque, PipelineSink& sink) {
+InputOutcome RigPipeline::torque(Stamp stamp, double torque, PipelineSink& sink, const InputOrigin& origin,
+                                 Backlog backlog) {
+  counters_.dropped_torque += torque_seq_.observe(origin.publisher, origin.seq);
+  if (!options_.torque_frame.empty()) {
+    // tf2 strips a leading '/' (ROS 1 frame ids may still carry one).
+    const std::string_view frame = !origin.frame_id.empty() && origin.frame_id.front() == '/' ? origin.frame_id.substr(1)
+                                                                                               : origin.frame_id;
+    if (frame != options_.torque_frame) {
+      return reject(InputOutcome::kWrongFrame, "torque",
+                    "header.frame_id = '" + std::string(origin.frame_id) + "', expected ~torque_frame = '" +
+                        options_.torque_frame + "' (the sign of torque.z selects the loaded flank)",
+                    counters_.rejected_torque);
+    }
+  }
   const InputOutcome outcome = apply(
       "torque", stamp, last_torque_, counters_.accepted_torque, counters_.rejected_torque, sink,
       [&] { estimator_->validateTorque(torque); },
-      [&]() -> const StiffnessEstimate& {
+      [&]() -> const StiffnessEstimate* {
         // The mesh phase counts from the first torque input after a (re)start, as the dynamics do;
         // the origin is kept only if the input is accepted.
-        const Stamp origin = angle_origin_.value_or(stamp);
-        const StiffnessEstimate& e = estimator_->setTorque(torque, pinion_speed_ * secondsBetween(stamp, origin));
-        angle_origin_ = origin;
-        return e;
+        const Stamp origin_stamp = angle_origin_.value_or(stamp);
+        if (backlog == Backlog::kShed) {
+          // Shed: the rules and the dynamics, no stiffness update or message (its estimate would be
+          // replaced by the newest input's before anyone could read it).
+          angle_origin_ = origin_stamp;
+          ++counters_.stiffness_shed;
+          return nullptr;
+        }
+        const StiffnessEstimate& e = estimator_->setTorque(torque, pinion_speed_ * secondsBetween(stamp, origin_stamp));
+        angle_origin_ = origin_stamp;
+        return &e;
       });
   if (outcome == InputOutcome::kAccepted && dynamics_) advanceDynamics(stamp, torque, sink);
   return outcome;
 }
 
-InputOutcome RigPipeline::preload(Stamp stamp, const std::vector<PreloadSetting>& settings, PipelineSink& sink) {
+InputOutcome RigPipeline::preload(Stamp stamp, const std::vector<PreloadSetting>& settings, PipelineSink& sink,
+                                  const InputOrigin& origin) {
+  counters_.dropped_preload += preload_seq_.observe(origin.publisher, origin.seq);
   return apply("preload", stamp, last_preload_, counters_.accepted_preload, counters_.rejected_preload, sink,
                [&] { estimator_->validatePreloads(settings); },
-               [&]() -> const StiffnessEstimate& { return estimator_->setPreloads(settings); });
+               [&]() -> const StiffnessEstimate* { return &estimator_->setPreloads(settings); });
 }
 
 void RigPipeline::afterUpdate(Stamp stamp, const StiffnessEstimate& estimate, PipelineSink& sink) {

@@ -1,6 +1,24 @@
 #include "drivetrain_stiffness/ros/message_conversion.hpp"
 
+#include "drivetrain_stiffness/core/validation.hpp"
+
 namespace drivetrain_stiffness {
+
+ros::Time toRosTime(Stamp s) {
+  if (!s.inRosRange()) {
+    throw InvalidInput("stamp = " + formatValue(s.toSec()) + " s: outside ROS time [0, 4294967295.999999999] s (1970 to 2106)");
+  }
+  return ros::Time(static_cast<std::uint32_t>(s.sec()), static_cast<std::uint32_t>(s.nsec()));
+}
+
+std::vector<PreloadSetting> toPreloadSettings(const drivetrain_stiffness::Preload& msg) {
+  std::vector<PreloadSetting> settings;
+  settings.reserve(msg.bearings.size());
+  for (const auto& b : msg.bearings) {
+    settings.push_back({b.name, b.axial_preload, b.radial_preload, b.inner_interference, b.outer_interference});
+  }
+  return settings;
+}
 
 void fillStiffnessMsg(Stamp stamp, const std::string& frame_id, const StiffnessEstimate& estimate,
                       drivetrain_stiffness::Stiffness& out) {

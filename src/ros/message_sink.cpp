@@ -34,11 +34,14 @@ void MessageSink::setTfRate(double hz) {
 
 void MessageSink::stiffness(Stamp stamp, const StiffnessEstimate& estimate) {
   fillStiffnessMsg(stamp, settings_.frames.rig, estimate, stiffness_msg_);
+  stiffness_msg_.header.seq = stiffness_seq_++;
   emitStiffness(stiffness_msg_);
 }
 
 void MessageSink::transmissionError(Stamp stamp, const DynamicsSample& sample) {
-  emitTransmissionError(toTransmissionErrorMsg(stamp, settings_.frames.pinion, sample));
+  drivetrain_stiffness::TransmissionError te = toTransmissionErrorMsg(stamp, settings_.frames.pinion, sample);
+  te.header.seq = te_seq_++;
+  emitTransmissionError(te);
   if (settings_.tf_rate <= 0.0) return;
   // Decided on sample stamps, so a replay draws the same frames as the live node.
   if (last_tf_ && !(stamp < *last_tf_) && secondsBetween(stamp, *last_tf_) < 1.0 / settings_.tf_rate) return;

@@ -90,6 +90,19 @@ StiffnessEstimatorRos::StiffnessEstimatorRos(ros::NodeHandle nh, ros::NodeHandle
   if (!(diagnostic_period_ > 0.0 && diagnostic_period_ <= 60.0)) {
     throw InvalidInput("~diagnostic_period = " + formatValue(diagnostic_period_) + ": must be in (0, 60] s");
   }
+  shed_queue_age_ = readParam(pnh, "shed_queue_age", shed_queue_age_);
+  if (!(shed_queue_age_ >= 0.0 && shed_queue_age_ <= 60.0)) {
+    throw InvalidInput("~shed_queue_age = " + formatValue(shed_queue_age_) + ": must be in [0, 60] s (0: never shed)");
+  }
+  const double master_check_period = readParam(pnh, "master_check_period", 1.0);
+  if (!(master_check_period >= 0.0 && master_check_period <= 60.0)) {
+    throw InvalidInput("~master_check_period = " + formatValue(master_check_period) + ": must be in [0, 60] s (0: off)");
+  }
+  // Starts under this master: the parameter server outlives a respawned process, so a SIGKILL and
+  // roslaunch's respawn show up as a restart on /diagnostics. Written by the node, not a setting.
+  pnh.getParam("process_starts", starts_);
+  ++starts_;
+  pnh.setParam("process_starts", starts_);
 
   // dynamic_reconfigure starts from the parameter server: seed it with the gearbox's damping, every
   // time (the server writes its values back, so a restart would otherwise reuse the last session's
@@ -106,16 +119,40 @@ StiffnessEstimatorRos::StiffnessEstimatorRos(ros::NodeHandle nh, ros::NodeHandle
   diagnostics_.setHardwareID("drivetrain_stiffness");
   diagnostics_.add("stiffness_estimator", this, &StiffnessEstimatorRos::diagnose);
   // Relative topic names, so launch files can remap and namespace them (wiki.ros.org/Names).
-  torque_sub_ = nh.subscribe("torque", static_cast<std::uint32_t>(queue), &StiffnessEstimatorRos::onTorque, this,
-                             ros::TransportHints().tcpNoDelay());
+  torque_sub_ = nh.subscribe("torque", static_cast<std::uint32_t>(queue),
+                                                           &StiffnessEstimatorRos::onTorque, this, ros::TransportHints().tcpNoDelay());
   preload_sub_ = nh.subscribe("preload", 100, &StiffnessEstimatorRos::onPreload, this);
   // The updater publishes at ~diagnostic_period; poll it often enough to keep that period.
   diagnostic_timer_ = nh.createWallTimer(ros::WallDuration(0.05), [this](const ros::WallTimerEvent&) { onDiagnosticTimer(); });
-  ROS_INFO("stiffness_estimator: %zu bearing supports from %s; dynamics %s", rig.bearings.size(), gearbox_config_.c_str(),
-           pipeline_->dynamics() ? toString(pipeline_->options().fidelity) : "off");
+  private_namespace_ = pnh.getNamespace();
+  pnh.getParam(private_namespace_, parameters_);
+  if (master_check_period > 0.0) {
+    master_watch_ = std::make_unique<MasterWatch>(master_check_period, [this](const std::string& a, const std::string& b) {
+      onMasterRestart(a, b);
+    });
+  }
+  ROS_INFO("stiffness_estimator: %zu bearing supports from %s; dynamics %s; start %d under this master",
+           rig.bearings.size(), gearbox_config_.c_str(), pipeline_->dynamics() ? toString(pipeline_->options().fidelity) : "off",
+           starts_);
 }
 
 StiffnessEstimatorRos::~StiffnessEstimatorRos() = default;
+
+void StiffnessEstimatorRos::onMasterRestart(const std::string& old_run_id, const std::string& new_run_id) {
+  // The parameters go first, so that the respawned process reads the same settings it had.
+  if (parameters_.valid()) ros::param::set(private_namespace_, parameters_);
+  ROS_ERROR("stiffness_estimator: the ROS master restarted (run_id %s -> %s): this node's topics are no longer "
+            "registered; its parameters are restored and it exits for roslaunch to respawn it (rig.launch: respawn)",
+            old_run_id.c_str(), new_run_id.c_str());
+  ros::requestShutdown();
+}
+
+Backlog StiffnessEstimatorRos::backlogOf(const ros::Time& receipt) const {
+  // Receipt time is stamped by roscpp when the message entered the subscriber queue; its age here
+  // is the queue's backlog, on the same clock whatever the publisher's stamps say.
+  if (shed_queue_age_ <= 0.0 || receipt.isZero()) return Backlog::kNone;
+  return (ros::Time::now() - receipt).toSec() > shed_queue_age_ ? Backlog::kShed : Backlog::kNone;
+}
 
 void StiffnessEstimatorRos::observeClock() {
   if (pipeline_->observeClock(fromRosTime(ros::Time::now()), *publishers_)) {
@@ -134,28 +171,30 @@ void StiffnessEstimatorRos::finishInput(const ros::WallTime& start, double cpu_s
   if (cpu > deadline_) ++missed_deadlines_cpu_;
 }
 
-void StiffnessEstimatorRos::onTorque(const geometry_msgs::WrenchStamped::ConstPtr& msg) {
+void StiffnessEstimatorRos::onTorque(const ros::MessageEvent<const geometry_msgs::WrenchStamped>& event) {
   const ros::WallTime start = ros::WallTime::now();
   const double cpu_start = threadCpuSeconds();
+  const geometry_msgs::WrenchStamped& msg = *event.getConstMessage();
   std::lock_guard<std::mutex> lock(mutex_);
   observeClock();
-  const InputOutcome outcome = pipeline_->torque(fromRosTime(msg->header.stamp), msg->wrench.torque.z, *publishers_);
+  const InputOrigin origin{event.getPublisherName(), msg.header.seq, msg.header.frame_id};
+  const InputOutcome outcome = pipeline_->torque(fromRosTime(msg.header.stamp), msg.wrench.torque.z, *publishers_, origin,
+                                                 backlogOf(event.getReceiptTime()));
   if (outcome != InputOutcome::kAccepted) {
     ROS_WARN_THROTTLE(1.0, "stiffness_estimator: %s", pipeline_->counters().last_event.c_str());
   }
   finishInput(start, cpu_start);
 }
 
-void StiffnessEstimatorRos::onPreload(const drivetrain_stiffness::Preload::ConstPtr& msg) {
+void StiffnessEstimatorRos::onPreload(const ros::MessageEvent<const drivetrain_stiffness::Preload>& event) {
   const ros::WallTime start = ros::WallTime::now();
   const double cpu_start = threadCpuSeconds();
+  const drivetrain_stiffness::Preload& msg = *event.getConstMessage();
   std::lock_guard<std::mutex> lock(mutex_);
   observeClock();
-  std::vector<PreloadSetting> settings;
-  for (const auto& b : msg->bearings) {
-    settings.push_back({b.name, b.axial_preload, b.radial_preload, b.inner_interference, b.outer_interference});
-  }
-  if (pipeline_->preload(fromRosTime(msg->header.stamp), settings, *publishers_) != InputOutcome::kAccepted) {
+  const InputOrigin origin{event.getPublisherName(), msg.header.seq, msg.header.frame_id};
+  if (pipeline_->preload(fromRosTime(msg.header.stamp), toPreloadSettings(msg), *publishers_, origin) !=
+      InputOutcome::kAccepted) {
     ROS_WARN_THROTTLE(1.0, "stiffness_estimator: %s", pipeline_->counters().last_event.c_str());
   }
   finishInput(start, cpu_start);
@@ -216,10 +255,26 @@ void StiffnessEstimatorRos::diagnose(diagnostic_updater::DiagnosticStatusWrapper
   if (resets > resets_at_last_report_) {
     status.mergeSummaryf(diagnostic_msgs::DiagnosticStatus::WARN, "estimator reset: %s", c.last_event.c_str());
   }
+  if (c.dropped_torque + c.dropped_preload > dropped_at_last_report_) {
+    status.mergeSummaryf(diagnostic_msgs::DiagnosticStatus::WARN, "%llu inputs dropped on the way since last report",
+                         static_cast<unsigned long long>(c.dropped_torque + c.dropped_preload - dropped_at_last_report_));
+  }
+  if (c.stiffness_shed > shed_at_last_report_) {
+    status.mergeSummaryf(diagnostic_msgs::DiagnosticStatus::WARN, "overloaded: %llu torque inputs shed since last report",
+                         static_cast<unsigned long long>(c.stiffness_shed - shed_at_last_report_));
+  }
+  if (starts_ > 1 && !restart_reported_) {
+    status.mergeSummaryf(diagnostic_msgs::DiagnosticStatus::WARN, "restarted (start %d under this master)", starts_);
+    restart_reported_ = true;
+  }
   rejected_at_last_report_ = rejected;
   resets_at_last_report_ = resets;
+  dropped_at_last_report_ = c.dropped_torque + c.dropped_preload;
+  shed_at_last_report_ = c.stiffness_shed;
   for (const auto& [key, count] : namedCounters(c)) status.add(key, count);
   status.add("last_event", c.last_event);
+  status.add("process_restarts", starts_ - 1);
+  status.add("unnumbered_publishers", pipeline_->unnumberedPublishers());
   status.add("missed_deadlines", missed_deadlines_);
   status.add("missed_deadlines_cpu", missed_deadlines_cpu_);
   status.add("deadline [s]", deadline_);

@@ -118,17 +118,16 @@ int run(int argc, char** argv) {
     if (!first) first = m.getTime();
     last = m.getTime();
     pipeline.observeClock(fromRosTime(m.getTime()), writer);
+    // The recording publisher's caller id: its header.seq numbers what rosbag record received.
+    const std::string& publisher = m.getCallerId();
     if (topicMatches(m.getTopic(), torque_topic)) {
       if (auto w = m.instantiate<geometry_msgs::WrenchStamped>()) {
-        pipeline.torque(fromRosTime(w->header.stamp), w->wrench.torque.z, writer);
+        pipeline.torque(fromRosTime(w->header.stamp), w->wrench.torque.z, writer,
+                        {publisher, w->header.seq, w->header.frame_id});
         continue;
       }
     } else if (auto p = m.instantiate<drivetrain_stiffness::Preload>()) {
-      std::vector<PreloadSetting> settings;
-      for (const auto& b : p->bearings) {
-        settings.push_back({b.name, b.axial_preload, b.radial_preload, b.inner_interference, b.outer_interference});
-      }
-      pipeline.preload(fromRosTime(p->header.stamp), settings, writer);
+      pipeline.preload(fromRosTime(p->header.stamp), toPreloadSettings(*p), writer, {publisher, p->header.seq, p->header.frame_id});
       continue;
     }
     ++wrong_type;  // counted and reported, never silently skipped

@@ -36,7 +36,8 @@ int main(int argc, char** argv) {
     const std::vector<RigEvent> events = makeScenario(rig, spec);
     const std::int64_t epoch_ns = std::llround(epoch * 1e9);
     rosbag::Bag bag(out, rosbag::bagmode::Write);
-    std::uint32_t seq = 0;
+    // header.seq numbers each stream from 0, as rospy does; a gap is a message lost on the way.
+    std::uint32_t seq = 0, preload_seq = 0;
     for (const RigEvent& e : events) {
       const std::int64_t ns = epoch_ns + std::llround(e.t * 1e9);  // record time: when the rig sent it
       const ros::Time record(static_cast<std::uint32_t>(ns / 1000000000LL), static_cast<std::uint32_t>(ns % 1000000000LL));
@@ -46,14 +47,17 @@ int main(int argc, char** argv) {
                                                        static_cast<std::uint32_t>(stamp_ns % 1000000000LL));
       if (e.torque) {
         geometry_msgs::WrenchStamped w;
+        seq += e.lost_before;
         w.header.seq = seq++;
         w.header.stamp = stamp;
-        w.header.frame_id = "pinion";
+        w.header.frame_id = e.frame_id;
         w.wrench.torque.z = *e.torque;
         bag.write(torque_topic, record, w);
       }
       if (!e.preload.empty()) {
         drivetrain_stiffness::Preload p;
+        preload_seq += e.lost_before;
+        p.header.seq = preload_seq++;
         p.header.stamp = stamp;
         for (const PreloadSetting& s : e.preload) {
           drivetrain_stiffness::BearingPreload b;

@@ -1,4 +1,6 @@
-#include "rig_scenarios.hpp"  // NOLINT(build/include_subdir)
+#include "rig_scenarios.hpp"
+
+#include <algorithm>  // NOLINT(build/include_subdir)
 
 #include <cmath>
 #include <limits>
@@ -65,6 +67,12 @@ std::vector<RigEvent> makeScenario(const RigConfig& rig, const ScenarioSpec& spe
       for (int i = 0; i < 5; ++i) events.push_back({t1 + 0.6 * dt, mean, {}, false, 0.0});  // burst, equal stamps
       std::vector<PreloadSetting> bad = preloadOfAll(rig, -100.0);   // negative preload
       events.push_back({t1 + 0.7 * dt, std::nullopt, bad});
+      RigEvent after_loss{t1 + 0.8 * dt, mean, {}};                 // 3 torque messages lost on the way
+      after_loss.lost_before = 3;
+      events.push_back(after_loss);
+      RigEvent wrong_frame{t1 + 0.9 * dt, mean, {}};                // torque about the gear's axis
+      wrong_frame.frame_id = "gear";
+      events.push_back(wrong_frame);
       // From 3/4 on, the stamps run 0.6 duration behind (a recording that looped; more than the default
       // ~stamp_jump_back of 1 s for durations over 1.7 s): one reset, then accepted.
       for (RigEvent& e : events) {
@@ -97,6 +105,8 @@ std::vector<RigEvent> makeScenario(const RigConfig& rig, const ScenarioSpec& spe
   } else {
     throw InvalidInput("scenario = '" + s + "': unknown; one of:\n" + scenarioHelp());
   }
+  // In send order, as a rig numbers its messages (header.seq) and rosbag::View plays them.
+  std::stable_sort(events.begin(), events.end(), [](const RigEvent& a, const RigEvent& b) { return a.t < b.t; });
   return events;
 }
 

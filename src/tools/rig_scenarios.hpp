@@ -2,6 +2,7 @@
 // what drivetrain_rig_sim writes to bags and the tests feed to the pipeline. ROS-free.
 #pragma once
 
+#include <cstdint>
 #include <optional>
 #include <string>
 #include <vector>
@@ -17,6 +18,8 @@ struct RigEvent {
   std::vector<PreloadSetting> preload;  ///< preload input (empty: none)
   bool zero_stamp = false;              ///< fault injection: publish with a stamp of 0
   double stamp_offset = 0.0;            ///< [s] fault injection: stamp = epoch + t + offset
+  std::uint32_t lost_before = 0;        ///< fault injection: messages of its stream lost before it (seq gap)
+  std::string frame_id = "pinion";      ///< torque frame (fault injection: another one)
 };
 
 struct ScenarioSpec {

@@ -4,7 +4,8 @@
 #  2. the counters show each injected fault under its own rule (README, "Time and input rules"):
 #     NaN, Inf and absurd torque and a negative preload -> invalid value (4); one zero stamp; one
 #     stamp 0.5 s late -> out of order; five equal stamps -> accepted; the 1.2 s jump back of the
-#     stamps -> one stamp reset; nothing else rejected, every message accounted for.
+#     stamps -> one stamp reset; a torque in the gear's frame -> wrong frame; a gap of 3 in the
+#     torque's header.seq -> 3 dropped; nothing else rejected, every message accounted for.
 # usage: check_replay.sh BIN_DIR SOURCE_DIR WORK_DIR
 set -euo pipefail
 bin=$1 src=$2 work=$3
@@ -20,11 +21,13 @@ import csv, json, math, sys
 d = json.load(open(sys.argv[1]))
 c = d["counters"]
 expected = {"rejected_invalid_value": 4, "rejected_zero_stamp": 1, "rejected_out_of_order": 1, "stamp_jump_resets": 1,
-            "rejected_torque": 5, "rejected_preload": 1, "unreachable_loads": 0, "dynamics_errors": 0, "clock_jump_resets": 0}
+            "rejected_wrong_frame": 1, "dropped_torque": 3, "dropped_preload": 0, "rejected_stamp_range": 0,
+            "stiffness_shed": 0, "rejected_torque": 6, "rejected_preload": 1, "unreachable_loads": 0,
+            "dynamics_errors": 0, "clock_jump_resets": 0}
 bad = {k: (c[k], v) for k, v in expected.items() if c[k] != v}
-# Every message is either accepted or rejected: 2000 clean torque + 2 preload + 11 injected.
+# Every message is either accepted or rejected: 2000 clean torque + 2 preload + 13 injected.
 total = c["accepted_torque"] + c["rejected_torque"] + c["accepted_preload"] + c["rejected_preload"]
-if total != d["messages"] or d["messages"] != 2013:
+if total != d["messages"] or d["messages"] != 2015:
     bad["accounted"] = (total, d["messages"])
 rows = list(csv.DictReader(open(sys.argv[2])))
 if any(not math.isfinite(float(r["dynamic_te"])) for r in rows) or len(rows) != c["transmission_error_published"]:

@@ -19,8 +19,16 @@
 //     unless the accepted stamps already restarted in the new timeline (rule 2 came first).
 //  6. Preload stamps follow rules 1, 2 and 5 on their own stream; an older preload never overrides
 //     a newer one.
+//  7. A stamp outside ROS time (negative, or past 2106-02-07, uint32 seconds) is rejected: no
+//     output could carry it.
 // Value rules: NaN, Inf, negative and absurd values are rejected by the core classes
-// (InvalidInput naming the field); the state is left as it was. Every input is counted.
+// (InvalidInput naming the field); the state is left as it was. A torque whose header.frame_id is
+// not ~torque_frame is rejected before its value is read (the sign of torque.z selects the loaded
+// flank, and only that frame says which way is positive). Every input is counted.
+// Transport rules: messages a numbering publisher sent that never arrived are counted as dropped
+// (SequenceGaps). An input the caller marks as backlogged (it waited too long in the subscriber
+// queue) passes every rule and drives the dynamics at its stamp, but skips the stiffness update
+// and message (counted as shed), so an overloaded node catches up instead of overflowing its queue.
 #pragma once
 
 #include <array>
@@ -28,12 +36,14 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "drivetrain_stiffness/core/dynamics_estimator.hpp"
 #include "drivetrain_stiffness/core/modal_analysis.hpp"
 #include "drivetrain_stiffness/core/reduced_models.hpp"
 #include "drivetrain_stiffness/core/stiffness_estimator.hpp"
+#include "drivetrain_stiffness/pipeline/sequence_gaps.hpp"
 #include "drivetrain_stiffness/spectral/sliding_spectrum.hpp"
 
 namespace drivetrain_stiffness {
@@ -47,6 +57,9 @@ struct Stamp {
   std::int64_t nsec() const { return ns % 1000000000LL; }
   double toSec() const { return static_cast<double>(sec()) + 1e-9 * static_cast<double>(nsec()); }
   bool isZero() const { return ns == 0; }
+  /// ros::Time's range: uint32 seconds and nanoseconds (1970 to 2106-02-07).
+  static constexpr std::int64_t kMaxRosNs = 4294967295LL * 1000000000LL + 999999999LL;
+  bool inRosRange() const { return ns >= 0 && ns <= kMaxRosNs; }
 };
 inline bool operator<(Stamp a, Stamp b) { return a.ns < b.ns; }
 inline bool operator==(Stamp a, Stamp b) { return a.ns == b.ns; }
@@ -74,6 +87,7 @@ struct PipelineOptions {
   int spectrum_hop = 256;            ///< [samples] between spectra
   double pinion_speed_rpm = 1000.0;  ///< [rpm] nominal speed for the mesh phase
   double stiffness_rate = 0.0;       ///< [Hz] largest stiffness output rate; 0 = every accepted input
+  std::string torque_frame;          ///< required header.frame_id of torque inputs; empty = any
   void validate() const;
 };
 
@@ -99,14 +113,27 @@ class PipelineSink {
 };
 
 /// Why an input was not accepted (kAccepted otherwise).
-enum class InputOutcome { kAccepted, kZeroStamp, kOutOfOrder, kInvalidValue, kUnreachableLoad };
+enum class InputOutcome { kAccepted, kZeroStamp, kOutOfOrder, kInvalidValue, kUnreachableLoad, kWrongFrame, kStampRange };
 const char* toString(InputOutcome outcome);
+
+/// Where an input came from (its message header and publisher): for the drop count and the frame rule.
+struct InputOrigin {
+  std::string_view publisher;  ///< the publisher's caller id; messages are numbered per publisher
+  std::uint32_t seq = 0;       ///< header.seq (0 throughout when the publisher does not number)
+  std::string_view frame_id;   ///< header.frame_id
+};
+
+/// Whether the caller's subscriber queue holds a backlog at this input (see the transport rules).
+enum class Backlog { kNone, kShed };
 
 /// Counters of everything the pipeline saw; nothing is dropped without being counted here.
 struct PipelineCounters {
   std::uint64_t accepted_torque = 0, rejected_torque = 0;
   std::uint64_t accepted_preload = 0, rejected_preload = 0;
   std::uint64_t zero_stamps = 0, out_of_order = 0, invalid_values = 0, unreachable_loads = 0;
+  std::uint64_t wrong_frames = 0, stamps_out_of_range = 0;
+  std::uint64_t dropped_torque = 0, dropped_preload = 0;  ///< numbered messages that never arrived
+  std::uint64_t stiffness_shed = 0;  ///< backlogged torque inputs: dynamics only, no stiffness update
   std::uint64_t clock_resets = 0, stamp_resets = 0, gap_restarts = 0;
   std::uint64_t dynamics_errors = 0;
   std::uint64_t stiffness_out = 0, stiffness_coalesced = 0;  ///< published, and skipped by ~stiffness_rate
@@ -127,8 +154,12 @@ class RigPipeline {
   /// The caller's clock (ROS time now, or the bag's record time). Returns true if it went back
   /// by more than ~clock_jump_back and everything was reset.
   bool observeClock(Stamp now, PipelineSink& sink);
-  InputOutcome torque(Stamp stamp, double torque, PipelineSink& sink);
-  InputOutcome preload(Stamp stamp, const std::vector<PreloadSetting>& settings, PipelineSink& sink);
+  InputOutcome torque(Stamp stamp, double torque, PipelineSink& sink, const InputOrigin& origin = {},
+                      Backlog backlog = Backlog::kNone);
+  InputOutcome preload(Stamp stamp, const std::vector<PreloadSetting>& settings, PipelineSink& sink,
+                       const InputOrigin& origin = {});
+  /// Publishers whose drops cannot be seen (they leave header.seq constant), over both streams.
+  std::size_t unnumberedPublishers() const { return torque_seq_.unnumberedPublishers() + preload_seq_.unnumberedPublishers(); }
   /// Back to the configured preloads, zero torque, dynamics restarted at the next torque input.
   void reset(const std::string& reason);
 
@@ -150,7 +181,8 @@ class RigPipeline {
   InputOutcome reject(InputOutcome why, const std::string& topic, const std::string& reason, std::uint64_t& rejected);
   /// Rules 1, 2 and 5 for one stream; returns kAccepted or the rejection (counted by the caller).
   InputOutcome checkStamp(Stamp stamp, std::optional<Stamp>& last, const std::string& topic, PipelineSink& sink);
-  /// `validate` (the value checks), the stamp rules, then `update` (a StiffnessEstimator call);
+  /// `validate` (the value checks), the stamp rules, then `update` (a StiffnessEstimator call that
+  /// returns the new estimate, or nullptr for a shed input);
   /// counts and reports the outcome.
   template <typename Validate, typename Update>
   InputOutcome apply(const char* topic, Stamp stamp, std::optional<Stamp>& last, std::uint64_t& accepted,
@@ -168,6 +200,7 @@ class RigPipeline {
   std::unique_ptr<DynamicsEstimator> dynamics_;
   std::unique_ptr<SlidingSpectrum> te_spectrum_;
   PipelineCounters counters_;
+  SequenceGaps torque_seq_, preload_seq_;
   std::optional<Stamp> last_torque_, last_preload_, last_clock_, last_stiffness_out_;
   std::optional<Stamp> angle_origin_;
   bool stamps_restarted_ = false;  ///< rule 2 reset since the last clock jump (rule 5 then skips one)

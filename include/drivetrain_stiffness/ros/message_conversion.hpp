@@ -4,6 +4,7 @@
 
 #include <ros/time.h>
 
+#include "drivetrain_stiffness/Preload.h"
 #include "drivetrain_stiffness/Resonance.h"
 #include "drivetrain_stiffness/SpectralPeaks.h"
 #include "drivetrain_stiffness/Stiffness.h"
@@ -12,8 +13,13 @@
 
 namespace drivetrain_stiffness {
 
-inline ros::Time toRosTime(Stamp s) { return ros::Time(static_cast<std::uint32_t>(s.sec()), static_cast<std::uint32_t>(s.nsec())); }
+/// Refuses (InvalidInput) a stamp that ros::Time cannot hold instead of narrowing it to uint32:
+/// the pipeline never makes one (time rule 7), so this only guards other callers.
+ros::Time toRosTime(Stamp s);
 inline Stamp fromRosTime(const ros::Time& t) { return Stamp::fromSecNsec(t.sec, t.nsec); }
+
+/// A Preload message's settings, as the pipeline takes them (node and replay).
+std::vector<PreloadSetting> toPreloadSettings(const drivetrain_stiffness::Preload& msg);
 
 /// The stiffness message into `out`, reusing its bearings array and strings: the sinks keep one
 /// message and refill it for every update (1 kHz and more) instead of allocating one per update.

@@ -4,6 +4,7 @@
 // publishing and the replay tool by writing a bag and CSV files.
 #pragma once
 
+#include <cstdint>
 #include <optional>
 #include <vector>
 
@@ -49,6 +50,9 @@ class MessageSink : public PipelineSink {
   RigVisualizer visualizer_;
   std::optional<Stamp> last_tf_;
   drivetrain_stiffness::Stiffness stiffness_msg_;  ///< refilled per update (publish serializes it at once)
+  // header.seq of the stiffness and transmission_error messages, numbered from 0 as rospy does
+  // (roscpp leaves it to the caller): a subscriber sees from the gaps what it did not receive.
+  std::uint32_t stiffness_seq_ = 0, te_seq_ = 0;
 };
 
 }  // namespace drivetrain_stiffness

@@ -31,6 +31,9 @@ PipelineOptions readPipelineOptions(const Get& get, const RigConfig& rig) {
   // One speed for both mesh phases (stiffness and dynamics): the dynamics block's, unless overridden.
   o.pinion_speed_rpm = get("pinion_speed_rpm", rig.dynamics.present ? rig.dynamics.speed_rpm : 1000.0);
   o.stiffness_rate = get("stiffness_rate", o.stiffness_rate);
+  // The torque sensor's frame: torque.z about the pinion axis (right-hand rule, REP 103). A torque in
+  // another frame has another sign convention, so it is refused unless the user names the frame.
+  o.torque_frame = get("torque_frame", std::string("pinion"));
   try {
     o.validate();
   } catch (const InvalidInput& e) {

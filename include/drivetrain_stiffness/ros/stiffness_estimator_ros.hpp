@@ -20,6 +20,7 @@
 #include "drivetrain_stiffness/EstimatorConfig.h"
 #include "drivetrain_stiffness/Preload.h"
 #include "drivetrain_stiffness/pipeline/rig_pipeline.hpp"
+#include "drivetrain_stiffness/ros/master_watch.hpp"
 
 namespace drivetrain_stiffness {
 
@@ -32,8 +33,13 @@ class StiffnessEstimatorRos {
 
  private:
   class Publishers;
-  void onTorque(const geometry_msgs::WrenchStamped::ConstPtr& msg);
-  void onPreload(const drivetrain_stiffness::Preload::ConstPtr& msg);
+  void onTorque(const ros::MessageEvent<const geometry_msgs::WrenchStamped>& event);
+  void onPreload(const ros::MessageEvent<const drivetrain_stiffness::Preload>& event);
+  /// The input waited in the subscriber queue for longer than ~shed_queue_age: shed its stiffness.
+  Backlog backlogOf(const ros::Time& receipt) const;
+  /// A new master knows nothing of this node: put its parameters there and exit, for roslaunch to
+  /// respawn it (rig.launch sets respawn) into a clean registration. Called from the watch thread.
+  void onMasterRestart(const std::string& old_run_id, const std::string& new_run_id);
   void onReconfigure(drivetrain_stiffness::EstimatorConfig& config, std::uint32_t level);
   /// ROS time going back (a looping bag) resets the pipeline; called under the lock.
   void observeClock();
@@ -61,6 +67,13 @@ class StiffnessEstimatorRos {
   std::uint64_t processed_ = 0;
   double diagnostic_period_ = 1.0;  // [s] wall time between /diagnostics publications
   ros::WallTime last_diagnostic_wall_;
+  double shed_queue_age_ = 0.01;  // [s] queue wait beyond which a torque input is shed; 0 = never
+  int starts_ = 1;                // of this node under this master (respawns included)
+  bool restart_reported_ = false;
+  std::uint64_t dropped_at_last_report_ = 0, shed_at_last_report_ = 0;
+  std::string private_namespace_;
+  XmlRpc::XmlRpcValue parameters_;  // the private parameters at start-up, for a restarted master
+  std::unique_ptr<MasterWatch> master_watch_;
 };
 
 }  // namespace drivetrain_stiffness
