@@ -1,7 +1,8 @@
 #!/usr/bin/python3
 """The plotting entry points name real, flat, numeric message fields: every topic path in
-config/drivetrain.perspective (rqt_plot) and every `rostopic echo -p` / PlotJuggler field the
-README lists must exist in msg/*.msg as a scalar number (rqt_plot plots float(field)).
+config/drivetrain.perspective (rqt_plot) and every `rostopic echo -p` / PlotJuggler field that
+docs/ros_api.md (section "Plotting") or README.md names as `/topic/field` must exist in msg/*.msg
+as a scalar number (rqt_plot plots float(field)).
 usage: check_plot_fields.py SOURCE_DIR"""
 import ast
 import json
@@ -31,8 +32,11 @@ paths = []
 for name, group in groups.items():
     if name.startswith("plugin__rqt_plot__Plot__"):
         paths += ast.literal_eval(group["groups"]["plugin"]["keys"]["topics"]["repr"])
-readme = open(os.path.join(src, "README.md")).read()
-paths += re.findall(r"`(/(?:transmission_error|stiffness|resonance|te_spectrum)/[a-z0-9_]+)`", readme)
+PATH_RE = r"`(/(?:transmission_error|stiffness|resonance|te_spectrum)/[a-z0-9_]+)`"
+documented = re.findall(PATH_RE, open(os.path.join(src, "docs", "ros_api.md")).read())
+if not documented:
+    sys.exit("docs/ros_api.md lists no plot paths (section \"Plotting\")")
+paths += documented + re.findall(PATH_RE, open(os.path.join(src, "README.md")).read())
 bad = []
 for p in paths:
     topic, field = p.rsplit("/", 1)

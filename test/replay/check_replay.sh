@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # drivetrain_replay on the bundled fault-injection bag (drivetrain_rig_sim --scenario faults):
 #  1. twice: the output bags and every CSV file are byte-identical (the pipeline reads no clock);
-#  2. the counters show each injected fault under its own rule (README, "Time and input rules"):
+#  2. the counters show each injected fault under its own rule (docs/ros_api.md, "Time and input rules"):
 #     NaN, Inf and absurd torque and a negative preload -> invalid value (4); one zero stamp; one
 #     stamp 0.5 s late -> out of order; five equal stamps -> accepted; the 1.2 s jump back of the
 #     stamps -> one stamp reset; a torque in the gear's frame -> wrong frame; a gap of 3 in the

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The bags under test/data/ are what drivetrain_rig_sim writes for their documented scenarios
-# (README, "drivetrain_rig_sim"): regenerate each and compare byte for byte.
+# (docs/tools.md, "drivetrain_rig_sim"): regenerate each and compare byte for byte.
 # usage: check_scenario_bags.sh BIN_DIR SOURCE_DIR WORK_DIR
 set -euo pipefail
 bin=$1 src=$2 work=$3
