@@ -3,7 +3,9 @@
 // each stiffness answer), the counts, and the node's own figures from /diagnostics (deadline
 // misses, processing time, resident memory after ~warmup [s] and at the end).
 // It must be the only torque (and preload) source of the node: answers are counted, not matched.
-// Run it with launch/latency.launch. Messages go to stderr (ROS_WARN and above), so stdout is JSON.
+// Run it with launch/latency.launch (or scripts/soak). Messages go to stderr (ROS_WARN and above),
+// so stdout is JSON; ~out names a file for the same JSON.
+#include <fstream>
 #include <iostream>
 
 #include "drivetrain_stiffness/ros/parameters.hpp"
@@ -15,7 +17,9 @@ int main(int argc, char** argv) {
   ros::init(argc, argv, "drivetrain_latency");
   ros::NodeHandle nh, pnh("~");
   LoadOptions options;
+  std::string out;  // also write the JSON here (scripts/soak reads it; roslaunch mixes stdout)
   try {
+    out = readParam(pnh, "out", out);
     options.rate_hz = readParam(pnh, "rate", options.rate_hz);
     options.duration_s = readParam(pnh, "duration", options.duration_s);
     options.warmup_s = readParam(pnh, "warmup", options.warmup_s);
@@ -39,6 +43,10 @@ int main(int argc, char** argv) {
   report["duration_s"] = options.duration_s;
   report["warmup_s"] = options.warmup_s;
   std::cout << report.dump(2) << std::endl;
+  if (!out.empty() && !(std::ofstream(out) << report.dump(2) << "\n")) {
+    ROS_FATAL("drivetrain_latency: ~out = '%s': cannot be written", out.c_str());
+    return 1;
+  }
   if (result.answered != result.sent) {
     ROS_WARN("drivetrain_latency: %llu of %llu inputs answered", static_cast<unsigned long long>(result.answered),
              static_cast<unsigned long long>(result.sent));

@@ -33,6 +33,14 @@ void waitUntil(const ros::WallTime& deadline) {
 nlohmann::json toJson(const LoadResult& r) {
   return {{"sent", r.sent},
           {"answered", r.answered},
+          {"answers_lost", r.answers_lost},
+          {"te_received", r.te_received},
+          {"te_lost", r.te_lost},
+          {"non_finite", r.non_finite},
+          {"dropped_torque", r.dropped_torque},
+          {"stiffness_shed", r.stiffness_shed},
+          {"stiffness_coalesced", r.stiffness_coalesced},
+          {"te_published", r.te_published},
           {"late_sends", r.late_sends},
           {"max_send_lateness_s", r.max_send_lateness_s},
           {"send_rate_hz", r.send_rate_hz},
@@ -59,10 +67,11 @@ LoadGenerator::LoadGenerator(const ros::NodeHandle& nh, const LoadOptions& optio
   nh_.setCallbackQueue(&queue_);
   // Both queues hold every message of the run: a drop on our side (a slow callback thread, a
   // backed-up socket) would otherwise be blamed on the node.
-  const double expected = options_.rate_hz * (options_.duration_s + options_.settle_timeout_s);
+  const double expected = (options_.rate_hz > 0.0 ? options_.rate_hz : 1e5) * (options_.duration_s + options_.settle_timeout_s);
   const auto queue = static_cast<std::uint32_t>(std::clamp(expected, 1000.0, 1e8));
   torque_pub_ = nh_.advertise<geometry_msgs::WrenchStamped>("torque", queue);
   stiffness_sub_ = nh_.subscribe("stiffness", queue, &LoadGenerator::onStiffness, this, ros::TransportHints().tcpNoDelay());
+  te_sub_ = nh_.subscribe("transmission_error", queue, &LoadGenerator::onTransmissionError, this, ros::TransportHints().tcpNoDelay());
   diagnostics_sub_ = nh_.subscribe("/diagnostics", 100, &LoadGenerator::onDiagnostics, this);
   spinner_ = std::make_unique<ros::AsyncSpinner>(1, &queue_);
   spinner_->start();
@@ -99,8 +108,22 @@ bool LoadGenerator::connect() {
 
 void LoadGenerator::onStiffness(const Stiffness::ConstPtr& msg) {
   const ros::Time now = ros::Time::now();  // before the lock: its wait is not the node's latency
+  bool finite = std::isfinite(msg->torque) && std::isfinite(msg->mesh_force) && std::isfinite(msg->mesh_stiffness) &&
+                std::isfinite(msg->radial_stiffness_0) && std::isfinite(msg->radial_stiffness_1);
+  for (const auto& b : msg->bearings) finite = finite && std::isfinite(b.radial_stiffness);
   std::lock_guard<std::mutex> lock(mutex_);
   latencies_s_.push_back((now - msg->header.stamp).toSec());
+  // Gaps after the first answer this generator saw (the node numbers from 0 over its lifetime).
+  answers_lost_ += answer_gaps_.observe("stiffness", msg->header.seq);
+  if (!finite) ++non_finite_;
+}
+
+void LoadGenerator::onTransmissionError(const TransmissionError::ConstPtr& msg) {
+  const bool finite = std::isfinite(msg->dynamic_te) && std::isfinite(msg->static_te) && std::isfinite(msg->mesh_force);
+  std::lock_guard<std::mutex> lock(mutex_);
+  ++te_received_;
+  te_lost_ += te_gaps_.observe("transmission_error", msg->header.seq);
+  if (!finite) ++non_finite_;
 }
 
 void LoadGenerator::onDiagnostics(const diagnostic_msgs::DiagnosticArray::ConstPtr& msg) {
@@ -117,6 +140,10 @@ void LoadGenerator::onDiagnostics(const diagnostic_msgs::DiagnosticArray::ConstP
       else if (kv.key == "missed_deadlines_cpu") diag_.missed_deadlines_cpu = std::strtoull(v, nullptr, 10);
       else if (kv.key == "max_processing_cpu [s]") diag_.max_processing_cpu_s = std::strtod(v, nullptr);
       else if (kv.key == "stiffness_published") diag_.stiffness_published = std::strtoull(v, nullptr, 10);
+      else if (kv.key == "dropped_torque") diag_.dropped_torque = std::strtoull(v, nullptr, 10);
+      else if (kv.key == "stiffness_shed") diag_.stiffness_shed = std::strtoull(v, nullptr, 10);
+      else if (kv.key == "stiffness_coalesced") diag_.stiffness_coalesced = std::strtoull(v, nullptr, 10);
+      else if (kv.key == "transmission_error_published") diag_.te_published = std::strtoull(v, nullptr, 10);
       else if (kv.key == "max_processing [s]") diag_.max_processing_s = std::strtod(v, nullptr);
       else if (kv.key == "mean_processing [s]") diag_.mean_processing_s = std::strtod(v, nullptr);
       else if (kv.key == "resident_memory [kB]") diag_.rss_end_kb = std::strtod(v, nullptr);
@@ -132,8 +159,10 @@ void LoadGenerator::onDiagnostics(const diagnostic_msgs::DiagnosticArray::ConstP
 }
 
 LoadResult LoadGenerator::run() {
-  const double period = 1.0 / options_.rate_hz;  // [s]
-  const auto total = static_cast<std::uint64_t>(std::llround(options_.rate_hz * options_.duration_s));
+  const bool burst = options_.rate_hz <= 0.0;
+  // A burst sends as many as 1e5 Hz would in duration_s, as fast as publish() returns.
+  const double period = burst ? 0.0 : 1.0 / options_.rate_hz;  // [s]
+  const auto total = static_cast<std::uint64_t>(std::llround((burst ? 1e5 : options_.rate_hz) * options_.duration_s));
   {
     std::lock_guard<std::mutex> lock(mutex_);
     latencies_s_.clear();
@@ -154,13 +183,16 @@ LoadResult LoadGenerator::run() {
   for (std::uint64_t i = 0; i < total && ros::ok(); ++i) {
     // Absolute deadlines: a late send does not shift the ones after it (they catch up), so the
     // count and the mean rate are exact; lateness is counted instead.
-    const double t = static_cast<double>(i) * period;  // [s] on the schedule
+    const double t = static_cast<double>(i) * (burst ? 1e-5 : period);  // [s] on the schedule
     const ros::WallTime deadline = start + ros::WallDuration(t);
-    waitUntil(deadline);
+    if (!burst) waitUntil(deadline);
     const ros::WallTime now = ros::WallTime::now();
-    const double lateness = (now - deadline).toSec();
-    if (lateness > period) ++r.late_sends;  // its slot was missed
-    r.max_send_lateness_s = std::max(r.max_send_lateness_s, lateness);
+    if (!burst) {
+      const double lateness = (now - deadline).toSec();
+      if (lateness > period) ++r.late_sends;  // its slot was missed
+      r.max_send_lateness_s = std::max(r.max_send_lateness_s, lateness);
+    }
+    m.header.seq = next_seq_++;  // roscpp leaves it to us; the node counts the gaps as dropped
     m.header.stamp = ros::Time::now();
     m.wrench.torque.z = options_.nominal_torque + options_.ripple_torque * std::sin(2.0 * M_PI * options_.ripple_hz * t);
     torque_pub_.publish(m);
@@ -170,10 +202,13 @@ LoadResult LoadGenerator::run() {
   }
   if (r.sent > 1) r.send_rate_hz = static_cast<double>(r.sent - 1) / (last_send - first_send).toSec();
 
-  // The answers still in flight, then two more reports: the second was surely made after the node
-  // processed the last input.
+  // The answers still in flight (all of them, or until the node's counters say everything is
+  // accounted for), then two more reports: the second was surely made after the node processed
+  // the last input.
   const std::uint64_t sent = r.sent;
-  waitFor([&] { return latencies_s_.size() >= sent; }, options_.settle_timeout_s);
+  waitFor([&] { return latencies_s_.size() + answers_lost_ >= sent - diag_.dropped_torque - diag_.stiffness_shed -
+                                                                   diag_.stiffness_coalesced - diag_.rejected_torque; },
+          options_.settle_timeout_s);
   std::uint64_t reports = 0;
   {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -192,6 +227,10 @@ LoadResult LoadGenerator::run() {
     r.late_sends = sends.late_sends;
     r.max_send_lateness_s = sends.max_send_lateness_s;
     r.send_rate_hz = sends.send_rate_hz;
+    r.answers_lost = answers_lost_;
+    r.te_received = te_received_;
+    r.te_lost = te_lost_;
+    r.non_finite = non_finite_;
   }
   r.answered = latencies.size();
   if (!latencies.empty()) {

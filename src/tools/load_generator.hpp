@@ -19,11 +19,13 @@
 #include <ros/ros.h>
 
 #include "drivetrain_stiffness/Stiffness.h"
+#include "drivetrain_stiffness/TransmissionError.h"
+#include "drivetrain_stiffness/pipeline/sequence_gaps.hpp"
 
 namespace drivetrain_stiffness {
 
 struct LoadOptions {
-  double rate_hz = 1000.0;      ///< [Hz] torque send rate
+  double rate_hz = 1000.0;      ///< [Hz] torque send rate; 0 = as fast as publish() goes (outruns the node)
   double duration_s = 10.0;     ///< [s] sending time
   double warmup_s = 2.0;        ///< [s] after the first send: the first RSS after it is the baseline
   double connect_timeout_s = 20.0;  ///< [s] for the node to appear on all three topics
@@ -38,6 +40,9 @@ struct LoadOptions {
 struct LoadResult {
   static constexpr double kNone = std::numeric_limits<double>::quiet_NaN();
   std::uint64_t sent = 0, answered = 0;
+  std::uint64_t answers_lost = 0;   ///< stiffness answers the node published that never arrived (seq gaps)
+  std::uint64_t te_received = 0, te_lost = 0;  ///< transmission_error samples received, and lost (seq gaps)
+  std::uint64_t non_finite = 0;     ///< answers or samples with a NaN or Inf in a number field
   std::uint64_t late_sends = 0;     ///< sent more than one period after their deadline
   double max_send_lateness_s = 0.0;  ///< [s] worst send time - deadline
   double send_rate_hz = 0.0;         ///< [Hz] mean rate between the first and the last send
@@ -46,6 +51,7 @@ struct LoadResult {
   bool diagnostics_seen = false;
   double rss_warmup_kb = kNone, rss_end_kb = kNone;  ///< [kB] VmRSS of the node
   std::uint64_t accepted_torque = 0, rejected_torque = 0, missed_deadlines = 0, stiffness_published = 0;
+  std::uint64_t dropped_torque = 0, stiffness_shed = 0, stiffness_coalesced = 0, te_published = 0;
   std::uint64_t missed_deadlines_warmup = 0;
   std::uint64_t missed_deadlines_cpu = 0;     ///< the node's own CPU time beyond ~deadline
   std::uint64_t missed_deadlines_cpu_warmup = 0;  ///< of those, by the RSS baseline report
@@ -68,6 +74,7 @@ class LoadGenerator {
 
  private:
   void onStiffness(const Stiffness::ConstPtr& msg);
+  void onTransmissionError(const TransmissionError::ConstPtr& msg);
   void onDiagnostics(const diagnostic_msgs::DiagnosticArray::ConstPtr& msg);
   /// Waits (wall time) until done() or the timeout; done() is called under mutex_.
   template <typename F>
@@ -77,11 +84,14 @@ class LoadGenerator {
   ros::CallbackQueue queue_;  // own queue: the spinner serves only these subscriptions
   ros::NodeHandle nh_;
   ros::Publisher torque_pub_;
-  ros::Subscriber stiffness_sub_, diagnostics_sub_;
+  ros::Subscriber stiffness_sub_, te_sub_, diagnostics_sub_;
+  std::uint32_t next_seq_ = 0;  // header.seq of the next torque sent: the node counts gaps as drops
   std::unique_ptr<ros::AsyncSpinner> spinner_;
 
   std::mutex mutex_;  // the spinner's thread writes, run() reads
   std::vector<double> latencies_s_;
+  SequenceGaps answer_gaps_, te_gaps_;
+  std::uint64_t answers_lost_ = 0, te_received_ = 0, te_lost_ = 0, non_finite_ = 0;
   ros::WallTime warmup_end_;  // zero until run() starts: no RSS baseline before that
   std::uint64_t diagnostics_received_ = 0;
   LoadResult diag_;  // diagnostics fields only
