@@ -68,3 +68,10 @@ catkin_add_gtest(bag_writer_tests test/ros/test_bag_writer.cpp)
 target_include_directories(bag_writer_tests PRIVATE ${CMAKE_CURRENT_SOURCE_DIR}/src/tools include)
 target_link_libraries(bag_writer_tests ${PROJECT_NAME}_bag_writer ${catkin_LIBRARIES})
 add_dependencies(bag_writer_tests ${PROJECT_NAME}_generate_messages_cpp)
+
+# Fault drills: the node killed with SIGKILL and the master restarted under it; roslaunch's respawn
+# (rig.launch) brings it back, the restart is counted, and it answers again.
+add_test(NAME fault_recovery_sigkill_and_master_restart
+  COMMAND ${CATKIN_DEVEL_PREFIX}/env.sh ${CMAKE_CURRENT_SOURCE_DIR}/test/ros/check_fault_recovery.sh
+          ${CMAKE_CURRENT_SOURCE_DIR} ${CMAKE_CURRENT_BINARY_DIR}/fault_recovery_test)
+set_tests_properties(fault_recovery_sigkill_and_master_restart PROPERTIES TIMEOUT 600)

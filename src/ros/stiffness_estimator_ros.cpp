@@ -100,8 +100,9 @@ StiffnessEstimatorRos::StiffnessEstimatorRos(ros::NodeHandle nh, ros::NodeHandle
   }
   // Starts under this master: the parameter server outlives a respawned process, so a SIGKILL and
   // roslaunch's respawn show up as a restart on /diagnostics. Written by the node, not a setting.
-  pnh.getParam("process_starts", starts_);
-  ++starts_;
+  int previous_starts = 0;
+  pnh.getParam("process_starts", previous_starts);
+  starts_ = previous_starts + 1;
   pnh.setParam("process_starts", starts_);
 
   // dynamic_reconfigure starts from the parameter server: seed it with the gearbox's damping, every

@@ -147,7 +147,9 @@ TEST(RigPipeline, LongGapRestartsTheDynamics) {
 // configured preloads return, and the replayed inputs are accepted again; a clock that only
 // repeats itself does not reset.
 TEST(RigPipeline, ClockJumpBackResetsEverything) {
-  RigPipeline p(rig(), PipelineOptions{});
+  PipelineOptions o;
+  o.clock_jump_back = 0.0;  // any step back (tf2's rule); the default is tested below
+  RigPipeline p(rig(), o);
   Recorder r;
   const double configured_k = p.estimator().current().supports[0].solution.radialStiffness();
   p.observeClock(at(0.0), r);
@@ -163,6 +165,29 @@ TEST(RigPipeline, ClockJumpBackResetsEverything) {
   EXPECT_FALSE(p.dynamics()->started());
   EXPECT_EQ(p.torque(at(0.0), 0.1, r), InputOutcome::kAccepted);  // the loop's first input again
   EXPECT_EQ(p.counters().out_of_order, 0u);
+}
+
+// The default ~clock_jump_back (1 s) keeps the state through an NTP-sized step back (0.5 s; ntpd
+// steps offsets over 0.128 s): the inputs stamped in the repeated half second are out of order
+// (rejected, counted), the stiffness estimate and the running dynamics stay; a looping bag's jump
+// back by its 2 s length still resets everything.
+TEST(RigPipeline, DefaultClockRuleTellsAnNtpStepFromALoopingBag) {
+  RigPipeline p(rig(), PipelineOptions{});
+  Recorder r;
+  for (int k = 0; k <= 2000; ++k) {
+    p.observeClock(at(1e-3 * k), r);
+    p.torque(at(1e-3 * k), 0.1, r);
+  }
+  ASSERT_TRUE(p.dynamics()->started());
+  EXPECT_FALSE(p.observeClock(at(1.5), r));  // stepped back by 0.5 s
+  EXPECT_EQ(p.torque(at(1.5), 0.1, r), InputOutcome::kOutOfOrder);
+  EXPECT_TRUE(p.dynamics()->started());
+  EXPECT_EQ(p.counters().clock_resets, 0u);
+  EXPECT_EQ(p.counters().out_of_order, 1u);
+  EXPECT_EQ(p.torque(at(2.001), 0.1, r), InputOutcome::kAccepted);  // caught up
+  EXPECT_TRUE(p.observeClock(at(0.0), r));  // the bag looped
+  EXPECT_EQ(p.counters().clock_resets, 1u);
+  EXPECT_FALSE(p.dynamics()->started());
 }
 
 // Same inputs, same order: bit-identical outputs (what makes drivetrain_replay reproducible).

@@ -81,7 +81,13 @@ struct PipelineOptions {
   double output_rate = 1000.0;       ///< [Hz] transmission_error rate, rounded to divide the mesh period
   double max_gap = 1.0;              ///< [s] a longer forward input gap restarts the dynamics
   double stamp_jump_back = 1.0;      ///< [s] a stamp further back than this restarts everything
-  double clock_jump_back = 0.0;      ///< [s] the clock going back by more than this resets everything
+  /// [s] the clock going back by more than this resets everything. 1 s tells a looping bag (it
+  /// jumps back by its length, seconds to hours) from a clock correction on a live rig: ntpd steps
+  /// offsets over 0.128 s (its default step threshold) and slews smaller ones; chrony's usual
+  /// `makestep 1.0 3` steps only by more than 1 s and only in its first three updates. A smaller
+  /// step back keeps the state; inputs stamped before the last accepted one are then rejected as
+  /// out of order (rule 2, counted) until the clock has caught up.
+  double clock_jump_back = 1.0;
   double resonance_threshold = 0.01; ///< [-] relative frequency change that republishes resonance
   int spectrum_window = 1024;        ///< [samples] TE spectrum window
   int spectrum_hop = 256;            ///< [samples] between spectra
