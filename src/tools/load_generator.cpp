@@ -60,7 +60,8 @@ nlohmann::json toJson(const LoadResult& r) {
           {"max_processing_s", r.max_processing_s},
           {"mean_processing_s", r.mean_processing_s},
           {"rss_warmup_kb", r.rss_warmup_kb},
-          {"rss_end_kb", r.rss_end_kb}};
+          {"rss_end_kb", r.rss_end_kb},
+          {"heap_end_b", r.heap_end_b}};
 }
 
 LoadGenerator::LoadGenerator(const ros::NodeHandle& nh, const LoadOptions& options) : options_(options), nh_(nh) {
@@ -147,6 +148,7 @@ void LoadGenerator::onDiagnostics(const diagnostic_msgs::DiagnosticArray::ConstP
       else if (kv.key == "max_processing [s]") diag_.max_processing_s = std::strtod(v, nullptr);
       else if (kv.key == "mean_processing [s]") diag_.mean_processing_s = std::strtod(v, nullptr);
       else if (kv.key == "resident_memory [kB]") diag_.rss_end_kb = std::strtod(v, nullptr);
+      else if (kv.key == "heap_in_use [B]") diag_.heap_end_b = std::strtod(v, nullptr);
     }
     // The baseline: the first report after the warm-up (start-up allocations are done by then).
     const bool warm = !warmup_end_.isZero() && ros::WallTime::now() >= warmup_end_;
@@ -171,6 +173,11 @@ LoadResult LoadGenerator::run() {
   // Linux lets a sleep overrun by the timer slack, 50 us by default: half a 10 kHz period.
   prctl(PR_SET_TIMERSLACK, 1UL, 0UL, 0UL, 0UL);
 
+  LoadResult baseline;  // the node's counters before this run
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    baseline = diag_;
+  }
   LoadResult r;
   geometry_msgs::WrenchStamped m;
   m.header.frame_id = "pinion";
@@ -202,12 +209,14 @@ LoadResult LoadGenerator::run() {
   }
   if (r.sent > 1) r.send_rate_hz = static_cast<double>(r.sent - 1) / (last_send - first_send).toSec();
 
-  // The answers still in flight (all of them, or until the node's counters say everything is
-  // accounted for), then two more reports: the second was surely made after the node processed
-  // the last input.
+  // Settle on the node's own counts, not on time: first until it has accounted for every input
+  // sent (accepted, rejected or seen dropped: the newest always arrives, as roscpp's queues drop
+  // the oldest), then until every answer it published has arrived or been seen missing. Both
+  // against its counters when this run started (they are totals since the node started).
   const std::uint64_t sent = r.sent;
-  waitFor([&] { return latencies_s_.size() + answers_lost_ >= sent - diag_.dropped_torque - diag_.stiffness_shed -
-                                                                   diag_.stiffness_coalesced - diag_.rejected_torque; },
+  const auto processed = [](const LoadResult& d) { return d.accepted_torque + d.rejected_torque + d.dropped_torque; };
+  waitFor([&] { return processed(diag_) - processed(baseline) >= sent; }, options_.settle_timeout_s);
+  waitFor([&] { return latencies_s_.size() + answers_lost_ >= diag_.stiffness_published - baseline.stiffness_published; },
           options_.settle_timeout_s);
   std::uint64_t reports = 0;
   {

@@ -50,6 +50,7 @@ struct LoadResult {
   // From the node's /diagnostics (its counters since it started).
   bool diagnostics_seen = false;
   double rss_warmup_kb = kNone, rss_end_kb = kNone;  ///< [kB] VmRSS of the node
+  double heap_end_b = kNone;  ///< [B] the node's live heap at the end (queues drained)
   std::uint64_t accepted_torque = 0, rejected_torque = 0, missed_deadlines = 0, stiffness_published = 0;
   std::uint64_t dropped_torque = 0, stiffness_shed = 0, stiffness_coalesced = 0, te_published = 0;
   std::uint64_t missed_deadlines_warmup = 0;

@@ -6,7 +6,7 @@
 // It never reads a clock: stamps and "now" are arguments, so a replay with the recorded stamps is
 // bit-identical to the live run that saw the same inputs in the same order.
 //
-// Time rules (README, "Time and input rules"):
+// Time rules (docs/ros_api.md, "Time and input rules"):
 //  1. A zero stamp is rejected (the publisher forgot to stamp; its time is unknown).
 //  2. A torque stamp earlier than the last accepted one by at most ~stamp_jump_back is out of order:
 //     rejected (the dynamics cannot integrate backwards). Earlier by more: the source restarted
@@ -21,6 +21,7 @@
 //     a newer one.
 //  7. A stamp outside ROS time (negative, or past 2106-02-07, uint32 seconds) is rejected: no
 //     output could carry it.
+//  8. A failed integration (dynamics_errors) restarts the model at that input.
 // Value rules: NaN, Inf, negative and absurd values are rejected by the core classes
 // (InvalidInput naming the field); the state is left as it was. A torque whose header.frame_id is
 // not ~torque_frame is rejected before its value is read (the sign of torque.z selects the loaded
