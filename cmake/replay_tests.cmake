@@ -9,6 +9,19 @@ add_test(NAME rig_sim_reproduces_bundled_bags
   COMMAND ${CMAKE_CURRENT_SOURCE_DIR}/test/replay/check_scenario_bags.sh ${DEVEL_BIN} ${CMAKE_CURRENT_SOURCE_DIR}
           ${CMAKE_CURRENT_BINARY_DIR}/scenario_test)
 
+# Damaged bags made at test time from torque_ripple.bag and an LZ4 copy of it: truncated inside the
+# first chunk, mid-file, just before the index; an unclosed recording (no index, unfinished chunk);
+# garbage over a record and inside an LZ4 chunk; a damaged bag header. Each: exit 4, the error and
+# summary.json's status name the file and the byte offset, the outputs are closed and valid, and the
+# torque inputs accepted equal the torque messages before the damage (python rosbag on the original).
+# Also: a text file is refused with exit 1 naming it; the intact bag gives exit 0 and status "ok".
+add_test(NAME replay_damaged_bags_read_up_to_the_damage
+  COMMAND ${CATKIN_DEVEL_PREFIX}/env.sh /usr/bin/python3 ${CMAKE_CURRENT_SOURCE_DIR}/test/replay/check_damaged_bags.py
+          ${DEVEL_BIN} ${CMAKE_CURRENT_SOURCE_DIR} ${CMAKE_CURRENT_BINARY_DIR}/damaged_bags_test)
+# --help documents the exit codes, 4 (incomplete) included.
+add_test(NAME replay_help_lists_exit_codes COMMAND ${DEVEL_BIN}/drivetrain_replay --help)
+set_tests_properties(replay_help_lists_exit_codes PROPERTIES PASS_REGULAR_EXPRESSION "Exit codes.*\n  4  incomplete")
+
 # The report: summary, markdown and the three plots (matplotlib from Debian's python3).
 add_test(NAME replay_report
   COMMAND ${CATKIN_DEVEL_PREFIX}/env.sh ${DEVEL_BIN}/drivetrain_replay --bag ${CMAKE_CURRENT_SOURCE_DIR}/test/data/preload_ramp.bag

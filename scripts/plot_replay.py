@@ -4,7 +4,11 @@
 plots plus report.md with the key figures.
 
 usage: plot_replay.py OUTPUT_BAG REPORT_DIR [INPUT_BAG]
-Times are seconds since the first output stamp; SI units (TE in m shown in um)."""
+Times are seconds since the first output stamp; SI units (TE in m shown in um).
+drivetrain_replay writes REPORT_DIR/summary.json before it runs this script: when its status says
+the replay is incomplete (a truncated or damaged bag), report.md says so at the top, and a run with
+no outputs before the damage gets a report.md without plots instead of an error."""
+import json
 import math
 import os
 import sys
@@ -41,6 +45,24 @@ def finish(fig, axes, ylabels, title, path):
     plt.close(fig)
 
 
+def replay_status(report):
+    """drivetrain_replay's status ("ok" or "incomplete: ...") from REPORT_DIR/summary.json; None
+    without one (e.g. a report of a live run's `rosbag record`)."""
+    try:
+        with open(os.path.join(report, "summary.json")) as f:
+            return json.load(f).get("status")
+    except (OSError, ValueError):
+        return None
+
+
+def write_header(f, status, source, out_bag):
+    f.write("# Stiffness estimator report\n\n")
+    if status and status != "ok":
+        f.write("**Incomplete replay**: the bag could not be read to its end; the outputs and the figures below "
+                "cover the messages before the damage only.\n\n`%s`\n\n" % status)
+    f.write("Source: `%s`; outputs: `%s`.\n\n" % (source, out_bag))
+
+
 def moving_mean(values, n):
     out, acc = [], 0.0
     for i, v in enumerate(values):
@@ -57,8 +79,14 @@ def main():
     out_bag, report = sys.argv[1], sys.argv[2]
     source = sys.argv[3] if len(sys.argv) > 3 else out_bag
     os.makedirs(report, exist_ok=True)
+    status = replay_status(report)
     te, st, res = read(out_bag)
     starts = [s[0][0] for s in (te, st, res) if s]
+    if not starts and status and status != "ok":
+        with open(os.path.join(report, "report.md"), "w") as f:
+            write_header(f, status, source, out_bag)
+            f.write("No outputs: the damage comes before the first of them.\n")
+        return
     if not starts:
         sys.exit("plot_replay.py: no /transmission_error, /stiffness or /resonance in " + out_bag)
     t0 = min(starts)
@@ -103,7 +131,7 @@ def main():
     finish(fig, [ax], ["natural frequency [kHz]"], "Resonance estimates", os.path.join(report, "resonance.png"))
 
     with open(os.path.join(report, "report.md"), "w") as f:
-        f.write("# Stiffness estimator report\n\nSource: `%s`; outputs: `%s`.\n\n" % (source, out_bag))
+        write_header(f, status, source, out_bag)
         f.write("| quantity | value |\n|---|---|\n")
         f.write("| span of outputs | %.3f s |\n" % (max(r[0] for r in te + st) - t0 if te or st else 0.0))
         f.write("| transmission_error samples | %d |\n| stiffness messages | %d |\n| resonance updates | %d |\n"

@@ -4,6 +4,8 @@
 // the record time plays the role of the node's ROS clock for the clock-jump rule), and writes the
 // node's output topics to a bag, CSV files and a short report with plots. Identical inputs give
 // bit-identical outputs (nothing depends on the wall clock except the printed speed).
+// A truncated or damaged bag is read up to the damage (ReplayInput): the outputs up to there are
+// written and closed, the summary's status says "incomplete: ..." and the exit code is 4.
 //   drivetrain_replay --bag rig.bag --config config/gearboxes/seed_servo.yaml --out out.bag --report report/
 #include <CLI/CLI.hpp>
 #include <chrono>
@@ -13,13 +15,13 @@
 #include <nlohmann/json.hpp>
 
 #include <geometry_msgs/WrenchStamped.h>
-#include <rosbag/view.h>
 #include <yaml-cpp/yaml.h>
 
 #include "drivetrain_stiffness/Preload.h"
 #include "drivetrain_stiffness/config/yaml_config.hpp"
 #include "drivetrain_stiffness/ros/node_parameters.hpp"
 #include "python_script.hpp"  // NOLINT(build/include_subdir)
+#include "replay_input.hpp"   // NOLINT(build/include_subdir)
 #include "replay_writer.hpp"  // NOLINT(build/include_subdir)
 
 namespace drivetrain_stiffness {
@@ -51,9 +53,17 @@ class YamlParams {
   YAML::Node root_;
 };
 
-bool topicMatches(const std::string& topic, const std::string& wanted) {
-  return topic == wanted || topic == "/" + wanted || "/" + topic == wanted;
-}
+// Exit codes (docs/replay_exit_codes.md); 2 is left unused, as before.
+constexpr int kExitOk = 0, kExitRefused = 1, kExitWrongType = 3, kExitIncomplete = 4;
+constexpr char kExitCodesHelp[] =
+    "Exit codes (docs/replay_exit_codes.md):\n"
+    "  0  ok: the whole bag was read\n"
+    "  1  refused or failed: bad options, an unreadable config or parameter file, a file that is not a\n"
+    "     bag (nothing replayed); an output or the report that cannot be written\n"
+    "  3  messages of the wrong type on the torque or preload topic (counted as wrong_type)\n"
+    "  4  incomplete: the bag is truncated or damaged; the outputs up to the damage are written and\n"
+    "     closed, and the summary's status says \"incomplete: 'FILE' at byte OFFSET: ...\" (takes\n"
+    "     precedence over 3)";
 
 void ensureDirectory(const std::string& option, const std::string& dir) {
   std::error_code ec;
@@ -71,6 +81,7 @@ nlohmann::json countersJson(const PipelineCounters& c) {
 
 int run(int argc, char** argv) {
   CLI::App app{"Replays a recorded bag through the stiffness estimator's pipeline (no master needed)"};
+  app.footer(kExitCodesHelp);
   std::string bag_path, config, params, out_bag, csv_dir, report_dir, torque_topic = "torque", preload_topic = "preload";
   std::string plot_script = DRIVETRAIN_PLOT_REPLAY_SCRIPT;
   std::string compression = "lz4";
@@ -87,7 +98,11 @@ int run(int argc, char** argv) {
   app.add_option("--preload-topic", preload_topic, "drivetrain_stiffness/Preload");
   app.add_option("--plot-script", plot_script, "matplotlib script: OUTPUT_BAG REPORT_DIR INPUT_BAG");
   app.add_flag("!--no-plots", plots, "Write the report without PNG plots");
-  CLI11_PARSE(app, argc, argv);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {  // --help is one too (exit code 0); CLI11's own codes are 100+
+    return app.exit(e) == 0 ? kExitOk : kExitRefused;
+  }
 
   const RigConfig rig = loadRigFile(config);
   const YamlParams get(params);
@@ -99,21 +114,15 @@ int run(int argc, char** argv) {
   }
   if (!csv_dir.empty()) ensureDirectory("--csv", csv_dir);
 
-  rosbag::Bag in;
-  try {
-    in.open(bag_path, rosbag::bagmode::Read);
-  } catch (const rosbag::BagException& e) {
-    throw InvalidInput("--bag = '" + bag_path + "': " + e.what());
-  }
+  // Reads each message before the loop gets it: damage ends the input (input.damage()), it is
+  // never thrown out of the loop, so the outputs below are always closed.
+  ReplayInput input(bag_path, torque_topic, preload_topic);
   ReplayWriter writer(pipeline, readOutputSettings(get), out_bag,
                       compression == "none" ? BagCompression::None : BagCompression::Lz4, csv_dir);
-  rosbag::View view(in, [&](const rosbag::ConnectionInfo* c) {
-    return topicMatches(c->topic, torque_topic) || topicMatches(c->topic, preload_topic);
-  });
   std::uint64_t messages = 0, wrong_type = 0;
   std::optional<ros::Time> first, last;
   const auto start = std::chrono::steady_clock::now();  // only for the printed speed
-  for (const rosbag::MessageInstance& m : view) {
+  for (const ReplayMessage& m : input) {
     ++messages;
     if (!first) first = m.getTime();
     last = m.getTime();
@@ -138,6 +147,12 @@ int run(int argc, char** argv) {
 
   nlohmann::json summary;
   summary["bag"] = bag_path;
+  summary["status"] = "ok";
+  if (const auto& damage = input.damage()) {
+    summary["status"] = "incomplete: " + damage->describe(bag_path) + "; " + std::to_string(messages) + " messages read before it";
+    summary["damage"] = {{"file", bag_path}, {"offset", damage->offset}, {"what", damage->what}, {"messages_before", messages}};
+    std::cerr << "drivetrain_replay: " << summary["status"].get<std::string>() << "\n";
+  }
   summary["messages"] = messages;
   summary["wrong_type"] = wrong_type;
   summary["span_s"] = span;
@@ -157,7 +172,8 @@ int run(int argc, char** argv) {
   }
   summary["speed"] = speed;
   std::cout << summary.dump(2) << std::endl;
-  return wrong_type > 0 ? 3 : 0;
+  if (input.damage()) return kExitIncomplete;
+  return wrong_type > 0 ? kExitWrongType : kExitOk;
 }
 
 }  // namespace
@@ -168,6 +184,6 @@ int main(int argc, char** argv) {
     return drivetrain_stiffness::run(argc, argv);
   } catch (const std::exception& e) {
     std::cerr << "drivetrain_replay: " << e.what() << "\n";
-    return 1;
+    return drivetrain_stiffness::kExitRefused;
   }
 }

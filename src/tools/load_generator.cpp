@@ -199,7 +199,8 @@ LoadResult LoadGenerator::run() {
       if (lateness > period) ++r.late_sends;  // its slot was missed
       r.max_send_lateness_s = std::max(r.max_send_lateness_s, lateness);
     }
-    m.header.seq = next_seq_++;  // roscpp leaves it to us; the node counts the gaps as dropped
+    // roscpp numbers header.seq itself (per publication, gaps = losses); set it the same way anyway.
+    m.header.seq = next_seq_++;
     m.header.stamp = ros::Time::now();
     m.wrench.torque.z = options_.nominal_torque + options_.ripple_torque * std::sin(2.0 * M_PI * options_.ripple_hz * t);
     torque_pub_.publish(m);

@@ -54,7 +54,8 @@ TEST(SequenceGaps, WrapsRestartsAndUnnumberedPublishers) {
   EXPECT_EQ(gaps.observe("/rig", 0u), 0u);  // numbers went back: the publisher restarted
   EXPECT_EQ(gaps.renumberings(), 1u);
   EXPECT_EQ(gaps.observe("/rig", 1u), 0u);
-  // A roscpp publisher that leaves header.seq at 0: nothing can be seen, and it is said so.
+  // A publisher whose header.seq stays constant (a zero-copy nodelet publication that does not set
+  // it): nothing can be seen, and it is said so.
   for (int i = 0; i < 5; ++i) EXPECT_EQ(gaps.observe("/cpp_driver", 0u), 0u);
   EXPECT_EQ(gaps.unnumberedPublishers(), 1u);
 }

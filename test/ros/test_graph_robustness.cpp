@@ -37,7 +37,12 @@ bool waitWall(const std::function<bool()>& done, double seconds) {
 class GraphTest : public testing::Test {
  protected:
   void SetUp() override {
-    torque_pub_ = nh_.advertise<geometry_msgs::WrenchStamped>("torque", 100);
+    // As rosbag play publishes a recording (has_header false): roscpp then sends header.seq as we
+    // set it instead of numbering the messages itself, so the test can make a gap.
+    ros::AdvertiseOptions options = ros::AdvertiseOptions::create<geometry_msgs::WrenchStamped>(
+        "torque", 100, ros::SubscriberStatusCallback(), ros::SubscriberStatusCallback(), ros::VoidConstPtr(), nullptr);
+    options.has_header = false;
+    torque_pub_ = nh_.advertise(options);
     stiffness_sub_ = nh_.subscribe<drivetrain_stiffness::Stiffness>("stiffness", 1000,
         [this](const drivetrain_stiffness::Stiffness::ConstPtr& m) { std::lock_guard<std::mutex> l(m_); stiffness_.push_back(*m); });
     te_sub_ = nh_.subscribe<drivetrain_stiffness::TransmissionError>("transmission_error", 100000,
@@ -59,12 +64,16 @@ class GraphTest : public testing::Test {
   }
   // Stamp = the epoch plus `offset` seconds, exact to the nanosecond (ros::Time(1.7e9 + 0.05) would
   // round 0.05 to 0.049999952 s: one grid sample short). offset < -1e9 gives the zero stamp.
-  void send(double offset, double torque) {
+  void send(double offset, double torque, const std::string& frame = "pinion", std::uint32_t skip = 0) {
     geometry_msgs::WrenchStamped w;
     w.header.stamp = offset < -1e9 ? ros::Time(0, 0) : ros::Time(kT0, 0) + ros::Duration(offset);
+    w.header.frame_id = frame;  // ~torque_frame (pinion)
+    seq_ += skip;               // messages "lost on the way"
+    w.header.seq = seq_++;
     w.wrench.torque.z = torque;
     torque_pub_.publish(w);
   }
+  std::uint32_t seq_ = 0;
   std::size_t answers() { std::lock_guard<std::mutex> l(m_); return stiffness_.size(); }
   std::string diagnostic(const std::string& key) {
     std::lock_guard<std::mutex> l(m_);
@@ -101,10 +110,16 @@ TEST_F(GraphTest, NodeletAnswersAndAppliesTheStampRules) {
   // Rule 3: a burst of five equal stamps is accepted (answers 3-7) and releases no extra samples.
   for (int i = 0; i < 5; ++i) send(0.2, 0.1 + 0.01 * i);
   send(0.203, 0.1);  // answer 8: three samples with the last torque of the burst held
-  ASSERT_TRUE(waitWall([this] { return answers() >= 8; }, 5.0)) << answers();
+  // Transport rules on the graph: a torque in the gear's frame is refused, and a gap of 4 in the
+  // publisher's numbering is counted as dropped (the caller id comes from the connection).
+  send(0.2031, -0.1, "gear");
+  send(0.2032, 0.14, "pinion", 4);  // answer 9; its own stamp releases no new grid sample
+  ASSERT_TRUE(waitWall([this] { return answers() >= 9; }, 5.0)) << answers();
   EXPECT_TRUE(diagnosticIs("rejected_zero_stamp", "1"));
   EXPECT_TRUE(diagnosticIs("rejected_out_of_order", "1"));
-  EXPECT_TRUE(diagnosticIs("accepted_torque", "8"));
+  EXPECT_TRUE(diagnosticIs("rejected_wrong_frame", "1"));
+  EXPECT_TRUE(diagnosticIs("dropped_torque", "4"));
+  EXPECT_TRUE(diagnosticIs("accepted_torque", "9"));
   ASSERT_TRUE(waitWall([this] { std::lock_guard<std::mutex> l(m_); return te_.size() >= 203; }, 5.0));
   std::lock_guard<std::mutex> l(m_);
   EXPECT_EQ(te_.size(), 203u);  // (kT0, kT0 + 0.203] on the 1 ms grid

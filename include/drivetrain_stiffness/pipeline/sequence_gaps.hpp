@@ -1,7 +1,11 @@
-// Messages lost on the way: a publisher that numbers its messages (std_msgs/Header.seq: rospy fills
-// it, roscpp leaves it to the caller) shows every message dropped between its publish() and our
-// callback (its own outgoing queue, the transport, roscpp's subscriber queue, rosbag record's
-// queue) as a gap in the numbers that do arrive. One table per input stream, keyed by publisher
+// Messages lost on the way: a publisher that numbers its messages (std_msgs/Header.seq) shows every
+// message dropped between its publish() and our callback (its own outgoing queue, the transport,
+// roscpp's subscriber queue, rosbag record's queue) as a gap in the numbers that do arrive. roscpp
+// and rospy number every message of a type with a header themselves, per publication (roscpp's
+// Publication::enqueueMessage writes its counter into the serialized header when the advertised
+// type has one); rosbag play sends the recorded numbers unchanged (it advertises without a header
+// type), so a recording's own losses show too. Only a nodelet's zero-copy (intra-process)
+// publication carries whatever the publisher wrote. One table per input stream, keyed by publisher
 // (the caller id). Allocates only for a publisher not seen before, and never beyond kMaxPublishers.
 #pragma once
 

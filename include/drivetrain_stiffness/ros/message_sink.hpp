@@ -50,8 +50,9 @@ class MessageSink : public PipelineSink {
   RigVisualizer visualizer_;
   std::optional<Stamp> last_tf_;
   drivetrain_stiffness::Stiffness stiffness_msg_;  ///< refilled per update (publish serializes it at once)
-  // header.seq of the stiffness and transmission_error messages, numbered from 0 as rospy does
-  // (roscpp leaves it to the caller): a subscriber sees from the gaps what it did not receive.
+  // header.seq of the stiffness and transmission_error messages, numbered from 0: what a bag
+  // written by drivetrain_replay carries (on the live graph roscpp writes its own per-publication
+  // count, the same numbers while a subscriber listens): a reader sees from the gaps what it lost.
   std::uint32_t stiffness_seq_ = 0, te_seq_ = 0;
 };
 

@@ -1,0 +1,188 @@
+#include "replay_input.hpp"  // NOLINT(build/include_subdir)
+
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <string_view>
+
+#include <boost/make_shared.hpp>
+#include <ros/serialization.h>
+
+#include "drivetrain_stiffness/core/validation.hpp"
+
+namespace drivetrain_stiffness {
+namespace {
+
+/// The connection header's callerid, by reference into the header (which outlives the messages).
+const std::string& callerIdOf(const std::map<std::string, std::string>* header) {
+  static const std::string kNone;
+  if (!header) return kNone;
+  const auto it = header->find("callerid");
+  return it == header->end() ? kNone : it->second;
+}
+
+/// The file's first line (at most 32 characters); throws InvalidInput naming the file if it cannot be read.
+std::string firstLine(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InvalidInput("--bag = '" + path + "': cannot be read: " + std::strerror(errno));
+  std::string line(32, '\0');
+  in.read(line.data(), static_cast<std::streamsize>(line.size()));
+  line.resize(static_cast<std::size_t>(in.gcount()));
+  return line.substr(0, line.find('\n'));
+}
+
+std::string recordTime(const ros::Time& t) {
+  char s[32];
+  std::snprintf(s, sizeof s, "%u.%09u", t.sec, t.nsec);
+  return s;
+}
+
+/// The recorded message as T, as MessageInstance::instantiate does it: null if the MD5 sums differ.
+template <class T>
+boost::shared_ptr<T> deserialize(const BagRecordMessage& raw) {
+  const std::string md5sum = ros::message_traits::MD5Sum<T>::value();
+  if (md5sum != "*" && md5sum != raw.connection->field("md5sum")) return {};
+  auto message = boost::make_shared<T>();
+  ros::serialization::IStream stream(const_cast<std::uint8_t*>(raw.data), raw.size);
+  ros::serialization::deserialize(stream, *message);  // throws on a length running past the data
+  return message;
+}
+
+}  // namespace
+
+bool topicMatches(const std::string& topic, const std::string& wanted) {
+  // Equal, or equal but for one leading '/' on one side; without building strings: it runs twice
+  // per message.
+  const std::string_view t(topic), w(wanted);
+  return t == w || (!t.empty() && t[0] == '/' && t.substr(1) == w) || (!w.empty() && w[0] == '/' && w.substr(1) == t);
+}
+
+ReplayInput::ReplayInput(const std::string& path, const std::string& torque_topic, const std::string& preload_topic)
+    : path_(path), torque_topic_(torque_topic), preload_topic_(preload_topic) {
+  const std::string version = firstLine(path);
+  if (version.rfind("#ROSBAG V", 0) != 0) throw InvalidInput("--bag = '" + path + "': not a ROS bag (it does not start with '#ROSBAG V')");
+  try {
+    bag_ = std::make_unique<rosbag::Bag>();
+    bag_->open(path, rosbag::bagmode::Read);
+    view_ = std::make_unique<rosbag::View>(*bag_, [this](const rosbag::ConnectionInfo* c) { return isWanted(c->topic); });
+    return;
+  } catch (const std::exception& e) {  // rosbag::BagException; std::bad_alloc for a damaged length
+    rosbag_open_error_ = e.what();
+    view_.reset();
+    bag_.reset();
+  }
+  if (version != "#ROSBAG V2.0") {
+    throw InvalidInput("--bag = '" + path + "': rosbag cannot open it (" + rosbag_open_error_ + "), and a bag of format " +
+                       version.substr(9) + " cannot be read without its index (only format 2.0 can)");
+  }
+  sequential_ = std::make_unique<SequentialBagReader>(path);
+}
+
+ReplayInput::Iterator ReplayInput::begin() {
+  if (!begun_) {
+    begun_ = true;
+    advance();
+  }
+  return Iterator(*this);
+}
+
+void ReplayInput::advance() {
+  has_message_ = !damage_ && (view_ ? nextIndexed() : nextSequential());
+  if (has_message_) ++read_;
+}
+
+bool ReplayInput::isTorque(const std::string& topic) const { return topicMatches(topic, torque_topic_); }
+
+bool ReplayInput::isWanted(const std::string& topic) const {
+  return isTorque(topic) || topicMatches(topic, preload_topic_);
+}
+
+bool ReplayInput::nextIndexed() {
+  try {
+    if (read_ == 0) {
+      view_next_ = view_->begin();
+      view_end_ = view_->end();
+    } else {
+      ++view_next_;
+    }
+    if (view_next_ == view_end_) return false;
+    const rosbag::MessageInstance& m = *view_next_;
+    message_.time_ = m.getTime();
+    message_.topic_ = &m.getTopic();
+    message_.caller_id_ = &callerIdOf(m.getConnectionHeader().get());
+    // The type follows the topic as in drivetrain_replay's loop: torque first.
+    const bool torque = isTorque(m.getTopic());
+    message_.torque_ = torque ? m.instantiate<geometry_msgs::WrenchStamped>() : nullptr;
+    message_.preload_ = torque ? nullptr : m.instantiate<drivetrain_stiffness::Preload>();
+    return true;
+  } catch (const std::exception& e) {  // a chunk that does not decompress, a damaged record or message
+    damage_ = locateDamage(e.what());
+    return false;
+  }
+}
+
+bool ReplayInput::nextSequential() {
+  BagRecordMessage raw;
+  while (sequential_->next(raw)) {
+    if (!isWanted(raw.connection->topic)) continue;
+    try {
+      decode(raw, message_);
+      return true;
+    } catch (const std::exception& e) {
+      damage_ = BagDamage{raw.offset, "the " + raw.connection->topic + " message at record time " + recordTime(raw.time) +
+                                          " does not deserialize: " + e.what() + "; " + withoutIndex()};
+      return false;
+    }
+  }
+  damage_ = endOfSequentialReading();
+  return false;
+}
+
+std::string ReplayInput::withoutIndex() const {
+  return "read without the index, as rosbag::Bag cannot open the bag (" + rosbag_open_error_ + ")";
+}
+
+void ReplayInput::decode(const BagRecordMessage& raw, ReplayMessage& message) const {
+  message.time_ = raw.time;
+  message.topic_ = &raw.connection->topic;
+  message.caller_id_ = &callerIdOf(&raw.connection->header);
+  const bool torque = isTorque(raw.connection->topic);
+  message.torque_ = torque ? deserialize<geometry_msgs::WrenchStamped>(raw) : nullptr;
+  message.preload_ = torque ? nullptr : deserialize<drivetrain_stiffness::Preload>(raw);
+}
+
+/// A sequential reading ends in damage: the reader's, or (every chunk read whole) the index that
+/// rosbag could not read.
+BagDamage ReplayInput::endOfSequentialReading() const {
+  if (const auto& damage = sequential_->damage()) return BagDamage{damage->offset, damage->what + "; " + withoutIndex()};
+  return BagDamage{sequential_->indexPosition(), "every chunk reads whole, so the index from this byte is damaged; " + withoutIndex()};
+}
+
+/// rosbag::View failed on message read_ + 1: where is the damage? Reads the bag sequentially up to the
+/// first record that fails to read or to deserialize as the loop would.
+BagDamage ReplayInput::locateDamage(const std::string& rosbag_error) const {
+  const std::string topic = message_.topic_ ? *message_.topic_ : std::string("?");
+  const std::string failed = "rosbag::View cannot read message " + std::to_string(read_ + 1) + " (" + topic +
+                             " at record time " + recordTime(message_.time_) + "): " + rosbag_error;
+  try {
+    SequentialBagReader reader(path_);
+    BagRecordMessage raw;
+    ReplayMessage scratch;
+    while (reader.next(raw)) {
+      if (!isWanted(raw.connection->topic)) continue;
+      try {
+        decode(raw, scratch);
+      } catch (const std::exception& e) {
+        return BagDamage{raw.offset, "the " + raw.connection->topic + " message at record time " + recordTime(raw.time) +
+                                         " does not deserialize: " + e.what() + "; " + failed};
+      }
+    }
+    if (const auto& damage = reader.damage()) return BagDamage{damage->offset, damage->what + "; " + failed};
+    return BagDamage{reader.indexPosition(), failed + "; every chunk reads whole without the index, so the index from this byte is damaged"};
+  } catch (const InvalidInput& e) {  // not format 2.0
+    return BagDamage{0, failed + "; byte offset unknown: " + e.what()};
+  }
+}
+
+}  // namespace drivetrain_stiffness

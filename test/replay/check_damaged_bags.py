@@ -1,0 +1,206 @@
+#!/usr/bin/python3
+"""drivetrain_replay on truncated and corrupt bags, made here from the bundled torque_ripple.bag
+(one uncompressed chunk) and from an LZ4 copy with 16 KiB chunks written by python rosbag.
+
+For every damaged bag: exit code 4 (docs/replay_exit_codes.md); the error on stderr and the status
+in summary.json name the file and the expected byte offset; the outputs are valid (the output bag
+is closed and indexed, python rosbag opens it, and it and the CSV file hold as many transmission
+error messages as the counters say); and the torque inputs accepted equal the torque messages
+before the damage. Those expectations come from python rosbag reading the ORIGINAL bag: its index
+gives every message's chunk and offset, its own record reader the record's end, so a message
+counts when its record (uncompressed) or its whole chunk (compressed) lies before the damage.
+A text file is refused with exit 1 naming it; the intact bag gives exit 0 and status "ok".
+
+usage: check_damaged_bags.py BIN_DIR SOURCE_DIR WORK_DIR   (with the devel space's env.sh)"""
+import json
+import os
+import shutil
+import subprocess
+import sys
+
+import rosbag
+import rosbag.bag as rb
+
+bin_dir, src, work = sys.argv[1:4]
+replay = os.path.join(bin_dir, "drivetrain_replay")
+config = os.path.join(src, "config/gearboxes/seed_servo.yaml")
+params = os.path.join(src, "config/stiffness_estimator.yaml")
+original = os.path.join(src, "test/data/torque_ripple.bag")
+failures = []
+
+
+def layout(path):
+    """Python rosbag's view of a closed bag: its chunks (pos, data start, data end, compression) and
+    its messages (topic, record time, record start, end of the record or of its compressed chunk)."""
+    bag = rosbag.Bag(path)
+    f = bag._file
+    chunks = {}
+    for c in bag._chunks:
+        f.seek(c.pos)
+        h = bag._reader.read_chunk_header()
+        chunks[c.pos] = (c.pos, h.data_pos, h.data_pos + h.compressed_size, h.compression)
+    messages = []
+    for conn_id, entries in bag._connection_indexes.items():
+        topic = bag._connections[conn_id].topic
+        for e in entries:
+            pos, data_pos, data_end, compression = chunks[e.chunk_pos]
+            start = end = None
+            if compression == "none":
+                start = data_pos + e.offset
+                f.seek(start)
+                rb._read_header(f)
+                rb._skip_sized(f)
+                end = f.tell()
+            messages.append({"topic": topic, "time": e.time, "chunk": pos, "offset": e.offset, "start": start,
+                             "end": end if end is not None else data_end})
+    messages.sort(key=lambda m: (m["chunk"], m["offset"]))  # file order
+    times = [m["time"] for m in messages]
+    assert times == sorted(times), "the test assumes file order is record-time order (rosbag::View's order)"
+    return bag._index_data_pos, sorted(chunks.values()), messages
+
+
+def torque_before(messages, offset):
+    return sum(1 for m in messages if m["topic"] == "/torque" and m["end"] <= offset)
+
+
+def patch(path, offset, data):
+    with open(path, "r+b") as f:
+        f.seek(offset)
+        f.write(data)
+
+
+def prefix(source, n, name):
+    path = os.path.join(work, name)
+    with open(source, "rb") as f, open(path, "wb") as out:
+        out.write(f.read(n))
+    return path
+
+
+def copy(source, name):
+    path = os.path.join(work, name)
+    shutil.copyfile(source, path)
+    return path
+
+
+def field_value(path, name, start):
+    """Offset of a record header field's value (b'name=' searched from `start`)."""
+    with open(path, "rb") as f:
+        data = f.read()
+    return data.index(name + b"=", start) + len(name) + 1
+
+
+def run(bag, name, plots=False):
+    report = os.path.join(work, name + ".report")
+    cmd = [replay, "--bag", bag, "--config", config, "--params", params, "--report", report]
+    p = subprocess.run(cmd + ([] if plots else ["--no-plots"]), capture_output=True, text=True)
+    return p, report
+
+
+def check_damaged(name, bag, offset, torque, plots=False):
+    p, report = run(bag, name, plots)
+    bad = []
+    if p.returncode != 4:
+        bad.append("exit code %d, expected 4 (stderr: %s)" % (p.returncode, p.stderr.strip()))
+    where = "'%s' at byte %d:" % (bag, offset)
+    if where not in p.stderr:
+        bad.append("stderr does not name %s: %s" % (where, p.stderr.strip()))
+    try:
+        s = json.load(open(os.path.join(report, "summary.json")))
+        c = s["counters"]
+        if not s["status"].startswith("incomplete: " + where):
+            bad.append("status %r" % s["status"])
+        if s["damage"]["offset"] != offset or s["damage"]["messages_before"] != s["messages"]:
+            bad.append("damage %r" % s["damage"])
+        if c["accepted_torque"] != torque:
+            bad.append("accepted_torque %d, expected %d" % (c["accepted_torque"], torque))
+        out = rosbag.Bag(os.path.join(report, "outputs.bag"))  # raises if not closed (no index)
+        te = out.get_message_count("/transmission_error")
+        with open(os.path.join(report, "csv/transmission_error.csv")) as f:
+            rows = sum(1 for _ in f) - 1
+        if not te == rows == c["transmission_error_published"]:
+            bad.append("outputs: bag %d, csv %d, counter %d" % (te, rows, c["transmission_error_published"]))
+        if plots:
+            with open(os.path.join(report, "report.md")) as f:
+                top = f.read().split("\n")[:5]
+            if not any(line.startswith("**Incomplete replay**") for line in top) or not any(where in line for line in top):
+                bad.append("report.md does not say incomplete at the top: %r" % top)
+    except Exception as e:  # noqa: BLE001 - any missing or unreadable output is the failure to report
+        bad.append("outputs: %s: %s" % (type(e).__name__, e))
+    print("%-26s exit %d, offset %d, torque %d: %s" % (name, p.returncode, offset, torque, "; ".join(bad) or "ok"))
+    if bad:
+        failures.append(name)
+
+
+def main():
+    shutil.rmtree(work, ignore_errors=True)
+    os.makedirs(work)
+    index_pos, chunks, msgs = layout(original)
+    torque = [m for m in msgs if m["topic"] == "/torque"]
+    assert len(torque) == 2000 and len(chunks) == 1 and chunks[0][3] == "none"
+    first, mid = torque[40], torque[1200]
+
+    # Truncations of the uncompressed bag: inside the first chunk, mid-file, just before the index.
+    check_damaged("truncated_first_chunk", prefix(original, first["start"] + 20, "t_first.bag"), first["start"],
+                  torque_before(msgs, first["start"]))
+    check_damaged("truncated_mid_file", prefix(original, mid["start"] + 20, "t_mid.bag"), mid["start"],
+                  torque_before(msgs, mid["start"]), plots=True)
+    check_damaged("truncated_before_index", prefix(original, index_pos, "t_index.bag"), index_pos, 2000)
+
+    # A recording cut by a power loss as rosbag record leaves it: the bag header's index_pos and the
+    # open chunk's sizes still hold the zeros written when they were opened.
+    unclosed = prefix(original, mid["start"] + 20, "unclosed.bag")
+    patch(unclosed, field_value(unclosed, b"index_pos", 0), bytes(8))
+    chunk_pos, data_pos = chunks[0][0], chunks[0][1]
+    patch(unclosed, field_value(unclosed, b"size", chunk_pos), bytes(4))
+    patch(unclosed, data_pos - 4, bytes(4))
+    check_damaged("unclosed_recording", unclosed, mid["start"], torque_before(msgs, mid["start"]))
+
+    # Garbage over a message record's header inside the chunk: rosbag::View fails there.
+    garbage = copy(original, "garbage_record.bag")
+    patch(garbage, mid["start"], b"GARBAGE!GARBAGE!")
+    check_damaged("garbage_record", garbage, mid["start"], torque_before(msgs, mid["start"]))
+
+    # A damaged bag header: nothing can be read.
+    header = copy(original, "bad_header.bag")
+    patch(header, field_value(header, b"op", 0) - 3, b"xx")  # "op=" -> "xx=": no op field
+    check_damaged("bad_bag_header", header, 13, 0, plots=True)
+
+    # LZ4 chunks: truncated inside one, and garbage inside one's compressed data.
+    lz4 = os.path.join(work, "lz4.bag")
+    with rosbag.Bag(original) as i, rosbag.Bag(lz4, "w", compression="lz4", chunk_threshold=16 * 1024) as o:
+        for topic, raw, t, conn in i.read_messages(raw=True, return_connection_header=True):
+            o.write(topic, raw, t, raw=True, connection_header=conn)
+    _, lz4_chunks, lz4_msgs = layout(lz4)
+    assert len(lz4_chunks) >= 6 and all(c[3] == "lz4" for c in lz4_chunks)
+    victim = lz4_chunks[len(lz4_chunks) // 2]
+    check_damaged("lz4_truncated_in_chunk", prefix(lz4, (victim[1] + victim[2]) // 2, "lz4_t.bag"), victim[0],
+                  torque_before(lz4_msgs, victim[0]))
+    corrupt = copy(lz4, "lz4_corrupt.bag")
+    patch(corrupt, (victim[1] + victim[2]) // 2, b"GARBAGE!GARBAGE!")
+    check_damaged("lz4_corrupt_chunk", corrupt, victim[0], torque_before(lz4_msgs, victim[0]))
+
+    # Not a bag at all: refused, naming the file.
+    text = os.path.join(work, "notes.txt")
+    with open(text, "w") as f:
+        f.write("torque log, not a bag\n")
+    p, _ = run(text, "not_a_bag")
+    ok = p.returncode == 1 and "'%s'" % text in p.stderr
+    print("%-26s exit %d: %s" % ("not_a_bag", p.returncode, "ok" if ok else p.stderr.strip()))
+    if not ok:
+        failures.append("not_a_bag")
+
+    # The intact bag: status ok, exit 0.
+    p, report = run(original, "intact")
+    s = json.load(open(os.path.join(report, "summary.json")))
+    ok = p.returncode == 0 and s["status"] == "ok" and "damage" not in s and s["counters"]["accepted_torque"] == 2000
+    print("%-26s exit %d, status %s: %s" % ("intact", p.returncode, s["status"], "ok" if ok else "unexpected"))
+    if not ok:
+        failures.append("intact")
+
+    if failures:
+        sys.exit("check_damaged_bags: failed: %s" % ", ".join(failures))
+    print("check_damaged_bags: every damaged bag read up to its damage, named, flagged and closed")
+
+
+if __name__ == "__main__":
+    main()
