@@ -4,14 +4,11 @@
 #include <cmath>
 #include <complex>
 
+#include "drivetrain_stiffness/core/constants.hpp"
 #include "drivetrain_stiffness/core/scenes.hpp"
 #include "drivetrain_stiffness/core/validation.hpp"
 
 namespace drivetrain_stiffness {
-namespace {
-constexpr double kTwoPi = 6.283185307179586;
-}
-
 DynamicsEstimator::DynamicsEstimator(const RigConfig& rig, const std::array<double, 2>& bearing_stiffness,
                                      double output_rate)
     : rig_(rig), bearing_stiffness_(bearing_stiffness), requested_rate_(output_rate), torque_(std::make_shared<double>(0.0)) {

@@ -4,11 +4,11 @@
 #include <cmath>
 #include <unsupported/Eigen/MatrixFunctions>
 
+#include "drivetrain_stiffness/core/constants.hpp"
 #include "drivetrain_stiffness/core/validation.hpp"
 
 namespace drivetrain_stiffness {
 namespace {
-constexpr double kTwoPi = 6.283185307179586;
 
 bool stepInside(const TorqueProfile& torque, double a, double b) {
   for (const auto& s : torque.steps) {

@@ -4,12 +4,12 @@
 #include <algorithm>
 #include <cmath>
 
+#include "drivetrain_stiffness/core/constants.hpp"
 #include "drivetrain_stiffness/core/exponential_integrator.hpp"
 #include "drivetrain_stiffness/core/validation.hpp"
 
 namespace drivetrain_stiffness {
 namespace {
-constexpr double kTwoPi = 6.283185307179586;
 const char* kNames[3] = {"x_p", "x_g", "x"};
 }  // namespace
 

@@ -3,11 +3,11 @@
 #include <cmath>
 #include <unsupported/Eigen/MatrixFunctions>
 
+#include "drivetrain_stiffness/core/constants.hpp"
 #include "drivetrain_stiffness/core/validation.hpp"
 
 namespace drivetrain_stiffness {
 namespace {
-constexpr double kTwoPi = 6.283185307179586;
 
 const RigExcitation& rigExcitation(const GearRotorModel& model, const char* what) {
   const auto* e = dynamic_cast<const RigExcitation*>(&model.excitation());

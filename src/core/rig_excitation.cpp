@@ -4,13 +4,10 @@
 #include <cmath>
 #include <limits>
 
+#include "drivetrain_stiffness/core/constants.hpp"
 #include "drivetrain_stiffness/core/validation.hpp"
 
 namespace drivetrain_stiffness {
-namespace {
-constexpr double kTwoPi = 6.283185307179586;
-}
-
 void TorqueProfile::retune(double new_frequency, double t) {
   phase = std::remainder(kTwoPi * (frequency - new_frequency) * t + phase, kTwoPi);
   frequency = new_frequency;

@@ -3,13 +3,13 @@
 #include <Eigen/Dense>
 #include <cmath>
 
+#include "drivetrain_stiffness/core/constants.hpp"
 #include "drivetrain_stiffness/core/rig_excitation.hpp"
 #include "drivetrain_stiffness/core/stiffness_estimator.hpp"
 #include "drivetrain_stiffness/core/validation.hpp"
 
 namespace drivetrain_stiffness {
 namespace {
-constexpr double kTwoPi = 6.283185307179586;
 
 // Kahraman & Singh style excitation (gear.md section 3, the Fraunhofer-SCAI regression case):
 // k(tau) = k0 [1 - a1 cos(W tau) - a2 cos(2 W tau) - a3 cos(3 W tau)], dead zone of half-gap 1,

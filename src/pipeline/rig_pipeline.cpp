@@ -2,14 +2,11 @@
 
 #include <cmath>
 
+#include "drivetrain_stiffness/core/constants.hpp"
 #include "drivetrain_stiffness/core/scenes.hpp"
 #include "drivetrain_stiffness/core/validation.hpp"
 
 namespace drivetrain_stiffness {
-namespace {
-constexpr double kTwoPi = 6.283185307179586;
-}
-
 const char* toString(InputOutcome outcome) {
   switch (outcome) {
     case InputOutcome::kAccepted: return "accepted";

@@ -3,15 +3,12 @@
 #include <algorithm>
 #include <cmath>
 
+#include "drivetrain_stiffness/core/constants.hpp"
 #include "drivetrain_stiffness/core/scenes.hpp"
 #include "drivetrain_stiffness/core/stiffness_estimator.hpp"
 #include "drivetrain_stiffness/core/validation.hpp"
 
 namespace drivetrain_stiffness {
-namespace {
-constexpr double kTwoPi = 6.283185307179586;
-}
-
 SweepOutput torqueSweep(const RigConfig& rig, const SweepSpec& spec) {
   if (!rig.dynamics.present) throw InvalidInput("sweep: the gearbox file has no 'dynamics:' block");
   requirePositive("sweep.start", spec.start);

@@ -5,11 +5,11 @@
 #include <cmath>
 #include <limits>
 
+#include "drivetrain_stiffness/core/constants.hpp"
 #include "drivetrain_stiffness/core/validation.hpp"
 
 namespace drivetrain_stiffness {
 namespace {
-constexpr double kTwoPi = 6.283185307179586;
 
 std::vector<PreloadSetting> preloadOfAll(const RigConfig& rig, double axial) {
   std::vector<PreloadSetting> out;
