@@ -160,7 +160,13 @@ BearingEvaluation BallBearing::evaluate(const Vector5d& q, double axial_offset) 
 }
 
 std::vector<BallState> BallBearing::balls(const Vector5d& q, double axial_offset) const {
-  std::vector<BallState> out(spec_.balls);
+  std::vector<BallState> out;
+  balls(q, axial_offset, out);
+  return out;
+}
+
+void BallBearing::balls(const Vector5d& q, double axial_offset, std::vector<BallState>& out) const {
+  out.resize(static_cast<std::size_t>(spec_.balls));
   for (int j = 0; j < spec_.balls; ++j) {
     double ar, az;
     separation(j, q, axial_offset, ar, az);
@@ -172,7 +178,6 @@ std::vector<BallState> BallBearing::balls(const Vector5d& q, double axial_offset
     b.load = b.in_contact ? kn_ * std::pow(b.deflection, 1.5) : 0.0;
     b.max_pressure = std::max(inner_.maxPressure(b.load), outer_.maxPressure(b.load));
   }
-  return out;
 }
 
 double BallBearing::axialDisplacementForLoad(double axial_load) const {

@@ -189,6 +189,12 @@ bool BearingSupport::newton(const Vector5d& load, Vector5d& q, int& iterations, 
 }
 
 BearingSolution BearingSupport::solve(const Vector5d& external_load, const Vector5d* warm_start) const {
+  BearingSolution sol;
+  solve(external_load, warm_start, sol);
+  return sol;
+}
+
+void BearingSupport::solve(const Vector5d& external_load, const Vector5d* warm_start, BearingSolution& sol) const {
   static const char* kNames[5] = {"force_x", "force_y", "force_z", "moment_x", "moment_y"};
   for (int i = 0; i < 5; ++i) {
     // The name is built only on failure: this runs on every stiffness update.
@@ -202,9 +208,10 @@ BearingSolution BearingSupport::solve(const Vector5d& external_load, const Vecto
   if (warm_start && !warm_start->allFinite()) throw InvalidInput("warm_start: contains a non-finite value");
   const Vector5d load = totalLoad(external_load);
 
-  BearingSolution sol;
+  Vector5d q = warm_start ? *warm_start : coldStart(load);  // read before `sol` (it may hold the warm start)
   sol.load = load;
-  Vector5d q = warm_start ? *warm_start : coldStart(load);
+  sol.stiffness.setZero();
+  sol.residual = 0.0;
   int iterations = 0;
   sol.converged = newton(load, q, iterations, sol.residual);
   sol.iterations = iterations;
@@ -226,7 +233,6 @@ BearingSolution BearingSupport::solve(const Vector5d& external_load, const Vecto
   }
   sol.displacement = q;
   finish(sol);
-  return sol;
 }
 
 void BearingSupport::finish(BearingSolution& sol) const {
@@ -235,13 +241,13 @@ void BearingSupport::finish(BearingSolution& sol) const {
   for (int i = 0; i < 5; ++i) {
     if (free_[i] == 0.0) sol.load[i] = eval.force[i];  // reaction at a prescribed DOF
   }
-  sol.rows.clear();
+  sol.rows.resize(static_cast<std::size_t>(rows()));  // kept storage: no allocation per solve
   sol.balls_in_contact = 0;
   sol.max_contact_pressure = 0.0;
   for (int i = 0; i < rows(); ++i) {
     const double offset = arrangement_ == Arrangement::kSingle ? 0.0 : offset_;
-    sol.rows.push_back(bearing_.balls(to_row_[i] * sol.displacement, offset));
-    for (const BallState& b : sol.rows.back()) {
+    bearing_.balls(to_row_[i] * sol.displacement, offset, sol.rows[static_cast<std::size_t>(i)]);
+    for (const BallState& b : sol.rows[static_cast<std::size_t>(i)]) {
       if (!b.in_contact) continue;
       ++sol.balls_in_contact;
       sol.max_contact_pressure = std::max(sol.max_contact_pressure, b.max_pressure);

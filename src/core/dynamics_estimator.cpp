@@ -61,7 +61,10 @@ void DynamicsEstimator::setTorque(double torque) {
 }
 
 void DynamicsEstimator::setBearingStiffness(const std::array<double, 2>& k) {
-  for (int i = 0; i < 2; ++i) requireNonNegative("bearing_stiffness[" + std::to_string(i) + "]", k[i]);
+  for (int i = 0; i < 2; ++i) {
+    // The field name is built only on failure: this runs on every accepted input.
+    if (!(k[i] >= 0.0)) requireNonNegative("bearing_stiffness[" + std::to_string(i) + "]", k[i]);
+  }
   bool changed = false;
   for (int i = 0; i < 2; ++i) changed |= std::abs(k[i] - bearing_stiffness_[i]) > 0.01 * std::max(bearing_stiffness_[i], 1.0);
   if (!changed) return;

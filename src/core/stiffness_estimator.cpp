@@ -48,6 +48,7 @@ const StiffnessEstimate& StiffnessEstimator::reset() {
   for (const BearingSupportConfig& c : rig_.bearings) supports.push_back({c, build(c)});
   estimate_ = solveAll(0.0, 0.0, supports);
   supports_ = std::move(supports);
+  workspace_.resize(supports_.size());
   return estimate_;
 }
 
@@ -122,23 +123,35 @@ const StiffnessEstimate& StiffnessEstimator::setTorque(double torque, double pin
   requireFinite("pinion_angle", pinion_angle);
   const double signed_force = meshForce(rig_.gears, 0, torque);
   const double mesh_force = std::abs(signed_force);
-  bool all_stand = true;
-  for (std::size_t i = 0; i < supports_.size() && all_stand; ++i) {
-    all_stand = solutionStands(i, supports_[i], radialLoad(supports_[i].config, mesh_force));
+  // In place and all or nothing, with no allocation in steady state: the supports whose load moved
+  // past ~load_tolerance are solved into their workspace (warm-started from their last solution,
+  // as solveAll would), the mesh is looked up, and only when nothing threw are the new solutions
+  // swapped in (a swap of storage, not a copy). The numbers are solveAll's.
+  const std::size_t n = supports_.size();
+  for (std::size_t i = 0; i < n; ++i) {
+    const Support& s = supports_[i];
+    Workspace& w = workspace_[i];
+    w.radial_load = radialLoad(s.config, mesh_force);
+    w.solved = !solutionStands(i, s, w.radial_load);
+    if (!w.solved) continue;
+    Vector5d load = Vector5d::Zero();
+    load[kUx] = w.radial_load;
+    try {
+      s.model->solve(load, &estimate_.supports[i].solution.displacement, w.solution);
+    } catch (const UnreachableLoad& error) {
+      throw UnreachableLoad(s.config.name + ": " + error.what());
+    }
   }
-  if (all_stand) {
-    // No support moved past ~load_tolerance: solveAll would copy every support's entry (name, ball
-    // states) unchanged. Only the torque and the mesh change, so update them in place: same
-    // result, no allocation (the copies were ~10 % of a replay's time). meshAt runs first, so a
-    // throw there leaves the state as it was.
-    const MeshEstimate mesh = meshAt(signed_force, pinion_angle);
-    estimate_.torque = torque;
-    estimate_.mesh_force = mesh_force;
-    estimate_.mesh = mesh;
-    last_pinion_angle_ = pinion_angle;
-    return estimate_;
+  const MeshEstimate mesh = meshAt(signed_force, pinion_angle);
+  for (std::size_t i = 0; i < n; ++i) {
+    Workspace& w = workspace_[i];
+    if (!w.solved) continue;
+    std::swap(estimate_.supports[i].solution, w.solution);
+    estimate_.supports[i].radial_load = w.radial_load;
   }
-  estimate_ = solveAll(torque, pinion_angle, supports_);
+  estimate_.torque = torque;
+  estimate_.mesh_force = mesh_force;
+  estimate_.mesh = mesh;
   last_pinion_angle_ = pinion_angle;
   return estimate_;
 }
@@ -165,6 +178,7 @@ const StiffnessEstimate& StiffnessEstimator::setPreloads(const std::vector<Prelo
   }
   estimate_ = solveAll(estimate_.torque, last_pinion_angle_, next);
   supports_ = std::move(next);
+  workspace_.resize(supports_.size());
   return estimate_;
 }
 

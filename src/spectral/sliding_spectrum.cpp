@@ -37,7 +37,7 @@ bool SlidingSpectrum::push(double value) {
   if (count_ < window_ || (count_ - window_) % hop_ != 0) return false;
   // Unroll the ring into time order: the oldest sample sits at count_ % window_.
   for (int i = 0; i < window_; ++i) ordered_[i] = ring_[(count_ + i) % window_];
-  peaks_ = topPeaks(analyzer_.compute(ordered_), n_peaks_);
+  topPeaks(analyzer_.compute(ordered_), n_peaks_, 3, scratch_, peaks_);
   return true;
 }
 

@@ -26,14 +26,16 @@ void refine(double a, double b, double c, double* offset, double* height) {
   *height = std::exp(lb - 0.25 * (la - lc) * *offset);
 }
 
-std::vector<SpectralPeak> peaksOf(const std::vector<double>& x, const std::vector<double>& y, int n, int separation,
-                                  std::size_t first) {
-  std::vector<std::size_t> maxima;
+void peaksOf(const std::vector<double>& x, const std::vector<double>& y, int n, int separation, std::size_t first,
+             PeakScratch& scratch, std::vector<SpectralPeak>& out) {
+  std::vector<std::size_t>& maxima = scratch.maxima;
+  maxima.clear();
   for (std::size_t k = std::max<std::size_t>(first, 1); k + 1 < y.size(); ++k) {
     if (y[k] > y[k - 1] && y[k] >= y[k + 1]) maxima.push_back(k);
   }
   std::sort(maxima.begin(), maxima.end(), [&](std::size_t a, std::size_t b) { return y[a] > y[b]; });
-  std::vector<std::size_t> kept;
+  std::vector<std::size_t>& kept = scratch.kept;
+  kept.clear();
   for (std::size_t k : maxima) {
     bool near = false;
     for (std::size_t j : kept) near |= (k > j ? k - j : j - k) < static_cast<std::size_t>(separation);
@@ -41,12 +43,19 @@ std::vector<SpectralPeak> peaksOf(const std::vector<double>& x, const std::vecto
     if (static_cast<int>(kept.size()) == n) break;
   }
   const double step = x.size() > 1 ? x[1] - x[0] : 0.0;
-  std::vector<SpectralPeak> out;
+  out.clear();
   for (std::size_t k : kept) {
     double offset, height;
     refine(y[k - 1], y[k], y[k + 1], &offset, &height);
     out.push_back({x[k] + offset * step, height});
   }
+}
+
+std::vector<SpectralPeak> peaksOf(const std::vector<double>& x, const std::vector<double>& y, int n, int separation,
+                                  std::size_t first) {
+  PeakScratch scratch;
+  std::vector<SpectralPeak> out;
+  peaksOf(x, y, n, separation, first, scratch, out);
   return out;
 }
 }  // namespace
@@ -109,8 +118,15 @@ Spectrum amplitudeSpectrum(const std::vector<double>& x, double dt) {
 }
 
 std::vector<SpectralPeak> topPeaks(const Spectrum& s, int n, int min_separation) {
+  PeakScratch scratch;
+  std::vector<SpectralPeak> out;
+  topPeaks(s, n, min_separation, scratch, out);
+  return out;
+}
+
+void topPeaks(const Spectrum& s, int n, int min_separation, PeakScratch& scratch, std::vector<SpectralPeak>& out) {
   if (n < 1) throwInvalid("peaks", n, "must be >= 1");
-  return peaksOf(s.frequency, s.amplitude, n, min_separation, 2);  // skip DC and its window leakage
+  peaksOf(s.frequency, s.amplitude, n, min_separation, 2, scratch, out);  // skip DC and its window leakage
 }
 
 std::vector<SpectralPeak> curvePeaks(const std::vector<double>& x, const std::vector<double>& y, int n) {

@@ -111,6 +111,8 @@ class BallBearing {
   BearingEvaluation evaluate(const Vector5d& q, double axial_offset = 0.0) const;
   /// Per-ball state at q.
   std::vector<BallState> balls(const Vector5d& q, double axial_offset = 0.0) const;
+  /// The same into `out`, reusing its storage (no allocation once it holds `balls` entries).
+  void balls(const Vector5d& q, double axial_offset, std::vector<BallState>& out) const;
 
   /// Pure-axial equilibrium (u_x = u_y = tilt = 0) for an axial load F_z >= 0: returns u_z [m].
   /// Closed-form geometry, scalar safeguarded Newton (bearing.md "closed forms under pure axial").

@@ -77,6 +77,10 @@ class BearingSupport {
   /// pressure above spec.max_contact_pressure, an angular-contact bearing loaded against its
   /// missing shoulder, or no convergence).
   BearingSolution solve(const Vector5d& external_load, const Vector5d* warm_start = nullptr) const;
+  /// The same into `out`, reusing its ball-state storage: no allocation once `out` has held a
+  /// solution of this support (the stiffness estimator's per-input path). On a throw `out` is
+  /// left in an unspecified state. `warm_start` may point into `out`.
+  void solve(const Vector5d& external_load, const Vector5d* warm_start, BearingSolution& out) const;
 
   /// Energy, force and tangent of the whole support at q (used by solve and by tests).
   BearingEvaluation evaluate(const Vector5d& q) const;

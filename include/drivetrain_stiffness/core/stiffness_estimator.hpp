@@ -101,6 +101,14 @@ class StiffnessEstimator {
   std::array<double, 3> mean_k1_kchain_{};  ///< period means of k1, k_chain (for the flank state) and k1 + k_chain
   std::vector<Support> supports_;
   StiffnessEstimate estimate_;
+  /// setTorque's per-support scratch (one per support, sized with supports_): a new solution and
+  /// the load it is for, swapped into estimate_ once every support has solved.
+  struct Workspace {
+    BearingSolution solution;
+    double radial_load = 0.0;
+    bool solved = false;
+  };
+  std::vector<Workspace> workspace_;
   double last_pinion_angle_ = 0.0;
 };
 

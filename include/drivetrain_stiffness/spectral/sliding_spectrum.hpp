@@ -28,6 +28,7 @@ class SlidingSpectrum {
   SpectrumAnalyzer analyzer_;  ///< plan made once: no planning inside the node's callbacks
   long count_ = 0;
   std::vector<SpectralPeak> peaks_;
+  PeakScratch scratch_;  ///< topPeaks' storage, kept between hops
 };
 
 }  // namespace drivetrain_stiffness

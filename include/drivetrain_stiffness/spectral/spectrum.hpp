@@ -50,6 +50,13 @@ class SpectrumAnalyzer {
 /// The n largest peaks (local maxima at least `min_separation` bins apart), strongest first.
 std::vector<SpectralPeak> topPeaks(const Spectrum& s, int n, int min_separation = 3);
 
+/// Storage topPeaks works in; kept by a caller that repeats it (no allocation once it has grown).
+struct PeakScratch {
+  std::vector<std::size_t> maxima, kept;
+};
+/// The same peaks into `out`, working in `scratch` (the sliding spectrum's per-hop path).
+void topPeaks(const Spectrum& s, int n, int min_separation, PeakScratch& scratch, std::vector<SpectralPeak>& out);
+
 /// Peaks of a sampled curve y(x) on a uniform grid (a frequency sweep's RMS), same refinement.
 std::vector<SpectralPeak> curvePeaks(const std::vector<double>& x, const std::vector<double>& y, int n);
 
