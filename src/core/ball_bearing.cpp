@@ -2,6 +2,7 @@
 
 #include <cmath>
 
+#include "drivetrain_stiffness/core/enum_names.hpp"
 #include "drivetrain_stiffness/core/validation.hpp"
 
 namespace drivetrain_stiffness {
@@ -34,15 +35,13 @@ void validateSpec(const BallBearingSpec& s) {
 
 }  // namespace
 
-BearingType parseBearingType(const std::string& field, const std::string& text) {
-  if (text == "angular_contact") return BearingType::kAngularContact;
-  if (text == "deep_groove") return BearingType::kDeepGroove;
-  throw InvalidInput(field + " = '" + text + "': must be 'angular_contact' or 'deep_groove'");
-}
+namespace {
+constexpr EnumName<BearingType> kBearingTypes[] = {{BearingType::kAngularContact, "angular_contact"},
+                                                   {BearingType::kDeepGroove, "deep_groove"}};
+}  // namespace
 
-const char* toString(BearingType type) {
-  return type == BearingType::kAngularContact ? "angular_contact" : "deep_groove";
-}
+BearingType parseBearingType(const std::string& field, const std::string& text) { return parseEnum(kBearingTypes, field, text); }
+const char* toString(BearingType type) { return enumName(kBearingTypes, type); }
 
 BallBearing::Derived BallBearing::derive(const BallBearingSpec& s, const Interference& interference) {
   validateSpec(s);

@@ -3,33 +3,24 @@
 #include <Eigen/Cholesky>
 #include <cmath>
 
+#include "drivetrain_stiffness/core/enum_names.hpp"
 #include "drivetrain_stiffness/core/validation.hpp"
 
 namespace drivetrain_stiffness {
 
-Arrangement parseArrangement(const std::string& field, const std::string& text) {
-  if (text == "single") return Arrangement::kSingle;
-  if (text == "back_to_back") return Arrangement::kBackToBack;
-  if (text == "face_to_face") return Arrangement::kFaceToFace;
-  throw InvalidInput(field + " = '" + text + "': must be 'single', 'back_to_back' or 'face_to_face'");
-}
+namespace {
+constexpr EnumName<Arrangement> kArrangements[] = {
+    {Arrangement::kSingle, "single"}, {Arrangement::kBackToBack, "back_to_back"}, {Arrangement::kFaceToFace, "face_to_face"}};
+constexpr EnumName<TiltCondition> kTiltConditions[] = {{TiltCondition::kConstrained, "constrained"},
+                                                       {TiltCondition::kFree, "free"}};
+}  // namespace
 
-const char* toString(Arrangement a) {
-  switch (a) {
-    case Arrangement::kSingle: return "single";
-    case Arrangement::kBackToBack: return "back_to_back";
-    case Arrangement::kFaceToFace: return "face_to_face";
-  }
-  return "?";
-}
-
+Arrangement parseArrangement(const std::string& field, const std::string& text) { return parseEnum(kArrangements, field, text); }
+const char* toString(Arrangement a) { return enumName(kArrangements, a); }
 TiltCondition parseTiltCondition(const std::string& field, const std::string& text) {
-  if (text == "constrained") return TiltCondition::kConstrained;
-  if (text == "free") return TiltCondition::kFree;
-  throw InvalidInput(field + " = '" + text + "': must be 'constrained' or 'free'");
+  return parseEnum(kTiltConditions, field, text);
 }
-
-const char* toString(TiltCondition tilt) { return tilt == TiltCondition::kConstrained ? "constrained" : "free"; }
+const char* toString(TiltCondition tilt) { return enumName(kTiltConditions, tilt); }
 
 namespace {
 // Row transfer: a row whose ball plane sits at axial position z sees the shaft translation plus

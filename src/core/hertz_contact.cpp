@@ -2,6 +2,7 @@
 
 #include <cmath>
 
+#include "drivetrain_stiffness/core/enum_names.hpp"
 #include "drivetrain_stiffness/core/validation.hpp"
 
 namespace drivetrain_stiffness {
@@ -19,15 +20,15 @@ double curvatureDifferenceOf(double log_kappa) {
 }
 }  // namespace
 
-EllipticityMethod parseEllipticityMethod(const std::string& field, const std::string& text) {
-  if (text == "exact") return EllipticityMethod::kExact;
-  if (text == "hamrock_dowson") return EllipticityMethod::kHamrockDowson;
-  throw InvalidInput(field + " = '" + text + "': must be 'exact' or 'hamrock_dowson'");
-}
+namespace {
+constexpr EnumName<EllipticityMethod> kEllipticityMethods[] = {{EllipticityMethod::kExact, "exact"},
+                                                               {EllipticityMethod::kHamrockDowson, "hamrock_dowson"}};
+}  // namespace
 
-const char* toString(EllipticityMethod method) {
-  return method == EllipticityMethod::kExact ? "exact" : "hamrock_dowson";
+EllipticityMethod parseEllipticityMethod(const std::string& field, const std::string& text) {
+  return parseEnum(kEllipticityMethods, field, text);
 }
+const char* toString(EllipticityMethod method) { return enumName(kEllipticityMethods, method); }
 
 double reducedModulus(double youngs_a, double poisson_a, double youngs_b, double poisson_b) {
   requirePositive("youngs_modulus", youngs_a);

@@ -6,6 +6,7 @@
 #include <limits>
 
 #include "drivetrain_stiffness/core/exponential_integrator.hpp"
+#include "drivetrain_stiffness/core/enum_names.hpp"
 #include "drivetrain_stiffness/core/validation.hpp"
 
 namespace drivetrain_stiffness {
@@ -114,23 +115,17 @@ ContactRegime regimeAt(const GearRotorModel& m, double t, const State6& y) { ret
 
 }  // namespace
 
-IntegratorMethod parseIntegratorMethod(const std::string& field, const std::string& text) {
-  if (text == "rk4") return IntegratorMethod::kRk4;
-  if (text == "trapezoidal") return IntegratorMethod::kTrapezoidal;
-  if (text == "dopri5") return IntegratorMethod::kDopri5;
-  if (text == "exponential") return IntegratorMethod::kExponential;
-  throw InvalidInput(field + " = '" + text + "': must be 'rk4', 'trapezoidal', 'dopri5' or 'exponential'");
-}
+namespace {
+constexpr EnumName<IntegratorMethod> kIntegratorMethods[] = {{IntegratorMethod::kRk4, "rk4"},
+                                                             {IntegratorMethod::kTrapezoidal, "trapezoidal"},
+                                                             {IntegratorMethod::kDopri5, "dopri5"},
+                                                             {IntegratorMethod::kExponential, "exponential"}};
+}  // namespace
 
-const char* toString(IntegratorMethod m) {
-  switch (m) {
-    case IntegratorMethod::kRk4: return "rk4";
-    case IntegratorMethod::kTrapezoidal: return "trapezoidal";
-    case IntegratorMethod::kDopri5: return "dopri5";
-    case IntegratorMethod::kExponential: return "exponential";
-  }
-  return "?";
+IntegratorMethod parseIntegratorMethod(const std::string& field, const std::string& text) {
+  return parseEnum(kIntegratorMethods, field, text);
 }
+const char* toString(IntegratorMethod m) { return enumName(kIntegratorMethods, m); }
 
 State6 integrate(const GearRotorModel& model, IntegratorMethod method, const IntegratorOptions& o, double t0,
                  const State6& y0, double t_end, double interval, const Observer& observe, IntegrationStats* stats_out) {

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "drivetrain_stiffness/core/enum_names.hpp"
 #include "drivetrain_stiffness/core/validation.hpp"
 
 namespace drivetrain_stiffness {
@@ -115,21 +116,16 @@ class Iso6336Model : public ToothPairStiffness {
 
 }  // namespace
 
-MeshStiffnessModel parseMeshStiffnessModel(const std::string& field, const std::string& text) {
-  if (text == "potential_energy") return MeshStiffnessModel::kPotentialEnergy;
-  if (text == "kuang_yang") return MeshStiffnessModel::kKuangYang;
-  if (text == "iso6336") return MeshStiffnessModel::kIso6336;
-  throw InvalidInput(field + " = '" + text + "': must be 'potential_energy', 'kuang_yang' or 'iso6336'");
-}
+namespace {
+constexpr EnumName<MeshStiffnessModel> kMeshStiffnessModels[] = {{MeshStiffnessModel::kPotentialEnergy, "potential_energy"},
+                                                                 {MeshStiffnessModel::kKuangYang, "kuang_yang"},
+                                                                 {MeshStiffnessModel::kIso6336, "iso6336"}};
+}  // namespace
 
-const char* toString(MeshStiffnessModel model) {
-  switch (model) {
-    case MeshStiffnessModel::kPotentialEnergy: return "potential_energy";
-    case MeshStiffnessModel::kKuangYang: return "kuang_yang";
-    case MeshStiffnessModel::kIso6336: return "iso6336";
-  }
-  return "?";
+MeshStiffnessModel parseMeshStiffnessModel(const std::string& field, const std::string& text) {
+  return parseEnum(kMeshStiffnessModels, field, text);
 }
+const char* toString(MeshStiffnessModel model) { return enumName(kMeshStiffnessModels, model); }
 
 ToothCompliance toothBeamCompliance(double rb, double alpha2, double x_root, double alpha_c, double youngs,
                                     double poisson, double width) {

@@ -4,6 +4,7 @@
 #include <unsupported/Eigen/MatrixFunctions>
 
 #include "drivetrain_stiffness/core/constants.hpp"
+#include "drivetrain_stiffness/core/enum_names.hpp"
 #include "drivetrain_stiffness/core/validation.hpp"
 
 namespace drivetrain_stiffness {
@@ -60,21 +61,13 @@ struct ShaftPropagator {
 
 }  // namespace
 
-Fidelity parseFidelity(const std::string& field, const std::string& text) {
-  if (text == "full") return Fidelity::kFull;
-  if (text == "quasi_static") return Fidelity::kQuasiStatic;
-  if (text == "linear_modal") return Fidelity::kLinearModal;
-  throw InvalidInput(field + " = '" + text + "': must be 'full', 'quasi_static' or 'linear_modal'");
-}
+namespace {
+constexpr EnumName<Fidelity> kFidelities[] = {
+    {Fidelity::kFull, "full"}, {Fidelity::kQuasiStatic, "quasi_static"}, {Fidelity::kLinearModal, "linear_modal"}};
+}  // namespace
 
-const char* toString(Fidelity f) {
-  switch (f) {
-    case Fidelity::kFull: return "full";
-    case Fidelity::kQuasiStatic: return "quasi_static";
-    case Fidelity::kLinearModal: return "linear_modal";
-  }
-  return "?";
-}
+Fidelity parseFidelity(const std::string& field, const std::string& text) { return parseEnum(kFidelities, field, text); }
+const char* toString(Fidelity f) { return enumName(kFidelities, f); }
 
 State6 integrateReduced(const GearRotorModel& model, Fidelity fidelity, double t0, const State6& y0, double t_end,
                         double interval, const Observer& observe) {

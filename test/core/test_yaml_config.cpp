@@ -4,6 +4,8 @@
 #include <fstream>
 
 #include "drivetrain_stiffness/config/yaml_config.hpp"
+#include "drivetrain_stiffness/core/hertz_contact.hpp"
+#include "drivetrain_stiffness/core/reduced_models.hpp"
 #include "drivetrain_stiffness/core/validation.hpp"
 
 using namespace drivetrain_stiffness;
@@ -98,5 +100,28 @@ bearings:
     FAIL();
   } catch (const InvalidInput& e) {
     EXPECT_NE(std::string(e.what()).find("gears.pressure_angle_deg = 60"), std::string::npos) << e.what();
+  }
+}
+
+// Each enum's names come from one table: every name parses back to its value, and a wrong name is
+// refused with the field and the full list of accepted names (the format the CLI tests match).
+TEST(EnumNames, RoundTripAndRefusalListsEveryName) {
+  for (Fidelity f : {Fidelity::kFull, Fidelity::kQuasiStatic, Fidelity::kLinearModal}) {
+    EXPECT_EQ(parseFidelity("fidelity", toString(f)), f);
+  }
+  for (Arrangement a : {Arrangement::kSingle, Arrangement::kBackToBack, Arrangement::kFaceToFace}) {
+    EXPECT_EQ(parseArrangement("arrangement", toString(a)), a);
+  }
+  try {
+    parseArrangement("bearings[0].arrangement", "tandem");
+    FAIL() << "accepted 'tandem'";
+  } catch (const InvalidInput& e) {
+    EXPECT_STREQ(e.what(), "bearings[0].arrangement = 'tandem': must be 'single', 'back_to_back' or 'face_to_face'");
+  }
+  try {
+    parseEllipticityMethod("ellipticity", "x");
+    FAIL() << "accepted 'x'";
+  } catch (const InvalidInput& e) {
+    EXPECT_STREQ(e.what(), "ellipticity = 'x': must be 'exact' or 'hamrock_dowson'");
   }
 }
