@@ -65,15 +65,20 @@ void PipelineOptions::validate() const {
   if (std::abs(pinion_speed_rpm) > 1e5) {
     throw InvalidInput("pinion_speed_rpm = " + formatValue(pinion_speed_rpm) + ": must be within +-1e5 rpm");
   }
-  requireNonNegative("stiffness_rate", stiffness_rate);
-  if (stiffness_rate > 1e5) throw InvalidInput("stiffness_rate = " + formatValue(stiffness_rate) + ": must be <= 1e5 Hz");
   if (!torque_frame.empty() && torque_frame.front() == '/') {
     throw InvalidInput("torque_frame = '" + torque_frame + "': a frame id without a leading '/' (or empty: any frame)");
   }
 }
 
-RigPipeline::RigPipeline(const RigConfig& rig, const PipelineOptions& options) : rig_(rig), options_(options) {
+RigPipeline::RigPipeline(const RigConfig& rig, const PipelineOptions& options)
+    : RigPipeline(rig, options, RuntimeSettings::forRig(rig)) {}
+
+RigPipeline::RigPipeline(const RigConfig& rig, const PipelineOptions& options, const RuntimeSettings& settings)
+    : rig_(rig), options_(options), settings_(settings) {
   options_.validate();
+  settings_.validate();
+  rig_.dynamics.mesh_damping_ratio = settings_.mesh_damping_ratio;
+  rig_.dynamics.bearing_damping_ratio = settings_.bearing_damping_ratio;
   if (options_.dynamics && rig_.dynamics.present) {
     // One speed for both mesh phases: the stiffness estimate's and the dynamics' (their grid too).
     if (!(options_.pinion_speed_rpm > 0.0)) {
@@ -85,7 +90,7 @@ RigPipeline::RigPipeline(const RigConfig& rig, const PipelineOptions& options) :
   pinion_speed_ = options_.pinion_speed_rpm * kTwoPi / 60.0;
   if (options_.dynamics) {
     dynamics_ = std::make_unique<DynamicsEstimator>(rig_, estimator_->shaftRadialStiffness(), options_.output_rate);
-    dynamics_->setFidelity(options_.fidelity);
+    dynamics_->setFidelity(settings_.fidelity);
     te_spectrum_ = std::make_unique<SlidingSpectrum>(options_.spectrum_window, options_.spectrum_hop,
                                                      dynamics_->outputInterval(), 3);
   }
@@ -236,8 +241,8 @@ InputOutcome RigPipeline::preload(Stamp stamp, const std::vector<PreloadSetting>
 
 void RigPipeline::afterUpdate(Stamp stamp, const StiffnessEstimate& estimate, PipelineSink& sink) {
   // Coalescing by stamp, not by wall time, so a replay coalesces exactly as the live node did.
-  const bool due = options_.stiffness_rate <= 0.0 || !last_stiffness_out_ || stamp < *last_stiffness_out_ ||
-                   secondsBetween(stamp, *last_stiffness_out_) >= 1.0 / options_.stiffness_rate;
+  const bool due = settings_.stiffness_rate <= 0.0 || !last_stiffness_out_ || stamp < *last_stiffness_out_ ||
+                   secondsBetween(stamp, *last_stiffness_out_) >= 1.0 / settings_.stiffness_rate;
   if (due) {
     sink.stiffness(stamp, estimate);
     last_stiffness_out_ = stamp;
@@ -353,27 +358,18 @@ void RigPipeline::updateResonance(Stamp stamp, const StiffnessEstimate& estimate
   }
 }
 
-void RigPipeline::setDamping(double mesh_damping_ratio, double bearing_damping_ratio) {
-  requireNonNegative("mesh_damping_ratio", mesh_damping_ratio);
-  requireNonNegative("bearing_damping_ratio", bearing_damping_ratio);
-  if (mesh_damping_ratio > 1.0 || bearing_damping_ratio > 1.0) {
-    throw InvalidInput("damping ratios (" + formatValue(mesh_damping_ratio) + ", " + formatValue(bearing_damping_ratio) +
-                       "): must be <= 1");
+void RigPipeline::apply(const RuntimeSettings& settings) {
+  settings.validate();  // all or nothing: nothing below throws for valid settings
+  const bool damping_changed = settings.mesh_damping_ratio != settings_.mesh_damping_ratio ||
+                               settings.bearing_damping_ratio != settings_.bearing_damping_ratio;
+  settings_ = settings;
+  if (damping_changed) {
+    rig_.dynamics.mesh_damping_ratio = settings.mesh_damping_ratio;
+    rig_.dynamics.bearing_damping_ratio = settings.bearing_damping_ratio;
+    if (dynamics_) dynamics_->setDamping(settings.mesh_damping_ratio, settings.bearing_damping_ratio);
+    last_resonance_.reset();  // damped frequencies and ratios changed: republish at the next input
   }
-  rig_.dynamics.mesh_damping_ratio = mesh_damping_ratio;
-  rig_.dynamics.bearing_damping_ratio = bearing_damping_ratio;
-  if (dynamics_) dynamics_->setDamping(mesh_damping_ratio, bearing_damping_ratio);
-  last_resonance_.reset();  // damped frequencies and ratios changed: republish at the next input
-}
-
-void RigPipeline::setFidelity(Fidelity fidelity) {
-  options_.fidelity = fidelity;
-  if (dynamics_) dynamics_->setFidelity(fidelity);
-}
-
-void RigPipeline::setStiffnessRate(double hz) {
-  requireNonNegative("stiffness_rate", hz);
-  options_.stiffness_rate = hz;
+  if (dynamics_) dynamics_->setFidelity(settings.fidelity);
 }
 
 }  // namespace drivetrain_stiffness

@@ -18,19 +18,7 @@ MessageSink::MessageSink(const RigPipeline& pipeline, const OutputSettings& sett
     : pipeline_(pipeline),
       settings_(settings),
       visualizer_(pipeline.estimator().mesh().geometry(), pipeline.rig().gears.face_width, nominalMeshForce(pipeline.rig()),
-                  settings.frames, settings.exaggeration) {
-  setTfRate(settings.tf_rate);
-}
-
-void MessageSink::setExaggeration(double exaggeration) {
-  visualizer_.setExaggeration(exaggeration);
-  settings_.exaggeration = exaggeration;
-}
-
-void MessageSink::setTfRate(double hz) {
-  requireNonNegative("tf_rate", hz);
-  settings_.tf_rate = hz;
-}
+                  settings.frames, pipeline.settings().exaggeration) {}
 
 void MessageSink::stiffness(Stamp stamp, const StiffnessEstimate& estimate) {
   fillStiffnessMsg(stamp, settings_.frames.rig, estimate, stiffness_msg_);
@@ -42,10 +30,12 @@ void MessageSink::transmissionError(Stamp stamp, const DynamicsSample& sample) {
   drivetrain_stiffness::TransmissionError te = toTransmissionErrorMsg(stamp, settings_.frames.pinion, sample);
   te.header.seq = te_seq_++;
   emitTransmissionError(te);
-  if (settings_.tf_rate <= 0.0) return;
+  const RuntimeSettings& run = pipeline_.settings();
+  if (run.tf_rate <= 0.0) return;
   // Decided on sample stamps, so a replay draws the same frames as the live node.
-  if (last_tf_ && !(stamp < *last_tf_) && secondsBetween(stamp, *last_tf_) < 1.0 / settings_.tf_rate) return;
+  if (last_tf_ && !(stamp < *last_tf_) && secondsBetween(stamp, *last_tf_) < 1.0 / run.tf_rate) return;
   last_tf_ = stamp;
+  if (run.exaggeration != visualizer_.exaggeration()) visualizer_.setExaggeration(run.exaggeration);
   emitTransforms(visualizer_.transforms(toRosTime(stamp), sample, pipeline_.pinionAngle(stamp)));
   emitMarkers(visualizer_.markers(toRosTime(stamp), sample, pipeline_.lastResonance()));
 }

@@ -87,7 +87,7 @@ StiffnessEstimatorRos::StiffnessEstimatorRos(ros::NodeHandle nh, ros::NodeHandle
   }
   const RigConfig rig = loadRigFile(gearbox_config_);
   const auto get = [&pnh](const std::string& name, const auto& fallback) { return readParam(pnh, name, fallback); };
-  pipeline_ = std::make_unique<RigPipeline>(rig, readPipelineOptions(get, rig));
+  pipeline_ = std::make_unique<RigPipeline>(rig, readPipelineOptions(get, rig), readRuntimeSettings(get, rig));
   publishers_ = std::make_unique<Publishers>(nh, *pipeline_, readOutputSettings(get));
   deadline_ = readParam(pnh, "deadline", deadline_);
   requirePositive("~deadline", deadline_);
@@ -117,12 +117,13 @@ StiffnessEstimatorRos::StiffnessEstimatorRos(ros::NodeHandle nh, ros::NodeHandle
   // dynamic_reconfigure starts from the parameter server: seed it with the gearbox's damping, every
   // time (the server writes its values back, so a restart would otherwise reuse the last session's
   // and the node would no longer match drivetrain_replay on the same files).
-  pnh.setParam("mesh_damping_ratio", rig.dynamics.mesh_damping_ratio);
-  pnh.setParam("bearing_damping_ratio", rig.dynamics.bearing_damping_ratio);
-  pnh.setParam("fidelity", std::string(toString(pipeline_->options().fidelity)));
-  pnh.setParam("exaggeration", publishers_->settings().exaggeration);
-  pnh.setParam("stiffness_rate", pipeline_->options().stiffness_rate);
-  pnh.setParam("tf_rate", publishers_->settings().tf_rate);
+  const RuntimeSettings& run = pipeline_->settings();
+  pnh.setParam("mesh_damping_ratio", run.mesh_damping_ratio);
+  pnh.setParam("bearing_damping_ratio", run.bearing_damping_ratio);
+  pnh.setParam("fidelity", std::string(toString(run.fidelity)));
+  pnh.setParam("exaggeration", run.exaggeration);
+  pnh.setParam("stiffness_rate", run.stiffness_rate);
+  pnh.setParam("tf_rate", run.tf_rate);
   reconfigure_ = std::make_unique<dynamic_reconfigure::Server<drivetrain_stiffness::EstimatorConfig>>(reconfigure_mutex_, pnh);
   reconfigure_->setCallback([this](drivetrain_stiffness::EstimatorConfig& c, std::uint32_t level) { onReconfigure(c, level); });
 
@@ -142,7 +143,7 @@ StiffnessEstimatorRos::StiffnessEstimatorRos(ros::NodeHandle nh, ros::NodeHandle
     });
   }
   ROS_INFO("stiffness_estimator: %zu bearing supports from %s; dynamics %s; start %d under this master",
-           rig.bearings.size(), gearbox_config_.c_str(), pipeline_->dynamics() ? toString(pipeline_->options().fidelity) : "off",
+           rig.bearings.size(), gearbox_config_.c_str(), pipeline_->dynamics() ? toString(pipeline_->settings().fidelity) : "off",
            starts_);
 }
 
@@ -213,22 +214,16 @@ void StiffnessEstimatorRos::onPreload(const ros::MessageEvent<const drivetrain_s
 void StiffnessEstimatorRos::onReconfigure(drivetrain_stiffness::EstimatorConfig& config, std::uint32_t /*level*/) {
   std::lock_guard<std::mutex> lock(mutex_);
   try {
-    // All or nothing: check every value before applying any (the .cfg ranges clamp rqt's requests;
-    // a hand-made one may still carry an unknown fidelity).
-    const Fidelity fidelity = parseFidelity("fidelity", config.fidelity);
-    for (const auto& [name, v] : {std::pair<const char*, double>{"mesh_damping_ratio", config.mesh_damping_ratio},
-                                  {"bearing_damping_ratio", config.bearing_damping_ratio}}) {
-      if (!(v >= 0.0 && v <= 1.0)) throw InvalidInput(std::string(name) + " = " + formatValue(v) + ": must be in [0, 1]");
-    }
-    if (!(config.exaggeration >= 1.0)) throw InvalidInput("exaggeration = " + formatValue(config.exaggeration) + ": must be >= 1");
-    if (!(config.stiffness_rate >= 0.0 && config.tf_rate >= 0.0)) throw InvalidInput("stiffness_rate, tf_rate: must be >= 0");
-    const bool damping_changed = !applied_config_ || applied_config_->mesh_damping_ratio != config.mesh_damping_ratio ||
-                                 applied_config_->bearing_damping_ratio != config.bearing_damping_ratio;
-    if (damping_changed) pipeline_->setDamping(config.mesh_damping_ratio, config.bearing_damping_ratio);
-    pipeline_->setFidelity(fidelity);
-    pipeline_->setStiffnessRate(config.stiffness_rate);
-    publishers_->setExaggeration(config.exaggeration);
-    publishers_->setTfRate(config.tf_rate);
+    // All or nothing: RigPipeline::apply validates the whole set before it changes anything (the
+    // .cfg ranges clamp rqt's requests; a hand-made request may still carry an unknown fidelity).
+    RuntimeSettings next;
+    next.mesh_damping_ratio = config.mesh_damping_ratio;
+    next.bearing_damping_ratio = config.bearing_damping_ratio;
+    next.fidelity = parseFidelity("fidelity", config.fidelity);
+    next.stiffness_rate = config.stiffness_rate;
+    next.exaggeration = config.exaggeration;
+    next.tf_rate = config.tf_rate;
+    pipeline_->apply(next);
     applied_config_ = config;
     ++reconfigurations_;
   } catch (const InvalidInput& e) {

@@ -106,7 +106,7 @@ int run(int argc, char** argv) {
 
   const RigConfig rig = loadRigFile(config);
   const YamlParams get(params);
-  RigPipeline pipeline(rig, readPipelineOptions(get, rig));
+  RigPipeline pipeline(rig, readPipelineOptions(get, rig), readRuntimeSettings(get, rig));
   if (!report_dir.empty()) {
     ensureDirectory("--report", report_dir);
     if (csv_dir.empty()) csv_dir = report_dir + "/csv";

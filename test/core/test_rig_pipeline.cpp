@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <functional>
 #include <limits>
 
 #include "drivetrain_stiffness/config/yaml_config.hpp"
@@ -288,33 +289,68 @@ TEST(RigPipeline, FidelityAndDampingSwitchAtRunTime) {
   Recorder r;
   p.torque(at(0.0), 0.1, r);
   p.torque(at(0.05), 0.1, r);
-  p.setFidelity(Fidelity::kQuasiStatic);
+  RuntimeSettings s = p.settings();
+  s.fidelity = Fidelity::kQuasiStatic;
+  p.apply(s);
   p.torque(at(0.1), 0.1, r);
   ASSERT_EQ(r.te.size(), 100u);
   for (std::size_t i = 50; i < 100; ++i) {
     EXPECT_NEAR(r.te[i].dynamic_te, r.te[i].static_te, 1e-12 * std::abs(r.te[i].static_te)) << i;
   }
   EXPECT_EQ(r.te_stamps[99].ns - r.te_stamps[49].ns, 50000000);  // the grid continues, exactly
-  p.setFidelity(Fidelity::kFull);
-  p.setDamping(0.1, 0.05);
+  s.fidelity = Fidelity::kFull;
+  s.mesh_damping_ratio = 0.1;
+  s.bearing_damping_ratio = 0.05;
+  p.apply(s);
   const std::size_t published = r.resonance_out.size();
   p.torque(at(0.11), 0.1, r);
   ASSERT_EQ(r.te.size(), 110u);
   // The mesh phase continues across the rebuild: 1 ms steps of 1/3 of the 3 ms mesh period.
   EXPECT_NEAR(std::fmod(r.te[100].phase - r.te[99].phase + 1.0, 1.0), 1.0 / 3.0, 1e-9);
-  EXPECT_THROW(p.setDamping(-0.1, 0.05), InvalidInput);
-  EXPECT_THROW(p.setDamping(0.1, 2.0), InvalidInput);
+  // Refused whole: a bad damping ratio leaves the fidelity change beside it unapplied too.
+  RuntimeSettings bad = s;
+  bad.fidelity = Fidelity::kQuasiStatic;
+  bad.bearing_damping_ratio = 2.0;
+  EXPECT_THROW(p.apply(bad), InvalidInput);
+  EXPECT_EQ(p.settings().fidelity, Fidelity::kFull);
+  bad.bearing_damping_ratio = -0.1;
+  EXPECT_THROW(p.apply(bad), InvalidInput);
   // A damping change republishes the resonance at the next input with the new ratios.
   ASSERT_EQ(r.resonance_out.size(), published + 1);
   EXPECT_NEAR(r.resonance_out.back().second.modes[2].damping_ratio, 0.1, 0.02);  // the torsional mode
+}
+
+// The run-time settings are checked in one place with the ranges of cfg/Estimator.cfg, naming the
+// field; the same check runs at start-up, on reconfiguration and in the replay.
+TEST(RuntimeSettings, OneValidationNamesTheField) {
+  const std::vector<std::pair<std::string, std::function<void(RuntimeSettings&)>>> bad = {
+      {"mesh_damping_ratio", [](RuntimeSettings& s) { s.mesh_damping_ratio = 1.5; }},
+      {"bearing_damping_ratio", [](RuntimeSettings& s) { s.bearing_damping_ratio = std::nan(""); }},
+      {"stiffness_rate", [](RuntimeSettings& s) { s.stiffness_rate = 1e9; }},
+      {"exaggeration", [](RuntimeSettings& s) { s.exaggeration = 0.5; }},
+      {"tf_rate", [](RuntimeSettings& s) { s.tf_rate = -1.0; }},
+  };
+  for (const auto& [field, spoil] : bad) {
+    RuntimeSettings s;
+    spoil(s);
+    try {
+      s.validate();
+      ADD_FAILURE() << field << " accepted";
+    } catch (const InvalidInput& e) {
+      EXPECT_EQ(std::string(e.what()).rfind(field + " = ", 0), 0u) << e.what();
+    }
+    EXPECT_THROW(RigPipeline(rig(), PipelineOptions{}, s), InvalidInput) << field;
+  }
+  RuntimeSettings::forRig(rig()).validate();  // the gearbox's own values pass
 }
 
 // Stiffness coalescing (~stiffness_rate) is decided on stamps, so a replay coalesces the same way,
 // and every input is still counted.
 TEST(RigPipeline, StiffnessRateCoalescesOnStamps) {
   PipelineOptions o;
-  o.stiffness_rate = 100.0;
-  RigPipeline p(rig(), o);
+  RuntimeSettings settings = RuntimeSettings::forRig(rig());
+  settings.stiffness_rate = 100.0;
+  RigPipeline p(rig(), o, settings);
   Recorder r;
   for (int k = 0; k < 1000; ++k) p.torque(at(k * 1e-3), 0.1, r);
   EXPECT_EQ(r.stiffness_out.size(), 100u);

@@ -44,6 +44,7 @@
 #include "drivetrain_stiffness/core/modal_analysis.hpp"
 #include "drivetrain_stiffness/core/reduced_models.hpp"
 #include "drivetrain_stiffness/core/stiffness_estimator.hpp"
+#include "drivetrain_stiffness/pipeline/runtime_settings.hpp"
 #include "drivetrain_stiffness/pipeline/sequence_gaps.hpp"
 #include "drivetrain_stiffness/spectral/sliding_spectrum.hpp"
 
@@ -78,7 +79,6 @@ struct PipelineOptions {
     return l;
   }
   bool dynamics = true;              ///< integrate the 3-DOF model (needs the gearbox's dynamics block)
-  Fidelity fidelity = Fidelity::kFull;
   double output_rate = 1000.0;       ///< [Hz] transmission_error rate, rounded to divide the mesh period
   double max_gap = 1.0;              ///< [s] a longer forward input gap restarts the dynamics
   double stamp_jump_back = 1.0;      ///< [s] a stamp further back than this restarts everything
@@ -93,7 +93,6 @@ struct PipelineOptions {
   int spectrum_window = 1024;        ///< [samples] TE spectrum window
   int spectrum_hop = 256;            ///< [samples] between spectra
   double pinion_speed_rpm = 1000.0;  ///< [rpm] nominal speed for the mesh phase
-  double stiffness_rate = 0.0;       ///< [Hz] largest stiffness output rate; 0 = every accepted input
   std::string torque_frame;          ///< required header.frame_id of torque inputs; empty = any
   void validate() const;
 };
@@ -155,7 +154,9 @@ std::vector<std::pair<std::string, std::uint64_t>> namedCounters(const PipelineC
 
 class RigPipeline {
  public:
-  /// Throws InvalidInput naming the field for an invalid rig or option.
+  /// Throws InvalidInput naming the field for an invalid rig, option or setting. Without settings:
+  /// RuntimeSettings::forRig (the gearbox's damping, the other defaults).
+  RigPipeline(const RigConfig& rig, const PipelineOptions& options, const RuntimeSettings& settings);
   RigPipeline(const RigConfig& rig, const PipelineOptions& options);
 
   /// The caller's clock (ROS time now, or the bag's record time). Returns true if it went back
@@ -170,10 +171,11 @@ class RigPipeline {
   /// Back to the configured preloads, zero torque, dynamics restarted at the next torque input.
   void reset(const std::string& reason);
 
-  /// Run-time settings (dynamic_reconfigure). Validated; the dynamics keep their state.
-  void setDamping(double mesh_damping_ratio, double bearing_damping_ratio);
-  void setFidelity(Fidelity fidelity);
-  void setStiffnessRate(double hz);
+  /// New run-time settings (dynamic_reconfigure), validated and applied whole, or refused
+  /// (InvalidInput naming the field) with nothing changed. The dynamics keep their state; a damping
+  /// change rebuilds them and republishes the resonance at the next input.
+  void apply(const RuntimeSettings& settings);
+  const RuntimeSettings& settings() const { return settings_; }
 
   const PipelineCounters& counters() const { return counters_; }
   const PipelineOptions& options() const { return options_; }
@@ -203,6 +205,7 @@ class RigPipeline {
 
   RigConfig rig_;
   PipelineOptions options_;
+  RuntimeSettings settings_;
   std::unique_ptr<StiffnessEstimator> estimator_;
   std::unique_ptr<DynamicsEstimator> dynamics_;
   std::unique_ptr<SlidingSpectrum> te_spectrum_;

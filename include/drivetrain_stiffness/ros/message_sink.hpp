@@ -16,15 +16,16 @@
 
 namespace drivetrain_stiffness {
 
+/// What the sink needs beyond the pipeline's run-time settings (exaggeration and tf rate live in
+/// RuntimeSettings, read from the pipeline at each output).
 struct OutputSettings {
   VisualizationFrames frames;
-  double exaggeration = 2e4;  ///< display scale of displacements [-], >= 1
-  double tf_rate = 30.0;      ///< [Hz] tf and marker rate (on sample time); 0 = none
 };
 
 class MessageSink : public PipelineSink {
  public:
-  /// The pipeline supplies the rig geometry, the nominal pinion angle and the last resonance.
+  /// The pipeline supplies the rig geometry, the nominal pinion angle, the last resonance and the
+  /// run-time settings (exaggeration, tf rate).
   MessageSink(const RigPipeline& pipeline, const OutputSettings& settings);
 
   void stiffness(Stamp stamp, const StiffnessEstimate& estimate) override;
@@ -32,8 +33,6 @@ class MessageSink : public PipelineSink {
   void spectrum(Stamp stamp, const SlidingSpectrum& spectrum) override;
   void resonance(Stamp stamp, const ResonanceEstimate& estimate) override;
 
-  void setExaggeration(double exaggeration);  ///< InvalidInput if < 1
-  void setTfRate(double hz);                  ///< InvalidInput if negative
   const OutputSettings& settings() const { return settings_; }
 
  protected:

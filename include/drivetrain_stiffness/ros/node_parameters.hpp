@@ -20,7 +20,6 @@ PipelineOptions readPipelineOptions(const Get& get, const RigConfig& rig) {
   o.limits.max_interference = get("max_interference", o.limits.max_interference);
   o.limits.load_tolerance = get("bearing_load_tolerance", o.limits.load_tolerance);
   o.dynamics = get("dynamics", rig.dynamics.present);
-  o.fidelity = parseFidelity("~fidelity", get("fidelity", std::string("full")));
   o.output_rate = get("output_rate", o.output_rate);
   o.max_gap = get("max_gap", o.max_gap);
   o.stamp_jump_back = get("stamp_jump_back", o.stamp_jump_back);
@@ -30,7 +29,6 @@ PipelineOptions readPipelineOptions(const Get& get, const RigConfig& rig) {
   o.spectrum_hop = get("spectrum_hop", o.spectrum_hop);
   // One speed for both mesh phases (stiffness and dynamics): the dynamics block's, unless overridden.
   o.pinion_speed_rpm = get("pinion_speed_rpm", rig.dynamics.present ? rig.dynamics.speed_rpm : 1000.0);
-  o.stiffness_rate = get("stiffness_rate", o.stiffness_rate);
   // The torque sensor's frame: torque.z about the pinion axis (right-hand rule, REP 103). A torque in
   // another frame has another sign convention, so it is refused unless the user names the frame.
   o.torque_frame = get("torque_frame", std::string("pinion"));
@@ -40,6 +38,22 @@ PipelineOptions readPipelineOptions(const Get& get, const RigConfig& rig) {
     throw InvalidInput(std::string("parameter ~") + e.what());
   }
   return o;
+}
+
+/// The run-time settings at start-up: the gearbox's damping, the rest from the parameters.
+template <typename Get>
+RuntimeSettings readRuntimeSettings(const Get& get, const RigConfig& rig) {
+  RuntimeSettings s = RuntimeSettings::forRig(rig);
+  s.fidelity = parseFidelity("~fidelity", get("fidelity", std::string(toString(s.fidelity))));
+  s.stiffness_rate = get("stiffness_rate", s.stiffness_rate);
+  s.exaggeration = get("exaggeration", s.exaggeration);
+  s.tf_rate = get("tf_rate", s.tf_rate);
+  try {
+    s.validate();
+  } catch (const InvalidInput& e) {
+    throw InvalidInput(std::string("parameter ~") + e.what());
+  }
+  return s;
 }
 
 template <typename Get>
@@ -52,14 +66,6 @@ OutputSettings readOutputSettings(const Get& get) {
     if (f->empty() || f->front() == '/') {
       throw InvalidInput("parameter ~*_frame = '" + *f + "': must be a non-empty frame id without a leading '/'");
     }
-  }
-  s.exaggeration = get("exaggeration", s.exaggeration);
-  if (!(s.exaggeration >= 1.0 && s.exaggeration <= 1e8)) {
-    throw InvalidInput("parameter ~exaggeration = " + formatValue(s.exaggeration) + ": must be in [1, 1e8]");
-  }
-  s.tf_rate = get("tf_rate", s.tf_rate);
-  if (!(s.tf_rate >= 0.0 && s.tf_rate <= 1000.0)) {
-    throw InvalidInput("parameter ~tf_rate = " + formatValue(s.tf_rate) + ": must be in [0, 1000] Hz");
   }
   return s;
 }

@@ -27,6 +27,7 @@ class RigVisualizer {
   RigVisualizer(const SpurGearGeometry& geometry, double face_width, double nominal_mesh_force,
                 const VisualizationFrames& frames, double exaggeration);
   void setExaggeration(double exaggeration);
+  double exaggeration() const { return exaggeration_; }
 
   /// rig -> pinion and rig -> gear at sample.t; pinion_angle is the nominal pinion angle [rad].
   std::vector<geometry_msgs::TransformStamped> transforms(const ros::Time& stamp, const DynamicsSample& sample,
