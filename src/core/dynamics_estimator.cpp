@@ -11,11 +11,17 @@
 namespace drivetrain_stiffness {
 DynamicsEstimator::DynamicsEstimator(const RigConfig& rig, const std::array<double, 2>& bearing_stiffness,
                                      double output_rate)
-    : rig_(rig), bearing_stiffness_(bearing_stiffness), requested_rate_(output_rate), torque_(std::make_shared<double>(0.0)) {
+    : DynamicsEstimator(rig, bearing_stiffness, output_rate,
+                        std::make_shared<const AntiBacklashMesh>(rig.gears, rig.anti_backlash, rig.mesh_model, rig.mesh_samples)) {}
+
+DynamicsEstimator::DynamicsEstimator(const RigConfig& rig, const std::array<double, 2>& bearing_stiffness,
+                                     double output_rate, std::shared_ptr<const AntiBacklashMesh> mesh)
+    : rig_(rig), bearing_stiffness_(bearing_stiffness), requested_rate_(output_rate), torque_(std::make_shared<double>(0.0)),
+      mesh_(std::move(mesh)) {
   if (!rig.dynamics.present) throw InvalidInput("dynamics: the gearbox file has no 'dynamics:' block");
   requirePositive("output_rate", output_rate);
   for (int i = 0; i < 2; ++i) requireNonNegative("bearing_stiffness[" + std::to_string(i) + "]", bearing_stiffness[i]);
-  mesh_ = std::make_shared<AntiBacklashMesh>(rig.gears, rig.anti_backlash, rig.mesh_model, rig.mesh_samples);
+  if (!mesh_) throw InvalidInput("dynamics: no mesh table");
   fallback_.relative_tolerance = 1e-8;
   fallback_.absolute_tolerance = 1e-15;
   fallback_.max_step = 1e-4;

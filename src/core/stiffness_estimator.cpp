@@ -8,7 +8,7 @@
 namespace drivetrain_stiffness {
 
 StiffnessEstimator::StiffnessEstimator(const RigConfig& rig, const EstimatorLimits& limits)
-    : rig_(rig), limits_(limits), mesh_(rig.gears, rig.anti_backlash, rig.mesh_model, rig.mesh_samples) {
+    : rig_(rig), limits_(limits), mesh_(std::make_shared<const AntiBacklashMesh>(rig.gears, rig.anti_backlash, rig.mesh_model, rig.mesh_samples)) {
   requirePositive("max_abs_torque", limits.max_abs_torque);
   requirePositive("max_preload", limits.max_preload);
   requirePositive("max_interference", limits.max_interference);
@@ -19,7 +19,7 @@ StiffnessEstimator::StiffnessEstimator(const RigConfig& rig, const EstimatorLimi
   // stiffness (the table itself is fixed until the gear parameters change).
   const int n = 512;
   for (int i = 0; i < n; ++i) {
-    const CompositeMesh c = mesh_.at((i + 0.5) / n, 0.0);
+    const CompositeMesh c = mesh_->at((i + 0.5) / n, 0.0);
     mean_k1_kchain_[0] += c.k1 / n;
     mean_k1_kchain_[1] += c.k_chain / n;
   }
@@ -28,10 +28,10 @@ StiffnessEstimator::StiffnessEstimator(const RigConfig& rig, const EstimatorLimi
 
 MeshEstimate StiffnessEstimator::meshAt(double signed_mesh_force, double pinion_angle) const {
   MeshEstimate m;
-  m.phase = mesh_.geometry().phase(pinion_angle);
-  m.current = mesh_.at(m.phase, signed_mesh_force);
+  m.phase = mesh_->geometry().phase(pinion_angle);
+  m.current = mesh_->at(m.phase, signed_mesh_force);
   const double k1 = mean_k1_kchain_[0], kc = mean_k1_kchain_[1];
-  switch (mesh_.flankContact(signed_mesh_force, k1, kc)) {
+  switch (mesh_->flankContact(signed_mesh_force, k1, kc)) {
     case FlankContact::kBoth: m.mean = k1 + kc; break;
     case FlankContact::kDriveOnly: m.mean = k1; break;
     case FlankContact::kBackOnly: m.mean = kc; break;

@@ -89,7 +89,9 @@ RigPipeline::RigPipeline(const RigConfig& rig, const PipelineOptions& options, c
   estimator_ = std::make_unique<StiffnessEstimator>(rig_, options_.limits);
   pinion_speed_ = options_.pinion_speed_rpm * kTwoPi / 60.0;
   if (options_.dynamics) {
-    dynamics_ = std::make_unique<DynamicsEstimator>(rig_, estimator_->shaftRadialStiffness(), options_.output_rate);
+    // One mesh table for the rig: the stiffness estimator's, shared read-only with the dynamics.
+    dynamics_ = std::make_unique<DynamicsEstimator>(rig_, estimator_->shaftRadialStiffness(), options_.output_rate,
+                                                    estimator_->sharedMesh());
     dynamics_->setFidelity(settings_.fidelity);
     te_spectrum_ = std::make_unique<SlidingSpectrum>(options_.spectrum_window, options_.spectrum_hop,
                                                      dynamics_->outputInterval(), 3);

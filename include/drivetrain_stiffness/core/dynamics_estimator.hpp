@@ -35,6 +35,10 @@ class DynamicsEstimator {
  public:
   /// rig needs a dynamics block; bearing stiffness [N/m] per shaft; output rate [Hz].
   DynamicsEstimator(const RigConfig& rig, const std::array<double, 2>& bearing_stiffness, double output_rate);
+  /// The same with the rig's mesh table already built (the stiffness estimator's, shared): it must
+  /// be the table of rig.gears, rig.anti_backlash, rig.mesh_model and rig.mesh_samples.
+  DynamicsEstimator(const RigConfig& rig, const std::array<double, 2>& bearing_stiffness, double output_rate,
+                    std::shared_ptr<const AntiBacklashMesh> mesh);
 
   /// Restart at static equilibrium under `torque` at absolute time t.
   void reset(double t, double torque);

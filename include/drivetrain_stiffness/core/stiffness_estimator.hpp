@@ -78,7 +78,9 @@ class StiffnessEstimator {
   /// parallel, as the 3-DOF model's k_r1, k_r2 (seed 000 eq 15).
   std::array<double, 2> shaftRadialStiffness() const;
   const RigConfig& rig() const { return rig_; }
-  const AntiBacklashMesh& mesh() const { return mesh_; }
+  const AntiBacklashMesh& mesh() const { return *mesh_; }
+  /// The same read-only table, for the dynamics of the same rig (built once, shared).
+  std::shared_ptr<const AntiBacklashMesh> sharedMesh() const { return mesh_; }
 
  private:
   struct Support {
@@ -97,7 +99,7 @@ class StiffnessEstimator {
 
   RigConfig rig_;
   EstimatorLimits limits_;
-  AntiBacklashMesh mesh_;
+  std::shared_ptr<const AntiBacklashMesh> mesh_;
   std::array<double, 3> mean_k1_kchain_{};  ///< period means of k1, k_chain (for the flank state) and k1 + k_chain
   std::vector<Support> supports_;
   StiffnessEstimate estimate_;
