@@ -7,6 +7,15 @@
 #include "drivetrain_stiffness/core/validation.hpp"
 
 namespace drivetrain_stiffness {
+
+Eigen::Matrix3d meshBearingMatrix(double mesh, const std::array<double, 2>& bearing) {
+  Eigen::Matrix3d m;
+  m << 1, -1, 1, -1, 1, -1, 1, -1, 1;
+  m *= mesh;
+  m(0, 0) += bearing[0];
+  m(1, 1) += bearing[1];
+  return m;
+}
 namespace {
 
 // A compressive contact: spring force s = k g for g > 0 (g the penetration), damper c g' clipped so

@@ -18,14 +18,8 @@ std::array<Mode, 3> modalAnalysis(const GearRotorParameters& p, double ks) {
   requireNonNegative("mesh_stiffness", ks);
   const double ms = p.equivalentMass(), cs = p.mesh_damping;
   const Eigen::Vector3d mass(p.pinion_mass, p.gear_mass, ms);
-  // docs/model.md: K and C share the mesh pattern [[1,-1,1],[-1,1,-1],[1,-1,1]] plus the bearings.
-  Eigen::Matrix3d pattern;
-  pattern << 1, -1, 1, -1, 1, -1, 1, -1, 1;
-  Eigen::Matrix3d k = ks * pattern, c = cs * pattern;
-  k(0, 0) += p.bearing_stiffness[0];
-  k(1, 1) += p.bearing_stiffness[1];
-  c(0, 0) += p.bearing_damping[0];
-  c(1, 1) += p.bearing_damping[1];
+  // docs/model.md: K and C share the mesh pattern plus the bearings.
+  const Eigen::Matrix3d k = meshBearingMatrix(ks, p.bearing_stiffness), c = meshBearingMatrix(cs, p.bearing_damping);
   const Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::Matrix3d> undamped(k, Eigen::Matrix3d(mass.asDiagonal()));
   if (undamped.info() != Eigen::Success) throw InvalidInput("modal analysis: eigen-solution failed");
   // State-space eigenvalues for the damped frequencies and damping ratios.

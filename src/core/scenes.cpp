@@ -88,8 +88,7 @@ Scene rigScene(const std::string& name, const std::string& description, RigScene
   if (setup.parametric) {
     // Lowest natural frequency of the linearised system (docs/model.md), mesh frequency = 2 f_1.
     Eigen::Matrix3d mm = Eigen::Vector3d(p.pinion_mass, p.gear_mass, p.equivalentMass()).asDiagonal();
-    Eigen::Matrix3d kk;
-    kk << p.bearing_stiffness[0] + k_mean, -k_mean, k_mean, -k_mean, p.bearing_stiffness[1] + k_mean, -k_mean, k_mean, -k_mean, k_mean;
+    const Eigen::Matrix3d kk = meshBearingMatrix(k_mean, p.bearing_stiffness);
     const double f1 = std::sqrt(Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::Matrix3d>(kk, mm).eigenvalues()[0]) / kTwoPi;
     setup.excitation.speed = 2.0 * f1 * kTwoPi / rig.gears.teeth[0];
   }
@@ -163,8 +162,7 @@ State6 staticEquilibrium(const GearRotorModel& model, double t) {
   model.excitation().at(t, m);
   const GearRotorParameters& p = model.parameters();
   const double ks = m.k_drive + m.k_back;
-  Eigen::Matrix3d k;
-  k << p.bearing_stiffness[0] + ks, -ks, ks, -ks, p.bearing_stiffness[1] + ks, -ks, ks, -ks, ks;
+  const Eigen::Matrix3d k = meshBearingMatrix(ks, p.bearing_stiffness);
   // Mesh force k_s (delta - o) with delta = x + x_p - x_g - e and o the backlash an ordinary gear
   // must close on the loaded flank (b sign(F), seed 000 eq 17): e + o enters as k_s (e + o) on each row.
   const bool ordinary = m.k_back == 0.0 && m.preload_force == 0.0;

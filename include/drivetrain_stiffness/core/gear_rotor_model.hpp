@@ -38,6 +38,12 @@ struct GearRotorParameters {
   double equivalentMass() const;
 };
 
+/// The linear model's 3x3 matrix over (x_p, x_g, x) for a mesh coefficient `mesh` and the bearing
+/// coefficients `bearing` (docs/model.md): mesh * [[1,-1,1],[-1,1,-1],[1,-1,1]] + diag(b0, b1, 0).
+/// With stiffnesses it is K, with damping coefficients C. One assembly for the modal analysis,
+/// the static equilibrium and the scenes.
+Eigen::Matrix3d meshBearingMatrix(double mesh, const std::array<double, 2>& bearing);
+
 /// Mesh and load state at one instant, supplied by the excitation.
 struct MeshInstant {
   double k_drive = 0.0;          ///< k1 [N/m]
