@@ -11,6 +11,7 @@
 
 #include "drivetrain_stiffness/config/yaml_config.hpp"
 #include "drivetrain_stiffness/pipeline/rig_pipeline.hpp"
+#include "ripple_torque_feed.hpp"  // NOLINT(build/include_subdir)
 
 namespace {
 std::atomic<long> g_allocations{0};
@@ -28,30 +29,15 @@ using namespace drivetrain_stiffness;
 
 namespace {
 
-struct ReadingSink : PipelineSink {
-  double sum = 0.0;
-  void stiffness(Stamp, const StiffnessEstimate& e) override { sum += e.mesh.current.composite; }
-  void transmissionError(Stamp, const DynamicsSample& s) override { sum += s.dynamic_te; }
-};
-
-constexpr std::int64_t kEpoch = 1767225600LL * 1000000000LL;
-
 // Torque inputs to a warmed-up pipeline (2 s of 10 kHz inputs: tables, propagators, a full
 // spectrum window), then 1 s more counted: none may allocate.
 long allocationsPerSecondOfInputs(const PipelineOptions& options, Backlog backlog) {
   const RigConfig rig = loadRigFile(std::string(DRIVETRAIN_SOURCE_DIR) + "/config/gearboxes/seed_servo.yaml");
   RigPipeline pipeline(rig, options);
-  ReadingSink sink;
-  long k = 0;
-  const auto input = [&](Backlog b) {
-    const double t = 1e-4 * static_cast<double>(k);
-    const double torque = 0.1 * (1.0 + 0.1 * std::sin(2.0 * M_PI * 100.0 * t));  // the soak's ripple
-    pipeline.torque(Stamp{kEpoch + 100000 * k}, torque, sink, {"/rig", static_cast<std::uint32_t>(k), "pinion"}, b);
-    ++k;
-  };
-  for (int i = 0; i < 20000; ++i) input(Backlog::kNone);
+  RippleTorqueFeed feed(pipeline);
+  for (int i = 0; i < 20000; ++i) feed.next();
   const long before = g_allocations.load();
-  for (int i = 0; i < 10000; ++i) input(backlog);
+  for (int i = 0; i < 10000; ++i) feed.next(backlog);
   return g_allocations.load() - before;
 }
 
