@@ -88,3 +88,17 @@ add_test(NAME fault_recovery_sigkill_and_master_restart
   COMMAND ${CATKIN_DEVEL_PREFIX}/env.sh ${CMAKE_CURRENT_SOURCE_DIR}/test/ros/check_fault_recovery.sh
           ${CMAKE_CURRENT_SOURCE_DIR} ${CMAKE_CURRENT_BINARY_DIR}/fault_recovery_test)
 set_tests_properties(fault_recovery_sigkill_and_master_restart PROPERTIES TIMEOUT 600)
+
+# The README's quick start from a fresh shell: in an empty environment (env -i), source the devel
+# space's setup.bash, then `rosrun drivetrain_stiffness drivetrain_cli --help`, every tool and
+# script below resolved by rosrun to the expected file, every launch file by `roslaunch --files`.
+# Fails if the sourcing or the lookup by package name breaks - e.g. the devel space back under
+# build/, where rosrun finds nothing (scripts/build says why).
+set(FRESH_SHELL_TOOLS stiffness_estimator drivetrain_cli drivetrain_replay drivetrain_rig_sim drivetrain_latency
+  plot_study.py plot_replay.py stiffness_summary.py rviz_screenshot)
+if(TARGET drivetrain_bench)
+  list(APPEND FRESH_SHELL_TOOLS drivetrain_bench)
+endif()
+add_test(NAME ros_lookup_from_a_fresh_shell
+  COMMAND ${CMAKE_CURRENT_SOURCE_DIR}/test/ros/check_fresh_shell.sh ${CATKIN_DEVEL_PREFIX} ${CMAKE_CURRENT_SOURCE_DIR}
+          ${FRESH_SHELL_TOOLS})
