@@ -3,7 +3,7 @@
 // writes at every 1 kHz input (Stiffness with two bearings, TransmissionError). The bag goes to
 // /tmp; time includes the chunk compression and file writes, amortised (BagWriter does them on its
 // worker thread, so its figure is the cost left on the analysis thread).
-// Run: build/devel/lib/drivetrain_stiffness/bag_benchmark (see README, "Replay speed").
+// Run: devel/lib/drivetrain_stiffness/bag_benchmark (figures: docs/performance.md, "Replay speed").
 #include <benchmark/benchmark.h>
 
 #include <rosbag/bag.h>

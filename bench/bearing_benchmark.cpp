@@ -1,7 +1,7 @@
 // One bearing-stiffness update for the 7013 AC (19 balls, seed 003 Table 1): warm-started (the
 // node's steady state: a new radial load, solved from the previous displacement) and cold (no
 // previous solution), plus a rebuild of the bearing after a preload or fit change.
-// Run: build/devel/lib/drivetrain_stiffness/bearing_benchmark (see README for the figures).
+// Run: devel/lib/drivetrain_stiffness/bearing_benchmark (figures: docs/performance.md).
 #include <benchmark/benchmark.h>
 
 #include "drivetrain_stiffness/config/yaml_config.hpp"

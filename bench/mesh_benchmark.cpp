@@ -1,6 +1,6 @@
 // Mesh stiffness: table lookup by mesh phase (the hot path of the dynamics) and table rebuild (when
 // a gear parameter changes), for the seed-000 anti-backlash pair with the potential-energy model.
-// Run: build/devel/lib/drivetrain_stiffness/mesh_benchmark (see README for the figures).
+// Run: devel/lib/drivetrain_stiffness/mesh_benchmark (figures: docs/performance.md).
 #include <benchmark/benchmark.h>
 
 #include "drivetrain_stiffness/config/yaml_config.hpp"

@@ -3,7 +3,7 @@
 // output) against one shed under backlog (rules and dynamics only), the ratio that tells how much
 // an overloaded node gains by shedding (docs/reliability.md, "Overload"). The node adds roscpp's
 // deserialization and one publish per output on top.
-// Run: build/devel/lib/drivetrain_stiffness/pipeline_benchmark --benchmark_repetitions=3 --benchmark_report_aggregates_only=true
+// Run: devel/lib/drivetrain_stiffness/pipeline_benchmark --benchmark_repetitions=3 --benchmark_report_aggregates_only=true
 #include <benchmark/benchmark.h>
 
 #include "drivetrain_stiffness/config/yaml_config.hpp"
