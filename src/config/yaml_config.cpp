@@ -238,7 +238,7 @@ void parseGears(const YAML::Node& root, const std::string& file, RigConfig& rig)
     rig.anti_backlash.loaded_gear_face_width = readDouble(ab, w, "loaded_gear_face_width", 0.0);
     withContext(file, [&] {
       requirePositive("anti_backlash.spring_stiffness", rig.anti_backlash.spring_stiffness);  // the block means a spring
-      requireNonNegative("anti_backlash.preload_torque", rig.anti_backlash.preload_torque);
+      validateAntiBacklash(rig.anti_backlash);
     });
   }
   if (const YAML::Node mesh = root["mesh"]) {

@@ -176,3 +176,29 @@ TEST(YamlConfig, UnreachablePreloadNamesFileAndKey) {
   const std::string path = writeTemp("pair.yaml", std::string(kGood) + "  arrangement: back_to_back\n  axial_preload: 1e300\n");
   expectNames(refusal<UnreachableLoad>(loadBearingFile, path), path, "bearing: axial_preload = 1e+300");
 }
+
+TEST(YamlConfig, AbsurdMagnitudesAreRefusedNotNaN) {
+  // Each passed every sign check and then overflowed into a NaN stiffness (fuzz findings).
+  const std::string bearing_file = kSource + "/config/bearings/servo_7000ac.yaml";
+  const std::string rig = std::string(kGears) + "bearings:\n  - {name: a, file: '" + bearing_file + "'}\n";
+  struct Case {
+    std::string from, to, named;
+  };
+  const Case cases[] = {
+      {"face_width: 6.5e-3", "face_width: 1e308", "gears.face_width = 1e+308"},
+      {"module: 0.6e-3", "module: 1e308", "gears.module = 1e+308"},
+      {"teeth", "youngs_modulus: 1e308, teeth", "gears.youngs_modulus = 1e+308"},
+      {"bearings:", "anti_backlash: {spring_stiffness: 1e308, preload_torque: 1}\nbearings:",
+       "anti_backlash.spring_stiffness = 1e+308"},
+      {"bearings:", "anti_backlash: {spring_stiffness: 1e7, preload_torque: 1e308}\nbearings:",
+       "anti_backlash.preload_torque = 1e+308"},
+      {"name: a,", "name: a, pitch_diameter: 1e308,", "pitch_diameter = 1e+308"},
+      {"name: a,", "name: a, youngs_modulus: 1e308,", "youngs_modulus = 1e+308"},
+      {"name: a,", "name: a, youngs_modulus: 4.9e-324,", "youngs_modulus = 4.940656458e-324"},
+      {"name: a,", "name: a, shaft_youngs_modulus: 1e308,", "youngs_modulus = 1e+308"},
+  };
+  for (const Case& c : cases) {
+    const std::string path = writeTemp("absurd.yaml", std::string(rig).replace(rig.find(c.from), c.from.size(), c.to));
+    expectNames(refusal(loadRigFile, path), path, c.named);
+  }
+}
