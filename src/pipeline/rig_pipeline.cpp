@@ -323,12 +323,11 @@ void RigPipeline::updateResonance(Stamp stamp, const StiffnessEstimate& estimate
 }
 
 void RigPipeline::setDamping(double mesh_damping_ratio, double bearing_damping_ratio) {
+  // Each checked on its own, so that a refusal names the one that is out of range.
   requireNonNegative("mesh_damping_ratio", mesh_damping_ratio);
+  requireAtMost("mesh_damping_ratio", mesh_damping_ratio, 1.0);
   requireNonNegative("bearing_damping_ratio", bearing_damping_ratio);
-  if (mesh_damping_ratio > 1.0 || bearing_damping_ratio > 1.0) {
-    throw InvalidInput("damping ratios (" + formatValue(mesh_damping_ratio) + ", " + formatValue(bearing_damping_ratio) +
-                       "): must be <= 1");
-  }
+  requireAtMost("bearing_damping_ratio", bearing_damping_ratio, 1.0);
   rig_.dynamics.mesh_damping_ratio = mesh_damping_ratio;
   rig_.dynamics.bearing_damping_ratio = bearing_damping_ratio;
   if (dynamics_) dynamics_->setDamping(mesh_damping_ratio, bearing_damping_ratio);
