@@ -2,6 +2,8 @@
 
 #include <cmath>
 #include <array>
+#include <filesystem>
+#include <ios>
 #include <set>
 
 #include "drivetrain_stiffness/core/validation.hpp"
@@ -22,11 +24,36 @@ const std::set<std::string> kRigBearingKeys = {"name", "shaft", "mesh_load_share
 
 std::string key(const std::string& where, const std::string& name) { return where + "." + name; }
 
+// A key from the file as it goes into a message: control characters escaped (\xNN), since what()
+// is a C string and a NUL in a key would cut the message short before it names anything.
+std::string printable(const std::string& text) {
+  std::string out;
+  for (const char c : text) {
+    const auto u = static_cast<unsigned char>(c);
+    if (u >= 0x20 && u != 0x7f) {
+      out.push_back(c);
+    } else {
+      static const char kHex[] = "0123456789abcdef";
+      out += {'\\', 'x', kHex[u >> 4], kHex[u & 15]};
+    }
+  }
+  return out;
+}
+
+// A mapping key as a name. YAML allows a sequence or a mapping as a key ("[a, b]: 1"), which
+// as<std::string>() refuses with an untranslated YAML::TypedBadConversion; a null key ("~: 1") is
+// returned as "~", which no schema contains (an unknown key).
+std::string keyName(const YAML::Node& k, const std::string& where) {
+  if (k.IsScalar()) return k.Scalar();
+  if (k.IsNull()) return "~";
+  throw InvalidInput(where + ": key '" + YAML::Dump(k) + "' is not a name");
+}
+
 void rejectUnknownKeys(const YAML::Node& node, const std::string& where,
                        const std::set<std::string>& a, const std::set<std::string>& b = {}) {
   for (const auto& item : node) {
-    const std::string name = item.first.as<std::string>();
-    if (!a.count(name) && !b.count(name)) throw InvalidInput(key(where, name) + ": unknown key");
+    const std::string name = keyName(item.first, where);
+    if (!a.count(name) && !b.count(name)) throw InvalidInput(key(where, printable(name)) + ": unknown key");
   }
 }
 
@@ -60,21 +87,31 @@ std::string readString(const YAML::Node& node, const std::string& where, const s
   }
 }
 
-// Prefixes the field named in a core InvalidInput message with the YAML location.
+// Prefixes the field named in a core InvalidInput or UnreachableLoad (a preload the bearing cannot
+// carry is refused at load time too) message with the YAML location.
 template <typename F>
 auto withContext(const std::string& where, F&& f) -> decltype(f()) {
   try {
     return f();
   } catch (const InvalidInput& e) {
     throw InvalidInput(where + ": " + e.what());
+  } catch (const UnreachableLoad& e) {
+    throw UnreachableLoad(where + ": " + e.what());
   }
 }
 
 YAML::Node loadFile(const std::string& path) {
+  // Refused before yaml-cpp sees it: its reader throws std::ios_base::failure from the first read
+  // of a directory, and leaks its 2 KB prefetch buffer doing so (LeakSanitizer, scripts/test
+  // --sanitize).
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) throw InvalidInput(path + ": is a directory, not a file");
   try {
     return YAML::LoadFile(path);
   } catch (const YAML::BadFile&) {
     throw InvalidInput(path + ": cannot open file");
+  } catch (const std::ios_base::failure& e) {  // opened but unreadable (EIO, ...)
+    throw InvalidInput(path + ": cannot read file (" + e.what() + ")");
   } catch (const YAML::Exception& e) {
     throw InvalidInput(path + ": YAML syntax error at line " + std::to_string(e.mark.line + 1) + ": " + e.msg);
   }
@@ -102,7 +139,13 @@ BearingSupportConfig parseBearing(const YAML::Node& node, const std::string& whe
     throw InvalidInput(where + ": give diametral_clearance or contact_angle_deg, not both");
   }
   if (node["diametral_clearance"]) s.diametral_clearance = readDouble(node, where, "diametral_clearance");
-  else if (node["contact_angle_deg"]) s.contact_angle = readDouble(node, where, "contact_angle_deg") * kDegToRad;
+  else if (node["contact_angle_deg"]) {
+    // Checked here in degrees: the bearing's own check names contact_angle in radians, which is not
+    // what the file says.
+    const double deg = readDouble(node, where, "contact_angle_deg");
+    requireInHalfOpenRange(key(where, "contact_angle_deg"), deg, 0.0, 90.0);
+    s.contact_angle = deg * kDegToRad;
+  }
   else throw InvalidInput(where + ": one of diametral_clearance or contact_angle_deg is required");
   s.width = readDouble(node, where, "width", 0.0);
   s.material.youngs_modulus = readDouble(node, where, "youngs_modulus");
@@ -199,16 +242,34 @@ void parseGears(const YAML::Node& root, const std::string& file, RigConfig& rig)
     rig.anti_backlash.spring_stiffness = readDouble(ab, w, "spring_stiffness");
     rig.anti_backlash.preload_torque = readDouble(ab, w, "preload_torque");
     rig.anti_backlash.loaded_gear_face_width = readDouble(ab, w, "loaded_gear_face_width", 0.0);
-    requirePositive("anti_backlash.spring_stiffness", rig.anti_backlash.spring_stiffness);
-    requireNonNegative("anti_backlash.preload_torque", rig.anti_backlash.preload_torque);
+    withContext(file, [&] {
+      requirePositive("anti_backlash.spring_stiffness", rig.anti_backlash.spring_stiffness);  // the block means a spring
+      validateAntiBacklash(rig.anti_backlash);
+    });
   }
   if (const YAML::Node mesh = root["mesh"]) {
     if (!mesh.IsMap()) throw InvalidInput(file + ": mesh: must be a mapping");
     rejectUnknownKeys(mesh, file + ": mesh", kMeshKeys);
-    rig.mesh_model = parseMeshStiffnessModel("mesh.model", readString(mesh, "mesh", "model", "potential_energy"));
-    if (mesh["samples"]) rig.mesh_samples = readInt(mesh, file + ": mesh", "samples");
-    if (rig.mesh_samples < 16 || rig.mesh_samples > 100000) throwInvalid("mesh.samples", rig.mesh_samples, "must be in [16, 100000]");
+    const std::string w = file + ": mesh";
+    rig.mesh_model = parseMeshStiffnessModel(key(w, "model"), readString(mesh, w, "model", "potential_energy"));
+    if (mesh["samples"]) rig.mesh_samples = readInt(mesh, w, "samples");
+    if (rig.mesh_samples < 16 || rig.mesh_samples > 100000) throwInvalid(key(w, "samples"), rig.mesh_samples, "must be in [16, 100000]");
   }
+}
+
+// The dynamics block's value checks (the caller adds the file to the field named).
+static void checkDynamics(const DynamicsConfig& c) {
+  requirePositive("dynamics.pinion_mass", c.pinion_mass);
+  requirePositive("dynamics.gear_mass", c.gear_mass);
+  requirePositive("dynamics.pinion_inertia", c.pinion_inertia);
+  requirePositive("dynamics.gear_inertia", c.gear_inertia);
+  requireInHalfOpenRange("dynamics.mesh_damping_ratio", c.mesh_damping_ratio, 0.0, 1.0);
+  requireInHalfOpenRange("dynamics.bearing_damping_ratio", c.bearing_damping_ratio, 0.0, 1.0);
+  for (int i = 0; i < 2; ++i) requireNonNegative("dynamics.bearing_clearance[" + std::to_string(i) + "]", c.bearing_clearance[i]);
+  requirePositive("dynamics.speed_rpm", c.speed_rpm);
+  requireNonNegative("dynamics.transmission_error_amplitude", c.transmission_error_amplitude);
+  requireNonNegative("dynamics.backlash", c.backlash);
+  requireFinite("dynamics.torque", c.torque);
 }
 
 static void parseDynamics(const YAML::Node& root, const std::string& file, RigConfig& rig) {
@@ -230,17 +291,7 @@ static void parseDynamics(const YAML::Node& root, const std::string& file, RigCo
   c.transmission_error_amplitude = readDouble(d, w, "transmission_error_amplitude", c.transmission_error_amplitude);
   c.backlash = readDouble(d, w, "backlash", c.backlash);
   c.torque = readDouble(d, w, "torque", c.torque);
-  requirePositive("dynamics.pinion_mass", c.pinion_mass);
-  requirePositive("dynamics.gear_mass", c.gear_mass);
-  requirePositive("dynamics.pinion_inertia", c.pinion_inertia);
-  requirePositive("dynamics.gear_inertia", c.gear_inertia);
-  requireInHalfOpenRange("dynamics.mesh_damping_ratio", c.mesh_damping_ratio, 0.0, 1.0);
-  requireInHalfOpenRange("dynamics.bearing_damping_ratio", c.bearing_damping_ratio, 0.0, 1.0);
-  for (int i = 0; i < 2; ++i) requireNonNegative("dynamics.bearing_clearance[" + std::to_string(i) + "]", c.bearing_clearance[i]);
-  requirePositive("dynamics.speed_rpm", c.speed_rpm);
-  requireNonNegative("dynamics.transmission_error_amplitude", c.transmission_error_amplitude);
-  requireNonNegative("dynamics.backlash", c.backlash);
-  requireFinite("dynamics.torque", c.torque);
+  withContext(file, [&] { checkDynamics(c); });
 }
 
 RigConfig loadGearFile(const std::string& path) {
@@ -256,7 +307,7 @@ BearingSupportConfig loadBearingFile(const std::string& path) {
   const YAML::Node root = loadFile(path);
   if (!root.IsMap() || !root["bearing"]) throw InvalidInput(path + ": needs a top-level 'bearing:' block");
   BearingSupportConfig cfg = parseBearing(root["bearing"], path + ": bearing");
-  cfg.name = readString(root["bearing"], "bearing", "name", "bearing");
+  cfg.name = readString(root["bearing"], path + ": bearing", "name", "bearing");
   return cfg;
 }
 
@@ -267,9 +318,9 @@ RigConfig loadRigFile(const std::string& path) {
     throw InvalidInput(path + ": needs top-level 'gears:' and 'bearings:' blocks");
   }
   for (const auto& item : root) {
-    const std::string name = item.first.as<std::string>();
+    const std::string name = keyName(item.first, path);
     if (name != "gears" && name != "bearings" && name != "anti_backlash" && name != "mesh" && name != "dynamics") {
-      throw InvalidInput(path + ": " + name + ": unknown top-level key");
+      throw InvalidInput(path + ": '" + printable(name) + "': unknown top-level key");
     }
   }
   RigConfig rig;
@@ -284,13 +335,22 @@ RigConfig loadRigFile(const std::string& path) {
     YAML::Node node = YAML::Clone(list[i]);
     if (!node.IsMap()) throw InvalidInput(entry + ": must be a mapping");
     if (node["file"]) {  // keys of the entry override those of the referenced bearing file
-      const std::string name = node["file"].as<std::string>();
+      const std::string name = readString(node, entry, "file", "");
       const std::string file = !name.empty() && name[0] == '/' ? name : directoryOf(path) + "/" + name;
-      const YAML::Node base = loadFile(file);
-      if (!base["bearing"]) throw InvalidInput(file + ": needs a top-level 'bearing:' block");
+      // A refusal of the referenced file names the entry that references it, then the file.
+      const std::string ref = entry + ".file = '" + name + "'";
+      YAML::Node base;
+      try {
+        base = loadFile(file);
+      } catch (const InvalidInput& e) {
+        throw InvalidInput(ref + ": " + e.what());
+      }
+      if (!base.IsMap() || !base["bearing"]) throw InvalidInput(ref + ": " + file + ": needs a top-level 'bearing:' block");
+      if (!base["bearing"].IsMap()) throw InvalidInput(ref + ": " + file + ": bearing: must be a mapping of bearing keys");
       YAML::Node merged = YAML::Clone(base["bearing"]);
       for (const auto& kv : node) {
-        if (kv.first.as<std::string>() != "file") merged[kv.first.as<std::string>()] = kv.second;
+        const std::string k = keyName(kv.first, entry);
+        if (k != "file") merged[k] = kv.second;
       }
       node = merged;
     }

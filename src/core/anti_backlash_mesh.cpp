@@ -16,12 +16,21 @@ const char* toString(FlankContact contact) {
   return "?";
 }
 
+void validateAntiBacklash(const AntiBacklashSpec& spec) {
+  // The upper bounds are past anything built (tooth pairs are ~1e9 N/m); at 1e308 the flank forces
+  // overflow into a NaN mesh stiffness instead of a refusal.
+  requireNonNegative("anti_backlash.spring_stiffness", spec.spring_stiffness);  // 0: ordinary gear
+  requireAtMost("anti_backlash.spring_stiffness", spec.spring_stiffness, 1e13);  // [N/m]
+  requireNonNegative("anti_backlash.preload_torque", spec.preload_torque);
+  requireAtMost("anti_backlash.preload_torque", spec.preload_torque, 1e6);  // [N m]
+  requireNonNegative("anti_backlash.loaded_gear_face_width", spec.loaded_gear_face_width);
+  requireAtMost("anti_backlash.loaded_gear_face_width", spec.loaded_gear_face_width, 10.0);  // [m], as gears.face_width
+}
+
 AntiBacklashMesh::AntiBacklashMesh(const GearPairSpec& gears, const AntiBacklashSpec& spec, MeshStiffnessModel model,
                                    int samples)
     : geometry_(gears), spec_(spec), model_(model) {
-  requireNonNegative("anti_backlash.spring_stiffness", spec.spring_stiffness);  // 0: ordinary gear
-  requireNonNegative("anti_backlash.preload_torque", spec.preload_torque);
-  requireNonNegative("anti_backlash.loaded_gear_face_width", spec.loaded_gear_face_width);
+  validateAntiBacklash(spec);
   preload_force_ = spec.preload_torque / geometry_.baseRadius(1);
   const auto drive_model = makeToothPairStiffness(model, geometry_, gears.face_width);
   verified_ = drive_model->verified();

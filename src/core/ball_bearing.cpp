@@ -8,11 +8,15 @@
 namespace drivetrain_stiffness {
 namespace {
 constexpr double kPi = 3.14159265358979323846;
+constexpr double kMaxDiameter = 10.0;  // [m]
 
 void validateSpec(const BallBearingSpec& s) {
   if (s.balls < 3) throwInvalid("balls", s.balls, "must be an integer >= 3");
   requirePositive("ball_diameter", s.ball_diameter);
   requirePositive("pitch_diameter", s.pitch_diameter);
+  // Past any bearing made (TBM main bearings are ~8 m): at 1e308 the ring geometry overflows and
+  // the equilibrium comes out NaN instead of refused.
+  requireAtMost("pitch_diameter", s.pitch_diameter, kMaxDiameter);
   if (!(s.pitch_diameter > s.ball_diameter)) {
     throwInvalid("pitch_diameter", s.pitch_diameter, "must exceed ball_diameter = " + formatValue(s.ball_diameter));
   }
@@ -28,7 +32,7 @@ void validateSpec(const BallBearingSpec& s) {
   if (s.contact_angle) requireInHalfOpenRange("contact_angle", *s.contact_angle, 0.0, kPi / 2.0);
   if (s.diametral_clearance) requireFinite("diametral_clearance", *s.diametral_clearance);
   requireNonNegative("width", s.width);
-  requirePositive("youngs_modulus", s.material.youngs_modulus);
+  requireYoungsModulus("youngs_modulus", s.material.youngs_modulus);
   requireInHalfOpenRange("poisson_ratio", s.material.poisson_ratio, 0.0, 0.5);
   requirePositive("max_contact_pressure", s.max_contact_pressure);
 }

@@ -51,7 +51,11 @@ BearingSupport::BearingSupport(const BallBearingSpec& spec, Arrangement arrangem
                          "': duplex pairs need type = angular_contact");
     }
     if (!(axial_preload > 0.0)) throwInvalid("axial_preload", axial_preload, "a duplex pair needs a preload > 0");
-    offset_ = bearing_.axialDisplacementForLoad(axial_preload);
+    try {
+      offset_ = bearing_.axialDisplacementForLoad(axial_preload);
+    } catch (const UnreachableLoad& e) {  // named as the caller gave it: the pair's preload, not "axial_load"
+      throw UnreachableLoad("axial_preload = " + formatValue(axial_preload) + ": " + e.what());
+    }
     const double half = spec.width / 2.0;
     // DB: the unmirrored row (pressure centre at z - (d_m/2) tan(alpha)) on the -z side, so both
     // pressure centres lie outside the rows; DF: the other way round.

@@ -29,6 +29,18 @@ DynamicsEstimator::DynamicsEstimator(const RigConfig& rig, const std::array<doub
 }
 
 void DynamicsEstimator::build() {
+  // A refusal while building (a speed no excitation or propagator can take) names the settings a
+  // user gives, not the derived ones (speed in rad/s, output interval) the parts below check.
+  try {
+    buildModel();
+  } catch (const InvalidInput& e) {
+    throw InvalidInput("dynamics.speed_rpm = " + formatValue(rig_.dynamics.speed_rpm) + " with output_rate = " +
+                       formatValue(requested_rate_) + ": " + e.what());
+  }
+  ++rebuilds_;
+}
+
+void DynamicsEstimator::buildModel() {
   const DynamicsConfig& d = rig_.dynamics;
   const GearRotorParameters p = rigRotorParameters(rig_, *mesh_, bearing_stiffness_);
   RigExcitationSpec spec;
@@ -40,15 +52,21 @@ void DynamicsEstimator::build() {
   spec.torque.mean = d.torque;
   spec.torque.live = torque_;
   auto excitation = std::make_shared<RigExcitation>(mesh_, p, spec);
-  model_ = std::make_shared<GearRotorModel>(p, excitation);
+  auto model = std::make_shared<GearRotorModel>(p, excitation);
   const double period = 1.0 / excitation->meshFrequency();
   const double per_period = std::max(1.0, std::round(period * requested_rate_));
-  interval_ = period / per_period;
-  propagator_.reset();
+  const double interval = period / per_period;
+  // A mesh so slow that its period overflows the grid arithmetic (0 or NaN samples) would make
+  // every advanceTo() convert NaN to an index.
+  if (!(interval > 0.0 && std::isfinite(interval))) throwInvalid("mesh period", period, "gives no usable output grid");
+  std::unique_ptr<PeriodicExponentialPropagator> propagator;
   if (d.bearing_clearance[0] == 0.0 && d.bearing_clearance[1] == 0.0) {
-    propagator_ = std::make_unique<PeriodicExponentialPropagator>(*model_, 0.0, interval_);
+    propagator = std::make_unique<PeriodicExponentialPropagator>(*model, 0.0, interval);
   }
-  ++rebuilds_;
+  // Kept only now, all together: a refused rebuild leaves the last model, grid and propagators.
+  propagator_ = std::move(propagator);  // first: the old one refers to the old model
+  model_ = std::move(model);
+  interval_ = interval;
 }
 
 void DynamicsEstimator::reset(double t, double torque) {

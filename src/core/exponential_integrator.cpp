@@ -35,6 +35,11 @@ PeriodicExponentialPropagator::PeriodicExponentialPropagator(const GearRotorMode
   const RigExcitationSpec& spec = excitation_->spec();
   const double period = 1.0 / excitation_->meshFrequency();
   const double n_real = period / output_interval;
+  // Checked before lround: a slow mesh on a fine grid asks for more intervals than a long holds.
+  if (!(n_real <= kMaxIntervalsPerPeriod)) {
+    throwInvalid("output_interval", output_interval, "gives " + formatValue(n_real) + " samples per mesh period of " +
+                 formatValue(period) + " s: more than " + formatValue(kMaxIntervalsPerPeriod) + " stored propagators");
+  }
   const long n = std::lround(n_real);
   if (n < 1 || std::abs(n_real - n) > 1e-9 * n_real) {
     throwInvalid("output_interval", output_interval, "must divide the mesh period " + formatValue(period) + " s");
@@ -58,6 +63,12 @@ PeriodicExponentialPropagator::PeriodicExponentialPropagator(const GearRotorMode
                                            (k_max + p.bearing_stiffness[1]) / p.gear_mass,
                                            2.0 * k_max / model.equivalentMass(), te_omega_ * te_omega_}));
   const double h_max = step_factor / w_max;
+  // The set-up costs one Magnus step (an 11x11 exponential, ~5 us) per h_max over a mesh period:
+  // a slow mesh makes that hours (0.001 rpm on the seed-000 rig: 2e9 steps). Refused up front.
+  if (!(period / h_max <= kMaxSetupSteps)) {
+    throwInvalid("mesh period", period, "needs " + formatValue(period / h_max) + " Magnus steps to set up (more than " +
+                 formatValue(kMaxSetupSteps) + "): the mesh is too slow for exact propagation");
+  }
 
   // Pieces end exactly on the tooth-count switches and on every node of the phase table, so that
   // A(t) is linear in t inside each piece and the Gauss-point Magnus step keeps its order.

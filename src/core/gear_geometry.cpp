@@ -30,6 +30,7 @@ double inverseInvolute(double value) {
 
 void validateGearPair(const GearPairSpec& spec) {
   requirePositive("gears.module", spec.module);
+  requireAtMost("gears.module", spec.module, 1.0);  // [m]; the largest gears made have ~0.1 m
   requireInOpenRange("gears.pressure_angle_deg", spec.pressure_angle * 180.0 / kPi, 0.0, 45.0);
   requireInHalfOpenRange("gears.helix_angle_deg", spec.helix_angle * 180.0 / kPi, 0.0, 45.0);
   for (int i = 0; i < 2; ++i) {
@@ -40,7 +41,8 @@ void validateGearPair(const GearPairSpec& spec) {
   requireInOpenRange("gears.addendum_coefficient", spec.addendum_coefficient, 0.0, 2.0);
   requireInOpenRange("gears.tool_dedendum_coefficient", spec.tool_dedendum_coefficient, 0.0, 3.0);
   requireNonNegative("gears.face_width", spec.face_width);
-  requirePositive("gears.youngs_modulus", spec.material.youngs_modulus);
+  requireAtMost("gears.face_width", spec.face_width, 10.0);  // [m]
+  requireYoungsModulus("gears.youngs_modulus", spec.material.youngs_modulus);
   requireInHalfOpenRange("gears.poisson_ratio", spec.material.poisson_ratio, 0.0, 0.5);
   if (spec.center_distance) requirePositive("gears.center_distance", *spec.center_distance);
 }

@@ -8,7 +8,7 @@ namespace drivetrain_stiffness {
 namespace {
 
 void validateMaterial(const std::string& prefix, const ElasticMaterial& m) {
-  requirePositive(prefix + "youngs_modulus", m.youngs_modulus);
+  requireYoungsModulus(prefix + "youngs_modulus", m.youngs_modulus);
   requireInHalfOpenRange(prefix + "poisson_ratio", m.poisson_ratio, 0.0, 0.5);
 }
 

@@ -30,6 +30,18 @@ void requireNonNegative(const std::string& field, double value) {
   if (value < 0.0) throwInvalid(field, value, "must be >= 0");
 }
 
+void requireAtMost(const std::string& field, double value, double limit) {
+  requireFinite(field, value);
+  if (value > limit) throwInvalid(field, value, "must be <= " + formatValue(limit));
+}
+
+void requireYoungsModulus(const std::string& field, double value) {
+  requireFinite(field, value);
+  if (!(value >= kMinYoungsModulus && value <= kMaxYoungsModulus)) {
+    throwInvalid(field, value, "must lie in [" + formatValue(kMinYoungsModulus) + ", " + formatValue(kMaxYoungsModulus) + "] Pa");
+  }
+}
+
 void requireInOpenRange(const std::string& field, double value, double lower, double upper) {
   requireFinite(field, value);
   if (!(value > lower && value < upper)) {

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <functional>
 #include <limits>
+#include <tuple>
 
 #include "drivetrain_stiffness/config/yaml_config.hpp"
 #include "drivetrain_stiffness/core/scenes.hpp"
@@ -315,6 +316,19 @@ TEST(RigPipeline, FidelityAndDampingSwitchAtRunTime) {
   EXPECT_EQ(p.settings().fidelity, Fidelity::kFull);
   bad.bearing_damping_ratio = -0.1;
   EXPECT_THROW(p.apply(bad), InvalidInput);
+  // Each refusal names the ratio that is out of range (fuzz finding: "damping ratios (1.5, 0)").
+  for (const auto& [mesh, bearing, named] : {std::tuple{1.5, 0.0, "mesh_damping_ratio = 1.5"},
+                                             std::tuple{0.0, 2.0, "bearing_damping_ratio = 2"}}) {
+    RuntimeSettings spoiled = s;
+    spoiled.mesh_damping_ratio = mesh;
+    spoiled.bearing_damping_ratio = bearing;
+    try {
+      p.apply(spoiled);
+      ADD_FAILURE() << "accepted " << named;
+    } catch (const InvalidInput& e) {
+      EXPECT_NE(std::string(e.what()).find(named), std::string::npos) << e.what();
+    }
+  }
   // A damping change republishes the resonance at the next input with the new ratios.
   ASSERT_EQ(r.resonance_out.size(), published + 1);
   EXPECT_NEAR(r.resonance_out.back().second.modes[2].damping_ratio, 0.1, 0.02);  // the torsional mode

@@ -103,6 +103,120 @@ bearings:
   }
 }
 
+// Hostile files found by the fuzz harness (test/fuzz/): every one is refused with InvalidInput (or
+// UnreachableLoad) whose message begins with the file and names the key; none lets another
+// exception type escape.
+namespace {
+
+const char* kGears = "gears: {module: 0.6e-3, pressure_angle_deg: 20, teeth: [20, 40], face_width: 6.5e-3}\n";
+
+// The refusal's message, or a failure if the load is accepted or something else is thrown.
+template <typename Exception = InvalidInput, typename Load>
+std::string refusal(Load load, const std::string& path) {
+  try {
+    load(path);
+  } catch (const Exception& e) {
+    return e.what();
+  }
+  ADD_FAILURE() << "accepted " << path;
+  return {};
+}
+
+void expectNames(const std::string& message, const std::string& path, const std::string& fragment) {
+  EXPECT_EQ(message.rfind(path + ": ", 0), 0u) << message;
+  EXPECT_NE(message.find(fragment), std::string::npos) << message;
+}
+
+}  // namespace
+
+TEST(YamlConfig, KeysThatAreNotNamesAreRefused) {
+  // A sequence or mapping as a key used to escape as YAML::TypedBadConversion.
+  std::string path = writeTemp("seq_key.yaml", std::string(kGood) + "  [a, b]: 1\n");
+  expectNames(refusal(loadBearingFile, path), path, "bearing: key ");
+  path = writeTemp("seq_top.yaml", std::string(kGears) + "? [a]\n: 1\nbearings: []\n");
+  expectNames(refusal(loadRigFile, path), path, "key ");
+  path = writeTemp("file_seq.yaml", std::string(kGears) + "bearings:\n  - {name: a, file: [x]}\n");
+  expectNames(refusal(loadRigFile, path), path, "bearings[0].file: must be a string");
+  // A NUL in a key used to cut the message (a C string) short before it named anything.
+  path = writeTemp("nul_key.yaml", std::string(kGears) + "\"a\\0b\": 1\nbearings: []\n");
+  expectNames(refusal(loadRigFile, path), path, "'a\\x00b': unknown top-level key");
+}
+
+TEST(YamlConfig, BlockRefusalsNameTheFile) {
+  // mesh:, anti_backlash:, dynamics: and the bearing's name used to be refused without the file.
+  std::string path = writeTemp("mesh.yaml", std::string(kGears) + "mesh: {samples: 8}\n");
+  expectNames(refusal(loadGearFile, path), path, "mesh.samples = 8");
+  path = writeTemp("mesh_model.yaml", std::string(kGears) + "mesh: {model: [1]}\n");
+  expectNames(refusal(loadGearFile, path), path, "mesh.model: must be a string");
+  path = writeTemp("ab.yaml", std::string(kGears) + "anti_backlash: {spring_stiffness: 0, preload_torque: 1}\n");
+  expectNames(refusal(loadGearFile, path), path, "anti_backlash.spring_stiffness = 0");
+  path = writeTemp("dyn.yaml", std::string(kGears) +
+                                   "dynamics: {pinion_mass: 0, gear_mass: 1, pinion_inertia: 1, gear_inertia: 1}\n");
+  expectNames(refusal(loadGearFile, path), path, "dynamics.pinion_mass = 0");
+  path = writeTemp("name.yaml", std::string(kGood) + "  name: [1]\n");
+  expectNames(refusal(loadBearingFile, path), path, "bearing.name: must be a string");
+}
+
+TEST(YamlConfig, ContactAngleIsRefusedInDegrees) {
+  // Used to be refused as "contact_angle = 1.745" (radians, a name the file does not have).
+  const std::string path = writeTemp("angle.yaml", std::string(kGood).replace(std::string(kGood).find("25"), 2, "100"));
+  expectNames(refusal(loadBearingFile, path), path, "bearing.contact_angle_deg = 100");
+}
+
+TEST(YamlConfig, ReferencedFileRefusalsNameTheEntry) {
+  // A missing file, a directory (used to escape as std::ios_base::failure) and a file that is not
+  // a bearing file: each names the entry's file: key, then the file.
+  for (const std::string& name : {std::string("no_such.yaml"), testing::TempDir(), writeTemp("scalar.yaml", "just text\n"),
+                                  writeTemp("scalar_bearing.yaml", "bearing: 7\n")}) {
+    const std::string path = writeTemp("ref.yaml", std::string(kGears) + "bearings:\n  - {name: a, file: '" + name + "'}\n");
+    expectNames(refusal(loadRigFile, path), path, "bearings[0].file = '" + name + "': ");
+  }
+}
+
+TEST(YamlConfig, UnreachablePreloadNamesFileAndKey) {
+  // A duplex preload no geometry carries used to be refused as "axial_load = ..." with no file.
+  const std::string path = writeTemp("pair.yaml", std::string(kGood) + "  arrangement: back_to_back\n  axial_preload: 1e300\n");
+  expectNames(refusal<UnreachableLoad>(loadBearingFile, path), path, "bearing: axial_preload = 1e+300");
+}
+
+TEST(YamlConfig, AbsurdMagnitudesAreRefusedNotNaN) {
+  // Each passed every sign check and then overflowed into a NaN stiffness (fuzz findings).
+  const std::string bearing_file = kSource + "/config/bearings/servo_7000ac.yaml";
+  const std::string rig = std::string(kGears) + "bearings:\n  - {name: a, file: '" + bearing_file + "'}\n";
+  struct Case {
+    std::string from, to, named;
+  };
+  const Case cases[] = {
+      {"face_width: 6.5e-3", "face_width: 1e308", "gears.face_width = 1e+308"},
+      {"module: 0.6e-3", "module: 1e308", "gears.module = 1e+308"},
+      {"teeth", "youngs_modulus: 1e308, teeth", "gears.youngs_modulus = 1e+308"},
+      {"bearings:", "anti_backlash: {spring_stiffness: 1e308, preload_torque: 1}\nbearings:",
+       "anti_backlash.spring_stiffness = 1e+308"},
+      {"bearings:", "anti_backlash: {spring_stiffness: 1e7, preload_torque: 1e308}\nbearings:",
+       "anti_backlash.preload_torque = 1e+308"},
+      {"name: a,", "name: a, pitch_diameter: 1e308,", "pitch_diameter = 1e+308"},
+      {"name: a,", "name: a, youngs_modulus: 1e308,", "youngs_modulus = 1e+308"},
+      {"name: a,", "name: a, youngs_modulus: 4.9e-324,", "youngs_modulus = 4.940656458e-324"},
+      {"name: a,", "name: a, shaft_youngs_modulus: 1e308,", "youngs_modulus = 1e+308"},
+  };
+  for (const Case& c : cases) {
+    const std::string path = writeTemp("absurd.yaml", std::string(rig).replace(rig.find(c.from), c.from.size(), c.to));
+    expectNames(refusal(loadRigFile, path), path, c.named);
+  }
+}
+
+TEST(YamlConfig, ADirectoryIsRefusedBeforeYamlCppReadsIt) {
+  // yaml-cpp's reader throws std::ios_base::failure on a directory's first read and leaks its
+  // prefetch buffer doing so (LeakSanitizer in scripts/test --sanitize): refused up front instead.
+  const std::string dir = testing::TempDir();
+  try {
+    loadBearingFile(dir);
+    FAIL() << "accepted a directory";
+  } catch (const InvalidInput& e) {
+    EXPECT_NE(std::string(e.what()).find(dir + ": is a directory"), std::string::npos) << e.what();
+  }
+}
+
 // Each enum's names come from one table: every name parses back to its value, and a wrong name is
 // refused with the field and the full list of accepted names (the format the CLI tests match).
 TEST(EnumNames, RoundTripAndRefusalListsEveryName) {

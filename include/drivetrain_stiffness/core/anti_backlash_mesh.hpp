@@ -27,6 +27,8 @@ struct AntiBacklashSpec {
   double preload_torque = 0.0;     ///< T_p about the gear axis [N·m] (seed 000 Table 1: 1000 N·mm)
   double loaded_gear_face_width = 0.0;  ///< face width of g2 [m]; 0 = the pair's face width
 };
+/// The spec's own checks (InvalidInput naming anti_backlash.<key>), also run by the YAML loader.
+void validateAntiBacklash(const AntiBacklashSpec& spec);
 
 enum class FlankContact { kBoth, kDriveOnly, kBackOnly };
 const char* toString(FlankContact contact);

@@ -75,6 +75,7 @@ class DynamicsEstimator {
 
  private:
   void build();
+  void buildModel();  ///< build() without the rebuild count and the settings named in a refusal
   DynamicsSample sample(double t_rel, const State6& y) const;
 
   RigConfig rig_;

@@ -30,6 +30,11 @@ class PeriodicExponentialPropagator {
   /// step to step_factor / omega_max. Throws InvalidInput when the model cannot be linear (bearing
   /// clearance, an excitation other than RigExcitation).
   PeriodicExponentialPropagator(const GearRotorModel& model, double t0, double output_interval, double step_factor = 1.0);
+  /// Set-up bounds (InvalidInput beyond): stored output intervals per mesh period (9x11 doubles
+  /// each: 52 MB at the bound) and Magnus steps per mesh period (seconds of set-up at the bound;
+  /// the seed-000 rig needs 1.7e6 at 1 rpm).
+  static constexpr double kMaxIntervalsPerPeriod = 65536;
+  static constexpr double kMaxSetupSteps = 2e6;
 
   int intervalsPerPeriod() const { return static_cast<int>(propagators_.size()); }
   long magnusSteps() const { return magnus_steps_; }

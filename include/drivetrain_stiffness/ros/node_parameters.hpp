@@ -5,6 +5,7 @@
 #pragma once
 
 #include <string>
+#include <utility>
 
 #include "drivetrain_stiffness/core/validation.hpp"
 #include "drivetrain_stiffness/pipeline/rig_pipeline.hpp"
@@ -62,9 +63,11 @@ OutputSettings readOutputSettings(const Get& get) {
   s.frames.rig = get("rig_frame", s.frames.rig);
   s.frames.pinion = get("pinion_frame", s.frames.pinion);
   s.frames.gear = get("gear_frame", s.frames.gear);
-  for (const std::string* f : {&s.frames.rig, &s.frames.pinion, &s.frames.gear}) {
+  const std::pair<const char*, const std::string*> frames[] = {
+      {"rig_frame", &s.frames.rig}, {"pinion_frame", &s.frames.pinion}, {"gear_frame", &s.frames.gear}};
+  for (const auto& [name, f] : frames) {
     if (f->empty() || f->front() == '/') {
-      throw InvalidInput("parameter ~*_frame = '" + *f + "': must be a non-empty frame id without a leading '/'");
+      throw InvalidInput(std::string("parameter ~") + name + " = '" + *f + "': must be a non-empty frame id without a leading '/'");
     }
   }
   return s;

@@ -1,0 +1,105 @@
+#include "finite_checks.hpp"
+
+#include <cmath>
+#include <string>
+
+#include "fuzz_target.hpp"
+
+namespace drivetrain_stiffness::fuzz {
+namespace {
+
+void check(const std::string& field, double value) {
+  if (!std::isfinite(value)) throw FuzzFinding("non-finite output " + field + " = " + std::to_string(value));
+}
+
+template <typename Matrix>
+void checkMatrix(const std::string& field, const Matrix& m) {
+  for (Eigen::Index i = 0; i < m.rows(); ++i) {
+    for (Eigen::Index j = 0; j < m.cols(); ++j) {
+      check(field + "(" + std::to_string(i) + "," + std::to_string(j) + ")", m(i, j));
+    }
+  }
+}
+
+}  // namespace
+
+void requireAllFinite(const StiffnessEstimate& e) {
+  check("stiffness.torque", e.torque);
+  check("stiffness.mesh_force", e.mesh_force);
+  check("stiffness.mesh.phase", e.mesh.phase);
+  check("stiffness.mesh.mean", e.mesh.mean);
+  check("stiffness.mesh.current.k1", e.mesh.current.k1);
+  check("stiffness.mesh.current.k2", e.mesh.current.k2);
+  check("stiffness.mesh.current.k_chain", e.mesh.current.k_chain);
+  check("stiffness.mesh.current.composite", e.mesh.current.composite);
+  for (const SupportEstimate& s : e.supports) {
+    const std::string f = "stiffness.supports[" + s.name + "].";
+    check(f + "radial_load", s.radial_load);
+    check(f + "axial_load", s.axial_load);
+    checkMatrix(f + "solution.displacement", s.solution.displacement);
+    checkMatrix(f + "solution.load", s.solution.load);
+    checkMatrix(f + "solution.stiffness", s.solution.stiffness);
+    check(f + "solution.residual", s.solution.residual);
+    check(f + "solution.max_contact_pressure", s.solution.max_contact_pressure);
+    for (const auto& row : s.solution.rows) {
+      for (const BallState& b : row) {
+        check(f + "ball.azimuth", b.azimuth);
+        check(f + "ball.contact_angle", b.contact_angle);
+        check(f + "ball.deflection", b.deflection);
+        check(f + "ball.load", b.load);
+        check(f + "ball.max_pressure", b.max_pressure);
+      }
+    }
+  }
+}
+
+void requireAllFinite(const DynamicsSample& s) {
+  check("te.t", s.t);
+  checkMatrix("te.state", s.state);
+  check("te.dynamic_te", s.dynamic_te);
+  check("te.static_te", s.static_te);
+  check("te.mesh_force", s.mesh_force);
+  check("te.phase", s.phase);
+  check("te.torque", s.torque);
+}
+
+void requireAllFinite(const ResonanceEstimate& r) {
+  for (std::size_t i = 0; i < r.modes.size(); ++i) {
+    const std::string f = "resonance.modes[" + std::to_string(i) + "].";
+    check(f + "natural_frequency", r.modes[i].natural_frequency);
+    check(f + "damped_frequency", r.modes[i].damped_frequency);
+    check(f + "damping_ratio", r.modes[i].damping_ratio);
+    checkMatrix(f + "shape", r.modes[i].shape);
+  }
+  check("resonance.floquet_margin", r.floquet_margin);
+}
+
+void requireAllFinite(const SlidingSpectrum& spectrum) {
+  for (const SpectralPeak& p : spectrum.peaks()) {
+    check("spectrum.peak.frequency", p.frequency);
+    check("spectrum.peak.amplitude", p.amplitude);
+  }
+  check("spectrum.resolution", spectrum.resolution());
+  check("spectrum.window_s", spectrum.windowSeconds());
+}
+
+void FiniteSink::stiffness(Stamp, const StiffnessEstimate& estimate) {
+  requireAllFinite(estimate);
+  ++outputs;
+}
+void FiniteSink::transmissionError(Stamp stamp, const DynamicsSample& sample) {
+  requireAllFinite(sample);
+  // The documented contract of the sample stamp (rig_pipeline.hpp): sample.t is exactly the stamp.
+  if (sample.t != stamp.toSec()) throw FuzzFinding("te.t differs from its stamp");
+  ++outputs;
+}
+void FiniteSink::spectrum(Stamp, const SlidingSpectrum& spectrum) {
+  requireAllFinite(spectrum);
+  ++outputs;
+}
+void FiniteSink::resonance(Stamp, const ResonanceEstimate& estimate) {
+  requireAllFinite(estimate);
+  ++outputs;
+}
+
+}  // namespace drivetrain_stiffness::fuzz

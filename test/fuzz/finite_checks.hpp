@@ -1,0 +1,24 @@
+// Nothing non-finite leaves the library: every number the pipeline hands a sink (and so every
+// field of the node's messages) is checked. A violation throws FuzzFinding naming the field.
+#pragma once
+
+#include "drivetrain_stiffness/pipeline/rig_pipeline.hpp"
+
+namespace drivetrain_stiffness::fuzz {
+
+void requireAllFinite(const StiffnessEstimate& estimate);
+void requireAllFinite(const DynamicsSample& sample);
+void requireAllFinite(const ResonanceEstimate& resonance);
+void requireAllFinite(const SlidingSpectrum& spectrum);
+
+/// A sink that checks every output and counts them.
+class FiniteSink : public PipelineSink {
+ public:
+  void stiffness(Stamp stamp, const StiffnessEstimate& estimate) override;
+  void transmissionError(Stamp stamp, const DynamicsSample& sample) override;
+  void spectrum(Stamp stamp, const SlidingSpectrum& spectrum) override;
+  void resonance(Stamp stamp, const ResonanceEstimate& estimate) override;
+  std::uint64_t outputs = 0;
+};
+
+}  // namespace drivetrain_stiffness::fuzz

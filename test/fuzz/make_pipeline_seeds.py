@@ -1,0 +1,119 @@
+#!/usr/bin/env python3
+"""Writes the binary seeds of the pipeline fuzz target (test/data/fuzz/pipeline/*.bin) in the
+layout pipeline_decoder.hpp documents. Run from anywhere; the seeds are committed, this script
+says what they hold."""
+import math
+import os
+import struct
+
+OUT = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "data", "fuzz", "pipeline")
+
+# decodeValue's "interesting" table indices
+NAN, INF, MINUS_INF, DENORM, MAX_TORQUE_NEXT, PRELOAD_LIMIT_NEXT = 4, 6, 7, 8, 16, 19
+
+
+def forward(ms):  # stamp: forward by ms milliseconds (16 ns units up to 1 ms, 10 us units beyond)
+    if ms <= 1.0:
+        return bytes([0]) + struct.pack("<H", int(round(ms * 1e6 / 16)))
+    return bytes([2]) + struct.pack("<H", int(round(ms * 100)))
+
+
+def back(ms):
+    return bytes([4]) + struct.pack("<H", int(round(ms * 100)))
+
+
+BURST, SAME, ZERO = bytes([3, 0]), bytes([5]), bytes([6])
+
+
+def absolute(sec, nsec):
+    return bytes([7]) + struct.pack("<II", sec, nsec)
+
+
+def typical(x, scale):  # value: x in units of the field's typical scale
+    return bytes([2]) + struct.pack("<h", max(-32768, min(32767, int(round(x / scale * 32768)))))
+
+
+def interesting(i):
+    return bytes([0, i])
+
+
+def raw(x):
+    return bytes([1]) + struct.pack("<d", x)
+
+
+def torque(stamp, value):
+    return bytes([0]) + stamp + value
+
+
+def preload(stamp, settings):
+    out = bytes([1]) + stamp + bytes([len(settings)])
+    for name_byte, values in settings:
+        out += bytes([name_byte]) + b"".join(values)
+    return out
+
+
+def pre(name_byte, axial, radial=1000.0, inner=0.0, outer=0.0):
+    return (name_byte, [typical(axial, 3000.0), typical(radial, 3000.0), typical(inner, 2e-5), typical(outer, 2e-5)])
+
+
+def clock(stamp):
+    return bytes([2]) + stamp
+
+
+def damping(a, b):
+    return bytes([3]) + a + b
+
+
+def fidelity(f):
+    return bytes([4, f])
+
+
+def stiffness_rate(v):
+    return bytes([5]) + v
+
+
+RESET = bytes([6])
+
+
+def header(no_dynamics=0, fid=0, ordinary=0, exact_solve=0, rate=0, h1=0, h2=0):
+    return bytes([no_dynamics | fid << 1 | ordinary << 3 | exact_solve << 4 | rate << 5, h1, h2])
+
+
+def ripple(n, step_ms, mean, amp):
+    return b"".join(torque(forward(step_ms), typical(mean + amp * math.sin(i), 0.3)) for i in range(n))
+
+
+seeds = {
+    # 1 ms torque ripple around 0.1 N*m, a preload step, the clock following
+    "valid_nominal.bin": header() + ripple(10, 1.0, 0.1, 0.02) + preload(forward(1), [pre(0, 2000.0), pre(1, 2000.0)])
+    + clock(SAME) + ripple(10, 1.0, 0.1, 0.02),
+    # the time rules: zero stamp, out of order, a burst, a gap, a restart far back, the clock going back
+    "time_rules.bin": header(h1=0b01 << 6) + ripple(3, 1.0, 0.1, 0.0) + torque(ZERO, typical(0.1, 0.3))
+    + torque(back(0.5), typical(0.1, 0.3)) + torque(BURST, typical(0.12, 0.3)) + torque(SAME, typical(0.1, 0.3))
+    + torque(forward(600), typical(0.1, 0.3)) + clock(SAME) + clock(back(600)) + torque(back(650), typical(0.1, 0.3))
+    + torque(absolute(4294967295, 4294967295), typical(0.1, 0.3)) + torque(absolute(0, 1), typical(0.1, 0.3))
+    + ripple(3, 1.0, 0.1, 0.0),
+    # values the rules refuse: NaN, Inf, just past max_abs_torque, preloads unknown, negative, past the limit
+    "bad_values.bin": header() + ripple(2, 1.0, 0.1, 0.0) + torque(forward(1), interesting(NAN))
+    + torque(forward(1), interesting(INF)) + torque(forward(1), interesting(MAX_TORQUE_NEXT))
+    + torque(forward(1), raw(-1e300)) + torque(forward(1), interesting(DENORM))
+    + preload(forward(1), [(7, [bytes([3]) + b"xyz"] + pre(0, 1.0)[1])])
+    + preload(forward(1), [pre(0x80, 1000.0)]) + preload(forward(1), [(0, [interesting(PRELOAD_LIMIT_NEXT)] + pre(0, 0)[1][1:])])
+    + preload(forward(1), [pre(6, 1000.0)]) + ripple(2, 1.0, 0.1, 0.0),
+    # the run-time setters, good and bad, between inputs
+    "setters.bin": header(rate=2) + ripple(3, 1.0, 0.1, 0.0) + damping(typical(0.05, 0.1), typical(0.02, 0.1))
+    + damping(interesting(NAN), typical(0.02, 0.1)) + damping(raw(1.5), raw(0.0)) + fidelity(1) + ripple(3, 1.0, 0.1, 0.0)
+    + fidelity(2) + ripple(3, 1.0, 0.1, 0.0) + stiffness_rate(raw(-1.0)) + stiffness_rate(typical(100.0, 1000.0))
+    + RESET + ripple(3, 1.0, 0.1, 0.0),
+    # the ordinary gear (backlash): the torque reverses, the flanks separate
+    "ordinary_reversal.bin": header(ordinary=1, h1=0b01 << 2) + ripple(12, 2.0, 0.0, 0.1),
+    # no dynamics, every support re-solved, 1 kHz inputs with preload ramps
+    "no_dynamics_preload_ramp.bin": header(no_dynamics=1, exact_solve=1)
+    + b"".join(preload(forward(1), [pre(0, 500.0 + 250.0 * i), pre(1, 500.0 + 250.0 * i, inner=2e-6 * i)]) + torque(SAME, typical(0.1, 0.3)) for i in range(8)),
+}
+
+os.makedirs(OUT, exist_ok=True)
+for name, data in seeds.items():
+    with open(os.path.join(OUT, name), "wb") as f:
+        f.write(data)
+    print(name, len(data), "bytes")

@@ -1,0 +1,76 @@
+// The node's private parameters on a hostile parameter file (drivetrain_replay --params reads the
+// same YAML; the node reads the same names from the parameter server): readPipelineOptions and
+// readOutputSettings, then the pipeline they configure, fed a few torque samples.
+#include <yaml-cpp/yaml.h>
+
+#include "drivetrain_stiffness/config/yaml_config.hpp"
+#include "drivetrain_stiffness/ros/node_parameters.hpp"
+#include "field_rule.hpp"
+#include "finite_checks.hpp"
+#include "fuzz_target.hpp"
+#include "pipeline_inputs.hpp"
+#include "refusal.hpp"
+
+namespace drivetrain_stiffness::fuzz {
+namespace {
+
+// The getter of drivetrain_replay (YamlParams in src/tools/drivetrain_replay.cpp) over a parsed
+// document: absent -> the fallback, present with the wrong type -> InvalidInput naming it.
+class NodeParams {
+ public:
+  explicit NodeParams(YAML::Node root) : root_(std::move(root)) {}
+  template <typename T>
+  T operator()(const std::string& name, const T& fallback) const {
+    if (!root_.IsMap() || !root_[name]) return fallback;
+    try {
+      return root_[name].as<T>();
+    } catch (const YAML::Exception&) {
+      throw InvalidInput("parameter ~" + name + ": has the wrong type");
+    }
+  }
+
+ private:
+  YAML::Node root_;
+};
+
+const RigConfig& seedServo() {
+  static const RigConfig rig = loadRigFile(sourceDir() + "/config/gearboxes/seed_servo.yaml");
+  return rig;
+}
+
+}  // namespace
+
+CaseStats fuzzNodeParameters(const std::uint8_t* data, std::size_t size) {
+  CaseStats stats;
+  YAML::Node root;
+  try {
+    root = YAML::Load(std::string(reinterpret_cast<const char*>(data), size));
+  } catch (const YAML::Exception& e) {
+    stats.refuse(std::string("not YAML (refused by the caller, as --params): ") + e.what());
+    return stats;
+  }
+  if (!root.IsMap() && !root.IsNull()) {
+    stats.refuse("not a map of parameters (refused by the caller, as --params)");
+    return stats;
+  }
+  const NodeParams get(root);
+  PipelineOptions options;
+  RuntimeSettings runtime;
+  OutputSettings settings;
+  if (!acceptOrRefuse(stats, [&] { options = readPipelineOptions(get, seedServo()); }, &requireNamesParameter) ||
+      !acceptOrRefuse(stats, [&] { runtime = readRuntimeSettings(get, seedServo()); }, &requireNamesParameter) ||
+      !acceptOrRefuse(stats, [&] { settings = readOutputSettings(get); }, &requireNamesParameter)) {
+    return stats;
+  }
+  // Accepted options must make a working pipeline (or be refused there, naming the parameter).
+  acceptOrRefuse(stats, [&] {
+    RigPipeline pipeline(seedServo(), options, runtime);
+    FiniteSink sink;
+    const std::int64_t epoch = 1767225600LL * 1000000000LL;
+    for (int i = 0; i < 3; ++i) feedTorque(pipeline, Stamp{epoch + i * 1000000LL}, 0.1, sink);
+    ++stats.accepted;
+  }, &requireNamesParameter);
+  return stats;
+}
+
+}  // namespace drivetrain_stiffness::fuzz

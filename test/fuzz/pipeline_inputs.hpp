@@ -1,0 +1,21 @@
+// The only place the fuzz harness hands messages to RigPipeline: when the input API changes, these
+// two functions are what to adapt.
+#pragma once
+
+#include <vector>
+
+#include "drivetrain_stiffness/pipeline/rig_pipeline.hpp"
+
+namespace drivetrain_stiffness::fuzz {
+
+inline InputOutcome feedTorque(RigPipeline& pipeline, Stamp stamp, double torque, PipelineSink& sink,
+                               const InputOrigin& origin = {}, Backlog backlog = Backlog::kNone) {
+  return pipeline.torque(stamp, torque, sink, origin, backlog);
+}
+
+inline InputOutcome feedPreload(RigPipeline& pipeline, Stamp stamp, const std::vector<PreloadSetting>& settings,
+                                PipelineSink& sink) {
+  return pipeline.preload(stamp, settings, sink);
+}
+
+}  // namespace drivetrain_stiffness::fuzz
