@@ -1,0 +1,78 @@
+// Exact propagation of the gear-rotor model's linear regime at any speed: the propagator of the
+// sliced model (sliced_mesh.hpp) over any duration, from one eigen-decomposition per slice.
+//
+// Inside slice j the model is linear time-invariant while its contacts stay closed (both
+// anti-backlash flanks loaded, or the drive flank of an ordinary gear; bearings without clearance):
+//   y' = A_j y + e_F (-k_s,j A sin(theta) - c_s A w cos(theta) - [ordinary gear] k1_j b) + e_v F_d / m_s,
+// theta = 2 pi phi(t) = theta_0 + w s (w = 2 pi f, f the signed mesh frequency, constant between
+// encoder readings), e_F = (0, 0, 0, -1/m_p, 1/m_g, -1/m_s) (the mesh force's action, docs/model.md
+// eqs M1-M3), F_d the drive force (torque held). With A_j = V diag(lambda) V^-1 and eta = V^-1 y,
+// each modal coordinate obeys eta' = lambda eta + P e^{i w s} + Q e^{-i w s} + G, whose solution is
+// closed form (variation of constants):
+//   eta(h) = e^{lambda h} eta(0) + P E(lambda, i w, h) + Q E(lambda, -i w, h) + G E(lambda, 0, h),
+//   E(lambda, mu, h) = integral_0^h e^{lambda (h - s)} e^{mu s} ds = (e^{mu h} - e^{lambda h}) / (mu - lambda)
+// (phi_1 series near mu = lambda). The step length h is free: a sample, the time to the next slice
+// boundary, the time to an input's stamp. Nothing depends on the speed, so a speed that changes at
+// every encoder reading, stands still (w = 0) or reverses (w < 0) costs nothing to set up. Work per
+// slice crossed: two 6x6 complex matrix-vector products and seven complex exponentials.
+//
+// The decomposition of a slice is made the first time the slice is crossed after a parameter
+// change (setParameters), so a bearing-stiffness change costs nothing at the input that made it:
+// the work spreads over the next mesh period, a few microseconds per slice, and the results do not
+// depend on when it is done (deterministic replay).
+#pragma once
+
+#include <complex>
+#include <memory>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "drivetrain_stiffness/core/gear_rotor_model.hpp"
+#include "drivetrain_stiffness/core/sliced_mesh.hpp"
+
+namespace drivetrain_stiffness {
+
+class SlicedModalPropagator {
+ public:
+  /// Throws InvalidInput for bearing clearance (the model is then never linear) or bad parameters.
+  SlicedModalPropagator(const GearRotorParameters& p, std::shared_ptr<const SlicedMesh> slices, double te_amplitude,
+                        double backlash);
+  /// New parameters (bearing stiffness, damping): every slice is decomposed again on its next use.
+  void setParameters(const GearRotorParameters& p);
+  const GearRotorParameters& parameters() const { return p_; }
+
+  /// Propagates y over `duration` [s] (>= 0) from the mesh phase `phase` [turns] at the signed mesh
+  /// frequency f [Hz] with the drive force F_d [N] held. Returns false, leaving y and phase as they
+  /// were, if a contact leaves the linear regime at a slice boundary or at the end (the caller
+  /// integrates that stretch with dopri5 instead), or a slice has no usable eigenbasis.
+  bool propagate(State6& y, double& phase, double f, double duration, double drive_force) const;
+  /// Homogeneous propagator over one mesh period at mesh frequency f != 0 (the monodromy matrix of the
+  /// sliced model at a constant speed); for the Floquet margin.
+  Matrix6 monodromy(double f) const;
+  long decompositions() const { return decompositions_; }
+  long slicesCrossed() const { return crossed_; }
+
+ private:
+  using Complex = std::complex<double>;
+  using CVector = Eigen::Matrix<Complex, 6, 1>;
+  using CMatrix = Eigen::Matrix<Complex, 6, 6>;
+  struct Slice {
+    CMatrix v, v_inv;
+    CVector lambda, force_dir, drive_dir;  ///< eigenvalues, V^-1 e_F, V^-1 e_v
+    bool ready = false, usable = false;
+  };
+  const Slice& slice(int j) const;
+  Matrix6 systemMatrix(int j) const;
+  /// One LTI piece inside slice j: y over h from theta0 = 2 pi phase.
+  void step(const Slice& s, int j, State6& y, double theta0, double w, double h, double drive_force) const;
+  bool linearRegime(int j, const State6& y, double theta, double w) const;
+
+  GearRotorParameters p_;
+  std::shared_ptr<const SlicedMesh> slices_;
+  double te_amplitude_, backlash_, m_s_ = 0.0;
+  mutable std::vector<Slice> cache_;
+  mutable long decompositions_ = 0, crossed_ = 0;
+};
+
+}  // namespace drivetrain_stiffness

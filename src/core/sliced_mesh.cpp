@@ -1,0 +1,102 @@
+#include "drivetrain_stiffness/core/sliced_mesh.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "drivetrain_stiffness/core/constants.hpp"
+#include "drivetrain_stiffness/core/validation.hpp"
+
+namespace drivetrain_stiffness {
+
+SlicedMesh::SlicedMesh(std::shared_ptr<const AntiBacklashMesh> mesh, int slices) : mesh_(std::move(mesh)) {
+  if (!mesh_) throw InvalidInput("sliced mesh: no mesh table");
+  if (slices < 4 || slices > 65536) throwInvalid("motion_slices", slices, "must be in [4, 65536] per mesh period");
+  std::vector<double> b;
+  for (int j = 0; j < slices; ++j) b.push_back(static_cast<double>(j) / slices);
+  for (double s : mesh_->switchingPhases()) b.push_back(s - std::floor(s));
+  std::sort(b.begin(), b.end());
+  // A switch closer than 1e-9 of a period to a uniform boundary replaces it (no sliver slices).
+  for (double x : b) {
+    if (bounds_.empty() || x - bounds_.back() > 1e-9) {
+      bounds_.push_back(x);
+    } else if (x != bounds_.back() && std::find(mesh_->switchingPhases().begin(), mesh_->switchingPhases().end(), x) !=
+                                          mesh_->switchingPhases().end()) {
+      bounds_.back() = x;
+    }
+  }
+  if (bounds_.front() > 0.0) bounds_.insert(bounds_.begin(), 0.0);
+  if (1.0 - bounds_.back() <= 1e-9) bounds_.pop_back();
+  bounds_.push_back(1.0);
+  // Slice means of the phase table: 16-point midpoint rule inside each slice. The table is linear
+  // between its nodes, so this is exact up to the nodes inside a slice (a 1/16-slice kink).
+  const int n = static_cast<int>(bounds_.size()) - 1;
+  k1_.resize(n);
+  kc_.resize(n);
+  for (int j = 0; j < n; ++j) {
+    double s1 = 0.0, sc = 0.0;
+    for (int q = 0; q < 16; ++q) {
+      const CompositeMesh c = mesh_->at(bounds_[j] + (q + 0.5) / 16.0 * (bounds_[j + 1] - bounds_[j]), 0.0);
+      s1 += c.k1;
+      sc += c.k_chain;
+    }
+    k1_[j] = s1 / 16.0;
+    kc_[j] = mesh_->spec().spring_stiffness > 0.0 ? sc / 16.0 : 0.0;
+  }
+  anti_backlash_ = mesh_->spec().spring_stiffness > 0.0 || mesh_->preloadForce() > 0.0;
+}
+
+int SlicedMesh::sliceAt(double p, bool backward) const {
+  // upper_bound: first boundary > p, so bounds_[j] <= p < bounds_[j + 1].
+  int j = static_cast<int>(std::upper_bound(bounds_.begin(), bounds_.end(), p) - bounds_.begin()) - 1;
+  if (backward && j > 0 && p == bounds_[j]) --j;
+  if (backward && j == 0 && p == 0.0) j = size() - 1;
+  return std::clamp(j, 0, size() - 1);
+}
+
+SlicedExcitation::SlicedExcitation(std::shared_ptr<const SlicedMesh> slices, double te_amplitude, double backlash,
+                                   double torque_gain, double load_term)
+    : slices_(std::move(slices)), te_amplitude_(te_amplitude), backlash_(backlash), torque_gain_(torque_gain),
+      load_term_(load_term) {
+  if (!slices_) throw InvalidInput("sliced excitation: no sliced mesh");
+  requireNonNegative("transmission_error_amplitude", te_amplitude);
+  requireNonNegative("backlash", backlash);
+  requireFinite("torque_gain", torque_gain);
+  requireFinite("load_term", load_term);
+}
+
+void SlicedExcitation::setMotion(double t0, double phase0, double mesh_frequency) {
+  requireFinite("t0", t0);
+  requireFinite("mesh phase", phase0);
+  requireFinite("mesh frequency", mesh_frequency);
+  t0_ = t0;
+  phase0_ = phase0;
+  f_ = mesh_frequency;
+}
+
+void SlicedExcitation::at(double t, MeshInstant& out) const {
+  const double turns = phaseAt(t);
+  out.phase = turns - std::floor(turns);
+  // On a boundary (to rounding) the slice the motion enters: the right limit in time.
+  const int j = slices_->sliceAt(out.phase, f_ < 0.0);
+  out.k_drive = slices_->k1(j);
+  out.k_back = slices_->kChain(j);
+  out.preload_force = slices_->mesh().preloadForce();
+  out.backlash = backlash_;
+  const double w = kTwoPi * f_;
+  out.te = te_amplitude_ * std::sin(kTwoPi * out.phase);
+  out.te_rate = te_amplitude_ * w * std::cos(kTwoPi * out.phase);
+  out.drive_force = torque_gain_ * torque_ + load_term_;
+}
+
+double SlicedExcitation::nextSwitch(double t) const {
+  if (f_ == 0.0) return std::numeric_limits<double>::infinity();
+  const double turns = phaseAt(t), whole = std::floor(turns), p = turns - whole;
+  const SlicedMesh& s = *slices_;
+  const int j = s.sliceAt(p, f_ < 0.0);
+  const double target = whole + (f_ > 0.0 ? s.end(j) : s.start(j));
+  const double time = t0_ + (target - phase0_) / f_;
+  return time > t ? time : std::nextafter(t, std::numeric_limits<double>::infinity());
+}
+
+}  // namespace drivetrain_stiffness
