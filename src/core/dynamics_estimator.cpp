@@ -72,6 +72,12 @@ void DynamicsEstimator::buildModel() {
 void DynamicsEstimator::reset(double t, double torque) {
   requireFinite("t", t);
   requireFinite("torque", torque);
+  if (periodic_stale_) {
+    build();  // parameters changed while following the motion: the nominal phase needs its own propagators
+    periodic_stale_ = false;
+  }
+  following_ = false;
+  t_state_ = 0.0;
   origin_ = t;
   k_ = 0;
   *torque_ = torque;
@@ -92,25 +98,171 @@ void DynamicsEstimator::setBearingStiffness(const std::array<double, 2>& k) {
   bool changed = false;
   for (int i = 0; i < 2; ++i) changed |= std::abs(k[i] - bearing_stiffness_[i]) > 0.01 * std::max(bearing_stiffness_[i], 1.0);
   if (!changed) return;
+  const std::array<double, 2> before = bearing_stiffness_;
   bearing_stiffness_ = k;
-  // Keep the state, the origin and the sample index: the rebuilt model's phase and output grid
-  // both count from the same origin, so the mesh phase continues without a jump.
-  build();
+  try {
+    parametersChanged();
+  } catch (...) {
+    bearing_stiffness_ = before;  // refused: the last model stays
+    throw;
+  }
 }
 
 void DynamicsEstimator::setDamping(double mesh_damping_ratio, double bearing_damping_ratio) {
   requireNonNegative("mesh_damping_ratio", mesh_damping_ratio);
   requireNonNegative("bearing_damping_ratio", bearing_damping_ratio);
+  const DynamicsConfig before = rig_.dynamics;
   rig_.dynamics.mesh_damping_ratio = mesh_damping_ratio;
   rig_.dynamics.bearing_damping_ratio = bearing_damping_ratio;
-  build();  // keeps state, origin and sample index, as setBearingStiffness does
+  try {
+    parametersChanged();
+  } catch (...) {
+    rig_.dynamics = before;
+    throw;
+  }
+}
+
+void DynamicsEstimator::parametersChanged() {
+  // Running: keep the state, the origin and the sample index, and go on with the speed-independent
+  // propagation (its slices are decomposed lazily as they are crossed) instead of rebuilding the
+  // periodic propagators inside the caller. Not started: rebuild those for the next reset.
+  if (!started_) {
+    build();
+    return;
+  }
+  if (!following_) startFollowing();
+  const GearRotorParameters p = currentParameters();
+  if (sliced_) sliced_->setParameters(p);
+  moving_model_ = std::make_unique<GearRotorModel>(p, moving_);
+  periodic_stale_ = true;
+  ++rebuilds_;
+}
+
+GearRotorParameters DynamicsEstimator::currentParameters() const { return rigRotorParameters(rig_, *mesh_, bearing_stiffness_); }
+
+double DynamicsEstimator::nominalMeshFrequency() const {
+  return rig_.dynamics.speed_rpm / 60.0 * mesh_->geometry().spec().teeth[0];
+}
+
+void DynamicsEstimator::setMotionSlices(int slices) {
+  if (slices < 4 || slices > 65536) throwInvalid("motion_slices", slices, "must be in [4, 65536] per mesh period");
+  if (slices == motion_slices_) return;
+  if (following_) throw InvalidInput("motion_slices: cannot change while following the measured motion (reset first)");
+  motion_slices_ = slices;
+  slices_.reset();
+  sliced_.reset();
+  moving_.reset();
+  moving_model_.reset();
+}
+
+void DynamicsEstimator::startFollowing() {
+  const GearRotorParameters p = currentParameters();
+  if (!slices_) {
+    slices_ = std::make_shared<const SlicedMesh>(mesh_, motion_slices_);
+    // The live node's load follows the input (RigExcitationSpec::balanced_load): F_d = T / r_p.
+    moving_ = std::make_shared<SlicedExcitation>(slices_, rig_.dynamics.transmission_error_amplitude, rig_.dynamics.backlash,
+                                                 1.0 / p.pinion_base_radius, 0.0);
+  }
+  const bool clearance = p.bearing_clearance[0] > 0.0 || p.bearing_clearance[1] > 0.0;
+  if (!sliced_ && !clearance) {
+    sliced_ = std::make_unique<SlicedModalPropagator>(p, slices_, rig_.dynamics.transmission_error_amplitude,
+                                                      rig_.dynamics.backlash);
+  } else if (sliced_) {
+    sliced_->setParameters(p);
+  }
+  moving_model_ = std::make_unique<GearRotorModel>(p, moving_);
+  // The state sits on grid sample k_; the nominal phase there (RigExcitation: turns = f t).
+  t_state_ = k_ * interval_;
+  mesh_frequency_ = nominalMeshFrequency();
+  phase_ = mesh_frequency_ * t_state_;
+  phase_ -= std::floor(phase_);
+  following_ = true;
+}
+
+void DynamicsEstimator::followMotion(double t, double mesh_phase, double mesh_frequency) {
+  requireFinite("t", t);
+  requireFinite("mesh_phase", mesh_phase);
+  requireFinite("mesh_frequency", mesh_frequency);
+  if (!started_) throw InvalidInput("dynamics: followMotion before reset");
+  if (!following_) startFollowing();
+  const double t_rel = t - origin_;
+  if (t_rel < t_state_ - 1e-12) {
+    throw InvalidInput("t = " + formatValue(t) + ": before the current time " + formatValue(time()) + " (time went backwards; reset)");
+  }
+  if (std::floor(t_rel / interval_ + 1e-9) > k_) {
+    throw InvalidInput("t = " + formatValue(t) + ": output samples lie before it; advanceTo(t) first");
+  }
+  propagateTo(t_rel);
+  phase_ = mesh_phase - std::floor(mesh_phase);
+  mesh_frequency_ = mesh_frequency;
+}
+
+double DynamicsEstimator::meshPhase() const { return following_ ? phase_ : nominalMeshFrequency() * k_ * interval_; }
+
+double DynamicsEstimator::meshFrequency() const { return following_ ? mesh_frequency_ : nominalMeshFrequency(); }
+
+void DynamicsEstimator::propagateTo(double t_rel) {
+  const double h = t_rel - t_state_;
+  if (!(h > 0.0)) return;
+  const double drive_force = *torque_ / mesh_->geometry().baseRadius(0);
+  if (sliced_ && sliced_->propagate(y_, phase_, mesh_frequency_, h, drive_force)) {
+    phase_ -= std::floor(phase_);
+    t_state_ = t_rel;
+    return;
+  }
+  // A contact open (or bearing clearance): dopri5 on the same sliced model along the same motion.
+  moving_->setMotion(t_state_, phase_, mesh_frequency_);
+  moving_->setTorque(*torque_);
+  y_ = integrate(*moving_model_, IntegratorMethod::kDopri5, fallback_, t_state_, y_, t_rel, h, nullptr);
+  phase_ += mesh_frequency_ * h;
+  phase_ -= std::floor(phase_);
+  t_state_ = t_rel;
+  ++fallback_intervals_;
+}
+
+DynamicsSample DynamicsEstimator::movingSample() const {
+  moving_->setMotion(t_state_, phase_, mesh_frequency_);
+  moving_->setTorque(*torque_);
+  DynamicsSample s;
+  s.t = origin_ + t_state_;
+  s.state = y_;
+  const GearRotorForces f = moving_model_->forces(t_state_, y_);
+  s.dynamic_te = f.delta;
+  s.mesh_force = f.mesh;
+  MeshInstant m;
+  moving_->at(t_state_, m);  // on a slice boundary: the slice entered (the right limit)
+  s.phase = m.phase;
+  s.torque = *torque_;
+  const double ks = m.k_drive + m.k_back;
+  s.static_te = ks > 0.0 ? m.drive_force / ks : 0.0;
+  s.drive_flank_loaded = f.regime.code[0] == 1;
+  s.back_flank_loaded = f.regime.code[1] == 1;
+  return s;
+}
+
+void DynamicsEstimator::advanceFollowing(double t_rel, const std::function<void(const DynamicsSample&)>& sink) {
+  const long k_end = static_cast<long>(std::floor(t_rel / interval_ + 1e-9));
+  while (k_ < k_end) {
+    propagateTo((k_ + 1) * interval_);
+    ++k_;
+    if (sink) sink(movingSample());
+  }
+  propagateTo(t_rel);
 }
 
 void DynamicsEstimator::setFidelity(Fidelity fidelity) { fidelity_ = fidelity; }
 
 bool DynamicsEstimator::floquetMargin(double* margin) const {
-  if (!propagator_) return false;
-  const Eigen::Matrix<std::complex<double>, 6, 1> mu = Eigen::EigenSolver<Matrix6>(propagator_->monodromy(), false).eigenvalues();
+  Matrix6 monodromy;
+  if (following_) {
+    // The sliced model at the measured speed, as if it were held (standing: no period).
+    if (!sliced_ || mesh_frequency_ == 0.0) return false;
+    monodromy = sliced_->monodromy(mesh_frequency_);
+  } else {
+    if (!propagator_) return false;
+    monodromy = propagator_->monodromy();
+  }
+  const Eigen::Matrix<std::complex<double>, 6, 1> mu = Eigen::EigenSolver<Matrix6>(monodromy, false).eigenvalues();
   *margin = 1.0 - mu.cwiseAbs().maxCoeff();
   return true;
 }
@@ -144,6 +296,10 @@ void DynamicsEstimator::advanceTo(double t, const std::function<void(const Dynam
   if (samples > kMaxSamplesPerAdvance) {
     throw InvalidInput("t = " + formatValue(t) + ": a gap of " + formatValue(t - time()) + " s (" + formatValue(samples) +
                        " samples) is too long to integrate in one call; reset at the new time instead");
+  }
+  if (following_) {
+    advanceFollowing(t - origin_, sink);
+    return;
   }
   const long k_end = k_ + static_cast<long>(samples);
   const double torque = *torque_;

@@ -5,9 +5,19 @@
 // point <= t with the measured torque held (zero-order hold, applied from the next sample: latency
 // <= one output interval) and the load following it quasi-statically (drive force T / r_p), using
 // the exact-exponential propagators while the contacts stay closed and dopri5 for any interval in
-// which they do not. The mesh phase counts from the last reset (the gear angle is not measured;
-// the node assumes the nominal speed). Times are absolute seconds of the caller's clock; internally
-// they are taken relative to the reset time so that 1e9-second epochs keep full phase resolution.
+// which they do not. Times are absolute seconds of the caller's clock; internally they are taken
+// relative to the reset time so that 1e9-second epochs keep full phase resolution.
+//
+// Two ways to drive the mesh phase (docs/model.md "Following the rig's motion"):
+//  - nominal: the phase counts from the last reset at the nominal speed (dynamics.speed_rpm), and
+//    the periodic propagators of that one speed stream one matrix-vector product per sample;
+//  - measured (followMotion, from the first call until the next reset): the phase and the speed
+//    come from the rig's encoders, re-anchored at every reading, and the state is propagated
+//    exactly at whatever speed (SlicedModalPropagator: the mesh sliced in phase), to any instant,
+//    not only to grid points, so every input takes effect at its own stamp. A bearing-stiffness or
+//    damping change also moves the dynamics onto this propagation at the nominal speed: its slices
+//    are decomposed lazily as they are crossed, where the periodic propagators would have been
+//    rebuilt inside the caller (8.7 ms at 1000 rpm).
 #pragma once
 
 #include <array>
@@ -17,6 +27,7 @@
 #include "drivetrain_stiffness/core/exponential_integrator.hpp"
 #include "drivetrain_stiffness/core/reduced_models.hpp"
 #include "drivetrain_stiffness/core/rig_config.hpp"
+#include "drivetrain_stiffness/core/sliced_modal_propagator.hpp"
 
 namespace drivetrain_stiffness {
 
@@ -50,8 +61,22 @@ class DynamicsEstimator {
   void advanceTo(double t, const std::function<void(const DynamicsSample&)>& sink);
   /// Forget the state: started() is false until the next reset() (the model is kept).
   void stop() { started_ = false; }
-  /// New measured torque, applied from the next output sample.
+  /// New measured torque: from the next output sample (nominal phase), or from time() on when
+  /// following the measured motion.
   void setTorque(double torque);
+  /// The measured motion from absolute time t on: mesh phase [turns] at t and signed mesh
+  /// frequency [Hz] (z_p * pinion speed / 2 pi). t >= time(); the caller has advanced to t (no
+  /// output sample lies between time() and t). The state is propagated to t with the motion
+  /// before, then the phase is re-anchored at the measured one.
+  void followMotion(double t, double mesh_phase, double mesh_frequency);
+  bool followingMotion() const { return following_; }
+  /// Mesh phase [turns, not wrapped] and mesh frequency [Hz] at time(), whichever drives them.
+  double meshPhase() const;
+  double meshFrequency() const;
+  /// Slices per mesh period of the measured-motion propagation (before its first use; default 256).
+  void setMotionSlices(int slices);
+  /// The speed-independent propagator (null until the motion is followed or a rebuild is avoided).
+  const SlicedModalPropagator* slicedPropagator() const { return sliced_.get(); }
   /// Rebuilds the model (and the propagators) when a stiffness changes by more than 1 %.
   void setBearingStiffness(const std::array<double, 2>& k);
   /// Damping ratios of the dynamics block (mesh, bearings); the model is rebuilt, the state kept.
@@ -62,12 +87,12 @@ class DynamicsEstimator {
   Fidelity fidelity() const { return fidelity_; }
 
   bool started() const { return started_; }
-  double time() const { return origin_ + k_ * interval_; }  ///< time of the current state
+  double time() const { return origin_ + (following_ ? t_state_ : k_ * interval_); }  ///< time of the current state
   double outputInterval() const { return interval_; }
   long rebuilds() const { return rebuilds_; }
   long fallbackIntervals() const { return fallback_intervals_; }
-  bool exact() const { return propagator_ != nullptr; }  ///< exponential propagation available
-  const GearRotorModel& model() const { return *model_; }  ///< time relative to the last reset
+  bool exact() const { return following_ ? sliced_ != nullptr : propagator_ != nullptr; }  ///< exact propagation available
+  const GearRotorModel& model() const { return *model_; }  ///< nominal phase; time relative to the last reset
   /// 1 - max |Floquet multiplier| of the current model over one mesh period, from the exact
   /// propagators (a few 6x6 products); false if there is no linear regime (bearing clearance).
   bool floquetMargin(double* margin) const;
@@ -77,6 +102,16 @@ class DynamicsEstimator {
   void build();
   void buildModel();  ///< build() without the rebuild count and the settings named in a refusal
   DynamicsSample sample(double t_rel, const State6& y) const;
+  DynamicsSample movingSample() const;  ///< the sample at the state (measured motion)
+  /// Onto the measured-motion propagation at the state's time and the nominal phase there.
+  void startFollowing();
+  /// Measured motion: the state from t_state_ to t_rel, exact or (a contact open) dopri5.
+  void propagateTo(double t_rel);
+  void advanceFollowing(double t_rel, const std::function<void(const DynamicsSample&)>& sink);
+  GearRotorParameters currentParameters() const;
+  /// After a bearing-stiffness or damping change (see the class comment).
+  void parametersChanged();
+  double nominalMeshFrequency() const;  ///< [Hz]
 
   RigConfig rig_;
   std::array<double, 2> bearing_stiffness_;
@@ -90,6 +125,16 @@ class DynamicsEstimator {
   long k_ = 0;
   State6 y_ = State6::Zero();
   bool started_ = false;
+  // Measured motion (followMotion): the sliced model, its exact propagator, the model over it for
+  // the dopri5 fallback and the samples; the state's own time, phase and mesh frequency.
+  int motion_slices_ = 256;
+  std::shared_ptr<const SlicedMesh> slices_;
+  std::shared_ptr<SlicedExcitation> moving_;
+  std::unique_ptr<GearRotorModel> moving_model_;
+  std::unique_ptr<SlicedModalPropagator> sliced_;
+  bool following_ = false;
+  bool periodic_stale_ = false;  ///< parameters changed while following: rebuild the periodic ones at reset
+  double t_state_ = 0.0, phase_ = 0.0, mesh_frequency_ = 0.0;
   Fidelity fidelity_ = Fidelity::kFull;
   long rebuilds_ = 0, fallback_intervals_ = 0;
 };
