@@ -90,7 +90,7 @@ void DynamicsEstimator::setTorque(double torque) {
   *torque_ = torque;
 }
 
-void DynamicsEstimator::setBearingStiffness(const std::array<double, 2>& k) {
+void DynamicsEstimator::setBearingStiffness(const std::array<double, 2>& k, std::optional<double> at) {
   for (int i = 0; i < 2; ++i) {
     // The field name is built only on failure: this runs on every accepted input.
     if (!(k[i] >= 0.0)) requireNonNegative("bearing_stiffness[" + std::to_string(i) + "]", k[i]);
@@ -98,6 +98,7 @@ void DynamicsEstimator::setBearingStiffness(const std::array<double, 2>& k) {
   bool changed = false;
   for (int i = 0; i < 2; ++i) changed |= std::abs(k[i] - bearing_stiffness_[i]) > 0.01 * std::max(bearing_stiffness_[i], 1.0);
   if (!changed) return;
+  if (started_ && at) moveTo(*at);
   const std::array<double, 2> before = bearing_stiffness_;
   bearing_stiffness_ = k;
   try {
@@ -179,11 +180,9 @@ void DynamicsEstimator::startFollowing() {
   following_ = true;
 }
 
-void DynamicsEstimator::followMotion(double t, double mesh_phase, double mesh_frequency) {
+void DynamicsEstimator::moveTo(double t) {
   requireFinite("t", t);
-  requireFinite("mesh_phase", mesh_phase);
-  requireFinite("mesh_frequency", mesh_frequency);
-  if (!started_) throw InvalidInput("dynamics: followMotion before reset");
+  if (!started_) throw InvalidInput("dynamics: not started (reset first)");
   if (!following_) startFollowing();
   const double t_rel = t - origin_;
   if (t_rel < t_state_ - 1e-12) {
@@ -193,6 +192,12 @@ void DynamicsEstimator::followMotion(double t, double mesh_phase, double mesh_fr
     throw InvalidInput("t = " + formatValue(t) + ": output samples lie before it; advanceTo(t) first");
   }
   propagateTo(t_rel);
+}
+
+void DynamicsEstimator::followMotion(double t, double mesh_phase, double mesh_frequency) {
+  requireFinite("mesh_phase", mesh_phase);
+  requireFinite("mesh_frequency", mesh_frequency);
+  moveTo(t);
   phase_ = mesh_phase - std::floor(mesh_phase);
   mesh_frequency_ = mesh_frequency;
 }
@@ -226,12 +231,13 @@ DynamicsSample DynamicsEstimator::movingSample() const {
   DynamicsSample s;
   s.t = origin_ + t_state_;
   s.state = y_;
-  const GearRotorForces f = moving_model_->forces(t_state_, y_);
-  s.dynamic_te = f.delta;
-  s.mesh_force = f.mesh;
+  s.dynamic_te = moving_model_->forces(t_state_, y_).delta;  // from the state: continuous
+  // On a tooth switch (a sample lands on phase 0 to rounding, either side) report the right limit,
+  // as sample() does at the nominal speed.
   MeshInstant m;
-  moving_->at(t_state_, m);  // on a slice boundary: the slice entered (the right limit)
-  s.phase = m.phase;
+  const GearRotorForces f = moving_model_->forces(meshForSample(*moving_, t_state_, interval_, m), y_);
+  s.mesh_force = f.mesh;
+  s.phase = m.phase < 1e-6 || 1.0 - m.phase < 1e-6 ? 0.0 : m.phase;
   s.torque = *torque_;
   const double ks = m.k_drive + m.k_back;
   s.static_te = ks > 0.0 ? m.drive_force / ks : 0.0;

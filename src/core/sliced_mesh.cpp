@@ -77,7 +77,8 @@ void SlicedExcitation::setMotion(double t0, double phase0, double mesh_frequency
 void SlicedExcitation::at(double t, MeshInstant& out) const {
   const double turns = phaseAt(t);
   out.phase = turns - std::floor(turns);
-  // On a boundary (to rounding) the slice the motion enters: the right limit in time.
+  // On a boundary (to rounding) the slice the motion enters: the right limit in time, consistent
+  // with nextSwitch. Samples on a tooth switch take theirs from meshForSample.
   const int j = slices_->sliceAt(out.phase, f_ < 0.0);
   out.k_drive = slices_->k1(j);
   out.k_back = slices_->kChain(j);

@@ -27,6 +27,9 @@ std::vector<std::pair<std::string, std::uint64_t>> namedCounters(const PipelineC
           {"rejected_invalid_value", c.invalid_values},   {"unreachable_loads", c.unreachable_loads},
           {"rejected_wrong_frame", c.wrong_frames},       {"rejected_stamp_range", c.stamps_out_of_range},
           {"dropped_torque", c.dropped_torque},           {"dropped_preload", c.dropped_preload},
+          {"accepted_joint_states", c.accepted_motion},   {"rejected_joint_states", c.rejected_motion},
+          {"dropped_joint_states", c.dropped_motion},     {"motion_timeouts", c.motion_timeouts},
+          {"gear_ratio_mismatches", c.gear_ratio_mismatches},
           {"stiffness_shed", c.stiffness_shed},
           {"clock_jump_resets", c.clock_resets},          {"stamp_jump_resets", c.stamp_resets},
           {"gap_restarts", c.gap_restarts},               {"dynamics_errors", c.dynamics_errors},
@@ -65,6 +68,18 @@ void PipelineOptions::validate() const {
   if (std::abs(pinion_speed_rpm) > 1e5) {
     throw InvalidInput("pinion_speed_rpm = " + formatValue(pinion_speed_rpm) + ": must be within +-1e5 rpm");
   }
+  requireFinite("mesh_phase_offset", mesh_phase_offset);
+  if (!(mesh_phase_offset >= 0.0 && mesh_phase_offset < 1.0)) {
+    throw InvalidInput("mesh_phase_offset = " + formatValue(mesh_phase_offset) + ": must be in [0, 1) (a fraction of a mesh period)");
+  }
+  requirePositive("motion_timeout", motion_timeout);
+  if (motion_timeout > max_gap) {
+    throw InvalidInput("motion_timeout = " + formatValue(motion_timeout) + ": must be <= max_gap (" + formatValue(max_gap) + " s)");
+  }
+  requirePositive("gear_ratio_tolerance", gear_ratio_tolerance);
+  if (motion_slices < 4 || motion_slices > 65536) {
+    throw InvalidInput("motion_slices = " + std::to_string(motion_slices) + ": must be in [4, 65536] per mesh period");
+  }
   if (!torque_frame.empty() && torque_frame.front() == '/') {
     throw InvalidInput("torque_frame = '" + torque_frame + "': a frame id without a leading '/' (or empty: any frame)");
   }
@@ -93,6 +108,7 @@ RigPipeline::RigPipeline(const RigConfig& rig, const PipelineOptions& options, c
     dynamics_ = std::make_unique<DynamicsEstimator>(rig_, estimator_->shaftRadialStiffness(), options_.output_rate,
                                                     estimator_->sharedMesh());
     dynamics_->setFidelity(settings_.fidelity);
+    dynamics_->setMotionSlices(options_.motion_slices);
     te_spectrum_ = std::make_unique<SlidingSpectrum>(options_.spectrum_window, options_.spectrum_hop,
                                                      dynamics_->outputInterval(), 3);
   }
@@ -113,8 +129,12 @@ void RigPipeline::reset(const std::string& reason) {
   }
   last_torque_.reset();
   last_preload_.reset();
+  last_motion_.reset();
   last_stiffness_out_.reset();
   angle_origin_.reset();
+  anchor_.reset();
+  reading_.reset();
+  encoders_ = false;
   last_resonance_.reset();  // the next accepted input republishes the resonance
   counters_.last_event = "reset: " + reason;
 }
@@ -167,7 +187,17 @@ InputOutcome RigPipeline::checkStamp(Stamp stamp, std::optional<Stamp>& last, co
 }
 
 double RigPipeline::pinionAngle(Stamp stamp) const {
+  if (anchor_) return anchor_->angle + anchor_->speed * secondsBetween(stamp, anchor_->stamp);
   return angle_origin_ ? pinion_speed_ * secondsBetween(stamp, *angle_origin_) : 0.0;
+}
+
+const char* RigPipeline::phaseSource() const {
+  if (encoders_) return "encoders";
+  return anchor_ ? "nominal (encoders timed out)" : "nominal";
+}
+
+double RigPipeline::meshTurns(double pinion_angle) const {
+  return pinion_angle * estimator_->mesh().geometry().spec().teeth[0] / kTwoPi;
 }
 
 template <typename Validate, typename Update>
@@ -217,6 +247,7 @@ InputOutcome RigPipeline::torque(Stamp stamp, double torque, PipelineSink& sink,
       [&]() -> const StiffnessEstimate* {
         // The mesh phase counts from the first torque input after a (re)start, as the dynamics do;
         // the origin is kept only if the input is accepted.
+        checkMotionTimeout(stamp, sink);
         const Stamp origin_stamp = angle_origin_.value_or(stamp);
         if (backlog == Backlog::kShed) {
           // Shed: the rules and the dynamics, no stiffness update or message (its estimate would be
@@ -225,7 +256,8 @@ InputOutcome RigPipeline::torque(Stamp stamp, double torque, PipelineSink& sink,
           ++counters_.stiffness_shed;
           return nullptr;
         }
-        const StiffnessEstimate& e = estimator_->setTorque(torque, pinion_speed_ * secondsBetween(stamp, origin_stamp));
+        const double angle = anchor_ ? pinionAngle(stamp) : pinion_speed_ * secondsBetween(stamp, origin_stamp);
+        const StiffnessEstimate& e = estimator_->setTorque(torque, angle);
         angle_origin_ = origin_stamp;
         return &e;
       });
@@ -241,6 +273,105 @@ InputOutcome RigPipeline::preload(Stamp stamp, const std::vector<PreloadSetting>
                [&]() -> const StiffnessEstimate* { return &estimator_->setPreloads(settings); });
 }
 
+InputOutcome RigPipeline::motion(Stamp stamp, const MotionInput& reading, PipelineSink& sink, const InputOrigin& origin) {
+  counters_.dropped_motion += motion_seq_.observe(origin.publisher, origin.seq);
+  return apply(
+      "joint_states", stamp, last_motion_, counters_.accepted_motion, counters_.rejected_motion, sink,
+      [&] {
+        requireFinite("joint_states: pinion position", reading.pinion_angle);
+        if (reading.pinion_velocity) {
+          requireFinite("joint_states: pinion velocity", *reading.pinion_velocity);
+          // The same bound as ~pinion_speed_rpm: +-1e5 rpm.
+          if (std::abs(*reading.pinion_velocity) > 1e5 * kTwoPi / 60.0) {
+            throwInvalid("joint_states: pinion velocity", *reading.pinion_velocity, "beyond +-1e5 rpm (10472 rad/s)");
+          }
+        }
+        if (reading.gear_angle) requireFinite("joint_states: gear position", *reading.gear_angle);
+      },
+      [&]() -> const StiffnessEstimate* {
+        acceptMotion(stamp, reading, sink);
+        return nullptr;  // no stiffness message: the estimate has not changed
+      });
+}
+
+InputOutcome RigPipeline::motionRefused(const std::string& reason, const InputOrigin& origin) {
+  counters_.dropped_motion += motion_seq_.observe(origin.publisher, origin.seq);
+  return reject(InputOutcome::kInvalidValue, "joint_states", reason, counters_.rejected_motion);
+}
+
+void RigPipeline::acceptMotion(Stamp stamp, const MotionInput& m, PipelineSink& sink) {
+  checkMotionTimeout(stamp, sink);
+  const auto& teeth = estimator_->mesh().geometry().spec().teeth;
+  const double ratio = static_cast<double>(teeth[0]) / teeth[1];
+  // Unwrap against the prediction from the last reading (an encoder may wrap at +-pi or 2 pi):
+  // exact while the shaft turns by less than pi beyond the prediction between two readings.
+  Reading next;
+  next.stamp = stamp;
+  double dt = 0.0;
+  next.pinion = m.pinion_angle;
+  if (reading_) {
+    dt = secondsBetween(stamp, reading_->stamp);
+    const double predicted = reading_->pinion + reading_->speed * dt;
+    next.pinion += kTwoPi * std::round((predicted - m.pinion_angle) / kTwoPi);
+  }
+  if (m.pinion_velocity) {
+    next.speed = *m.pinion_velocity;
+  } else if (reading_ && dt > 0.0) {
+    next.speed = (next.pinion - reading_->pinion) / dt;  // backward difference of the encoder angle
+  } else {
+    next.speed = reading_ ? reading_->speed : 0.0;  // first reading without velocity: standing until the next
+  }
+  if (m.gear_angle) {
+    next.gear = *m.gear_angle;
+    if (reading_ && reading_->gear) {
+      const double predicted = *reading_->gear - ratio * (next.pinion - reading_->pinion);
+      *next.gear += kTwoPi * std::round((predicted - *m.gear_angle) / kTwoPi);
+    }
+    // Meshing gears: theta_g = -(z_p / z_g) theta_p + const (+ TE / r_b,g, micro-radians).
+    const double residual = *next.gear + ratio * next.pinion;
+    next.gear_reference = reading_ && reading_->gear_reference ? reading_->gear_reference : residual;
+    const double off = residual - *next.gear_reference;
+    if (std::abs(off) > options_.gear_ratio_tolerance) {
+      ++counters_.gear_ratio_mismatches;
+      counters_.last_event = "joint_states: the gear angle moved " + formatValue(off) +
+                             " rad off -(z_p/z_g) x the pinion angle (more than ~gear_ratio_tolerance): a slip, or a "
+                             "wrong ~pinion_joint/~gear_joint mapping";
+      next.gear_reference = residual;  // one report per slip; a wrong mapping keeps reporting
+    }
+  }
+  // Rule 10: the dynamics run up to this reading with the motion before it.
+  advanceDynamicsTo(stamp, sink);
+  reading_ = next;
+  anchor_ = AngleAnchor{stamp, next.pinion + options_.mesh_phase_offset * kTwoPi / teeth[0], next.speed};
+  encoders_ = true;
+  followAnchor(stamp);
+}
+
+void RigPipeline::checkMotionTimeout(Stamp stamp, PipelineSink& sink) {
+  if (!encoders_ || !reading_ || secondsBetween(stamp, reading_->stamp) <= options_.motion_timeout) return;
+  const Stamp at{reading_->stamp.ns + std::llround(options_.motion_timeout * 1e9)};
+  ++counters_.motion_timeouts;
+  counters_.last_event = "joint_states: none for ~motion_timeout = " + formatValue(options_.motion_timeout) +
+                         " s: the mesh phase runs at ~pinion_speed_rpm from there";
+  advanceDynamicsTo(at, sink);
+  anchor_ = AngleAnchor{at, pinionAngle(at), pinion_speed_};
+  encoders_ = false;
+  reading_.reset();  // a stale reading would unwrap the next one wrongly
+  followAnchor(at);
+}
+
+void RigPipeline::followAnchor(Stamp stamp) {
+  if (!dynamics_ || !dynamics_->started() || !anchor_) return;
+  try {
+    // Another stream may have taken the dynamics past this stamp: the motion applies from there.
+    const double t = std::max(secondsBetween(stamp, dynamics_epoch_), dynamics_->time());
+    const Stamp at{dynamics_epoch_.ns + std::llround(t * 1e9)};
+    dynamics_->followMotion(t, meshTurns(pinionAngle(at)), meshTurns(anchor_->speed));
+  } catch (const std::exception& e) {
+    dynamicsError("dynamics", e);
+  }
+}
+
 void RigPipeline::afterUpdate(Stamp stamp, const StiffnessEstimate& estimate, PipelineSink& sink) {
   // Coalescing by stamp, not by wall time, so a replay coalesces exactly as the live node did.
   const bool due = settings_.stiffness_rate <= 0.0 || !last_stiffness_out_ || stamp < *last_stiffness_out_ ||
@@ -252,11 +383,18 @@ void RigPipeline::afterUpdate(Stamp stamp, const StiffnessEstimate& estimate, Pi
   } else {
     ++counters_.stiffness_coalesced;
   }
+  pushStiffness(stamp, estimate, sink);
+}
+
+void RigPipeline::pushStiffness(Stamp stamp, const StiffnessEstimate& estimate, PipelineSink& sink) {
   if (!dynamics_) return;
-  // Every accepted input hands the new bearing stiffness to the dynamics (rebuilt only when it
-  // moved by more than 1 %), then the resonance estimate is refreshed.
+  // Every accepted input hands the new bearing stiffness to the dynamics (taken up only when it
+  // moved by more than 1 %) at its own stamp (rule 10), then the resonance estimate is refreshed.
+  const bool advanced = advanceDynamicsTo(stamp, sink);
   try {
-    dynamics_->setBearingStiffness(estimator_->shaftRadialStiffness());
+    std::optional<double> at;
+    if (dynamics_->started()) at = advanced ? secondsBetween(stamp, dynamics_epoch_) : dynamics_->time();
+    dynamics_->setBearingStiffness(estimator_->shaftRadialStiffness(), at);
   } catch (const std::exception& e) {
     dynamicsError("dynamics", e);
   }
@@ -273,6 +411,35 @@ void RigPipeline::restartDynamics(Stamp stamp, double torque) {
   dynamics_->reset(0.0, torque);
   te_spectrum_->reset();  // a new window: no samples from before the restart
   angle_origin_ = stamp;  // the stiffness message's mesh phase restarts with the dynamics
+  followAnchor(stamp);    // measured motion: the dynamics start at the measured phase
+}
+
+bool RigPipeline::advanceDynamicsTo(Stamp stamp, PipelineSink& sink) {
+  if (!dynamics_ || !dynamics_->started()) return false;
+  const double t = secondsBetween(stamp, dynamics_epoch_);
+  // Past it already (another stream), or a gap that rule 4 restarts at the next torque input.
+  if (t <= dynamics_->time() || t - dynamics_->time() > options_.max_gap) return false;
+  const double from = dynamics_->time();
+  try {
+    dynamics_->advanceTo(t, [&](const DynamicsSample& relative) {
+      DynamicsSample s = relative;
+      const Stamp sample_stamp{dynamics_epoch_.ns + std::llround(relative.t * 1e9)};
+      s.t = sample_stamp.toSec();
+      sink.transmissionError(sample_stamp, s);
+      ++counters_.te_out;
+      if (te_spectrum_->push(s.dynamic_te)) {
+        sink.spectrum(sample_stamp, *te_spectrum_);
+        ++counters_.spectra_out;
+      }
+    });
+  } catch (const std::exception& e) {
+    counters_.simulated_s += dynamics_->time() - from;
+    dynamicsError("dynamics (restarted at the next torque input)", e);
+    dynamics_->stop();
+    return false;
+  }
+  counters_.simulated_s += dynamics_->time() - from;
+  return true;
 }
 
 void RigPipeline::advanceDynamics(Stamp stamp, double torque, PipelineSink& sink) {
@@ -288,19 +455,21 @@ void RigPipeline::advanceDynamics(Stamp stamp, double torque, PipelineSink& sink
       restartDynamics(stamp, torque);
       return;
     }
-    const double from = dynamics_->time();
-    dynamics_->advanceTo(t, [&](const DynamicsSample& relative) {
-      DynamicsSample s = relative;
-      const Stamp sample_stamp{dynamics_epoch_.ns + std::llround(relative.t * 1e9)};
-      s.t = sample_stamp.toSec();
-      sink.transmissionError(sample_stamp, s);
-      ++counters_.te_out;
-      if (te_spectrum_->push(s.dynamic_te)) {
-        sink.spectrum(sample_stamp, *te_spectrum_);
-        ++counters_.spectra_out;
-      }
-    });
-    counters_.simulated_s += dynamics_->time() - from;
+    if (t > dynamics_->time()) {  // else another stream took the dynamics past this stamp: applies from there
+      const double from = dynamics_->time();
+      dynamics_->advanceTo(t, [&](const DynamicsSample& relative) {
+        DynamicsSample s = relative;
+        const Stamp sample_stamp{dynamics_epoch_.ns + std::llround(relative.t * 1e9)};
+        s.t = sample_stamp.toSec();
+        sink.transmissionError(sample_stamp, s);
+        ++counters_.te_out;
+        if (te_spectrum_->push(s.dynamic_te)) {
+          sink.spectrum(sample_stamp, *te_spectrum_);
+          ++counters_.spectra_out;
+        }
+      });
+      counters_.simulated_s += dynamics_->time() - from;
+    }
   } catch (const std::exception& e) {
     // The state stays at its last good sample and every later input would fail the same way:
     // restart the model here (counted), as after a gap.
@@ -311,6 +480,7 @@ void RigPipeline::advanceDynamics(Stamp stamp, double torque, PipelineSink& sink
       dynamicsError("dynamics", again);
     }
   }
+  held_torque_ = torque;
   try {
     dynamics_->setTorque(torque);  // the new torque holds from here on, whatever happened above
   } catch (const std::exception& e) {

@@ -113,3 +113,31 @@ drivetrain_stiffness::Resonance toResonanceMsg(Stamp stamp, const std::string& f
 }
 
 }  // namespace drivetrain_stiffness
+
+namespace drivetrain_stiffness {
+
+std::optional<MotionInput> toMotionInput(const sensor_msgs::JointState& msg, const JointNames& names, std::string& why) {
+  // sensor_msgs/JointState: name[i] goes with position[i], velocity[i], effort[i]; velocity and
+  // effort may be empty (not measured).
+  auto index = [&](const std::string& joint) -> long {
+    for (std::size_t i = 0; i < msg.name.size(); ++i) {
+      if (msg.name[i] == joint) return static_cast<long>(i);
+    }
+    return -1;
+  };
+  const long p = index(names.pinion);
+  if (p < 0 || static_cast<std::size_t>(p) >= msg.position.size()) {
+    why = p < 0 ? "no joint named '" + names.pinion + "' (~pinion_joint)"
+                : "joint '" + names.pinion + "' has no position (" + std::to_string(msg.position.size()) + " positions for " +
+                      std::to_string(msg.name.size()) + " names)";
+    return std::nullopt;
+  }
+  MotionInput m;
+  m.pinion_angle = msg.position[static_cast<std::size_t>(p)];
+  if (static_cast<std::size_t>(p) < msg.velocity.size()) m.pinion_velocity = msg.velocity[static_cast<std::size_t>(p)];
+  const long g = index(names.gear);
+  if (g >= 0 && static_cast<std::size_t>(g) < msg.position.size()) m.gear_angle = msg.position[static_cast<std::size_t>(g)];
+  return m;
+}
+
+}  // namespace drivetrain_stiffness

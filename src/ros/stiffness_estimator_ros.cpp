@@ -89,6 +89,7 @@ StiffnessEstimatorRos::StiffnessEstimatorRos(ros::NodeHandle nh, ros::NodeHandle
   const auto get = [&pnh](const std::string& name, const auto& fallback) { return readParam(pnh, name, fallback); };
   pipeline_ = std::make_unique<RigPipeline>(rig, readPipelineOptions(get, rig), readRuntimeSettings(get, rig));
   publishers_ = std::make_unique<Publishers>(nh, *pipeline_, readOutputSettings(get));
+  joints_ = readJointNames(get);
   deadline_ = readParam(pnh, "deadline", deadline_);
   requirePositive("~deadline", deadline_);
   const int queue = readParam(pnh, "torque_queue_size", 1000);
@@ -133,6 +134,9 @@ StiffnessEstimatorRos::StiffnessEstimatorRos(ros::NodeHandle nh, ros::NodeHandle
   torque_sub_ = nh.subscribe("torque", static_cast<std::uint32_t>(queue),
                                                            &StiffnessEstimatorRos::onTorque, this, ros::TransportHints().tcpNoDelay());
   preload_sub_ = nh.subscribe("preload", 100, &StiffnessEstimatorRos::onPreload, this);
+  // The rig's encoders, by the ROS convention for joint positions (sensor_msgs/JointState).
+  joint_states_sub_ = nh.subscribe("joint_states", 1000, &StiffnessEstimatorRos::onJointStates, this,
+                                   ros::TransportHints().tcpNoDelay());
   // The updater publishes at ~diagnostic_period; poll it often enough to keep that period.
   diagnostic_timer_ = nh.createWallTimer(ros::WallDuration(0.05), [this](const ros::WallTimerEvent&) { onDiagnosticTimer(); });
   private_namespace_ = pnh.getNamespace();
@@ -211,6 +215,22 @@ void StiffnessEstimatorRos::onPreload(const ros::MessageEvent<const drivetrain_s
   finishInput(start, cpu_start);
 }
 
+void StiffnessEstimatorRos::onJointStates(const ros::MessageEvent<const sensor_msgs::JointState>& event) {
+  const ros::WallTime start = ros::WallTime::now();
+  const double cpu_start = threadCpuSeconds();
+  const sensor_msgs::JointState& msg = *event.getConstMessage();
+  std::lock_guard<std::mutex> lock(mutex_);
+  observeClock();
+  const InputOrigin origin{event.getPublisherName(), msg.header.seq, msg.header.frame_id};
+  const std::optional<MotionInput> reading = toMotionInput(msg, joints_, joint_refusal_);
+  const InputOutcome outcome = reading ? pipeline_->motion(fromRosTime(msg.header.stamp), *reading, *publishers_, origin)
+                                       : pipeline_->motionRefused(joint_refusal_, origin);
+  if (outcome != InputOutcome::kAccepted) {
+    ROS_WARN_THROTTLE(1.0, "stiffness_estimator: %s", pipeline_->counters().last_event.c_str());
+  }
+  finishInput(start, cpu_start);
+}
+
 void StiffnessEstimatorRos::onReconfigure(drivetrain_stiffness::EstimatorConfig& config, std::uint32_t /*level*/) {
   std::lock_guard<std::mutex> lock(mutex_);
   try {
@@ -250,7 +270,8 @@ void StiffnessEstimatorRos::onDiagnosticTimer() {
 void StiffnessEstimatorRos::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) {
   std::lock_guard<std::mutex> lock(mutex_);
   const PipelineCounters& c = pipeline_->counters();
-  const std::uint64_t rejected = c.rejected_torque + c.rejected_preload;
+  const std::uint64_t rejected = c.rejected_torque + c.rejected_preload + c.rejected_motion;
+  const std::uint64_t dropped = c.dropped_torque + c.dropped_preload + c.dropped_motion;
   const std::uint64_t resets = c.clock_resets + c.stamp_resets + c.gap_restarts;
   status.summary(diagnostic_msgs::DiagnosticStatus::OK, "estimating");
   if (rejected > rejected_at_last_report_) {
@@ -260,10 +281,18 @@ void StiffnessEstimatorRos::diagnose(diagnostic_updater::DiagnosticStatusWrapper
   if (resets > resets_at_last_report_) {
     status.mergeSummaryf(diagnostic_msgs::DiagnosticStatus::WARN, "estimator reset: %s", c.last_event.c_str());
   }
-  if (c.dropped_torque + c.dropped_preload > dropped_at_last_report_) {
+  if (dropped > dropped_at_last_report_) {
     status.mergeSummaryf(diagnostic_msgs::DiagnosticStatus::WARN, "%llu inputs dropped on the way since last report",
-                         static_cast<unsigned long long>(c.dropped_torque + c.dropped_preload - dropped_at_last_report_));
+                         static_cast<unsigned long long>(dropped - dropped_at_last_report_));
   }
+  if (c.motion_timeouts > motion_timeouts_at_last_report_) {
+    status.mergeSummaryf(diagnostic_msgs::DiagnosticStatus::WARN, "encoders silent for ~motion_timeout: phase from ~pinion_speed_rpm");
+  }
+  if (c.gear_ratio_mismatches > ratio_mismatches_at_last_report_) {
+    status.mergeSummaryf(diagnostic_msgs::DiagnosticStatus::WARN, "gear angle off the tooth ratio: %s", c.last_event.c_str());
+  }
+  motion_timeouts_at_last_report_ = c.motion_timeouts;
+  ratio_mismatches_at_last_report_ = c.gear_ratio_mismatches;
   if (c.stiffness_shed > shed_at_last_report_) {
     status.mergeSummaryf(diagnostic_msgs::DiagnosticStatus::WARN, "overloaded: %llu torque inputs shed since last report",
                          static_cast<unsigned long long>(c.stiffness_shed - shed_at_last_report_));
@@ -274,10 +303,11 @@ void StiffnessEstimatorRos::diagnose(diagnostic_updater::DiagnosticStatusWrapper
   }
   rejected_at_last_report_ = rejected;
   resets_at_last_report_ = resets;
-  dropped_at_last_report_ = c.dropped_torque + c.dropped_preload;
+  dropped_at_last_report_ = dropped;
   shed_at_last_report_ = c.stiffness_shed;
   for (const auto& [key, count] : namedCounters(c)) status.add(key, count);
   status.add("last_event", c.last_event);
+  status.add("phase_source", pipeline_->phaseSource());
   status.add("process_restarts", starts_ - 1);
   status.add("unnumbered_publishers", pipeline_->unnumberedPublishers());
   status.add("missed_deadlines", missed_deadlines_);

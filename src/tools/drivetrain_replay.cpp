@@ -60,7 +60,7 @@ constexpr char kExitCodesHelp[] =
     "  0  ok: the whole bag was read\n"
     "  1  refused or failed: bad options, an unreadable config or parameter file, a file that is not a\n"
     "     bag (nothing replayed); an output or the report that cannot be written\n"
-    "  3  messages of the wrong type on the torque or preload topic (counted as wrong_type)\n"
+    "  3  messages of the wrong type on the torque, preload or joint_states topic (counted as wrong_type)\n"
     "  4  incomplete: the bag is truncated or damaged; the outputs up to the damage are written and\n"
     "     closed, and the summary's status says \"incomplete: 'FILE' at byte OFFSET: ...\" (takes\n"
     "     precedence over 3)";
@@ -82,7 +82,8 @@ nlohmann::json countersJson(const PipelineCounters& c) {
 int run(int argc, char** argv) {
   CLI::App app{"Replays a recorded bag through the stiffness estimator's pipeline (no master needed)"};
   app.footer(kExitCodesHelp);
-  std::string bag_path, config, params, out_bag, csv_dir, report_dir, torque_topic = "torque", preload_topic = "preload";
+  std::string bag_path, config, params, out_bag, csv_dir, report_dir, torque_topic = "torque", preload_topic = "preload",
+              joint_states_topic = "joint_states";
   std::string plot_script = DRIVETRAIN_PLOT_REPLAY_SCRIPT;
   std::string compression = "lz4";
   bool plots = true;
@@ -96,6 +97,8 @@ int run(int argc, char** argv) {
   app.add_option("--report", report_dir, "Directory for summary.json, report.md and PNG plots (CSV in DIR/csv, outputs in DIR/outputs.bag unless --csv, --out)");
   app.add_option("--torque-topic", torque_topic, "geometry_msgs/WrenchStamped, torque.z [N*m]");
   app.add_option("--preload-topic", preload_topic, "drivetrain_stiffness/Preload");
+  app.add_option("--joint-states-topic", joint_states_topic,
+                 "sensor_msgs/JointState, the rig's encoders (~pinion_joint, ~gear_joint from --params)");
   app.add_option("--plot-script", plot_script, "matplotlib script: OUTPUT_BAG REPORT_DIR INPUT_BAG");
   app.add_flag("!--no-plots", plots, "Write the report without PNG plots");
   try {
@@ -116,7 +119,9 @@ int run(int argc, char** argv) {
 
   // Reads each message before the loop gets it: damage ends the input (input.damage()), it is
   // never thrown out of the loop, so the outputs below are always closed.
-  ReplayInput input(bag_path, torque_topic, preload_topic);
+  ReplayInput input(bag_path, torque_topic, preload_topic, joint_states_topic);
+  const JointNames joints = readJointNames(get);
+  std::string joint_refusal;
   ReplayWriter writer(pipeline, readOutputSettings(get), out_bag,
                       compression == "none" ? BagCompression::None : BagCompression::Lz4, csv_dir);
   std::uint64_t messages = 0, wrong_type = 0;
@@ -133,6 +138,17 @@ int run(int argc, char** argv) {
       if (auto w = m.instantiate<geometry_msgs::WrenchStamped>()) {
         pipeline.torque(fromRosTime(w->header.stamp), w->wrench.torque.z, writer,
                         {publisher, w->header.seq, w->header.frame_id});
+        continue;
+      }
+    } else if (topicMatches(m.getTopic(), joint_states_topic)) {
+      if (auto j = m.instantiate<sensor_msgs::JointState>()) {
+        const InputOrigin origin{publisher, j->header.seq, j->header.frame_id};
+        const std::optional<MotionInput> reading = toMotionInput(*j, joints, joint_refusal);
+        if (reading) {
+          pipeline.motion(fromRosTime(j->header.stamp), *reading, writer, origin);
+        } else {
+          pipeline.motionRefused(joint_refusal, origin);
+        }
         continue;
       }
     } else if (auto p = m.instantiate<drivetrain_stiffness::Preload>()) {

@@ -58,8 +58,9 @@ bool topicMatches(const std::string& topic, const std::string& wanted) {
   return t == w || (!t.empty() && t[0] == '/' && t.substr(1) == w) || (!w.empty() && w[0] == '/' && w.substr(1) == t);
 }
 
-ReplayInput::ReplayInput(const std::string& path, const std::string& torque_topic, const std::string& preload_topic)
-    : path_(path), torque_topic_(torque_topic), preload_topic_(preload_topic) {
+ReplayInput::ReplayInput(const std::string& path, const std::string& torque_topic, const std::string& preload_topic,
+                         const std::string& joint_states_topic)
+    : path_(path), torque_topic_(torque_topic), preload_topic_(preload_topic), joint_states_topic_(joint_states_topic) {
   const std::string version = firstLine(path);
   if (version.rfind("#ROSBAG V", 0) != 0) throw InvalidInput("--bag = '" + path + "': not a ROS bag (it does not start with '#ROSBAG V')");
   try {
@@ -94,8 +95,10 @@ void ReplayInput::advance() {
 
 bool ReplayInput::isTorque(const std::string& topic) const { return topicMatches(topic, torque_topic_); }
 
+bool ReplayInput::isJointStates(const std::string& topic) const { return topicMatches(topic, joint_states_topic_); }
+
 bool ReplayInput::isWanted(const std::string& topic) const {
-  return isTorque(topic) || topicMatches(topic, preload_topic_);
+  return isTorque(topic) || topicMatches(topic, preload_topic_) || isJointStates(topic);
 }
 
 bool ReplayInput::nextIndexed() {
@@ -112,9 +115,10 @@ bool ReplayInput::nextIndexed() {
     message_.topic_ = &m.getTopic();
     message_.caller_id_ = &callerIdOf(m.getConnectionHeader().get());
     // The type follows the topic as in drivetrain_replay's loop: torque first.
-    const bool torque = isTorque(m.getTopic());
+    const bool torque = isTorque(m.getTopic()), joints = !torque && isJointStates(m.getTopic());
     message_.torque_ = torque ? m.instantiate<geometry_msgs::WrenchStamped>() : nullptr;
-    message_.preload_ = torque ? nullptr : m.instantiate<drivetrain_stiffness::Preload>();
+    message_.joint_states_ = joints ? m.instantiate<sensor_msgs::JointState>() : nullptr;
+    message_.preload_ = torque || joints ? nullptr : m.instantiate<drivetrain_stiffness::Preload>();
     return true;
   } catch (const std::exception& e) {  // a chunk that does not decompress, a damaged record or message
     damage_ = locateDamage(e.what());
@@ -147,9 +151,10 @@ void ReplayInput::decode(const BagRecordMessage& raw, ReplayMessage& message) co
   message.time_ = raw.time;
   message.topic_ = &raw.connection->topic;
   message.caller_id_ = &callerIdOf(&raw.connection->header);
-  const bool torque = isTorque(raw.connection->topic);
+  const bool torque = isTorque(raw.connection->topic), joints = !torque && isJointStates(raw.connection->topic);
   message.torque_ = torque ? deserialize<geometry_msgs::WrenchStamped>(raw) : nullptr;
-  message.preload_ = torque ? nullptr : deserialize<drivetrain_stiffness::Preload>(raw);
+  message.joint_states_ = joints ? deserialize<sensor_msgs::JointState>(raw) : nullptr;
+  message.preload_ = torque || joints ? nullptr : deserialize<drivetrain_stiffness::Preload>(raw);
 }
 
 /// A sequential reading ends in damage: the reader's, or (every chunk read whole) the index that

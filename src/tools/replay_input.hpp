@@ -1,4 +1,4 @@
-// drivetrain_replay's input: the torque and preload messages of a recorded bag, each one read and
+// drivetrain_replay's input: the torque, preload and joint_states messages of a recorded bag, each one read and
 // deserialized before the message loop gets it, so the loop never meets a read error: the first
 // message that cannot be read ends the input, and damage() says where (byte offset) and what.
 //  - A bag rosbag::Bag opens is read with rosbag::View in record-time order through its index, as
@@ -17,6 +17,7 @@
 
 #include <boost/shared_ptr.hpp>
 #include <geometry_msgs/WrenchStamped.h>
+#include <sensor_msgs/JointState.h>
 #include <rosbag/view.h>
 
 #include "bag_sequential_reader.hpp"  // NOLINT(build/include_subdir)
@@ -35,7 +36,8 @@ class ReplayMessage {
   /// The recording's publisher (its connection's callerid; "" if the bag has none).
   const std::string& getCallerId() const { return *caller_id_; }
   /// geometry_msgs::WrenchStamped on the torque topic, drivetrain_stiffness::Preload on the preload
-  /// topic; null if the recorded type is another (MD5 sum), as MessageInstance::instantiate.
+  /// topic, sensor_msgs::JointState on the joint_states topic; null if the recorded type is another
+  /// (MD5 sum), as MessageInstance::instantiate.
   template <class T>
   boost::shared_ptr<T> instantiate() const;
 
@@ -46,6 +48,7 @@ class ReplayMessage {
   const std::string* caller_id_ = nullptr;  ///< likewise
   boost::shared_ptr<geometry_msgs::WrenchStamped> torque_;
   boost::shared_ptr<drivetrain_stiffness::Preload> preload_;
+  boost::shared_ptr<sensor_msgs::JointState> joint_states_;
 };
 
 template <>
@@ -56,12 +59,17 @@ template <>
 inline boost::shared_ptr<drivetrain_stiffness::Preload> ReplayMessage::instantiate() const {
   return preload_;
 }
+template <>
+inline boost::shared_ptr<sensor_msgs::JointState> ReplayMessage::instantiate() const {
+  return joint_states_;
+}
 
 class ReplayInput {
  public:
   /// Throws InvalidInput ("--bag = 'PATH': ...") if the file cannot be read, is not a bag, or is a
   /// bag rosbag cannot open in a format other than 2.0 (the only one read without the index).
-  ReplayInput(const std::string& path, const std::string& torque_topic, const std::string& preload_topic);
+  ReplayInput(const std::string& path, const std::string& torque_topic, const std::string& preload_topic,
+              const std::string& joint_states_topic = "joint_states");
 
   struct End {};
   class Iterator {
@@ -88,13 +96,14 @@ class ReplayInput {
   bool nextIndexed();
   bool nextSequential();
   bool isTorque(const std::string& topic) const;
+  bool isJointStates(const std::string& topic) const;
   bool isWanted(const std::string& topic) const;
   void decode(const BagRecordMessage& raw, ReplayMessage& message) const;
   BagDamage endOfSequentialReading() const;
   std::string withoutIndex() const;  ///< what a sequential reading's damage says of rosbag
   BagDamage locateDamage(const std::string& rosbag_error) const;
 
-  std::string path_, torque_topic_, preload_topic_;
+  std::string path_, torque_topic_, preload_topic_, joint_states_topic_;
   std::unique_ptr<rosbag::Bag> bag_;
   std::unique_ptr<rosbag::View> view_;
   rosbag::View::iterator view_next_, view_end_;

@@ -23,6 +23,7 @@
 #include <array>
 #include <functional>
 #include <memory>
+#include <optional>
 
 #include "drivetrain_stiffness/core/exponential_integrator.hpp"
 #include "drivetrain_stiffness/core/reduced_models.hpp"
@@ -77,8 +78,11 @@ class DynamicsEstimator {
   void setMotionSlices(int slices);
   /// The speed-independent propagator (null until the motion is followed or a rebuild is avoided).
   const SlicedModalPropagator* slicedPropagator() const { return sliced_.get(); }
-  /// Rebuilds the model (and the propagators) when a stiffness changes by more than 1 %.
-  void setBearingStiffness(const std::array<double, 2>& k);
+  /// A stiffness change by more than 1 % takes effect (see the class comment); smaller ones are
+  /// ignored. With `at` (absolute time >= time(), no output sample before it: advanceTo(at) first)
+  /// the state is first propagated to `at` with the stiffness before, so the change takes effect at
+  /// that instant rather than at the last output sample.
+  void setBearingStiffness(const std::array<double, 2>& k, std::optional<double> at = std::nullopt);
   /// Damping ratios of the dynamics block (mesh, bearings); the model is rebuilt, the state kept.
   void setDamping(double mesh_damping_ratio, double bearing_damping_ratio);
   /// full: exact-exponential / dopri5; quasi_static and linear_modal: reduced_models.hpp. The
@@ -111,6 +115,8 @@ class DynamicsEstimator {
   GearRotorParameters currentParameters() const;
   /// After a bearing-stiffness or damping change (see the class comment).
   void parametersChanged();
+  /// Onto the measured-motion propagation, the state at absolute time t (>= time(), no sample before).
+  void moveTo(double t);
   double nominalMeshFrequency() const;  ///< [Hz]
 
   RigConfig rig_;

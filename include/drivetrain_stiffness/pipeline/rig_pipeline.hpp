@@ -22,6 +22,15 @@
 //  7. A stamp outside ROS time (negative, or past 2106-02-07, uint32 seconds) is rejected: no
 //     output could carry it.
 //  8. A failed integration (dynamics_errors) restarts the model at that input.
+//  9. joint_states (the rig's encoders, MotionInput) follow rules 1, 2, 5 and 7 on their own stream.
+//     From the first accepted reading the measured pinion angle drives the mesh phase and its
+//     velocity the speed (phase source "encoders"); no reading for ~motion_timeout falls back to
+//     ~pinion_speed_rpm from the phase extrapolated to that moment (counted, phase source
+//     "nominal (encoders timed out)") until the next reading. A gear angle off the tooth ratio by
+//     more than ~gear_ratio_tolerance is counted and reported (a slip or a wrong joint mapping).
+// 10. Every input takes effect at its own stamp: the dynamics are integrated up to it with what was
+//     held before (torque, bearing stiffness, motion), then the input is applied. An input stamped
+//     before the dynamics' time (another stream got there first) applies from that time.
 // Value rules: NaN, Inf, negative and absurd values are rejected by the core classes
 // (InvalidInput naming the field); the state is left as it was. A torque whose header.frame_id is
 // not ~torque_frame is rejected before its value is read (the sign of torque.z selects the loaded
@@ -42,6 +51,7 @@
 
 #include "drivetrain_stiffness/core/dynamics_estimator.hpp"
 #include "drivetrain_stiffness/core/modal_analysis.hpp"
+#include "drivetrain_stiffness/core/motion.hpp"
 #include "drivetrain_stiffness/core/reduced_models.hpp"
 #include "drivetrain_stiffness/core/stiffness_estimator.hpp"
 #include "drivetrain_stiffness/pipeline/runtime_settings.hpp"
@@ -94,6 +104,10 @@ struct PipelineOptions {
   int spectrum_hop = 256;            ///< [samples] between spectra
   double pinion_speed_rpm = 1000.0;  ///< [rpm] nominal speed for the mesh phase
   std::string torque_frame;          ///< required header.frame_id of torque inputs; empty = any
+  double mesh_phase_offset = 0.0;    ///< [-] mesh phase at measured pinion angle 0 (where a drive pair enters contact)
+  double motion_timeout = 0.1;       ///< [s] no joint_states for this long: back to ~pinion_speed_rpm
+  double gear_ratio_tolerance = 0.01;  ///< [rad] gear angle off -(z_p/z_g) pinion angle by more: reported
+  int motion_slices = 256;           ///< slices per mesh period of the measured-motion dynamics
   void validate() const;
 };
 
@@ -139,6 +153,8 @@ struct PipelineCounters {
   std::uint64_t zero_stamps = 0, out_of_order = 0, invalid_values = 0, unreachable_loads = 0;
   std::uint64_t wrong_frames = 0, stamps_out_of_range = 0;
   std::uint64_t dropped_torque = 0, dropped_preload = 0;  ///< numbered messages that never arrived
+  std::uint64_t accepted_motion = 0, rejected_motion = 0, dropped_motion = 0;  ///< joint_states
+  std::uint64_t motion_timeouts = 0, gear_ratio_mismatches = 0;
   std::uint64_t stiffness_shed = 0;  ///< backlogged torque inputs: dynamics only, no stiffness update
   std::uint64_t clock_resets = 0, stamp_resets = 0, gap_restarts = 0;
   std::uint64_t dynamics_errors = 0;
@@ -166,8 +182,18 @@ class RigPipeline {
                       Backlog backlog = Backlog::kNone);
   InputOutcome preload(Stamp stamp, const std::vector<PreloadSetting>& settings, PipelineSink& sink,
                        const InputOrigin& origin = {});
+  /// One encoder reading (rule 9). Refusals name the field: a non-finite angle, a speed beyond
+  /// +-1e5 rpm.
+  InputOutcome motion(Stamp stamp, const MotionInput& reading, PipelineSink& sink, const InputOrigin& origin = {});
+  /// A joint_states message the caller could not convert (no pinion joint): counted as a rejected
+  /// reading with an invalid value, `reason` in last_event.
+  InputOutcome motionRefused(const std::string& reason, const InputOrigin& origin = {});
+  /// "nominal", "encoders" or "nominal (encoders timed out)": what drives the mesh phase now.
+  const char* phaseSource() const;
   /// Publishers whose drops cannot be seen (they leave header.seq constant), over both streams.
-  std::size_t unnumberedPublishers() const { return torque_seq_.unnumberedPublishers() + preload_seq_.unnumberedPublishers(); }
+  std::size_t unnumberedPublishers() const {
+    return torque_seq_.unnumberedPublishers() + preload_seq_.unnumberedPublishers() + motion_seq_.unnumberedPublishers();
+  }
   /// Back to the configured preloads, zero torque, dynamics restarted at the next torque input.
   void reset(const std::string& reason);
 
@@ -183,7 +209,8 @@ class RigPipeline {
   const DynamicsEstimator* dynamics() const { return dynamics_.get(); }
   const RigConfig& rig() const { return rig_; }
   const std::optional<ResonanceEstimate>& lastResonance() const { return last_resonance_; }
-  /// Nominal pinion angle since the dynamics origin at `stamp` [rad] (the gear angle is not measured).
+  /// Pinion angle at `stamp` [rad]: the last encoder reading extrapolated at its speed, or the
+  /// nominal speed's angle since the dynamics origin (plus ~mesh_phase_offset as an angle).
   double pinionAngle(Stamp stamp) const;
 
  private:
@@ -198,6 +225,17 @@ class RigPipeline {
                      std::uint64_t& rejected, PipelineSink& sink, Validate validate, Update update);
   void afterUpdate(Stamp stamp, const StiffnessEstimate& estimate, PipelineSink& sink);
   void advanceDynamics(Stamp stamp, double torque, PipelineSink& sink);
+  /// Integrates the dynamics up to `stamp` (rule 10) with what is held; false if not running or
+  /// already past it.
+  bool advanceDynamicsTo(Stamp stamp, PipelineSink& sink);
+  /// The new bearing stiffness from `stamp` on, then the resonance estimate.
+  void pushStiffness(Stamp stamp, const StiffnessEstimate& estimate, PipelineSink& sink);
+  void acceptMotion(Stamp stamp, const MotionInput& reading, PipelineSink& sink);
+  /// Rule 9's fall-back when the last reading is older than ~motion_timeout at `stamp`.
+  void checkMotionTimeout(Stamp stamp, PipelineSink& sink);
+  /// The dynamics follow the pinion angle model (anchor) from `stamp` on.
+  void followAnchor(Stamp stamp);
+  double meshTurns(double pinion_angle) const;
   /// Dynamics at static equilibrium under `torque` from `stamp` on (new epoch, empty spectrum).
   void restartDynamics(Stamp stamp, double torque);
   void updateResonance(Stamp stamp, const StiffnessEstimate& estimate, PipelineSink& sink);
@@ -210,7 +248,23 @@ class RigPipeline {
   std::unique_ptr<DynamicsEstimator> dynamics_;
   std::unique_ptr<SlidingSpectrum> te_spectrum_;
   PipelineCounters counters_;
-  SequenceGaps torque_seq_, preload_seq_;
+  SequenceGaps torque_seq_, preload_seq_, motion_seq_;
+  std::optional<Stamp> last_motion_;
+  /// The pinion angle model: angle(stamp) = angle + speed (stamp - stamp) [rad, rad/s], offset included.
+  struct AngleAnchor {
+    Stamp stamp;
+    double angle = 0.0, speed = 0.0;
+  };
+  std::optional<AngleAnchor> anchor_;  ///< set by encoder readings (and their time-out); empty: nominal
+  bool encoders_ = false;              ///< the anchor comes from a reading (not a time-out)
+  /// The last reading, unwrapped, for the next one's unwrapping, differentiation and ratio check.
+  struct Reading {
+    Stamp stamp;
+    double pinion = 0.0, speed = 0.0;
+    std::optional<double> gear, gear_reference;
+  };
+  std::optional<Reading> reading_;
+  double held_torque_ = 0.0;
   std::optional<Stamp> last_torque_, last_preload_, last_clock_, last_stiffness_out_;
   std::optional<Stamp> angle_origin_;
   bool stamps_restarted_ = false;  ///< rule 2 reset since the last clock jump (rule 5 then skips one)

@@ -10,6 +10,7 @@
 #include "drivetrain_stiffness/Stiffness.h"
 #include "drivetrain_stiffness/TransmissionError.h"
 #include "drivetrain_stiffness/pipeline/rig_pipeline.hpp"
+#include <sensor_msgs/JointState.h>
 
 namespace drivetrain_stiffness {
 
@@ -17,6 +18,15 @@ namespace drivetrain_stiffness {
 /// the pipeline never makes one (time rule 7), so this only guards other callers.
 ros::Time toRosTime(Stamp s);
 inline Stamp fromRosTime(const ros::Time& t) { return Stamp::fromSecNsec(t.sec, t.nsec); }
+
+/// The encoders' joint names in joint_states (~pinion_joint, ~gear_joint).
+struct JointNames {
+  std::string pinion = "pinion", gear = "gear";
+};
+/// The reading of a JointState message: the pinion's position (required), its velocity and the
+/// gear's position when present. Without a pinion position: nullopt and `why` says what is missing
+/// (the pipeline counts it, RigPipeline::motionRefused).
+std::optional<MotionInput> toMotionInput(const sensor_msgs::JointState& msg, const JointNames& names, std::string& why);
 
 /// A Preload message's settings, as the pipeline takes them (node and replay).
 std::vector<PreloadSetting> toPreloadSettings(const drivetrain_stiffness::Preload& msg);

@@ -33,6 +33,12 @@ PipelineOptions readPipelineOptions(const Get& get, const RigConfig& rig) {
   // The torque sensor's frame: torque.z about the pinion axis (right-hand rule, REP 103). A torque in
   // another frame has another sign convention, so it is refused unless the user names the frame.
   o.torque_frame = get("torque_frame", std::string("pinion"));
+  // joint_states (the rig's encoders): where a drive pair enters contact at pinion angle 0, how
+  // long a silent encoder stream is trusted, and how far the gear may run off the tooth ratio.
+  o.mesh_phase_offset = get("mesh_phase_offset", o.mesh_phase_offset);
+  o.motion_timeout = get("motion_timeout", o.motion_timeout);
+  o.gear_ratio_tolerance = get("gear_ratio_tolerance", o.gear_ratio_tolerance);
+  o.motion_slices = get("motion_slices", o.motion_slices);
   try {
     o.validate();
   } catch (const InvalidInput& e) {
@@ -55,6 +61,19 @@ RuntimeSettings readRuntimeSettings(const Get& get, const RigConfig& rig) {
     throw InvalidInput(std::string("parameter ~") + e.what());
   }
   return s;
+}
+
+/// ~pinion_joint, ~gear_joint: the joint names of the two encoders in joint_states.
+template <typename Get>
+JointNames readJointNames(const Get& get) {
+  JointNames j;
+  j.pinion = get("pinion_joint", j.pinion);
+  j.gear = get("gear_joint", j.gear);
+  if (j.pinion.empty() || j.gear.empty() || j.pinion == j.gear) {
+    throw InvalidInput("parameters ~pinion_joint = '" + j.pinion + "', ~gear_joint = '" + j.gear +
+                       "': two different, non-empty joint names");
+  }
+  return j;
 }
 
 template <typename Get>

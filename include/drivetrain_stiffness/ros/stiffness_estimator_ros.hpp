@@ -15,12 +15,14 @@
 #include <boost/thread/recursive_mutex.hpp>
 #include <dynamic_reconfigure/server.h>
 #include <geometry_msgs/WrenchStamped.h>
+#include <sensor_msgs/JointState.h>
 #include <ros/ros.h>
 
 #include "drivetrain_stiffness/EstimatorConfig.h"
 #include "drivetrain_stiffness/Preload.h"
 #include "drivetrain_stiffness/pipeline/rig_pipeline.hpp"
 #include "drivetrain_stiffness/ros/master_watch.hpp"
+#include "drivetrain_stiffness/ros/message_conversion.hpp"
 
 namespace drivetrain_stiffness {
 
@@ -35,6 +37,7 @@ class StiffnessEstimatorRos {
   class Publishers;
   void onTorque(const ros::MessageEvent<const geometry_msgs::WrenchStamped>& event);
   void onPreload(const ros::MessageEvent<const drivetrain_stiffness::Preload>& event);
+  void onJointStates(const ros::MessageEvent<const sensor_msgs::JointState>& event);
   /// The input waited in the subscriber queue for longer than ~shed_queue_age: shed its stiffness.
   Backlog backlogOf(const ros::Time& receipt) const;
   /// A new master knows nothing of this node: put its parameters there and exit, for roslaunch to
@@ -52,7 +55,9 @@ class StiffnessEstimatorRos {
   std::mutex mutex_;  // callbacks may run on several threads (nodelet, multi-threaded spinners)
   std::unique_ptr<RigPipeline> pipeline_;
   std::unique_ptr<Publishers> publishers_;
-  ros::Subscriber torque_sub_, preload_sub_;
+  ros::Subscriber torque_sub_, preload_sub_, joint_states_sub_;
+  JointNames joints_;
+  std::string joint_refusal_;  ///< scratch for toMotionInput's reason
   diagnostic_updater::Updater diagnostics_;
   ros::WallTimer diagnostic_timer_;  // wall time: keeps running when sim time stops or jumps back
   boost::recursive_mutex reconfigure_mutex_;  // dynamic_reconfigure::Server wants a boost mutex; outlives it
@@ -71,6 +76,7 @@ class StiffnessEstimatorRos {
   int starts_ = 1;                // of this node under this master (respawns included)
   bool restart_reported_ = false;
   std::uint64_t dropped_at_last_report_ = 0, shed_at_last_report_ = 0;
+  std::uint64_t motion_timeouts_at_last_report_ = 0, ratio_mismatches_at_last_report_ = 0;
   std::string private_namespace_;
   XmlRpc::XmlRpcValue parameters_;  // the private parameters at start-up, for a restarted master
   std::unique_ptr<MasterWatch> master_watch_;
