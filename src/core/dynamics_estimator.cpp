@@ -209,6 +209,12 @@ double DynamicsEstimator::meshFrequency() const { return following_ ? mesh_frequ
 void DynamicsEstimator::propagateTo(double t_rel) {
   const double h = t_rel - t_state_;
   if (!(h > 0.0)) return;
+  const double crossings = std::abs(mesh_frequency_) * h * slices_->size();
+  if (crossings > kMaxSlicesPerAdvance) {
+    throw InvalidInput("t = " + formatValue(origin_ + t_rel) + ": " + formatValue(h) + " s at a mesh frequency of " +
+                       formatValue(mesh_frequency_) + " Hz crosses " + formatValue(crossings) + " phase slices (more than " +
+                       formatValue(kMaxSlicesPerAdvance) + " in one call); reset at the new time instead");
+  }
   const double drive_force = *torque_ / mesh_->geometry().baseRadius(0);
   if (sliced_ && sliced_->propagate(y_, phase_, mesh_frequency_, h, drive_force)) {
     phase_ -= std::floor(phase_);
@@ -247,6 +253,13 @@ DynamicsSample DynamicsEstimator::movingSample() const {
 }
 
 void DynamicsEstimator::advanceFollowing(double t_rel, const std::function<void(const DynamicsSample&)>& sink) {
+  const double crossings = std::abs(mesh_frequency_) * (t_rel - t_state_) * slices_->size();
+  if (crossings > kMaxSlicesPerAdvance) {
+    throw InvalidInput("t = " + formatValue(origin_ + t_rel) + ": " + formatValue(t_rel - t_state_) +
+                       " s at a mesh frequency of " + formatValue(mesh_frequency_) + " Hz crosses " + formatValue(crossings) +
+                       " phase slices (more than " + formatValue(kMaxSlicesPerAdvance) +
+                       " in one call); reset at the new time instead");
+  }
   const long k_end = static_cast<long>(std::floor(t_rel / interval_ + 1e-9));
   while (k_ < k_end) {
     propagateTo((k_ + 1) * interval_);

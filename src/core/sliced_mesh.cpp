@@ -77,8 +77,8 @@ void SlicedExcitation::setMotion(double t0, double phase0, double mesh_frequency
 void SlicedExcitation::at(double t, MeshInstant& out) const {
   const double turns = phaseAt(t);
   out.phase = turns - std::floor(turns);
-  // On a boundary (to rounding) the slice the motion enters: the right limit in time, consistent
-  // with nextSwitch. Samples on a tooth switch take theirs from meshForSample.
+  // On a boundary the slice the motion enters (the right limit in time): nextSwitch returns times
+  // whose phase is on or past the boundary, so this agrees with the events dopri5 steps onto.
   const int j = slices_->sliceAt(out.phase, f_ < 0.0);
   out.k_drive = slices_->k1(j);
   out.k_back = slices_->kChain(j);
@@ -96,7 +96,14 @@ double SlicedExcitation::nextSwitch(double t) const {
   const SlicedMesh& s = *slices_;
   const int j = s.sliceAt(p, f_ < 0.0);
   const double target = whole + (f_ > 0.0 ? s.end(j) : s.start(j));
-  const double time = t0_ + (target - phase0_) / f_;
+  // The first time whose computed phase is on or past the boundary (a few ulps at most): at that
+  // time at() already gives the slice beyond, and the next call looks for the boundary after it.
+  // Without this the phase of the returned time can round to just short of the boundary, and every
+  // later call returns that same boundary again (dopri5 would crawl by one ulp per step).
+  double time = t0_ + (target - phase0_) / f_;
+  for (int i = 0; i < 64 && (f_ > 0.0 ? phaseAt(time) < target : phaseAt(time) > target); ++i) {
+    time = std::nextafter(time, std::numeric_limits<double>::infinity());
+  }
   return time > t ? time : std::nextafter(t, std::numeric_limits<double>::infinity());
 }
 

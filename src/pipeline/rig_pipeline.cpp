@@ -73,9 +73,7 @@ void PipelineOptions::validate() const {
     throw InvalidInput("mesh_phase_offset = " + formatValue(mesh_phase_offset) + ": must be in [0, 1) (a fraction of a mesh period)");
   }
   requirePositive("motion_timeout", motion_timeout);
-  if (motion_timeout > max_gap) {
-    throw InvalidInput("motion_timeout = " + formatValue(motion_timeout) + ": must be <= max_gap (" + formatValue(max_gap) + " s)");
-  }
+  if (motion_timeout > 3600.0) throw InvalidInput("motion_timeout = " + formatValue(motion_timeout) + ": must be <= 3600 s");
   requirePositive("gear_ratio_tolerance", gear_ratio_tolerance);
   if (motion_slices < 4 || motion_slices > 65536) {
     throw InvalidInput("motion_slices = " + std::to_string(motion_slices) + ": must be in [4, 65536] per mesh period");
@@ -300,51 +298,69 @@ InputOutcome RigPipeline::motionRefused(const std::string& reason, const InputOr
 }
 
 void RigPipeline::acceptMotion(Stamp stamp, const MotionInput& m, PipelineSink& sink) {
+  // Transactional: the reading is checked against the last one before anything changes.
+  const Reading* last =
+      reading_ && secondsBetween(stamp, reading_->stamp) <= options_.motion_timeout ? &*reading_ : nullptr;
+  const Reading next = unwrapReading(stamp, m, last);
+  const double max_speed = 1e5 * kTwoPi / 60.0;  // the bound of ~pinion_speed_rpm and of a measured velocity
+  if (!(std::abs(next.speed) <= max_speed)) {
+    throwInvalid("joint_states: pinion position", m.pinion_angle,
+                 "implies " + formatValue(next.speed) + " rad/s since the last reading (beyond +-1e5 rpm): an encoder "
+                 "jump, or readings too far apart to unwrap");
+  }
   checkMotionTimeout(stamp, sink);
-  const auto& teeth = estimator_->mesh().geometry().spec().teeth;
-  const double ratio = static_cast<double>(teeth[0]) / teeth[1];
-  // Unwrap against the prediction from the last reading (an encoder may wrap at +-pi or 2 pi):
-  // exact while the shaft turns by less than pi beyond the prediction between two readings.
-  Reading next;
-  next.stamp = stamp;
-  double dt = 0.0;
-  next.pinion = m.pinion_angle;
-  if (reading_) {
-    dt = secondsBetween(stamp, reading_->stamp);
-    const double predicted = reading_->pinion + reading_->speed * dt;
-    next.pinion += kTwoPi * std::round((predicted - m.pinion_angle) / kTwoPi);
-  }
-  if (m.pinion_velocity) {
-    next.speed = *m.pinion_velocity;
-  } else if (reading_ && dt > 0.0) {
-    next.speed = (next.pinion - reading_->pinion) / dt;  // backward difference of the encoder angle
-  } else {
-    next.speed = reading_ ? reading_->speed : 0.0;  // first reading without velocity: standing until the next
-  }
-  if (m.gear_angle) {
-    next.gear = *m.gear_angle;
-    if (reading_ && reading_->gear) {
-      const double predicted = *reading_->gear - ratio * (next.pinion - reading_->pinion);
-      *next.gear += kTwoPi * std::round((predicted - *m.gear_angle) / kTwoPi);
-    }
-    // Meshing gears: theta_g = -(z_p / z_g) theta_p + const (+ TE / r_b,g, micro-radians).
-    const double residual = *next.gear + ratio * next.pinion;
-    next.gear_reference = reading_ && reading_->gear_reference ? reading_->gear_reference : residual;
-    const double off = residual - *next.gear_reference;
+  Reading accepted = next;
+  if (accepted.gear) {
+    const double residual = *accepted.gear + ratio() * accepted.pinion;
+    const double off = residual - *accepted.gear_reference;
     if (std::abs(off) > options_.gear_ratio_tolerance) {
       ++counters_.gear_ratio_mismatches;
       counters_.last_event = "joint_states: the gear angle moved " + formatValue(off) +
                              " rad off -(z_p/z_g) x the pinion angle (more than ~gear_ratio_tolerance): a slip, or a "
                              "wrong ~pinion_joint/~gear_joint mapping";
-      next.gear_reference = residual;  // one report per slip; a wrong mapping keeps reporting
+      accepted.gear_reference = residual;  // one report per slip; a wrong mapping keeps reporting
     }
   }
   // Rule 10: the dynamics run up to this reading with the motion before it.
   advanceDynamicsTo(stamp, sink);
-  reading_ = next;
-  anchor_ = AngleAnchor{stamp, next.pinion + options_.mesh_phase_offset * kTwoPi / teeth[0], next.speed};
+  reading_ = accepted;
+  anchor_ = AngleAnchor{stamp, next.pinion + options_.mesh_phase_offset * kTwoPi / teeth(0), next.speed};
   encoders_ = true;
   followAnchor(stamp);
+}
+
+double RigPipeline::ratio() const { return static_cast<double>(teeth(0)) / teeth(1); }
+
+int RigPipeline::teeth(int shaft) const { return estimator_->mesh().geometry().spec().teeth[shaft]; }
+
+RigPipeline::Reading RigPipeline::unwrapReading(Stamp stamp, const MotionInput& m, const Reading* last) const {
+  // An angle is used modulo a turn only (exact for any finite double: std::remainder), so an
+  // encoder count of any size neither overflows the phase (z_p theta) nor loses the unwrapping.
+  // Unwrapped against the prediction from the last reading (an encoder may wrap at +-pi or 2 pi):
+  // exact while the shaft turns by less than pi beyond the prediction between two readings.
+  const double pinion_in = std::remainder(m.pinion_angle, kTwoPi);
+  Reading next;
+  next.stamp = stamp;
+  const double dt = last ? secondsBetween(stamp, last->stamp) : 0.0;
+  next.pinion = pinion_in;
+  if (last) next.pinion += kTwoPi * std::round((last->pinion + last->speed * dt - pinion_in) / kTwoPi);
+  if (m.pinion_velocity) {
+    next.speed = *m.pinion_velocity;
+  } else if (last && dt > 0.0) {
+    next.speed = (next.pinion - last->pinion) / dt;  // backward difference of the encoder angle
+  } else {
+    next.speed = last ? last->speed : 0.0;  // first reading without velocity: standing until the next
+  }
+  if (m.gear_angle) {
+    // Meshing gears: theta_g = -(z_p / z_g) theta_p + const (+ TE / r_b,g, micro-radians).
+    const double gear_in = std::remainder(*m.gear_angle, kTwoPi);
+    next.gear = gear_in;
+    if (last && last->gear) {
+      *next.gear += kTwoPi * std::round((*last->gear - ratio() * (next.pinion - last->pinion) - gear_in) / kTwoPi);
+    }
+    next.gear_reference = last && last->gear_reference ? last->gear_reference : std::optional<double>(*next.gear + ratio() * next.pinion);
+  }
+  return next;
 }
 
 void RigPipeline::checkMotionTimeout(Stamp stamp, PipelineSink& sink) {

@@ -101,7 +101,8 @@ const std::vector<std::string>& nodeParameterNames() {
       "max_abs_torque", "max_preload", "max_interference", "bearing_load_tolerance", "dynamics", "fidelity",
       "output_rate", "max_gap", "stamp_jump_back", "clock_jump_back", "resonance_threshold", "spectrum_window",
       "spectrum_hop", "pinion_speed_rpm", "stiffness_rate", "rig_frame", "pinion_frame", "gear_frame",
-      "exaggeration", "tf_rate"};
+      "exaggeration", "tf_rate", "mesh_phase_offset", "motion_timeout", "gear_ratio_tolerance", "motion_slices",
+      "pinion_joint", "gear_joint"};
   return names;
 }
 

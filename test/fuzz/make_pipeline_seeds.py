@@ -75,6 +75,28 @@ def stiffness_rate(v):
 RESET = bytes([6])
 
 
+def motion(stamp, angle, velocity=None, gear=None, missing=False, numbering=0):
+    """joint_states: flags (bit 0 velocity, bit 1 gear angle, 0b111 a missing pinion joint, bits 3-7 numbering)."""
+    flags = (7 if missing else (1 if velocity is not None else 0) | (2 if gear is not None else 0)) | numbering
+    out = bytes([0xF0]) + stamp + bytes([flags]) + typical(angle, 10.0)
+    if velocity is not None and not missing:
+        out += typical(velocity, 700.0)
+    if gear is not None and not missing:
+        out += typical(gear, 10.0)
+    return out
+
+
+def encoder_run_up(n, rpm0, rpm1):
+    """Torque and joint_states at 1 kHz, the pinion from rpm0 to rpm1, angle wrapped at +-pi."""
+    out, angle = b"", 0.0
+    for i in range(n):
+        w = (rpm0 + (rpm1 - rpm0) * i / max(1, n - 1)) * 2 * math.pi / 60
+        angle += w * 1e-3
+        wrapped = math.remainder(angle, 2 * math.pi)
+        out += torque(forward(0.5), typical(0.1, 0.3)) + motion(forward(0.5), wrapped, w, math.remainder(-0.5 * angle, 2 * math.pi))
+    return out
+
+
 def header(no_dynamics=0, fid=0, ordinary=0, exact_solve=0, rate=0, h1=0, h2=0):
     return bytes([no_dynamics | fid << 1 | ordinary << 3 | exact_solve << 4 | rate << 5, h1, h2])
 
@@ -108,6 +130,15 @@ seeds = {
     # the ordinary gear (backlash): the torque reverses, the flanks separate
     "ordinary_reversal.bin": header(ordinary=1, h1=0b01 << 2) + ripple(12, 2.0, 0.0, 0.1),
     # no dynamics, every support re-solved, 1 kHz inputs with preload ramps
+    # the encoders: a run-up, then a reversal through standstill, without velocity (differentiated)
+    "encoder_run_up.bin": header() + encoder_run_up(12, 300.0, 3000.0)
+    + b"".join(torque(forward(0.5), typical(0.1, 0.3)) + motion(forward(0.5), 0.3 * math.cos(i / 3)) for i in range(10)),
+    # joint_states refused, dropped, out of order, timed out, slipping
+    "encoder_faults.bin": header() + encoder_run_up(3, 600.0, 600.0) + motion(forward(1), 0.0, missing=True)
+    + motion(forward(1), 0.0) + bytes([0xF0]) + forward(1) + bytes([1]) + interesting(NAN) + typical(60.0, 700.0)
+    + motion(back(0.5), 0.1) + motion(ZERO, 0.1) + motion(forward(1), 0.2, numbering=0x10 | 3 << 5)
+    + motion(forward(1), 0.3, 60.0, 2.0) + motion(forward(1), 0.35, 60.0, 3.0) + ripple(5, 50.0, 0.1, 0.0)
+    + motion(forward(1), 0.0, raw(1e9) and None) + ripple(3, 1.0, 0.1, 0.0),
     "no_dynamics_preload_ramp.bin": header(no_dynamics=1, exact_solve=1)
     + b"".join(preload(forward(1), [pre(0, 500.0 + 250.0 * i), pre(1, 500.0 + 250.0 * i, inner=2e-6 * i)]) + torque(SAME, typical(0.1, 0.3)) for i in range(8)),
 }

@@ -96,6 +96,17 @@ double decodeValue(ByteReader& in, double typical) {
   }
 }
 
+MotionCase decodeMotion(ByteReader& in) {
+  const std::uint8_t flags = in.u8();
+  MotionCase m;
+  m.missing_pinion = (flags & 0x07) == 0x07;
+  m.numbering = flags & 0xF8;
+  m.reading.pinion_angle = decodeValue(in, 10.0);          // [rad]: several turns, wrapped or not
+  if (flags & 1) m.reading.pinion_velocity = decodeValue(in, 700.0);  // [rad/s]: 6700 rpm at full scale
+  if (flags & 2) m.reading.gear_angle = decodeValue(in, 10.0);
+  return m;
+}
+
 std::vector<PreloadSetting> decodePreloads(ByteReader& in) {
   static const char* const kNames[] = {"pinion_bearing", "gear_bearing", "", "pinion_bearing\n"};
   std::vector<PreloadSetting> settings(in.u8() % 4);

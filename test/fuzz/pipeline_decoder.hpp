@@ -11,6 +11,9 @@
 //     4     fidelity (apply): 1 byte
 //     5     stiffness rate (apply): value
 //     6     reset
+//     >= 0xF0  joint_states (RigPipeline::motion): stamp, flags byte (velocity, gear angle, a missing
+//              pinion joint, header.seq numbering as opcode 7), pinion angle, [velocity], [gear angle]
+//              (opcode bytes below 0xF0 keep their meaning modulo 8, so older seeds still mean the same)
 //   stamp: 1 mode byte, then 0 to 8 bytes: forward by up to 1 ms or 0.65 s, back by up to 0.65 s,
 //          a burst (same stamp, or 1 ns steps), zero, or any (sec, nsec) pair a ROS header carries
 //   value: 1 mode byte, then an "interesting" double (NaN, +-Inf, subnormals, limits and their
@@ -28,6 +31,14 @@
 namespace drivetrain_stiffness::fuzz {
 
 constexpr int kMaxOperations = 64;
+
+/// One joint_states message: the reading, or (missing) a message without the pinion joint.
+struct MotionCase {
+  MotionInput reading;
+  bool missing_pinion = false;
+  std::uint8_t numbering = 0;  ///< as opcode 7's origin byte, bits 3-7
+};
+MotionCase decodeMotion(ByteReader& in);
 
 struct PipelineSetup {
   int rig = 0;  ///< 0: config/gearboxes/seed_servo.yaml (anti-backlash); 1: test/data/ordinary_servo.yaml (backlash)

@@ -1,5 +1,5 @@
 // The only place the fuzz harness hands messages to RigPipeline: when the input API changes, these
-// two functions are what to adapt.
+// functions are what to adapt.
 #pragma once
 
 #include <vector>
@@ -11,6 +11,12 @@ namespace drivetrain_stiffness::fuzz {
 inline InputOutcome feedTorque(RigPipeline& pipeline, Stamp stamp, double torque, PipelineSink& sink,
                                const InputOrigin& origin = {}, Backlog backlog = Backlog::kNone) {
   return pipeline.torque(stamp, torque, sink, origin, backlog);
+}
+
+inline InputOutcome feedMotion(RigPipeline& pipeline, Stamp stamp, const MotionInput& reading, bool missing_pinion,
+                               PipelineSink& sink, const InputOrigin& origin) {
+  return missing_pinion ? pipeline.motionRefused("no joint named 'pinion' (~pinion_joint)", origin)
+                        : pipeline.motion(stamp, reading, sink, origin);
 }
 
 inline InputOutcome feedPreload(RigPipeline& pipeline, Stamp stamp, const std::vector<PreloadSetting>& settings,

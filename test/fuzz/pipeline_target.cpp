@@ -23,6 +23,8 @@ const RigConfig& rigConfig(int index) {
 // What a value refusal of each input must name: the input's fields, or for a load no bearing
 // equilibrium carries (UnreachableLoad), the support it concerns.
 const std::vector<std::string> kTorqueFields = {"torque", "pinion_bearing", "gear_bearing"};
+const std::vector<std::string> kMotionFields = {"pinion position", "pinion velocity", "gear position",
+                                                "~pinion_joint", "pinion_bearing", "gear_bearing"};
 const std::vector<std::string> kPreloadFields = {"name", "axial_preload", "radial_preload", "inner_interference",
                                                  "outer_interference", "pinion_bearing", "gear_bearing"};
 
@@ -41,8 +43,12 @@ void checkOutcome(InputOutcome outcome, const RigPipeline& pipeline, const std::
   requireNamesOneOf(event.substr(colon + 3), fields, "value refusal names no input field");
 }
 
-void checkCounts(const RigPipeline& pipeline, std::uint64_t torques, std::uint64_t preloads) {
+void checkCounts(const RigPipeline& pipeline, std::uint64_t torques, std::uint64_t preloads, std::uint64_t motions) {
   const PipelineCounters& c = pipeline.counters();
+  if (c.accepted_motion + c.rejected_motion != motions) {
+    throw FuzzFinding("a joint_states message was not counted: " + std::to_string(motions) + " sent, counters " +
+                      std::to_string(c.accepted_motion) + "+" + std::to_string(c.rejected_motion));
+  }
   if (c.accepted_torque + c.rejected_torque != torques || c.accepted_preload + c.rejected_preload != preloads) {
     throw FuzzFinding("an input was not counted: " + std::to_string(torques) + " torques, " +
                       std::to_string(preloads) + " preloads, counters " + std::to_string(c.accepted_torque) + "+" +
@@ -68,15 +74,29 @@ CaseStats fuzzPipeline(const std::uint8_t* data, std::size_t size) {
   if (!built) return stats;  // the decoder only picks valid options: the rule above says why not
   FiniteSink sink;
   Stamp now{0};
-  std::uint64_t torques = 0, preloads = 0;
-  std::uint32_t seq = 0;
+  std::uint64_t torques = 0, preloads = 0, motions = 0;
+  std::uint32_t seq = 0, motion_seq = 0;
   const auto setter = [&](const std::vector<std::string>& fields, auto call) {
     if (acceptOrRefuse(stats, call, [&](const std::string& m) { requireNamesOneOf(m, fields, "setter refusal"); })) {
       ++stats.accepted;
     }
   };
   for (int op = 0; op < kMaxOperations && !in.empty(); ++op) {
-    const int op_code = in.u8() % 8;
+    const std::uint8_t op_byte = in.u8();
+    if (op_byte >= 0xF0) {
+      now = decodeStamp(in, now);
+      const MotionCase m = decodeMotion(in);
+      motion_seq = (m.numbering & 0x18) == 0x18 ? static_cast<std::uint32_t>(m.numbering >> 5)
+                                                : motion_seq + 1 + ((m.numbering & 0x18) == 0x10 ? m.numbering >> 5 : 0u);
+      ++motions;
+      acceptOrRefuse(stats, [&] {
+        checkOutcome(feedMotion(*pipeline, now, m.reading, m.missing_pinion, sink, {"/encoders", motion_seq, ""}), *pipeline,
+                     kMotionFields, stats);
+      }, [](const std::string& msg) { throw FuzzFinding("motion() threw instead of refusing: " + msg); });
+      checkCounts(*pipeline, torques, preloads, motions);
+      continue;
+    }
+    const int op_code = op_byte % 8;
     switch (op_code) {
       case 0:
       case 7: {
@@ -145,7 +165,7 @@ CaseStats fuzzPipeline(const std::uint8_t* data, std::size_t size) {
         setter({}, [&] { pipeline->reset("fuzz"); });
         break;
     }
-    checkCounts(*pipeline, torques, preloads);
+    checkCounts(*pipeline, torques, preloads, motions);
   }
   return stats;
 }

@@ -231,6 +231,8 @@ class RigPipeline {
   /// The new bearing stiffness from `stamp` on, then the resonance estimate.
   void pushStiffness(Stamp stamp, const StiffnessEstimate& estimate, PipelineSink& sink);
   void acceptMotion(Stamp stamp, const MotionInput& reading, PipelineSink& sink);
+  double ratio() const;          ///< z_p / z_g
+  int teeth(int shaft) const;
   /// Rule 9's fall-back when the last reading is older than ~motion_timeout at `stamp`.
   void checkMotionTimeout(Stamp stamp, PipelineSink& sink);
   /// The dynamics follow the pinion angle model (anchor) from `stamp` on.
@@ -264,6 +266,8 @@ class RigPipeline {
     std::optional<double> gear, gear_reference;
   };
   std::optional<Reading> reading_;
+  /// The reading unwrapped against `last` (null: none recent), its speed measured or differentiated.
+  Reading unwrapReading(Stamp stamp, const MotionInput& reading, const Reading* last) const;
   double held_torque_ = 0.0;
   std::optional<Stamp> last_torque_, last_preload_, last_clock_, last_stiffness_out_;
   std::optional<Stamp> angle_origin_;
