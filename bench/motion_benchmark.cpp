@@ -1,0 +1,95 @@
+// Following the rig's measured motion (docs/model.md, "Following the rig's motion"):
+//  - BM_SlicedPropagation/<rpm>: SlicedModalPropagator over 1 ms steps at a constant speed, the
+//    cost per simulated second and per slice crossed (the work grows with speed x slices);
+//  - BM_SliceDecomposition: one slice's eigen-decomposition (what a bearing-stiffness change costs
+//    per slice, spread over the slices as they are crossed);
+//  - BM_PipelineEncoderRunUp: RigPipeline with torque and joint_states at 1 kHz each through a
+//    run-up 0 -> 6000 rpm in 10 s (model seconds per second of work = the real-time factor).
+// Run: devel/lib/drivetrain_stiffness/motion_benchmark --benchmark_repetitions=3 --benchmark_report_aggregates_only=true
+#include <benchmark/benchmark.h>
+
+#include <cmath>
+
+#include "drivetrain_stiffness/config/yaml_config.hpp"
+#include "drivetrain_stiffness/core/constants.hpp"
+#include "drivetrain_stiffness/core/scenes.hpp"
+#include "drivetrain_stiffness/core/sliced_modal_propagator.hpp"
+#include "drivetrain_stiffness/pipeline/rig_pipeline.hpp"
+
+using namespace drivetrain_stiffness;
+
+namespace {
+
+const RigConfig& rig() {
+  static const RigConfig r = loadRigFile(DRIVETRAIN_SOURCE_DIR "/config/gearboxes/seed_servo.yaml");
+  return r;
+}
+std::shared_ptr<const AntiBacklashMesh> mesh() {
+  static const auto m =
+      std::make_shared<const AntiBacklashMesh>(rig().gears, rig().anti_backlash, rig().mesh_model, rig().mesh_samples);
+  return m;
+}
+
+}  // namespace
+
+static void BM_SlicedPropagation(benchmark::State& state) {
+  const double rpm = static_cast<double>(state.range(0));
+  const GearRotorParameters p = rigRotorParameters(rig(), *mesh(), {1.2e8, 1.2e8});
+  SlicedModalPropagator prop(p, std::make_shared<const SlicedMesh>(mesh(), 256), 1e-6, 0.0);
+  const double f = rpm / 60.0 * 20.0, force = 0.1 / p.pinion_base_radius;
+  State6 y = State6::Zero();
+  y[2] = force / 2e8;
+  double phase = 0.0;
+  for (int i = 0; i < 100; ++i) prop.propagate(y, phase, f, 1e-3, force);  // every slice decomposed
+  const long crossed0 = prop.slicesCrossed();
+  for (auto _ : state) {
+    if (!prop.propagate(y, phase, f, 1e-3, force)) state.SkipWithError("left the linear regime");
+  }
+  benchmark::DoNotOptimize(y);
+  state.counters["model_s_per_s"] = benchmark::Counter(1e-3 * static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
+  state.counters["crossings_per_step"] =
+      static_cast<double>(prop.slicesCrossed() - crossed0) / static_cast<double>(std::max<benchmark::IterationCount>(1, state.iterations()));
+}
+BENCHMARK(BM_SlicedPropagation)->Arg(100)->Arg(1000)->Arg(6000);
+
+static void BM_SliceDecomposition(benchmark::State& state) {
+  const GearRotorParameters p = rigRotorParameters(rig(), *mesh(), {1.2e8, 1.2e8});
+  auto slices = std::make_shared<const SlicedMesh>(mesh(), 256);
+  SlicedModalPropagator prop(p, slices, 1e-6, 0.0);
+  State6 y = State6::Zero();
+  y[2] = 17.7 / 2e8;
+  double phase = 0.0;
+  for (auto _ : state) {
+    prop.setParameters(p);  // every slice decomposed again on its next use
+    // One mesh period at 1000 rpm crosses every slice once: one decomposition each.
+    prop.propagate(y, phase, 333.33333333333331, 3e-3, 17.7);
+  }
+  state.counters["decompositions_per_iteration"] =
+      static_cast<double>(prop.decompositions()) / static_cast<double>(std::max<benchmark::IterationCount>(1, state.iterations()));
+}
+BENCHMARK(BM_SliceDecomposition)->Unit(benchmark::kMicrosecond);
+
+static void BM_PipelineEncoderRunUp(benchmark::State& state) {
+  RigPipeline pipeline(rig(), PipelineOptions{});
+  PipelineSink sink;
+  constexpr std::int64_t kEpoch = 1767225600LL * 1000000000LL;
+  const double a = 6000.0 / 60.0 * kTwoPi / 10.0;  // [rad/s^2]: 0 -> 6000 rpm in 10 s
+  long k = 0;
+  auto step = [&] {
+    const double t = 1e-3 * static_cast<double>(k % 10000);  // the run-up repeats (a restart every 10 s)
+    const std::int64_t ns = kEpoch + 1000000LL * k;
+    pipeline.torque(Stamp{ns}, 0.1, sink);
+    MotionInput m;
+    m.pinion_angle = std::remainder(0.5 * a * t * t, kTwoPi);
+    m.pinion_velocity = a * t;
+    pipeline.motion(Stamp{ns + 500000}, m, sink);
+    ++k;
+  };
+  for (int i = 0; i < 1000; ++i) step();
+  for (auto _ : state) step();
+  state.counters["model_s_per_s"] = benchmark::Counter(1e-3 * static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
+  state.counters["dynamics_errors"] = static_cast<double>(pipeline.counters().dynamics_errors);
+}
+BENCHMARK(BM_PipelineEncoderRunUp)->Iterations(10000);
+
+BENCHMARK_MAIN();
