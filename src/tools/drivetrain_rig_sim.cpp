@@ -23,14 +23,14 @@ int main(int argc, char** argv) {
   app.add_option("--out", out, "Bag to write")->required();
   app.add_option("--duration", spec.duration, "[s] length of the scenario");
   app.add_option("--rate", spec.torque_rate, "[Hz] torque sample rate");
-  app.add_option("--joint-rate", spec.joint_rate, "[Hz] encoder (joint_states) sample rate; 0: none");
+  app.add_option("--joint-rate", spec.joint_rate, "[Hz] encoder (joint_states) sample rate, 1000 by default; 0: none");
   app.add_flag("--no-velocity", no_velocity, "joint_states without velocity (the node differentiates the angle)");
   app.add_option("--epoch", bag.epoch, "[s] stamp of the scenario start");
   app.add_option("--torque-topic", bag.torque_topic);
   app.add_option("--preload-topic", bag.preload_topic);
-  app.add_option("--joint-topic", bag.joint_topic, "sensor_msgs/JointState topic");
-  app.add_option("--pinion-joint", bag.pinion_joint, "JointState name of the pinion shaft");
-  app.add_option("--gear-joint", bag.gear_joint, "JointState name of the gear shaft");
+  app.add_option("--joint-topic", bag.joint_topic, "sensor_msgs/JointState topic (/joint_states)");
+  app.add_option("--pinion-joint", bag.pinion_joint, "JointState name of the pinion shaft (pinion)");
+  app.add_option("--gear-joint", bag.gear_joint, "JointState name of the gear shaft (gear)");
   CLI11_PARSE(app, argc, argv);
   spec.joint_velocity = !no_velocity;
   try {
