@@ -9,6 +9,18 @@ add_test(NAME rig_sim_reproduces_bundled_bags
   COMMAND ${CMAKE_CURRENT_SOURCE_DIR}/test/replay/check_scenario_bags.sh ${DEVEL_BIN} ${CMAKE_CURRENT_SOURCE_DIR}
           ${CMAKE_CURRENT_BINARY_DIR}/scenario_test)
 
+# drivetrain_rig_sim's encoders: --joint-rate, --no-velocity, --joint-topic, --pinion-joint and
+# --gear-joint, read back by Python's rosbag (sensor_msgs/JointState from the bag's definition).
+add_test(NAME rig_sim_writes_joint_states
+  COMMAND ${CATKIN_DEVEL_PREFIX}/env.sh /usr/bin/python3 ${CMAKE_CURRENT_SOURCE_DIR}/test/replay/check_rig_sim_joint_states.py
+          ${DEVEL_BIN} ${CMAKE_CURRENT_SOURCE_DIR} ${CMAKE_CURRENT_BINARY_DIR}/joint_states_test)
+
+# The scenario bag writer: joint_states read back by rosbag::View with sensor_msgs/JointState's md5sum.
+catkin_add_gtest(scenario_bag_tests test/core/test_main.cpp test/ros/test_scenario_bag.cpp src/tools/scenario_bag.cpp)
+target_link_libraries(scenario_bag_tests ${PROJECT_NAME}_scenarios ${PROJECT_NAME}_config ${catkin_LIBRARIES})
+target_compile_definitions(scenario_bag_tests PRIVATE DRIVETRAIN_SOURCE_DIR="${CMAKE_CURRENT_SOURCE_DIR}")
+add_dependencies(scenario_bag_tests ${PROJECT_NAME}_generate_messages_cpp)
+
 # Damaged bags made at test time from torque_ripple.bag and an LZ4 copy of it: truncated inside the
 # first chunk, mid-file, just before the index; an unclosed recording (no index, unfinished chunk);
 # garbage over a record and inside an LZ4 chunk; a damaged bag header. Each: exit 4, the error and

@@ -6,7 +6,9 @@
 #include <limits>
 
 #include "drivetrain_stiffness/core/constants.hpp"
+#include "drivetrain_stiffness/core/speed_profile.hpp"
 #include "drivetrain_stiffness/core/validation.hpp"
+#include "rig_encoder.hpp"  // NOLINT(build/include_subdir)
 
 namespace drivetrain_stiffness {
 namespace {
@@ -21,6 +23,57 @@ std::vector<PreloadSetting> preloadOfAll(const RigConfig& rig, double axial) {
 
 double configuredAxial(const RigConfig& rig) { return rig.bearings.empty() ? 0.0 : rig.bearings.front().axial_preload; }
 
+/// [rad/s] from [rpm]: one revolution (2 pi rad) per minute (60 s).
+double radPerSecond(double rpm) { return rpm * kTwoPi / 60.0; }
+
+bool isSpeedScenario(const std::string& s) {
+  return s == "run_up" || s == "coast_down" || s == "speed_steps" || s == "reverse";
+}
+
+/// The pinion's speed: the speed scenarios' own profiles; the others run at the gearbox's nominal
+/// speed (dynamics.speed_rpm, 1000 rpm without a dynamics block), as their torque assumes.
+SpeedProfile scenarioSpeed(const RigConfig& rig, const ScenarioSpec& spec) {
+  const std::string& s = spec.name;
+  const double T = spec.duration;
+  if (s == "run_up") return SpeedProfile(SpeedRamp{0.0, radPerSecond(6000.0), 0.0, T});
+  if (s == "coast_down") return SpeedProfile(SpeedRamp{radPerSecond(6000.0), 0.0, 0.0, T});
+  if (s == "speed_steps") {
+    // 500, 1000, 2000, 4000 rpm, a quarter of the duration each, every step a 50 ms linear ramp.
+    const double ramp = 0.05;
+    if (!(T / 4.0 >= ramp)) throwInvalid("duration", T, "speed_steps needs >= 0.2 s (four dwells, each at least its 0.05 s ramp)");
+    return SpeedProfile(SpeedSteps{radPerSecond(500.0),
+                                   {{T / 4.0, radPerSecond(1000.0)}, {T / 2.0, radPerSecond(2000.0)},
+                                    {3.0 * T / 4.0, radPerSecond(4000.0)}},
+                                   ramp});
+  }
+  // +1000 rpm, zero at T/4, -1000 rpm at T/2, zero at 3T/4, +1000 rpm at T: 1000 rpm cos(2 pi t / T).
+  if (s == "reverse") return SpeedProfile(SpeedReversal{radPerSecond(1000.0), 0.0, T});
+  return SpeedProfile(radPerSecond(rig.dynamics.present ? rig.dynamics.speed_rpm : 1000.0));
+}
+
+/// Encoder readings of both shafts at spec.joint_rate from t = 0, as events of their own.
+void addEncoderEvents(const RigConfig& rig, const ScenarioSpec& spec, const SpeedProfile& speed,
+                      std::vector<RigEvent>& events) {
+  requireNonNegative("joint_rate", spec.joint_rate);
+  if (spec.joint_rate == 0.0) return;
+  const long n = std::lround(spec.duration * spec.joint_rate);
+  if (n < 2 || n > 100000000) {
+    throw InvalidInput("duration * joint_rate = " + std::to_string(n) + ": must be in [2, 1e8] samples (joint_rate 0: none)");
+  }
+  requirePositive("gears.teeth[0]", rig.gears.teeth[0]);
+  requirePositive("gears.teeth[1]", rig.gears.teeth[1]);
+  const double ratio = static_cast<double>(rig.gears.teeth[0]) / rig.gears.teeth[1];  // z_p / z_g
+  const double dt = 1.0 / spec.joint_rate;
+  for (long k = 0; k < n; ++k) {
+    RigEvent e;
+    e.t = k * dt;
+    const EncoderSample reading = readEncoders(speed, e.t, ratio, spec.joint_velocity);
+    e.motion = reading.motion;
+    e.gear_velocity = reading.gear_velocity;
+    events.push_back(std::move(e));
+  }
+}
+
 }  // namespace
 
 std::string scenarioHelp() {
@@ -31,7 +84,14 @@ std::string scenarioHelp() {
          "speed_sweep: mesh-order torque ripple (5 %) whose frequency sweeps 5 -> 11 kHz, through the transverse "
          "modes (use --rate >= 25000)\n"
          "faults: torque_ripple with a NaN, an Inf, an absurd torque, a zero stamp, an out-of-order stamp, a burst of "
-         "equal stamps and a jump back of the stamps by 0.6 duration (a looped recording) injected\n";
+         "equal stamps and a jump back of the stamps by 0.6 duration (a looped recording) injected\n"
+         "(the five above at the gearbox's constant dynamics.speed_rpm; the four below at constant torque "
+         "dynamics.torque, preload sent once)\n"
+         "run_up: pinion speed 0 -> 6000 rpm linearly over the duration\n"
+         "coast_down: pinion speed 6000 -> 0 rpm linearly over the duration\n"
+         "speed_steps: 500, 1000, 2000, 4000 rpm, a quarter of the duration each, each step a 50 ms linear ramp\n"
+         "reverse: +1000 rpm through zero (at 1/4) to -1000 rpm (at 1/2) and back (zero at 3/4, +1000 rpm at the "
+         "end): 1000 rpm cos(2 pi t / duration); the torque keeps its sign\n";
 }
 
 std::vector<RigEvent> makeScenario(const RigConfig& rig, const ScenarioSpec& spec) {
@@ -44,6 +104,9 @@ std::vector<RigEvent> makeScenario(const RigConfig& rig, const ScenarioSpec& spe
   const double shaft_hz = (rig.dynamics.present ? rig.dynamics.speed_rpm : 1000.0) / 60.0;
   std::vector<RigEvent> events;
   const std::string& s = spec.name;
+  // The encoders first: at equal times a reading precedes the torque (the stable sort below keeps
+  // that order), and the faults' jump back of the stamps moves the readings with the rest.
+  addEncoderEvents(rig, spec, scenarioSpeed(rig, spec), events);
   auto ripple = [&](double t) {
     // Servo motors ripple at multiples of six per electrical revolution; with one pole pair
     // that is the 6th and 12th shaft order.
@@ -102,6 +165,10 @@ std::vector<RigEvent> makeScenario(const RigConfig& rig, const ScenarioSpec& spe
       const double phase = kTwoPi * (f0 * t + 0.5 * (f1 - f0) * t * t / spec.duration);
       events.push_back({t, mean * (1.0 + 0.05 * std::sin(phase)), {}});
     }
+  } else if (isSpeedScenario(s)) {
+    // The speed follows the scenario's profile (the encoder events above); the torque is constant.
+    events.push_back({0.0, std::nullopt, preloadOfAll(rig, configuredAxial(rig))});
+    for (long k = 0; k < n; ++k) events.push_back({k * dt, mean, {}});
   } else {
     throw InvalidInput("scenario = '" + s + "': unknown; one of:\n" + scenarioHelp());
   }

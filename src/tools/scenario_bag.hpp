@@ -1,0 +1,33 @@
+// Writes a scenario's events (rig_scenarios.hpp) to a bag as the rig would publish them: torque
+// (geometry_msgs/WrenchStamped), preload (drivetrain_stiffness/Preload) and the encoders
+// (sensor_msgs/JointState), with header stamps and record times = epoch + t, so the bags are
+// reproducible byte for byte. Used by drivetrain_rig_sim.
+#pragma once
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include "rig_scenarios.hpp"  // NOLINT(build/include_subdir)
+
+namespace drivetrain_stiffness {
+
+struct ScenarioBagOptions {
+  double epoch = 1767225600.0;  ///< [s] stamp of the scenario start: 2026-01-01T00:00:00Z (1e9-second stamps)
+  std::string torque_topic = "/torque";
+  std::string preload_topic = "/preload";
+  std::string joint_topic = "/joint_states";
+  std::string pinion_joint = "pinion";  ///< JointState.name[0]
+  std::string gear_joint = "gear";      ///< JointState.name[1]
+};
+
+struct ScenarioBagCounts {
+  std::size_t torque = 0, preload = 0, joint_states = 0;  ///< messages written per topic
+};
+
+/// Writes `events` in their order to a new bag at `path` (overwritten). Throws InvalidInput for an
+/// epoch outside [1, 4e9) s or empty topic or joint names.
+ScenarioBagCounts writeScenarioBag(const std::vector<RigEvent>& events, const ScenarioBagOptions& options,
+                                   const std::string& path);
+
+}  // namespace drivetrain_stiffness
