@@ -23,6 +23,11 @@ SlidingSpectrum::SlidingSpectrum(int window, int hop, double dt, int peaks)
   if (hop < 1 || hop > window) throwInvalid("spectrum_hop", hop, "must be in [1, spectrum_window]");
   if (peaks < 1) throwInvalid("spectrum_peaks", peaks, "must be >= 1");
   requirePositive("dt", dt);
+  // A spectrum of window/2 + 1 bins has at most that many local maxima: reserved now, so that a
+  // spectrum richer than any before it (a run-up sweeping the mesh orders) allocates nothing.
+  scratch_.maxima.reserve(static_cast<std::size_t>(window / 2 + 1));
+  scratch_.kept.reserve(static_cast<std::size_t>(window / 2 + 1));
+  peaks_.reserve(static_cast<std::size_t>(peaks));
 }
 
 void SlidingSpectrum::reset() {
