@@ -187,3 +187,46 @@ TEST(RigPipelineMotion, ReplayOfTheSameInputsIsBitIdentical) {
     EXPECT_EQ(first[i].phase, second[i].phase);
   }
 }
+
+// Fuzz findings (docs/reliability.md): an encoder count near DBL_MAX overflowed z_p theta into a NaN
+// mesh phase; a differentiated speed had no bound; an advance across millions of slices stalled.
+TEST(RigPipelineMotion, HugeEncoderCountsKeepTheirPhase) {
+  RigPipeline p(rig(), PipelineOptions{});
+  Recorder r;
+  ASSERT_EQ(p.torque(at(0.0), 0.1, r), InputOutcome::kAccepted);
+  MotionInput m;
+  m.pinion_angle = 1e308;  // z_p x this overflows a double; the angle modulo a turn: only its angle modulo a turn matters
+  m.pinion_velocity = 100.0;
+  ASSERT_EQ(p.motion(at(0.001), m, r), InputOutcome::kAccepted) << p.counters().last_event;
+  ASSERT_EQ(p.torque(at(0.002), 0.1, r), InputOutcome::kAccepted) << p.counters().last_event;
+  EXPECT_LT(phaseDistance(r.te.back().phase, phaseOf(std::remainder(1e308, kTwoPi) + 100.0 * 0.001)), 1e-9);
+  EXPECT_EQ(p.counters().dynamics_errors, 0u);
+}
+
+TEST(RigPipelineMotion, DifferentiatedSpeedBeyondTheBoundIsRefused) {
+  RigPipeline p(rig(), PipelineOptions{});
+  Recorder r;
+  MotionInput m;
+  m.pinion_angle = 0.0;
+  ASSERT_EQ(p.motion(at(0.001), m, r), InputOutcome::kAccepted);
+  m.pinion_angle = 1.0;  // 1 rad in 10 us: 1e5 rad/s, an encoder jump
+  EXPECT_EQ(p.motion(at(0.00101), m, r), InputOutcome::kInvalidValue);
+  EXPECT_NE(p.counters().last_event.find("pinion position"), std::string::npos) << p.counters().last_event;
+  m.pinion_angle = 0.001;  // 100 rad/s from the last accepted reading: fine
+  EXPECT_EQ(p.motion(at(0.00102), m, r), InputOutcome::kAccepted) << p.counters().last_event;
+}
+
+TEST(RigPipelineMotion, AnAdvanceAcrossTooManySlicesRestartsInsteadOfStalling) {
+  RigPipeline p(rig(), PipelineOptions{});
+  Recorder r;
+  ASSERT_EQ(p.torque(at(0.0), 0.1, r), InputOutcome::kAccepted);
+  MotionInput m;
+  m.pinion_angle = 0.0;
+  m.pinion_velocity = 1e4;  // 95,500 rpm: 31.8 kHz mesh, 8.2e6 slices per second
+  ASSERT_EQ(p.motion(at(0.0005), m, r), InputOutcome::kAccepted);
+  // 0.5 s later (inside ~max_gap): 4e6 slices, more than DynamicsEstimator::kMaxSlicesPerAdvance.
+  EXPECT_EQ(p.torque(at(0.5), 0.1, r), InputOutcome::kAccepted);
+  EXPECT_GE(p.counters().dynamics_errors, 1u);
+  EXPECT_NE(p.counters().last_event.find("phase slices"), std::string::npos) << p.counters().last_event;
+  EXPECT_TRUE(p.dynamics()->started());  // restarted at that input
+}
