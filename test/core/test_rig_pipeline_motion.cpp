@@ -195,7 +195,7 @@ TEST(RigPipelineMotion, HugeEncoderCountsKeepTheirPhase) {
   Recorder r;
   ASSERT_EQ(p.torque(at(0.0), 0.1, r), InputOutcome::kAccepted);
   MotionInput m;
-  m.pinion_angle = 1e308;  // z_p x this overflows a double; the angle modulo a turn: only its angle modulo a turn matters
+  m.pinion_angle = 1e308;  // z_p x this overflows a double; only the angle modulo a turn matters
   m.pinion_velocity = 100.0;
   ASSERT_EQ(p.motion(at(0.001), m, r), InputOutcome::kAccepted) << p.counters().last_event;
   ASSERT_EQ(p.torque(at(0.002), 0.1, r), InputOutcome::kAccepted) << p.counters().last_event;
