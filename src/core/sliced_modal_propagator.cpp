@@ -100,6 +100,22 @@ const SlicedModalPropagator::Slice& SlicedModalPropagator::slice(int j) const {
     e_v << 0.0, 0.0, 0.0, 0.0, 0.0, 1.0 / m_s_;
     s.force_dir = s.v_inv * e_f.cast<Complex>();
     s.drive_dir = s.v_inv * e_v.cast<Complex>();
+    // Conjugate pairs: Eigen's EigenSolver returns a complex pair's eigenvectors as conjugates, so
+    // for a real state and real forcing the pair's modal coordinates are conjugates too.
+    s.weight.fill(1.0);
+    for (int k = 0; k < 6; ++k) {
+      if (s.weight[k] == 0.0 || s.lambda[k].imag() == 0.0) continue;
+      for (int j = k + 1; j < 6; ++j) {
+        const bool pair = s.weight[j] != 0.0 && std::abs(s.lambda[j] - std::conj(s.lambda[k])) <= 1e-12 * std::abs(s.lambda[k]) &&
+                          (s.v.col(j) - s.v.col(k).conjugate()).cwiseAbs().maxCoeff() <= 1e-12 * s.v.col(k).cwiseAbs().maxCoeff();
+        if (pair) {
+          s.weight[k] = 2.0;
+          s.weight[j] = 0.0;
+          break;
+        }
+      }
+      if (s.weight[k] != 2.0) s.usable = false;  // a complex eigenvalue without its conjugate: not a real system's
+    }
   }
   s.ready = true;
   return s;
@@ -109,7 +125,6 @@ void SlicedModalPropagator::step(const Slice& s, int j, State6& y, double theta0
                                  double drive_force) const {
   const SlicedMesh& m = *slices_;
   const double ks = m.antiBacklash() ? m.k1(j) + m.kChain(j) : m.k1(j);
-  const CVector eta0 = s.v_inv * y.cast<Complex>();
   // Forcing in modal coordinates: U sin(theta) + W w cos(theta) + G, written as
   // P e^{i w s} + Q e^{-i w s} + G with sin x = (e^{ix} - e^{-ix}) / 2i, cos x = (e^{ix} + e^{-ix}) / 2.
   const double u = -ks * te_amplitude_, wc = -p_.mesh_damping * te_amplitude_ * w;
@@ -118,16 +133,21 @@ void SlicedModalPropagator::step(const Slice& s, int j, State6& y, double theta0
   const Complex p_coef = e0 * Complex(0.5 * wc, -0.5 * u), q_coef = std::conj(e0) * Complex(0.5 * wc, 0.5 * u);
   const Complex mu(0.0, w);
   const Complex e_mu = std::exp(mu * h), e_mu_conj = std::conj(e_mu);
-  CVector eta;
+  State6 next = State6::Zero();
   for (int k = 0; k < 6; ++k) {
+    if (s.weight[k] == 0.0) continue;  // the conjugate of a mode already counted twice
     const Complex lambda = s.lambda[k];
+    Complex eta0 = 0.0;  // row k of V^-1 y (complex times real)
+    for (int i = 0; i < 6; ++i) eta0 += s.v_inv(k, i) * y[i];
     const Complex e_l = std::exp(lambda * h);
     const Complex g = s.force_dir[k] * constant + s.drive_dir[k] * drive_force;
-    eta[k] = e_l * eta0[k] + s.force_dir[k] * (p_coef * forcedIntegral(lambda, mu, h, e_l, e_mu) +
-                                               q_coef * forcedIntegral(lambda, -mu, h, e_l, e_mu_conj)) +
-             g * forcedIntegral(lambda, 0.0, h, e_l, 1.0);
+    const Complex eta = e_l * eta0 +
+                        s.force_dir[k] * (p_coef * forcedIntegral(lambda, mu, h, e_l, e_mu) +
+                                          q_coef * forcedIntegral(lambda, -mu, h, e_l, e_mu_conj)) +
+                        g * forcedIntegral(lambda, 0.0, h, e_l, 1.0);
+    next += s.weight[k] * (s.v.col(k) * eta).real();
   }
-  y = (s.v * eta).real();
+  y = next;
 }
 
 bool SlicedModalPropagator::linearRegime(int j, const State6& y, double theta, double w) const {

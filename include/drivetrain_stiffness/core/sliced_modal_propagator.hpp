@@ -14,7 +14,8 @@
 // (phi_1 series near mu = lambda). The step length h is free: a sample, the time to the next slice
 // boundary, the time to an input's stamp. Nothing depends on the speed, so a speed that changes at
 // every encoder reading, stands still (w = 0) or reverses (w < 0) costs nothing to set up. Work per
-// slice crossed: two 6x6 complex matrix-vector products and seven complex exponentials.
+// slice crossed: for each conjugate pair of modes one (the other is its conjugate for a real state),
+// so three rows of V^-1 y, three complex exponentials and three columns of V back.
 //
 // The decomposition of a slice is made the first time the slice is crossed after a parameter
 // change (setParameters), so a bearing-stiffness change costs nothing at the input that made it:
@@ -22,6 +23,7 @@
 // depend on when it is done (deterministic replay).
 #pragma once
 
+#include <array>
 #include <complex>
 #include <memory>
 #include <vector>
@@ -60,6 +62,9 @@ class SlicedModalPropagator {
   struct Slice {
     CMatrix v, v_inv;
     CVector lambda, force_dir, drive_dir;  ///< eigenvalues, V^-1 e_F, V^-1 e_v
+    /// y = sum_k weight_k Re(V_k eta_k): 2 for one member of a conjugate pair (the other, whose
+    /// modal coordinate is its conjugate for a real state, gets 0), 1 for a real eigenvalue.
+    std::array<double, 6> weight{};
     bool ready = false, usable = false;
   };
   const Slice& slice(int j) const;
