@@ -231,27 +231,6 @@ void DynamicsEstimator::propagateTo(double t_rel) {
   ++fallback_intervals_;
 }
 
-DynamicsSample DynamicsEstimator::movingSample() const {
-  moving_->setMotion(t_state_, phase_, mesh_frequency_);
-  moving_->setTorque(*torque_);
-  DynamicsSample s;
-  s.t = origin_ + t_state_;
-  s.state = y_;
-  s.dynamic_te = moving_model_->forces(t_state_, y_).delta;  // from the state: continuous
-  // On a tooth switch (a sample lands on phase 0 to rounding, either side) report the right limit,
-  // as sample() does at the nominal speed.
-  MeshInstant m;
-  const GearRotorForces f = moving_model_->forces(meshForSample(*moving_, t_state_, interval_, m), y_);
-  s.mesh_force = f.mesh;
-  s.phase = m.phase < 1e-6 || 1.0 - m.phase < 1e-6 ? 0.0 : m.phase;
-  s.torque = *torque_;
-  const double ks = m.k_drive + m.k_back;
-  s.static_te = ks > 0.0 ? m.drive_force / ks : 0.0;
-  s.drive_flank_loaded = f.regime.code[0] == 1;
-  s.back_flank_loaded = f.regime.code[1] == 1;
-  return s;
-}
-
 void DynamicsEstimator::advanceFollowing(double t_rel, const std::function<void(const DynamicsSample&)>& sink) {
   const double crossings = std::abs(mesh_frequency_) * (t_rel - t_state_) * slices_->size();
   if (crossings > kMaxSlicesPerAdvance) {
@@ -286,17 +265,25 @@ bool DynamicsEstimator::floquetMargin(double* margin) const {
   return true;
 }
 
-DynamicsSample DynamicsEstimator::sample(double t_rel, const State6& y) const {
+DynamicsSample DynamicsEstimator::sample(double t_rel, const State6& y) const { return sampleOf(*model_, t_rel, y); }
+
+DynamicsSample DynamicsEstimator::movingSample() const {
+  moving_->setMotion(t_state_, phase_, mesh_frequency_);
+  moving_->setTorque(*torque_);
+  return sampleOf(*moving_model_, t_state_, y_);
+}
+
+DynamicsSample DynamicsEstimator::sampleOf(const GearRotorModel& model, double t_rel, const State6& y) const {
   DynamicsSample s;
   s.t = origin_ + t_rel;
   s.state = y;
-  s.dynamic_te = model_->forces(t_rel, y).delta;  // from the state: continuous
+  s.dynamic_te = model.forces(t_rel, y).delta;  // from the state: continuous
   // On a tooth switch the force, static TE and flank flags jump: report the right limit.
   MeshInstant m;
-  const double t_eval = meshForSample(model_->excitation(), t_rel, interval_, m);
-  const GearRotorForces f = model_->forces(t_eval, y);
+  const GearRotorForces f = model.forces(meshForSample(model.excitation(), t_rel, interval_, m), y);
   s.mesh_force = f.mesh;
-  s.phase = m.phase < 1e-6 ? 0.0 : m.phase;  // the switch itself, not 1e-6 of an interval after it
+  // The switch itself (a sample lands on it to rounding, either side), not 1e-6 of an interval after it.
+  s.phase = m.phase < 1e-6 || 1.0 - m.phase < 1e-6 ? 0.0 : m.phase;
   s.torque = *torque_;
   const double ks = m.k_drive + m.k_back;
   s.static_te = ks > 0.0 ? m.drive_force / ks : 0.0;

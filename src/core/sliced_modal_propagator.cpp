@@ -57,18 +57,14 @@ Matrix6 SlicedModalPropagator::systemMatrix(int j) const {
   // delta = x + x_p - x_g - e (both anti-backlash flanks loaded: F_p cancels; an ordinary gear on
   // its drive flank: k_s = k1, and the constant -k1 b goes to the forcing).
   const SlicedMesh& s = *slices_;
-  const double ks = s.antiBacklash() ? s.k1(j) + s.kChain(j) : s.k1(j), cs = p_.mesh_damping;
-  Eigen::Matrix<double, 1, 6> f;
-  f << ks, -ks, ks, cs, -cs, cs;
+  // y' = [[0, I], [-M^-1 K, -M^-1 C]] y with M = diag(m_p, m_g, m_s) and K, C the shared
+  // mesh-and-bearing assembly (meshBearingMatrix, the modal analysis' and the scenes').
+  const double ks = s.antiBacklash() ? s.k1(j) + s.kChain(j) : s.k1(j);
+  const Eigen::Vector3d m_inv(1.0 / p_.pinion_mass, 1.0 / p_.gear_mass, 1.0 / m_s_);
   Matrix6 a = Matrix6::Zero();
-  a(0, 3) = a(1, 4) = a(2, 5) = 1.0;
-  a.row(3) = -f / p_.pinion_mass;
-  a(3, 0) -= p_.bearing_stiffness[0] / p_.pinion_mass;
-  a(3, 3) -= p_.bearing_damping[0] / p_.pinion_mass;
-  a.row(4) = f / p_.gear_mass;
-  a(4, 1) -= p_.bearing_stiffness[1] / p_.gear_mass;
-  a(4, 4) -= p_.bearing_damping[1] / p_.gear_mass;
-  a.row(5) = -f / m_s_;
+  a.topRightCorner<3, 3>().setIdentity();
+  a.bottomLeftCorner<3, 3>() = -(m_inv.asDiagonal() * meshBearingMatrix(ks, p_.bearing_stiffness));
+  a.bottomRightCorner<3, 3>() = -(m_inv.asDiagonal() * meshBearingMatrix(p_.mesh_damping, p_.bearing_damping));
   return a;
 }
 

@@ -435,6 +435,17 @@ bool RigPipeline::advanceDynamicsTo(Stamp stamp, PipelineSink& sink) {
   const double t = secondsBetween(stamp, dynamics_epoch_);
   // Past it already (another stream), or a gap that rule 4 restarts at the next torque input.
   if (t <= dynamics_->time() || t - dynamics_->time() > options_.max_gap) return false;
+  try {
+    emitUpTo(t, sink);
+  } catch (const std::exception& e) {
+    dynamicsError("dynamics (restarted at the next torque input)", e);
+    dynamics_->stop();
+    return false;
+  }
+  return true;
+}
+
+void RigPipeline::emitUpTo(double t, PipelineSink& sink) {
   const double from = dynamics_->time();
   try {
     dynamics_->advanceTo(t, [&](const DynamicsSample& relative) {
@@ -448,14 +459,11 @@ bool RigPipeline::advanceDynamicsTo(Stamp stamp, PipelineSink& sink) {
         ++counters_.spectra_out;
       }
     });
-  } catch (const std::exception& e) {
+  } catch (...) {
     counters_.simulated_s += dynamics_->time() - from;
-    dynamicsError("dynamics (restarted at the next torque input)", e);
-    dynamics_->stop();
-    return false;
+    throw;
   }
   counters_.simulated_s += dynamics_->time() - from;
-  return true;
 }
 
 void RigPipeline::advanceDynamics(Stamp stamp, double torque, PipelineSink& sink) {
@@ -471,21 +479,8 @@ void RigPipeline::advanceDynamics(Stamp stamp, double torque, PipelineSink& sink
       restartDynamics(stamp, torque);
       return;
     }
-    if (t > dynamics_->time()) {  // else another stream took the dynamics past this stamp: applies from there
-      const double from = dynamics_->time();
-      dynamics_->advanceTo(t, [&](const DynamicsSample& relative) {
-        DynamicsSample s = relative;
-        const Stamp sample_stamp{dynamics_epoch_.ns + std::llround(relative.t * 1e9)};
-        s.t = sample_stamp.toSec();
-        sink.transmissionError(sample_stamp, s);
-        ++counters_.te_out;
-        if (te_spectrum_->push(s.dynamic_te)) {
-          sink.spectrum(sample_stamp, *te_spectrum_);
-          ++counters_.spectra_out;
-        }
-      });
-      counters_.simulated_s += dynamics_->time() - from;
-    }
+    // Else another stream took the dynamics past this stamp: the torque applies from there.
+    if (t > dynamics_->time()) emitUpTo(t, sink);
   } catch (const std::exception& e) {
     // The state stays at its last good sample and every later input would fail the same way:
     // restart the model here (counted), as after a gap.

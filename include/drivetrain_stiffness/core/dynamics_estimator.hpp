@@ -111,6 +111,8 @@ class DynamicsEstimator {
   void buildModel();  ///< build() without the rebuild count and the settings named in a refusal
   DynamicsSample sample(double t_rel, const State6& y) const;
   DynamicsSample movingSample() const;  ///< the sample at the state (measured motion)
+  /// The sample of `model` (nominal or measured phase) at t_rel (relative to the last reset).
+  DynamicsSample sampleOf(const GearRotorModel& model, double t_rel, const State6& y) const;
   /// Onto the measured-motion propagation at the state's time and the nominal phase there.
   void startFollowing();
   /// Measured motion: the state from t_state_ to t_rel, exact or (a contact open) dopri5.

@@ -228,6 +228,8 @@ class RigPipeline {
   /// Integrates the dynamics up to `stamp` (rule 10) with what is held; false if not running or
   /// already past it.
   bool advanceDynamicsTo(Stamp stamp, PipelineSink& sink);
+  /// advanceTo(t) handing each sample to the sink and the TE spectrum (throws what advanceTo throws).
+  void emitUpTo(double t, PipelineSink& sink);
   /// The new bearing stiffness from `stamp` on, then the resonance estimate.
   void pushStiffness(Stamp stamp, const StiffnessEstimate& estimate, PipelineSink& sink);
   void acceptMotion(Stamp stamp, const MotionInput& reading, PipelineSink& sink);
