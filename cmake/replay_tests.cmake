@@ -9,6 +9,10 @@ add_test(NAME replay_follows_the_encoders
   COMMAND ${CMAKE_CURRENT_SOURCE_DIR}/test/replay/check_replay_encoders.sh ${DEVEL_BIN} ${CMAKE_CURRENT_SOURCE_DIR}
           ${CMAKE_CURRENT_BINARY_DIR}/replay_encoders_test)
 
+add_test(NAME run_up_te_follows_the_mesh_order
+  COMMAND ${CMAKE_CURRENT_SOURCE_DIR}/test/replay/check_run_up_spectrum.sh ${DEVEL_BIN} ${CMAKE_CURRENT_SOURCE_DIR}
+          ${CMAKE_CURRENT_BINARY_DIR}/run_up_spectrum_test)
+
 add_test(NAME rig_sim_reproduces_bundled_bags
   COMMAND ${CMAKE_CURRENT_SOURCE_DIR}/test/replay/check_scenario_bags.sh ${DEVEL_BIN} ${CMAKE_CURRENT_SOURCE_DIR}
           ${CMAKE_CURRENT_BINARY_DIR}/scenario_test)

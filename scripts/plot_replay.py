@@ -16,7 +16,11 @@ import sys
 import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
 import rosbag  # noqa: E402
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import motion_analysis  # noqa: E402
 
 
 def read(bag_path):
@@ -130,6 +134,8 @@ def main():
         ax.legend(loc="best")
     finish(fig, [ax], ["natural frequency [kHz]"], "Resonance estimates", os.path.join(report, "resonance.png"))
 
+    motion_figures = plot_motion(source, te, res, t0, report) if source != out_bag and te else []
+
     with open(os.path.join(report, "report.md"), "w") as f:
         write_header(f, status, source, out_bag)
         f.write("| quantity | value |\n|---|---|\n")
@@ -153,6 +159,63 @@ def main():
                 f.write("| Floquet margin | %.3f |\n" % res[-1][3])
         f.write("\n![transmission error](transmission_error.png)\n\n![stiffness](stiffness.png)\n\n"
                 "![resonance](resonance.png)\n")
+        for name, caption in motion_figures:
+            f.write("\n![%s](%s)\n" % (caption, name))
+
+
+def plot_motion(input_bag, te, res, t0, report, z_p=20):
+    """With the rig's encoders in the input bag: the Campbell diagram (TE short-time spectra against
+    the measured speed, mesh orders 1-4 and the natural frequencies as lines) and the TE order
+    spectrum (angle-domain resampling). Returns the (file, caption) pairs written."""
+    try:
+        enc_t, enc_angle, enc_speed = motion_analysis.read_encoder(input_bag)
+    except Exception:  # not a bag rosbag reads (a damaged input): no motion figures
+        return []
+    if len(enc_t) < 10:
+        return []
+    te_t = np.array([r[0] for r in te])
+    dyn = np.array([r[1] for r in te])
+    out = []
+    spec = motion_analysis.order_spectrum(te_t, dyn, enc_t, enc_angle)
+    if spec is not None:
+        orders, amp = spec
+        fig, ax = plt.subplots(figsize=(9, 4))
+        ax.semilogy(orders, 1e6 * amp + 1e-12, lw=0.8)
+        for k in range(1, 5):
+            ax.axvline(k * z_p, color="grey", lw=0.6, ls="--")
+        ax.set_xlim(0, 5 * z_p)
+        ax.set_xlabel("order [cycles per pinion revolution]; dashed: mesh orders 1-4 (z_p = %d)" % z_p)
+        ax.set_ylabel("dynamic TE amplitude [um]")
+        ax.set_title("Transmission error order spectrum (angle-domain resampling)")
+        fig.tight_layout()
+        fig.savefig(os.path.join(report, "te_order_spectrum.png"), dpi=110)
+        plt.close(fig)
+        out.append(("te_order_spectrum.png", "TE order spectrum"))
+    dt = np.median(np.diff(te_t)) if len(te_t) > 1 else 0.0
+    if dt > 0 and te_t[-1] - te_t[0] > 0.5:
+        rpm, _, (speeds, freqs, rows) = motion_analysis.campbell(te_t, dyn, enc_t, enc_speed)
+        if rows.shape[1] > 2 and np.ptp(rpm) > 1.0:
+            order = np.argsort(rpm)
+            fig, ax = plt.subplots(figsize=(9, 5))
+            level = np.log10(rows[:, order] + 1e-30)
+            # Colour from the median (the broadband floor) to the strongest line.
+            ax.pcolormesh(speeds[order], freqs, level, shading="nearest", cmap="viridis",
+                          vmin=np.percentile(level, 50), vmax=level.max())
+            n = np.linspace(max(0.0, rpm.min()), rpm.max(), 50)
+            for k in range(1, 5):
+                ax.plot(n, k * z_p * np.abs(n) / 60.0, "w--", lw=0.8)
+            for r in res[-1:]:
+                for fr in r[1]:
+                    ax.axhline(fr, color="r", lw=0.8)
+            ax.set_ylim(0, freqs[-1])
+            ax.set_xlabel("pinion speed [rpm] (encoders)")
+            ax.set_ylabel("frequency [Hz]")
+            ax.set_title("Campbell diagram: TE spectra (colour, log), mesh orders 1-4 (dashed), natural frequencies (red)")
+            fig.tight_layout()
+            fig.savefig(os.path.join(report, "campbell.png"), dpi=110)
+            plt.close(fig)
+            out.append(("campbell.png", "Campbell diagram"))
+    return out
 
 
 if __name__ == "__main__":

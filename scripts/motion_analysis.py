@@ -1,0 +1,85 @@
+#!/usr/bin/python3
+"""Order tracking of the predicted transmission error against the rig's encoders, for the replay
+report (plot_replay.py) and its test (test/replay/check_run_up_spectrum.py).
+
+- read_encoder: the pinion's joint_states (angle unwrapped, speed) from the replay's input bag;
+- order_spectrum: the TE resampled on a uniform pinion-angle grid (angle-domain resampling, as
+  computed order tracking does it: Fyfe & Munck, Mech. Syst. Signal Process. 11 (1997) 187), then
+  an FFT: amplitude against shaft order (cycles per pinion revolution; the mesh is order z_p);
+- campbell: short-time spectra of the TE against the mean speed of each window (the Campbell
+  diagram of a run-up): frequency of the strongest line in each window, and the whole map.
+numpy only; SI units (rad, rad/s, s, m, Hz)."""
+import numpy as np
+import rosbag
+
+
+def read_encoder(bag_path, joint="pinion", topic="/joint_states"):
+    """Stamps [s], unwrapped pinion angle [rad] and speed [rad/s] (the message's velocity, or the
+    angle differentiated when the message has none); empty arrays when the bag has no such topic."""
+    t, angle, speed = [], [], []
+    with rosbag.Bag(bag_path) as bag:
+        for _, m, _ in bag.read_messages(topics=[topic, topic.lstrip("/")]):
+            if joint not in m.name:
+                continue
+            i = m.name.index(joint)
+            t.append(m.header.stamp.to_sec())
+            angle.append(m.position[i])
+            speed.append(m.velocity[i] if i < len(m.velocity) else float("nan"))
+    t, angle, speed = np.array(t), np.unwrap(np.array(angle)), np.array(speed)
+    if len(t) > 1 and np.isnan(speed).any():
+        speed = np.gradient(angle, t)
+    return t, angle, speed
+
+
+def order_spectrum(te_t, te, enc_t, enc_angle, samples_per_rev=256, min_revs=4):
+    """Amplitude [m] against shaft order of the TE resampled on a uniform pinion-angle grid. Uses
+    the longest stretch where the angle increases (or decreases) monotonically; None if it spans
+    fewer than min_revs revolutions."""
+    theta = np.interp(te_t, enc_t, enc_angle)  # the pinion angle at each TE sample
+    d = np.sign(np.diff(theta))
+    best, start = (0, 0), 0
+    for i in range(1, len(d) + 1):  # longest run of one sign
+        if i == len(d) or d[i] != d[start] or d[i] == 0:
+            if i - start > best[1] - best[0]:
+                best = (start, i + 1)
+            start = i
+    a, b = best
+    th, x = theta[a:b], np.asarray(te[a:b])
+    if th[-1] < th[0]:
+        th, x = th[::-1], x[::-1]
+    revs = (th[-1] - th[0]) / (2 * np.pi)
+    if revs < min_revs:
+        return None
+    n = int(np.floor(revs)) * samples_per_rev
+    grid = th[0] + np.arange(n) * (2 * np.pi / samples_per_rev)
+    y = np.interp(grid, th, x)
+    y = (y - y.mean()) * np.hanning(n)
+    amp = 2.0 * np.abs(np.fft.rfft(y)) / np.hanning(n).sum()
+    orders = np.fft.rfftfreq(n, d=1.0 / samples_per_rev)  # cycles per revolution
+    return orders, amp
+
+
+def campbell(te_t, te, enc_t, enc_speed, window=0.1, hop=0.05, pad=8):
+    """Short-time spectra of the TE (Hann windows of `window` s every `hop` s, zero-padded `pad`
+    times): per window the mean pinion speed [rpm], the frequency of the strongest line [Hz]
+    (parabolic interpolation of the log amplitude), and the map (speeds, freqs, amplitude)."""
+    te_t, te = np.asarray(te_t), np.asarray(te)
+    dt = np.median(np.diff(te_t))
+    n = int(round(window / dt))
+    step = max(1, int(round(hop / dt)))
+    rows, rpm, peak = [], [], []
+    nfft = pad * n
+    freqs = np.fft.rfftfreq(nfft, d=dt)
+    for s in range(0, len(te) - n + 1, step):
+        seg = te[s:s + n]
+        spec = np.abs(np.fft.rfft((seg - seg.mean()) * np.hanning(n), nfft))
+        spec[freqs < 20.0] = 0.0  # below the slowest mesh line of interest
+        k = int(np.argmax(spec))
+        if 0 < k < len(spec) - 1 and spec[k - 1] > 0 and spec[k + 1] > 0:
+            l0, l1, l2 = np.log(spec[k - 1]), np.log(spec[k]), np.log(spec[k + 1])
+            k = k + 0.5 * (l0 - l2) / (l0 - 2 * l1 + l2)
+        peak.append(k * (freqs[1] - freqs[0]))
+        t_mid = te_t[s:s + n]
+        rpm.append(np.mean(np.interp(t_mid, enc_t, enc_speed)) * 60.0 / (2 * np.pi))
+        rows.append(spec)
+    return np.array(rpm), np.array(peak), (np.array(rpm), freqs, np.array(rows).T if rows else np.zeros((len(freqs), 0)))
