@@ -9,6 +9,14 @@
 #include "drivetrain_stiffness/core/validation.hpp"
 
 namespace drivetrain_stiffness {
+namespace {
+/// x modulo 1 in [0, 1): x - floor(x) rounds to 1.0 for x just below an integer (-1e-17 + 1).
+double wrapTurns(double x) {
+  const double w = x - std::floor(x);
+  return w < 1.0 ? w : 0.0;
+}
+}  // namespace
+
 DynamicsEstimator::DynamicsEstimator(const RigConfig& rig, const std::array<double, 2>& bearing_stiffness,
                                      double output_rate)
     : DynamicsEstimator(rig, bearing_stiffness, output_rate,
@@ -25,6 +33,10 @@ DynamicsEstimator::DynamicsEstimator(const RigConfig& rig, const std::array<doub
   fallback_.relative_tolerance = 1e-8;
   fallback_.absolute_tolerance = 1e-15;
   fallback_.max_step = 1e-4;
+  // ~0.1 s of work per call at most: a 1 ms interval needs a few hundred steps even with its
+  // contacts opening; only an advance over a long gap with the contacts open reaches this, and it
+  // is refused (the caller restarts the dynamics) rather than stalling the input that asked for it.
+  fallback_.max_steps = 100000;
   build();
 }
 
@@ -175,8 +187,7 @@ void DynamicsEstimator::startFollowing() {
   // The state sits on grid sample k_; the nominal phase there (RigExcitation: turns = f t).
   t_state_ = k_ * interval_;
   mesh_frequency_ = nominalMeshFrequency();
-  phase_ = mesh_frequency_ * t_state_;
-  phase_ -= std::floor(phase_);
+  phase_ = wrapTurns(mesh_frequency_ * t_state_);
   following_ = true;
 }
 
@@ -198,7 +209,7 @@ void DynamicsEstimator::followMotion(double t, double mesh_phase, double mesh_fr
   requireFinite("mesh_phase", mesh_phase);
   requireFinite("mesh_frequency", mesh_frequency);
   moveTo(t);
-  phase_ = mesh_phase - std::floor(mesh_phase);
+  phase_ = wrapTurns(mesh_phase);
   mesh_frequency_ = mesh_frequency;
 }
 
@@ -217,7 +228,7 @@ void DynamicsEstimator::propagateTo(double t_rel) {
   }
   const double drive_force = *torque_ / mesh_->geometry().baseRadius(0);
   if (sliced_ && sliced_->propagate(y_, phase_, mesh_frequency_, h, drive_force)) {
-    phase_ -= std::floor(phase_);
+    phase_ = wrapTurns(phase_);
     t_state_ = t_rel;
     return;
   }
@@ -225,8 +236,7 @@ void DynamicsEstimator::propagateTo(double t_rel) {
   moving_->setMotion(t_state_, phase_, mesh_frequency_);
   moving_->setTorque(*torque_);
   y_ = integrate(*moving_model_, IntegratorMethod::kDopri5, fallback_, t_state_, y_, t_rel, h, nullptr);
-  phase_ += mesh_frequency_ * h;
-  phase_ -= std::floor(phase_);
+  phase_ = wrapTurns(phase_ + mesh_frequency_ * h);
   t_state_ = t_rel;
   ++fallback_intervals_;
 }

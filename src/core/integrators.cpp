@@ -206,7 +206,13 @@ State6 integrate(const GearRotorModel& model, IntegratorMethod method, const Int
   ++st.rhs_evaluations;
   DenseStep dense;
   double err_prev = 1e-4;
+  long switches_in_place = 0;
   while (t < t_end) {
+    if (o.max_steps > 0 && st.steps + st.rejected > o.max_steps) {
+      throw UnstableIntegration("integrator dopri5: more than " + std::to_string(o.max_steps) + " steps from t = " +
+                                formatValue(t0) + " s to " + formatValue(t_end) + " s (stopped at " + formatValue(t) +
+                                " s): the work bound of one call");
+    }
     const double switch_time = model.excitation().nextSwitch(t);
     double h_try = std::min({h, o.max_step, t_end - t});
     bool hits_switch = false;
@@ -214,6 +220,11 @@ State6 integrate(const GearRotorModel& model, IntegratorMethod method, const Int
     const double tiny = 64.0 * std::numeric_limits<double>::epsilon() * std::max(1.0, std::abs(t));
     if (h_try < tiny) {
       if (hits_switch) {  // already on the switch (to rounding): step onto it, restart the stages
+        // An excitation whose next switch never gets past rounding would loop here for ever.
+        if (++switches_in_place > 1000000) {
+          throw UnstableIntegration("integrator dopri5: the excitation's switch events stopped advancing at t = " +
+                                    formatValue(t) + " s");
+        }
         t = switch_time;
         model.rhs(t, y, k1);
         continue;

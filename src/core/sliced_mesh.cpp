@@ -92,9 +92,13 @@ void SlicedExcitation::at(double t, MeshInstant& out) const {
 
 double SlicedExcitation::nextSwitch(double t) const {
   if (f_ == 0.0) return std::numeric_limits<double>::infinity();
-  const double turns = phaseAt(t), whole = std::floor(turns), p = turns - whole;
+  const double turns = phaseAt(t);
+  double whole = std::floor(turns);
+  const double p = turns - whole;
   const SlicedMesh& s = *slices_;
   const int j = s.sliceAt(p, f_ < 0.0);
+  // Backwards from a period boundary (p = 0) the slice is the top one of the period below.
+  if (f_ < 0.0 && p == 0.0) whole -= 1.0;
   const double target = whole + (f_ > 0.0 ? s.end(j) : s.start(j));
   // The first time whose computed phase is on or past the boundary (a few ulps at most): at that
   // time at() already gives the slice beyond, and the next call looks for the boundary after it.

@@ -204,3 +204,18 @@ TEST(SlicedModalPropagator, SlicingErrorAgainstThePhaseTableFallsWithTheSliceCou
   EXPECT_LT(errors[1], 2e-5);
   EXPECT_LT(errors[2], 3e-6);
 }
+
+// Fuzz finding: a reversed motion standing exactly on a period boundary (phase 0, or a phase that
+// rounded to 1.0) looked for the slice below in the wrong period, so nextSwitch returned a time in
+// the past and dopri5 crawled one ulp per step for ever.
+TEST(SlicedExcitation, NextSwitchBackwardsFromAPeriodBoundary) {
+  auto slices = std::make_shared<const SlicedMesh>(mesh(), 256);
+  SlicedExcitation e(slices, kTe, 0.0, 1.0, 0.0);
+  for (double phase0 : {0.0, 1.0, 3.0}) {
+    e.setMotion(0.184, phase0, -100.0);
+    const double top = slices->start(slices->size() - 1);  // the top slice of the period below
+    EXPECT_NEAR(e.nextSwitch(0.184), 0.184 + (1.0 - top) / 100.0, 1e-15) << "phase0 = " << phase0;
+    e.setMotion(0.184, phase0, -5e-101);  // a speed that is all but zero: the switch is far ahead
+    EXPECT_GT(e.nextSwitch(0.184), 1e90);
+  }
+}

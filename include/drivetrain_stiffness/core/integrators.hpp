@@ -38,6 +38,9 @@ struct IntegratorOptions {
   double divergence_limit = 1e-2;  ///< |displacement| beyond this [m] counts as blow-up
   bool locate_events = true;       ///< dopri5: locate contact changes
   double magnus_step_factor = 1.0; ///< exponential: Magnus step <= factor / omega_max
+  /// dopri5: more accepted plus rejected steps than this in one call throw UnstableIntegration
+  /// (0: no bound). The online estimator bounds its fallback so that no input stalls the caller.
+  long max_steps = 0;
 };
 
 struct IntegrationStats {
