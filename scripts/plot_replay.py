@@ -163,6 +163,14 @@ def main():
             f.write("\n![%s](%s)\n" % (caption, name))
 
 
+def save(fig, report, name, caption):
+    """Writes the figure as REPORT/name; returns (name, caption) for report.md."""
+    fig.tight_layout()
+    fig.savefig(os.path.join(report, name), dpi=110)
+    plt.close(fig)
+    return name, caption
+
+
 def plot_motion(input_bag, te, res, t0, report, z_p=20):
     """With the rig's encoders in the input bag: the Campbell diagram (TE short-time spectra against
     the measured speed, mesh orders 1-4 and the natural frequencies as lines) and the TE order
@@ -187,10 +195,7 @@ def plot_motion(input_bag, te, res, t0, report, z_p=20):
         ax.set_xlabel("order [cycles per pinion revolution]; dashed: mesh orders 1-4 (z_p = %d)" % z_p)
         ax.set_ylabel("dynamic TE amplitude [um]")
         ax.set_title("Transmission error order spectrum (angle-domain resampling)")
-        fig.tight_layout()
-        fig.savefig(os.path.join(report, "te_order_spectrum.png"), dpi=110)
-        plt.close(fig)
-        out.append(("te_order_spectrum.png", "TE order spectrum"))
+        out.append(save(fig, report, "te_order_spectrum.png", "TE order spectrum"))
     dt = np.median(np.diff(te_t)) if len(te_t) > 1 else 0.0
     if dt > 0 and te_t[-1] - te_t[0] > 0.5:
         rpm, _, (speeds, freqs, rows) = motion_analysis.campbell(te_t, dyn, enc_t, enc_speed)
@@ -211,10 +216,7 @@ def plot_motion(input_bag, te, res, t0, report, z_p=20):
             ax.set_xlabel("pinion speed [rpm] (encoders)")
             ax.set_ylabel("frequency [Hz]")
             ax.set_title("Campbell diagram: TE spectra (colour, log), mesh orders 1-4 (dashed), natural frequencies (red)")
-            fig.tight_layout()
-            fig.savefig(os.path.join(report, "campbell.png"), dpi=110)
-            plt.close(fig)
-            out.append(("campbell.png", "Campbell diagram"))
+            out.append(save(fig, report, "campbell.png", "Campbell diagram"))
     return out
 
 
