@@ -22,36 +22,25 @@
 #include "drivetrain_stiffness/ros/node_parameters.hpp"
 #include "python_script.hpp"  // NOLINT(build/include_subdir)
 #include "replay_input.hpp"   // NOLINT(build/include_subdir)
+#include "drivetrain_stiffness/config/yaml_parameters.hpp"
 #include "replay_writer.hpp"  // NOLINT(build/include_subdir)
 
 namespace drivetrain_stiffness {
 namespace {
 
-/// The node's parameter file (config/stiffness_estimator.yaml) read as the node would see it.
-class YamlParams {
- public:
-  explicit YamlParams(const std::string& path) {
-    if (path.empty()) return;
-    try {
-      root_ = YAML::LoadFile(path);
-    } catch (const YAML::Exception& e) {
-      throw InvalidInput("--params = '" + path + "': " + e.what());
-    }
-    if (!root_.IsMap() && !root_.IsNull()) throw InvalidInput("--params = '" + path + "': not a map of parameters");
+/// The node's parameter file (config/stiffness_estimator.yaml) read as the node would see it;
+/// no file: every parameter at its default.
+YamlParameters readParameterFile(const std::string& path) {
+  if (path.empty()) return YamlParameters();
+  YAML::Node root;
+  try {
+    root = YAML::LoadFile(path);
+  } catch (const YAML::Exception& e) {
+    throw InvalidInput("--params = '" + path + "': " + e.what());
   }
-  template <typename T>
-  T operator()(const std::string& name, const T& fallback) const {
-    if (!root_.IsMap() || !root_[name]) return fallback;
-    try {
-      return root_[name].as<T>();
-    } catch (const YAML::Exception&) {
-      throw InvalidInput("parameter ~" + name + ": has the wrong type");
-    }
-  }
-
- private:
-  YAML::Node root_;
-};
+  if (!root.IsMap() && !root.IsNull()) throw InvalidInput("--params = '" + path + "': not a map of parameters");
+  return YamlParameters(root);
+}
 
 // Exit codes (docs/replay_exit_codes.md); 2 is left unused, as before.
 constexpr int kExitOk = 0, kExitRefused = 1, kExitWrongType = 3, kExitIncomplete = 4;
@@ -108,7 +97,7 @@ int run(int argc, char** argv) {
   }
 
   const RigConfig rig = loadRigFile(config);
-  const YamlParams get(params);
+  const YamlParameters get = readParameterFile(params);
   RigPipeline pipeline(rig, readPipelineOptions(get, rig), readRuntimeSettings(get, rig));
   if (!report_dir.empty()) {
     ensureDirectory("--report", report_dir);

@@ -4,6 +4,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include "drivetrain_stiffness/config/yaml_config.hpp"
+#include "drivetrain_stiffness/config/yaml_parameters.hpp"
 #include "drivetrain_stiffness/ros/node_parameters.hpp"
 #include "field_rule.hpp"
 #include "finite_checks.hpp"
@@ -13,25 +14,6 @@
 
 namespace drivetrain_stiffness::fuzz {
 namespace {
-
-// The getter of drivetrain_replay (YamlParams in src/tools/drivetrain_replay.cpp) over a parsed
-// document: absent -> the fallback, present with the wrong type -> InvalidInput naming it.
-class NodeParams {
- public:
-  explicit NodeParams(YAML::Node root) : root_(std::move(root)) {}
-  template <typename T>
-  T operator()(const std::string& name, const T& fallback) const {
-    if (!root_.IsMap() || !root_[name]) return fallback;
-    try {
-      return root_[name].as<T>();
-    } catch (const YAML::Exception&) {
-      throw InvalidInput("parameter ~" + name + ": has the wrong type");
-    }
-  }
-
- private:
-  YAML::Node root_;
-};
 
 const RigConfig& seedServo() {
   static const RigConfig rig = loadRigFile(sourceDir() + "/config/gearboxes/seed_servo.yaml");
@@ -53,7 +35,7 @@ CaseStats fuzzNodeParameters(const std::uint8_t* data, std::size_t size) {
     stats.refuse("not a map of parameters (refused by the caller, as --params)");
     return stats;
   }
-  const NodeParams get(root);
+  const YamlParameters get(root);  // drivetrain_replay --params reads the same way
   PipelineOptions options;
   RuntimeSettings runtime;
   OutputSettings settings;
