@@ -20,7 +20,7 @@ const std::set<std::string> kBearingKeys = {
     "housing_outside_diameter", "shaft_youngs_modulus", "shaft_poisson_ratio",
     "housing_youngs_modulus", "housing_poisson_ratio", "inner_interference", "outer_interference",
     "arrangement", "tilt", "axial_preload", "radial_preload"};
-const std::set<std::string> kRigBearingKeys = {"name", "shaft", "mesh_load_share", "file"};
+const std::set<std::string> kRigBearingKeys = {"name", "shaft", "mesh_load_share", "file", "stiffness_scale"};
 
 std::string key(const std::string& where, const std::string& name) { return where + "." + name; }
 
@@ -186,7 +186,7 @@ const std::set<std::string> kGearKeys = {
     "center_distance", "addendum_coefficient", "tool_dedendum_coefficient", "youngs_modulus",
     "poisson_ratio", "bore_diameter"};
 const std::set<std::string> kAntiBacklashKeys = {"spring_stiffness", "preload_torque", "loaded_gear_face_width"};
-const std::set<std::string> kMeshKeys = {"model", "samples"};
+const std::set<std::string> kMeshKeys = {"model", "samples", "stiffness_scale"};
 const std::set<std::string> kDynamicsKeys = {
     "pinion_mass", "gear_mass", "pinion_inertia", "gear_inertia", "mesh_damping_ratio",
     "bearing_damping_ratio", "bearing_clearance", "speed_rpm", "transmission_error_amplitude", "backlash", "torque"};
@@ -254,6 +254,8 @@ void parseGears(const YAML::Node& root, const std::string& file, RigConfig& rig)
     rig.mesh_model = parseMeshStiffnessModel(key(w, "model"), readString(mesh, w, "model", "potential_energy"));
     if (mesh["samples"]) rig.mesh_samples = readInt(mesh, w, "samples");
     if (rig.mesh_samples < 16 || rig.mesh_samples > 100000) throwInvalid(key(w, "samples"), rig.mesh_samples, "must be in [16, 100000]");
+    rig.mesh_stiffness_scale = readDouble(mesh, w, "stiffness_scale", 1.0);
+    requireInHalfOpenRange(key(w, "stiffness_scale"), rig.mesh_stiffness_scale, 0.05, 20.0);
   }
 }
 
@@ -270,6 +272,67 @@ static void checkDynamics(const DynamicsConfig& c) {
   requireNonNegative("dynamics.transmission_error_amplitude", c.transmission_error_amplitude);
   requireNonNegative("dynamics.backlash", c.backlash);
   requireFinite("dynamics.torque", c.torque);
+}
+
+const std::set<std::string> kCalibrationKeys = {
+    "mesh_stiffness_scale", "pinion_bearing_scale", "gear_bearing_scale", "preload_torque", "te_offset",
+    "baseline_torque", "torque_band", "min_speed_rpm", "max_mesh_to_natural", "gate", "model_error",
+    "te_noise_floor", "drift", "reference_torque"};
+
+// A prior `{mean: M, std: S}`; the mean defaults to `fallback` (the rig's own value).
+static CalibrationPrior readPrior(const YAML::Node& c, const std::string& w, const std::string& name, CalibrationPrior prior,
+                           double lower, double upper) {
+  if (c[name]) {
+    const YAML::Node p = c[name];
+    const std::string where = key(w, name);
+    if (!p.IsMap()) throw InvalidInput(where + ": must be a mapping {mean: ..., std: ...}");
+    rejectUnknownKeys(p, where, {"mean", "std"});
+    prior.mean = readDouble(p, where, "mean", prior.mean);
+    prior.std = readDouble(p, where, "std", prior.std);
+  }
+  requireInHalfOpenRange(key(w, name) + ".mean", prior.mean, lower, upper);
+  requireNonNegative(key(w, name) + ".std", prior.std);
+  requireAtMost(key(w, name) + ".std", prior.std, upper - lower);
+  return prior;
+}
+
+// The calibration block (docs/calibration.md); its prior means default to the rig's own values.
+static void parseCalibration(const YAML::Node& root, const std::string& file, RigConfig& rig) {
+  const YAML::Node c = root["calibration"];
+  if (!c) return;
+  const std::string w = file + ": calibration";
+  if (!c.IsMap()) throw InvalidInput(w + ": must be a mapping");
+  rejectUnknownKeys(c, w, kCalibrationKeys);
+  CalibrationConfig& k = rig.calibration;
+  k.present = true;
+  auto shaftScale = [&](int shaft) {
+    for (const BearingSupportConfig& b : rig.bearings) if (b.shaft == shaft) return b.stiffness_scale;
+    return 1.0;
+  };
+  k.mesh_stiffness_scale = readPrior(c, w, "mesh_stiffness_scale", {rig.mesh_stiffness_scale, 0.2}, 0.05, 20.0);
+  k.pinion_bearing_scale = readPrior(c, w, "pinion_bearing_scale", {shaftScale(0), 0.3}, 0.05, 20.0);
+  k.gear_bearing_scale = readPrior(c, w, "gear_bearing_scale", {shaftScale(1), 0.3}, 0.05, 20.0);
+  const double tp = rig.anti_backlash.preload_torque;
+  k.preload_torque = readPrior(c, w, "preload_torque", {tp, 0.2 * tp}, 0.0, 1e6);
+  k.te_offset = readPrior(c, w, "te_offset", {0.0, 1e-6}, -1e-3, 1e-3);
+  k.baseline_torque = readDouble(c, w, "baseline_torque", k.baseline_torque);
+  k.torque_band = readDouble(c, w, "torque_band", k.torque_band);
+  k.min_speed_rpm = readDouble(c, w, "min_speed_rpm", k.min_speed_rpm);
+  k.max_mesh_to_natural = readDouble(c, w, "max_mesh_to_natural", k.max_mesh_to_natural);
+  k.gate = readDouble(c, w, "gate", k.gate);
+  k.model_error = readDouble(c, w, "model_error", k.model_error);
+  k.te_noise_floor = readDouble(c, w, "te_noise_floor", k.te_noise_floor);
+  k.drift = readDouble(c, w, "drift", k.drift);
+  k.reference_torque = readDouble(c, w, "reference_torque", k.reference_torque);
+  requireNonNegative(key(w, "baseline_torque"), k.baseline_torque);
+  requirePositive(key(w, "torque_band"), k.torque_band);
+  requireNonNegative(key(w, "min_speed_rpm"), k.min_speed_rpm);
+  requireInHalfOpenRange(key(w, "max_mesh_to_natural"), k.max_mesh_to_natural, 1e-6, 1.0);
+  requirePositive(key(w, "gate"), k.gate);
+  requireInHalfOpenRange(key(w, "model_error"), k.model_error, 0.0, 1.0);
+  requirePositive(key(w, "te_noise_floor"), k.te_noise_floor);
+  requireInHalfOpenRange(key(w, "drift"), k.drift, 0.0, 1.0);
+  requirePositive(key(w, "reference_torque"), k.reference_torque);
 }
 
 static void parseDynamics(const YAML::Node& root, const std::string& file, RigConfig& rig) {
@@ -319,7 +382,8 @@ RigConfig loadRigFile(const std::string& path) {
   }
   for (const auto& item : root) {
     const std::string name = keyName(item.first, path);
-    if (name != "gears" && name != "bearings" && name != "anti_backlash" && name != "mesh" && name != "dynamics") {
+    if (name != "gears" && name != "bearings" && name != "anti_backlash" && name != "mesh" && name != "dynamics" &&
+        name != "calibration") {
       throw InvalidInput(path + ": '" + printable(name) + "': unknown top-level key");
     }
   }
@@ -363,8 +427,11 @@ RigConfig loadRigFile(const std::string& path) {
     cfg.shaft = shaft == "pinion" ? 0 : 1;
     cfg.mesh_load_share = readDouble(node, entry, "mesh_load_share", 1.0);
     requireInHalfOpenRange(entry + ".mesh_load_share", cfg.mesh_load_share, 0.0, 1.0 + 1e-12);
+    cfg.stiffness_scale = readDouble(node, entry, "stiffness_scale", 1.0);
+    requireInHalfOpenRange(entry + ".stiffness_scale", cfg.stiffness_scale, 0.05, 20.0);
     rig.bearings.push_back(cfg);
   }
+  parseCalibration(root, where, rig);
   return rig;
 }
 

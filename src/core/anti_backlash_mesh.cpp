@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "drivetrain_stiffness/core/rig_config.hpp"
 #include "drivetrain_stiffness/core/validation.hpp"
 
 namespace drivetrain_stiffness {
@@ -28,9 +29,11 @@ void validateAntiBacklash(const AntiBacklashSpec& spec) {
 }
 
 AntiBacklashMesh::AntiBacklashMesh(const GearPairSpec& gears, const AntiBacklashSpec& spec, MeshStiffnessModel model,
-                                   int samples)
-    : geometry_(gears), spec_(spec), model_(model) {
+                                   int samples, double stiffness_scale)
+    : geometry_(gears), spec_(spec), model_(model), scale_(stiffness_scale) {
   validateAntiBacklash(spec);
+  // A calibrated scale is within a factor of a few of the drawing's; 0 or 1e3 is a typo.
+  requireInHalfOpenRange("mesh.stiffness_scale", stiffness_scale, 0.05, 20.0);
   preload_force_ = spec.preload_torque / geometry_.baseRadius(1);
   const auto drive_model = makeToothPairStiffness(model, geometry_, gears.face_width);
   verified_ = drive_model->verified();
@@ -72,6 +75,9 @@ AntiBacklashMesh::AntiBacklashMesh(const GearPairSpec& gears, const AntiBacklash
     segments_.push_back(std::move(seg));
   }
 }
+
+AntiBacklashMesh::AntiBacklashMesh(const RigConfig& rig)
+    : AntiBacklashMesh(rig.gears, rig.anti_backlash, rig.mesh_model, rig.mesh_samples, rig.mesh_stiffness_scale) {}
 
 FlankContact AntiBacklashMesh::flankContact(double mesh_force, double k1, double k_chain) const {
   if (!(k_chain > 0.0)) return FlankContact::kDriveOnly;  // no loaded half: an ordinary gear
@@ -133,9 +139,9 @@ CompositeMesh AntiBacklashMesh::exactAt(double phase, double mesh_force) const {
   CompositeMesh out;
   std::array<double, 3> s;
   out.drive_pairs = geometry_.drivePairs(phase, s);
-  for (int i = 0; i < out.drive_pairs; ++i) out.k1 += drive_->pair(s[i]);
+  for (int i = 0; i < out.drive_pairs; ++i) out.k1 += scale_ * drive_->pair(s[i]);
   out.back_pairs = geometry_.backPairs(phase, s);
-  for (int i = 0; i < out.back_pairs; ++i) out.k2 += back_->pair(s[i]);
+  for (int i = 0; i < out.back_pairs; ++i) out.k2 += scale_ * back_->pair(s[i]);
   if (spec_.spring_stiffness > 0.0) {
     out.k_chain = spec_.spring_stiffness * out.k2 / (spec_.spring_stiffness + out.k2);
   } else {

@@ -20,7 +20,7 @@ double wrapTurns(double x) {
 DynamicsEstimator::DynamicsEstimator(const RigConfig& rig, const std::array<double, 2>& bearing_stiffness,
                                      double output_rate)
     : DynamicsEstimator(rig, bearing_stiffness, output_rate,
-                        std::make_shared<const AntiBacklashMesh>(rig.gears, rig.anti_backlash, rig.mesh_model, rig.mesh_samples)) {}
+                        std::make_shared<const AntiBacklashMesh>(rig)) {}
 
 DynamicsEstimator::DynamicsEstimator(const RigConfig& rig, const std::array<double, 2>& bearing_stiffness,
                                      double output_rate, std::shared_ptr<const AntiBacklashMesh> mesh)

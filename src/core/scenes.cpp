@@ -77,7 +77,7 @@ struct RigSceneSetup {
 
 Scene rigScene(const std::string& name, const std::string& description, RigSceneSetup setup) {
   const RigConfig& rig = setup.rig;
-  auto mesh = std::make_shared<AntiBacklashMesh>(rig.gears, rig.anti_backlash, rig.mesh_model, rig.mesh_samples);
+  auto mesh = std::make_shared<AntiBacklashMesh>(rig);
   const double k_mean = meanMeshStiffness(*mesh);
   std::array<double, 2> kb = bearingStiffness(rig, setup.excitation.torque.mean);
   for (double& k : kb) {

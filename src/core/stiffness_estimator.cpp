@@ -8,13 +8,16 @@
 namespace drivetrain_stiffness {
 
 StiffnessEstimator::StiffnessEstimator(const RigConfig& rig, const EstimatorLimits& limits)
-    : rig_(rig), limits_(limits), mesh_(std::make_shared<const AntiBacklashMesh>(rig.gears, rig.anti_backlash, rig.mesh_model, rig.mesh_samples)) {
+    : rig_(rig), limits_(limits), mesh_(std::make_shared<const AntiBacklashMesh>(rig)) {
   requirePositive("max_abs_torque", limits.max_abs_torque);
   requirePositive("max_preload", limits.max_preload);
   requirePositive("max_interference", limits.max_interference);
   requireNonNegative("load_tolerance", limits.load_tolerance);
   if (limits.load_tolerance > 0.1) throwInvalid("load_tolerance", limits.load_tolerance, "must be <= 0.1");
   if (rig.bearings.empty()) throw InvalidInput("bearings: at least one support is required");
+  for (const BearingSupportConfig& b : rig.bearings) {
+    requireInHalfOpenRange("bearings[" + b.name + "].stiffness_scale", b.stiffness_scale, 0.05, 20.0);
+  }
   // Period means of k1 and k_chain, computed once: they decide the flank state of the mean
   // stiffness (the table itself is fixed until the gear parameters change).
   const int n = 512;
@@ -79,6 +82,7 @@ StiffnessEstimate StiffnessEstimator::solveAll(double torque, double pinion_angl
     } catch (const UnreachableLoad& error) {
       throw UnreachableLoad(s.config.name + ": " + error.what());
     }
+    e.solution.stiffness *= s.config.stiffness_scale;  // see SupportEstimate
     next.supports.push_back(std::move(e));
   }
   return next;
@@ -141,6 +145,7 @@ const StiffnessEstimate& StiffnessEstimator::setTorque(double torque, double pin
     } catch (const UnreachableLoad& error) {
       throw UnreachableLoad(s.config.name + ": " + error.what());
     }
+    w.solution.stiffness *= s.config.stiffness_scale;
   }
   const MeshEstimate mesh = meshAt(signed_force, pinion_angle);
   for (std::size_t i = 0; i < n; ++i) {

@@ -18,7 +18,7 @@ SweepOutput torqueSweep(const RigConfig& rig, const SweepSpec& spec) {
   requirePositive("sweep.measure", spec.measure);
   requireFinite("sweep.torque_amplitude", spec.torque_amplitude);
   const DynamicsConfig& d = rig.dynamics;
-  auto mesh = std::make_shared<AntiBacklashMesh>(rig.gears, rig.anti_backlash, rig.mesh_model, rig.mesh_samples);
+  auto mesh = std::make_shared<AntiBacklashMesh>(rig);
   StiffnessEstimator estimator(rig);
   estimator.setTorque(d.torque);
   const std::array<double, 2> kb = estimator.shaftRadialStiffness();

@@ -21,6 +21,8 @@
 
 namespace drivetrain_stiffness {
 
+struct RigConfig;
+
 struct AntiBacklashSpec {
   double spring_stiffness = 0.0;   ///< k_te along the line of action [N/m] (seed 000 Table 1: 1e4 N/mm);
                                    ///< 0 = an ordinary gear (drive flank only)
@@ -45,7 +47,13 @@ struct CompositeMesh {
 class AntiBacklashMesh {
  public:
   /// Builds the drive and back tables (potential-energy etc. per `model`) with `samples` points.
-  AntiBacklashMesh(const GearPairSpec& gears, const AntiBacklashSpec& spec, MeshStiffnessModel model, int samples = 256);
+  /// `stiffness_scale` multiplies every tooth pair's stiffness (k1 and k2, not the spring k_te):
+  /// the rig's `mesh.stiffness_scale`, 1 for the drawing's gear (docs/calibration.md).
+  AntiBacklashMesh(const GearPairSpec& gears, const AntiBacklashSpec& spec, MeshStiffnessModel model, int samples = 256,
+                   double stiffness_scale = 1.0);
+  /// The same for a rig: its gears, anti_backlash, mesh model, samples and stiffness scale.
+  explicit AntiBacklashMesh(const RigConfig& rig);
+  double stiffnessScale() const { return scale_; }
 
   const SpurGearGeometry& geometry() const { return geometry_; }
   const AntiBacklashSpec& spec() const { return spec_; }
@@ -77,6 +85,7 @@ class AntiBacklashMesh {
   SpurGearGeometry geometry_;
   AntiBacklashSpec spec_;
   MeshStiffnessModel model_;
+  double scale_ = 1.0;
   bool verified_ = true;
   double preload_force_ = 0.0;
   std::unique_ptr<MeshStiffnessTable> drive_, back_;

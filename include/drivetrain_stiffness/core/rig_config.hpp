@@ -23,6 +23,9 @@ struct BearingSupportConfig {
   Interference interference;               ///< diametral [m]
   int shaft = 0;                           ///< 0 pinion, 1 gear
   double mesh_load_share = 1.0;            ///< fraction of the mesh force this support reacts
+  /// [-] scale on the support's stiffness from the Hertz model (its compliance divided by it): 1 for
+  /// the drawing's bearing, a calibrated value from `drivetrain_replay --calibrate` (docs/calibration.md).
+  double stiffness_scale = 1.0;
 };
 
 /// The `dynamics:` block: what the 3-DOF model needs beyond the gears and bearings (SI units).
@@ -39,13 +42,45 @@ struct DynamicsConfig {
   bool present = false;                             ///< the block was given
 };
 
+/// One calibrated parameter's prior: its mean and standard deviation (docs/calibration.md).
+struct CalibrationPrior {
+  double mean = 0.0;
+  double std = 0.0;  ///< 0: the parameter is held at `mean` (not estimated)
+};
+
+/// The gearbox's `calibration:` block: the live calibration's priors and its data rules
+/// (docs/calibration.md). Absent: no calibration.
+struct CalibrationConfig {
+  bool present = false;
+  CalibrationPrior mesh_stiffness_scale{1.0, 0.2};   ///< [-] scale on the tooth-pair stiffness
+  CalibrationPrior pinion_bearing_scale{1.0, 0.3};   ///< [-] scale on the pinion shaft's bearing stiffness
+  CalibrationPrior gear_bearing_scale{1.0, 0.3};     ///< [-] scale on the gear shaft's bearing stiffness
+  CalibrationPrior preload_torque{1.0, 0.2};         ///< [N·m] anti-backlash preload torque T_p about the gear axis
+  CalibrationPrior te_offset{0.0, 1e-6};             ///< [m] offset of the measured TE left after the baseline
+  double baseline_torque = 0.05;    ///< [N·m] windows with |mean torque| at most this build the unloaded baseline
+  double torque_band = 0.02;        ///< [N·m] a window ends when the torque leaves its start by more (plus 1 %)
+  double min_speed_rpm = 5.0;       ///< [rpm] slower windows are not excited (too few mesh periods per second)
+  /// [-] windows whose mesh frequency exceeds this fraction of the lowest natural frequency are not
+  /// quasi-static (dynamic amplification (f/f_n)^2 above ~1e-2) and are not used.
+  double max_mesh_to_natural = 0.1;
+  double gate = 16.27;              ///< normalised innovation squared above this (chi^2, 3 dof, 0.999) rejects a window
+  double model_error = 0.01;        ///< [-] relative model error added to each feature's variance
+  double te_noise_floor = 2e-9;     ///< [m] absolute floor of each feature's standard deviation
+  double drift = 1e-4;              ///< [1/sqrt(s)] random walk of the scales (relative), preload and offset
+  double reference_torque = 1.0;    ///< [N·m] pinion torque at which series_compliance is reported
+};
+
 struct RigConfig {
   GearPairSpec gears;
   AntiBacklashSpec anti_backlash;          ///< spring_stiffness 0 = an ordinary (single) gear
   MeshStiffnessModel mesh_model = MeshStiffnessModel::kPotentialEnergy;
   int mesh_samples = 256;                  ///< table samples over the path of contact
+  /// [-] scale on the tooth-pair stiffness of both halves (not the scissor spring): 1 for the
+  /// drawing's gear, a calibrated value from `drivetrain_replay --calibrate` (docs/calibration.md).
+  double mesh_stiffness_scale = 1.0;
   std::vector<BearingSupportConfig> bearings;
   DynamicsConfig dynamics;
+  CalibrationConfig calibration;
 };
 
 }  // namespace drivetrain_stiffness

@@ -39,6 +39,9 @@ struct SupportEstimate {
   std::string name;
   double radial_load = 0.0;  ///< radial preload + share of |mesh force| [N]
   double axial_load = 0.0;   ///< axial preload (single) or 0 (pair) [N]
+  /// The Hertz model's solution, its tangent `stiffness` multiplied by the support's
+  /// stiffness_scale; `displacement` is the unscaled model's (the next solve's warm start): the
+  /// support's deflection is displacement / stiffness_scale.
   BearingSolution solution;
 };
 
@@ -78,6 +81,9 @@ class StiffnessEstimator {
   /// parallel, as the 3-DOF model's k_r1, k_r2 (seed 000 eq 15).
   std::array<double, 2> shaftRadialStiffness() const;
   const RigConfig& rig() const { return rig_; }
+  /// Support i's configuration with its current preload settings, and its Hertz model.
+  const BearingSupportConfig& supportConfig(std::size_t i) const { return supports_.at(i).config; }
+  const BearingSupport& supportModel(std::size_t i) const { return *supports_.at(i).model; }
   const AntiBacklashMesh& mesh() const { return *mesh_; }
   /// The same read-only table, for the dynamics of the same rig (built once, shared).
   std::shared_ptr<const AntiBacklashMesh> sharedMesh() const { return mesh_; }

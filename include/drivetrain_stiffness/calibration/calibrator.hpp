@@ -1,0 +1,133 @@
+// Live calibration of the stiffness model against the rig's encoders (docs/calibration.md), free of
+// ROS and of any clock: readings arrive with their times as arguments.
+//
+// Per encoder reading (both shafts' angles, the mesh phase, the held torque):
+//  1. the measured TE x = r_b,p theta_p + r_b,g theta_g (static_te_model.hpp), taken modulo the
+//     lattice 2 pi r_b,p gcd(z_p, z_g) / z_p that the encoders' unknown whole turns leave;
+//  2. into the current window's angle-domain regression (order_regression.hpp). A window spans one
+//     gear turn (a whole period of every shaft order) at a steady torque (within ~torque_band and
+//     1 %); a torque step, a break in the readings or a reset starts a new one.
+// Per closed window:
+//  3. |T| <= ~baseline_torque: the window joins the unloaded baseline (mean and mesh harmonics,
+//     averaged over baseline windows), which every later window subtracts (it holds the encoders'
+//     zeros and the load-free manufacturing TE);
+//  4. otherwise, when excited (speed at least ~min_speed_rpm, mesh frequency at most
+//     ~max_mesh_to_natural of the lowest natural frequency, readings dense enough for the second
+//     mesh harmonic) and a baseline exists: the features (mean TE, |C_1|, |C_2| above the baseline)
+//     update an iterated extended Kalman filter over the five parameters (static_te_model.hpp),
+//     after a gate on the normalised innovation squared (NIS > ~gate: rejected and counted).
+//  5. the confidence bands of the outputs follow from the posterior covariance by linearisation.
+// Allocation-free per reading; per window only fixed-size Eigen and the supports' preallocated
+// solutions.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <optional>
+
+#include "drivetrain_stiffness/calibration/order_regression.hpp"
+#include "drivetrain_stiffness/calibration/static_te_model.hpp"
+#include "drivetrain_stiffness/core/rig_config.hpp"
+
+namespace drivetrain_stiffness {
+
+class StiffnessEstimator;
+
+/// Why the last window did or did not update the estimate.
+enum class WindowOutcome { kNone, kBaseline, kUpdated, kGated, kNoBaseline, kTooSlow, kNotQuasiStatic, kTooSparse, kIllConditioned };
+const char* toString(WindowOutcome outcome);
+
+/// The calibration's state after a window (every field SI; see the Calibration message).
+struct CalibrationEstimate {
+  CalibrationVector value = CalibrationVector::Zero();
+  CalibrationVector std = CalibrationVector::Zero();
+  CalibrationVector prior_std = CalibrationVector::Zero();
+  std::array<bool, kCalibrationSize> identified{};  ///< posterior std below half the prior's
+  WindowOutcome outcome = WindowOutcome::kNone;
+  bool excited = false;      ///< the last window was usable (baseline or update)
+  bool baseline = false;     ///< a baseline exists
+  double nis = 0.0;          ///< normalised innovation squared of the last loaded window (3 dof)
+  std::uint64_t windows = 0, baseline_windows = 0, updates = 0, gated = 0, not_excited = 0;
+  double window_torque = 0.0;  ///< [N·m] mean torque of the last window
+  double window_speed = 0.0;   ///< [rad/s] mean pinion speed of the last window
+  FeatureVector measured = FeatureVector::Zero(), predicted = FeatureVector::Zero(), feature_std = FeatureVector::Zero();
+  double series_compliance = 0.0, series_compliance_std = 0.0;  ///< [m/N] mean TE / F at ~reference_torque
+  double mesh_stiffness = 0.0, mesh_stiffness_low = 0.0, mesh_stiffness_high = 0.0;  ///< [N/m] at the window torque, 95 %
+  std::array<double, 2> bearing_stiffness{}, bearing_stiffness_low{}, bearing_stiffness_high{};  ///< [N/m] per shaft
+  std::array<double, 3> natural_frequency{}, natural_frequency_low{}, natural_frequency_high{};  ///< [Hz]
+  double knee_torque = 0.0;  ///< [N·m] pinion torque where the back half lifts, at the estimate
+};
+
+/// One processed reading: measured TE with the baseline and the shaft orders removed, and the
+/// calibrated model's prediction at the same phase and torque [m].
+struct MeasuredTeSample {
+  double te = 0.0, predicted = 0.0, residual = 0.0;
+  double torque = 0.0;  ///< [N·m] held
+  double phase = 0.0;   ///< mesh phase [-]
+};
+
+class Calibrator {
+ public:
+  /// The rig's calibration block gives the priors and the data rules. Throws InvalidInput for a
+  /// rig without one, or an invalid one.
+  explicit Calibrator(const RigConfig& rig);
+
+  /// What a reading produced (bit flags).
+  enum : int { kNothing = 0, kSample = 1, kWindow = 2 };
+  /// One encoder reading at time t [s]: unwrapped pinion and gear angles [rad] (joint_states
+  /// convention), mesh phase [-], pinion speed [rad/s], held torque [N·m]; `supports` gives the
+  /// bearing models at their current settings. `sample` is filled when kSample is returned.
+  int reading(double t, double pinion, double gear, double phase, double speed, double torque,
+              const StiffnessEstimator& supports, MeasuredTeSample& sample);
+  /// The readings broke off (encoder time-out, a reset, a jump): the open window is dropped.
+  void interrupt();
+  const CalibrationEstimate& estimate() const { return estimate_; }
+  /// The parameter values as a CalibrationVector (same as estimate().value).
+  const CalibrationVector& parameters() const { return theta_; }
+  const CalibrationMatrix& covariance() const { return covariance_; }
+
+ private:
+  void closeWindow(const StiffnessEstimator& supports);
+  WindowOutcome excitation(double speed, double duration) const;
+  void update(const FeatureVector& z, const FeatureVector& z_std, double torque, const StiffnessEstimator& supports);
+  void outputs(double torque, const StiffnessEstimator& supports);
+  FeatureVector predict(const CalibrationVector& p, double torque) const;
+
+  RigConfig rig_;
+  CalibrationConfig config_;
+  StaticTeModel model_;
+  OrderRegression regression_;
+  int teeth_[2] = {0, 0};
+  double lattice_ = 0.0;  ///< [m] the TE's ambiguity from the encoders' whole turns
+
+  CalibrationVector theta_ = CalibrationVector::Zero(), prior_mean_ = CalibrationVector::Zero();
+  CalibrationMatrix covariance_ = CalibrationMatrix::Zero();
+  CalibrationEstimate estimate_;
+  double last_update_t_ = 0.0;
+  bool has_update_t_ = false;
+
+  // The open window.
+  struct Window {
+    bool open = false;
+    double t0 = 0.0, t1 = 0.0, torque0 = 0.0, angle_min = 0.0, angle_max = 0.0;
+    double torque_sum = 0.0, speed_sum = 0.0;
+    long n = 0;
+  } window_;
+  std::optional<double> te_reference_;  ///< the first TE, around which later ones are reduced
+
+  // The baseline: running means over the baseline windows.
+  double base_torque_ = 0.0, base_mean_ = 0.0, base_mean_var_ = 0.0, base_harm_var_ = 0.0;
+  std::array<std::complex<double>, OrderRegression::kMeshHarmonics> base_harmonics_{};
+  std::uint64_t base_count_ = 0;
+  std::array<double, 2> base_shafts_{};
+
+  // The last fit (its orders are removed from the readings that follow) and the shafts' deflection
+  // at the last loaded window (scaled by torque for the per-reading prediction).
+  OrderRegression::Fit last_fit_;
+  bool has_fit_ = false;
+  double shafts_torque_ = 0.0;
+  std::array<double, 2> shafts_{};
+  std::array<double, 2> scratch_{};
+};
+
+}  // namespace drivetrain_stiffness

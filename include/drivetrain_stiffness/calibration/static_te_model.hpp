@@ -1,0 +1,98 @@
+// The quasi-static transmission error the rig's encoders see, as a function of the calibrated
+// parameters (docs/calibration.md, "What the encoders see"). With the 3-DOF model of seed 000
+// section 3 at rest under a mesh force F (docs/model.md), the encoder TE along the line of action,
+//   x = r_b,p theta_p + r_b,g theta_g   (joint_states angles; the gear's falls when the pinion's rises)
+// is the model's torsional coordinate x = delta - x_p + x_g + e, with
+//  - delta the mesh deflection of the scissor gear (anti_backlash_mesh.hpp, docs/model.md):
+//      both flanks:  delta = F / (k1 + k_c)       for -F_p (1 + k_c/k1) <= F <= F_p (1 + k1/k_c)
+//      drive only:   delta = (F - F_p) / k1        above (the back half g2 has lifted)
+//      back only:    delta = (F + F_p) / k_c       below (the reversed load runs through the spring)
+//    with k1 = s_m k1', k2 = s_m k2', k_c = k_te k2 / (k_te + k2), F_p = T_p / r_b,gear;
+//  - -x_p + x_g the shafts' displacements along the line of action, from each support's exact
+//    static solution (the secant u(F_0 + |F|) - u(F_0), not F / k_tangent: bearing.md, last
+//    section), weighted by the support's mesh_load_share (the lever rule of a rigid shaft), divided
+//    by the shaft's scale and signed with F;
+//  - e the manufacturing TE, which does not depend on load and leaves with the baseline.
+// The mesh period is integrated exactly between the switching phases (the stiffness jumps there), so
+// the mean and the mesh harmonics carry no sampling error from the steps.
+#pragma once
+
+#include <array>
+#include <complex>
+#include <memory>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "drivetrain_stiffness/core/anti_backlash_mesh.hpp"
+#include "drivetrain_stiffness/core/bearing_support.hpp"
+#include "drivetrain_stiffness/core/rig_config.hpp"
+
+namespace drivetrain_stiffness {
+
+class StiffnessEstimator;
+
+/// The calibrated parameters, in this order.
+enum CalibrationIndex { kMeshScale = 0, kPinionBearingScale, kGearBearingScale, kPreloadTorque, kTeOffset, kCalibrationSize };
+using CalibrationVector = Eigen::Matrix<double, kCalibrationSize, 1>;
+using CalibrationMatrix = Eigen::Matrix<double, kCalibrationSize, kCalibrationSize>;
+/// Field names of the parameters (message fields, CSV columns, YAML keys of the calibration block).
+const char* calibrationName(int index);
+
+/// The angle-domain features of one window: the mean TE and the magnitudes of the first mesh
+/// harmonics, each the loaded window's minus the baseline's [m].
+constexpr int kFeatureHarmonics = 2;
+constexpr int kFeatureSize = 1 + kFeatureHarmonics;
+using FeatureVector = Eigen::Matrix<double, kFeatureSize, 1>;
+
+class StaticTeModel {
+ public:
+  /// Tabulates the drawing's tooth stiffness (scale 1) over one mesh period. Throws InvalidInput for
+  /// an invalid rig.
+  explicit StaticTeModel(const RigConfig& rig);
+
+  /// Each shaft's displacement along the line of action at pinion torque `torque`, from the
+  /// supports' exact static solutions at their current settings in `supports`, at scale 1 (divide
+  /// by the shaft's scale), signed with the torque: x_g - x_p split as {-x_p, x_g} [m].
+  /// Allocation-free after the first call for the same supports.
+  void shaftDeflection(double torque, const StiffnessEstimator& supports, std::array<double, 2>& out);
+
+  /// The period mean and the complex mesh harmonics C_k = 2 <x e^{-i 2 pi k phase}> of the encoder
+  /// TE at pinion torque `torque` for parameters `p`, without e, with shaft deflections `shafts`
+  /// (shaftDeflection at the same torque, scale 1) and without the TE offset.
+  void waveform(const CalibrationVector& p, double torque, const std::array<double, 2>& shafts, double& mean,
+                std::array<std::complex<double>, kFeatureHarmonics>& harmonics) const;
+  /// The mesh deflection delta at grid point j (flank state from F).
+  double meshDeflection(const CalibrationVector& p, double mesh_force, int j) const;
+  /// Features at `torque` against the baseline at `baseline_torque` (see FeatureVector).
+  FeatureVector features(const CalibrationVector& p, double torque, const std::array<double, 2>& shafts,
+                         double baseline_torque, const std::array<double, 2>& baseline_shafts) const;
+  /// The encoder TE at mesh phase `phase` minus the baseline's, offset included (the per-reading
+  /// prediction the measured TE is compared with).
+  double at(const CalibrationVector& p, double phase, double torque, const std::array<double, 2>& shafts,
+            double baseline_torque, const std::array<double, 2>& baseline_shafts) const;
+  /// Period-mean composite mesh stiffness [N/m] for `p` under pinion torque `torque` (flank state
+  /// per phase), and the series compliance mean(x(T) - x(0)) / F [m/N].
+  double meanMeshStiffness(const CalibrationVector& p, double torque) const;
+  /// Signed mesh force F = T / r_b,pinion [N] (seed 000 eq 14).
+  double meshForce(double torque) const { return torque / base_radius_[0]; }
+  /// Pinion torque at which the back half lifts, F = F_p (1 + k1/k_c) with period-mean k1, k_c
+  /// (the knee of TE against torque), for `p` [N·m].
+  double kneeTorque(const CalibrationVector& p) const;
+  const std::array<double, 2>& baseRadius() const { return base_radius_; }
+
+ private:
+  struct GridPoint {
+    double weight = 0.0;  ///< share of the period
+    double k1 = 0.0, k2 = 0.0;  ///< tooth stiffness at scale 1 [N/m]
+    std::array<std::complex<double>, kFeatureHarmonics> basis;  ///< 2 e^{-i 2 pi k phase}
+    double phase = 0.0;
+  };
+  std::vector<GridPoint> grid_;
+  double spring_ = 0.0;  ///< k_te [N/m]
+  std::array<double, 2> base_radius_{};
+  /// Scratch solutions for shaftDeflection (one per support): no allocation once sized.
+  std::vector<BearingSolution> loaded_, unloaded_;
+};
+
+}  // namespace drivetrain_stiffness

@@ -1,0 +1,316 @@
+#include "drivetrain_stiffness/calibration/calibrator.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+#include <Eigen/Cholesky>
+#include <Eigen/LU>
+
+#include "drivetrain_stiffness/core/constants.hpp"
+#include "drivetrain_stiffness/core/modal_analysis.hpp"
+#include "drivetrain_stiffness/core/scenes.hpp"
+#include "drivetrain_stiffness/core/stiffness_estimator.hpp"
+#include "drivetrain_stiffness/core/validation.hpp"
+
+namespace drivetrain_stiffness {
+
+const char* toString(WindowOutcome outcome) {
+  switch (outcome) {
+    case WindowOutcome::kNone: return "none";
+    case WindowOutcome::kBaseline: return "baseline";
+    case WindowOutcome::kUpdated: return "updated";
+    case WindowOutcome::kGated: return "gated (normalised innovation above ~gate)";
+    case WindowOutcome::kNoBaseline: return "no baseline yet (needs a window at |torque| <= ~baseline_torque)";
+    case WindowOutcome::kTooSlow: return "not excited: slower than ~min_speed_rpm";
+    case WindowOutcome::kNotQuasiStatic: return "not excited: mesh frequency above ~max_mesh_to_natural of the lowest mode";
+    case WindowOutcome::kTooSparse: return "not excited: too few readings per mesh period for the second harmonic";
+    case WindowOutcome::kIllConditioned: return "not excited: the readings do not determine the shaft orders";
+  }
+  return "?";
+}
+
+namespace {
+constexpr double k95 = 1.959963984540054;  // two-sided 95 % of the normal distribution
+}  // namespace
+
+Calibrator::Calibrator(const RigConfig& rig)
+    : rig_(rig),
+      config_(rig.calibration),
+      model_(rig),
+      regression_(rig.gears.teeth[0], rig.gears.teeth[1]) {
+  if (!config_.present) throw InvalidInput("calibration: the gearbox has no calibration block");
+  if (!rig.dynamics.present) throw InvalidInput("calibration: needs the gearbox's dynamics block (masses for the modes)");
+  teeth_[0] = rig.gears.teeth[0];
+  teeth_[1] = rig.gears.teeth[1];
+  // Whole turns of both encoders shift x by 2 pi (m r_b,p + n r_b,g); with r_b proportional to z
+  // these form the lattice 2 pi r_b,p gcd(z_p, z_g) / z_p.
+  lattice_ = kTwoPi * model_.baseRadius()[0] * std::gcd(teeth_[0], teeth_[1]) / teeth_[0];
+  const CalibrationConfig& c = config_;
+  prior_mean_ << c.mesh_stiffness_scale.mean, c.pinion_bearing_scale.mean, c.gear_bearing_scale.mean,
+      c.preload_torque.mean, c.te_offset.mean;
+  estimate_.prior_std << c.mesh_stiffness_scale.std, c.pinion_bearing_scale.std, c.gear_bearing_scale.std,
+      c.preload_torque.std, c.te_offset.std;
+  if (!(rig.anti_backlash.spring_stiffness > 0.0)) estimate_.prior_std[kPreloadTorque] = 0.0;  // no scissor spring
+  theta_ = prior_mean_;
+  covariance_ = estimate_.prior_std.cwiseAbs2().asDiagonal();
+  estimate_.value = theta_;
+  estimate_.std = estimate_.prior_std;
+}
+
+void Calibrator::interrupt() { window_.open = false; }
+
+int Calibrator::reading(double t, double pinion, double gear, double phase, double speed, double torque,
+                        const StiffnessEstimator& supports, MeasuredTeSample& sample) {
+  // 1. The measured TE, reduced onto the lattice around the first one.
+  const double raw = model_.baseRadius()[0] * pinion + model_.baseRadius()[1] * gear;
+  if (!te_reference_) te_reference_ = raw;
+  const double te = *te_reference_ + std::remainder(raw - *te_reference_, lattice_);
+
+  // 2. The window: closed when it spans a gear turn, dropped when the torque leaves its band.
+  int result = kNothing;
+  if (window_.open && std::abs(torque - window_.torque0) > config_.torque_band + 0.01 * std::abs(window_.torque0)) {
+    window_.open = false;
+  }
+  if (!window_.open) {
+    regression_.clear();
+    window_ = Window{};
+    window_.open = true;
+    window_.t0 = t;
+    window_.torque0 = torque;
+    window_.angle_min = window_.angle_max = pinion;
+  }
+  regression_.add(pinion, phase, te);
+  window_.t1 = t;
+  window_.angle_min = std::min(window_.angle_min, pinion);
+  window_.angle_max = std::max(window_.angle_max, pinion);
+  window_.torque_sum += torque;
+  window_.speed_sum += speed;
+  ++window_.n;
+  const double gear_turn = kTwoPi * std::max(1.0, static_cast<double>(teeth_[1]) / teeth_[0]);
+  if (window_.angle_max - window_.angle_min >= gear_turn) {
+    closeWindow(supports);
+    window_.open = false;
+    result |= kWindow;
+  }
+
+  // 3. The processed reading, once a baseline and a fit exist.
+  if (base_count_ > 0 && has_fit_) {
+    double base = base_mean_;
+    for (int k = 0; k < OrderRegression::kMeshHarmonics; ++k) {
+      base += std::real(base_harmonics_[k] * std::polar(1.0, kTwoPi * (k + 1) * phase));
+    }
+    sample.te = te - base - regression_.orders(last_fit_, pinion);
+    const double scale = shafts_torque_ != 0.0 ? torque / shafts_torque_ : 0.0;
+    const std::array<double, 2> shafts{shafts_[0] * scale, shafts_[1] * scale};
+    sample.predicted = model_.at(theta_, phase, torque, shafts, base_torque_, base_shafts_);
+    sample.residual = sample.te - sample.predicted;
+    sample.torque = torque;
+    sample.phase = phase;
+    result |= kSample;
+  }
+  return result;
+}
+
+WindowOutcome Calibrator::excitation(double speed, double duration) const {
+  const double rpm = std::abs(speed) * 60.0 / kTwoPi;
+  if (rpm < config_.min_speed_rpm) return WindowOutcome::kTooSlow;
+  const double mesh_hz = std::abs(speed) * teeth_[0] / kTwoPi;
+  const double lowest = estimate_.natural_frequency[0];
+  if (lowest > 0.0 && mesh_hz > config_.max_mesh_to_natural * lowest) return WindowOutcome::kNotQuasiStatic;
+  // The second mesh harmonic below 0.45 of the reading rate (Nyquist with a margin).
+  const double rate = duration > 0.0 ? static_cast<double>(window_.n - 1) / duration : 0.0;
+  if (!(2.0 * mesh_hz < 0.45 * rate)) return WindowOutcome::kTooSparse;
+  return WindowOutcome::kUpdated;
+}
+
+void Calibrator::closeWindow(const StiffnessEstimator& supports) {
+  ++estimate_.windows;
+  const double n = static_cast<double>(window_.n);
+  const double torque = window_.torque_sum / n;
+  const double speed = window_.speed_sum / n;
+  estimate_.window_torque = torque;
+  estimate_.window_speed = speed;
+  if (estimate_.natural_frequency[0] == 0.0) outputs(torque, supports);  // the modes, for the first check
+  OrderRegression::Fit fit;
+  WindowOutcome outcome = excitation(speed, window_.t1 - window_.t0);
+  if (outcome == WindowOutcome::kUpdated && !regression_.solve(fit)) outcome = WindowOutcome::kIllConditioned;
+  if (outcome != WindowOutcome::kUpdated) {
+    ++estimate_.not_excited;
+    estimate_.outcome = outcome;
+    estimate_.excited = false;
+    return;
+  }
+  last_fit_ = fit;
+  has_fit_ = true;
+  estimate_.excited = true;
+  if (std::abs(torque) <= config_.baseline_torque) {
+    // 3. The baseline: running means of the window fits (equal weights: the windows are alike).
+    const double k = static_cast<double>(++base_count_);
+    base_torque_ += (torque - base_torque_) / k;
+    base_mean_ += (fit.mean - base_mean_) / k;
+    for (int h = 0; h < OrderRegression::kMeshHarmonics; ++h) base_harmonics_[h] += (fit.harmonics[h] - base_harmonics_[h]) / k;
+    // Variance of the running mean: the windows' own variances / k (between-window scatter is
+    // checked by the NIS of the loaded windows).
+    base_mean_var_ += (fit.mean_std * fit.mean_std - base_mean_var_) / k;
+    base_harm_var_ += (fit.harmonic_std * fit.harmonic_std - base_harm_var_) / k;
+    model_.shaftDeflection(base_torque_, supports, base_shafts_);
+    ++estimate_.baseline_windows;
+    estimate_.baseline = true;
+    estimate_.outcome = WindowOutcome::kBaseline;
+    return;
+  }
+  if (base_count_ == 0) {
+    ++estimate_.not_excited;
+    estimate_.outcome = WindowOutcome::kNoBaseline;
+    return;
+  }
+  // 4. The features above the baseline, with their standard deviations: the fit's, the baseline's,
+  // the model error and the floor, in quadrature.
+  FeatureVector z, z_std;
+  const double kb = static_cast<double>(base_count_);
+  z[0] = fit.mean - base_mean_;
+  z_std[0] = std::sqrt(fit.mean_std * fit.mean_std + base_mean_var_ / kb);
+  for (int h = 0; h < kFeatureHarmonics; ++h) {
+    z[1 + h] = std::abs(fit.harmonics[h] - base_harmonics_[h]);
+    z_std[1 + h] = std::sqrt(fit.harmonic_std * fit.harmonic_std + base_harm_var_ / kb);
+  }
+  model_.shaftDeflection(torque, supports, shafts_);
+  shafts_torque_ = torque;
+  update(z, z_std, torque, supports);
+  outputs(torque, supports);
+}
+
+FeatureVector Calibrator::predict(const CalibrationVector& p, double torque) const {
+  return model_.features(p, torque, shafts_, base_torque_, base_shafts_);
+}
+
+void Calibrator::update(const FeatureVector& z, const FeatureVector& z_std, double torque, const StiffnessEstimator&) {
+  // Random walk since the last update (a preload that relaxes, wear): relative to the prior spread.
+  const double t = window_.t1;
+  const double dt = has_update_t_ ? std::max(0.0, t - last_update_t_) : 0.0;
+  CalibrationMatrix prior = covariance_;
+  prior.diagonal() += (config_.drift * config_.drift * dt) * estimate_.prior_std.cwiseAbs2();
+
+  auto jacobian = [&](const CalibrationVector& p, Eigen::Matrix<double, kFeatureSize, kCalibrationSize>& H) {
+    H.setZero();
+    for (int i = 0; i < kCalibrationSize; ++i) {
+      if (!(estimate_.prior_std[i] > 0.0)) continue;  // held: no column
+      const double step = 1e-4 * std::max(estimate_.prior_std[i], std::abs(p[i]));
+      CalibrationVector a = p, b = p;
+      a[i] += step;
+      b[i] -= step;
+      H.col(i) = (predict(a, torque) - predict(b, torque)) / (2.0 * step);
+    }
+  };
+  // Measurement noise: the window's own, the relative model error and the floor (docs/calibration.md).
+  Eigen::Matrix<double, kFeatureSize, kFeatureSize> R = Eigen::Matrix<double, kFeatureSize, kFeatureSize>::Zero();
+  const FeatureVector h0 = predict(theta_, torque);
+  for (int i = 0; i < kFeatureSize; ++i) {
+    const double model = config_.model_error * std::abs(h0[i]);
+    R(i, i) = z_std[i] * z_std[i] + model * model + config_.te_noise_floor * config_.te_noise_floor;
+  }
+  Eigen::Matrix<double, kFeatureSize, kCalibrationSize> H;
+  jacobian(theta_, H);
+  const FeatureVector innovation = z - h0;
+  const Eigen::Matrix<double, kFeatureSize, kFeatureSize> S = H * prior * H.transpose() + R;
+  const double nis = innovation.dot(S.ldlt().solve(innovation));
+  estimate_.nis = nis;
+  estimate_.measured = z;
+  estimate_.feature_std = R.diagonal().cwiseSqrt();
+  if (!(nis <= config_.gate)) {  // also refuses a NaN
+    ++estimate_.gated;
+    estimate_.outcome = WindowOutcome::kGated;
+    estimate_.predicted = h0;
+    return;
+  }
+  // Iterated EKF (Gauss-Newton on the posterior mode): relinearise at the new estimate.
+  CalibrationVector theta = theta_;
+  Eigen::Matrix<double, kCalibrationSize, kFeatureSize> K;
+  for (int iteration = 0; iteration < 4; ++iteration) {
+    const FeatureVector h = predict(theta, torque);
+    if (iteration > 0) jacobian(theta, H);
+    const Eigen::Matrix<double, kFeatureSize, kFeatureSize> Si = H * prior * H.transpose() + R;
+    K = prior * H.transpose() * Si.inverse();
+    CalibrationVector next = theta_ + K * (z - h - H * (theta_ - theta));
+    // Physical bounds: scales in [0.05, 20) as the YAML loader's, a preload torque >= 0.
+    for (int i : {kMeshScale, kPinionBearingScale, kGearBearingScale}) next[i] = std::clamp(next[i], 0.05, 19.9);
+    next[kPreloadTorque] = std::max(0.0, next[kPreloadTorque]);
+    const double moved = ((next - theta).cwiseQuotient(estimate_.prior_std.cwiseMax(1e-300))).cwiseAbs().maxCoeff();
+    theta = next;
+    if (moved < 1e-6) break;
+  }
+  // Joseph form: stays symmetric positive semi-definite whatever the rounding.
+  const CalibrationMatrix IKH = CalibrationMatrix::Identity() - K * H;
+  covariance_ = IKH * prior * IKH.transpose() + K * R * K.transpose();
+  covariance_ = 0.5 * (covariance_ + covariance_.transpose()).eval();
+  theta_ = theta;
+  last_update_t_ = t;
+  has_update_t_ = true;
+  ++estimate_.updates;
+  estimate_.outcome = WindowOutcome::kUpdated;
+  estimate_.predicted = predict(theta_, torque);
+}
+
+void Calibrator::outputs(double torque, const StiffnessEstimator& supports) {
+  CalibrationEstimate& e = estimate_;
+  e.value = theta_;
+  e.std = covariance_.diagonal().cwiseMax(0.0).cwiseSqrt();
+  for (int i = 0; i < kCalibrationSize; ++i) e.identified[i] = e.prior_std[i] > 0.0 && e.std[i] < 0.5 * e.prior_std[i];
+  const CalibrationMatrix& P = covariance_;
+  // A scalar output's standard deviation by linearisation: sqrt(g' P g), g by central differences.
+  auto spread = [&](auto&& f) {
+    CalibrationVector g = CalibrationVector::Zero();
+    for (int i = 0; i < kCalibrationSize; ++i) {
+      if (!(e.prior_std[i] > 0.0)) continue;
+      const double step = 1e-4 * std::max(e.prior_std[i], std::abs(theta_[i]));
+      CalibrationVector a = theta_, b = theta_;
+      a[i] += step;
+      b[i] -= step;
+      g[i] = (f(a) - f(b)) / (2.0 * step);
+    }
+    return std::sqrt(std::max(0.0, g.dot(P * g)));
+  };
+  // Series compliance at the reference torque: mean TE above zero torque over the mesh force.
+  const double tr = config_.reference_torque;
+  model_.shaftDeflection(tr, supports, scratch_);
+  const std::array<double, 2> zero{0.0, 0.0};
+  const double fr = model_.meshForce(tr);
+  auto compliance = [&](const CalibrationVector& p) { return (model_.features(p, tr, scratch_, 0.0, zero)[0] - p[kTeOffset]) / fr; };
+  e.series_compliance = compliance(theta_);
+  e.series_compliance_std = spread(compliance);
+  // Mesh stiffness at the window's torque.
+  auto mesh = [&](const CalibrationVector& p) { return model_.meanMeshStiffness(p, torque); };
+  e.mesh_stiffness = mesh(theta_);
+  const double mesh_std = spread(mesh);
+  e.mesh_stiffness_low = e.mesh_stiffness - k95 * mesh_std;
+  e.mesh_stiffness_high = e.mesh_stiffness + k95 * mesh_std;
+  // Bearing stiffness per shaft: the Hertz tangent at the current load (scale 1) times the scale.
+  std::array<double, 2> unit{0.0, 0.0};
+  for (std::size_t i = 0; i < rig_.bearings.size(); ++i) {
+    const SupportEstimate& s = supports.current().supports[i];
+    unit[rig_.bearings[i].shaft] += s.solution.radialStiffness() / supports.supportConfig(i).stiffness_scale;
+  }
+  for (int s = 0; s < 2; ++s) {
+    const int index = s == 0 ? kPinionBearingScale : kGearBearingScale;
+    e.bearing_stiffness[s] = theta_[index] * unit[s];
+    e.bearing_stiffness_low[s] = (theta_[index] - k95 * e.std[index]) * unit[s];
+    e.bearing_stiffness_high[s] = (theta_[index] + k95 * e.std[index]) * unit[s];
+  }
+  // Natural frequencies of the calibrated model (modal_analysis.hpp), each with its band.
+  auto modes = [&](const CalibrationVector& p) {
+    const std::array<double, 2> kb{p[kPinionBearingScale] * unit[0], p[kGearBearingScale] * unit[1]};
+    return modalAnalysis(rigRotorParameters(rig_, supports.mesh(), kb), model_.meanMeshStiffness(p, torque));
+  };
+  const std::array<Mode, 3> m = modes(theta_);
+  for (int i = 0; i < 3; ++i) {
+    const double f = m[i].natural_frequency;
+    const double s = spread([&](const CalibrationVector& p) { return modes(p)[i].natural_frequency; });
+    e.natural_frequency[i] = f;
+    e.natural_frequency_low[i] = f - k95 * s;
+    e.natural_frequency_high[i] = f + k95 * s;
+  }
+  e.knee_torque = model_.kneeTorque(theta_);
+}
+
+}  // namespace drivetrain_stiffness

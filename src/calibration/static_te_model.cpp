@@ -1,0 +1,149 @@
+#include "drivetrain_stiffness/calibration/static_te_model.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "drivetrain_stiffness/core/constants.hpp"
+#include "drivetrain_stiffness/core/stiffness_estimator.hpp"
+#include "drivetrain_stiffness/core/validation.hpp"
+
+namespace drivetrain_stiffness {
+
+const char* calibrationName(int index) {
+  switch (index) {
+    case kMeshScale: return "mesh_stiffness_scale";
+    case kPinionBearingScale: return "pinion_bearing_scale";
+    case kGearBearingScale: return "gear_bearing_scale";
+    case kPreloadTorque: return "preload_torque";
+    case kTeOffset: return "te_offset";
+    default: return "?";
+  }
+}
+
+StaticTeModel::StaticTeModel(const RigConfig& rig) {
+  // The drawing's tooth stiffness (scale 1): the calibrated scale multiplies it.
+  const AntiBacklashMesh mesh(rig.gears, rig.anti_backlash, rig.mesh_model, rig.mesh_samples, 1.0);
+  spring_ = rig.anti_backlash.spring_stiffness;
+  base_radius_ = {mesh.geometry().baseRadius(0), mesh.geometry().baseRadius(1)};
+  // Midpoint rule inside each interval between switching phases, where k1 and k2 are smooth: the
+  // steps add no error (a grid across a step would be off by up to step / points per harmonic).
+  std::vector<double> breaks = mesh.switchingPhases();
+  breaks.push_back(1.0);
+  constexpr int kPerInterval = 64;
+  for (std::size_t s = 0; s + 1 < breaks.size(); ++s) {
+    const double a = breaks[s], width = breaks[s + 1] - a;
+    if (width <= 1e-12) continue;
+    for (int i = 0; i < kPerInterval; ++i) {
+      GridPoint g;
+      g.phase = a + (i + 0.5) * width / kPerInterval;
+      g.weight = width / kPerInterval;
+      const CompositeMesh c = mesh.exactAt(g.phase, 0.0);
+      g.k1 = c.k1;
+      g.k2 = c.k2;
+      for (int k = 0; k < kFeatureHarmonics; ++k) g.basis[k] = 2.0 * std::polar(1.0, -kTwoPi * (k + 1) * g.phase);
+      grid_.push_back(g);
+    }
+  }
+}
+
+double StaticTeModel::meshDeflection(const CalibrationVector& p, double force, int j) const {
+  const GridPoint& g = grid_[static_cast<std::size_t>(j)];
+  const double k1 = p[kMeshScale] * g.k1;
+  if (!(spring_ > 0.0)) return force / k1;  // an ordinary gear: the drive flank only (force >= 0)
+  const double k2 = p[kMeshScale] * g.k2;
+  const double kc = spring_ * k2 / (spring_ + k2);
+  const double fp = p[kPreloadTorque] / base_radius_[1];
+  // The three flank states of anti_backlash_mesh.hpp, multiplied out as flankContact does.
+  if (force * kc > fp * (k1 + kc)) return (force - fp) / k1;   // drive flank only
+  if (force * k1 < -fp * (k1 + kc)) return (force + fp) / kc;  // back flank only
+  return force / (k1 + kc);                                     // both flanks
+}
+
+void StaticTeModel::shaftDeflection(double torque, const StiffnessEstimator& supports, std::array<double, 2>& out) {
+  const double force = std::abs(meshForce(torque));
+  const std::size_t n = supports.rig().bearings.size();
+  loaded_.resize(n);
+  unloaded_.resize(n);
+  out = {0.0, 0.0};
+  Vector5d load = Vector5d::Zero();
+  for (std::size_t i = 0; i < n; ++i) {
+    const BearingSupportConfig& c = supports.supportConfig(i);
+    const BearingSupport& model = supports.supportModel(i);
+    load[kUx] = c.radial_preload;
+    model.solve(load, nullptr, unloaded_[i]);
+    load[kUx] = c.radial_preload + c.mesh_load_share * force;
+    model.solve(load, &unloaded_[i].displacement, loaded_[i]);
+    // The secant deflection of the support under the mesh force, carried to the gear by the lever
+    // rule (a rigid shaft: the gear moves by the share-weighted support deflections).
+    out[c.shaft] += c.mesh_load_share * (loaded_[i].displacement[kUx] - unloaded_[i].displacement[kUx]);
+  }
+  if (torque < 0.0) out = {-out[0], -out[1]};
+}
+
+void StaticTeModel::waveform(const CalibrationVector& p, double torque, const std::array<double, 2>& shafts,
+                             double& mean, std::array<std::complex<double>, kFeatureHarmonics>& harmonics) const {
+  const double force = meshForce(torque);
+  const double bearings = shafts[0] / p[kPinionBearingScale] + shafts[1] / p[kGearBearingScale];
+  mean = bearings;  // constant over the period: no harmonic
+  harmonics.fill({0.0, 0.0});
+  for (std::size_t j = 0; j < grid_.size(); ++j) {
+    const double delta = meshDeflection(p, force, static_cast<int>(j));
+    mean += grid_[j].weight * delta;
+    for (int k = 0; k < kFeatureHarmonics; ++k) harmonics[k] += grid_[j].weight * delta * grid_[j].basis[k];
+  }
+}
+
+FeatureVector StaticTeModel::features(const CalibrationVector& p, double torque, const std::array<double, 2>& shafts,
+                                      double baseline_torque, const std::array<double, 2>& baseline_shafts) const {
+  double m = 0.0, m0 = 0.0;
+  std::array<std::complex<double>, kFeatureHarmonics> c, c0;
+  waveform(p, torque, shafts, m, c);
+  waveform(p, baseline_torque, baseline_shafts, m0, c0);
+  FeatureVector f;
+  f[0] = m - m0 + p[kTeOffset];
+  for (int k = 0; k < kFeatureHarmonics; ++k) f[1 + k] = std::abs(c[k] - c0[k]);
+  return f;
+}
+
+double StaticTeModel::at(const CalibrationVector& p, double phase, double torque, const std::array<double, 2>& shafts,
+                         double baseline_torque, const std::array<double, 2>& baseline_shafts) const {
+  // The grid point whose interval holds the phase (midpoints 1/64 of an interval apart: the
+  // per-reading curve for plots; the features use the exact period integrals).
+  const double ph = phase - std::floor(phase);
+  auto it = std::lower_bound(grid_.begin(), grid_.end(), ph, [](const GridPoint& g, double x) { return g.phase + 0.5 * g.weight < x; });
+  const int j = static_cast<int>(std::min<std::size_t>(static_cast<std::size_t>(it - grid_.begin()), grid_.size() - 1));
+  const double loaded = meshDeflection(p, meshForce(torque), j) + shafts[0] / p[kPinionBearingScale] + shafts[1] / p[kGearBearingScale];
+  const double base = meshDeflection(p, meshForce(baseline_torque), j) + baseline_shafts[0] / p[kPinionBearingScale] +
+                      baseline_shafts[1] / p[kGearBearingScale];
+  return loaded - base + p[kTeOffset];
+}
+
+double StaticTeModel::meanMeshStiffness(const CalibrationVector& p, double torque) const {
+  const double force = meshForce(torque);
+  const double fp = p[kPreloadTorque] / base_radius_[1];
+  double k = 0.0;
+  for (const GridPoint& g : grid_) {
+    const double k1 = p[kMeshScale] * g.k1;
+    const double k2 = p[kMeshScale] * g.k2;
+    const double kc = spring_ > 0.0 ? spring_ * k2 / (spring_ + k2) : 0.0;
+    double ks = k1 + kc;
+    if (!(kc > 0.0) || force * kc > fp * (k1 + kc)) ks = k1;
+    else if (force * k1 < -fp * (k1 + kc)) ks = kc;
+    k += g.weight * ks;
+  }
+  return k;
+}
+
+double StaticTeModel::kneeTorque(const CalibrationVector& p) const {
+  if (!(spring_ > 0.0)) return 0.0;
+  double k1 = 0.0, kc = 0.0;
+  for (const GridPoint& g : grid_) {
+    k1 += g.weight * p[kMeshScale] * g.k1;
+    const double k2 = p[kMeshScale] * g.k2;
+    kc += g.weight * spring_ * k2 / (spring_ + k2);
+  }
+  const double fp = p[kPreloadTorque] / base_radius_[1];
+  return fp * (1.0 + k1 / kc) * base_radius_[0];
+}
+
+}  // namespace drivetrain_stiffness
