@@ -35,7 +35,9 @@ std::vector<std::pair<std::string, std::uint64_t>> namedCounters(const PipelineC
           {"gap_restarts", c.gap_restarts},               {"dynamics_errors", c.dynamics_errors},
           {"stiffness_published", c.stiffness_out},       {"stiffness_coalesced", c.stiffness_coalesced},
           {"transmission_error_published", c.te_out},     {"te_spectra_published", c.spectra_out},
-          {"resonance_published", c.resonance_out},       {"modal_updates", c.modal_updates}};
+          {"resonance_published", c.resonance_out},       {"modal_updates", c.modal_updates},
+          {"measured_te_published", c.measured_te_out},   {"calibration_published", c.calibration_out},
+          {"calibration_errors", c.calibration_errors}};
 }
 
 void PipelineOptions::validate() const {
@@ -100,6 +102,7 @@ RigPipeline::RigPipeline(const RigConfig& rig, const PipelineOptions& options, c
     rig_.dynamics.speed_rpm = options_.pinion_speed_rpm;
   }
   estimator_ = std::make_unique<StiffnessEstimator>(rig_, options_.limits);
+  if (options_.calibrate && rig_.calibration.present && rig_.dynamics.present) calibrator_ = std::make_unique<Calibrator>(rig_);
   pinion_speed_ = options_.pinion_speed_rpm * kTwoPi / 60.0;
   if (options_.dynamics) {
     // One mesh table for the rig: the stiffness estimator's, shared read-only with the dynamics.
@@ -132,6 +135,7 @@ void RigPipeline::reset(const std::string& reason) {
   angle_origin_.reset();
   anchor_.reset();
   reading_.reset();
+  if (calibrator_) calibrator_->interrupt();
   encoders_ = false;
   last_resonance_.reset();  // the next accepted input republishes the resonance
   counters_.last_event = "reset: " + reason;
@@ -324,9 +328,37 @@ void RigPipeline::acceptMotion(Stamp stamp, const MotionInput& m, PipelineSink& 
   // Rule 10: the dynamics run up to this reading with the motion before it.
   advanceDynamicsTo(stamp, sink);
   reading_ = accepted;
+  calibrate(stamp, accepted, last != nullptr, sink);
   anchor_ = AngleAnchor{stamp, next.pinion + options_.mesh_phase_offset * kTwoPi / teeth(0), next.speed};
   encoders_ = true;
   followAnchor(stamp);
+}
+
+void RigPipeline::calibrate(Stamp stamp, const Reading& reading, bool continuous, PipelineSink& sink) {
+  if (!calibrator_ || !reading.gear) return;
+  if (!continuous) calibrator_->interrupt();
+  const double turns = meshTurns(reading.pinion) + options_.mesh_phase_offset;
+  const double phase = turns - std::floor(turns);
+  try {
+    const int out = calibrator_->reading(stamp.toSec(), reading.pinion, *reading.gear, phase, reading.speed, held_torque_,
+                                         *estimator_, measured_te_);
+    if (out & Calibrator::kSample) {
+      ++counters_.measured_te_out;
+      sink.measuredTe(stamp, measured_te_);
+    }
+    if (out & Calibrator::kWindow) {
+      ++counters_.calibration_out;
+      sink.calibration(stamp, calibrator_->estimate());
+    }
+  } catch (const InvalidInput& e) {
+    ++counters_.calibration_errors;
+    counters_.last_event = std::string("calibration: ") + e.what();
+    calibrator_->interrupt();
+  } catch (const UnreachableLoad& e) {
+    ++counters_.calibration_errors;
+    counters_.last_event = std::string("calibration: ") + e.what();
+    calibrator_->interrupt();
+  }
 }
 
 double RigPipeline::ratio() const { return static_cast<double>(teeth(0)) / teeth(1); }

@@ -31,6 +31,10 @@
 // 10. Every input takes effect at its own stamp: the dynamics are integrated up to it with what was
 //     held before (torque, bearing stiffness, motion), then the input is applied. An input stamped
 //     before the dynamics' time (another stream got there first) applies from that time.
+// 11. With a calibration block in the gearbox (and ~calibrate), each accepted reading that carries
+//     the gear joint gives the measured TE r_b,p theta_p + r_b,g theta_g to the Calibrator
+//     (calibration/calibrator.hpp) with the torque held at its stamp; a reading that follows a
+//     break (a time-out, a reset) starts a new window. Its outputs go to the sink.
 // Value rules: NaN, Inf, negative and absurd values are rejected by the core classes
 // (InvalidInput naming the field); the state is left as it was. A torque whose header.frame_id is
 // not ~torque_frame is rejected before its value is read (the sign of torque.z selects the loaded
@@ -49,6 +53,7 @@
 #include <string_view>
 #include <vector>
 
+#include "drivetrain_stiffness/calibration/calibrator.hpp"
 #include "drivetrain_stiffness/core/dynamics_estimator.hpp"
 #include "drivetrain_stiffness/core/modal_analysis.hpp"
 #include "drivetrain_stiffness/core/motion.hpp"
@@ -108,6 +113,8 @@ struct PipelineOptions {
   double motion_timeout = 0.1;       ///< [s] no joint_states for this long: back to ~pinion_speed_rpm
   double gear_ratio_tolerance = 0.01;  ///< [rad] gear angle off -(z_p/z_g) pinion angle by more: reported
   int motion_slices = 256;           ///< slices per mesh period of the measured-motion dynamics
+  /// Calibrate against the encoders' TE when the gearbox has a calibration block (rule 11).
+  bool calibrate = true;
   void validate() const;
 };
 
@@ -130,6 +137,12 @@ class PipelineSink {
   virtual void spectrum(Stamp /*stamp*/, const SlidingSpectrum& /*spectrum*/) {}
   /// The resonance estimate moved by more than the threshold (or after a reset); stamp = the input's.
   virtual void resonance(Stamp /*stamp*/, const ResonanceEstimate& /*estimate*/) {}
+  /// One encoder reading's measured TE (baseline and shaft orders removed) beside the calibrated
+  /// model's; stamp = the reading's (rule 11).
+  virtual void measuredTe(Stamp /*stamp*/, const MeasuredTeSample& /*sample*/) {}
+  /// The calibration after a closed window (every window, whatever its outcome); stamp = the
+  /// reading that closed it.
+  virtual void calibration(Stamp /*stamp*/, const CalibrationEstimate& /*estimate*/) {}
 };
 
 /// Why an input was not accepted (kAccepted otherwise).
@@ -161,6 +174,8 @@ struct PipelineCounters {
   std::uint64_t stiffness_out = 0, stiffness_coalesced = 0;  ///< published, and skipped by ~stiffness_rate
   std::uint64_t te_out = 0, spectra_out = 0, resonance_out = 0;
   std::uint64_t modal_updates = 0;  ///< modal analyses actually run (see RigPipeline::updateResonance)
+  std::uint64_t measured_te_out = 0, calibration_out = 0;  ///< published (rule 11)
+  std::uint64_t calibration_errors = 0;  ///< windows the calibration could not evaluate (last_event says why)
   double simulated_s = 0.0;         ///< model time integrated
   std::string last_event;           ///< last rejection or reset, with its reason
 };
@@ -207,6 +222,8 @@ class RigPipeline {
   const PipelineOptions& options() const { return options_; }
   const StiffnessEstimator& estimator() const { return *estimator_; }
   const DynamicsEstimator* dynamics() const { return dynamics_.get(); }
+  /// The live calibration (rule 11), or null without a calibration block or with ~calibrate off.
+  const Calibrator* calibrator() const { return calibrator_.get(); }
   const RigConfig& rig() const { return rig_; }
   const std::optional<ResonanceEstimate>& lastResonance() const { return last_resonance_; }
   /// Pinion angle at `stamp` [rad]: the last encoder reading extrapolated at its speed, or the
@@ -251,6 +268,8 @@ class RigPipeline {
   std::unique_ptr<StiffnessEstimator> estimator_;
   std::unique_ptr<DynamicsEstimator> dynamics_;
   std::unique_ptr<SlidingSpectrum> te_spectrum_;
+  std::unique_ptr<Calibrator> calibrator_;
+  MeasuredTeSample measured_te_;  ///< the calibrator's per-reading output (reused: no allocation)
   PipelineCounters counters_;
   SequenceGaps torque_seq_, preload_seq_, motion_seq_;
   std::optional<Stamp> last_motion_;
@@ -268,6 +287,8 @@ class RigPipeline {
     std::optional<double> gear, gear_reference;
   };
   std::optional<Reading> reading_;
+  /// Rule 11 for an accepted reading; `continuous`: it follows the last one without a break.
+  void calibrate(Stamp stamp, const Reading& reading, bool continuous, PipelineSink& sink);
   /// The reading unwrapped against `last` (null: none recent), its speed measured or differentiated.
   Reading unwrapReading(Stamp stamp, const MotionInput& reading, const Reading* last) const;
   double held_torque_ = 0.0;
