@@ -1,0 +1,285 @@
+// The live calibration (docs/calibration.md): the static encoder-TE model against independent
+// period integrals of the mesh table, the order regression against a synthetic signal, and the
+// calibrator against synthetic encoder readings of a rig whose parameters are known.
+#include <cmath>
+#include <iostream>
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "drivetrain_stiffness/calibration/calibrator.hpp"
+#include "drivetrain_stiffness/config/yaml_config.hpp"
+#include "drivetrain_stiffness/core/constants.hpp"
+#include "drivetrain_stiffness/core/stiffness_estimator.hpp"
+
+namespace drivetrain_stiffness {
+namespace {
+
+RigConfig seedRig() {
+  RigConfig rig = loadRigFile(std::string(DRIVETRAIN_SOURCE_DIR) + "/config/gearboxes/seed_servo.yaml");
+  rig.calibration.present = true;
+  rig.calibration.preload_torque = {rig.anti_backlash.preload_torque, 0.2 * rig.anti_backlash.preload_torque};
+  return rig;
+}
+
+CalibrationVector nominal(const RigConfig& rig) {
+  CalibrationVector p;
+  p << 1.0, 1.0, 1.0, rig.anti_backlash.preload_torque, 0.0;
+  return p;
+}
+
+/// The period mean of f(k1, k_c) by 20000 midpoints of the mesh table's exact pair sums: an
+/// integration independent of StaticTeModel's grid (which splits at the switching phases).
+template <typename F>
+double periodMean(const AntiBacklashMesh& mesh, F f) {
+  const int n = 20000;
+  double sum = 0.0;
+  for (int i = 0; i < n; ++i) {
+    const CompositeMesh c = mesh.exactAt((i + 0.5) / n, 0.0);
+    sum += f(c.k1, c.k_chain);
+  }
+  return sum / n;
+}
+
+TEST(StaticTeModel, MeanTeMatchesTheFlankStateClosedForms) {
+  const RigConfig rig = seedRig();
+  StaticTeModel model(rig);
+  const AntiBacklashMesh mesh(rig);
+  const CalibrationVector p = nominal(rig);
+  const std::array<double, 2> none{0.0, 0.0};
+  const double fp = rig.anti_backlash.preload_torque / model.baseRadius()[1];
+  // Both flanks (0.5 N·m is far below the knee, ~7 N·m): delta = F / (k1 + k_c) (seed 000 eq 1).
+  const double t_low = 0.5, f_low = t_low / model.baseRadius()[0];
+  const double both = periodMean(mesh, [&](double k1, double kc) { return f_low / (k1 + kc); });
+  EXPECT_NEAR(model.features(p, t_low, none, 0.0, none)[0] / both, 1.0, 2e-4);
+  // Drive flank only (20 N·m, beyond every phase's knee): delta = (F - F_p) / k1.
+  const double t_high = 20.0, f_high = t_high / model.baseRadius()[0];
+  const double drive = periodMean(mesh, [&](double k1, double) { return (f_high - fp) / k1; });
+  EXPECT_NEAR(model.features(p, t_high, none, 0.0, none)[0] / drive, 1.0, 2e-4);
+  // Back flank only (-5 N·m): delta = (F + F_p) / k_c, the soft scissor spring.
+  const double t_back = -5.0, f_back = t_back / model.baseRadius()[0];
+  const double back = periodMean(mesh, [&](double, double kc) { return (f_back + fp) / kc; });
+  EXPECT_NEAR(model.features(p, t_back, none, 0.0, none)[0] / back, 1.0, 2e-4);
+  // A mesh scale s divides the tooth compliance (k_c only partly: the spring is not scaled).
+  CalibrationVector stiffer = p;
+  stiffer[kMeshScale] = 1.25;
+  EXPECT_NEAR(model.features(stiffer, t_high, none, 0.0, none)[0] / drive, 1.0 / 1.25, 2e-4);
+}
+
+TEST(StaticTeModel, KneeIsWhereTheBackHalfLifts) {
+  const RigConfig rig = seedRig();
+  StaticTeModel model(rig);
+  const CalibrationVector p = nominal(rig);
+  const double knee = model.kneeTorque(p);
+  // F_p (1 + k1/k_c) with the seed's numbers: F_p = 1 N·m / r_b,g = 88.7 N and k1/k_c ~ 11
+  // (k_te = 1e7 N/m in series with k2 ~ 1e8 N/m), so ~1000 N of mesh force, ~6-7 N·m of pinion torque.
+  EXPECT_GT(knee, 5.0);
+  EXPECT_LT(knee, 8.0);
+  // The mean mesh stiffness drops from k1 + k_c to k1 across the knee (phase by phase).
+  EXPECT_GT(model.meanMeshStiffness(p, 0.5 * knee), model.meanMeshStiffness(p, 2.0 * knee) * 1.05);
+  // The knee scales with T_p.
+  CalibrationVector q = p;
+  q[kPreloadTorque] *= 1.2;
+  EXPECT_NEAR(model.kneeTorque(q) / knee, 1.2, 1e-12);
+}
+
+TEST(StaticTeModel, BearingDeflectionIsTheSecantNotTheTangent) {
+  RigConfig rig = seedRig();
+  StaticTeModel model(rig);
+  StiffnessEstimator estimator(rig);
+  std::array<double, 2> d{};
+  model.shaftDeflection(4.0, estimator, d);
+  // Independent: the support's own solve at the two loads (bearing_support.hpp).
+  const BearingSupportConfig& c = rig.bearings[0];
+  const BearingSupport support(c.spec, c.arrangement, c.axial_preload, c.interference, c.tilt);
+  Vector5d load = Vector5d::Zero();
+  load[kUx] = c.radial_preload;
+  const double u0 = support.solve(load).displacement[kUx];
+  load[kUx] = c.radial_preload + 4.0 / model.baseRadius()[0];
+  const double u1 = support.solve(load).displacement[kUx];
+  EXPECT_NEAR(d[0], u1 - u0, 1e-12);
+  // Reversed torque: the same magnitude, the other way along the line of action.
+  std::array<double, 2> r{};
+  model.shaftDeflection(-4.0, estimator, r);
+  EXPECT_NEAR(r[0], -d[0], 1e-15);
+  // The secant compliance exceeds the tangent's F / k_xx: the axial spring preload lets the shaft
+  // float axially, which k_xx (axial displacement held) does not (docs/calibration.md).
+  estimator.setTorque(4.0);
+  EXPECT_GT(d[0], 1.2 * (4.0 / model.baseRadius()[0]) / estimator.shaftRadialStiffness()[0]);
+}
+
+TEST(OrderRegression, SeparatesMeshHarmonicsFromShaftOrders) {
+  OrderRegression reg(20, 40);
+  EXPECT_EQ(reg.orderCount(), 3);  // 1, 2 and 0.5 pinion orders (the gear's 2x is the pinion's 1x)
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> noise(-1e-8, 1e-8);
+  const double c1 = 1e-6, c2 = 0.3e-6;
+  for (int i = 0; i < 20000; ++i) {
+    const double theta = 4.0 * kTwoPi * i / 20000.0 + 0.1;  // two gear turns
+    const double phase = 20.0 * theta / kTwoPi + 0.25;
+    const double x = 5e-3 + c1 * std::cos(kTwoPi * phase - 0.4) + c2 * std::sin(2.0 * kTwoPi * phase) +
+                     0.5e-6 * std::sin(theta + 0.3) + 0.2e-6 * std::cos(0.5 * theta) + 0.1e-6 * std::cos(2.0 * theta) + noise(rng);
+    reg.add(theta, phase - std::floor(phase), x);
+  }
+  OrderRegression::Fit fit;
+  ASSERT_TRUE(reg.solve(fit));
+  EXPECT_NEAR(fit.mean, 5e-3, 1e-9);
+  EXPECT_NEAR(std::abs(fit.harmonics[0]), c1, 1e-9);
+  EXPECT_NEAR(std::arg(fit.harmonics[0]), -0.4, 1e-3);  // a cos(. - 0.4) = Re(a e^{-0.4i} e^{i .}): C = a e^{-0.4i}
+  EXPECT_NEAR(std::abs(fit.harmonics[1]), c2, 1e-9);
+  EXPECT_NEAR(reg.orders(fit, 1.0), 0.5e-6 * std::sin(1.3) + 0.2e-6 * std::cos(0.5) + 0.1e-6 * std::cos(2.0), 1e-9);
+  // The noise is uniform in +-1e-8 m: rms 1e-8 / sqrt(3).
+  EXPECT_NEAR(fit.residual_rms, 1e-8 / std::sqrt(3.0), 1e-10);
+  EXPECT_NEAR(fit.mean_std, 1e-8 / std::sqrt(3.0) / std::sqrt(20000.0), 3e-11);
+}
+
+TEST(OrderRegression, RefusesAnUnderdeterminedWindow) {
+  OrderRegression reg(20, 40);
+  // Fewer than four readings per term: no fit (the window's noise could not be estimated).
+  for (int i = 0; i < 4 * reg.terms() - 1; ++i) reg.add(0.01 * i, 0.2 * i - std::floor(0.2 * i), 1e-6);
+  OrderRegression::Fit fit;
+  EXPECT_FALSE(reg.solve(fit));
+  // All readings at one angle: the shaft orders and the mean cannot be told apart.
+  OrderRegression still(20, 40);
+  for (int i = 0; i < 1000; ++i) still.add(1.0, 0.3, 1e-6);
+  EXPECT_FALSE(still.solve(fit));
+}
+
+/// Synthetic encoder readings of a rig with parameters `truth` (the static model's physics built
+/// here from the mesh table and the supports): 120 rpm, 5 kHz, a torque staircase through the knee
+/// and a reversal, 2^20-count encoders with 15 arcsec eccentricity each, 1 um manufacturing TE.
+struct SyntheticRig {
+  RigConfig rig;
+  CalibrationVector truth;
+  std::uint64_t seed = 1;
+};
+
+void runSweep(const SyntheticRig& s, Calibrator& calibrator, StiffnessEstimator& supports) {
+  StaticTeModel physics(s.rig);
+  const AntiBacklashMesh unit(s.rig.gears, s.rig.anti_backlash, s.rig.mesh_model, s.rig.mesh_samples, 1.0);
+  const double rbp = physics.baseRadius()[0], rbg = physics.baseRadius()[1];
+  // Up to 1.5 x the knee, but at most 10 N·m: the seed's bearings reach the ISO 76 contact-pressure
+  // limit near 11 N·m (1000 N radial preload plus ~2000 N of mesh force).
+  const double top = std::min(1.5 * physics.kneeTorque(s.truth), 10.0);
+  std::vector<double> levels = {0.0};
+  for (int i = 1; i <= 10; ++i) levels.push_back(0.1 * i * top);
+  for (int i = 1; i <= 4; ++i) levels.push_back(-0.25 * i);
+  levels.push_back(0.0);
+  std::mt19937_64 rng(s.seed);
+  std::uniform_real_distribution<double> uni(0.0, 1.0);
+  const double arcsec = kTwoPi / (360.0 * 3600.0);
+  const double ecc_p = (10.0 + 10.0 * uni(rng)) * arcsec, psi_p = kTwoPi * uni(rng);
+  const double ecc_g = (10.0 + 10.0 * uni(rng)) * arcsec, psi_g = kTwoPi * uni(rng);
+  const double count = kTwoPi / 1048576.0;  // 2^20 counts per turn
+  const double speed = 120.0 * kTwoPi / 60.0, rate = 5000.0, hold = 2.5;  // 2.5 gear turns per level
+  const double fp = s.truth[kPreloadTorque] / rbg;
+  MeasuredTeSample sample;
+  long i = 0;
+  for (double torque : levels) {
+    std::array<double, 2> d{};
+    physics.shaftDeflection(torque, supports, d);
+    const double bearings = d[0] / s.truth[kPinionBearingScale] + d[1] / s.truth[kGearBearingScale];
+    const double force = torque / rbp;
+    for (int j = 0; j < static_cast<int>(hold * rate); ++j, ++i) {
+      const double t = i / rate, theta_p = speed * t;
+      const double phase = 20.0 * theta_p / kTwoPi - std::floor(20.0 * theta_p / kTwoPi);
+      const CompositeMesh c = unit.at(phase, 0.0);
+      const double k1 = s.truth[kMeshScale] * c.k1, k2 = s.truth[kMeshScale] * c.k2;
+      const double kte = s.rig.anti_backlash.spring_stiffness, kc = kte * k2 / (kte + k2);
+      double delta = force / (k1 + kc);
+      if (force * kc > fp * (k1 + kc)) delta = (force - fp) / k1;
+      else if (force * k1 < -fp * (k1 + kc)) delta = (force + fp) / kc;
+      const double x = delta + bearings + 1e-6 * std::sin(kTwoPi * phase) + 3e-5;  // manufacturing TE, encoder zero
+      const double theta_g = (x - rbp * theta_p) / rbg;
+      const double read_p = std::round((theta_p + ecc_p * std::sin(theta_p + psi_p)) / count) * count;
+      const double read_g = std::round((theta_g + ecc_g * std::sin(theta_g + psi_g)) / count) * count;
+      calibrator.reading(t, read_p, read_g, phase, speed, torque, supports, sample);
+    }
+  }
+}
+
+TEST(Calibrator, RecoversAKnownRigAndFlagsWhatEncodersCannotSeparate) {
+  SyntheticRig s{seedRig(), {}, 3};
+  s.truth << 1.12, 0.85, 0.85, 1.15 * s.rig.anti_backlash.preload_torque, 0.0;
+  StiffnessEstimator supports(s.rig);
+  Calibrator calibrator(s.rig);
+  runSweep(s, calibrator, supports);
+  const CalibrationEstimate& e = calibrator.estimate();
+  ASSERT_GT(e.updates, 8u) << toString(e.outcome);
+  EXPECT_EQ(e.baseline_windows, 4u);  // two gear turns at each of the two zero-torque levels
+  std::cout << "estimate " << e.value.transpose() << "\nstd      " << e.std.transpose() << "\nupdates " << e.updates
+            << " gated " << e.gated << " nis " << e.nis << " compliance " << e.series_compliance << " +- " << e.series_compliance_std << "\n";
+  EXPECT_NEAR(e.value[kMeshScale] / s.truth[kMeshScale], 1.0, 0.05);
+  EXPECT_NEAR(e.value[kPreloadTorque] / s.truth[kPreloadTorque], 1.0, 0.05);
+  EXPECT_TRUE(e.identified[kMeshScale]);
+  EXPECT_TRUE(e.identified[kPreloadTorque]);
+  // The two shafts' bearings enter only as the sum of their compliances: neither alone is identified...
+  EXPECT_FALSE(e.identified[kPinionBearingScale]);
+  EXPECT_FALSE(e.identified[kGearBearingScale]);
+  // ...but the series compliance at the reference torque is, within 2 %.
+  StaticTeModel physics(s.rig);
+  std::array<double, 2> d{};
+  physics.shaftDeflection(s.rig.calibration.reference_torque, supports, d);
+  const double truth = (physics.features(s.truth, s.rig.calibration.reference_torque, d, 0.0, {0.0, 0.0})[0]) /
+                       physics.meshForce(s.rig.calibration.reference_torque);
+  EXPECT_NEAR(e.series_compliance / truth, 1.0, 0.02);
+  EXPECT_LT(std::abs(e.series_compliance - truth), 3.0 * e.series_compliance_std + 1e-15);
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_LT(e.natural_frequency_low[i], e.natural_frequency[i]);
+    EXPECT_GT(e.natural_frequency_high[i], e.natural_frequency[i]);
+  }
+}
+
+}  // namespace
+}  // namespace drivetrain_stiffness
+
+namespace drivetrain_stiffness {
+namespace {
+
+// docs/calibration.md, "Monte Carlo": 50 rigs drawn from the ranges (mesh scale 0.8-1.2,
+// each bearing scale 0.7-1.3, T_p +-20 %), each swept once with its own encoder errors. The 95 %
+// bounds must cover the truth in at least 90 % of the rigs (45 of 50).
+TEST(CalibratorMonteCarlo, ErrorsAndCoverageOverFiftyPerturbedRigs) {
+  // The readings come from the calibrator's own static model here, so the default 1 % model-error
+  // allowance makes the bounds conservative (all 50 cover: docs/calibration.md). Without it the
+  // sequential filter is overconfident on the knee's nonlinearity (T_p off by up to 28 %, coverage
+  // 25 of 50, measured): the allowance stays, and this test holds the errors and a coverage >= 90 %.
+  const RigConfig rig = seedRig();
+  std::mt19937_64 draw(2026);
+  std::uniform_real_distribution<double> uni(0.0, 1.0);
+  int covered_mesh = 0, covered_tp = 0, covered_compliance = 0, runs = 0;
+  double worst_mesh = 0.0, worst_tp = 0.0, worst_compliance = 0.0;
+  for (int run = 0; run < 50; ++run, ++runs) {
+    SyntheticRig s{rig, {}, static_cast<std::uint64_t>(100 + run)};
+    s.truth << 0.8 + 0.4 * uni(draw), 0.7 + 0.6 * uni(draw), 0.7 + 0.6 * uni(draw),
+        rig.anti_backlash.preload_torque * (0.8 + 0.4 * uni(draw)), 0.0;
+    StiffnessEstimator supports(s.rig);
+    Calibrator calibrator(s.rig);
+    runSweep(s, calibrator, supports);
+    const CalibrationEstimate& e = calibrator.estimate();
+    StaticTeModel physics(s.rig);
+    std::array<double, 2> d{};
+    const double tr = s.rig.calibration.reference_torque;
+    physics.shaftDeflection(tr, supports, d);
+    const double compliance = physics.features(s.truth, tr, d, 0.0, {0.0, 0.0})[0] / physics.meshForce(tr);
+    const double em = std::abs(e.value[kMeshScale] / s.truth[kMeshScale] - 1.0);
+    const double et = std::abs(e.value[kPreloadTorque] / s.truth[kPreloadTorque] - 1.0);
+    const double ec = std::abs(e.series_compliance / compliance - 1.0);
+    worst_mesh = std::max(worst_mesh, em);
+    worst_tp = std::max(worst_tp, et);
+    worst_compliance = std::max(worst_compliance, ec);
+    covered_mesh += std::abs(e.value[kMeshScale] - s.truth[kMeshScale]) <= 1.959964 * e.std[kMeshScale];
+    covered_tp += std::abs(e.value[kPreloadTorque] - s.truth[kPreloadTorque]) <= 1.959964 * e.std[kPreloadTorque];
+    covered_compliance += std::abs(e.series_compliance - compliance) <= 1.959964 * e.series_compliance_std;
+  }
+  std::cout << "worst error: mesh " << worst_mesh << " T_p " << worst_tp << " compliance " << worst_compliance
+            << "\ncovered of " << runs << ": mesh " << covered_mesh << " T_p " << covered_tp << " compliance "
+            << covered_compliance << "\n";
+  EXPECT_LT(worst_mesh, 0.05);
+  EXPECT_LT(worst_tp, 0.05);
+  EXPECT_LT(worst_compliance, 0.02);
+  for (int covered : {covered_mesh, covered_tp, covered_compliance}) EXPECT_GE(covered, 45);
+}
+
+}  // namespace
+}  // namespace drivetrain_stiffness
