@@ -194,7 +194,15 @@ void Calibrator::update(const FeatureVector& z, const FeatureVector& z_std, doub
 
   auto jacobian = [&](const CalibrationVector& p, Eigen::Matrix<double, kFeatureSize, kCalibrationSize>& H) {
     H.setZero();
-    for (int i = 0; i < kCalibrationSize; ++i) {
+    // Closed-form columns where the features are simple in the parameter: the offset adds to the
+    // mean; a bearing scale s divides its shaft's deflection (d/ds (u/s) = -u/s^2), which is the
+    // same at every phase, so it moves the mean only. The mesh scale and T_p by central differences.
+    H(0, kTeOffset) = estimate_.prior_std[kTeOffset] > 0.0 ? 1.0 : 0.0;
+    for (int s = 0; s < 2; ++s) {
+      const int i = s == 0 ? kPinionBearingScale : kGearBearingScale;
+      if (estimate_.prior_std[i] > 0.0) H(0, i) = -(shafts_[s] - base_shafts_[s]) / (p[i] * p[i]);
+    }
+    for (int i : {kMeshScale, kPreloadTorque}) {
       if (!(estimate_.prior_std[i] > 0.0)) continue;  // held: no column
       const double step = 1e-4 * std::max(estimate_.prior_std[i], std::abs(p[i]));
       CalibrationVector a = p, b = p;
@@ -303,9 +311,21 @@ void Calibrator::outputs(double torque, const StiffnessEstimator& supports) {
     return modalAnalysis(rigRotorParameters(rig_, supports.mesh(), kb), model_.meanMeshStiffness(p, torque));
   };
   const std::array<Mode, 3> m = modes(theta_);
+  // The three frequencies' gradients together: two modal analyses per parameter that moves them.
+  Eigen::Matrix<double, 3, kCalibrationSize> G = Eigen::Matrix<double, 3, kCalibrationSize>::Zero();
+  for (int i : {kMeshScale, kPinionBearingScale, kGearBearingScale, kPreloadTorque}) {
+    if (!(e.prior_std[i] > 0.0)) continue;
+    const double step = 1e-4 * std::max(e.prior_std[i], std::abs(theta_[i]));
+    CalibrationVector a = theta_, b = theta_;
+    a[i] += step;
+    b[i] -= step;
+    const std::array<Mode, 3> ma = modes(a), mb = modes(b);
+    for (int k = 0; k < 3; ++k) G(k, i) = (ma[k].natural_frequency - mb[k].natural_frequency) / (2.0 * step);
+  }
+  const Eigen::Matrix3d frequency_covariance = G * P * G.transpose();
   for (int i = 0; i < 3; ++i) {
     const double f = m[i].natural_frequency;
-    const double s = spread([&](const CalibrationVector& p) { return modes(p)[i].natural_frequency; });
+    const double s = std::sqrt(std::max(0.0, frequency_covariance(i, i)));
     e.natural_frequency[i] = f;
     e.natural_frequency_low[i] = f - k95 * s;
     e.natural_frequency_high[i] = f + k95 * s;
