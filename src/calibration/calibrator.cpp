@@ -47,15 +47,36 @@ Calibrator::Calibrator(const RigConfig& rig)
   // these form the lattice 2 pi r_b,p gcd(z_p, z_g) / z_p.
   lattice_ = kTwoPi * model_.baseRadius()[0] * std::gcd(teeth_[0], teeth_[1]) / teeth_[0];
   const CalibrationConfig& c = config_;
-  prior_mean_ << c.mesh_stiffness_scale.mean, c.pinion_bearing_scale.mean, c.gear_bearing_scale.mean,
-      c.preload_torque.mean, c.te_offset.mean;
+  CalibrationVector mean;
+  mean << c.mesh_stiffness_scale.mean, c.pinion_bearing_scale.mean, c.gear_bearing_scale.mean, c.preload_torque.mean,
+      c.te_offset.mean;
   estimate_.prior_std << c.mesh_stiffness_scale.std, c.pinion_bearing_scale.std, c.gear_bearing_scale.std,
       c.preload_torque.std, c.te_offset.std;
   if (!(rig.anti_backlash.spring_stiffness > 0.0)) estimate_.prior_std[kPreloadTorque] = 0.0;  // no scissor spring
-  theta_ = prior_mean_;
+  // The prior in the state's coordinates: c = 1/s, std(c) = std(s) / s^2 (first order).
+  state_ = mean;
+  state_prior_std_ = estimate_.prior_std;
+  for (int i : {kPinionBearingScale, kGearBearingScale}) {
+    state_[i] = 1.0 / mean[i];
+    state_prior_std_[i] = estimate_.prior_std[i] / (mean[i] * mean[i]);
+  }
+  state_covariance_ = state_prior_std_.cwiseAbs2().asDiagonal();
   covariance_ = estimate_.prior_std.cwiseAbs2().asDiagonal();
-  estimate_.value = theta_;
+  estimate_.value = mean;
   estimate_.std = estimate_.prior_std;
+}
+
+CalibrationVector Calibrator::toParameters(const CalibrationVector& state) {
+  CalibrationVector p = state;
+  p[kPinionBearingScale] = 1.0 / state[kPinionBearingScale];
+  p[kGearBearingScale] = 1.0 / state[kGearBearingScale];
+  return p;
+}
+
+CalibrationMatrix Calibrator::parameterJacobian(const CalibrationVector& state) {
+  CalibrationMatrix J = CalibrationMatrix::Identity();
+  for (int i : {kPinionBearingScale, kGearBearingScale}) J(i, i) = -1.0 / (state[i] * state[i]);
+  return J;
 }
 
 void Calibrator::interrupt() { window_.open = false; }
@@ -103,7 +124,7 @@ int Calibrator::reading(double t, double pinion, double gear, double phase, doub
     sample.te = te - base - regression_.orders(last_fit_, pinion);
     const double scale = shafts_torque_ != 0.0 ? torque / shafts_torque_ : 0.0;
     const std::array<double, 2> shafts{shafts_[0] * scale, shafts_[1] * scale};
-    sample.predicted = model_.at(theta_, phase, torque, shafts, base_torque_, base_shafts_);
+    sample.predicted = model_.at(estimate_.value, phase, torque, shafts, base_torque_, base_shafts_);
     sample.residual = sample.te - sample.predicted;
     sample.torque = torque;
     sample.phase = phase;
@@ -181,30 +202,30 @@ void Calibrator::closeWindow(const StiffnessEstimator& supports) {
   outputs(torque, supports);
 }
 
-FeatureVector Calibrator::predict(const CalibrationVector& p, double torque) const {
-  return model_.features(p, torque, shafts_, base_torque_, base_shafts_);
+FeatureVector Calibrator::predict(const CalibrationVector& state, double torque) const {
+  return model_.features(toParameters(state), torque, shafts_, base_torque_, base_shafts_);
 }
 
 void Calibrator::update(const FeatureVector& z, const FeatureVector& z_std, double torque, const StiffnessEstimator&) {
   // Random walk since the last update (a preload that relaxes, wear): relative to the prior spread.
   const double t = window_.t1;
   const double dt = has_update_t_ ? std::max(0.0, t - last_update_t_) : 0.0;
-  CalibrationMatrix prior = covariance_;
-  prior.diagonal() += (config_.drift * config_.drift * dt) * estimate_.prior_std.cwiseAbs2();
+  CalibrationMatrix prior = state_covariance_;
+  prior.diagonal() += (config_.drift * config_.drift * dt) * state_prior_std_.cwiseAbs2();
 
   auto jacobian = [&](const CalibrationVector& p, Eigen::Matrix<double, kFeatureSize, kCalibrationSize>& H) {
     H.setZero();
     // Closed-form columns where the features are simple in the parameter: the offset adds to the
     // mean; a bearing scale s divides its shaft's deflection (d/ds (u/s) = -u/s^2), which is the
     // same at every phase, so it moves the mean only. The mesh scale and T_p by central differences.
-    H(0, kTeOffset) = estimate_.prior_std[kTeOffset] > 0.0 ? 1.0 : 0.0;
+    H(0, kTeOffset) = state_prior_std_[kTeOffset] > 0.0 ? 1.0 : 0.0;
     for (int s = 0; s < 2; ++s) {
       const int i = s == 0 ? kPinionBearingScale : kGearBearingScale;
-      if (estimate_.prior_std[i] > 0.0) H(0, i) = -(shafts_[s] - base_shafts_[s]) / (p[i] * p[i]);
+      if (state_prior_std_[i] > 0.0) H(0, i) = shafts_[s] - base_shafts_[s];  // mean TE = ... + u c
     }
     for (int i : {kMeshScale, kPreloadTorque}) {
-      if (!(estimate_.prior_std[i] > 0.0)) continue;  // held: no column
-      const double step = 1e-4 * std::max(estimate_.prior_std[i], std::abs(p[i]));
+      if (!(state_prior_std_[i] > 0.0)) continue;  // held: no column
+      const double step = 1e-4 * std::max(state_prior_std_[i], std::abs(p[i]));
       CalibrationVector a = p, b = p;
       a[i] += step;
       b[i] -= step;
@@ -212,14 +233,17 @@ void Calibrator::update(const FeatureVector& z, const FeatureVector& z_std, doub
     }
   };
   // Measurement noise: the window's own, the relative model error and the floor (docs/calibration.md).
+  // The model error repeats at an operating point: the n-th window there carries n times its
+  // variance, so a long dwell adds no more than one window's worth of model information.
   Eigen::Matrix<double, kFeatureSize, kFeatureSize> R = Eigen::Matrix<double, kFeatureSize, kFeatureSize>::Zero();
-  const FeatureVector h0 = predict(theta_, torque);
+  const FeatureVector h0 = predict(state_, torque);
+  const double repeats = static_cast<double>(countAtOperatingPoint(torque));
   for (int i = 0; i < kFeatureSize; ++i) {
     const double model = config_.model_error * std::abs(h0[i]);
-    R(i, i) = z_std[i] * z_std[i] + model * model + config_.te_noise_floor * config_.te_noise_floor;
+    R(i, i) = z_std[i] * z_std[i] + repeats * model * model + config_.te_noise_floor * config_.te_noise_floor;
   }
   Eigen::Matrix<double, kFeatureSize, kCalibrationSize> H;
-  jacobian(theta_, H);
+  jacobian(state_, H);
   const FeatureVector innovation = z - h0;
   const Eigen::Matrix<double, kFeatureSize, kFeatureSize> S = H * prior * H.transpose() + R;
   const double nis = innovation.dot(S.ldlt().solve(innovation));
@@ -233,46 +257,70 @@ void Calibrator::update(const FeatureVector& z, const FeatureVector& z_std, doub
     return;
   }
   // Iterated EKF (Gauss-Newton on the posterior mode): relinearise at the new estimate.
-  CalibrationVector theta = theta_;
+  CalibrationVector theta = state_;
   Eigen::Matrix<double, kCalibrationSize, kFeatureSize> K;
   for (int iteration = 0; iteration < 4; ++iteration) {
     const FeatureVector h = predict(theta, torque);
     if (iteration > 0) jacobian(theta, H);
     const Eigen::Matrix<double, kFeatureSize, kFeatureSize> Si = H * prior * H.transpose() + R;
     K = prior * H.transpose() * Si.inverse();
-    CalibrationVector next = theta_ + K * (z - h - H * (theta_ - theta));
+    CalibrationVector next = state_ + K * (z - h - H * (state_ - theta));
     // Physical bounds: scales in [0.05, 20) as the YAML loader's, a preload torque >= 0.
-    for (int i : {kMeshScale, kPinionBearingScale, kGearBearingScale}) next[i] = std::clamp(next[i], 0.05, 19.9);
+    next[kMeshScale] = std::clamp(next[kMeshScale], 0.05, 19.9);
+    for (int i : {kPinionBearingScale, kGearBearingScale}) next[i] = std::clamp(next[i], 1.0 / 19.9, 1.0 / 0.05);
     next[kPreloadTorque] = std::max(0.0, next[kPreloadTorque]);
-    const double moved = ((next - theta).cwiseQuotient(estimate_.prior_std.cwiseMax(1e-300))).cwiseAbs().maxCoeff();
+    const double moved = ((next - theta).cwiseQuotient(state_prior_std_.cwiseMax(1e-300))).cwiseAbs().maxCoeff();
     theta = next;
     if (moved < 1e-6) break;
   }
   // Joseph form: stays symmetric positive semi-definite whatever the rounding.
   const CalibrationMatrix IKH = CalibrationMatrix::Identity() - K * H;
-  covariance_ = IKH * prior * IKH.transpose() + K * R * K.transpose();
-  covariance_ = 0.5 * (covariance_ + covariance_.transpose()).eval();
-  theta_ = theta;
+  state_covariance_ = IKH * prior * IKH.transpose() + K * R * K.transpose();
+  state_covariance_ = 0.5 * (state_covariance_ + state_covariance_.transpose()).eval();
+  state_ = theta;
   last_update_t_ = t;
   has_update_t_ = true;
   ++estimate_.updates;
   estimate_.outcome = WindowOutcome::kUpdated;
-  estimate_.predicted = predict(theta_, torque);
+  estimate_.predicted = predict(state_, torque);
+}
+
+std::uint32_t Calibrator::countAtOperatingPoint(double torque) {
+  const long key = std::lround(torque / (2.0 * config_.torque_band));
+  int i = 0;
+  while (i < bins_used_ && bin_key_[i] != key) ++i;
+  if (i == bins_used_) {
+    if (bins_used_ < kBins) {
+      bin_key_[bins_used_++] = key;
+    } else {
+      i = kBins - 1;
+    }
+  }
+  return ++bin_count_[i];
 }
 
 void Calibrator::outputs(double torque, const StiffnessEstimator& supports) {
   CalibrationEstimate& e = estimate_;
-  e.value = theta_;
+  // The parameters and their covariance from the state's (first order in c -> 1/c).
+  const CalibrationVector theta = toParameters(state_);
+  const CalibrationMatrix J = parameterJacobian(state_);
+  covariance_ = J * state_covariance_ * J.transpose();
+  e.value = theta;
   e.std = covariance_.diagonal().cwiseMax(0.0).cwiseSqrt();
-  for (int i = 0; i < kCalibrationSize; ++i) e.identified[i] = e.prior_std[i] > 0.0 && e.std[i] < 0.5 * e.prior_std[i];
+  // Identified: the data have at least tripled the prior's information (std below half the prior's),
+  // judged in the state's coordinates, where the measurement is linear in the bearing factors: the
+  // scale's std also shrinks as s^2 when the estimate falls, which is not information.
+  for (int i = 0; i < kCalibrationSize; ++i) {
+    e.identified[i] = state_prior_std_[i] > 0.0 && std::sqrt(std::max(0.0, state_covariance_(i, i))) < 0.5 * state_prior_std_[i];
+  }
   const CalibrationMatrix& P = covariance_;
   // A scalar output's standard deviation by linearisation: sqrt(g' P g), g by central differences.
   auto spread = [&](auto&& f) {
     CalibrationVector g = CalibrationVector::Zero();
     for (int i = 0; i < kCalibrationSize; ++i) {
       if (!(e.prior_std[i] > 0.0)) continue;
-      const double step = 1e-4 * std::max(e.prior_std[i], std::abs(theta_[i]));
-      CalibrationVector a = theta_, b = theta_;
+      const double step = 1e-4 * std::max(e.prior_std[i], std::abs(theta[i]));
+      CalibrationVector a = theta, b = theta;
       a[i] += step;
       b[i] -= step;
       g[i] = (f(a) - f(b)) / (2.0 * step);
@@ -285,11 +333,11 @@ void Calibrator::outputs(double torque, const StiffnessEstimator& supports) {
   const std::array<double, 2> zero{0.0, 0.0};
   const double fr = model_.meshForce(tr);
   auto compliance = [&](const CalibrationVector& p) { return (model_.features(p, tr, scratch_, 0.0, zero)[0] - p[kTeOffset]) / fr; };
-  e.series_compliance = compliance(theta_);
+  e.series_compliance = compliance(theta);
   e.series_compliance_std = spread(compliance);
   // Mesh stiffness at the window's torque.
   auto mesh = [&](const CalibrationVector& p) { return model_.meanMeshStiffness(p, torque); };
-  e.mesh_stiffness = mesh(theta_);
+  e.mesh_stiffness = mesh(theta);
   const double mesh_std = spread(mesh);
   e.mesh_stiffness_low = e.mesh_stiffness - k95 * mesh_std;
   e.mesh_stiffness_high = e.mesh_stiffness + k95 * mesh_std;
@@ -301,22 +349,22 @@ void Calibrator::outputs(double torque, const StiffnessEstimator& supports) {
   }
   for (int s = 0; s < 2; ++s) {
     const int index = s == 0 ? kPinionBearingScale : kGearBearingScale;
-    e.bearing_stiffness[s] = theta_[index] * unit[s];
-    e.bearing_stiffness_low[s] = (theta_[index] - k95 * e.std[index]) * unit[s];
-    e.bearing_stiffness_high[s] = (theta_[index] + k95 * e.std[index]) * unit[s];
+    e.bearing_stiffness[s] = theta[index] * unit[s];
+    e.bearing_stiffness_low[s] = (theta[index] - k95 * e.std[index]) * unit[s];
+    e.bearing_stiffness_high[s] = (theta[index] + k95 * e.std[index]) * unit[s];
   }
   // Natural frequencies of the calibrated model (modal_analysis.hpp), each with its band.
   auto modes = [&](const CalibrationVector& p) {
     const std::array<double, 2> kb{p[kPinionBearingScale] * unit[0], p[kGearBearingScale] * unit[1]};
     return modalAnalysis(rigRotorParameters(rig_, supports.mesh(), kb), model_.meanMeshStiffness(p, torque));
   };
-  const std::array<Mode, 3> m = modes(theta_);
+  const std::array<Mode, 3> m = modes(theta);
   // The three frequencies' gradients together: two modal analyses per parameter that moves them.
   Eigen::Matrix<double, 3, kCalibrationSize> G = Eigen::Matrix<double, 3, kCalibrationSize>::Zero();
   for (int i : {kMeshScale, kPinionBearingScale, kGearBearingScale, kPreloadTorque}) {
     if (!(e.prior_std[i] > 0.0)) continue;
-    const double step = 1e-4 * std::max(e.prior_std[i], std::abs(theta_[i]));
-    CalibrationVector a = theta_, b = theta_;
+    const double step = 1e-4 * std::max(e.prior_std[i], std::abs(theta[i]));
+    CalibrationVector a = theta, b = theta;
     a[i] += step;
     b[i] -= step;
     const std::array<Mode, 3> ma = modes(a), mb = modes(b);
@@ -330,7 +378,7 @@ void Calibrator::outputs(double torque, const StiffnessEstimator& supports) {
     e.natural_frequency_low[i] = f - k95 * s;
     e.natural_frequency_high[i] = f + k95 * s;
   }
-  e.knee_torque = model_.kneeTorque(theta_);
+  e.knee_torque = model_.kneeTorque(theta);
 }
 
 }  // namespace drivetrain_stiffness
