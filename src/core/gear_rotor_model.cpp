@@ -46,11 +46,14 @@ void GearRotorParameters::validate() const {
   requirePositive("dynamics.gear_inertia", gear_inertia);
   requirePositive("dynamics.pinion_base_radius", pinion_base_radius);
   requirePositive("dynamics.gear_base_radius", gear_base_radius);
+  // Literal names: the modal analysis validates on every call, and a built name would allocate.
+  static constexpr const char* kStiffness[2] = {"dynamics.bearing_stiffness[0]", "dynamics.bearing_stiffness[1]"};
+  static constexpr const char* kDamping[2] = {"dynamics.bearing_damping[0]", "dynamics.bearing_damping[1]"};
+  static constexpr const char* kClearance[2] = {"dynamics.bearing_clearance[0]", "dynamics.bearing_clearance[1]"};
   for (int i = 0; i < 2; ++i) {
-    const std::string n = "[" + std::to_string(i) + "]";
-    requireNonNegative("dynamics.bearing_stiffness" + n, bearing_stiffness[i]);
-    requireNonNegative("dynamics.bearing_damping" + n, bearing_damping[i]);
-    requireNonNegative("dynamics.bearing_clearance" + n, bearing_clearance[i]);
+    requireNonNegative(kStiffness[i], bearing_stiffness[i]);
+    requireNonNegative(kDamping[i], bearing_damping[i]);
+    requireNonNegative(kClearance[i], bearing_clearance[i]);
   }
   requireNonNegative("dynamics.mesh_damping", mesh_damping);
 }

@@ -20,39 +20,39 @@ void throwNotFinite(std::string_view field, double value) {
   throwInvalid(std::string(field), value, "must be a finite number");
 }
 
-void requirePositive(const std::string& field, double value) {
+void requirePositive(std::string_view field, double value) {
   requireFinite(field, value);
-  if (!(value > 0.0)) throwInvalid(field, value, "must be > 0");
+  if (!(value > 0.0)) throwInvalid(std::string(field), value, "must be > 0");
 }
 
-void requireNonNegative(const std::string& field, double value) {
+void requireNonNegative(std::string_view field, double value) {
   requireFinite(field, value);
-  if (value < 0.0) throwInvalid(field, value, "must be >= 0");
+  if (value < 0.0) throwInvalid(std::string(field), value, "must be >= 0");
 }
 
-void requireAtMost(const std::string& field, double value, double limit) {
+void requireAtMost(std::string_view field, double value, double limit) {
   requireFinite(field, value);
-  if (value > limit) throwInvalid(field, value, "must be <= " + formatValue(limit));
+  if (value > limit) throwInvalid(std::string(field), value, "must be <= " + formatValue(limit));
 }
 
-void requireYoungsModulus(const std::string& field, double value) {
+void requireYoungsModulus(std::string_view field, double value) {
   requireFinite(field, value);
   if (!(value >= kMinYoungsModulus && value <= kMaxYoungsModulus)) {
-    throwInvalid(field, value, "must lie in [" + formatValue(kMinYoungsModulus) + ", " + formatValue(kMaxYoungsModulus) + "] Pa");
+    throwInvalid(std::string(field), value, "must lie in [" + formatValue(kMinYoungsModulus) + ", " + formatValue(kMaxYoungsModulus) + "] Pa");
   }
 }
 
-void requireInOpenRange(const std::string& field, double value, double lower, double upper) {
+void requireInOpenRange(std::string_view field, double value, double lower, double upper) {
   requireFinite(field, value);
   if (!(value > lower && value < upper)) {
-    throwInvalid(field, value, "must lie in (" + formatValue(lower) + ", " + formatValue(upper) + ")");
+    throwInvalid(std::string(field), value, "must lie in (" + formatValue(lower) + ", " + formatValue(upper) + ")");
   }
 }
 
-void requireInHalfOpenRange(const std::string& field, double value, double lower, double upper) {
+void requireInHalfOpenRange(std::string_view field, double value, double lower, double upper) {
   requireFinite(field, value);
   if (!(value >= lower && value < upper)) {
-    throwInvalid(field, value, "must lie in [" + formatValue(lower) + ", " + formatValue(upper) + ")");
+    throwInvalid(std::string(field), value, "must lie in [" + formatValue(lower) + ", " + formatValue(upper) + ")");
   }
 }
 

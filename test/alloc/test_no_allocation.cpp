@@ -85,3 +85,43 @@ TEST(NoAllocation, TorqueAndEncoderInputsThroughARunUp) {
   EXPECT_EQ(pipeline.counters().accepted_motion, 2000u);
   EXPECT_STREQ(pipeline.phaseSource(), "encoders");
 }
+
+// The live calibration (rule 11) on the per-reading path: torque at 1 kHz and joint_states with
+// both joints at 5 kHz, 120 rpm, the gear angle carrying the static model's TE (so loaded windows
+// pass the gate and run the whole update: fit, iterated EKF, bands, modal analyses). Warmed up
+// through a baseline and the first loaded windows, then 2 s (two gear turns, two updates) counted.
+TEST(NoAllocation, EncoderReadingsThroughCalibrationUpdates) {
+  RigConfig rig = loadRigFile(std::string(DRIVETRAIN_SOURCE_DIR) + "/config/gearboxes/seed_servo.yaml");
+  rig.calibration.present = true;
+  RigPipeline pipeline(rig, PipelineOptions{});
+  ASSERT_NE(pipeline.calibrator(), nullptr);
+  PipelineSink sink;
+  StaticTeModel model(rig);
+  CalibrationVector p;
+  p << 1.0, 1.0, 1.0, rig.anti_backlash.preload_torque, 0.0;
+  std::array<double, 2> zero{}, loaded{};
+  StiffnessEstimator supports(rig);
+  model.shaftDeflection(0.0, supports, zero);
+  model.shaftDeflection(2.0, supports, loaded);
+  constexpr std::int64_t kEpoch = 1767225600LL * 1000000000LL;
+  const double w = 120.0 / 60.0 * 2.0 * M_PI, rbp = model.baseRadius()[0], rbg = model.baseRadius()[1];
+  auto step = [&](int k) {  // k: 5 kHz ticks
+    const double t = 2e-4 * k, torque = t < 1.5 ? 0.0 : 2.0, theta = w * t;
+    if (k % 5 == 0) pipeline.torque(Stamp{kEpoch + 200000LL * k}, torque, sink);
+    const double turns = 20.0 * theta / (2.0 * M_PI), phase = turns - std::floor(turns);
+    const double x = torque == 0.0 ? 0.0 : model.at(p, phase, torque, loaded, 0.0, zero);
+    MotionInput m;
+    m.pinion_angle = std::remainder(theta, 2.0 * M_PI);
+    m.pinion_velocity = w;
+    m.gear_angle = std::remainder((x - rbp * theta) / rbg, 2.0 * M_PI);
+    pipeline.motion(Stamp{kEpoch + 200000LL * k + 100000LL}, m, sink);
+  };
+  for (int k = 0; k < 25000; ++k) step(k);  // 5 s: baseline, then loaded windows
+  const std::uint64_t updates_before = pipeline.calibrator()->estimate().updates;
+  const long before = g_allocations.load();
+  for (int k = 25000; k < 35000; ++k) step(k);
+  const long n = g_allocations.load() - before;
+  EXPECT_EQ(n, 0) << n / 1e4 << " heap allocations per reading";
+  EXPECT_GE(pipeline.calibrator()->estimate().updates, updates_before + 2);
+  EXPECT_EQ(pipeline.calibrator()->estimate().gated, 0u);
+}

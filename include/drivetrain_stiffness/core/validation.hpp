@@ -34,19 +34,21 @@ std::string formatValue(double value);
 inline void requireFinite(std::string_view field, double value) {
   if (!std::isfinite(value)) throwNotFinite(field, value);
 }
-void requirePositive(const std::string& field, double value);
-void requireNonNegative(const std::string& field, double value);
+// The checks take the field as a string_view: a name is built into a std::string only when the
+// check fails, so checks on the per-input and per-window paths allocate nothing.
+void requirePositive(std::string_view field, double value);
+void requireNonNegative(std::string_view field, double value);
 /// value <= limit, for magnitudes past anything physical: a value like 1e308 passes every sign
 /// check and then overflows the model into NaN (found by fuzzing, test/fuzz/).
-void requireAtMost(const std::string& field, double value, double limit);
+void requireAtMost(std::string_view field, double value, double limit);
 /// Plausibility bounds shared by the core's checks (an order of magnitude past anything made).
 constexpr double kMinYoungsModulus = 1e6;   ///< [Pa] below elastomers; a subnormal one underflows to 0
 constexpr double kMaxYoungsModulus = 1e13;  ///< [Pa] diamond is 1.2e12
 /// kMinYoungsModulus <= value <= kMaxYoungsModulus.
-void requireYoungsModulus(const std::string& field, double value);
+void requireYoungsModulus(std::string_view field, double value);
 /// lower < value < upper (open interval).
-void requireInOpenRange(const std::string& field, double value, double lower, double upper);
+void requireInOpenRange(std::string_view field, double value, double lower, double upper);
 /// lower <= value < upper.
-void requireInHalfOpenRange(const std::string& field, double value, double lower, double upper);
+void requireInHalfOpenRange(std::string_view field, double value, double lower, double upper);
 
 }  // namespace drivetrain_stiffness
