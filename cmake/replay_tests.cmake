@@ -23,6 +23,12 @@ add_test(NAME rig_sim_writes_joint_states
   COMMAND ${CATKIN_DEVEL_PREFIX}/env.sh /usr/bin/python3 ${CMAKE_CURRENT_SOURCE_DIR}/test/replay/check_rig_sim_joint_states.py
           ${DEVEL_BIN} ${CMAKE_CURRENT_SOURCE_DIR} ${CMAKE_CURRENT_BINARY_DIR}/joint_states_test)
 
+# drivetrain_rig_sim --scenario load_sweep: reproducible per --seed, its truth in the summary, the
+# messages read back by Python's rosbag (a 2 s sweep; load_sweep_tests checks the TE it carries).
+add_test(NAME rig_sim_load_sweep
+  COMMAND ${CATKIN_DEVEL_PREFIX}/env.sh /usr/bin/python3 ${CMAKE_CURRENT_SOURCE_DIR}/test/replay/check_rig_sim_load_sweep.py
+          ${DEVEL_BIN} ${CMAKE_CURRENT_SOURCE_DIR} ${CMAKE_CURRENT_BINARY_DIR}/load_sweep_test)
+
 # The scenario bag writer: joint_states read back by rosbag::View with sensor_msgs/JointState's md5sum.
 catkin_add_gtest(scenario_bag_tests test/core/test_main.cpp test/ros/test_scenario_bag.cpp src/tools/scenario_bag.cpp)
 target_link_libraries(scenario_bag_tests ${PROJECT_NAME}_scenarios ${PROJECT_NAME}_config ${catkin_LIBRARIES})

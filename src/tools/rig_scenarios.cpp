@@ -91,7 +91,11 @@ std::string scenarioHelp() {
          "coast_down: pinion speed 6000 -> 0 rpm linearly over the duration\n"
          "speed_steps: 500, 1000, 2000, 4000 rpm, a quarter of the duration each, each step a 50 ms linear ramp\n"
          "reverse: +1000 rpm through zero (at 1/4) to -1000 rpm (at 1/2) and back (zero at 3/4, +1000 rpm at the "
-         "end): 1000 rpm cos(2 pi t / duration); the torque keeps its sign\n";
+         "end): 1000 rpm cos(2 pi t / duration); the torque keeps its sign\n"
+         "load_sweep: a calibration recording whose true rig is the --config one (load_sweep.hpp): 120 rpm "
+         "(--speed-rpm), a torque staircase across the anti-backlash knee both ways, the gear encoder carrying the "
+         "true rig's TE, encoder mounting errors, stamp jitter and torque noise from --seed; joint rate 5000 Hz by "
+         "default; its natural length unless --duration is given (which scales every hold)\n";
 }
 
 std::vector<RigEvent> makeScenario(const RigConfig& rig, const ScenarioSpec& spec) {
@@ -169,6 +173,8 @@ std::vector<RigEvent> makeScenario(const RigConfig& rig, const ScenarioSpec& spe
     // The speed follows the scenario's profile (the encoder events above); the torque is constant.
     events.push_back({0.0, std::nullopt, preloadOfAll(rig, configuredAxial(rig))});
     for (long k = 0; k < n; ++k) events.push_back({k * dt, mean, {}});
+  } else if (s == "load_sweep") {
+    throw InvalidInput("scenario = 'load_sweep': made by makeLoadSweep (load_sweep.hpp), which takes a seed and a speed");
   } else {
     throw InvalidInput("scenario = '" + s + "': unknown; one of:\n" + scenarioHelp());
   }

@@ -37,7 +37,8 @@ struct ScenarioSpec {
 };
 
 /// Names: torque_ripple, torque_steps, preload_ramp, speed_sweep, faults (at the gearbox's constant
-/// dynamics.speed_rpm), run_up, coast_down, speed_steps, reverse (see scenarioHelp()).
+/// dynamics.speed_rpm), run_up, coast_down, speed_steps, reverse (see scenarioHelp()). load_sweep,
+/// which needs a seed and a speed, is makeLoadSweep (load_sweep.hpp): here it is refused.
 std::vector<RigEvent> makeScenario(const RigConfig& rig, const ScenarioSpec& spec);
 std::string scenarioHelp();
 

@@ -87,6 +87,9 @@ class DynamicsEstimator {
   /// the state is first propagated to `at` with the stiffness before, so the change takes effect at
   /// that instant rather than at the last output sample.
   void setBearingStiffness(const std::array<double, 2>& k, std::optional<double> at = std::nullopt);
+  /// The bearing stiffness per shaft [N/m] the model runs with now: the last one taken up (it can
+  /// lag the estimator's by up to the 1 % above).
+  const std::array<double, 2>& bearingStiffness() const { return bearing_stiffness_; }
   /// Damping ratios of the dynamics block (mesh, bearings); the model is rebuilt, the state kept.
   void setDamping(double mesh_damping_ratio, double bearing_damping_ratio);
   /// full: exact-exponential / dopri5; quasi_static and linear_modal: reduced_models.hpp. The
