@@ -79,7 +79,10 @@ CalibrationMatrix Calibrator::parameterJacobian(const CalibrationVector& state) 
   return J;
 }
 
-void Calibrator::interrupt() { window_.open = false; }
+void Calibrator::interrupt() {
+  window_.open = false;
+  filtered_torque_.reset();
+}
 
 int Calibrator::reading(double t, double pinion, double gear, double phase, double speed, double torque,
                         const StiffnessEstimator& supports, MeasuredTeSample& sample) {
@@ -88,19 +91,30 @@ int Calibrator::reading(double t, double pinion, double gear, double phase, doub
   if (!te_reference_) te_reference_ = raw;
   const double te = *te_reference_ + std::remainder(raw - *te_reference_, lattice_);
 
-  // 2. The window: closed when it spans a gear turn, dropped when the torque leaves its band.
+  // 2. The window: closed when it spans a gear turn, dropped when the filtered torque leaves its
+  // band (first-order low-pass, exact for the time step).
+  if (!filtered_torque_ || !(t > last_t_)) {
+    filtered_torque_ = filtered_torque_ ? *filtered_torque_ : torque;
+  } else {
+    *filtered_torque_ += (torque - *filtered_torque_) * -std::expm1(-(t - last_t_) / kTorqueFilter);
+  }
+  last_t_ = t;
+  const double watched = *filtered_torque_;
   int result = kNothing;
-  if (window_.open && std::abs(torque - window_.torque0) > config_.torque_band + 0.01 * std::abs(window_.torque0)) {
+  if (window_.open && std::abs(watched - window_.torque0) > config_.torque_band + 0.01 * std::abs(window_.torque0)) {
     window_.open = false;
   }
   if (!window_.open) {
     regression_.clear();
     window_ = Window{};
+    histogram_.fill(0);
     window_.open = true;
     window_.t0 = t;
-    window_.torque0 = torque;
+    window_.torque0 = watched;
     window_.angle_min = window_.angle_max = pinion;
+    model_.shaftDeflection(watched, supports, window_.shafts);
   }
+  ++histogram_[static_cast<std::size_t>(StaticTeModel::phaseBin(phase))];
   regression_.add(pinion, phase, te);
   window_.t1 = t;
   window_.angle_min = std::min(window_.angle_min, pinion);
@@ -122,8 +136,16 @@ int Calibrator::reading(double t, double pinion, double gear, double phase, doub
       base += std::real(base_harmonics_[k] * std::polar(1.0, kTwoPi * (k + 1) * phase));
     }
     sample.te = te - base - regression_.orders(last_fit_, pinion);
-    const double scale = shafts_torque_ != 0.0 ? torque / shafts_torque_ : 0.0;
-    const std::array<double, 2> shafts{shafts_[0] * scale, shafts_[1] * scale};
+    // The shafts' deflection: within the window's band, the one at the window's torque scaled to
+    // this reading's (the bearings are smooth over a band); outside it (a step the filter has not
+    // followed yet), the reading's own exact solution.
+    std::array<double, 2> shafts{};
+    if (std::abs(torque - window_.torque0) <= config_.torque_band + 0.01 * std::abs(window_.torque0) && window_.torque0 != 0.0) {
+      const double scale = torque / window_.torque0;
+      shafts = {window_.shafts[0] * scale, window_.shafts[1] * scale};
+    } else {
+      model_.shaftDeflection(torque, supports, shafts);
+    }
     sample.predicted = model_.at(estimate_.value, phase, torque, shafts, base_torque_, base_shafts_);
     sample.residual = sample.te - sample.predicted;
     sample.torque = torque;
@@ -197,13 +219,12 @@ void Calibrator::closeWindow(const StiffnessEstimator& supports) {
     z_std[1 + h] = std::sqrt(fit.harmonic_std * fit.harmonic_std + base_harm_var_ / kb);
   }
   model_.shaftDeflection(torque, supports, shafts_);
-  shafts_torque_ = torque;
   update(z, z_std, torque, supports);
   outputs(torque, supports);
 }
 
 FeatureVector Calibrator::predict(const CalibrationVector& state, double torque) const {
-  return model_.features(toParameters(state), torque, shafts_, base_torque_, base_shafts_);
+  return model_.sampledFeatures(toParameters(state), torque, shafts_, base_torque_, base_shafts_, histogram_, window_.n);
 }
 
 void Calibrator::update(const FeatureVector& z, const FeatureVector& z_std, double torque, const StiffnessEstimator&) {

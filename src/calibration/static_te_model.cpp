@@ -44,13 +44,49 @@ StaticTeModel::StaticTeModel(const RigConfig& rig) {
       grid_.push_back(g);
     }
   }
+  bins_.resize(kPhaseBins);
+  for (int b = 0; b < kPhaseBins; ++b) {
+    GridPoint& g = bins_[static_cast<std::size_t>(b)];
+    g.phase = (b + 0.5) / kPhaseBins;
+    const CompositeMesh c = mesh.exactAt(g.phase, 0.0);
+    g.k1 = c.k1;
+    g.k2 = c.k2;
+    for (int k = 0; k < kFeatureHarmonics; ++k) g.basis[k] = 2.0 * std::polar(1.0, -kTwoPi * (k + 1) * g.phase);
+  }
+}
+
+FeatureVector StaticTeModel::sampledFeatures(const CalibrationVector& p, double torque, const std::array<double, 2>& shafts,
+                                             double baseline_torque, const std::array<double, 2>& baseline_shafts,
+                                             const PhaseHistogram& histogram, long count) const {
+  const double f = meshForce(torque), f0 = meshForce(baseline_torque);
+  const double bearings = (shafts[0] - baseline_shafts[0]) / p[kPinionBearingScale] +
+                          (shafts[1] - baseline_shafts[1]) / p[kGearBearingScale];
+  double mean = 0.0;
+  std::array<std::complex<double>, kFeatureHarmonics> c{};
+  const double inv = 1.0 / static_cast<double>(count);
+  for (int b = 0; b < kPhaseBins; ++b) {
+    if (histogram[static_cast<std::size_t>(b)] == 0) continue;
+    const GridPoint& g = bins_[static_cast<std::size_t>(b)];
+    const double w = histogram[static_cast<std::size_t>(b)] * inv;
+    const double x = deflection(p, f, g.k1, g.k2) - deflection(p, f0, g.k1, g.k2);
+    mean += w * x;
+    for (int k = 0; k < kFeatureHarmonics; ++k) c[k] += w * x * g.basis[k];
+  }
+  FeatureVector out;
+  out[0] = mean + bearings + p[kTeOffset];
+  for (int k = 0; k < kFeatureHarmonics; ++k) out[1 + k] = std::abs(c[k]);
+  return out;
 }
 
 double StaticTeModel::meshDeflection(const CalibrationVector& p, double force, int j) const {
   const GridPoint& g = grid_[static_cast<std::size_t>(j)];
-  const double k1 = p[kMeshScale] * g.k1;
+  return deflection(p, force, g.k1, g.k2);
+}
+
+double StaticTeModel::deflection(const CalibrationVector& p, double force, double k1u, double k2u) const {
+  const double k1 = p[kMeshScale] * k1u;
   if (!(spring_ > 0.0)) return force / k1;  // an ordinary gear: the drive flank only (force >= 0)
-  const double k2 = p[kMeshScale] * g.k2;
+  const double k2 = p[kMeshScale] * k2u;
   const double kc = spring_ * k2 / (spring_ + k2);
   const double fp = p[kPreloadTorque] / base_radius_[1];
   // The three flank states of anti_backlash_mesh.hpp, multiplied out as flankContact does.

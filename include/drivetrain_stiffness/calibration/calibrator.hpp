@@ -129,10 +129,18 @@ class Calibrator {
   struct Window {
     bool open = false;
     double t0 = 0.0, t1 = 0.0, torque0 = 0.0, angle_min = 0.0, angle_max = 0.0;
+    std::array<double, 2> shafts{};  ///< shaft deflections at torque0 (the per-reading prediction)
     double torque_sum = 0.0, speed_sum = 0.0;
     long n = 0;
   } window_;
   std::optional<double> te_reference_;  ///< the first TE, around which later ones are reduced
+  /// The torque the window rule watches: the held torque low-passed with kTorqueFilter, so
+  /// measurement noise (0.5 % on a torque sensor is ~0.7 % between two samples) does not end
+  /// every window, while a step still ends it within a few time constants.
+  static constexpr double kTorqueFilter = 0.02;  ///< [s]
+  std::optional<double> filtered_torque_;
+  double last_t_ = 0.0;
+  StaticTeModel::PhaseHistogram histogram_{};  ///< the open window's sampled mesh phases
 
   // The baseline: running means over the baseline windows.
   double base_torque_ = 0.0, base_mean_ = 0.0, base_mean_var_ = 0.0, base_harm_var_ = 0.0;
@@ -144,8 +152,7 @@ class Calibrator {
   // at the last loaded window (scaled by torque for the per-reading prediction).
   OrderRegression::Fit last_fit_;
   bool has_fit_ = false;
-  double shafts_torque_ = 0.0;
-  std::array<double, 2> shafts_{};
+  std::array<double, 2> shafts_{};  ///< at the last loaded window's mean torque
   std::array<double, 2> scratch_{};
 };
 

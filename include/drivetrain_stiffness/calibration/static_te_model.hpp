@@ -18,7 +18,9 @@
 #pragma once
 
 #include <array>
+#include <cmath>
 #include <complex>
+#include <cstdint>
 #include <memory>
 #include <vector>
 
@@ -71,6 +73,24 @@ class StaticTeModel {
   /// prediction the measured TE is compared with).
   double at(const CalibrationVector& p, double phase, double torque, const std::array<double, 2>& shafts,
             double baseline_torque, const std::array<double, 2>& baseline_shafts) const;
+  /// Phase bins of a window's readings (kPhaseBins per mesh period): how often the encoder sampled
+  /// each phase. Readings at a fixed rate often hit the same few phases every period (5 kHz on a
+  /// 40 Hz mesh: 125 phases), and the mesh stiffness jumps at the switching phases, so the sampled
+  /// mean and harmonics differ from the period integrals (up to 3 % on the second harmonic,
+  /// measured on load_sweep bags). The model then predicts what those readings see.
+  static constexpr int kPhaseBins = 4096;
+  using PhaseHistogram = std::array<std::uint32_t, kPhaseBins>;
+  static int phaseBin(double phase) {
+    const int b = static_cast<int>((phase - std::floor(phase)) * kPhaseBins);
+    return b < 0 ? 0 : (b >= kPhaseBins ? kPhaseBins - 1 : b);
+  }
+  /// features() as the window's readings sample the mesh period (`histogram` with `count`
+  /// readings): the mean and C_k = 2 <x e^{-i 2 pi k phase}> over the sampled phases, each at its
+  /// bin's centre.
+  FeatureVector sampledFeatures(const CalibrationVector& p, double torque, const std::array<double, 2>& shafts,
+                                double baseline_torque, const std::array<double, 2>& baseline_shafts,
+                                const PhaseHistogram& histogram, long count) const;
+
   /// Period-mean composite mesh stiffness [N/m] for `p` under pinion torque `torque` (flank state
   /// per phase), and the series compliance mean(x(T) - x(0)) / F [m/N].
   double meanMeshStiffness(const CalibrationVector& p, double torque) const;
@@ -89,6 +109,9 @@ class StaticTeModel {
     double phase = 0.0;
   };
   std::vector<GridPoint> grid_;
+  std::vector<GridPoint> bins_;  ///< at the phase bins' centres (weight unused)
+  /// delta at tooth stiffness k1', k2' (scale 1) for p and F.
+  double deflection(const CalibrationVector& p, double force, double k1u, double k2u) const;
   double spring_ = 0.0;  ///< k_te [N/m]
   std::array<double, 2> base_radius_{};
   /// Scratch solutions for shaftDeflection (one per support): no allocation once sized.
