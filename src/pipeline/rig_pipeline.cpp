@@ -263,7 +263,13 @@ InputOutcome RigPipeline::torque(Stamp stamp, double torque, PipelineSink& sink,
         angle_origin_ = origin_stamp;
         return &e;
       });
-  if (outcome == InputOutcome::kAccepted && dynamics_) advanceDynamics(stamp, torque, sink);
+  if (outcome == InputOutcome::kAccepted) {
+    if (dynamics_) {
+      advanceDynamics(stamp, torque, sink);  // holds the torque once the dynamics reached its stamp
+    } else {
+      held_torque_ = torque;  // what the calibration (rule 11) pairs with the next readings
+    }
+  }
   return outcome;
 }
 
