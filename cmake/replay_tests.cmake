@@ -29,6 +29,11 @@ add_test(NAME rig_sim_load_sweep
   COMMAND ${CATKIN_DEVEL_PREFIX}/env.sh /usr/bin/python3 ${CMAKE_CURRENT_SOURCE_DIR}/test/replay/check_rig_sim_load_sweep.py
           ${DEVEL_BIN} ${CMAKE_CURRENT_SOURCE_DIR} ${CMAKE_CURRENT_BINARY_DIR}/load_sweep_test)
 
+# The calibration on two load_sweep recordings of drawn rigs (~25 s): errors and identification
+# flags against the truth (docs/calibration.md section 6).
+add_test(NAME calibration_recovers_drawn_rigs
+  COMMAND /usr/bin/python3 ${CMAKE_CURRENT_SOURCE_DIR}/test/replay/check_calibration_mc.py ${DEVEL_BIN} ${CMAKE_CURRENT_SOURCE_DIR})
+
 # The scenario bag writer: joint_states read back by rosbag::View with sensor_msgs/JointState's md5sum.
 catkin_add_gtest(scenario_bag_tests test/core/test_main.cpp test/ros/test_scenario_bag.cpp src/tools/scenario_bag.cpp)
 target_link_libraries(scenario_bag_tests ${PROJECT_NAME}_scenarios ${PROJECT_NAME}_config ${catkin_LIBRARIES})
