@@ -7,6 +7,8 @@
 
 #include <tf2_ros/transform_broadcaster.h>
 
+#include "drivetrain_stiffness/Calibration.h"
+#include "drivetrain_stiffness/MeasuredTe.h"
 #include "drivetrain_stiffness/Resonance.h"
 #include "drivetrain_stiffness/SpectralPeaks.h"
 #include "drivetrain_stiffness/Stiffness.h"
@@ -62,6 +64,11 @@ class StiffnessEstimatorRos::Publishers : public MessageSink {
     resonance_ = nh.advertise<drivetrain_stiffness::Resonance>("resonance", 10, true);  // latched: the last estimate
     spectrum_ = nh.advertise<drivetrain_stiffness::SpectralPeaks>("te_spectrum", 100);
     markers_ = nh.advertise<visualization_msgs::MarkerArray>("rig_markers", 10);
+    // The live calibration (rule 11): one measured TE per encoder reading (as transmission_error),
+    // one calibration per closed window. Advertised with or without a calibration block, so the
+    // interface does not depend on the gearbox file.
+    measured_te_ = nh.advertise<drivetrain_stiffness::MeasuredTe>("measured_te", 10000);
+    calibration_ = nh.advertise<drivetrain_stiffness::Calibration>("calibration", 10000);
   }
 
  protected:
@@ -69,11 +76,13 @@ class StiffnessEstimatorRos::Publishers : public MessageSink {
   void emitTransmissionError(const drivetrain_stiffness::TransmissionError& m) override { te_.publish(m); }
   void emitSpectrum(const drivetrain_stiffness::SpectralPeaks& m) override { spectrum_.publish(m); }
   void emitResonance(const drivetrain_stiffness::Resonance& m) override { resonance_.publish(m); }
+  void emitMeasuredTe(const drivetrain_stiffness::MeasuredTe& m) override { measured_te_.publish(m); }
+  void emitCalibration(const drivetrain_stiffness::Calibration& m) override { calibration_.publish(m); }
   void emitTransforms(const std::vector<geometry_msgs::TransformStamped>& t) override { tf_.sendTransform(t); }
   void emitMarkers(const visualization_msgs::MarkerArray& m) override { markers_.publish(m); }
 
  private:
-  ros::Publisher stiffness_, te_, resonance_, spectrum_, markers_;
+  ros::Publisher stiffness_, te_, resonance_, spectrum_, markers_, measured_te_, calibration_;
   tf2_ros::TransformBroadcaster tf_;
 };
 
