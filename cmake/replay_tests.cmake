@@ -122,3 +122,12 @@ endif()
 add_test(NAME ros_lookup_from_a_fresh_shell
   COMMAND ${CMAKE_CURRENT_SOURCE_DIR}/test/ros/check_fresh_shell.sh ${CATKIN_DEVEL_PREFIX} ${CMAKE_CURRENT_SOURCE_DIR}
           ${FRESH_SHELL_TOOLS})
+
+# drivetrain_replay --calibrate's gearbox YAML: written from an estimate, reloaded with loadRigFile,
+# the calibrated values exact and the rest unchanged; bearing files resolve from another directory;
+# refusals without a calibration block or without an update.
+catkin_add_gtest(replay_calibrate_tests test/core/test_main.cpp test/replay/test_calibrated_gearbox.cpp
+  src/tools/calibrated_gearbox.cpp)
+target_include_directories(replay_calibrate_tests PRIVATE ${CMAKE_CURRENT_SOURCE_DIR}/src/tools)
+target_link_libraries(replay_calibrate_tests ${PROJECT_NAME}_config ${PROJECT_NAME}_calibration)
+target_compile_definitions(replay_calibrate_tests PRIVATE DRIVETRAIN_SOURCE_DIR="${CMAKE_CURRENT_SOURCE_DIR}")
