@@ -141,3 +141,9 @@ target_compile_definitions(replay_calibrate_tests PRIVATE DRIVETRAIN_SOURCE_DIR=
 add_test(NAME replay_writes_the_calibration
   COMMAND ${CATKIN_DEVEL_PREFIX}/env.sh /usr/bin/python3 ${CMAKE_CURRENT_SOURCE_DIR}/test/replay/check_replay_calibration.py
           ${DEVEL_BIN} ${CMAKE_CURRENT_SOURCE_DIR} ${CMAKE_CURRENT_BINARY_DIR}/replay_calibration_test)
+
+# The node's measured_te and calibration (rule 11) on the graph equal the in-process pipeline's for
+# the same inputs in the same order, and /diagnostics shows the calibration.
+add_rostest_gtest(calibration_topics_rostest test/ros/calibration_topics.test test/ros/test_calibration_topics.cpp)
+target_link_libraries(calibration_topics_rostest ${PROJECT_NAME}_ros ${catkin_LIBRARIES})
+add_dependencies(calibration_topics_rostest stiffness_estimator ${PROJECT_NAME}_generate_messages_cpp)
