@@ -1,5 +1,7 @@
 #include "drivetrain_stiffness/ros/message_conversion.hpp"
 
+#include <cmath>
+
 #include "drivetrain_stiffness/core/validation.hpp"
 
 namespace drivetrain_stiffness {
@@ -110,6 +112,120 @@ drivetrain_stiffness::Resonance toResonanceMsg(Stamp stamp, const std::string& f
   msg.source = "modal: bearing model at this load, mean composite mesh stiffness of the flank state; "
                "Floquet: exact monodromy of the mesh period";
   return msg;
+}
+
+namespace {
+
+/// Never a NaN on a topic: a non-finite number is refused with the message field named.
+double finite(const char* msg, const char* field, double value) {
+  if (!std::isfinite(value)) throw InvalidInput(std::string(msg) + "." + field + " = " + formatValue(value) + ": not finite, not published");
+  return value;
+}
+
+}  // namespace
+
+// The message has flat fields for the five parameters and the three features: a change of either
+// vector must come with a change of the message.
+static_assert(kCalibrationSize == 5 && kMeshScale == 0 && kPinionBearingScale == 1 && kGearBearingScale == 2 &&
+                  kPreloadTorque == 3 && kTeOffset == 4,
+              "Calibration.msg holds exactly these parameters");
+static_assert(kFeatureSize == 3, "Calibration.msg holds the mean TE and two mesh harmonics");
+
+drivetrain_stiffness::Calibration toCalibrationMsg(Stamp stamp, const std::string& frame_id, const CalibrationEstimate& e) {
+  auto f = [](const char* field, double value) { return finite("calibration", field, value); };
+  drivetrain_stiffness::Calibration m;
+  m.header.stamp = toRosTime(stamp);
+  m.header.frame_id = frame_id;
+  // The parameters in CalibrationIndex order; the field names are calibrationName(i) (and _std,
+  // _identified), which the replay's CSV columns and --calibrate's YAML keys use as well.
+  m.mesh_stiffness_scale = f("mesh_stiffness_scale", e.value[kMeshScale]);
+  m.mesh_stiffness_scale_std = f("mesh_stiffness_scale_std", e.std[kMeshScale]);
+  m.pinion_bearing_scale = f("pinion_bearing_scale", e.value[kPinionBearingScale]);
+  m.pinion_bearing_scale_std = f("pinion_bearing_scale_std", e.std[kPinionBearingScale]);
+  m.gear_bearing_scale = f("gear_bearing_scale", e.value[kGearBearingScale]);
+  m.gear_bearing_scale_std = f("gear_bearing_scale_std", e.std[kGearBearingScale]);
+  m.preload_torque = f("preload_torque", e.value[kPreloadTorque]);
+  m.preload_torque_std = f("preload_torque_std", e.std[kPreloadTorque]);
+  m.te_offset = f("te_offset", e.value[kTeOffset]);
+  m.te_offset_std = f("te_offset_std", e.std[kTeOffset]);
+  m.mesh_stiffness_scale_identified = e.identified[kMeshScale];
+  m.pinion_bearing_scale_identified = e.identified[kPinionBearingScale];
+  m.gear_bearing_scale_identified = e.identified[kGearBearingScale];
+  m.preload_torque_identified = e.identified[kPreloadTorque];
+  m.te_offset_identified = e.identified[kTeOffset];
+  m.nis = f("nis", e.nis);
+  m.excited = e.excited;
+  m.baseline = e.baseline;
+  m.outcome = toString(e.outcome);
+  m.windows = e.windows;
+  m.baseline_windows = e.baseline_windows;
+  m.updates = e.updates;
+  m.gated = e.gated;
+  m.not_excited = e.not_excited;
+  m.window_torque = f("window_torque", e.window_torque);
+  m.window_speed = f("window_speed", e.window_speed);
+  m.series_compliance = f("series_compliance", e.series_compliance);
+  m.series_compliance_std = f("series_compliance_std", e.series_compliance_std);
+  m.mesh_stiffness = f("mesh_stiffness", e.mesh_stiffness);
+  m.mesh_stiffness_low = f("mesh_stiffness_low", e.mesh_stiffness_low);
+  m.mesh_stiffness_high = f("mesh_stiffness_high", e.mesh_stiffness_high);
+  m.pinion_bearing_stiffness = f("pinion_bearing_stiffness", e.bearing_stiffness[0]);
+  m.pinion_bearing_stiffness_low = f("pinion_bearing_stiffness_low", e.bearing_stiffness_low[0]);
+  m.pinion_bearing_stiffness_high = f("pinion_bearing_stiffness_high", e.bearing_stiffness_high[0]);
+  m.gear_bearing_stiffness = f("gear_bearing_stiffness", e.bearing_stiffness[1]);
+  m.gear_bearing_stiffness_low = f("gear_bearing_stiffness_low", e.bearing_stiffness_low[1]);
+  m.gear_bearing_stiffness_high = f("gear_bearing_stiffness_high", e.bearing_stiffness_high[1]);
+  m.natural_frequency_1 = f("natural_frequency_1", e.natural_frequency[0]);
+  m.natural_frequency_1_low = f("natural_frequency_1_low", e.natural_frequency_low[0]);
+  m.natural_frequency_1_high = f("natural_frequency_1_high", e.natural_frequency_high[0]);
+  m.natural_frequency_2 = f("natural_frequency_2", e.natural_frequency[1]);
+  m.natural_frequency_2_low = f("natural_frequency_2_low", e.natural_frequency_low[1]);
+  m.natural_frequency_2_high = f("natural_frequency_2_high", e.natural_frequency_high[1]);
+  m.natural_frequency_3 = f("natural_frequency_3", e.natural_frequency[2]);
+  m.natural_frequency_3_low = f("natural_frequency_3_low", e.natural_frequency_low[2]);
+  m.natural_frequency_3_high = f("natural_frequency_3_high", e.natural_frequency_high[2]);
+  m.knee_torque = f("knee_torque", e.knee_torque);
+  // FeatureVector: the mean TE, then the mesh harmonics 1 and 2.
+  m.measured_mean_te = f("measured_mean_te", e.measured[0]);
+  m.predicted_mean_te = f("predicted_mean_te", e.predicted[0]);
+  m.measured_mesh_harmonic_1 = f("measured_mesh_harmonic_1", e.measured[1]);
+  m.predicted_mesh_harmonic_1 = f("predicted_mesh_harmonic_1", e.predicted[1]);
+  m.measured_mesh_harmonic_2 = f("measured_mesh_harmonic_2", e.measured[2]);
+  m.predicted_mesh_harmonic_2 = f("predicted_mesh_harmonic_2", e.predicted[2]);
+  return m;
+}
+
+drivetrain_stiffness::MeasuredTe toMeasuredTeMsg(Stamp stamp, const std::string& frame_id, const MeasuredTeSample& s) {
+  auto f = [](const char* field, double value) { return finite("measured_te", field, value); };
+  drivetrain_stiffness::MeasuredTe m;
+  m.header.stamp = toRosTime(stamp);
+  m.header.frame_id = frame_id;
+  m.te = f("te", s.te);
+  m.predicted = f("predicted", s.predicted);
+  m.residual = f("residual", s.residual);
+  m.torque = f("torque", s.torque);
+  m.mesh_phase = f("mesh_phase", s.phase);
+  return m;
+}
+
+std::string calibrationStatus(const RigPipeline& pipeline) {
+  if (const Calibrator* c = pipeline.calibrator()) {
+    const CalibrationEstimate& e = c->estimate();
+    return e.windows == 0 ? "waiting for the first window (a gear turn at a steady torque)" : toString(e.outcome);
+  }
+  if (!pipeline.rig().calibration.present) return "off: the gearbox has no calibration block";
+  if (!pipeline.options().calibrate) return "off: ~calibrate is false";
+  return "off: the gearbox has no dynamics block (the calibration needs its masses)";
+}
+
+std::string identifiedParameters(const CalibrationEstimate& estimate) {
+  std::string names;
+  for (int i = 0; i < kCalibrationSize; ++i) {
+    if (!estimate.identified[static_cast<std::size_t>(i)]) continue;
+    if (!names.empty()) names += ", ";
+    names += calibrationName(i);
+  }
+  return names.empty() ? "none" : names;
 }
 
 }  // namespace drivetrain_stiffness

@@ -48,4 +48,16 @@ void MessageSink::resonance(Stamp stamp, const ResonanceEstimate& estimate) {
   emitResonance(toResonanceMsg(stamp, settings_.frames.rig, estimate));
 }
 
+void MessageSink::measuredTe(Stamp stamp, const MeasuredTeSample& sample) {
+  drivetrain_stiffness::MeasuredTe m = toMeasuredTeMsg(stamp, settings_.frames.pinion, sample);
+  m.header.seq = measured_te_seq_++;
+  emitMeasuredTe(m);
+}
+
+void MessageSink::calibration(Stamp stamp, const CalibrationEstimate& estimate) {
+  drivetrain_stiffness::Calibration m = toCalibrationMsg(stamp, settings_.frames.rig, estimate);
+  m.header.seq = calibration_seq_++;
+  emitCalibration(m);
+}
+
 }  // namespace drivetrain_stiffness

@@ -7,6 +7,8 @@
 
 #include <tf2_ros/transform_broadcaster.h>
 
+#include "drivetrain_stiffness/Calibration.h"
+#include "drivetrain_stiffness/MeasuredTe.h"
 #include "drivetrain_stiffness/Resonance.h"
 #include "drivetrain_stiffness/SpectralPeaks.h"
 #include "drivetrain_stiffness/Stiffness.h"
@@ -62,6 +64,11 @@ class StiffnessEstimatorRos::Publishers : public MessageSink {
     resonance_ = nh.advertise<drivetrain_stiffness::Resonance>("resonance", 10, true);  // latched: the last estimate
     spectrum_ = nh.advertise<drivetrain_stiffness::SpectralPeaks>("te_spectrum", 100);
     markers_ = nh.advertise<visualization_msgs::MarkerArray>("rig_markers", 10);
+    // The live calibration (rule 11): one measured TE per encoder reading (as transmission_error),
+    // one calibration per closed window. Advertised with or without a calibration block, so the
+    // interface does not depend on the gearbox file.
+    measured_te_ = nh.advertise<drivetrain_stiffness::MeasuredTe>("measured_te", 10000);
+    calibration_ = nh.advertise<drivetrain_stiffness::Calibration>("calibration", 10000);
   }
 
  protected:
@@ -69,11 +76,13 @@ class StiffnessEstimatorRos::Publishers : public MessageSink {
   void emitTransmissionError(const drivetrain_stiffness::TransmissionError& m) override { te_.publish(m); }
   void emitSpectrum(const drivetrain_stiffness::SpectralPeaks& m) override { spectrum_.publish(m); }
   void emitResonance(const drivetrain_stiffness::Resonance& m) override { resonance_.publish(m); }
+  void emitMeasuredTe(const drivetrain_stiffness::MeasuredTe& m) override { measured_te_.publish(m); }
+  void emitCalibration(const drivetrain_stiffness::Calibration& m) override { calibration_.publish(m); }
   void emitTransforms(const std::vector<geometry_msgs::TransformStamped>& t) override { tf_.sendTransform(t); }
   void emitMarkers(const visualization_msgs::MarkerArray& m) override { markers_.publish(m); }
 
  private:
-  ros::Publisher stiffness_, te_, resonance_, spectrum_, markers_;
+  ros::Publisher stiffness_, te_, resonance_, spectrum_, markers_, measured_te_, calibration_;
   tf2_ros::TransformBroadcaster tf_;
 };
 
@@ -146,9 +155,9 @@ StiffnessEstimatorRos::StiffnessEstimatorRos(ros::NodeHandle nh, ros::NodeHandle
       onMasterRestart(a, b);
     });
   }
-  ROS_INFO("stiffness_estimator: %zu bearing supports from %s; dynamics %s; start %d under this master",
+  ROS_INFO("stiffness_estimator: %zu bearing supports from %s; dynamics %s; calibration %s; start %d under this master",
            rig.bearings.size(), gearbox_config_.c_str(), pipeline_->dynamics() ? toString(pipeline_->settings().fidelity) : "off",
-           starts_);
+           pipeline_->calibrator() ? "on" : calibrationStatus(*pipeline_).c_str(), starts_);
 }
 
 StiffnessEstimatorRos::~StiffnessEstimatorRos() = default;
@@ -291,6 +300,12 @@ void StiffnessEstimatorRos::diagnose(diagnostic_updater::DiagnosticStatusWrapper
   if (c.gear_ratio_mismatches > ratio_mismatches_at_last_report_) {
     status.mergeSummaryf(diagnostic_msgs::DiagnosticStatus::WARN, "gear angle off the tooth ratio: %s", c.last_event.c_str());
   }
+  if (c.calibration_errors > calibration_errors_at_last_report_) {
+    status.mergeSummaryf(diagnostic_msgs::DiagnosticStatus::WARN, "%llu calibration errors since last report; last: %s",
+                         static_cast<unsigned long long>(c.calibration_errors - calibration_errors_at_last_report_),
+                         c.last_event.c_str());
+  }
+  calibration_errors_at_last_report_ = c.calibration_errors;
   motion_timeouts_at_last_report_ = c.motion_timeouts;
   ratio_mismatches_at_last_report_ = c.gear_ratio_mismatches;
   if (c.stiffness_shed > shed_at_last_report_) {
@@ -327,6 +342,22 @@ void StiffnessEstimatorRos::diagnose(diagnostic_updater::DiagnosticStatusWrapper
                          static_cast<unsigned long long>(missed_deadlines_ - late_at_last_report_));
   }
   late_at_last_report_ = missed_deadlines_;
+  // The live calibration (rule 11): the last window's outcome, its counts and what the data determined.
+  status.add("calibration", calibrationStatus(*pipeline_));
+  if (const Calibrator* calibrator = pipeline_->calibrator()) {
+    const CalibrationEstimate& e = calibrator->estimate();
+    status.add("calibration_windows", e.windows);
+    status.add("calibration_baseline_windows", e.baseline_windows);
+    status.add("calibration_updates", e.updates);
+    status.add("calibration_gated", e.gated);
+    status.add("calibration_not_excited", e.not_excited);
+    status.add("calibration_nis", e.nis);
+    status.add("calibration_identified", identifiedParameters(e));
+    static const char* const units[kCalibrationSize] = {"[-]", "[-]", "[-]", "[N*m]", "[m]"};  // CalibrationIndex order
+    for (int i = 0; i < kCalibrationSize; ++i) {
+      status.addf(std::string("calibration.") + calibrationName(i) + " " + units[i], "%.6g +- %.2g", e.value[i], e.std[i]);
+    }
+  }
   if (const DynamicsEstimator* d = pipeline_->dynamics()) {
     status.add("dynamics_fidelity", toString(d->fidelity()));
     status.add("dynamics_output_interval [s]", d->outputInterval());

@@ -9,6 +9,7 @@
 //   drivetrain_replay --bag rig.bag --config config/gearboxes/seed_servo.yaml --out out.bag --report report/
 #include <CLI/CLI.hpp>
 #include <chrono>
+#include <ctime>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -24,6 +25,7 @@
 #include "replay_input.hpp"   // NOLINT(build/include_subdir)
 #include "drivetrain_stiffness/config/yaml_parameters.hpp"
 #include "replay_writer.hpp"  // NOLINT(build/include_subdir)
+#include "calibrated_gearbox.hpp"  // NOLINT(build/include_subdir)
 
 namespace drivetrain_stiffness {
 namespace {
@@ -48,7 +50,8 @@ constexpr char kExitCodesHelp[] =
     "Exit codes (docs/replay_exit_codes.md):\n"
     "  0  ok: the whole bag was read\n"
     "  1  refused or failed: bad options, an unreadable config or parameter file, a file that is not a\n"
-    "     bag (nothing replayed); an output or the report that cannot be written\n"
+    "     bag (nothing replayed); an output or the report that cannot be written; --calibrate without a\n"
+    "     calibration, or after a bag in which no window updated it (the other outputs are written)\n"
     "  3  messages of the wrong type on the torque, preload or joint_states topic (counted as wrong_type)\n"
     "  4  incomplete: the bag is truncated or damaged; the outputs up to the damage are written and\n"
     "     closed, and the summary's status says \"incomplete: 'FILE' at byte OFFSET: ...\" (takes\n"
@@ -58,6 +61,35 @@ void ensureDirectory(const std::string& option, const std::string& dir) {
   std::error_code ec;
   std::filesystem::create_directories(dir, ec);
   if (ec || !std::filesystem::is_directory(dir)) throw InvalidInput(option + " = '" + dir + "': not a directory and cannot be created");
+}
+
+/// Seconds since the epoch as UTC, ISO 8601 (for --calibrate's header comment).
+std::string utc(std::time_t t) {
+  std::tm tm{};
+  gmtime_r(&t, &tm);
+  char buf[32];
+  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
+  return buf;
+}
+
+/// The live calibration's final state (rule 11), by the Calibration message's field names.
+nlohmann::json calibrationJson(const RigPipeline& pipeline) {
+  nlohmann::json j;
+  j["status"] = calibrationStatus(pipeline);
+  const Calibrator* c = pipeline.calibrator();
+  if (!c) return j;
+  const CalibrationEstimate& e = c->estimate();
+  for (int i = 0; i < kCalibrationSize; ++i) {
+    j[calibrationName(i)] = e.value[i];
+    j[std::string(calibrationName(i)) + "_std"] = e.std[i];
+    j[std::string(calibrationName(i)) + "_identified"] = static_cast<bool>(e.identified[static_cast<std::size_t>(i)]);
+  }
+  j["windows"] = e.windows;
+  j["baseline_windows"] = e.baseline_windows;
+  j["updates"] = e.updates;
+  j["gated"] = e.gated;
+  j["not_excited"] = e.not_excited;
+  return j;
 }
 
 nlohmann::json countersJson(const PipelineCounters& c) {
@@ -71,7 +103,7 @@ nlohmann::json countersJson(const PipelineCounters& c) {
 int run(int argc, char** argv) {
   CLI::App app{"Replays a recorded bag through the stiffness estimator's pipeline (no master needed)"};
   app.footer(kExitCodesHelp);
-  std::string bag_path, config, params, out_bag, csv_dir, report_dir, torque_topic = "torque", preload_topic = "preload",
+  std::string bag_path, config, params, out_bag, csv_dir, report_dir, calibrate_out, torque_topic = "torque", preload_topic = "preload",
               joint_states_topic = "joint_states";
   std::string plot_script = DRIVETRAIN_PLOT_REPLAY_SCRIPT;
   std::string compression = "lz4";
@@ -83,6 +115,9 @@ int run(int argc, char** argv) {
   app.add_option("--compression", compression, "Chunk compression of --out: lz4 (as rosbag record --lz4) or none")
       ->check(CLI::IsMember({"lz4", "none"}));
   app.add_option("--csv", csv_dir, "Directory for one CSV file per output topic");
+  app.add_option("--calibrate", calibrate_out,
+                 "Gearbox YAML to write with the calibrated values (needs a calibration: block in --config and a window "
+                 "that updated the calibration)");
   app.add_option("--report", report_dir, "Directory for summary.json, report.md and PNG plots (CSV in DIR/csv, outputs in DIR/outputs.bag unless --csv, --out)");
   app.add_option("--torque-topic", torque_topic, "geometry_msgs/WrenchStamped, torque.z [N*m]");
   app.add_option("--preload-topic", preload_topic, "drivetrain_stiffness/Preload");
@@ -99,6 +134,10 @@ int run(int argc, char** argv) {
   const RigConfig rig = loadRigFile(config);
   const YamlParameters get = readParameterFile(params);
   RigPipeline pipeline(rig, readPipelineOptions(get, rig), readRuntimeSettings(get, rig));
+  if (!calibrate_out.empty() && !pipeline.calibrator()) {  // refused before anything is read
+    throw InvalidInput("--calibrate = '" + calibrate_out + "': no calibration runs with --config '" + config +
+                       "' (" + calibrationStatus(pipeline) + ")");
+  }
   if (!report_dir.empty()) {
     ensureDirectory("--report", report_dir);
     if (csv_dir.empty()) csv_dir = report_dir + "/csv";
@@ -162,6 +201,24 @@ int run(int argc, char** argv) {
   summary["wrong_type"] = wrong_type;
   summary["span_s"] = span;
   summary["counters"] = countersJson(pipeline.counters());
+  summary["calibration"] = calibrationJson(pipeline);
+  // --calibrate: written or refused (no window updated the calibration); the other outputs stand either way.
+  std::string calibrate_error;
+  if (!calibrate_out.empty()) {
+    CalibrationProvenance provenance;
+    provenance.bag = std::filesystem::absolute(bag_path).string();
+    if (first) provenance.recorded = utc(static_cast<std::time_t>(first->sec)) + " to " + utc(static_cast<std::time_t>(last->sec));
+    provenance.written = utc(std::time(nullptr));
+    provenance.status = summary["status"].get<std::string>();
+    try {
+      writeCalibratedGearbox(config, pipeline.calibrator()->estimate(), calibrate_out, provenance);
+      summary["calibrated_gearbox"] = calibrate_out;
+    } catch (const std::exception& e) {
+      calibrate_error = e.what();
+      summary["calibrated_gearbox"] = nullptr;
+      summary["calibrate_error"] = calibrate_error;
+    }
+  }
   if (const auto& r = pipeline.lastResonance()) {
     for (const Mode& mode : r->modes) summary["final_resonance_hz"].push_back(mode.natural_frequency);
     summary["final_floquet_margin"] = r->floquet_valid ? nlohmann::json(r->floquet_margin) : nlohmann::json(nullptr);
@@ -177,6 +234,10 @@ int run(int argc, char** argv) {
   }
   summary["speed"] = speed;
   std::cout << summary.dump(2) << std::endl;
+  if (!calibrate_error.empty()) {
+    std::cerr << "drivetrain_replay: " << calibrate_error << "\n";
+    return kExitRefused;
+  }
   if (input.damage()) return kExitIncomplete;
   return wrong_type > 0 ? kExitWrongType : kExitOk;
 }

@@ -81,9 +81,20 @@ void CsvFile::format(Block& block) {
         formatted_.append(buf, static_cast<std::size_t>(n));
         break;
       }
-      case Cell::Kind::kText:
-        formatted_ += block.texts[c.sec];
+      case Cell::Kind::kText: {
+        const std::string& t = block.texts[c.sec];
+        if (t.find_first_of(",\"\r\n") == std::string::npos) {
+          formatted_ += t;
+        } else {  // RFC 4180: quoted, inner quotes doubled (what Python's csv module reads)
+          formatted_ += '"';
+          for (char ch : t) {
+            if (ch == '"') formatted_ += '"';
+            formatted_ += ch;
+          }
+          formatted_ += '"';
+        }
         break;
+      }
       case Cell::Kind::kEndRow:
         break;
     }
@@ -128,12 +139,31 @@ ReplayWriter::ReplayWriter(const RigPipeline& pipeline, const OutputSettings& se
       "stamp,peak_frequency_hz,peak_amplitude,f2_hz,a2,f3_hz,a3,window_s,resolution_hz");
   resonance_csv_ = std::make_unique<CsvFile>(csv_dir + "/resonance.csv",
       "stamp,f1_hz,f2_hz,f3_hz,zeta1,zeta2,zeta3,dominant1,dominant2,dominant3,floquet_valid,floquet_margin");
+  // The calibration's files, named after the message fields in message order (the ctest
+  // replay_writes_the_calibration checks the columns against msg/); header only without a calibration.
+  measured_te_csv_ = std::make_unique<CsvFile>(csv_dir + "/measured_te.csv", "stamp,te,predicted,residual,torque,mesh_phase");
+  std::string parameters, identified;
+  for (int i = 0; i < kCalibrationSize; ++i) {
+    parameters += std::string(",") + calibrationName(i) + "," + calibrationName(i) + "_std";
+    identified += std::string(",") + calibrationName(i) + "_identified";
+  }
+  std::string bands;
+  for (const char* f : {"mesh_stiffness", "pinion_bearing_stiffness", "gear_bearing_stiffness", "natural_frequency_1",
+                        "natural_frequency_2", "natural_frequency_3"}) {
+    bands += std::string(",") + f + "," + f + "_low," + f + "_high";
+  }
+  calibration_csv_ = std::make_unique<CsvFile>(csv_dir + "/calibration.csv",
+      "stamp" + parameters + identified +
+      ",nis,excited,baseline,outcome,windows,baseline_windows,updates,gated,not_excited,window_torque,window_speed,"
+      "series_compliance,series_compliance_std" + bands +
+      ",knee_torque,measured_mean_te,predicted_mean_te,measured_mesh_harmonic_1,predicted_mesh_harmonic_1,"
+      "measured_mesh_harmonic_2,predicted_mesh_harmonic_2");
 }
 
 void ReplayWriter::close() {
   // Each close throws on an I/O error, naming its file.
   if (bag_) bag_->close();
-  for (auto* csv : {&stiffness_csv_, &te_csv_, &spectrum_csv_, &resonance_csv_}) {
+  for (auto* csv : {&stiffness_csv_, &te_csv_, &spectrum_csv_, &resonance_csv_, &measured_te_csv_, &calibration_csv_}) {
     if (*csv) (*csv)->close();
   }
 }
@@ -179,6 +209,40 @@ void ReplayWriter::emitResonance(const drivetrain_stiffness::Resonance& m) {
   for (double z : m.damping_ratios) resonance_csv_->number(z);
   for (const std::string& d : m.dominant_coordinate) resonance_csv_->text(d);
   resonance_csv_->number(m.floquet_valid).number(m.floquet_margin).endRow();
+}
+
+void ReplayWriter::emitMeasuredTe(const drivetrain_stiffness::MeasuredTe& m) {
+  if (bag_) bag_->write("/measured_te", m.header.stamp, m);
+  if (!measured_te_csv_) return;
+  measured_te_csv_->stamp(m.header.stamp).number(m.te).number(m.predicted).number(m.residual).number(m.torque);
+  measured_te_csv_->number(m.mesh_phase).endRow();
+}
+
+void ReplayWriter::emitCalibration(const drivetrain_stiffness::Calibration& m) {
+  if (bag_) bag_->write("/calibration", m.header.stamp, m);
+  if (!calibration_csv_) return;
+  CsvFile& c = *calibration_csv_;
+  c.stamp(m.header.stamp);
+  c.number(m.mesh_stiffness_scale).number(m.mesh_stiffness_scale_std);
+  c.number(m.pinion_bearing_scale).number(m.pinion_bearing_scale_std);
+  c.number(m.gear_bearing_scale).number(m.gear_bearing_scale_std);
+  c.number(m.preload_torque).number(m.preload_torque_std);
+  c.number(m.te_offset).number(m.te_offset_std);
+  c.number(m.mesh_stiffness_scale_identified).number(m.pinion_bearing_scale_identified);
+  c.number(m.gear_bearing_scale_identified).number(m.preload_torque_identified).number(m.te_offset_identified);
+  c.number(m.nis).number(m.excited).number(m.baseline).text(m.outcome);
+  c.number(static_cast<double>(m.windows)).number(static_cast<double>(m.baseline_windows));
+  c.number(static_cast<double>(m.updates)).number(static_cast<double>(m.gated)).number(static_cast<double>(m.not_excited));
+  c.number(m.window_torque).number(m.window_speed).number(m.series_compliance).number(m.series_compliance_std);
+  c.number(m.mesh_stiffness).number(m.mesh_stiffness_low).number(m.mesh_stiffness_high);
+  c.number(m.pinion_bearing_stiffness).number(m.pinion_bearing_stiffness_low).number(m.pinion_bearing_stiffness_high);
+  c.number(m.gear_bearing_stiffness).number(m.gear_bearing_stiffness_low).number(m.gear_bearing_stiffness_high);
+  c.number(m.natural_frequency_1).number(m.natural_frequency_1_low).number(m.natural_frequency_1_high);
+  c.number(m.natural_frequency_2).number(m.natural_frequency_2_low).number(m.natural_frequency_2_high);
+  c.number(m.natural_frequency_3).number(m.natural_frequency_3_low).number(m.natural_frequency_3_high);
+  c.number(m.knee_torque).number(m.measured_mean_te).number(m.predicted_mean_te);
+  c.number(m.measured_mesh_harmonic_1).number(m.predicted_mesh_harmonic_1);
+  c.number(m.measured_mesh_harmonic_2).number(m.predicted_mesh_harmonic_2).endRow();
 }
 
 void ReplayWriter::emitTransforms(const std::vector<geometry_msgs::TransformStamped>& t) {

@@ -26,7 +26,7 @@ class CsvFile {
   CsvFile& operator=(const CsvFile&) = delete;
   CsvFile& stamp(const ros::Time& t);  ///< sec.nsec, exact
   CsvFile& number(double v);
-  CsvFile& text(const std::string& s);
+  CsvFile& text(const std::string& s);  ///< quoted (RFC 4180) if it holds a comma, a quote or a line break
   void endRow();
   void close();  ///< writes the rest; throws naming the path on an I/O error
 
@@ -63,12 +63,14 @@ class ReplayWriter : public MessageSink {
   void emitTransmissionError(const drivetrain_stiffness::TransmissionError& m) override;
   void emitSpectrum(const drivetrain_stiffness::SpectralPeaks& m) override;
   void emitResonance(const drivetrain_stiffness::Resonance& m) override;
+  void emitMeasuredTe(const drivetrain_stiffness::MeasuredTe& m) override;
+  void emitCalibration(const drivetrain_stiffness::Calibration& m) override;
   void emitTransforms(const std::vector<geometry_msgs::TransformStamped>& t) override;
   void emitMarkers(const visualization_msgs::MarkerArray& m) override;
 
  private:
   std::unique_ptr<BagWriter> bag_;
-  std::unique_ptr<CsvFile> stiffness_csv_, te_csv_, spectrum_csv_, resonance_csv_;
+  std::unique_ptr<CsvFile> stiffness_csv_, te_csv_, spectrum_csv_, resonance_csv_, measured_te_csv_, calibration_csv_;
   std::vector<std::string> bearing_names_;
 };
 

@@ -102,7 +102,7 @@ const std::vector<std::string>& nodeParameterNames() {
       "output_rate", "max_gap", "stamp_jump_back", "clock_jump_back", "resonance_threshold", "spectrum_window",
       "spectrum_hop", "pinion_speed_rpm", "stiffness_rate", "rig_frame", "pinion_frame", "gear_frame",
       "exaggeration", "tf_rate", "mesh_phase_offset", "motion_timeout", "gear_ratio_tolerance", "motion_slices",
-      "pinion_joint", "gear_joint"};
+      "pinion_joint", "gear_joint", "calibrate"};
   return names;
 }
 

@@ -192,6 +192,7 @@ TEST(StartupValidation, EveryBadParameterIsNamed) {
       {"pinion_speed_rpm", XmlRpc::XmlRpcValue(0.0), "pinion_speed_rpm"},
       {"stiffness_rate", XmlRpc::XmlRpcValue(-1.0), "~stiffness_rate"},
       {"dynamics", XmlRpc::XmlRpcValue("yes"), "~dynamics: has the wrong type"},
+      {"calibrate", XmlRpc::XmlRpcValue("yes"), "~calibrate: has the wrong type"},
       {"max_interference", XmlRpc::XmlRpcValue(-1e-3), "~max_interference"},
       {"gearbox_config", XmlRpc::XmlRpcValue("/no/such/gearbox.yaml"), "/no/such/gearbox.yaml"},
   };

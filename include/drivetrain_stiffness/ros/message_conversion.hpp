@@ -4,6 +4,8 @@
 
 #include <ros/time.h>
 
+#include "drivetrain_stiffness/Calibration.h"
+#include "drivetrain_stiffness/MeasuredTe.h"
 #include "drivetrain_stiffness/Preload.h"
 #include "drivetrain_stiffness/Resonance.h"
 #include "drivetrain_stiffness/SpectralPeaks.h"
@@ -38,5 +40,17 @@ void fillStiffnessMsg(Stamp stamp, const std::string& frame_id, const StiffnessE
 drivetrain_stiffness::TransmissionError toTransmissionErrorMsg(Stamp stamp, const std::string& frame_id, const DynamicsSample& s);
 drivetrain_stiffness::SpectralPeaks toSpectralPeaksMsg(Stamp stamp, const std::string& frame_id, const SlidingSpectrum& spectrum);
 drivetrain_stiffness::Resonance toResonanceMsg(Stamp stamp, const std::string& frame_id, const ResonanceEstimate& r);
+/// The calibration after a window (rule 11) and one reading's measured TE. Both refuse (InvalidInput
+/// naming the field) a non-finite number instead of publishing it; the pipeline counts that in
+/// calibration_errors.
+drivetrain_stiffness::Calibration toCalibrationMsg(Stamp stamp, const std::string& frame_id, const CalibrationEstimate& e);
+drivetrain_stiffness::MeasuredTe toMeasuredTeMsg(Stamp stamp, const std::string& frame_id, const MeasuredTeSample& s);
+/// The calibration's state in words, for /diagnostics and the replay's summary: the last window's
+/// outcome, or why the pipeline runs without a calibration (no calibration block, ~calibrate false,
+/// no dynamics block).
+std::string calibrationStatus(const RigPipeline& pipeline);
+/// The parameters whose posterior std fell below half the prior's, by calibrationName, joined with
+/// ", "; "none" if none.
+std::string identifiedParameters(const CalibrationEstimate& estimate);
 
 }  // namespace drivetrain_stiffness

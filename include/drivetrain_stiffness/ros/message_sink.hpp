@@ -32,6 +32,8 @@ class MessageSink : public PipelineSink {
   void transmissionError(Stamp stamp, const DynamicsSample& sample) override;
   void spectrum(Stamp stamp, const SlidingSpectrum& spectrum) override;
   void resonance(Stamp stamp, const ResonanceEstimate& estimate) override;
+  void measuredTe(Stamp stamp, const MeasuredTeSample& sample) override;
+  void calibration(Stamp stamp, const CalibrationEstimate& estimate) override;
 
   const OutputSettings& settings() const { return settings_; }
 
@@ -40,6 +42,8 @@ class MessageSink : public PipelineSink {
   virtual void emitTransmissionError(const drivetrain_stiffness::TransmissionError& msg) = 0;
   virtual void emitSpectrum(const drivetrain_stiffness::SpectralPeaks& msg) = 0;
   virtual void emitResonance(const drivetrain_stiffness::Resonance& msg) = 0;
+  virtual void emitMeasuredTe(const drivetrain_stiffness::MeasuredTe& msg) = 0;
+  virtual void emitCalibration(const drivetrain_stiffness::Calibration& msg) = 0;
   virtual void emitTransforms(const std::vector<geometry_msgs::TransformStamped>& transforms) = 0;
   virtual void emitMarkers(const visualization_msgs::MarkerArray& markers) = 0;
 
@@ -49,10 +53,11 @@ class MessageSink : public PipelineSink {
   RigVisualizer visualizer_;
   std::optional<Stamp> last_tf_;
   drivetrain_stiffness::Stiffness stiffness_msg_;  ///< refilled per update (publish serializes it at once)
-  // header.seq of the stiffness and transmission_error messages, numbered from 0: what a bag
-  // written by drivetrain_replay carries (on the live graph roscpp writes its own per-publication
-  // count, the same numbers while a subscriber listens): a reader sees from the gaps what it lost.
-  std::uint32_t stiffness_seq_ = 0, te_seq_ = 0;
+  // header.seq of the stiffness, transmission_error, measured_te and calibration messages, numbered
+  // from 0: what a bag written by drivetrain_replay carries (on the live graph roscpp writes its own
+  // per-publication count, the same numbers while a subscriber listens): a reader sees from the
+  // gaps what it lost.
+  std::uint32_t stiffness_seq_ = 0, te_seq_ = 0, measured_te_seq_ = 0, calibration_seq_ = 0;
 };
 
 }  // namespace drivetrain_stiffness

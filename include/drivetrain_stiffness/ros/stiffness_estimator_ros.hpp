@@ -77,6 +77,7 @@ class StiffnessEstimatorRos {
   bool restart_reported_ = false;
   std::uint64_t dropped_at_last_report_ = 0, shed_at_last_report_ = 0;
   std::uint64_t motion_timeouts_at_last_report_ = 0, ratio_mismatches_at_last_report_ = 0;
+  std::uint64_t calibration_errors_at_last_report_ = 0;
   std::string private_namespace_;
   XmlRpc::XmlRpcValue parameters_;  // the private parameters at start-up, for a restarted master
   std::unique_ptr<MasterWatch> master_watch_;
