@@ -107,14 +107,14 @@ int Calibrator::reading(double t, double pinion, double gear, double phase, doub
   if (!window_.open) {
     regression_.clear();
     window_ = Window{};
-    histogram_.fill(0);
+    histogram_.clear();
     window_.open = true;
     window_.t0 = t;
     window_.torque0 = watched;
     window_.angle_min = window_.angle_max = pinion;
     model_.shaftDeflection(watched, supports, window_.shafts);
   }
-  ++histogram_[static_cast<std::size_t>(StaticTeModel::phaseBin(phase))];
+  histogram_.add(phase);
   regression_.add(pinion, phase, te);
   window_.t1 = t;
   window_.angle_min = std::min(window_.angle_min, pinion);

@@ -44,15 +44,7 @@ StaticTeModel::StaticTeModel(const RigConfig& rig) {
       grid_.push_back(g);
     }
   }
-  bins_.resize(kPhaseBins);
-  for (int b = 0; b < kPhaseBins; ++b) {
-    GridPoint& g = bins_[static_cast<std::size_t>(b)];
-    g.phase = (b + 0.5) / kPhaseBins;
-    const CompositeMesh c = mesh.exactAt(g.phase, 0.0);
-    g.k1 = c.k1;
-    g.k2 = c.k2;
-    for (int k = 0; k < kFeatureHarmonics; ++k) g.basis[k] = 2.0 * std::polar(1.0, -kTwoPi * (k + 1) * g.phase);
-  }
+  unit_ = std::make_unique<AntiBacklashMesh>(rig.gears, rig.anti_backlash, rig.mesh_model, rig.mesh_samples, 1.0);
 }
 
 FeatureVector StaticTeModel::sampledFeatures(const CalibrationVector& p, double torque, const std::array<double, 2>& shafts,
@@ -64,13 +56,15 @@ FeatureVector StaticTeModel::sampledFeatures(const CalibrationVector& p, double 
   double mean = 0.0;
   std::array<std::complex<double>, kFeatureHarmonics> c{};
   const double inv = 1.0 / static_cast<double>(count);
-  for (int b = 0; b < kPhaseBins; ++b) {
-    if (histogram[static_cast<std::size_t>(b)] == 0) continue;
-    const GridPoint& g = bins_[static_cast<std::size_t>(b)];
-    const double w = histogram[static_cast<std::size_t>(b)] * inv;
-    const double x = deflection(p, f, g.k1, g.k2) - deflection(p, f0, g.k1, g.k2);
+  for (std::size_t b = 0; b < static_cast<std::size_t>(kPhaseBins); ++b) {
+    const std::uint32_t n = histogram.count[b];
+    if (n == 0) continue;
+    const double phase = histogram.phase_sum[b] / n;
+    const CompositeMesh m = unit_->at(phase, 0.0);  // the phase table: exact switching phases
+    const double w = n * inv;
+    const double x = deflection(p, f, m.k1, m.k2) - deflection(p, f0, m.k1, m.k2);
     mean += w * x;
-    for (int k = 0; k < kFeatureHarmonics; ++k) c[k] += w * x * g.basis[k];
+    for (int k = 0; k < kFeatureHarmonics; ++k) c[k] += w * x * 2.0 * std::polar(1.0, -kTwoPi * (k + 1) * phase);
   }
   FeatureVector out;
   out[0] = mean + bearings + p[kTeOffset];

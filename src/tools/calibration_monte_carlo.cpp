@@ -50,6 +50,21 @@ void replay(const LoadSweep& sweep, RigPipeline& pipeline, PipelineSink& sink) {
   }
 }
 
+/// With --windows: one line per closed window (outcome, torque, NIS, the estimate).
+struct WindowLog : PipelineSink {
+  bool enabled = false;
+  void calibration(Stamp, const CalibrationEstimate& e) override {
+    if (!enabled) return;
+    std::cout << nlohmann::json{{"window", e.windows}, {"outcome", toString(e.outcome)}, {"torque", e.window_torque},
+                                {"nis", e.nis}, {"mesh_stiffness_scale", e.value[kMeshScale]},
+                                {"preload_torque", e.value[kPreloadTorque]}, {"preload_torque_std", e.std[kPreloadTorque]},
+                                {"measured", {e.measured[0], e.measured[1], e.measured[2]}},
+                                {"predicted", {e.predicted[0], e.predicted[1], e.predicted[2]}}}
+                     .dump()
+              << "\n";
+  }
+};
+
 }  // namespace
 }  // namespace drivetrain_stiffness
 
@@ -64,6 +79,8 @@ int main(int argc, char** argv) {
   app.add_option("--runs", runs, "Number of rigs")->check(CLI::Range(1, 100000));
   app.add_option("--seed", seed, "Seed of the draws (each run's recording uses seed + run)");
   app.add_option("--speed-rpm", speed, "[rpm] pinion speed of the sweeps");
+  bool windows = false;
+  app.add_flag("--windows", windows, "Print every closed window too");
   CLI11_PARSE(app, argc, argv);
   try {
     const RigConfig nominal = withCalibration(loadRigFile(config));
@@ -85,7 +102,8 @@ int main(int argc, char** argv) {
       PipelineOptions options;
       options.dynamics = false;  // the calibration needs the readings and the torque, not the node's dynamics
       RigPipeline pipeline(nominal, options);
-      PipelineSink sink;
+      WindowLog sink;
+      sink.enabled = windows;
       replay(sweep, pipeline, sink);
       const CalibrationEstimate& e = pipeline.calibrator()->estimate();
 

@@ -79,7 +79,22 @@ class StaticTeModel {
   /// mean and harmonics differ from the period integrals (up to 3 % on the second harmonic,
   /// measured on load_sweep bags). The model then predicts what those readings see.
   static constexpr int kPhaseBins = 4096;
-  using PhaseHistogram = std::array<std::uint32_t, kPhaseBins>;
+  /// Per bin: the number of readings and the sum of their phases (the model is evaluated at the
+  /// bin's mean phase: exactly the readings' phase when they repeat, as at a fixed rate; a bin is
+  /// 1/4096 of a period, so a bin that straddles a switch costs at most its readings' share).
+  struct PhaseHistogram {
+    std::array<std::uint32_t, kPhaseBins> count{};
+    std::array<double, kPhaseBins> phase_sum{};
+    void clear() {
+      count.fill(0);
+      phase_sum.fill(0.0);
+    }
+    void add(double phase) {
+      const int b = phaseBin(phase);
+      ++count[static_cast<std::size_t>(b)];
+      phase_sum[static_cast<std::size_t>(b)] += phase - std::floor(phase);
+    }
+  };
   static int phaseBin(double phase) {
     const int b = static_cast<int>((phase - std::floor(phase)) * kPhaseBins);
     return b < 0 ? 0 : (b >= kPhaseBins ? kPhaseBins - 1 : b);
@@ -109,7 +124,7 @@ class StaticTeModel {
     double phase = 0.0;
   };
   std::vector<GridPoint> grid_;
-  std::vector<GridPoint> bins_;  ///< at the phase bins' centres (weight unused)
+  std::unique_ptr<AntiBacklashMesh> unit_;  ///< the drawing's mesh (scale 1): k1', k2' at any phase
   /// delta at tooth stiffness k1', k2' (scale 1) for p and F.
   double deflection(const CalibrationVector& p, double force, double k1u, double k2u) const;
   double spring_ = 0.0;  ///< k_te [N/m]
