@@ -114,8 +114,10 @@ int Calibrator::reading(double t, double pinion, double gear, double phase, doub
     window_.angle_min = window_.angle_max = pinion;
     model_.shaftDeflection(watched, supports, window_.shafts);
   }
-  histogram_.add(phase);
-  regression_.add(pinion, phase, te);
+  if (!model_.nearSwitch(phase, kSwitchGuard)) {
+    histogram_.add(phase);
+    regression_.add(pinion, phase, te);
+  }
   window_.t1 = t;
   window_.angle_min = std::min(window_.angle_min, pinion);
   window_.angle_max = std::max(window_.angle_max, pinion);
@@ -219,12 +221,13 @@ void Calibrator::closeWindow(const StiffnessEstimator& supports) {
     z_std[1 + h] = std::sqrt(fit.harmonic_std * fit.harmonic_std + base_harm_var_ / kb);
   }
   model_.shaftDeflection(torque, supports, shafts_);
+  model_.prepare(histogram_, regression_.count(), sampled_);
   update(z, z_std, torque, supports);
   outputs(torque, supports);
 }
 
 FeatureVector Calibrator::predict(const CalibrationVector& state, double torque) const {
-  return model_.sampledFeatures(toParameters(state), torque, shafts_, base_torque_, base_shafts_, histogram_, window_.n);
+  return model_.sampledFeatures(toParameters(state), torque, shafts_, base_torque_, base_shafts_, sampled_);
 }
 
 void Calibrator::update(const FeatureVector& z, const FeatureVector& z_std, double torque, const StiffnessEstimator&) {

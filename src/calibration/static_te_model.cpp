@@ -45,30 +45,60 @@ StaticTeModel::StaticTeModel(const RigConfig& rig) {
     }
   }
   unit_ = std::make_unique<AntiBacklashMesh>(rig.gears, rig.anti_backlash, rig.mesh_model, rig.mesh_samples, 1.0);
+  switches_ = unit_->switchingPhases();
+}
+
+bool StaticTeModel::nearSwitch(double phase, double guard) const {
+  const double ph = phase - std::floor(phase);
+  for (double s : switches_) {
+    const double d = std::abs(ph - s);
+    if (std::min(d, 1.0 - d) < guard) return true;
+  }
+  return false;
+}
+
+void StaticTeModel::prepare(const PhaseHistogram& histogram, long count, SampledPhases& out) const {
+  out.size = 0;
+  out.ok = false;
+  if (count <= 0) return;
+  const double inv = 1.0 / static_cast<double>(count);
+  Eigen::Matrix<double, kProjectionTerms, kProjectionTerms> gram = Eigen::Matrix<double, kProjectionTerms, kProjectionTerms>::Zero();
+  for (std::size_t b = 0; b < static_cast<std::size_t>(kPhaseBins); ++b) {
+    const std::uint32_t n = histogram.count[b];
+    if (n == 0) continue;
+    const std::size_t i = static_cast<std::size_t>(out.size++);
+    const double phase = histogram.phase_sum[b] / n;
+    const CompositeMesh m = unit_->at(phase, 0.0);  // the phase table: exact switching phases
+    out.weight[i] = n * inv;
+    out.k1[i] = m.k1;
+    out.k2[i] = m.k2;
+    Eigen::Matrix<double, kProjectionTerms, 1>& a = out.basis[i];
+    a[0] = 1.0;
+    for (int k = 1; k <= (kProjectionTerms - 1) / 2; ++k) {
+      a[2 * k - 1] = std::cos(kTwoPi * k * phase);
+      a[2 * k] = std::sin(kTwoPi * k * phase);
+    }
+    gram.noalias() += out.weight[i] * a * a.transpose();
+  }
+  out.gram.compute(gram);
+  out.ok = out.gram.info() == Eigen::Success;
 }
 
 FeatureVector StaticTeModel::sampledFeatures(const CalibrationVector& p, double torque, const std::array<double, 2>& shafts,
                                              double baseline_torque, const std::array<double, 2>& baseline_shafts,
-                                             const PhaseHistogram& histogram, long count) const {
+                                             const SampledPhases& sampled) const {
   const double f = meshForce(torque), f0 = meshForce(baseline_torque);
   const double bearings = (shafts[0] - baseline_shafts[0]) / p[kPinionBearingScale] +
                           (shafts[1] - baseline_shafts[1]) / p[kGearBearingScale];
-  double mean = 0.0;
-  std::array<std::complex<double>, kFeatureHarmonics> c{};
-  const double inv = 1.0 / static_cast<double>(count);
-  for (std::size_t b = 0; b < static_cast<std::size_t>(kPhaseBins); ++b) {
-    const std::uint32_t n = histogram.count[b];
-    if (n == 0) continue;
-    const double phase = histogram.phase_sum[b] / n;
-    const CompositeMesh m = unit_->at(phase, 0.0);  // the phase table: exact switching phases
-    const double w = n * inv;
-    const double x = deflection(p, f, m.k1, m.k2) - deflection(p, f0, m.k1, m.k2);
-    mean += w * x;
-    for (int k = 0; k < kFeatureHarmonics; ++k) c[k] += w * x * 2.0 * std::polar(1.0, -kTwoPi * (k + 1) * phase);
+  Eigen::Matrix<double, kProjectionTerms, 1> b = Eigen::Matrix<double, kProjectionTerms, 1>::Zero();
+  for (std::size_t i = 0; i < static_cast<std::size_t>(sampled.size); ++i) {
+    const double x = deflection(p, f, sampled.k1[i], sampled.k2[i]) - deflection(p, f0, sampled.k1[i], sampled.k2[i]);
+    b.noalias() += (sampled.weight[i] * x) * sampled.basis[i];
   }
+  const Eigen::Matrix<double, kProjectionTerms, 1> coef = sampled.gram.solve(b);
   FeatureVector out;
-  out[0] = mean + bearings + p[kTeOffset];
-  for (int k = 0; k < kFeatureHarmonics; ++k) out[1 + k] = std::abs(c[k]);
+  out[0] = coef[0] + bearings + p[kTeOffset];
+  for (int k = 0; k < kFeatureHarmonics; ++k) out[1 + k] = std::hypot(coef[1 + 2 * k], coef[2 + 2 * k]);
   return out;
 }
 

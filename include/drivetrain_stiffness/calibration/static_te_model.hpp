@@ -24,6 +24,7 @@
 #include <memory>
 #include <vector>
 
+#include <Eigen/Cholesky>
 #include <Eigen/Core>
 
 #include "drivetrain_stiffness/core/anti_backlash_mesh.hpp"
@@ -99,12 +100,29 @@ class StaticTeModel {
     const int b = static_cast<int>((phase - std::floor(phase)) * kPhaseBins);
     return b < 0 ? 0 : (b >= kPhaseBins ? kPhaseBins - 1 : b);
   }
-  /// features() as the window's readings sample the mesh period (`histogram` with `count`
-  /// readings): the mean and C_k = 2 <x e^{-i 2 pi k phase}> over the sampled phases, each at its
-  /// bin's centre.
+  /// A window's sampled phases prepared for the model: the occupied bins (their mean phase, the
+  /// share of the readings, the tooth stiffness there) and the least-squares projection onto a mean
+  /// and the fitted mesh harmonics over those phases, as OrderRegression fits the readings (with
+  /// gaps at the switching phases the fit is not a plain Fourier sum). Fixed storage.
+  static constexpr int kProjectionTerms = 1 + 2 * 4;  ///< mean and OrderRegression::kMeshHarmonics
+  struct SampledPhases {
+    int size = 0;
+    std::array<double, kPhaseBins> weight{}, k1{}, k2{};
+    std::array<Eigen::Matrix<double, kProjectionTerms, 1>, kPhaseBins> basis;
+    Eigen::LDLT<Eigen::Matrix<double, kProjectionTerms, kProjectionTerms>> gram;
+    bool ok = false;
+  };
+  /// Fills `out` from a window's histogram (`count` readings in it).
+  void prepare(const PhaseHistogram& histogram, long count, SampledPhases& out) const;
+  /// features() as the window's readings sample and fit the mesh period.
   FeatureVector sampledFeatures(const CalibrationVector& p, double torque, const std::array<double, 2>& shafts,
                                 double baseline_torque, const std::array<double, 2>& baseline_shafts,
-                                const PhaseHistogram& histogram, long count) const;
+                                const SampledPhases& sampled) const;
+
+  /// Whether `phase` lies within `guard` (fraction of a period) of a switching phase, where the TE
+  /// jumps and a reading's measured phase (encoder counts, mounting error: ~3e-4 of a period at
+  /// 20 arcsec on a 20-tooth pinion) may put it on the wrong side of the step.
+  bool nearSwitch(double phase, double guard) const;
 
   /// Period-mean composite mesh stiffness [N/m] for `p` under pinion torque `torque` (flank state
   /// per phase), and the series compliance mean(x(T) - x(0)) / F [m/N].
@@ -124,7 +142,8 @@ class StaticTeModel {
     double phase = 0.0;
   };
   std::vector<GridPoint> grid_;
-  std::unique_ptr<AntiBacklashMesh> unit_;  ///< the drawing's mesh (scale 1): k1', k2' at any phase
+  std::unique_ptr<AntiBacklashMesh> unit_;
+  std::vector<double> switches_;  ///< switching phases in [0, 1)  ///< the drawing's mesh (scale 1): k1', k2' at any phase
   /// delta at tooth stiffness k1', k2' (scale 1) for p and F.
   double deflection(const CalibrationVector& p, double force, double k1u, double k2u) const;
   double spring_ = 0.0;  ///< k_te [N/m]
