@@ -296,13 +296,23 @@ static CalibrationPrior readPrior(const YAML::Node& c, const std::string& w, con
   return prior;
 }
 
+// The optional top-level block `name` of `file`, checked to be a mapping of known keys; a null
+// node when the file has none.
+static YAML::Node optionalBlock(const YAML::Node& root, const std::string& file, const std::string& name,
+                                const std::set<std::string>& keys) {
+  const YAML::Node block = root[name];
+  if (!block) return block;
+  const std::string w = file + ": " + name;
+  if (!block.IsMap()) throw InvalidInput(w + ": must be a mapping");
+  rejectUnknownKeys(block, w, keys);
+  return block;
+}
+
 // The calibration block (docs/calibration.md); its prior means default to the rig's own values.
 static void parseCalibration(const YAML::Node& root, const std::string& file, RigConfig& rig) {
-  const YAML::Node c = root["calibration"];
+  const YAML::Node c = optionalBlock(root, file, "calibration", kCalibrationKeys);
   if (!c) return;
   const std::string w = file + ": calibration";
-  if (!c.IsMap()) throw InvalidInput(w + ": must be a mapping");
-  rejectUnknownKeys(c, w, kCalibrationKeys);
   CalibrationConfig& k = rig.calibration;
   k.present = true;
   auto shaftScale = [&](int shaft) {
@@ -336,11 +346,9 @@ static void parseCalibration(const YAML::Node& root, const std::string& file, Ri
 }
 
 static void parseDynamics(const YAML::Node& root, const std::string& file, RigConfig& rig) {
-  const YAML::Node d = root["dynamics"];
+  const YAML::Node d = optionalBlock(root, file, "dynamics", kDynamicsKeys);
   if (!d) return;
   const std::string w = file + ": dynamics";
-  if (!d.IsMap()) throw InvalidInput(w + ": must be a mapping");
-  rejectUnknownKeys(d, w, kDynamicsKeys);
   DynamicsConfig& c = rig.dynamics;
   c.present = true;
   c.pinion_mass = readDouble(d, w, "pinion_mass");

@@ -43,7 +43,8 @@ double periodMean(const AntiBacklashMesh& mesh, F f) {
   return sum / n;
 }
 
-/// The seed gearbox with `extra` appended (the bearing file path made absolute), loaded.
+/// The seed gearbox without its calibration block and with `extra` appended (the bearing file
+/// path made absolute), loaded.
 RigConfig seedWith(const std::string& extra, const std::string& bearing_extra = "") {
   const std::string dir = std::string(DRIVETRAIN_SOURCE_DIR) + "/config/gearboxes/";
   std::ifstream in(dir + "seed_servo.yaml");
@@ -51,6 +52,8 @@ RigConfig seedWith(const std::string& extra, const std::string& bearing_extra = 
   for (std::size_t at = text.find("file: ../"); at != std::string::npos; at = text.find("file: ../", at)) {
     text.replace(at, 9, "file: " + dir + "../");
   }
+  const std::size_t own = text.find("\ncalibration:");  // the seed's own block gives way to `extra`
+  if (own != std::string::npos) text.erase(own + 1);
   if (!bearing_extra.empty()) {
     const std::size_t at = text.find("    mesh_load_share: 1.0");
     text.insert(at, "    " + bearing_extra + "\n");
