@@ -224,7 +224,7 @@ with open(params) as f, open(off, "w") as g:
     text = re.sub(r"(?m)^calibrate:.*$", "calibrate: false", f.read())
     check("calibrate: false" in text, "config/stiffness_estimator.yaml has no calibrate: line")
     g.write(text)
-seed = os.path.join(src, "config", "gearboxes", "seed_servo.yaml")
+seed = os.path.join(src, "test", "data", "perturbed_servo.yaml")  # a gearbox with no calibration: block
 for tag, cfg, p, why in [("refused_no_block", seed, params, "off: the gearbox has no calibration block"),
                          ("refused_off", config, off, "off: ~calibrate is false")]:
     r, _ = replay(tag, "--params", p, "--calibrate", os.path.join(work, tag + ".yaml"), config=cfg, expect=1)

@@ -160,7 +160,7 @@ TEST(CalibratedGearbox, RefusesWithoutACalibration) {
   const fs::path dir = scratch("refusals");
   const fs::path out = dir / "calibrated.yaml";
   try {
-    writeCalibratedGearbox(kSource + "/config/gearboxes/seed_servo.yaml", fitted(), out.string(), provenance());
+    writeCalibratedGearbox(kSource + "/test/data/perturbed_servo.yaml", fitted(), out.string(), provenance());  // no calibration: block
     ADD_FAILURE() << "a gearbox without a calibration block: accepted";
   } catch (const InvalidInput& e) {
     EXPECT_NE(std::string(e.what()).find("has no calibration: block"), std::string::npos) << e.what();
