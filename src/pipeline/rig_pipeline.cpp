@@ -493,7 +493,9 @@ bool RigPipeline::advanceDynamicsTo(Stamp stamp, PipelineSink& sink) {
 void RigPipeline::emitUpTo(double t, PipelineSink& sink) {
   const double from = dynamics_->time();
   // The motion is held over one advance: its mesh frequency unwraps the phase between samples.
-  const double mesh_frequency = dynamics_->meshFrequency();
+  // A member, not a capture: the lambda must stay within std::function's small buffer (two
+  // pointers), or every advance allocates (allocation_tests).
+  advance_mesh_frequency_ = dynamics_->meshFrequency();
   try {
     dynamics_->advanceTo(t, [&](const DynamicsSample& relative) {
       DynamicsSample s = relative;
@@ -505,7 +507,7 @@ void RigPipeline::emitUpTo(double t, PipelineSink& sink) {
         sink.spectrum(sample_stamp, *te_spectrum_);
         ++counters_.spectra_out;
       }
-      meshPeriodSample(sample_stamp, s, mesh_frequency, sink);
+      meshPeriodSample(sample_stamp, s, advance_mesh_frequency_, sink);
     });
   } catch (...) {
     counters_.simulated_s += dynamics_->time() - from;

@@ -228,7 +228,9 @@ TEST_F(NodeTest, AnswersGoodInputAndSurvivesBadInput) {
     EXPECT_EQ(b.samples, 12u);
     EXPECT_NEAR(b.mesh_frequency, 1000.0 * 20 / 60, 1e-3 * 1000.0 * 20 / 60);
     EXPECT_TRUE(std::isfinite(b.te_mean) && std::isfinite(b.te_rms) && std::isfinite(b.mesh_force_rms));
-    if (b.header.stamp.toSec() > 11.3) EXPECT_NEAR(b.mesh_force_mean, mean_force, 1e-2 * mean_force) << i;
+    if (b.header.stamp.toSec() > 11.3) {
+      EXPECT_NEAR(b.mesh_force_mean, mean_force, 1e-2 * mean_force) << i;
+    }
   }
   EXPECT_TRUE(diagnosticCountAtLeast("mesh_period_stats_published", 167));
 

@@ -326,6 +326,7 @@ class RigPipeline {
   void meshPeriodSample(Stamp stamp, const DynamicsSample& s, double mesh_frequency, PipelineSink& sink);
   void startMeshBlock(Stamp stamp, const DynamicsSample& s, double turns, double boundary, double mesh_frequency);
   MeshPeriodAccumulator mesh_block_;
+  double advance_mesh_frequency_ = 0.0;  ///< [Hz] the dynamics' during the current emitUpTo
 
   RigConfig rig_;
   PipelineOptions options_;
