@@ -53,12 +53,13 @@ add_test(NAME replay_damaged_bags_read_up_to_the_damage
 add_test(NAME replay_help_lists_exit_codes COMMAND ${DEVEL_BIN}/drivetrain_replay --help)
 set_tests_properties(replay_help_lists_exit_codes PROPERTIES PASS_REGULAR_EXPRESSION "Exit codes.*\n  4  incomplete")
 
-# The report: summary, markdown and the three plots (matplotlib from Debian's python3).
+# The report: summary, markdown and the four plots (matplotlib from Debian's python3).
 add_test(NAME replay_report
   COMMAND ${CATKIN_DEVEL_PREFIX}/env.sh ${DEVEL_BIN}/drivetrain_replay --bag ${CMAKE_CURRENT_SOURCE_DIR}/test/data/preload_ramp.bag
           --config ${CMAKE_CURRENT_SOURCE_DIR}/config/gearboxes/seed_servo.yaml --report ${CMAKE_CURRENT_BINARY_DIR}/replay_report)
 add_test(NAME replay_report_files
   COMMAND ${CMAKE_COMMAND} -E md5sum ${CMAKE_CURRENT_BINARY_DIR}/replay_report/transmission_error.png
+          ${CMAKE_CURRENT_BINARY_DIR}/replay_report/mesh_period_stats.png
           ${CMAKE_CURRENT_BINARY_DIR}/replay_report/stiffness.png ${CMAKE_CURRENT_BINARY_DIR}/replay_report/resonance.png
           ${CMAKE_CURRENT_BINARY_DIR}/replay_report/report.md ${CMAKE_CURRENT_BINARY_DIR}/replay_report/summary.json)
 set_tests_properties(replay_report_files PROPERTIES DEPENDS replay_report)

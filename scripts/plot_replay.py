@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """Report of a stiffness-estimator run from a bag of its outputs (drivetrain_replay --out, or
-`rosbag record` of a live run): transmission error, stiffness and resonance against time, as PNG
-plots plus report.md with the key figures.
+`rosbag record` of a live run): transmission error, its per-mesh-period statistics, stiffness and
+resonance against time, as PNG plots plus report.md with the key figures.
 
 usage: plot_replay.py OUTPUT_BAG REPORT_DIR [INPUT_BAG]
 Times are seconds since the first output stamp; SI units (TE in m shown in um).
@@ -24,18 +24,23 @@ import motion_analysis  # noqa: E402
 
 
 def read(bag_path):
-    te, st, res = [], [], []
+    te, st, res, mp = [], [], [], []
     with rosbag.Bag(bag_path) as bag:
-        for topic, m, _ in bag.read_messages(topics=["/transmission_error", "/stiffness", "/resonance"]):
+        for topic, m, _ in bag.read_messages(topics=["/transmission_error", "/stiffness", "/resonance",
+                                                     "/mesh_period_stats"]):
             t = m.header.stamp.to_sec()
-            if topic == "/transmission_error":
+            if topic == "/mesh_period_stats":
+                # Placed at the middle of the block it describes.
+                mp.append((t - 0.5 * m.duration, m.te_mean, m.te_rms, m.mesh_force_mean, m.mesh_force_rms,
+                           m.mesh_frequency, m.periods))
+            elif topic == "/transmission_error":
                 te.append((t, m.dynamic_te, m.static_te, m.mesh_force))
             elif topic == "/stiffness":
                 st.append((t, m.mesh_stiffness, m.mesh_stiffness_mean, [b.radial_stiffness for b in m.bearings],
                            [b.name for b in m.bearings], m.torque))
             else:
                 res.append((t, list(m.frequencies_hz), list(m.dominant_coordinate), m.floquet_margin if m.floquet_valid else None))
-    return te, st, res
+    return te, st, res, mp
 
 
 def finish(fig, axes, ylabels, title, path):
@@ -84,7 +89,7 @@ def main():
     source = sys.argv[3] if len(sys.argv) > 3 else out_bag
     os.makedirs(report, exist_ok=True)
     status = replay_status(report)
-    te, st, res = read(out_bag)
+    te, st, res, mp = read(out_bag)
     starts = [s[0][0] for s in (te, st, res) if s]
     if not starts and status and status != "ok":
         with open(os.path.join(report, "report.md"), "w") as f:
@@ -108,6 +113,18 @@ def main():
         ax[1].legend(loc="upper right", fontsize=8)
     finish(fig, ax, ["mesh deflection [um]", "mesh force [N]"], "Predicted transmission error (3-DOF model)",
            os.path.join(report, "transmission_error.png"))
+
+    # Per block of whole mesh periods (/mesh_period_stats): what the mesh does, where the 30-sample
+    # mean above shows what the grid's few phases per period see.
+    fig, ax = plt.subplots(2, 1, figsize=(9, 6), sharex=True)
+    if mp:
+        ts = [r[0] - t0 for r in mp]
+        for axis, (mean_col, rms_col, scale, label) in enumerate(((1, 2, 1e6, "dynamic TE"), (3, 4, 1.0, "mesh force"))):
+            ax[axis].plot(ts, [scale * r[mean_col] for r in mp], lw=1.2, color="C0", label=label + ": per-period mean")
+            ax[axis].plot(ts, [scale * r[rms_col] for r in mp], lw=1.0, color="C1", label=label + ": RMS about the mean")
+            ax[axis].legend(loc="upper right", fontsize=8)
+    finish(fig, ax, ["mesh deflection [um]", "mesh force [N]"], "Per mesh period (blocks of whole mesh periods)",
+           os.path.join(report, "mesh_period_stats.png"))
 
     fig, ax = plt.subplots(2, 1, figsize=(9, 6), sharex=True)
     if st:
@@ -148,6 +165,11 @@ def main():
             rms = math.sqrt(sum((x - mean) ** 2 for x in d) / len(d))
             f.write("| dynamic TE mean / RMS about mean / peak-to-peak | %.4g / %.4g / %.4g um |\n"
                     % (1e6 * mean, 1e6 * rms, 1e6 * (max(d) - min(d))))
+        if mp:
+            f.write("| mesh period blocks / periods | %d / %d |\n" % (len(mp), sum(r[6] for r in mp)))
+            f.write("| per-period dynamic TE mean / RMS, last block | %.4g / %.4g um |\n" % (1e6 * mp[-1][1], 1e6 * mp[-1][2]))
+            f.write("| per-period mesh force mean / RMS, last block | %.4g / %.4g N at %.4g Hz |\n"
+                    % (mp[-1][3], mp[-1][4], mp[-1][5]))
         if st:
             for i, name in enumerate(st[-1][4]):
                 f.write("| %s radial stiffness, first / last | %.4g / %.4g N/um |\n"
@@ -157,7 +179,8 @@ def main():
                 "%.0f Hz (%s)" % (fr, dom) for fr, dom in zip(res[-1][1], res[-1][2])))
             if res[-1][3] is not None:
                 f.write("| Floquet margin | %.3f |\n" % res[-1][3])
-        f.write("\n![transmission error](transmission_error.png)\n\n![stiffness](stiffness.png)\n\n"
+        f.write("\n![transmission error](transmission_error.png)\n\n![per mesh period](mesh_period_stats.png)\n\n"
+                "![stiffness](stiffness.png)\n\n"
                 "![resonance](resonance.png)\n")
         for name, caption in motion_figures:
             f.write("\n![%s](%s)\n" % (caption, name))

@@ -1,5 +1,6 @@
 #include "drivetrain_stiffness/pipeline/rig_pipeline.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include "drivetrain_stiffness/core/constants.hpp"
@@ -37,7 +38,7 @@ std::vector<std::pair<std::string, std::uint64_t>> namedCounters(const PipelineC
           {"transmission_error_published", c.te_out},     {"te_spectra_published", c.spectra_out},
           {"resonance_published", c.resonance_out},       {"modal_updates", c.modal_updates},
           {"measured_te_published", c.measured_te_out},   {"calibration_published", c.calibration_out},
-          {"calibration_errors", c.calibration_errors}};
+          {"calibration_errors", c.calibration_errors},   {"mesh_period_stats_published", c.mesh_period_stats_out}};
 }
 
 void PipelineOptions::validate() const {
@@ -137,6 +138,7 @@ void RigPipeline::reset(const std::string& reason) {
   reading_.reset();
   if (calibrator_) calibrator_->interrupt();
   encoders_ = false;
+  mesh_block_ = MeshPeriodAccumulator{};
   last_resonance_.reset();  // the next accepted input republishes the resonance
   counters_.last_event = "reset: " + reason;
 }
@@ -333,6 +335,9 @@ void RigPipeline::acceptMotion(Stamp stamp, const MotionInput& m, PipelineSink& 
   }
   // Rule 10: the dynamics run up to this reading with the motion before it.
   advanceDynamicsTo(stamp, sink);
+  // The first reading moves the mesh phase from the nominal count to the measured one (a jump):
+  // the running block of mesh periods would count a period that never was.
+  if (!encoders_) mesh_block_ = MeshPeriodAccumulator{};
   reading_ = accepted;
   calibrate(stamp, accepted, last != nullptr, sink);
   anchor_ = AngleAnchor{stamp, next.pinion + options_.mesh_phase_offset * kTwoPi / teeth(0), next.speed};
@@ -464,6 +469,7 @@ void RigPipeline::restartDynamics(Stamp stamp, double torque) {
   dynamics_epoch_ = stamp;
   dynamics_->reset(0.0, torque);
   te_spectrum_->reset();  // a new window: no samples from before the restart
+  mesh_block_ = MeshPeriodAccumulator{};  // and no mesh periods
   angle_origin_ = stamp;  // the stiffness message's mesh phase restarts with the dynamics
   followAnchor(stamp);    // measured motion: the dynamics start at the measured phase
 }
@@ -478,6 +484,7 @@ bool RigPipeline::advanceDynamicsTo(Stamp stamp, PipelineSink& sink) {
   } catch (const std::exception& e) {
     dynamicsError("dynamics (restarted at the next torque input)", e);
     dynamics_->stop();
+    mesh_block_ = MeshPeriodAccumulator{};
     return false;
   }
   return true;
@@ -485,6 +492,10 @@ bool RigPipeline::advanceDynamicsTo(Stamp stamp, PipelineSink& sink) {
 
 void RigPipeline::emitUpTo(double t, PipelineSink& sink) {
   const double from = dynamics_->time();
+  // The motion is held over one advance: its mesh frequency unwraps the phase between samples.
+  // A member, not a capture: the lambda must stay within std::function's small buffer (two
+  // pointers), or every advance allocates (allocation_tests).
+  advance_mesh_frequency_ = dynamics_->meshFrequency();
   try {
     dynamics_->advanceTo(t, [&](const DynamicsSample& relative) {
       DynamicsSample s = relative;
@@ -496,6 +507,7 @@ void RigPipeline::emitUpTo(double t, PipelineSink& sink) {
         sink.spectrum(sample_stamp, *te_spectrum_);
         ++counters_.spectra_out;
       }
+      meshPeriodSample(sample_stamp, s, advance_mesh_frequency_, sink);
     });
   } catch (...) {
     counters_.simulated_s += dynamics_->time() - from;
@@ -590,7 +602,107 @@ void RigPipeline::apply(const RuntimeSettings& settings) {
     if (dynamics_) dynamics_->setDamping(settings.mesh_damping_ratio, settings.bearing_damping_ratio);
     last_resonance_.reset();  // damped frequencies and ratios changed: republish at the next input
   }
-  if (dynamics_) dynamics_->setFidelity(settings.fidelity);
+  if (dynamics_) {
+    // The mesh-force estimator depends on the fidelity (MeshPeriodStatistics): a block spans one.
+    if (dynamics_->fidelity() != settings.fidelity) mesh_block_ = MeshPeriodAccumulator{};
+    dynamics_->setFidelity(settings.fidelity);
+  }
+}
+
+void RigPipeline::startMeshBlock(Stamp stamp, const DynamicsSample& s, double turns, double boundary,
+                                 double mesh_frequency) {
+  MeshPeriodAccumulator& a = mesh_block_;
+  a.in_block = true;
+  a.boundary = boundary;
+  // Whole periods spanning >= ~10 output samples at this speed (one at least).
+  const double n = std::ceil(10.0 * dynamics_->outputInterval() * std::abs(mesh_frequency) - 1e-9);
+  a.periods = static_cast<std::uint32_t>(std::clamp(n, 1.0, 1e6));
+  a.samples = 0;
+  a.start = stamp;
+  a.start_turns = turns;
+  a.start_velocity = s.state[5];
+  a.te_ref = s.dynamic_te;
+  a.force_ref = s.mesh_force;
+  a.te_sum = a.te_sq = a.force_sum = a.force_sq = a.torque_sum = 0.0;
+  a.te_min = a.te_max = s.dynamic_te;
+  a.force_min = a.force_max = s.mesh_force;
+}
+
+void RigPipeline::meshPeriodSample(Stamp stamp, const DynamicsSample& s, double mesh_frequency, PipelineSink& sink) {
+  MeshPeriodAccumulator& a = mesh_block_;
+  // The unwrapped phase is kept as an integer count plus the sample's phase in [0, 1), so that the
+  // count is exact on a switch (phase 0): floor(turns) is the count, not a rounding of it.
+  if (!a.have_last) {
+    a.have_last = true;
+    a.last_turns = s.phase;
+    if (s.phase == 0.0) startMeshBlock(stamp, s, s.phase, 0.0, mesh_frequency);  // a restart on a switch
+  } else {
+    const double dt = secondsBetween(stamp, a.last_stamp);
+    if (!(dt > 0.0)) return;  // the grid only moves forward
+    const double last_count = std::floor(a.last_turns);
+    const double last_phase = a.last_turns - last_count;
+    // Whole periods between the samples: those the speed implies, corrected by the phases.
+    const double count = last_count + std::round(mesh_frequency * dt - (s.phase - last_phase));
+    const double turns = count + s.phase;
+    if (a.in_block) {
+      const double half = 0.5 * dt;
+      const double te0 = a.last_te - a.te_ref, te1 = s.dynamic_te - a.te_ref;
+      const double f0 = a.last_force - a.force_ref, f1 = s.mesh_force - a.force_ref;
+      a.te_sum += half * (te0 + te1);
+      a.te_sq += half * (te0 * te0 + te1 * te1);
+      a.force_sum += half * (f0 + f1);
+      a.force_sq += half * (f0 * f0 + f1 * f1);
+      a.torque_sum += half * (a.last_torque + s.torque);
+      ++a.samples;
+      a.te_min = std::min(a.te_min, s.dynamic_te);
+      a.te_max = std::max(a.te_max, s.dynamic_te);
+      a.force_min = std::min(a.force_min, s.mesh_force);
+      a.force_max = std::max(a.force_max, s.mesh_force);
+      const bool forward = count >= a.boundary + a.periods;
+      const bool backward = count < a.boundary - a.periods;
+      if (forward || backward) {
+        MeshPeriodStatistics out;
+        out.start = a.start;
+        out.end = stamp;
+        out.duration = secondsBetween(stamp, a.start);
+        const double d = out.duration;
+        out.periods = static_cast<std::uint32_t>(forward ? count - a.boundary : a.boundary - (count + 1.0));
+        out.samples = a.samples;
+        const double te_dev = a.te_sum / d, force_dev = a.force_sum / d;
+        out.te_mean = a.te_ref + te_dev;
+        out.te_rms = std::sqrt(std::max(0.0, a.te_sq / d - te_dev * te_dev));
+        out.te_peak_to_peak = a.te_max - a.te_min;
+        out.torque = a.torque_sum / d;
+        const double drive = out.torque / estimator_->mesh().geometry().baseRadius(0);
+        const double inertia = dynamics_->fidelity() == Fidelity::kQuasiStatic
+                                   ? 0.0
+                                   : dynamics_->model().equivalentMass() * (s.state[5] - a.start_velocity) / d;
+        out.mesh_force_mean = drive - inertia;
+        out.mesh_force_rms = std::sqrt(std::max(0.0, a.force_sq / d - force_dev * force_dev));
+        out.mesh_force_peak_to_peak = a.force_max - a.force_min;
+        out.mesh_frequency = (turns - a.start_turns) / d;
+        bool finite = true;
+        for (double v : {out.te_mean, out.te_rms, out.te_peak_to_peak, out.mesh_force_mean, out.mesh_force_rms,
+                         out.mesh_force_peak_to_peak, out.mesh_frequency, out.torque}) {
+          finite = finite && std::isfinite(v);
+        }
+        if (finite) {  // never NaN on a topic (the sink's conversion would refuse it inside the advance)
+          ++counters_.mesh_period_stats_out;
+          sink.meshPeriod(stamp, out);
+        } else {
+          counters_.last_event = "mesh_period_stats: a statistic is not finite (not published)";
+        }
+        startMeshBlock(stamp, s, turns, forward ? count : count + 1.0, mesh_frequency);
+      }
+    } else if (count != last_count) {
+      startMeshBlock(stamp, s, turns, count > last_count ? count : count + 1.0, mesh_frequency);
+    }
+    a.last_turns = turns;
+  }
+  a.last_stamp = stamp;
+  a.last_te = s.dynamic_te;
+  a.last_force = s.mesh_force;
+  a.last_torque = s.torque;
 }
 
 }  // namespace drivetrain_stiffness

@@ -208,6 +208,25 @@ drivetrain_stiffness::MeasuredTe toMeasuredTeMsg(Stamp stamp, const std::string&
   return m;
 }
 
+drivetrain_stiffness::MeshPeriodStats toMeshPeriodStatsMsg(Stamp stamp, const std::string& frame_id, const MeshPeriodStatistics& s) {
+  auto f = [](const char* field, double value) { return finite("mesh_period_stats", field, value); };
+  drivetrain_stiffness::MeshPeriodStats m;
+  m.header.stamp = toRosTime(stamp);
+  m.header.frame_id = frame_id;
+  m.te_mean = f("te_mean", s.te_mean);
+  m.te_rms = f("te_rms", s.te_rms);
+  m.te_peak_to_peak = f("te_peak_to_peak", s.te_peak_to_peak);
+  m.mesh_force_mean = f("mesh_force_mean", s.mesh_force_mean);
+  m.mesh_force_rms = f("mesh_force_rms", s.mesh_force_rms);
+  m.mesh_force_peak_to_peak = f("mesh_force_peak_to_peak", s.mesh_force_peak_to_peak);
+  m.mesh_frequency = f("mesh_frequency", s.mesh_frequency);
+  m.torque = f("torque", s.torque);
+  m.periods = s.periods;
+  m.samples = s.samples;
+  m.duration = f("duration", s.duration);
+  return m;
+}
+
 std::string calibrationStatus(const RigPipeline& pipeline) {
   if (const Calibrator* c = pipeline.calibrator()) {
     const CalibrationEstimate& e = c->estimate();

@@ -60,4 +60,10 @@ void MessageSink::calibration(Stamp stamp, const CalibrationEstimate& estimate) 
   emitCalibration(m);
 }
 
+void MessageSink::meshPeriod(Stamp stamp, const MeshPeriodStatistics& stats) {
+  drivetrain_stiffness::MeshPeriodStats m = toMeshPeriodStatsMsg(stamp, settings_.frames.pinion, stats);
+  m.header.seq = mesh_period_seq_++;
+  emitMeshPeriodStats(m);
+}
+
 }  // namespace drivetrain_stiffness

@@ -9,6 +9,7 @@
 
 #include "drivetrain_stiffness/Calibration.h"
 #include "drivetrain_stiffness/MeasuredTe.h"
+#include "drivetrain_stiffness/MeshPeriodStats.h"
 #include "drivetrain_stiffness/Resonance.h"
 #include "drivetrain_stiffness/SpectralPeaks.h"
 #include "drivetrain_stiffness/Stiffness.h"
@@ -69,6 +70,8 @@ class StiffnessEstimatorRos::Publishers : public MessageSink {
     // interface does not depend on the gearbox file.
     measured_te_ = nh.advertise<drivetrain_stiffness::MeasuredTe>("measured_te", 10000);
     calibration_ = nh.advertise<drivetrain_stiffness::Calibration>("calibration", 10000);
+    // The TE and mesh force per block of whole mesh periods (~10 output samples or more each).
+    mesh_period_stats_ = nh.advertise<drivetrain_stiffness::MeshPeriodStats>("mesh_period_stats", 1000);
   }
 
  protected:
@@ -78,11 +81,12 @@ class StiffnessEstimatorRos::Publishers : public MessageSink {
   void emitResonance(const drivetrain_stiffness::Resonance& m) override { resonance_.publish(m); }
   void emitMeasuredTe(const drivetrain_stiffness::MeasuredTe& m) override { measured_te_.publish(m); }
   void emitCalibration(const drivetrain_stiffness::Calibration& m) override { calibration_.publish(m); }
+  void emitMeshPeriodStats(const drivetrain_stiffness::MeshPeriodStats& m) override { mesh_period_stats_.publish(m); }
   void emitTransforms(const std::vector<geometry_msgs::TransformStamped>& t) override { tf_.sendTransform(t); }
   void emitMarkers(const visualization_msgs::MarkerArray& m) override { markers_.publish(m); }
 
  private:
-  ros::Publisher stiffness_, te_, resonance_, spectrum_, markers_, measured_te_, calibration_;
+  ros::Publisher stiffness_, te_, resonance_, spectrum_, markers_, measured_te_, calibration_, mesh_period_stats_;
   tf2_ros::TransformBroadcaster tf_;
 };
 

@@ -142,6 +142,10 @@ ReplayWriter::ReplayWriter(const RigPipeline& pipeline, const OutputSettings& se
   // The calibration's files, named after the message fields in message order (the ctest
   // replay_writes_the_calibration checks the columns against msg/); header only without a calibration.
   measured_te_csv_ = std::make_unique<CsvFile>(csv_dir + "/measured_te.csv", "stamp,te,predicted,residual,torque,mesh_phase");
+  // Per block of whole mesh periods, named after the MeshPeriodStats fields in message order.
+  mesh_period_csv_ = std::make_unique<CsvFile>(csv_dir + "/mesh_period_stats.csv",
+      "stamp,te_mean,te_rms,te_peak_to_peak,mesh_force_mean,mesh_force_rms,mesh_force_peak_to_peak,mesh_frequency,torque,"
+      "periods,samples,duration");
   std::string parameters, identified;
   for (int i = 0; i < kCalibrationSize; ++i) {
     parameters += std::string(",") + calibrationName(i) + "," + calibrationName(i) + "_std";
@@ -163,7 +167,7 @@ ReplayWriter::ReplayWriter(const RigPipeline& pipeline, const OutputSettings& se
 void ReplayWriter::close() {
   // Each close throws on an I/O error, naming its file.
   if (bag_) bag_->close();
-  for (auto* csv : {&stiffness_csv_, &te_csv_, &spectrum_csv_, &resonance_csv_, &measured_te_csv_, &calibration_csv_}) {
+  for (auto* csv : {&stiffness_csv_, &te_csv_, &spectrum_csv_, &resonance_csv_, &measured_te_csv_, &calibration_csv_, &mesh_period_csv_}) {
     if (*csv) (*csv)->close();
   }
 }
@@ -243,6 +247,16 @@ void ReplayWriter::emitCalibration(const drivetrain_stiffness::Calibration& m) {
   c.number(m.knee_torque).number(m.measured_mean_te).number(m.predicted_mean_te);
   c.number(m.measured_mesh_harmonic_1).number(m.predicted_mesh_harmonic_1);
   c.number(m.measured_mesh_harmonic_2).number(m.predicted_mesh_harmonic_2).endRow();
+}
+
+void ReplayWriter::emitMeshPeriodStats(const drivetrain_stiffness::MeshPeriodStats& m) {
+  if (bag_) bag_->write("/mesh_period_stats", m.header.stamp, m);
+  if (!mesh_period_csv_) return;
+  CsvFile& c = *mesh_period_csv_;
+  c.stamp(m.header.stamp).number(m.te_mean).number(m.te_rms).number(m.te_peak_to_peak);
+  c.number(m.mesh_force_mean).number(m.mesh_force_rms).number(m.mesh_force_peak_to_peak);
+  c.number(m.mesh_frequency).number(m.torque).number(static_cast<double>(m.periods));
+  c.number(static_cast<double>(m.samples)).number(m.duration).endRow();
 }
 
 void ReplayWriter::emitTransforms(const std::vector<geometry_msgs::TransformStamped>& t) {

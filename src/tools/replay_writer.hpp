@@ -65,12 +65,14 @@ class ReplayWriter : public MessageSink {
   void emitResonance(const drivetrain_stiffness::Resonance& m) override;
   void emitMeasuredTe(const drivetrain_stiffness::MeasuredTe& m) override;
   void emitCalibration(const drivetrain_stiffness::Calibration& m) override;
+  void emitMeshPeriodStats(const drivetrain_stiffness::MeshPeriodStats& m) override;
   void emitTransforms(const std::vector<geometry_msgs::TransformStamped>& t) override;
   void emitMarkers(const visualization_msgs::MarkerArray& m) override;
 
  private:
   std::unique_ptr<BagWriter> bag_;
-  std::unique_ptr<CsvFile> stiffness_csv_, te_csv_, spectrum_csv_, resonance_csv_, measured_te_csv_, calibration_csv_;
+  std::unique_ptr<CsvFile> stiffness_csv_, te_csv_, spectrum_csv_, resonance_csv_, measured_te_csv_, calibration_csv_,
+      mesh_period_csv_;
   std::vector<std::string> bearing_names_;
 };
 

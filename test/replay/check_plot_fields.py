@@ -12,7 +12,8 @@ import sys
 
 src = sys.argv[1]
 TOPIC_TYPES = {"/transmission_error": "TransmissionError", "/stiffness": "Stiffness", "/resonance": "Resonance",
-               "/te_spectrum": "SpectralPeaks", "/measured_te": "MeasuredTe", "/calibration": "Calibration"}
+               "/te_spectrum": "SpectralPeaks", "/measured_te": "MeasuredTe", "/calibration": "Calibration",
+               "/mesh_period_stats": "MeshPeriodStats"}
 NUMERIC = {"float64", "float32", "int32", "uint32", "int64", "uint64", "bool", "uint8", "int8"}
 
 
@@ -32,7 +33,7 @@ paths = []
 for name, group in groups.items():
     if name.startswith("plugin__rqt_plot__Plot__"):
         paths += ast.literal_eval(group["groups"]["plugin"]["keys"]["topics"]["repr"])
-PATH_RE = r"`(/(?:transmission_error|stiffness|resonance|te_spectrum|measured_te|calibration)/[a-z0-9_]+)`"
+PATH_RE = r"`(/(?:transmission_error|stiffness|resonance|te_spectrum|measured_te|calibration|mesh_period_stats)/[a-z0-9_]+)`"
 documented = re.findall(PATH_RE, open(os.path.join(src, "docs", "ros_api.md")).read())
 if not documented:
     sys.exit("docs/ros_api.md lists no plot paths (section \"Plotting\")")

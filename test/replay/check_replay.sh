@@ -15,7 +15,7 @@ for run in a b; do
     --params "$src/config/stiffness_estimator.yaml" --out "$work/$run.bag" --csv "$work/$run" > "$work/$run.json"
 done
 cmp "$work/a.bag" "$work/b.bag"
-for f in stiffness transmission_error te_spectrum resonance measured_te calibration; do cmp "$work/a/$f.csv" "$work/b/$f.csv"; done
+for f in stiffness transmission_error te_spectrum resonance measured_te calibration mesh_period_stats; do cmp "$work/a/$f.csv" "$work/b/$f.csv"; done
 /usr/bin/python3 - "$work/a.json" "$work/a/transmission_error.csv" <<'PY'
 import csv, json, math, sys
 d = json.load(open(sys.argv[1]))

@@ -6,11 +6,12 @@
     config/stiffness_estimator.yaml, twice: the output bags and every CSV file byte-identical, the
     calibrated gearbox identical but for its "written" line. (The kinematic rig sim has no
     transmission error: the numbers are plumbing, not a calibration.)
- 2. calibration.csv and measured_te.csv: the columns are "stamp" and the message fields of
-    msg/Calibration.msg and msg/MeasuredTe.msg in their order, one row per message counted in
-    calibration_published and measured_te_published (both > 0), every number finite;
- 3. the bag's /calibration and /measured_te equal the CSV rows field by field (the same conversion),
-    header.seq from 0, frame_id rig and pinion;
+ 2. calibration.csv, measured_te.csv and mesh_period_stats.csv: the columns are "stamp" and the
+    message fields of msg/Calibration.msg, msg/MeasuredTe.msg and msg/MeshPeriodStats.msg in their
+    order, one row per message counted in calibration_published, measured_te_published and
+    mesh_period_stats_published (all > 0), every number finite;
+ 3. the bag's /calibration, /measured_te and /mesh_period_stats equal the CSV rows field by field
+    (the same conversion), header.seq from 0, frame_id rig, pinion and pinion;
  4. --calibrate: on the kinematic bag the loaded windows are gated (no TE where the model predicts
     one), so it refuses with exit 1 naming why and writes nothing. The same bag with the model's
     own prediction at the prior added to the gear encoder (the kinematic replay's predicted_*
@@ -93,7 +94,7 @@ cal = summary["calibration"]
 print("counters: measured_te_published %d, calibration_published %d, calibration_errors %d; calibration: %s"
       % (c["measured_te_published"], c["calibration_published"], c["calibration_errors"], json.dumps(cal)))
 check(filecmp.cmp(os.path.join(work, "a.bag"), os.path.join(work, "b.bag"), shallow=False), "output bags differ")
-for f in ["stiffness", "transmission_error", "te_spectrum", "resonance", "measured_te", "calibration"]:
+for f in ["stiffness", "transmission_error", "te_spectrum", "resonance", "measured_te", "calibration", "mesh_period_stats"]:
     check(filecmp.cmp(os.path.join(work, "a", f + ".csv"), os.path.join(work, "b", f + ".csv"), shallow=False),
           f + ".csv differs between two replays")
 check(c["accepted_joint_states"] == sim["joint_states"] > 0 and c["rejected_joint_states"] == 0,
@@ -103,7 +104,8 @@ check(c["calibration_errors"] == 0, "calibration_errors %d: %s" % (c["calibratio
 # 2. The CSV files: the message fields as columns, one row per message, finite numbers.
 tables = {}
 for topic, msg, counter in [("calibration", "Calibration", "calibration_published"),
-                            ("measured_te", "MeasuredTe", "measured_te_published")]:
+                            ("measured_te", "MeasuredTe", "measured_te_published"),
+                            ("mesh_period_stats", "MeshPeriodStats", "mesh_period_stats_published")]:
     fields = msg_fields(msg)
     header, body = rows(os.path.join(work, "a", topic + ".csv"))
     tables[topic] = (fields, header, body)
@@ -122,7 +124,7 @@ check("baseline" in outcomes, "no baseline window (torque_steps' 0.05 N*m step)"
 
 # 3. The bag's topics equal the CSV rows.
 with rosbag.Bag(os.path.join(work, "a.bag")) as b:
-    for topic, frame in [("calibration", "rig"), ("measured_te", "pinion")]:
+    for topic, frame in [("calibration", "rig"), ("measured_te", "pinion"), ("mesh_period_stats", "pinion")]:
         fields, header, body = tables[topic]
         msgs = [m for _, m, _ in b.read_messages(topics=["/" + topic])]
         check(len(msgs) == len(body), "/%s: %d messages, %d CSV rows" % (topic, len(msgs), len(body)))

@@ -8,6 +8,7 @@
 #include <geometry_msgs/WrenchStamped.h>
 #include <ros/ros.h>
 
+#include "drivetrain_stiffness/MeshPeriodStats.h"
 #include "drivetrain_stiffness/Preload.h"
 #include "drivetrain_stiffness/Resonance.h"
 #include "drivetrain_stiffness/SpectralPeaks.h"
@@ -32,6 +33,8 @@ class NodeTest : public testing::Test {
     resonance_sub_ = nh_.subscribe<Resonance>("resonance", 100, [this](const Resonance::ConstPtr& m) { resonance_.push_back(*m); });
     te_sub_ = nh_.subscribe<TransmissionError>("transmission_error", 10000,
         [this](const TransmissionError::ConstPtr& m) { te_.push_back(*m); });
+    mesh_period_sub_ = nh_.subscribe<MeshPeriodStats>("mesh_period_stats", 1000,
+        [this](const MeshPeriodStats::ConstPtr& m) { mesh_periods_.push_back(*m); });
     torque_pub_ = nh_.advertise<geometry_msgs::WrenchStamped>("torque", 10);
     preload_pub_ = nh_.advertise<Preload>("preload", 10);
     ASSERT_TRUE(waitFor([&] { return torque_pub_.getNumSubscribers() > 0 && preload_pub_.getNumSubscribers() > 0 &&
@@ -124,6 +127,8 @@ class NodeTest : public testing::Test {
   std::vector<SpectralPeaks> spectra_;
   std::vector<Resonance> resonance_;
   std::vector<TransmissionError> te_;
+  std::vector<MeshPeriodStats> mesh_periods_;
+  ros::Subscriber mesh_period_sub_;
   ros::Publisher torque_pub_, preload_pub_;
   std::vector<Stiffness> received_;
   std::vector<diagnostic_msgs::DiagnosticArray> diagnostics_;
@@ -211,6 +216,23 @@ TEST_F(NodeTest, AnswersGoodInputAndSurvivesBadInput) {
   bool mesh_peak = false;
   for (double f : spectra_.back().frequencies_hz) mesh_peak |= std::abs(f - 1000.0 * 20 / 60) < spectra_.back().resolution_hz;
   EXPECT_TRUE(mesh_peak);
+  // Per-mesh-period statistics: from the first sample on a tooth switch (11.003 s) blocks of 4
+  // periods (12 samples, 12 ms) up to 13.013 s: 167 blocks; the mean mesh force T / r_b,p.
+  ASSERT_TRUE(waitFor([&] { return mesh_periods_.size() >= 167; }, 5.0)) << mesh_periods_.size();
+  EXPECT_EQ(mesh_periods_.size(), 167u);
+  const double mean_force = 0.5 / reference_->mesh().geometry().baseRadius(0);
+  for (std::size_t i = 0; i < mesh_periods_.size(); ++i) {
+    const MeshPeriodStats& b = mesh_periods_[i];
+    EXPECT_NEAR(b.header.stamp.toSec(), 11.015 + 0.012 * static_cast<double>(i), 1e-6) << i;
+    EXPECT_EQ(b.periods, 4u);
+    EXPECT_EQ(b.samples, 12u);
+    EXPECT_NEAR(b.mesh_frequency, 1000.0 * 20 / 60, 1e-3 * 1000.0 * 20 / 60);
+    EXPECT_TRUE(std::isfinite(b.te_mean) && std::isfinite(b.te_rms) && std::isfinite(b.mesh_force_rms));
+    if (b.header.stamp.toSec() > 11.3) {
+      EXPECT_NEAR(b.mesh_force_mean, mean_force, 1e-2 * mean_force) << i;
+    }
+  }
+  EXPECT_TRUE(diagnosticCountAtLeast("mesh_period_stats_published", 167));
 
   // 5. A gap beyond ~max_gap (5 s here) restarts the dynamics instead of integrating it: the stiffness
   // answer still comes, no transmission_error sample is released, and the restart is counted.

@@ -6,6 +6,7 @@
 
 #include "drivetrain_stiffness/Calibration.h"
 #include "drivetrain_stiffness/MeasuredTe.h"
+#include "drivetrain_stiffness/MeshPeriodStats.h"
 #include "drivetrain_stiffness/Preload.h"
 #include "drivetrain_stiffness/Resonance.h"
 #include "drivetrain_stiffness/SpectralPeaks.h"
@@ -45,6 +46,8 @@ drivetrain_stiffness::Resonance toResonanceMsg(Stamp stamp, const std::string& f
 /// calibration_errors.
 drivetrain_stiffness::Calibration toCalibrationMsg(Stamp stamp, const std::string& frame_id, const CalibrationEstimate& e);
 drivetrain_stiffness::MeasuredTe toMeasuredTeMsg(Stamp stamp, const std::string& frame_id, const MeasuredTeSample& s);
+/// One block of whole mesh periods (MeshPeriodStatistics); refuses a non-finite number as the two above.
+drivetrain_stiffness::MeshPeriodStats toMeshPeriodStatsMsg(Stamp stamp, const std::string& frame_id, const MeshPeriodStatistics& s);
 /// The calibration's state in words, for /diagnostics and the replay's summary: the last window's
 /// outcome, or why the pipeline runs without a calibration (no calibration block, ~calibrate false,
 /// no dynamics block).

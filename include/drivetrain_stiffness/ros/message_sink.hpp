@@ -34,6 +34,7 @@ class MessageSink : public PipelineSink {
   void resonance(Stamp stamp, const ResonanceEstimate& estimate) override;
   void measuredTe(Stamp stamp, const MeasuredTeSample& sample) override;
   void calibration(Stamp stamp, const CalibrationEstimate& estimate) override;
+  void meshPeriod(Stamp stamp, const MeshPeriodStatistics& stats) override;
 
   const OutputSettings& settings() const { return settings_; }
 
@@ -44,6 +45,7 @@ class MessageSink : public PipelineSink {
   virtual void emitResonance(const drivetrain_stiffness::Resonance& msg) = 0;
   virtual void emitMeasuredTe(const drivetrain_stiffness::MeasuredTe& msg) = 0;
   virtual void emitCalibration(const drivetrain_stiffness::Calibration& msg) = 0;
+  virtual void emitMeshPeriodStats(const drivetrain_stiffness::MeshPeriodStats& msg) = 0;
   virtual void emitTransforms(const std::vector<geometry_msgs::TransformStamped>& transforms) = 0;
   virtual void emitMarkers(const visualization_msgs::MarkerArray& markers) = 0;
 
@@ -53,11 +55,11 @@ class MessageSink : public PipelineSink {
   RigVisualizer visualizer_;
   std::optional<Stamp> last_tf_;
   drivetrain_stiffness::Stiffness stiffness_msg_;  ///< refilled per update (publish serializes it at once)
-  // header.seq of the stiffness, transmission_error, measured_te and calibration messages, numbered
+  // header.seq of the stiffness, transmission_error, measured_te, calibration and mesh_period_stats messages, numbered
   // from 0: what a bag written by drivetrain_replay carries (on the live graph roscpp writes its own
   // per-publication count, the same numbers while a subscriber listens): a reader sees from the
   // gaps what it lost.
-  std::uint32_t stiffness_seq_ = 0, te_seq_ = 0, measured_te_seq_ = 0, calibration_seq_ = 0;
+  std::uint32_t stiffness_seq_ = 0, te_seq_ = 0, measured_te_seq_ = 0, calibration_seq_ = 0, mesh_period_seq_ = 0;
 };
 
 }  // namespace drivetrain_stiffness
