@@ -353,13 +353,14 @@ void RigPipeline::calibrate(Stamp stamp, const Reading& reading, bool continuous
   try {
     const int out = calibrator_->reading(stamp.toSec(), reading.pinion, *reading.gear, phase, reading.speed, held_torque_,
                                          *estimator_, measured_te_);
+    // Counted once the sink took it: a message the sink refuses (non-finite) is an error, not both.
     if (out & Calibrator::kSample) {
-      ++counters_.measured_te_out;
       sink.measuredTe(stamp, measured_te_);
+      ++counters_.measured_te_out;
     }
     if (out & Calibrator::kWindow) {
-      ++counters_.calibration_out;
       sink.calibration(stamp, calibrator_->estimate());
+      ++counters_.calibration_out;
     }
   } catch (const InvalidInput& e) {
     ++counters_.calibration_errors;
