@@ -323,6 +323,74 @@ std::uint32_t Calibrator::countAtOperatingPoint(double torque) {
   return ++bin_count_[i];
 }
 
+template <typename F>
+double Calibrator::spreadOf(F&& f) const {
+  // A scalar output's standard deviation by linearisation: sqrt(g' P g), g by central differences.
+  const CalibrationVector& theta = estimate_.value;
+  CalibrationVector g = CalibrationVector::Zero();
+  for (int i = 0; i < kCalibrationSize; ++i) {
+    if (!(estimate_.prior_std[i] > 0.0)) continue;
+    const double step = 1e-4 * std::max(estimate_.prior_std[i], std::abs(theta[i]));
+    CalibrationVector a = theta, b = theta;
+    a[i] += step;
+    b[i] -= step;
+    g[i] = (f(a) - f(b)) / (2.0 * step);
+  }
+  return std::sqrt(std::max(0.0, g.dot(covariance_ * g)));
+}
+
+CalibrationBands Calibrator::bands(double torque, const StiffnessEstimator& supports, bool with_modes) const {
+  CalibrationBands out;
+  out.calibrated = estimate_.updates > 0;
+  const CalibrationVector& theta = estimate_.value;
+  const CalibrationMatrix& P = covariance_;
+  // Period-mean mesh stiffness at this torque (its flank state per phase).
+  auto mesh = [&](const CalibrationVector& p) { return model_.meanMeshStiffness(p, torque); };
+  out.mesh_stiffness = mesh(theta);
+  const double mesh_std = spreadOf(mesh);
+  out.mesh_stiffness_low = out.mesh_stiffness - k95 * mesh_std;
+  out.mesh_stiffness_high = out.mesh_stiffness + k95 * mesh_std;
+  // Bearing stiffness per shaft: the Hertz tangent at the current load (scale 1) times the scale.
+  std::array<double, 2> unit{0.0, 0.0};
+  for (std::size_t i = 0; i < rig_.bearings.size(); ++i) {
+    const SupportEstimate& s = supports.current().supports[i];
+    unit[rig_.bearings[i].shaft] += s.solution.radialStiffness() / supports.supportConfig(i).stiffness_scale;
+  }
+  for (int s = 0; s < 2; ++s) {
+    const int index = s == 0 ? kPinionBearingScale : kGearBearingScale;
+    out.bearing_stiffness[s] = theta[index] * unit[s];
+    out.bearing_stiffness_low[s] = (theta[index] - k95 * estimate_.std[index]) * unit[s];
+    out.bearing_stiffness_high[s] = (theta[index] + k95 * estimate_.std[index]) * unit[s];
+  }
+  if (!with_modes) return out;
+  // Natural frequencies of the calibrated model (modal_analysis.hpp), each with its band.
+  auto modes = [&](const CalibrationVector& p) {
+    const std::array<double, 2> kb{p[kPinionBearingScale] * unit[0], p[kGearBearingScale] * unit[1]};
+    return modalAnalysis(rigRotorParameters(rig_, supports.mesh(), kb), model_.meanMeshStiffness(p, torque));
+  };
+  const std::array<Mode, 3> m = modes(theta);
+  // The three frequencies' gradients together: two modal analyses per parameter that moves them.
+  Eigen::Matrix<double, 3, kCalibrationSize> G = Eigen::Matrix<double, 3, kCalibrationSize>::Zero();
+  for (int i : {kMeshScale, kPinionBearingScale, kGearBearingScale, kPreloadTorque}) {
+    if (!(estimate_.prior_std[i] > 0.0)) continue;
+    const double step = 1e-4 * std::max(estimate_.prior_std[i], std::abs(theta[i]));
+    CalibrationVector a = theta, b = theta;
+    a[i] += step;
+    b[i] -= step;
+    const std::array<Mode, 3> ma = modes(a), mb = modes(b);
+    for (int k = 0; k < 3; ++k) G(k, i) = (ma[k].natural_frequency - mb[k].natural_frequency) / (2.0 * step);
+  }
+  const Eigen::Matrix3d frequency_covariance = G * P * G.transpose();
+  for (int i = 0; i < 3; ++i) {
+    const double f = m[i].natural_frequency;
+    const double s = std::sqrt(std::max(0.0, frequency_covariance(i, i)));
+    out.natural_frequency[i] = f;
+    out.natural_frequency_low[i] = f - k95 * s;
+    out.natural_frequency_high[i] = f + k95 * s;
+  }
+  return out;
+}
+
 void Calibrator::outputs(double torque, const StiffnessEstimator& supports) {
   CalibrationEstimate& e = estimate_;
   // The parameters and their covariance from the state's (first order in c -> 1/c).
@@ -337,20 +405,6 @@ void Calibrator::outputs(double torque, const StiffnessEstimator& supports) {
   for (int i = 0; i < kCalibrationSize; ++i) {
     e.identified[i] = state_prior_std_[i] > 0.0 && std::sqrt(std::max(0.0, state_covariance_(i, i))) < 0.5 * state_prior_std_[i];
   }
-  const CalibrationMatrix& P = covariance_;
-  // A scalar output's standard deviation by linearisation: sqrt(g' P g), g by central differences.
-  auto spread = [&](auto&& f) {
-    CalibrationVector g = CalibrationVector::Zero();
-    for (int i = 0; i < kCalibrationSize; ++i) {
-      if (!(e.prior_std[i] > 0.0)) continue;
-      const double step = 1e-4 * std::max(e.prior_std[i], std::abs(theta[i]));
-      CalibrationVector a = theta, b = theta;
-      a[i] += step;
-      b[i] -= step;
-      g[i] = (f(a) - f(b)) / (2.0 * step);
-    }
-    return std::sqrt(std::max(0.0, g.dot(P * g)));
-  };
   // Series compliance at the reference torque: mean TE above zero torque over the mesh force.
   const double tr = config_.reference_torque;
   model_.shaftDeflection(tr, supports, scratch_);
@@ -358,50 +412,18 @@ void Calibrator::outputs(double torque, const StiffnessEstimator& supports) {
   const double fr = model_.meshForce(tr);
   auto compliance = [&](const CalibrationVector& p) { return (model_.features(p, tr, scratch_, 0.0, zero)[0] - p[kTeOffset]) / fr; };
   e.series_compliance = compliance(theta);
-  e.series_compliance_std = spread(compliance);
-  // Mesh stiffness at the window's torque.
-  auto mesh = [&](const CalibrationVector& p) { return model_.meanMeshStiffness(p, torque); };
-  e.mesh_stiffness = mesh(theta);
-  const double mesh_std = spread(mesh);
-  e.mesh_stiffness_low = e.mesh_stiffness - k95 * mesh_std;
-  e.mesh_stiffness_high = e.mesh_stiffness + k95 * mesh_std;
-  // Bearing stiffness per shaft: the Hertz tangent at the current load (scale 1) times the scale.
-  std::array<double, 2> unit{0.0, 0.0};
-  for (std::size_t i = 0; i < rig_.bearings.size(); ++i) {
-    const SupportEstimate& s = supports.current().supports[i];
-    unit[rig_.bearings[i].shaft] += s.solution.radialStiffness() / supports.supportConfig(i).stiffness_scale;
-  }
-  for (int s = 0; s < 2; ++s) {
-    const int index = s == 0 ? kPinionBearingScale : kGearBearingScale;
-    e.bearing_stiffness[s] = theta[index] * unit[s];
-    e.bearing_stiffness_low[s] = (theta[index] - k95 * e.std[index]) * unit[s];
-    e.bearing_stiffness_high[s] = (theta[index] + k95 * e.std[index]) * unit[s];
-  }
-  // Natural frequencies of the calibrated model (modal_analysis.hpp), each with its band.
-  auto modes = [&](const CalibrationVector& p) {
-    const std::array<double, 2> kb{p[kPinionBearingScale] * unit[0], p[kGearBearingScale] * unit[1]};
-    return modalAnalysis(rigRotorParameters(rig_, supports.mesh(), kb), model_.meanMeshStiffness(p, torque));
-  };
-  const std::array<Mode, 3> m = modes(theta);
-  // The three frequencies' gradients together: two modal analyses per parameter that moves them.
-  Eigen::Matrix<double, 3, kCalibrationSize> G = Eigen::Matrix<double, 3, kCalibrationSize>::Zero();
-  for (int i : {kMeshScale, kPinionBearingScale, kGearBearingScale, kPreloadTorque}) {
-    if (!(e.prior_std[i] > 0.0)) continue;
-    const double step = 1e-4 * std::max(e.prior_std[i], std::abs(theta[i]));
-    CalibrationVector a = theta, b = theta;
-    a[i] += step;
-    b[i] -= step;
-    const std::array<Mode, 3> ma = modes(a), mb = modes(b);
-    for (int k = 0; k < 3; ++k) G(k, i) = (ma[k].natural_frequency - mb[k].natural_frequency) / (2.0 * step);
-  }
-  const Eigen::Matrix3d frequency_covariance = G * P * G.transpose();
-  for (int i = 0; i < 3; ++i) {
-    const double f = m[i].natural_frequency;
-    const double s = std::sqrt(std::max(0.0, frequency_covariance(i, i)));
-    e.natural_frequency[i] = f;
-    e.natural_frequency_low[i] = f - k95 * s;
-    e.natural_frequency_high[i] = f + k95 * s;
-  }
+  e.series_compliance_std = spreadOf(compliance);
+  // Stiffness and natural frequencies at the window's torque, with their bands.
+  const CalibrationBands b = bands(torque, supports, true);
+  e.mesh_stiffness = b.mesh_stiffness;
+  e.mesh_stiffness_low = b.mesh_stiffness_low;
+  e.mesh_stiffness_high = b.mesh_stiffness_high;
+  e.bearing_stiffness = b.bearing_stiffness;
+  e.bearing_stiffness_low = b.bearing_stiffness_low;
+  e.bearing_stiffness_high = b.bearing_stiffness_high;
+  e.natural_frequency = b.natural_frequency;
+  e.natural_frequency_low = b.natural_frequency_low;
+  e.natural_frequency_high = b.natural_frequency_high;
   e.knee_torque = model_.kneeTorque(theta);
 }
 

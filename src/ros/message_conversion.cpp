@@ -131,6 +131,34 @@ static_assert(kCalibrationSize == 5 && kMeshScale == 0 && kPinionBearingScale ==
               "Calibration.msg holds exactly these parameters");
 static_assert(kFeatureSize == 3, "Calibration.msg holds the mean TE and two mesh harmonics");
 
+void fillStiffnessBands(const CalibrationBands& b, drivetrain_stiffness::Stiffness& m) {
+  auto f = [](const char* field, double value) { return finite("stiffness", field, value); };
+  m.calibrated = b.calibrated;
+  m.mesh_stiffness_mean_calibrated = f("mesh_stiffness_mean_calibrated", b.mesh_stiffness);
+  m.mesh_stiffness_mean_low = f("mesh_stiffness_mean_low", b.mesh_stiffness_low);
+  m.mesh_stiffness_mean_high = f("mesh_stiffness_mean_high", b.mesh_stiffness_high);
+  m.pinion_bearing_stiffness_calibrated = f("pinion_bearing_stiffness_calibrated", b.bearing_stiffness[0]);
+  m.pinion_bearing_stiffness_low = f("pinion_bearing_stiffness_low", b.bearing_stiffness_low[0]);
+  m.pinion_bearing_stiffness_high = f("pinion_bearing_stiffness_high", b.bearing_stiffness_high[0]);
+  m.gear_bearing_stiffness_calibrated = f("gear_bearing_stiffness_calibrated", b.bearing_stiffness[1]);
+  m.gear_bearing_stiffness_low = f("gear_bearing_stiffness_low", b.bearing_stiffness_low[1]);
+  m.gear_bearing_stiffness_high = f("gear_bearing_stiffness_high", b.bearing_stiffness_high[1]);
+}
+
+void fillResonanceBands(const CalibrationBands& b, drivetrain_stiffness::Resonance& m) {
+  auto f = [](const char* field, double value) { return finite("resonance", field, value); };
+  m.calibrated = b.calibrated;
+  m.f1_hz_calibrated = f("f1_hz_calibrated", b.natural_frequency[0]);
+  m.f1_hz_low = f("f1_hz_low", b.natural_frequency_low[0]);
+  m.f1_hz_high = f("f1_hz_high", b.natural_frequency_high[0]);
+  m.f2_hz_calibrated = f("f2_hz_calibrated", b.natural_frequency[1]);
+  m.f2_hz_low = f("f2_hz_low", b.natural_frequency_low[1]);
+  m.f2_hz_high = f("f2_hz_high", b.natural_frequency_high[1]);
+  m.f3_hz_calibrated = f("f3_hz_calibrated", b.natural_frequency[2]);
+  m.f3_hz_low = f("f3_hz_low", b.natural_frequency_low[2]);
+  m.f3_hz_high = f("f3_hz_high", b.natural_frequency_high[2]);
+}
+
 drivetrain_stiffness::Calibration toCalibrationMsg(Stamp stamp, const std::string& frame_id, const CalibrationEstimate& e) {
   auto f = [](const char* field, double value) { return finite("calibration", field, value); };
   drivetrain_stiffness::Calibration m;

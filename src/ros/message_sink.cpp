@@ -22,6 +22,7 @@ MessageSink::MessageSink(const RigPipeline& pipeline, const OutputSettings& sett
 
 void MessageSink::stiffness(Stamp stamp, const StiffnessEstimate& estimate) {
   fillStiffnessMsg(stamp, settings_.frames.rig, estimate, stiffness_msg_);
+  fillStiffnessBands(stiffnessBands(estimate), stiffness_msg_);
   stiffness_msg_.header.seq = stiffness_seq_++;
   emitStiffness(stiffness_msg_);
 }
@@ -45,7 +46,27 @@ void MessageSink::spectrum(Stamp stamp, const SlidingSpectrum& spectrum) {
 }
 
 void MessageSink::resonance(Stamp stamp, const ResonanceEstimate& estimate) {
-  emitResonance(toResonanceMsg(stamp, settings_.frames.rig, estimate));
+  drivetrain_stiffness::Resonance m = toResonanceMsg(stamp, settings_.frames.rig, estimate);
+  CalibrationBands b;
+  if (const Calibrator* c = pipeline_.calibrator()) {
+    b = c->bands(pipeline_.estimator().current().torque, pipeline_.estimator(), true);
+  } else {  // no calibration: the drawing's frequencies, bounds of zero width
+    for (int i = 0; i < 3; ++i) {
+      b.natural_frequency[i] = b.natural_frequency_low[i] = b.natural_frequency_high[i] = estimate.modes[i].natural_frequency;
+    }
+  }
+  fillResonanceBands(b, m);
+  emitResonance(m);
+}
+
+CalibrationBands MessageSink::stiffnessBands(const StiffnessEstimate& estimate) const {
+  if (const Calibrator* c = pipeline_.calibrator()) return c->bands(estimate.torque, pipeline_.estimator(), false);
+  // No calibration: the drawing's model, bounds of zero width.
+  CalibrationBands b;
+  b.mesh_stiffness = b.mesh_stiffness_low = b.mesh_stiffness_high = estimate.mesh.mean;
+  const std::array<double, 2> k = pipeline_.estimator().shaftRadialStiffness();
+  b.bearing_stiffness = b.bearing_stiffness_low = b.bearing_stiffness_high = k;
+  return b;
 }
 
 void MessageSink::measuredTe(Stamp stamp, const MeasuredTeSample& sample) {

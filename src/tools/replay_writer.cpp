@@ -132,13 +132,18 @@ ReplayWriter::ReplayWriter(const RigPipeline& pipeline, const OutputSettings& se
   }
   stiffness_csv_ = std::make_unique<CsvFile>(csv_dir + "/stiffness.csv",
       "stamp,torque,mesh_force,mesh_phase,mesh_stiffness,mesh_stiffness_mean,mesh_stiffness_drive,mesh_stiffness_back,"
-      "drive_flank_loaded,back_flank_loaded" + bearings);
+      "drive_flank_loaded,back_flank_loaded" + bearings +
+      ",calibrated,mesh_stiffness_mean_calibrated,mesh_stiffness_mean_low,mesh_stiffness_mean_high,"
+      "pinion_bearing_stiffness_calibrated,pinion_bearing_stiffness_low,pinion_bearing_stiffness_high,"
+      "gear_bearing_stiffness_calibrated,gear_bearing_stiffness_low,gear_bearing_stiffness_high");
   te_csv_ = std::make_unique<CsvFile>(csv_dir + "/transmission_error.csv",
       "stamp,dynamic_te,static_te,x_p,x_g,x,mesh_force,mesh_phase,torque,drive_flank_loaded,back_flank_loaded");
   spectrum_csv_ = std::make_unique<CsvFile>(csv_dir + "/te_spectrum.csv",
       "stamp,peak_frequency_hz,peak_amplitude,f2_hz,a2,f3_hz,a3,window_s,resolution_hz");
   resonance_csv_ = std::make_unique<CsvFile>(csv_dir + "/resonance.csv",
-      "stamp,f1_hz,f2_hz,f3_hz,zeta1,zeta2,zeta3,dominant1,dominant2,dominant3,floquet_valid,floquet_margin");
+      "stamp,f1_hz,f2_hz,f3_hz,zeta1,zeta2,zeta3,dominant1,dominant2,dominant3,floquet_valid,floquet_margin,"
+      "calibrated,f1_hz_calibrated,f1_hz_low,f1_hz_high,f2_hz_calibrated,f2_hz_low,f2_hz_high,f3_hz_calibrated,f3_hz_low,"
+      "f3_hz_high");
   // The calibration's files, named after the message fields in message order (the ctest
   // replay_writes_the_calibration checks the columns against msg/); header only without a calibration.
   measured_te_csv_ = std::make_unique<CsvFile>(csv_dir + "/measured_te.csv", "stamp,te,predicted,residual,torque,mesh_phase");
@@ -183,6 +188,9 @@ void ReplayWriter::emitStiffness(const drivetrain_stiffness::Stiffness& m) {
     c.number(b.radial_stiffness).number(b.axial_stiffness).number(b.tilt_stiffness).number(b.radial_load);
     c.number(b.axial_load).number(b.max_contact_pressure).number(b.balls_in_contact);
   }
+  c.number(m.calibrated).number(m.mesh_stiffness_mean_calibrated).number(m.mesh_stiffness_mean_low).number(m.mesh_stiffness_mean_high);
+  c.number(m.pinion_bearing_stiffness_calibrated).number(m.pinion_bearing_stiffness_low).number(m.pinion_bearing_stiffness_high);
+  c.number(m.gear_bearing_stiffness_calibrated).number(m.gear_bearing_stiffness_low).number(m.gear_bearing_stiffness_high);
   c.endRow();
 }
 
@@ -212,7 +220,10 @@ void ReplayWriter::emitResonance(const drivetrain_stiffness::Resonance& m) {
   for (double f : m.frequencies_hz) resonance_csv_->number(f);
   for (double z : m.damping_ratios) resonance_csv_->number(z);
   for (const std::string& d : m.dominant_coordinate) resonance_csv_->text(d);
-  resonance_csv_->number(m.floquet_valid).number(m.floquet_margin).endRow();
+  resonance_csv_->number(m.floquet_valid).number(m.floquet_margin).number(m.calibrated);
+  resonance_csv_->number(m.f1_hz_calibrated).number(m.f1_hz_low).number(m.f1_hz_high);
+  resonance_csv_->number(m.f2_hz_calibrated).number(m.f2_hz_low).number(m.f2_hz_high);
+  resonance_csv_->number(m.f3_hz_calibrated).number(m.f3_hz_low).number(m.f3_hz_high).endRow();
 }
 
 void ReplayWriter::emitMeasuredTe(const drivetrain_stiffness::MeasuredTe& m) {

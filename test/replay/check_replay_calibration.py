@@ -219,6 +219,23 @@ if s_te:
         check(s_te["calibrated_gearbox"] == te_calibrated, "summary.json: calibrated_gearbox")
         not_identified = check_calibrated(te_calibrated, last_te, te_bag, "te")
         print("--calibrate on the TE bag: written; not identified: %s" % (", ".join(not_identified) or "none"))
+        # The stiffness and resonance outputs carry the calibration's 95 % bounds once it updated:
+        # low <= calibrated <= high, a band of nonzero width; the calibrated mesh stiffness is the
+        # mesh scale times the drawing's (within the flank-state definitions, 2 %).
+        header, body = rows(os.path.join(work, "te", "stiffness.csv"))
+        st = dict(zip(header, body[-1]))
+        check(float(st["calibrated"]) == 1.0, "stiffness.csv: last row not calibrated")
+        for q in ["mesh_stiffness_mean", "pinion_bearing_stiffness", "gear_bearing_stiffness"]:
+            lo, mid, hi = float(st[q + "_low"]), float(st[q + "_calibrated"]), float(st[q + "_high"])
+            check(lo <= mid <= hi and hi > lo, "stiffness.csv %s: bounds %s %s %s" % (q, lo, mid, hi))
+        ratio = float(st["mesh_stiffness_mean_calibrated"]) / float(st["mesh_stiffness_mean"])
+        check(abs(ratio / float(last_te["mesh_stiffness_scale"]) - 1.0) < 0.02,
+              "stiffness.csv: calibrated/drawing mesh stiffness %s against the scale %s" % (ratio, last_te["mesh_stiffness_scale"]))
+        header, body = rows(os.path.join(work, "te", "resonance.csv"))
+        rs = dict(zip(header, body[-1]))
+        for k in ["f1_hz", "f2_hz", "f3_hz"]:
+            lo, mid, hi = float(rs[k + "_low"]), float(rs[k + "_calibrated"]), float(rs[k + "_high"])
+            check(lo <= mid <= hi and hi > lo, "resonance.csv %s: bounds %s %s %s" % (k, lo, mid, hi))
 
 # --calibrate refused before the replay.
 off = os.path.join(work, "calibrate_off.yaml")
@@ -247,6 +264,11 @@ for tag, cfg, p, why in [("no_block", seed, params, "off: the gearbox has no cal
     with rosbag.Bag(os.path.join(work, tag + ".bag")) as b:
         topics = b.get_type_and_topic_info().topics
         check("/calibration" not in topics and "/measured_te" not in topics, "%s: calibration topics in the bag" % tag)
+    # Without a calibration the bands repeat the drawing's model with zero width.
+    header, body = rows(os.path.join(work, tag, "stiffness.csv"))
+    st = dict(zip(header, body[-1]))
+    check(float(st["calibrated"]) == 0.0 and st["mesh_stiffness_mean_low"] == st["mesh_stiffness_mean_high"] ==
+          st["mesh_stiffness_mean_calibrated"] == st["mesh_stiffness_mean"], "%s: stiffness bands without a calibration" % tag)
 
 if failures:
     sys.exit("check_replay_calibration:\n  " + "\n  ".join(failures))

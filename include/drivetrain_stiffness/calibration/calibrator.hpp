@@ -58,6 +58,15 @@ struct CalibrationEstimate {
   double knee_torque = 0.0;  ///< [N·m] pinion torque where the back half lifts, at the estimate
 };
 
+/// The calibrated stiffness and natural frequencies at an operating point with their 95 % bounds
+/// (first-order propagation of the parameters' covariance), for the stiffness and resonance outputs.
+struct CalibrationBands {
+  bool calibrated = false;  ///< at least one window updated the parameters (else: the prior's bounds)
+  double mesh_stiffness = 0.0, mesh_stiffness_low = 0.0, mesh_stiffness_high = 0.0;  ///< [N/m] period mean
+  std::array<double, 2> bearing_stiffness{}, bearing_stiffness_low{}, bearing_stiffness_high{};  ///< [N/m] per shaft
+  std::array<double, 3> natural_frequency{}, natural_frequency_low{}, natural_frequency_high{};  ///< [Hz] (with_modes)
+};
+
 /// One processed reading: measured TE with the baseline and the shaft orders removed, and the
 /// calibrated model's prediction at the same phase and torque [m].
 struct MeasuredTeSample {
@@ -85,12 +94,19 @@ class Calibrator {
   /// The parameter values (same as estimate().value) and their covariance.
   const CalibrationVector& parameters() const { return estimate_.value; }
   const CalibrationMatrix& covariance() const { return covariance_; }
+  /// The calibrated stiffness at pinion torque `torque` (the supports at their current load), and
+  /// with `with_modes` the natural frequencies, each with its 95 % bounds. Const; allocation-free.
+  CalibrationBands bands(double torque, const StiffnessEstimator& supports, bool with_modes) const;
 
  private:
   void closeWindow(const StiffnessEstimator& supports);
   WindowOutcome excitation(double speed, double duration) const;
   void update(const FeatureVector& z, const FeatureVector& z_std, double torque, const StiffnessEstimator& supports);
   void outputs(double torque, const StiffnessEstimator& supports);
+  /// sqrt(g' P g) of a scalar function of the parameters, g by central differences at the estimate
+  /// (a template, not std::function: a capturing lambda would allocate on the per-window path).
+  template <typename F>
+  double spreadOf(F&& f) const;
   FeatureVector predict(const CalibrationVector& p, double torque) const;
 
   RigConfig rig_;

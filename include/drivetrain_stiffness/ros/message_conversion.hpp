@@ -41,6 +41,10 @@ void fillStiffnessMsg(Stamp stamp, const std::string& frame_id, const StiffnessE
 drivetrain_stiffness::TransmissionError toTransmissionErrorMsg(Stamp stamp, const std::string& frame_id, const DynamicsSample& s);
 drivetrain_stiffness::SpectralPeaks toSpectralPeaksMsg(Stamp stamp, const std::string& frame_id, const SlidingSpectrum& spectrum);
 drivetrain_stiffness::Resonance toResonanceMsg(Stamp stamp, const std::string& frame_id, const ResonanceEstimate& r);
+/// The calibrated stiffness and natural frequencies with their 95 % bounds into the stiffness and
+/// resonance messages (docs/calibration.md section 4); refuses a non-finite number, naming it.
+void fillStiffnessBands(const CalibrationBands& bands, drivetrain_stiffness::Stiffness& out);
+void fillResonanceBands(const CalibrationBands& bands, drivetrain_stiffness::Resonance& out);
 /// The calibration after a window (rule 11) and one reading's measured TE. Both refuse (InvalidInput
 /// naming the field) a non-finite number instead of publishing it; the pipeline counts that in
 /// calibration_errors.

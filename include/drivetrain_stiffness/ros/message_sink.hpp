@@ -38,6 +38,10 @@ class MessageSink : public PipelineSink {
 
   const OutputSettings& settings() const { return settings_; }
 
+ private:
+  /// The calibration's stiffness bands at this estimate's torque, or the drawing's model (zero width).
+  CalibrationBands stiffnessBands(const StiffnessEstimate& estimate) const;
+
  protected:
   virtual void emitStiffness(const drivetrain_stiffness::Stiffness& msg) = 0;
   virtual void emitTransmissionError(const drivetrain_stiffness::TransmissionError& msg) = 0;
