@@ -101,5 +101,44 @@ void FiniteSink::resonance(Stamp, const ResonanceEstimate& estimate) {
   requireAllFinite(estimate);
   ++outputs;
 }
+// The calibration's and the mesh-period outputs (rule 11, the per-period statistics): every number
+// a message would carry, so "never a NaN on a topic" holds for them under hostile input too.
+void FiniteSink::measuredTe(Stamp, const MeasuredTeSample& s) {
+  check("measured_te.te", s.te);
+  check("measured_te.predicted", s.predicted);
+  check("measured_te.residual", s.residual);
+  check("measured_te.torque", s.torque);
+  check("measured_te.phase", s.phase);
+  ++outputs;
+}
+void FiniteSink::calibration(Stamp, const CalibrationEstimate& e) {
+  checkMatrix("calibration.value", e.value);
+  checkMatrix("calibration.std", e.std);
+  checkMatrix("calibration.measured", e.measured);
+  checkMatrix("calibration.predicted", e.predicted);
+  checkMatrix("calibration.feature_std", e.feature_std);
+  for (double v : {e.nis, e.window_torque, e.window_speed, e.series_compliance, e.series_compliance_std, e.mesh_stiffness,
+                   e.mesh_stiffness_low, e.mesh_stiffness_high, e.knee_torque}) {
+    check("calibration.scalar", v);
+  }
+  for (int i = 0; i < 2; ++i) {
+    check("calibration.bearing_stiffness", e.bearing_stiffness[i]);
+    check("calibration.bearing_stiffness_low", e.bearing_stiffness_low[i]);
+    check("calibration.bearing_stiffness_high", e.bearing_stiffness_high[i]);
+  }
+  for (int i = 0; i < 3; ++i) {
+    check("calibration.natural_frequency", e.natural_frequency[i]);
+    check("calibration.natural_frequency_low", e.natural_frequency_low[i]);
+    check("calibration.natural_frequency_high", e.natural_frequency_high[i]);
+  }
+  ++outputs;
+}
+void FiniteSink::meshPeriod(Stamp, const MeshPeriodStatistics& s) {
+  for (double v : {s.duration, s.te_mean, s.te_rms, s.te_peak_to_peak, s.mesh_force_mean, s.mesh_force_rms,
+                   s.mesh_force_peak_to_peak, s.mesh_frequency, s.torque}) {
+    check("mesh_period_stats", v);
+  }
+  ++outputs;
+}
 
 }  // namespace drivetrain_stiffness::fuzz

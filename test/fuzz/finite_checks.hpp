@@ -18,6 +18,9 @@ class FiniteSink : public PipelineSink {
   void transmissionError(Stamp stamp, const DynamicsSample& sample) override;
   void spectrum(Stamp stamp, const SlidingSpectrum& spectrum) override;
   void resonance(Stamp stamp, const ResonanceEstimate& estimate) override;
+  void measuredTe(Stamp stamp, const MeasuredTeSample& sample) override;
+  void calibration(Stamp stamp, const CalibrationEstimate& estimate) override;
+  void meshPeriod(Stamp stamp, const MeshPeriodStatistics& stats) override;
   std::uint64_t outputs = 0;
 };
 
