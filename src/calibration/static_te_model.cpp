@@ -22,12 +22,14 @@ const char* calibrationName(int index) {
 
 StaticTeModel::StaticTeModel(const RigConfig& rig) {
   // The drawing's tooth stiffness (scale 1): the calibrated scale multiplies it.
-  const AntiBacklashMesh mesh(rig.gears, rig.anti_backlash, rig.mesh_model, rig.mesh_samples, 1.0);
+  unit_ = std::make_unique<AntiBacklashMesh>(rig.gears, rig.anti_backlash, rig.mesh_model, rig.mesh_samples, 1.0);
+  const AntiBacklashMesh& mesh = *unit_;
+  switches_ = mesh.switchingPhases();
   spring_ = rig.anti_backlash.spring_stiffness;
   base_radius_ = {mesh.geometry().baseRadius(0), mesh.geometry().baseRadius(1)};
   // Midpoint rule inside each interval between switching phases, where k1 and k2 are smooth: the
   // steps add no error (a grid across a step would be off by up to step / points per harmonic).
-  std::vector<double> breaks = mesh.switchingPhases();
+  std::vector<double> breaks = switches_;
   breaks.push_back(1.0);
   constexpr int kPerInterval = 64;
   for (std::size_t s = 0; s + 1 < breaks.size(); ++s) {
@@ -44,8 +46,6 @@ StaticTeModel::StaticTeModel(const RigConfig& rig) {
       grid_.push_back(g);
     }
   }
-  unit_ = std::make_unique<AntiBacklashMesh>(rig.gears, rig.anti_backlash, rig.mesh_model, rig.mesh_samples, 1.0);
-  switches_ = unit_->switchingPhases();
 }
 
 bool StaticTeModel::nearSwitch(double phase, double guard) const {
@@ -88,8 +88,7 @@ FeatureVector StaticTeModel::sampledFeatures(const CalibrationVector& p, double 
                                              double baseline_torque, const std::array<double, 2>& baseline_shafts,
                                              const SampledPhases& sampled) const {
   const double f = meshForce(torque), f0 = meshForce(baseline_torque);
-  const double bearings = (shafts[0] - baseline_shafts[0]) / p[kPinionBearingScale] +
-                          (shafts[1] - baseline_shafts[1]) / p[kGearBearingScale];
+  const double bearings = bearingTerm(p, shafts) - bearingTerm(p, baseline_shafts);
   Eigen::Matrix<double, kProjectionTerms, 1> b = Eigen::Matrix<double, kProjectionTerms, 1>::Zero();
   for (std::size_t i = 0; i < static_cast<std::size_t>(sampled.size); ++i) {
     const double x = deflection(p, f, sampled.k1[i], sampled.k2[i]) - deflection(p, f0, sampled.k1[i], sampled.k2[i]);
@@ -107,16 +106,29 @@ double StaticTeModel::meshDeflection(const CalibrationVector& p, double force, i
   return deflection(p, force, g.k1, g.k2);
 }
 
-double StaticTeModel::deflection(const CalibrationVector& p, double force, double k1u, double k2u) const {
-  const double k1 = p[kMeshScale] * k1u;
-  if (!(spring_ > 0.0)) return force / k1;  // an ordinary gear: the drive flank only (force >= 0)
+StaticTeModel::Flanks StaticTeModel::flanks(const CalibrationVector& p, double force, double k1u, double k2u) const {
+  Flanks f;
+  f.k1 = p[kMeshScale] * k1u;
   const double k2 = p[kMeshScale] * k2u;
-  const double kc = spring_ * k2 / (spring_ + k2);
-  const double fp = p[kPreloadTorque] / base_radius_[1];
-  // The three flank states of anti_backlash_mesh.hpp, multiplied out as flankContact does.
-  if (force * kc > fp * (k1 + kc)) return (force - fp) / k1;   // drive flank only
-  if (force * k1 < -fp * (k1 + kc)) return (force + fp) / kc;  // back flank only
-  return force / (k1 + kc);                                     // both flanks
+  f.kc = spring_ > 0.0 ? spring_ * k2 / (spring_ + k2) : 0.0;
+  f.fp = p[kPreloadTorque] / base_radius_[1];
+  f.contact = AntiBacklashMesh::flankContact(force, f.k1, f.kc, f.fp);
+  return f;
+}
+
+double StaticTeModel::deflection(const CalibrationVector& p, double force, double k1u, double k2u) const {
+  // The three flank states of anti_backlash_mesh.hpp (an ordinary gear: the drive flank only).
+  const Flanks f = flanks(p, force, k1u, k2u);
+  switch (f.contact) {
+    case FlankContact::kDriveOnly: return (force - (f.kc > 0.0 ? f.fp : 0.0)) / f.k1;
+    case FlankContact::kBackOnly: return (force + f.fp) / f.kc;
+    case FlankContact::kBoth: break;
+  }
+  return force / (f.k1 + f.kc);
+}
+
+double StaticTeModel::bearingTerm(const CalibrationVector& p, const std::array<double, 2>& shafts) {
+  return shafts[0] / p[kPinionBearingScale] + shafts[1] / p[kGearBearingScale];
 }
 
 void StaticTeModel::shaftDeflection(double torque, const StiffnessEstimator& supports, std::array<double, 2>& out) {
@@ -143,8 +155,7 @@ void StaticTeModel::shaftDeflection(double torque, const StiffnessEstimator& sup
 void StaticTeModel::waveform(const CalibrationVector& p, double torque, const std::array<double, 2>& shafts,
                              double& mean, std::array<std::complex<double>, kFeatureHarmonics>& harmonics) const {
   const double force = meshForce(torque);
-  const double bearings = shafts[0] / p[kPinionBearingScale] + shafts[1] / p[kGearBearingScale];
-  mean = bearings;  // constant over the period: no harmonic
+  mean = bearingTerm(p, shafts);  // constant over the period: no harmonic
   harmonics.fill({0.0, 0.0});
   for (std::size_t j = 0; j < grid_.size(); ++j) {
     const double delta = meshDeflection(p, force, static_cast<int>(j));
@@ -172,23 +183,17 @@ double StaticTeModel::at(const CalibrationVector& p, double phase, double torque
   const double ph = phase - std::floor(phase);
   auto it = std::lower_bound(grid_.begin(), grid_.end(), ph, [](const GridPoint& g, double x) { return g.phase + 0.5 * g.weight < x; });
   const int j = static_cast<int>(std::min<std::size_t>(static_cast<std::size_t>(it - grid_.begin()), grid_.size() - 1));
-  const double loaded = meshDeflection(p, meshForce(torque), j) + shafts[0] / p[kPinionBearingScale] + shafts[1] / p[kGearBearingScale];
-  const double base = meshDeflection(p, meshForce(baseline_torque), j) + baseline_shafts[0] / p[kPinionBearingScale] +
-                      baseline_shafts[1] / p[kGearBearingScale];
+  const double loaded = meshDeflection(p, meshForce(torque), j) + bearingTerm(p, shafts);
+  const double base = meshDeflection(p, meshForce(baseline_torque), j) + bearingTerm(p, baseline_shafts);
   return loaded - base + p[kTeOffset];
 }
 
 double StaticTeModel::meanMeshStiffness(const CalibrationVector& p, double torque) const {
   const double force = meshForce(torque);
-  const double fp = p[kPreloadTorque] / base_radius_[1];
   double k = 0.0;
   for (const GridPoint& g : grid_) {
-    const double k1 = p[kMeshScale] * g.k1;
-    const double k2 = p[kMeshScale] * g.k2;
-    const double kc = spring_ > 0.0 ? spring_ * k2 / (spring_ + k2) : 0.0;
-    double ks = k1 + kc;
-    if (!(kc > 0.0) || force * kc > fp * (k1 + kc)) ks = k1;
-    else if (force * k1 < -fp * (k1 + kc)) ks = kc;
+    const Flanks f = flanks(p, force, g.k1, g.k2);
+    const double ks = f.contact == FlankContact::kBoth ? f.k1 + f.kc : (f.contact == FlankContact::kDriveOnly ? f.k1 : f.kc);
     k += g.weight * ks;
   }
   return k;

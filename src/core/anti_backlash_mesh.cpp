@@ -79,13 +79,13 @@ AntiBacklashMesh::AntiBacklashMesh(const GearPairSpec& gears, const AntiBacklash
 AntiBacklashMesh::AntiBacklashMesh(const RigConfig& rig)
     : AntiBacklashMesh(rig.gears, rig.anti_backlash, rig.mesh_model, rig.mesh_samples, rig.mesh_stiffness_scale) {}
 
-FlankContact AntiBacklashMesh::flankContact(double mesh_force, double k1, double k_chain) const {
+FlankContact AntiBacklashMesh::flankContact(double mesh_force, double k1, double k_chain, double preload_force) {
   if (!(k_chain > 0.0)) return FlankContact::kDriveOnly;  // no loaded half: an ordinary gear
   // F_m > F_p (1 + k1/k_c) and F_m < -F_p (1 + k_c/k1), multiplied out (k1, k_c > 0): no division
   // on the lookup path.
   const double sum = k1 + k_chain;
-  if (mesh_force * k_chain > preload_force_ * sum) return FlankContact::kDriveOnly;
-  if (mesh_force * k1 < -preload_force_ * sum) return FlankContact::kBackOnly;
+  if (mesh_force * k_chain > preload_force * sum) return FlankContact::kDriveOnly;
+  if (mesh_force * k1 < -preload_force * sum) return FlankContact::kBackOnly;
   return FlankContact::kBoth;
 }
 

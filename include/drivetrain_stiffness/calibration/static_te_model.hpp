@@ -144,6 +144,15 @@ class StaticTeModel {
   std::vector<GridPoint> grid_;
   std::unique_ptr<AntiBacklashMesh> unit_;
   std::vector<double> switches_;  ///< switching phases in [0, 1)  ///< the drawing's mesh (scale 1): k1', k2' at any phase
+  /// The flank state at tooth stiffness k1', k2' (scale 1) for p and F: k1, k_c, F_p and the
+  /// contact by AntiBacklashMesh's criterion.
+  struct Flanks {
+    double k1 = 0.0, kc = 0.0, fp = 0.0;
+    FlankContact contact = FlankContact::kBoth;
+  };
+  Flanks flanks(const CalibrationVector& p, double force, double k1u, double k2u) const;
+  /// The shafts' deflections {-x_p, x_g} at scale 1 divided by each shaft's scale [m].
+  static double bearingTerm(const CalibrationVector& p, const std::array<double, 2>& shafts);
   /// delta at tooth stiffness k1', k2' (scale 1) for p and F.
   double deflection(const CalibrationVector& p, double force, double k1u, double k2u) const;
   double spring_ = 0.0;  ///< k_te [N/m]

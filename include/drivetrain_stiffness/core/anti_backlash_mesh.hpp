@@ -62,7 +62,11 @@ class AntiBacklashMesh {
   double preloadForce() const { return preload_force_; }  ///< F_p = T_p / r_b,gear [N]
 
   /// Flank state for mesh force F_m [N] along the LOA (positive: pinion drives) at given k1, k_c.
-  FlankContact flankContact(double mesh_force, double k1, double k_chain) const;
+  FlankContact flankContact(double mesh_force, double k1, double k_chain) const {
+    return flankContact(mesh_force, k1, k_chain, preload_force_);
+  }
+  /// The same criterion at preload force F_p [N] (the calibration's estimated T_p / r_b,gear).
+  static FlankContact flankContact(double mesh_force, double k1, double k_chain, double preload_force);
   /// Composite stiffness at mesh phase `phase` in [0, 1) under mesh force F_m [N], from the phase
   /// table: segments between the exact switching phases of both flanks, each sampled uniformly, so
   /// the single/double steps stay sharp and the lookup needs no division.
