@@ -46,6 +46,7 @@ Calibrator::Calibrator(const RigConfig& rig)
   // Whole turns of both encoders shift x by 2 pi (m r_b,p + n r_b,g); with r_b proportional to z
   // these form the lattice 2 pi r_b,p gcd(z_p, z_g) / z_p.
   lattice_ = kTwoPi * model_.baseRadius()[0] * std::gcd(teeth_[0], teeth_[1]) / teeth_[0];
+  gear_turn_ = kTwoPi * std::max(1.0, static_cast<double>(teeth_[1]) / teeth_[0]);
   const CalibrationConfig& c = config_;
   CalibrationVector mean;
   mean << c.mesh_stiffness_scale.mean, c.pinion_bearing_scale.mean, c.gear_bearing_scale.mean, c.preload_torque.mean,
@@ -101,9 +102,7 @@ int Calibrator::reading(double t, double pinion, double gear, double phase, doub
   last_t_ = t;
   const double watched = *filtered_torque_;
   int result = kNothing;
-  if (window_.open && std::abs(watched - window_.torque0) > config_.torque_band + 0.01 * std::abs(window_.torque0)) {
-    window_.open = false;
-  }
+  if (window_.open && !inBand(watched)) window_.open = false;
   if (!window_.open) {
     regression_.clear();
     window_ = Window{};
@@ -124,8 +123,7 @@ int Calibrator::reading(double t, double pinion, double gear, double phase, doub
   window_.torque_sum += torque;
   window_.speed_sum += speed;
   ++window_.n;
-  const double gear_turn = kTwoPi * std::max(1.0, static_cast<double>(teeth_[1]) / teeth_[0]);
-  if (window_.angle_max - window_.angle_min >= gear_turn) {
+  if (window_.angle_max - window_.angle_min >= gear_turn_) {
     closeWindow(supports);
     window_.open = false;
     result |= kWindow;
@@ -142,7 +140,7 @@ int Calibrator::reading(double t, double pinion, double gear, double phase, doub
     // this reading's (the bearings are smooth over a band); outside it (a step the filter has not
     // followed yet), the reading's own exact solution.
     std::array<double, 2> shafts{};
-    if (std::abs(torque - window_.torque0) <= config_.torque_band + 0.01 * std::abs(window_.torque0) && window_.torque0 != 0.0) {
+    if (inBand(torque) && window_.torque0 != 0.0) {
       const double scale = torque / window_.torque0;
       shafts = {window_.shafts[0] * scale, window_.shafts[1] * scale};
     } else {
@@ -155,6 +153,10 @@ int Calibrator::reading(double t, double pinion, double gear, double phase, doub
     result |= kSample;
   }
   return result;
+}
+
+bool Calibrator::inBand(double torque) const {
+  return std::abs(torque - window_.torque0) <= config_.torque_band + 0.01 * std::abs(window_.torque0);
 }
 
 WindowOutcome Calibrator::excitation(double speed, double duration) const {
@@ -222,7 +224,7 @@ void Calibrator::closeWindow(const StiffnessEstimator& supports) {
   }
   model_.shaftDeflection(torque, supports, shafts_);
   model_.prepare(histogram_, regression_.count(), sampled_);
-  update(z, z_std, torque, supports);
+  update(z, z_std, torque);
   outputs(torque, supports);
 }
 
@@ -230,7 +232,7 @@ FeatureVector Calibrator::predict(const CalibrationVector& state, double torque)
   return model_.sampledFeatures(toParameters(state), torque, shafts_, base_torque_, base_shafts_, sampled_);
 }
 
-void Calibrator::update(const FeatureVector& z, const FeatureVector& z_std, double torque, const StiffnessEstimator&) {
+void Calibrator::update(const FeatureVector& z, const FeatureVector& z_std, double torque) {
   // Random walk since the last update (a preload that relaxes, wear): relative to the prior spread.
   const double t = window_.t1;
   const double dt = has_update_t_ ? std::max(0.0, t - last_update_t_) : 0.0;

@@ -363,14 +363,16 @@ void RigPipeline::calibrate(Stamp stamp, const Reading& reading, bool continuous
       ++counters_.calibration_out;
     }
   } catch (const InvalidInput& e) {
-    ++counters_.calibration_errors;
-    counters_.last_event = std::string("calibration: ") + e.what();
-    calibrator_->interrupt();
+    calibrationError(e);
   } catch (const UnreachableLoad& e) {
-    ++counters_.calibration_errors;
-    counters_.last_event = std::string("calibration: ") + e.what();
-    calibrator_->interrupt();
+    calibrationError(e);
   }
+}
+
+void RigPipeline::calibrationError(const std::exception& e) {
+  ++counters_.calibration_errors;
+  counters_.last_event = std::string("calibration: ") + e.what();
+  calibrator_->interrupt();
 }
 
 double RigPipeline::ratio() const { return static_cast<double>(teeth(0)) / teeth(1); }

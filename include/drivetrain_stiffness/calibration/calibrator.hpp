@@ -101,7 +101,9 @@ class Calibrator {
  private:
   void closeWindow(const StiffnessEstimator& supports);
   WindowOutcome excitation(double speed, double duration) const;
-  void update(const FeatureVector& z, const FeatureVector& z_std, double torque, const StiffnessEstimator& supports);
+  void update(const FeatureVector& z, const FeatureVector& z_std, double torque);
+  /// The window's torque rule: within ~torque_band plus 1 % of the torque it started at.
+  bool inBand(double torque) const;
   void outputs(double torque, const StiffnessEstimator& supports);
   /// sqrt(g' P g) of a scalar function of the parameters, g by central differences at the estimate
   /// (a template, not std::function: a capturing lambda would allocate on the per-window path).
@@ -115,6 +117,7 @@ class Calibrator {
   OrderRegression regression_;
   int teeth_[2] = {0, 0};
   double lattice_ = 0.0;  ///< [m] the TE's ambiguity from the encoders' whole turns
+  double gear_turn_ = 0.0;  ///< [rad] of pinion angle a window spans: one gear turn (at least one pinion turn)
 
   // The filter's state: the parameters with each bearing scale s as its compliance factor c = 1/s.
   // The mean TE is linear in c (u/s = u c), so the direction the encoders cannot see (the pinion's

@@ -355,6 +355,9 @@ class RigPipeline {
   std::optional<Reading> reading_;
   /// Rule 11 for an accepted reading; `continuous`: it follows the last one without a break.
   void calibrate(Stamp stamp, const Reading& reading, bool continuous, PipelineSink& sink);
+  /// A window the calibration could not evaluate (the library's own errors only): counted, reason
+  /// in last_event, the window dropped.
+  void calibrationError(const std::exception& e);
   /// The reading unwrapped against `last` (null: none recent), its speed measured or differentiated.
   Reading unwrapReading(Stamp stamp, const MotionInput& reading, const Reading* last) const;
   double held_torque_ = 0.0;
