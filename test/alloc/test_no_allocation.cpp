@@ -12,6 +12,8 @@
 #include "drivetrain_stiffness/config/yaml_config.hpp"
 #include "drivetrain_stiffness/pipeline/rig_pipeline.hpp"
 #include "ripple_torque_feed.hpp"  // NOLINT(build/include_subdir)
+#include "seed_rig.hpp"            // NOLINT(build/include_subdir)
+#include "static_te_encoder.hpp"   // NOLINT(build/include_subdir)
 
 namespace {
 std::atomic<long> g_allocations{0};
@@ -32,8 +34,7 @@ namespace {
 // Torque inputs to a warmed-up pipeline (2 s of 10 kHz inputs: tables, propagators, a full
 // spectrum window), then 1 s more counted: none may allocate.
 long allocationsPerSecondOfInputs(const PipelineOptions& options, Backlog backlog) {
-  const RigConfig rig = loadRigFile(std::string(DRIVETRAIN_SOURCE_DIR) + "/config/gearboxes/seed_servo.yaml");
-  RigPipeline pipeline(rig, options);
+  RigPipeline pipeline(test::seedServo(), options);
   RippleTorqueFeed feed(pipeline);
   for (int i = 0; i < 20000; ++i) feed.next();
   const long before = g_allocations.load();
@@ -64,10 +65,9 @@ TEST(NoAllocation, ShedTorqueInputs) {
 // (the speed changes at every reading), warmed up for 1 s (every slice decomposed), then 1 s
 // counted: the exact propagation at the measured speed allocates nothing either.
 TEST(NoAllocation, TorqueAndEncoderInputsThroughARunUp) {
-  const RigConfig rig = loadRigFile(std::string(DRIVETRAIN_SOURCE_DIR) + "/config/gearboxes/seed_servo.yaml");
-  RigPipeline pipeline(rig, PipelineOptions{});
+  RigPipeline pipeline(test::seedServo(), PipelineOptions{});
   PipelineSink sink;
-  constexpr std::int64_t kEpoch = 1767225600LL * 1000000000LL;
+  using test::kEpoch;
   const double w0 = 300.0 / 60.0 * 2.0 * M_PI, a = (3000.0 - 300.0) / 60.0 * 2.0 * M_PI / 2.0;
   auto step = [&](int k) {
     const double t = 1e-3 * k;
@@ -91,30 +91,17 @@ TEST(NoAllocation, TorqueAndEncoderInputsThroughARunUp) {
 // pass the gate and run the whole update: fit, iterated EKF, bands, modal analyses). Warmed up
 // through a baseline and the first loaded windows, then 2 s (two gear turns, two updates) counted.
 TEST(NoAllocation, EncoderReadingsThroughCalibrationUpdates) {
-  RigConfig rig = loadRigFile(std::string(DRIVETRAIN_SOURCE_DIR) + "/config/gearboxes/seed_servo.yaml");
+  RigConfig rig = test::seedServo();
   rig.calibration.present = true;
   RigPipeline pipeline(rig, PipelineOptions{});
   ASSERT_NE(pipeline.calibrator(), nullptr);
   PipelineSink sink;
-  StaticTeModel model(rig);
-  CalibrationVector p;
-  p << 1.0, 1.0, 1.0, rig.anti_backlash.preload_torque, 0.0;
-  std::array<double, 2> zero{}, loaded{};
-  StiffnessEstimator supports(rig);
-  model.shaftDeflection(0.0, supports, zero);
-  model.shaftDeflection(2.0, supports, loaded);
-  constexpr std::int64_t kEpoch = 1767225600LL * 1000000000LL;
-  const double w = 120.0 / 60.0 * 2.0 * M_PI, rbp = model.baseRadius()[0], rbg = model.baseRadius()[1];
+  const test::StaticTeEncoder encoder(rig, 2.0);
+  const double w = 120.0 / 60.0 * 2.0 * M_PI;
   auto step = [&](int k) {  // k: 5 kHz ticks
-    const double t = 2e-4 * k, torque = t < 1.5 ? 0.0 : 2.0, theta = w * t;
-    if (k % 5 == 0) pipeline.torque(Stamp{kEpoch + 200000LL * k}, torque, sink);
-    const double turns = 20.0 * theta / (2.0 * M_PI), phase = turns - std::floor(turns);
-    const double x = torque == 0.0 ? 0.0 : model.at(p, phase, torque, loaded, 0.0, zero);
-    MotionInput m;
-    m.pinion_angle = std::remainder(theta, 2.0 * M_PI);
-    m.pinion_velocity = w;
-    m.gear_angle = std::remainder((x - rbp * theta) / rbg, 2.0 * M_PI);
-    pipeline.motion(Stamp{kEpoch + 200000LL * k + 100000LL}, m, sink);
+    const double t = 2e-4 * k, torque = t < 1.5 ? 0.0 : 2.0;
+    if (k % 5 == 0) pipeline.torque(Stamp{test::kEpoch + 200000LL * k}, torque, sink);
+    pipeline.motion(Stamp{test::kEpoch + 200000LL * k + 100000LL}, encoder.reading(w * t, w, torque), sink);
   };
   for (int k = 0; k < 25000; ++k) step(k);  // 5 s: baseline, then loaded windows
   const std::uint64_t updates_before = pipeline.calibrator()->estimate().updates;

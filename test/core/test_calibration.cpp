@@ -13,12 +13,15 @@
 #include "drivetrain_stiffness/core/constants.hpp"
 #include "drivetrain_stiffness/core/stiffness_estimator.hpp"
 #include "drivetrain_stiffness/core/validation.hpp"
+#include "drivetrain_stiffness/pipeline/rig_pipeline.hpp"
+#include "seed_rig.hpp"           // NOLINT(build/include_subdir)
+#include "static_te_encoder.hpp"  // NOLINT(build/include_subdir)
 
 namespace drivetrain_stiffness {
 namespace {
 
 RigConfig seedRig() {
-  RigConfig rig = loadRigFile(std::string(DRIVETRAIN_SOURCE_DIR) + "/config/gearboxes/seed_servo.yaml");
+  RigConfig rig = test::seedServo();
   rig.calibration.present = true;
   rig.calibration.preload_torque = {rig.anti_backlash.preload_torque, 0.2 * rig.anti_backlash.preload_torque};
   return rig;
@@ -366,8 +369,6 @@ TEST(CalibratorMonteCarlo, ErrorsAndCoverageOverFiftyPerturbedRigs) {
 }  // namespace
 }  // namespace drivetrain_stiffness
 
-#include "drivetrain_stiffness/pipeline/rig_pipeline.hpp"
-
 namespace drivetrain_stiffness {
 namespace {
 
@@ -386,25 +387,14 @@ TEST(RigPipelineCalibration, EncoderReadingsReachTheCalibratorAndTheSink) {
   RigPipeline pipeline(rig, PipelineOptions{});
   ASSERT_NE(pipeline.calibrator(), nullptr);
   CalibrationSink sink;
-  StaticTeModel model(rig);
-  const CalibrationVector p = nominal(rig);
-  std::array<double, 2> zero{}, loaded{};
-  StiffnessEstimator supports(rig);
-  model.shaftDeflection(0.0, supports, zero);
-  model.shaftDeflection(2.0, supports, loaded);
-  constexpr std::int64_t kEpoch = 1767225600LL * 1000000000LL;
-  const double w = 120.0 / 60.0 * kTwoPi, rbp = model.baseRadius()[0], rbg = model.baseRadius()[1];
-  const double count = kTwoPi / 1048576.0;
+  const test::StaticTeEncoder encoder(rig, 2.0);
+  const StaticTeModel& model = encoder.model();
+  const CalibrationVector& p = encoder.parameters();
+  const double w = 120.0 / 60.0 * kTwoPi, count = kTwoPi / 1048576.0;  // 2^20 counts per turn
   for (int k = 0; k < 40000; ++k) {  // 8 s at 5 kHz
-    const double t = 2e-4 * k, torque = t < 3.0 ? 0.0 : 2.0, theta = w * t;
-    if (k % 5 == 0) pipeline.torque(Stamp{kEpoch + 200000LL * k}, torque, sink);
-    const double turns = 20.0 * theta / kTwoPi, phase = turns - std::floor(turns);
-    const double x = torque == 0.0 ? 0.0 : model.at(p, phase, torque, loaded, 0.0, zero);
-    MotionInput m;
-    m.pinion_angle = std::round(std::remainder(theta, kTwoPi) / count) * count;
-    m.pinion_velocity = w;
-    m.gear_angle = std::round(std::remainder((x - rbp * theta) / rbg, kTwoPi) / count) * count;
-    pipeline.motion(Stamp{kEpoch + 200000LL * k + 100000LL}, m, sink);
+    const double t = 2e-4 * k, torque = t < 3.0 ? 0.0 : 2.0;
+    if (k % 5 == 0) pipeline.torque(Stamp{test::kEpoch + 200000LL * k}, torque, sink);
+    pipeline.motion(Stamp{test::kEpoch + 200000LL * k + 100000LL}, encoder.reading(w * t, w, torque, count), sink);
   }
   const PipelineCounters& c = pipeline.counters();
   EXPECT_EQ(c.calibration_out, sink.estimates.size());
@@ -434,7 +424,7 @@ TEST(RigPipelineCalibration, EncoderReadingsReachTheCalibratorAndTheSink) {
   EXPECT_LT(std::sqrt(sum2 / readings), 0.1e-6);
   EXPECT_LT(beyond, readings / 100);
   // The mean TE at 2 N·m is ~11 um: the residual is below 3 % of it everywhere.
-  EXPECT_GT(model.features(p, 2.0, loaded, 0.0, zero)[0], 10e-6);
+  EXPECT_GT(model.features(p, 2.0, encoder.loadedShafts(), 0.0, encoder.zeroShafts())[0], 10e-6);
 }
 
 }  // namespace

@@ -12,18 +12,15 @@
 #include "drivetrain_stiffness/config/yaml_config.hpp"
 #include "drivetrain_stiffness/core/constants.hpp"
 #include "drivetrain_stiffness/pipeline/rig_pipeline.hpp"
+#include "seed_rig.hpp"  // NOLINT(build/include_subdir)
 
 using namespace drivetrain_stiffness;
 
 namespace {
 
 // Its calibration: block plays no part here (no encoders but in the reversal, which has no gear joint).
-const RigConfig& rig() {
-  static const RigConfig r = loadRigFile(std::string(DRIVETRAIN_SOURCE_DIR) + "/config/gearboxes/seed_servo.yaml");
-  return r;
-}
-constexpr std::int64_t kEpoch = 1767225600LL * 1000000000LL;
-Stamp at(double seconds) { return Stamp{kEpoch + std::llround(seconds * 1e9)}; }
+const RigConfig& rig() { return test::seedServo(); }
+Stamp at(double seconds) { return test::stampAt(seconds); }
 constexpr double kTorque = 0.1;  // [N*m] seed 000 Table 1
 constexpr int kZp = 20;
 

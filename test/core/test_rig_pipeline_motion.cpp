@@ -8,17 +8,14 @@
 #include "drivetrain_stiffness/config/yaml_config.hpp"
 #include "drivetrain_stiffness/core/constants.hpp"
 #include "drivetrain_stiffness/pipeline/rig_pipeline.hpp"
+#include "seed_rig.hpp"  // NOLINT(build/include_subdir)
 
 using namespace drivetrain_stiffness;
 
 namespace {
 
-const RigConfig& rig() {
-  static const RigConfig r = loadRigFile(std::string(DRIVETRAIN_SOURCE_DIR) + "/config/gearboxes/seed_servo.yaml");
-  return r;
-}
-constexpr std::int64_t kEpoch = 1767225600LL * 1000000000LL;
-Stamp at(double seconds) { return Stamp{kEpoch + std::llround(seconds * 1e9)}; }
+const RigConfig& rig() { return test::seedServo(); }
+Stamp at(double seconds) { return test::stampAt(seconds); }
 constexpr int kZp = 20, kZg = 40;  // seed 000 Table 1
 
 struct Recorder : PipelineSink {
