@@ -200,6 +200,9 @@ int run(int argc, char** argv) {
   summary["messages"] = messages;
   summary["wrong_type"] = wrong_type;
   summary["span_s"] = span;
+  // [s since the epoch] the first and last stamp read (null for a bag without one): a campaign sorts by start.
+  summary["start"] = first ? nlohmann::json(first->toSec()) : nlohmann::json(nullptr);
+  summary["end"] = last ? nlohmann::json(last->toSec()) : nlohmann::json(nullptr);
   summary["counters"] = countersJson(pipeline.counters());
   summary["calibration"] = calibrationJson(pipeline);
   // --calibrate: written or refused (no window updated the calibration); the other outputs stand either way.

@@ -1,0 +1,13 @@
+# drivetrain_campaign (Python, dask.distributed; docs/campaign.md). Included from CMakeLists.txt
+# inside if(CATKIN_ENABLE_TESTING).
+
+# The change detector against the CUSUM's closed form (no bags, no cluster; < 1 s).
+add_test(NAME campaign_change_detector
+  COMMAND /usr/bin/python3 ${CMAKE_CURRENT_SOURCE_DIR}/test/campaign/test_detector.py)
+
+# End to end on short simulated bags and a local cluster on the loopback (~2-3 min on 2 cores):
+# cluster table = serial table, a killed worker, the cache, damaged bags, the alarm.
+add_test(NAME campaign_end_to_end
+  COMMAND /usr/bin/python3 ${CMAKE_CURRENT_SOURCE_DIR}/test/campaign/test_campaign.py)
+set_tests_properties(campaign_end_to_end PROPERTIES TIMEOUT 1500
+  ENVIRONMENT "DRIVETRAIN_RIG_SIM=${DEVEL_BIN}/drivetrain_rig_sim;DRIVETRAIN_REPLAY=${DEVEL_BIN}/drivetrain_replay")

@@ -1,0 +1,44 @@
+"""The campaign's bag list: files, directories (searched recursively for *.bag) and globs."""
+
+import glob
+import hashlib
+import os
+
+
+def expand_bags(arguments):
+    """Paths in the order given; a directory contributes its *.bag files sorted, a glob its matches
+    sorted. A path given twice is listed once. Raises ValueError naming an argument that matches
+    nothing (a typo would otherwise shrink the campaign silently)."""
+    paths, seen = [], set()
+    for arg in arguments:
+        if os.path.isdir(arg):
+            found = sorted(glob.glob(os.path.join(glob.escape(arg), "**", "*.bag"), recursive=True))
+        elif glob.has_magic(arg):
+            found = sorted(glob.glob(arg, recursive=True))
+        else:
+            found = [arg]  # a file, readable or not: an unreadable one gets its refused row
+        if not found:
+            raise ValueError(f"BAGS: '{arg}' matches no bag")
+        for path in found:
+            key = os.path.abspath(path)
+            if key not in seen:
+                seen.add(key)
+                paths.append(path)
+    return paths
+
+
+def hash_bag(path):
+    """(path, sha256 or None, error or None): a task, run where the bags are (a worker)."""
+    try:
+        return path, sha256_of(path), None
+    except OSError as e:
+        return path, None, f"cannot read '{path}': {e.strerror or e}"
+
+
+def sha256_of(path, block=1 << 20):
+    """Hex SHA-256 of a file's bytes (raises OSError)."""
+    digest = hashlib.sha256()
+    with open(path, "rb") as f:
+        for chunk in iter(lambda: f.read(block), b""):
+            digest.update(chunk)
+    return digest.hexdigest()

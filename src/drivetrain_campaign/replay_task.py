@@ -1,0 +1,119 @@
+"""One bag's task: the full `drivetrain_replay` with calibration, and the bag's row from its outputs.
+
+Runs on a dask worker (or in-process for --serial). The replay writes into a scratch directory
+beside the bag's final one, renamed into place when it is complete, so a worker killed mid-bag
+leaves no half-written report where the retried task will put its own; its replay process dies
+with it (PR_SET_PDEATHSIG), so it cannot write on after the retry started.
+"""
+
+import csv
+import ctypes
+import json
+import math
+import os
+import shutil
+import signal
+import subprocess
+import uuid
+
+# The calibrated parameters of msg/Calibration.msg, in its order (docs/calibration.md).
+CALIBRATED = ("mesh_stiffness_scale", "pinion_bearing_scale", "gear_bearing_scale", "preload_torque", "te_offset")
+MODES = 3  # natural frequencies of the 3-DOF model (seed 000 §3)
+
+_PR_SET_PDEATHSIG = 1
+
+
+def _die_with_parent():
+    """In the child before exec: SIGKILL when the worker that started it dies (Linux)."""
+    try:
+        ctypes.CDLL("libc.so.6", use_errno=True).prctl(_PR_SET_PDEATHSIG, signal.SIGKILL)
+    except OSError:
+        pass  # not Linux: a lost worker's replay then runs to its end, into its own scratch directory
+
+
+def replay_command(job, out_dir):
+    cmd = [job["replay"], "--bag", job["bag"], "--config", job["config"], "--report", out_dir,
+           "--calibrate", os.path.join(out_dir, "calibrated_gearbox.yaml")]
+    if job.get("params"):
+        cmd += ["--params", job["params"]]
+    if not job.get("plots", True):
+        cmd.append("--no-plots")
+    return cmd
+
+
+def run_replay(job):
+    """Replays job['bag'] into job['out_dir'] (replaced whole) and returns its row (table.COLUMNS)."""
+    final = job["out_dir"]
+    scratch = f"{final}.part-{uuid.uuid4().hex[:8]}"
+    os.makedirs(scratch)
+    proc = subprocess.run(replay_command(job, scratch), capture_output=True, text=True, preexec_fn=_die_with_parent)
+    summary_path = os.path.join(scratch, "summary.json")
+    summary = None
+    if os.path.exists(summary_path):
+        with open(summary_path) as f:
+            summary = json.load(f)
+    if os.path.isdir(final):
+        shutil.rmtree(final)
+    os.replace(scratch, final)
+    return bag_row(job, proc.returncode, proc.stderr, summary, final)
+
+
+def _stderr_reason(stderr):
+    lines = [line.strip() for line in stderr.splitlines() if line.strip()]
+    reason = lines[-1] if lines else "no message"
+    return reason[len("drivetrain_replay: "):] if reason.startswith("drivetrain_replay: ") else reason
+
+
+def bag_row(job, returncode, stderr, summary, out_dir):
+    """The bag's campaign row from the replay's exit code, stderr and summary.json
+    (docs/replay_exit_codes.md): refused without a summary, else its status, counts, ranges,
+    per-mesh-period TE statistics, final modal frequencies and calibration."""
+    row = {"bag": job["bag"], "sha256": job["sha256"], "report": os.path.relpath(out_dir, job["campaign_dir"])}
+    if summary is None:
+        row["status"] = f"refused: {_stderr_reason(stderr)} (exit {returncode})"
+        return row
+    row["status"] = summary["status"]
+    row["start"] = summary.get("start")
+    row["duration"] = summary.get("span_s")
+    counters = summary.get("counters", {})
+    for kind in ("accepted", "rejected", "dropped"):
+        row[kind] = sum(int(v) for k, v in counters.items() if k.startswith(kind + "_"))
+    row["wrong_type"] = summary.get("wrong_type", 0)
+    row.update(period_statistics(os.path.join(out_dir, "csv", "mesh_period_stats.csv"), job["pinion_teeth"]))
+    frequencies = summary.get("final_resonance_hz") or []
+    for i in range(MODES):
+        row[f"natural_frequency_{i + 1}"] = frequencies[i] if i < len(frequencies) else None
+    calibration = summary.get("calibration", {})
+    row["calibration_updates"] = calibration.get("updates")
+    for name in CALIBRATED:
+        for suffix in ("", "_std", "_identified"):
+            row[name + suffix] = calibration.get(name + suffix)
+    row["calibration_status"] = summary.get("calibrate_error") or calibration.get("status")
+    return row
+
+
+def period_statistics(path, pinion_teeth):
+    """Speed and torque ranges and TE figures over the bag's per-mesh-period blocks
+    (msg/MeshPeriodStats.msg): pinion speed = 2 pi f_mesh / z_p [rad/s]; torque = the block's mean
+    held pinion torque [N*m]; te_rms = RMS about each block's mean, combined over blocks by time
+    (sqrt of the time-weighted mean square) [m]; te_peak_to_peak = the largest block's [m];
+    mesh_force_mean = time-weighted [N]. Empty when the bag gave no block."""
+    keys = ("speed_min", "speed_max", "torque_min", "torque_max", "te_rms", "te_peak_to_peak", "mesh_force_mean")
+    out = dict.fromkeys(keys)
+    if not os.path.exists(path):
+        return out
+    speeds, torques, weight, square, force, p2p = [], [], 0.0, 0.0, 0.0, 0.0
+    with open(path, newline="") as f:
+        for r in csv.DictReader(f):
+            duration = float(r["duration"])
+            speeds.append(2.0 * math.pi * float(r["mesh_frequency"]) / pinion_teeth)
+            torques.append(float(r["torque"]))
+            weight += duration
+            square += duration * float(r["te_rms"]) ** 2
+            force += duration * float(r["mesh_force_mean"])
+            p2p = max(p2p, float(r["te_peak_to_peak"]))
+    if not speeds or weight <= 0.0:
+        return out
+    out.update(speed_min=min(speeds), speed_max=max(speeds), torque_min=min(torques), torque_max=max(torques),
+               te_rms=math.sqrt(square / weight), te_peak_to_peak=p2p, mesh_force_mean=force / weight)
+    return out

@@ -1,0 +1,186 @@
+#!/usr/bin/python3
+"""drivetrain_campaign end to end on short simulated bags (docs/campaign.md; issue: test campaigns):
+a local cluster on the loopback gives the serial run's table byte for byte; a worker killed
+mid-campaign leaves every bag with exactly one row, equal to the serial one; a second run
+replays nothing, a grown campaign replays only the new bag; a truncated bag and a file that is
+not a bag get their rows with reasons; the change detector raises on a 10 % loss of mesh
+stiffness and stays quiet on a constant campaign.
+
+Environment: DRIVETRAIN_RIG_SIM and DRIVETRAIN_REPLAY (the built programs; CMakeLists.txt sets them).
+"""
+
+import csv
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+import unittest
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(os.path.dirname(HERE))
+CAMPAIGN = os.path.join(ROOT, "scripts", "drivetrain_campaign")
+CONFIG = os.path.join(ROOT, "config", "gearboxes", "seed_servo.yaml")
+RIG_SIM = os.environ.get("DRIVETRAIN_RIG_SIM", "drivetrain_rig_sim")
+REPLAY = os.environ.get("DRIVETRAIN_REPLAY", "drivetrain_replay")
+# Short load sweeps: every hold scaled down, still whole gear turns at 600 rpm (load_sweep.hpp).
+SIM = ["--scenario", "load_sweep", "--config", CONFIG, "--duration", "6", "--speed-rpm", "600"]
+
+
+def sim_campaign(directory, bags, **step):
+    cmd = [RIG_SIM, *SIM, "--campaign", directory, "--bags", str(bags), "--interval", "3600"]
+    for option, value in step.items():
+        cmd += ["--" + option.replace("_", "-"), str(value)]
+    subprocess.run(cmd, check=True, capture_output=True)
+
+
+def campaign(out, bags, *options, check=True):
+    proc = subprocess.run([CAMPAIGN, *bags, "--config", CONFIG, "--out", out, "--replay", REPLAY, "--no-plots", *options],
+                          capture_output=True, text=True, timeout=900)
+    if check and proc.returncode != 0:
+        raise AssertionError(f"drivetrain_campaign exit {proc.returncode}:\n{proc.stderr}")
+    return proc
+
+
+def rows(out):
+    with open(os.path.join(out, "campaign.csv"), newline="") as f:
+        return list(csv.DictReader(f))
+
+
+def table_bytes(out):
+    with open(os.path.join(out, "campaign.csv"), "rb") as f:
+        return f.read()
+
+
+def processed(out):
+    import json
+
+    with open(os.path.join(out, "run.json")) as f:
+        return json.load(f)["processed"]
+
+
+def children(pid):
+    """Direct children of pid, from /proc."""
+    found = []
+    for entry in os.listdir("/proc"):
+        if entry.isdigit():
+            try:
+                with open(f"/proc/{entry}/stat") as f:
+                    fields = f.read().rsplit(")", 1)[1].split()
+                if int(fields[1]) == pid:
+                    found.append(int(entry))
+            except OSError:
+                pass
+    return found
+
+
+def command(pid):
+    try:
+        with open(f"/proc/{pid}/cmdline", "rb") as f:
+            return f.read().replace(b"\0", b" ").decode(errors="replace")
+    except OSError:
+        return ""
+
+
+class Campaign(unittest.TestCase):
+    @classmethod
+    def setUpClass(cls):
+        cls.tmp = tempfile.mkdtemp(prefix="campaign_test_")
+        cls.step = os.path.join(cls.tmp, "step")        # 10 % loss of mesh stiffness from bag 3 on
+        cls.constant = os.path.join(cls.tmp, "constant")
+        sim_campaign(cls.step, 6, step_at=3, step_mesh_scale=0.9)
+        sim_campaign(cls.constant, 4, epoch=1767225600 + 30 * 86400, seed=101)
+        cls.damaged = os.path.join(cls.tmp, "damaged")
+        os.makedirs(cls.damaged)
+        with open(os.path.join(cls.step, "bag_001.bag"), "rb") as f:
+            data = f.read()
+        with open(os.path.join(cls.damaged, "truncated.bag"), "wb") as f:
+            f.write(data[: len(data) // 2])   # a recording cut off halfway
+        with open(os.path.join(cls.damaged, "notes.bag"), "w") as f:
+            f.write("not a bag\n")
+        shutil.copy(os.path.join(cls.step, "bag_000.bag"), os.path.join(cls.damaged, "copy_of_000.bag"))
+        cls.inputs = [cls.step, os.path.join(cls.damaged, "*.bag")]
+        cls.serial = os.path.join(cls.tmp, "serial")
+        campaign(cls.serial, cls.inputs, "--serial")
+
+    @classmethod
+    def tearDownClass(cls):
+        shutil.rmtree(cls.tmp, ignore_errors=True)
+
+    def test_rows_damaged_bags_and_duplicates(self):
+        r = {os.path.basename(x["bag"]): x for x in rows(self.serial)}
+        # 6 campaign bags + truncated + notes; the copy of bag_000 is reported once, on bag_000's row.
+        self.assertEqual(sorted(r), sorted([f"bag_00{i}.bag" for i in range(6)] + ["truncated.bag", "notes.bag"]))
+        self.assertTrue(r["truncated.bag"]["status"].startswith("incomplete: "), r["truncated.bag"]["status"])
+        self.assertIn("messages read before it", r["truncated.bag"]["status"])
+        self.assertTrue(r["notes.bag"]["status"].startswith("refused: "), r["notes.bag"]["status"])
+        self.assertIn("#ROSBAG", r["notes.bag"]["status"])  # the replay's reason: not a bag
+        self.assertTrue(r["bag_000.bag"]["duplicates"].endswith("copy_of_000.bag"))
+        for i in range(6):
+            row = r[f"bag_00{i}.bag"]
+            self.assertEqual(row["status"], "ok")
+            self.assertEqual(float(row["start"]), 1767225600 + 3600 * i)  # the campaign's stamps, sorted
+            self.assertGreater(int(row["accepted"]), 0)
+            self.assertGreater(int(row["calibration_updates"]), 0)
+            self.assertEqual(len(row["sha256"]), 64)
+        # sorted by first stamp (the truncated copy of bag_001 starts with it), the refused one last
+        table = rows(self.serial)
+        starts = [float(x["start"]) for x in table[:-1]]
+        self.assertEqual(starts, sorted(starts))
+        self.assertEqual(os.path.basename(table[-1]["bag"]), "notes.bag")
+        order = [os.path.basename(x["bag"]) for x in table if x["bag"].startswith(self.step)]
+        self.assertEqual(order, [f"bag_00{i}.bag" for i in range(6)])
+
+    def test_change_detector_raises_on_a_ten_percent_loss(self):
+        r = {os.path.basename(x["bag"]): x for x in rows(self.serial)}
+        with open(os.path.join(self.step, "truth.csv"), newline="") as f:
+            truth = {x["bag"]: float(x["mesh_stiffness_scale"]) for x in csv.DictReader(f)}
+        for i in range(6):
+            row = r[f"bag_00{i}.bag"]
+            # the calibration finds each bag's true mesh scale (docs/calibration.md: within 5 %)
+            self.assertAlmostEqual(float(row["mesh_stiffness_scale"]), truth[f"bag_00{i}.bag"], delta=0.05)
+            self.assertEqual(row["alarm"], "true" if i >= 3 else "false", (i, row["alarm_reason"]))
+        self.assertIn("mesh_stiffness_scale -", r["bag_003.bag"]["alarm_reason"])
+
+    def test_cluster_equals_serial_and_a_rerun_replays_nothing(self):
+        out = os.path.join(self.tmp, "cluster")
+        campaign(out, self.inputs, "--workers", "2")
+        self.assertEqual(table_bytes(out), table_bytes(self.serial))
+        self.assertEqual(processed(out), 8)  # 6 + truncated + notes: the copy is not replayed
+        campaign(out, self.inputs, "--workers", "2")
+        self.assertEqual(processed(out), 0)
+        self.assertEqual(table_bytes(out), table_bytes(self.serial))
+        grown = self.inputs + [os.path.join(self.constant, "bag_000.bag")]
+        campaign(out, grown, "--workers", "2")
+        self.assertEqual(processed(out), 1)
+        self.assertEqual(len(rows(out)), 9)
+
+    def test_a_killed_worker_leaves_every_bag_with_one_row(self):
+        reference = os.path.join(self.tmp, "constant_serial")
+        campaign(reference, [self.constant], "--serial")
+        self.assertFalse(any(r["alarm"] == "true" for r in rows(reference)))  # a constant campaign: quiet
+        out = os.path.join(self.tmp, "killed")
+        proc = subprocess.Popen([CAMPAIGN, self.constant, "--config", CONFIG, "--out", out, "--replay", REPLAY,
+                                 "--no-plots", "--workers", "2"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        killed = None
+        deadline = time.monotonic() + 300
+        while killed is None and proc.poll() is None and time.monotonic() < deadline:
+            for worker in children(proc.pid):
+                if any("drivetrain_replay" in command(c) for c in children(worker)):
+                    os.kill(worker, signal.SIGKILL)  # mid-bag: its replay is running
+                    killed = worker
+                    break
+            time.sleep(0.05)
+        _, stderr = proc.communicate(timeout=600)
+        self.assertIsNotNone(killed, "no worker was caught running a replay")
+        self.assertEqual(proc.returncode, 0, stderr)
+        got = rows(out)
+        self.assertEqual(sorted(r["bag"] for r in got), sorted(r["bag"] for r in rows(reference)))
+        self.assertEqual(table_bytes(out), table_bytes(reference))
+        self.assertEqual(os.listdir(os.path.join(out, "bags")).__len__(), 4)  # no scratch left behind
+
+
+if __name__ == "__main__":
+    unittest.main(verbosity=2)
