@@ -127,7 +127,7 @@ set_tests_properties(fault_recovery_sigkill_and_master_restart PROPERTIES TIMEOU
 # Fails if the sourcing or the lookup by package name breaks - e.g. the devel space back under
 # build/, where rosrun finds nothing (scripts/build says why).
 set(FRESH_SHELL_TOOLS stiffness_estimator drivetrain_cli drivetrain_replay drivetrain_rig_sim drivetrain_latency
-  plot_study.py plot_replay.py stiffness_summary.py rviz_screenshot)
+  plot_study.py plot_replay.py stiffness_summary.py rviz_screenshot drivetrain_campaign)
 if(TARGET drivetrain_bench)
   list(APPEND FRESH_SHELL_TOOLS drivetrain_bench)
 endif()

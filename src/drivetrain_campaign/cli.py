@@ -1,7 +1,9 @@
 """drivetrain_campaign's command line (docs/campaign.md)."""
 
 import argparse
+import faulthandler
 import os
+import signal
 import shutil
 import sys
 
@@ -56,6 +58,9 @@ def parser():
 
 
 def main(argv=None, script_dir=None):
+    # `kill -USR1 PID` prints every thread's Python stack to stderr: a campaign that seems stuck
+    # says where, without a debugger.
+    faulthandler.register(signal.SIGUSR1, all_threads=True)
     args = parser().parse_args(argv)
     script_dir = script_dir or os.path.dirname(os.path.realpath(sys.argv[0]))
     replay = find_replay(args.replay, script_dir)

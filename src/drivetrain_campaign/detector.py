@@ -21,7 +21,8 @@ import math
 MONITORED = ("mesh_stiffness_scale", "pinion_bearing_scale", "gear_bearing_scale", "preload_torque")
 
 
-def _number(value):
+def finite_number(value):
+    """float(value) if it is a finite number, else None (empty CSV cells, None, NaN)."""
     try:
         x = float(value)
     except (TypeError, ValueError):
@@ -37,9 +38,9 @@ def usable(row, name):
     """(x, s) of the row's estimate of `name`, or None when it says nothing about the rig."""
     if not str(row.get("status", "")).startswith(("ok", "incomplete")):
         return None
-    if not (_number(row.get("calibration_updates")) or 0) > 0 or not _identified(row.get(name + "_identified")):
+    if not (finite_number(row.get("calibration_updates")) or 0) > 0 or not _identified(row.get(name + "_identified")):
         return None
-    x, s = _number(row.get(name)), _number(row.get(name + "_std"))
+    x, s = finite_number(row.get(name)), finite_number(row.get(name + "_std"))
     if x is None or s is None or s <= 0.0 or x == 0.0:
         return None
     return x, s

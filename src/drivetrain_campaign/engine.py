@@ -7,12 +7,24 @@ pure functions of their job dict; their results are small dicts (the rows).
 """
 
 import contextlib
+import faulthandler
 import os
 import sys
+import tempfile
+import threading
 
 # The task functions travel by value (cloudpickle), so workers on other machines need this
 # package's Python modules no more than its source tree: only drivetrain_replay at the same path.
 _BY_VALUE = False
+WORKER_WAIT_S = 60.0  # [s] for the first worker of a --scheduler
+START_TIMEOUT_S = 180.0  # [s] for the cluster and the client to come up
+
+
+def _start_timed_out(what):
+    print(f"drivetrain_campaign: {what} did not start in {START_TIMEOUT_S:g} s; thread stacks follow", file=sys.stderr)
+    faulthandler.dump_traceback(all_threads=True)
+    sys.stderr.flush()
+    os._exit(1)
 
 
 def _register_by_value():
@@ -66,19 +78,34 @@ class DaskEngine:
 
         _register_by_value()
         self._stack = contextlib.ExitStack()
+        # dask has no start-up timeout for a LocalCluster: a cluster that has not come up in
+        # START_TIMEOUT_S ends the campaign with the Python stacks of every thread (why), not a hang.
+        watchdog = threading.Timer(START_TIMEOUT_S, _start_timed_out, args=(address or "local cluster",))
+        watchdog.daemon = True
+        watchdog.start()
+        self._stack.callback(watchdog.cancel)
         if address:
             self.name = address
-            self.client = self._stack.enter_context(Client(address, security=security, timeout="30s"))
+            self.client = self._stack.enter_context(Client(address, security=security, timeout="20s"))
+            try:  # a scheduler whose workers have not joined yet (or never will): say so
+                self.client.wait_for_workers(1, timeout=WORKER_WAIT_S)
+            except TimeoutError as e:
+                self.close()
+                raise ValueError(f"--scheduler {address}: no worker joined in {WORKER_WAIT_S:g} s") from e
         else:
             n = workers or os.cpu_count() or 1
             self.name = f"local cluster, {n} worker process{'es' if n > 1 else ''}"
             # One single-threaded worker process per core: each task is one replay process.
-            # The loopback only: a dask scheduler runs any code a client sends it.
+            # The loopback only: a dask scheduler runs any code a client sends it. The workers'
+            # scratch space is this campaign's own, not the machine-wide /tmp/dask-worker-space
+            # whose lock files every dask process on the machine shares and purges.
+            space = self._stack.enter_context(tempfile.TemporaryDirectory(prefix="drivetrain_campaign_"))
             cluster = self._stack.enter_context(LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
                                                              host="127.0.0.1", dashboard_address=None,
-                                                             silence_logs=40))
+                                                             silence_logs=40, local_directory=space))
             self.client = self._stack.enter_context(Client(cluster))
         self.workers = len(self.client.scheduler_info()["workers"])
+        watchdog.cancel()
 
     def worker_pids(self):
         return self.client.run(os.getpid)

@@ -5,7 +5,7 @@ import datetime
 import math
 import os
 
-from .detector import MONITORED, usable
+from .detector import MONITORED, finite_number as _float, usable
 
 LABELS = {
     "mesh_stiffness_scale": "mesh stiffness scale [-]",
@@ -14,14 +14,6 @@ LABELS = {
     "preload_torque": "anti-backlash preload torque T_p [N·m]",
 }
 Z95 = 1.959963984540054  # two-sided 95 % quantile of the normal distribution
-
-
-def _float(x):
-    try:
-        v = float(x)
-    except (TypeError, ValueError):
-        return None
-    return v if math.isfinite(v) else None
 
 
 def _when(stamp):
@@ -61,7 +53,8 @@ def _plots(out_dir, rows, references, fraction):
                 ax.axvline(_when(r["start"]), color="C3", lw=0.6, alpha=0.5)
         ax.set_ylabel(LABELS[name], fontsize=8)
         ax.grid(alpha=0.3)
-    axes[0].legend(fontsize=7, loc="best")
+    if axes[0].get_legend_handles_labels()[0]:
+        axes[0].legend(fontsize=7, loc="best")
     axes[-1].set_xlabel("bag start (UTC); red lines: bags with alarm")
     fig.autofmt_xdate()
     fig.tight_layout()
@@ -77,7 +70,8 @@ def _plots(out_dir, rows, references, fraction):
             ax1.plot(*zip(*pts), "o-", ms=3, label=f"mode {i + 1}")
     ax1.set_ylabel("natural frequency [Hz]")
     ax1.set_yscale("log")
-    ax1.legend(fontsize=7)
+    if ax1.get_legend_handles_labels()[0]:
+        ax1.legend(fontsize=7)
     ax1.grid(alpha=0.3, which="both")
     pts = [(_when(r["start"]), _float(r.get("te_rms"))) for r in dated]
     pts = [(t, 1e6 * v) for t, v in pts if v is not None]

@@ -182,5 +182,91 @@ class Campaign(unittest.TestCase):
         self.assertEqual(os.listdir(os.path.join(out, "bags")).__len__(), 4)  # no scratch left behind
 
 
+def stop(proc):
+    """SIGTERM first: dask-worker's nanny then closes its worker process too."""
+    proc.terminate()
+    try:
+        proc.wait(timeout=15)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        proc.wait()
+
+
+def free_port():
+    import socket
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def make_tls(directory):
+    """A CA and one certificate it signs for 127.0.0.1 (scheduler, worker and client alike)."""
+    def ssl(*args):
+        subprocess.run(["openssl", *args], check=True, capture_output=True, cwd=directory)
+
+    ssl("req", "-x509", "-newkey", "rsa:2048", "-nodes", "-days", "2", "-subj", "/CN=campaign test CA",
+        "-keyout", "ca.key", "-out", "ca.pem")
+    ssl("req", "-newkey", "rsa:2048", "-nodes", "-subj", "/CN=127.0.0.1", "-keyout", "node.key", "-out", "node.csr")
+    with open(os.path.join(directory, "san.cnf"), "w") as f:
+        f.write("subjectAltName=IP:127.0.0.1\n")
+    ssl("x509", "-req", "-in", "node.csr", "-CA", "ca.pem", "-CAkey", "ca.key", "-CAcreateserial", "-days", "2",
+        "-extfile", "san.cnf", "-out", "node.pem")
+    return [os.path.join(directory, f) for f in ("ca.pem", "node.pem", "node.key")]
+
+
+class LabScheduler(unittest.TestCase):
+    """--scheduler: an existing dask-scheduler and dask-worker (as on a lab's machines), over TLS."""
+
+    def test_campaign_on_a_tls_scheduler_equals_serial_and_plain_tcp_is_refused(self):
+        tmp = tempfile.mkdtemp(prefix="campaign_tls_")
+        self.addCleanup(shutil.rmtree, tmp, True)
+        bags = os.path.join(tmp, "bags")
+        sim_campaign(bags, 2, seed=7)
+        ca, cert, key = make_tls(tmp)
+        tls = ["--tls-ca-file", ca, "--tls-cert", cert, "--tls-key", key]
+        port = free_port()
+        procs = [subprocess.Popen(["dask-scheduler", "--host", "127.0.0.1", "--port", str(port), "--protocol", "tls",
+                                   "--no-dashboard", *tls], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)]
+        self.addCleanup(lambda: [stop(p) for p in reversed(procs)])
+        address = f"tls://127.0.0.1:{port}"
+        procs.append(subprocess.Popen(["dask-worker", address, "--nworkers", "1", "--nthreads", "1", "--no-dashboard",
+                                       "--host", "127.0.0.1", *tls], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL))
+        serial = os.path.join(tmp, "serial")
+        campaign(serial, [bags], "--serial")
+        out = os.path.join(tmp, "lab")
+        campaign(out, [bags], "--scheduler", address, *tls)
+        self.assertEqual(table_bytes(out), table_bytes(serial))
+        # without the certificates the client cannot talk to the scheduler: refused, with the reason
+        refused = campaign(os.path.join(tmp, "plain"), [bags], "--scheduler", f"tcp://127.0.0.1:{port}", check=False)
+        self.assertEqual(refused.returncode, 1, refused.stderr)
+        self.assertIn("drivetrain_campaign:", refused.stderr)
+
+    @unittest.skipUnless(os.geteuid() == 0, "needs root to start a worker as another user")
+    def test_a_worker_that_cannot_read_the_bags_stops_the_campaign_before_it_starts(self):
+        # A lab worker without the shared storage: here a worker running as `nobody`, which cannot
+        # enter the 0700 directory that holds the bags (the client, root, can).
+        tmp = tempfile.mkdtemp(prefix="campaign_preflight_")
+        self.addCleanup(shutil.rmtree, tmp, True)
+        bags = os.path.join(tmp, "bags")
+        sim_campaign(bags, 1)
+        space = tempfile.mkdtemp(prefix="campaign_nobody_")
+        os.chmod(space, 0o777)
+        self.addCleanup(shutil.rmtree, space, True)
+        port = free_port()
+        address = f"tcp://127.0.0.1:{port}"
+        procs = [subprocess.Popen(["dask-scheduler", "--host", "127.0.0.1", "--port", str(port), "--no-dashboard"],
+                                  stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)]
+        self.addCleanup(lambda: [stop(p) for p in reversed(procs)])
+        procs.append(subprocess.Popen(["setpriv", "--reuid=65534", "--regid=65534", "--clear-groups", "dask-worker", address,
+                                       "--nworkers", "1", "--nthreads", "1", "--no-dashboard", "--host", "127.0.0.1",
+                                       "--local-directory", space], env={"PATH": "/usr/bin:/bin", "HOME": space},
+                                      stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL))
+        refused = campaign(os.path.join(tmp, "out"), [bags], "--scheduler", address, check=False)
+        self.assertEqual(refused.returncode, 1, refused.stderr)
+        self.assertRegex(refused.stderr, r"worker tcp://127\.0\.0\.1:\d+: cannot read '" + bags + "/bag_000.bag'")
+        self.assertNotIn("drivetrain_campaign: 1 bags", refused.stderr)  # nothing was replayed
+
+
 if __name__ == "__main__":
     unittest.main(verbosity=2)
