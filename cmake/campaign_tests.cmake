@@ -1,9 +1,11 @@
 # drivetrain_campaign (Python, dask.distributed; docs/campaign.md). Included from CMakeLists.txt
 # inside if(CATKIN_ENABLE_TESTING).
 
-# The change detector against the CUSUM's closed form (no bags, no cluster; < 1 s).
+# The change detector against the CUSUM's closed form, and the bag list (no bags, no cluster; < 1 s).
 add_test(NAME campaign_change_detector
   COMMAND /usr/bin/python3 ${CMAKE_CURRENT_SOURCE_DIR}/test/campaign/test_detector.py)
+add_test(NAME campaign_bag_list
+  COMMAND /usr/bin/python3 ${CMAKE_CURRENT_SOURCE_DIR}/test/campaign/test_inputs.py)
 
 # End to end on short simulated bags and a local cluster on the loopback (~2-3 min on 2 cores):
 # cluster table = serial table, a killed worker, the cache, damaged bags, the alarm.

@@ -52,8 +52,8 @@ def run(bags, config, params, out_dir, engine, replay, plots=True, cache_dir=Non
     wall_start = time.monotonic()
     config, params, replay = (os.path.abspath(p) if p else None for p in (config, params, replay))
     pinion_teeth = gearbox_facts(config)
-    paths = inputs.expand_bags(bags)
     out_dir = os.path.abspath(out_dir)
+    paths = inputs.expand_bags(bags, exclude=out_dir)
     bag_root = os.path.join(out_dir, "bags")
     os.makedirs(bag_root, exist_ok=True)
     _remove_scratch(bag_root)  # a killed earlier run's

@@ -5,11 +5,14 @@ import hashlib
 import os
 
 
-def expand_bags(arguments):
+def expand_bags(arguments, exclude=None):
     """Paths in the order given; a directory contributes its *.bag files sorted, a glob its matches
-    sorted. A path given twice is listed once. Raises ValueError naming an argument that matches
-    nothing (a typo would otherwise shrink the campaign silently)."""
+    sorted. A path given twice is listed once. Files below `exclude` (the campaign's own output
+    directory, whose reports hold outputs.bag files) are not bags of the campaign. Raises
+    ValueError naming an argument that matches nothing (a typo would otherwise shrink the
+    campaign silently)."""
     paths, seen = [], set()
+    skip = os.path.join(os.path.abspath(exclude), "") if exclude else None
     for arg in arguments:
         if os.path.isdir(arg):
             found = sorted(glob.glob(os.path.join(glob.escape(arg), "**", "*.bag"), recursive=True))
@@ -17,6 +20,8 @@ def expand_bags(arguments):
             found = sorted(glob.glob(arg, recursive=True))
         else:
             found = [arg]  # a file, readable or not: an unreadable one gets its refused row
+        if skip and (os.path.isdir(arg) or glob.has_magic(arg)):
+            found = [p for p in found if not os.path.abspath(p).startswith(skip)]
         if not found:
             raise ValueError(f"BAGS: '{arg}' matches no bag")
         for path in found:
