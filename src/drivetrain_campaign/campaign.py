@@ -69,9 +69,21 @@ def run(bags, config, params, out_dir, engine, replay, plots=True, cache_dir=Non
 
     cache = ResultCache(cache_dir or os.path.join(out_dir, "cache"), replay, config, params, plots)
     rows, jobs, first_path, duplicates = [], [], {}, {}
+    # A bag whose path, size and modification time are those of an earlier run keeps its SHA-256:
+    # a re-run of a large campaign reads no bag at all (a changed or touched bag is hashed again).
+    memo = inputs.HashMemo(os.path.join(cache_dir or os.path.join(out_dir, "cache"), "hashes.json"))
     hashed = {}
-    for path, result, task_error in engine.map_unordered(inputs.hash_bag, [os.path.abspath(p) for p in paths]):
+    for p in paths:
+        sha = memo.get(os.path.abspath(p))
+        if sha:
+            hashed[os.path.abspath(p)] = (sha, None)
+    to_hash = [os.path.abspath(p) for p in paths if os.path.abspath(p) not in hashed]
+    stamps = {p: memo.stamp(p) for p in to_hash}
+    for path, result, task_error in engine.map_unordered(inputs.hash_bag, to_hash):
         hashed[path] = (result[1], result[2]) if result else (None, task_error)
+        if hashed[path][0]:
+            memo.put(path, hashed[path][0], stamps[path])
+    memo.save()
     for path in paths:
         sha, error = hashed[os.path.abspath(path)]
         if sha is None:
@@ -118,7 +130,7 @@ def run(bags, config, params, out_dir, engine, replay, plots=True, cache_dir=Non
     table.write_table(os.path.join(out_dir, "campaign.csv"), rows)
     report.write_report(out_dir, rows, references, detector_options or {})
     result = {"bags": len(paths), "distinct": len(first_path) + sum(1 for r in rows if not r.get("sha256")),
-              "processed": len(jobs), "cached": len(first_path) - len(jobs),
+              "hashed": len(to_hash), "processed": len(jobs), "cached": len(first_path) - len(jobs),
               "duplicates": sum(len(v) for v in duplicates.values()),
               "refused": sum(1 for r in rows if str(r.get("status")).startswith("refused")),
               "alarms": sum(1 for r in rows if r.get("alarm")), "engine": engine.name, "workers": engine.workers,

@@ -2,6 +2,7 @@
 
 import glob
 import hashlib
+import json
 import os
 
 
@@ -47,3 +48,43 @@ def sha256_of(path, block=1 << 20):
         for chunk in iter(lambda: f.read(block), b""):
             digest.update(chunk)
     return digest.hexdigest()
+
+
+class HashMemo:
+    """SHA-256 of bags seen before, keyed by absolute path and trusted while the file's size and
+    modification time (ns) are unchanged, as git's index and make trust them. Stat is taken here,
+    where the client runs; a path the client cannot stat is hashed by a task every time."""
+
+    def __init__(self, path):
+        self.path = path
+        try:
+            with open(path) as f:
+                self.entries = json.load(f)
+        except (OSError, ValueError):
+            self.entries = {}
+
+    @staticmethod
+    def stamp(path):
+        """[size, mtime_ns], or None; take it before hashing, so that a bag written meanwhile is
+        hashed again next time."""
+        try:
+            st = os.stat(path)
+        except OSError:
+            return None
+        return [st.st_size, st.st_mtime_ns]
+
+    def get(self, path):
+        entry = self.entries.get(path)
+        stamp = self.stamp(path)
+        return entry["sha256"] if entry and stamp and entry["stat"] == stamp else None
+
+    def put(self, path, sha, stamp):
+        if stamp:
+            self.entries[path] = {"stat": stamp, "sha256": sha}
+
+    def save(self):
+        os.makedirs(os.path.dirname(self.path), exist_ok=True)
+        tmp = self.path + ".tmp"
+        with open(tmp, "w") as f:
+            json.dump(self.entries, f, sort_keys=True)
+        os.replace(tmp, self.path)

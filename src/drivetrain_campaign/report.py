@@ -53,8 +53,9 @@ def _plots(out_dir, rows, references, fraction):
                 ax.axvline(_when(r["start"]), color="C3", lw=0.6, alpha=0.5)
         ax.set_ylabel(LABELS[name], fontsize=8)
         ax.grid(alpha=0.3)
-    if axes[0].get_legend_handles_labels()[0]:
-        axes[0].legend(fontsize=7, loc="best")
+    for ax in axes:
+        if ax.get_legend_handles_labels()[0]:
+            ax.legend(fontsize=7, loc="best")
     axes[-1].set_xlabel("bag start (UTC); red lines: bags with alarm")
     fig.autofmt_xdate()
     fig.tight_layout()

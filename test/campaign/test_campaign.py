@@ -54,11 +54,15 @@ def table_bytes(out):
         return f.read()
 
 
-def processed(out):
+def run_info(out):
     import json
 
     with open(os.path.join(out, "run.json")) as f:
-        return json.load(f)["processed"]
+        return json.load(f)
+
+
+def processed(out):
+    return run_info(out)["processed"]
 
 
 def children(pid):
@@ -151,10 +155,12 @@ class Campaign(unittest.TestCase):
         self.assertEqual(processed(out), 8)  # 6 + truncated + notes: the copy is not replayed
         campaign(out, self.inputs, "--workers", "2")
         self.assertEqual(processed(out), 0)
+        self.assertEqual(run_info(out)["hashed"], 0)  # unchanged files: not even read again
         self.assertEqual(table_bytes(out), table_bytes(self.serial))
         grown = self.inputs + [os.path.join(self.constant, "bag_000.bag")]
         campaign(out, grown, "--workers", "2")
         self.assertEqual(processed(out), 1)
+        self.assertEqual(run_info(out)["hashed"], 1)
         self.assertEqual(len(rows(out)), 9)
 
     def test_a_killed_worker_leaves_every_bag_with_one_row(self):

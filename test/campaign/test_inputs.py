@@ -54,6 +54,19 @@ class BagList(unittest.TestCase):
         self.assertIsNone(sha)
         self.assertIn("cannot read", error)
 
+    def test_the_hash_memo_trusts_size_and_mtime_only(self):
+        bag = os.path.join(self.root, "b.bag")
+        memo_path = os.path.join(self.root, "memo", "hashes.json")
+        memo = inputs.HashMemo(memo_path)
+        self.assertIsNone(memo.get(bag))
+        memo.put(bag, "f" * 64, memo.stamp(bag))
+        memo.save()
+        self.assertEqual(inputs.HashMemo(memo_path).get(bag), "f" * 64)  # read back from disk
+        st = os.stat(bag)
+        os.utime(bag, ns=(st.st_atime_ns, st.st_mtime_ns + 1))  # touched: hashed again
+        self.assertIsNone(inputs.HashMemo(memo_path).get(bag))
+        self.assertIsNone(memo.get(os.path.join(self.root, "gone.bag")))
+
 
 if __name__ == "__main__":
     unittest.main()
