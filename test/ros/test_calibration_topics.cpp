@@ -1,9 +1,10 @@
 // The node's live calibration (docs/ros_api.md rule 11) on the graph: with a gearbox that has a
 // calibration block (test/data/calibration_servo.yaml), torque steps at 1000 rpm and the encoders'
 // joint_states at 5 kHz (the first step at the baseline torque), the node publishes `measured_te`
-// and `calibration`, and every message equals, bit for bit (header.seq aside, which roscpp numbers
+// and `calibration`, and with them the encoder-driven dynamics' `transmission_error` and
+// `mesh_period_stats`; every message equals, bit for bit (header.seq aside, which roscpp numbers
 // itself), what the same RigPipeline and message conversion give in-process for the same inputs in
-// the same order (what drivetrain_replay runs). /diagnostics carries the calibration's outcome,
+// the same order (what drivetrain_replay runs): the node against the replay with joint states. /diagnostics carries the calibration's outcome,
 // counts and identified parameters, and calibration_published / measured_te_published match.
 #include <gtest/gtest.h>
 
@@ -46,6 +47,10 @@ struct CollectingSink : PipelineSink {
   std::string rig_frame, pinion_frame;
   std::vector<drivetrain_stiffness::Calibration> calibrations;
   std::vector<drivetrain_stiffness::MeasuredTe> measured_tes;
+  std::vector<drivetrain_stiffness::TransmissionError> tes;
+  std::vector<drivetrain_stiffness::MeshPeriodStats> periods;
+  void transmissionError(Stamp stamp, const DynamicsSample& s) override { tes.push_back(toTransmissionErrorMsg(stamp, pinion_frame, s)); }
+  void meshPeriod(Stamp stamp, const MeshPeriodStatistics& s) override { periods.push_back(toMeshPeriodStatsMsg(stamp, pinion_frame, s)); }
   void measuredTe(Stamp stamp, const MeasuredTeSample& s) override { measured_tes.push_back(toMeasuredTeMsg(stamp, pinion_frame, s)); }
   void calibration(Stamp stamp, const CalibrationEstimate& e) override { calibrations.push_back(toCalibrationMsg(stamp, rig_frame, e)); }
 };
@@ -65,6 +70,10 @@ class CalibrationTopicsTest : public testing::Test {
         [this](const drivetrain_stiffness::Calibration::ConstPtr& m) { std::lock_guard<std::mutex> l(m_); calibration_.push_back(*m); });
     measured_te_sub_ = nh_.subscribe<drivetrain_stiffness::MeasuredTe>("measured_te", 100000,
         [this](const drivetrain_stiffness::MeasuredTe::ConstPtr& m) { std::lock_guard<std::mutex> l(m_); measured_te_.push_back(*m); });
+    te_sub_ = nh_.subscribe<drivetrain_stiffness::TransmissionError>("transmission_error", 100000,
+        [this](const drivetrain_stiffness::TransmissionError::ConstPtr& m) { std::lock_guard<std::mutex> l(m_); te_.push_back(*m); });
+    period_sub_ = nh_.subscribe<drivetrain_stiffness::MeshPeriodStats>("mesh_period_stats", 100000,
+        [this](const drivetrain_stiffness::MeshPeriodStats::ConstPtr& m) { std::lock_guard<std::mutex> l(m_); periods_.push_back(*m); });
     diag_sub_ = nh_.subscribe<diagnostic_msgs::DiagnosticArray>("/diagnostics", 100,
         [this](const diagnostic_msgs::DiagnosticArray::ConstPtr& a) {
           std::lock_guard<std::mutex> l(m_);
@@ -75,7 +84,8 @@ class CalibrationTopicsTest : public testing::Test {
     spinner_.start();
     ASSERT_TRUE(waitWall([this] {
       return torque_pub_.getNumSubscribers() > 0 && joints_pub_.getNumSubscribers() > 0 &&
-             calibration_sub_.getNumPublishers() > 0 && measured_te_sub_.getNumPublishers() > 0;
+             calibration_sub_.getNumPublishers() > 0 && measured_te_sub_.getNumPublishers() > 0 &&
+             te_sub_.getNumPublishers() > 0 && period_sub_.getNumPublishers() > 0;
     }, 30.0)) << "the node did not come up";
     ros::WallDuration(0.5).sleep();  // the TCP links settle after the master reports them
   }
@@ -92,10 +102,12 @@ class CalibrationTopicsTest : public testing::Test {
   ros::NodeHandle nh_;
   ros::AsyncSpinner spinner_{2};
   ros::Publisher torque_pub_, joints_pub_;
-  ros::Subscriber calibration_sub_, measured_te_sub_, diag_sub_;
+  ros::Subscriber calibration_sub_, measured_te_sub_, te_sub_, period_sub_, diag_sub_;
   std::mutex m_;
   std::vector<drivetrain_stiffness::Calibration> calibration_;
   std::vector<drivetrain_stiffness::MeasuredTe> measured_te_;
+  std::vector<drivetrain_stiffness::TransmissionError> te_;
+  std::vector<drivetrain_stiffness::MeshPeriodStats> periods_;
   std::map<std::string, std::string> diagnostics_;
 };
 
@@ -155,6 +167,8 @@ TEST_F(CalibrationTopicsTest, NodePublishesWhatThePipelineGivesInProcess) {
   }
   ASSERT_GT(sink.calibrations.size(), 3u);
   ASSERT_GT(sink.measured_tes.size(), 100u);
+  ASSERT_GT(sink.tes.size(), 1000u);  // 1.1 s at the 1 kHz output rate
+  ASSERT_GT(sink.periods.size(), 10u);
 
   // On the graph: each torque step, then its readings in chunks the subscriber queue holds, each
   // waited for on /diagnostics, so the node sees exactly this order.
@@ -175,7 +189,8 @@ TEST_F(CalibrationTopicsTest, NodePublishesWhatThePipelineGivesInProcess) {
   }
   ASSERT_TRUE(waitWall([&] {
     std::lock_guard<std::mutex> l(m_);
-    return calibration_.size() >= sink.calibrations.size() && measured_te_.size() >= sink.measured_tes.size();
+    return calibration_.size() >= sink.calibrations.size() && measured_te_.size() >= sink.measured_tes.size() &&
+           te_.size() >= sink.tes.size() && periods_.size() >= sink.periods.size();
   }, 20.0));
 
   {
@@ -194,6 +209,21 @@ TEST_F(CalibrationTopicsTest, NodePublishesWhatThePipelineGivesInProcess) {
       if (!(got == sink.measured_tes[i]) && differ++ < 3) {
         ADD_FAILURE() << "measured_te[" << i << "]: " << got << "\nin-process:\n" << sink.measured_tes[i];
       }
+    }
+    EXPECT_EQ(differ, 0u);
+    // The dynamics driven by the encoders' phase and speed: the same bytes as in-process.
+    ASSERT_EQ(te_.size(), sink.tes.size());
+    ASSERT_EQ(periods_.size(), sink.periods.size());
+    differ = 0;
+    for (std::size_t i = 0; i < te_.size(); ++i) {
+      drivetrain_stiffness::TransmissionError got = te_[i];
+      got.header.seq = sink.tes[i].header.seq;
+      if (!(got == sink.tes[i]) && differ++ < 3) ADD_FAILURE() << "transmission_error[" << i << "]: " << got << "\nin-process:\n" << sink.tes[i];
+    }
+    for (std::size_t i = 0; i < periods_.size(); ++i) {
+      drivetrain_stiffness::MeshPeriodStats got = periods_[i];
+      got.header.seq = sink.periods[i].header.seq;
+      if (!(got == sink.periods[i]) && differ++ < 6) ADD_FAILURE() << "mesh_period_stats[" << i << "]: " << got << "\nin-process:\n" << sink.periods[i];
     }
     EXPECT_EQ(differ, 0u);
     std::map<std::string, int> seen;
