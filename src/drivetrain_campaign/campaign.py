@@ -127,6 +127,7 @@ def run(bags, config, params, out_dir, engine, replay, plots=True, cache_dir=Non
                 row["duplicates"] = ";".join(others)
     rows = table.sort_rows(rows)
     references = detector.detect(rows, **(detector_options or {}))
+    detector.out_of_family(rows, fraction=(detector_options or {}).get("fraction", 0.05))
     table.write_table(os.path.join(out_dir, "campaign.csv"), rows)
     report.write_report(out_dir, rows, references, detector_options or {})
     result = {"bags": len(paths), "distinct": len(first_path) + sum(1 for r in rows if not r.get("sha256")),

@@ -17,6 +17,7 @@ nothing to that quantity's sums and cannot enter the reference.
 """
 
 import math
+import statistics
 
 MONITORED = ("mesh_stiffness_scale", "pinion_bearing_scale", "gear_bearing_scale", "preload_torque")
 
@@ -79,3 +80,29 @@ def detect(rows, fraction=0.05, threshold=5.0, reference_bags=3, monitored=MONIT
                 row["alarm_reason"] = reason if not row["alarm_reason"] else row["alarm_reason"] + "; " + reason
         result[name] = {"value": x0, "std": s0, "bags": len(reference), "trace": trace}
     return result
+
+
+def out_of_family(rows, fraction=0.05, confidence=2.0, minimum=5, monitored=MONITORED):
+    """End-of-line view (one bag per unit, no order in time): sets row['out_of_family'] and
+    row['family_reason'] where a quantity differs from the batch median by more than `fraction`,
+    by at least `confidence` of the bag's own standard deviation beyond that fraction:
+    (|x / median - 1| - f) |median| / s > confidence. The median, not the mean, so that the outliers
+    do not move the family they are compared with. Needs `minimum` usable bags; returns the
+    medians used."""
+    for row in rows:
+        row["out_of_family"], row["family_reason"] = False, None
+    medians = {}
+    for name in monitored:
+        points = [(i, v) for i, v in ((i, usable(r, name)) for i, r in enumerate(rows)) if v is not None]
+        if len(points) < minimum:
+            continue
+        median = statistics.median(x for _, (x, _) in points)
+        medians[name] = median
+        for i, (x, s) in points:
+            d = x / median - 1.0
+            if (abs(d) - fraction) * abs(median) / s > confidence:
+                row = rows[i]
+                row["out_of_family"] = True
+                reason = f"{name} {100.0 * d:+.1f} % from the batch median"
+                row["family_reason"] = reason if not row["family_reason"] else row["family_reason"] + "; " + reason
+    return medians

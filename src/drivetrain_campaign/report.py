@@ -113,17 +113,17 @@ def write_report(out_dir, rows, references, options):
             lines += ["", f"![{png}]({png})"]
     except ImportError as e:  # matplotlib missing: the tables still stand
         lines += ["", f"(no plots: {e})"]
-    flagged = [r for r in rows if r.get("alarm") or str(r.get("status", "")).startswith(("refused", "incomplete"))
+    flagged = [r for r in rows if r.get("alarm") or r.get("out_of_family") or str(r.get("status", "")).startswith(("refused", "incomplete"))
                or (_float(r.get("wrong_type")) or 0) > 0 or r.get("duplicates")]
     lines += ["", "## Flagged and refused bags", ""]
     if not flagged:
         lines.append("None.")
     else:
-        lines += ["| bag | start (UTC) | status | alarm | duplicates | report |", "|---|---|---|---|---|---|"]
+        lines += ["| bag | start (UTC) | status | alarm or out of family | duplicates | report |", "|---|---|---|---|---|---|"]
         for r in flagged:
             start = _float(r.get("start"))
             when = _when(start).strftime("%Y-%m-%d %H:%M:%S") if start is not None else ""
-            alarm = r.get("alarm_reason") or ""
+            alarm = "; ".join(x for x in (r.get("alarm_reason"), r.get("family_reason")) if x)
             report = f"[{r['report']}]({r['report']}/report.md)" if r.get("report") else ""
             lines.append(f"| {_cell(r['bag'])} | {when} | {_cell(r.get('status'))} | {_cell(alarm)} | "
                          f"{_cell(r.get('duplicates'))} | {report} |")

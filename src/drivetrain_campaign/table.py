@@ -14,7 +14,7 @@ COLUMNS = (
     + [f"natural_frequency_{i + 1}" for i in range(MODES)]
     + ["calibration_updates", "calibration_status"]
     + [name + suffix for name in CALIBRATED for suffix in ("", "_std", "_identified")]
-    + ["alarm", "alarm_reason", "duplicates", "report"]
+    + ["alarm", "alarm_reason", "out_of_family", "family_reason", "duplicates", "report"]
 )
 
 

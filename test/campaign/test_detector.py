@@ -82,5 +82,22 @@ class ChangeDetector(unittest.TestCase):
             self.detect([row(1.0, 0.01)], reference_bags=0)
 
 
+class OutOfFamily(unittest.TestCase):
+    """End-of-line: each unit against the batch median (detector.out_of_family)."""
+
+    def test_the_unit_beyond_the_fraction_by_two_of_its_sigmas_is_flagged(self):
+        rows = [row(x, 0.005) for x in (1.00, 1.01, 0.99, 1.02, 0.98, 0.92, 1.055)]
+        medians = detector.out_of_family(rows, monitored=("mesh_stiffness_scale",))
+        self.assertEqual(medians["mesh_stiffness_scale"], 1.0)
+        # 0.92: |d| - f = 0.03, / 0.005 = 6 > 2: flagged. 1.055: 0.005 / 0.005 = 1 < 2: within its uncertainty.
+        self.assertEqual([r["out_of_family"] for r in rows], [False] * 5 + [True, False])
+        self.assertIn("-8.0 % from the batch median", rows[5]["family_reason"])
+
+    def test_a_batch_too_small_for_a_median_flags_nothing(self):
+        rows = [row(x, 0.005) for x in (1.0, 0.5, 1.0, 1.0)]
+        self.assertEqual(detector.out_of_family(rows, monitored=("mesh_stiffness_scale",)), {})
+        self.assertFalse(any(r["out_of_family"] for r in rows))
+
+
 if __name__ == "__main__":
     unittest.main()
