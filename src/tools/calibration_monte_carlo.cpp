@@ -39,9 +39,17 @@ RigConfig withCalibration(RigConfig rig) {
 
 /// Feeds the recording to `pipeline` as drivetrain_replay would (stamps from the event times and
 /// their jitter, in send order).
-void replay(const LoadSweep& sweep, RigPipeline& pipeline, PipelineSink& sink) {
+/// With `mark` >= 0, `at_mark` gets the calibration's estimate as it stands when the recording
+/// reaches t = mark (the dwell's start).
+void replay(const LoadSweep& sweep, RigPipeline& pipeline, PipelineSink& sink, double mark = -1.0,
+            CalibrationEstimate* at_mark = nullptr) {
   constexpr std::int64_t kEpoch = 1767225600LL * 1000000000LL;
+  bool marked = !(mark >= 0.0 && at_mark);
   for (const RigEvent& e : sweep.events) {
+    if (!marked && e.t >= mark) {
+      *at_mark = pipeline.calibrator()->estimate();
+      marked = true;
+    }
     const Stamp stamp{kEpoch + std::llround((e.t + e.stamp_offset) * 1e9)};
     pipeline.observeClock(stamp, sink);
     if (e.motion) pipeline.motion(stamp, *e.motion, sink);
@@ -81,6 +89,9 @@ int main(int argc, char** argv) {
   app.add_option("--speed-rpm", speed, "[rpm] pinion speed of the sweeps");
   bool windows = false;
   app.add_flag("--windows", windows, "Print every closed window too");
+  double dwell = 0.0, dwell_torque = 3.0;
+  app.add_option("--dwell", dwell, "[s] after the sweep, a hold at --dwell-torque: the estimate's drift over it (docs/calibration.md)");
+  app.add_option("--dwell-torque", dwell_torque, "[N*m] the dwell's pinion torque (3)");
   CLI11_PARSE(app, argc, argv);
   try {
     const RigConfig nominal = withCalibration(loadRigFile(config));
@@ -88,6 +99,8 @@ int main(int argc, char** argv) {
     std::uniform_real_distribution<double> uni(0.0, 1.0);
     int covered_mesh = 0, covered_tp = 0, covered_compliance = 0, flags_right = 0;
     double worst_mesh = 0.0, worst_tp = 0.0, worst_compliance = 0.0;
+    double worst_drift = 0.0;  // [sigmas at the dwell's start] the largest move over the dwell
+    int drifted = 0;           // runs with a move beyond 1 sigma
     for (int run = 0; run < runs; ++run) {
       RigConfig truth = nominal;
       truth.mesh_stiffness_scale = 0.8 + 0.4 * uni(draw);
@@ -97,6 +110,8 @@ int main(int argc, char** argv) {
       LoadSweepSpec spec;
       spec.seed = seed + static_cast<std::uint64_t>(run);
       spec.speed_rpm = speed;
+      spec.dwell = dwell;
+      spec.dwell_torque = dwell_torque;
       const LoadSweep sweep = makeLoadSweep(truth, spec);
 
       PipelineOptions options;
@@ -104,7 +119,8 @@ int main(int argc, char** argv) {
       RigPipeline pipeline(nominal, options);
       WindowLog sink;
       sink.enabled = windows;
-      replay(sweep, pipeline, sink);
+      CalibrationEstimate before_dwell;
+      replay(sweep, pipeline, sink, dwell > 0.0 ? sweep.truth.levels.back().t0 : -1.0, &before_dwell);
       const CalibrationEstimate& e = pipeline.calibrator()->estimate();
 
       // The truth's series compliance at the reference torque, from the same static model.
@@ -142,6 +158,25 @@ int main(int argc, char** argv) {
       line["series_compliance"] = {{"truth", compliance}, {"estimate", e.series_compliance}, {"std", e.series_compliance_std}};
       line["error"] = {{"mesh_stiffness_scale", em}, {"preload_torque", et}, {"series_compliance", ec}};
       line["covered"] = {{"mesh_stiffness_scale", cm}, {"preload_torque", ct}, {"series_compliance", cc}};
+      if (dwell > 0.0) {
+        // Drift over the dwell: each estimate's move in units of its std at the dwell's start and end.
+        nlohmann::json drift;
+        double run_worst = 0.0;
+        for (int i : {kMeshScale, kPreloadTorque, kTeOffset}) {
+          const double move = std::abs(e.value[i] - before_dwell.value[i]);
+          const double sigmas = move / std::max(before_dwell.std[i], 1e-300);
+          drift[calibrationName(i)] = {{"move", move}, {"sigmas_start", sigmas}, {"sigmas_end", move / std::max(e.std[i], 1e-300)}};
+          run_worst = std::max(run_worst, sigmas);
+        }
+        const double cmove = std::abs(e.series_compliance - before_dwell.series_compliance);
+        drift["series_compliance"] = {{"move", cmove}, {"sigmas_start", cmove / std::max(before_dwell.series_compliance_std, 1e-300)}};
+        run_worst = std::max(run_worst, cmove / std::max(before_dwell.series_compliance_std, 1e-300));
+        drift["windows"] = e.windows - before_dwell.windows;
+        drift["updates"] = e.updates - before_dwell.updates;
+        line["dwell"] = drift;
+        worst_drift = std::max(worst_drift, run_worst);
+        drifted += run_worst > 1.0;
+      }
       line["windows"] = e.windows;
       line["updates"] = e.updates;
       line["gated"] = e.gated;
@@ -153,6 +188,7 @@ int main(int argc, char** argv) {
     summary["worst_error"] = {{"mesh_stiffness_scale", worst_mesh}, {"preload_torque", worst_tp}, {"series_compliance", worst_compliance}};
     summary["covered"] = {{"mesh_stiffness_scale", covered_mesh}, {"preload_torque", covered_tp}, {"series_compliance", covered_compliance}};
     summary["identification_flags_right"] = flags_right;
+    if (dwell > 0.0) summary["dwell"] = {{"seconds", dwell}, {"torque", dwell_torque}, {"worst_sigmas", worst_drift}, {"runs_beyond_1_sigma", drifted}};
     std::cout << nlohmann::json{{"summary", summary}}.dump() << std::endl;
   } catch (const std::exception& e) {
     std::cerr << "drivetrain_calibration_mc: " << e.what() << "\n";

@@ -10,7 +10,7 @@
 // scenario, bag i starting at --epoch + i * --interval with seed --seed + i, the rig's mesh stiffness
 // scale (or its bearings', or its preload torque) multiplied by the --step-* factor from bag --step-at
 // on, and DIR/truth.csv with each bag's true rig:
-//   drivetrain_rig_sim --scenario load_sweep --config config/gearboxes/seed_servo.yaml --campaign wear \
+//   drivetrain_rig_sim --scenario load_sweep --config config/gearboxes/seed_servo.yaml --campaign wear
 //     --bags 8 --interval 3600 --step-at 4 --step-mesh-scale 0.9 --duration 12
 #include <CLI/CLI.hpp>
 #include <cstdint>

@@ -66,6 +66,9 @@ void validate(const RigConfig& rig, const LoadSweepSpec& s) {
   requireNonNegative("torque_noise", s.torque_noise);
   requireNonNegative("torque_noise_floor", s.torque_noise_floor);
   requirePositive("lead_in", s.lead_in);
+  requireNonNegative("dwell", s.dwell);
+  if (s.dwell > 1e5) throwInvalid("dwell", s.dwell, "must be <= 1e5 s");
+  requireFinite("dwell_torque", s.dwell_torque);
   requirePositive("gears.teeth[0]", rig.gears.teeth[0]);
   requirePositive("gears.teeth[1]", rig.gears.teeth[1]);
   if (!rig.dynamics.present) throw InvalidInput("dynamics: load_sweep needs the gearbox's 'dynamics:' block (the true rig's TE)");
@@ -229,6 +232,16 @@ LoadSweep makeLoadSweep(const RigConfig& rig, const LoadSweepSpec& s) {
     const long next = std::lround(end * s.torque_rate);
     if (next <= sample) throwInvalid("duration", s.duration, "leaves a hold without a torque sample");
     truth.levels.push_back({sample / s.torque_rate, next / s.torque_rate, levels[i]});
+    sample = next;
+  }
+  if (s.dwell > 0.0) {  // the constant-load dwell after the sweep
+    if (std::abs(s.dwell_torque) > limit) {
+      throwInvalid("dwell_torque", s.dwell_torque, "beyond 0.96 x the torque the bearings carry (" + formatValue(carried) + " N*m)");
+    }
+    end += s.dwell;
+    const long next = std::lround(end * s.torque_rate);
+    if (next <= sample) throwInvalid("dwell", s.dwell, "shorter than a torque sample");
+    truth.levels.push_back({sample / s.torque_rate, next / s.torque_rate, s.dwell_torque});
     sample = next;
   }
   truth.duration = truth.levels.back().t1;

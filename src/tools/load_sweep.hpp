@@ -41,6 +41,10 @@ struct LoadSweepSpec {
   double torque_noise = 0.005;        ///< [-] published torque: sigma = torque_noise |T| + torque_noise_floor
   double torque_noise_floor = 1e-3;   ///< [N*m]
   double lead_in = 0.1;               ///< [s] the truth dynamics run this long before t = 0
+  /// [s] a final hold at `dwell_torque` after the sweep, for the calibration's drift at constant
+  /// load (drivetrain_calibration_mc --dwell); 0: none. Not scaled by `duration`.
+  double dwell = 0.0;
+  double dwell_torque = 3.0;          ///< [N*m] the dwell's pinion torque (within the bearings' limit)
 };
 
 /// One hold of the true torque: [t0, t1) [s].
