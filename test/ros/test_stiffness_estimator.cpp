@@ -78,7 +78,7 @@ class NodeTest : public testing::Test {
   // Expects exactly one new stiffness message, stamped `stamp`, equal to the reference estimate.
   void expectAnswer(double stamp, const StiffnessEstimate& expected) {
     const std::size_t before = received_.size();
-    ASSERT_TRUE(waitFor([&] { return received_.size() > before; }, 5.0)) << "no stiffness for stamp " << stamp;
+    ASSERT_TRUE(waitFor([&] { return received_.size() > before; }, 60.0)) << "no stiffness for stamp " << stamp;
     const Stiffness& s = received_.back();
     EXPECT_DOUBLE_EQ(s.header.stamp.toSec(), stamp);
     ASSERT_EQ(s.bearings.size(), expected.supports.size());
@@ -104,7 +104,7 @@ class NodeTest : public testing::Test {
           for (const auto& kv : status.values)
             if (kv.key == key && std::stoi(kv.value) >= count) return true;
       return false;
-    }, 5.0);
+    }, 60.0);
   }
 
   bool noMessageFor(double seconds) {
@@ -148,7 +148,7 @@ TEST_F(NodeTest, AnswersGoodInputAndSurvivesBadInput) {
 
   // 1b. A resonance estimate came with the first answer: three finite modes, the torsional one
   // (dominated by x) near 60 kHz with the seed's masses, and a stable Floquet margin.
-  ASSERT_TRUE(waitFor([&] { return !resonance_.empty(); }, 5.0));
+  ASSERT_TRUE(waitFor([&] { return !resonance_.empty(); }, 60.0));
   const Resonance& res = resonance_.back();
   ASSERT_EQ(res.frequencies_hz.size(), 3u);
   for (double f : res.frequencies_hz) EXPECT_TRUE(std::isfinite(f) && f > 0.0);
@@ -181,7 +181,7 @@ TEST_F(NodeTest, AnswersGoodInputAndSurvivesBadInput) {
 
   // 4. Dynamics: the first torque (t = 11) started the model; this one released every 1 ms sample
   // in (11, 13.0137] with the 0.5 N m held: 2013 transmission_error messages, stamped on the grid.
-  ASSERT_TRUE(waitFor([&] { return te_.size() >= 2013; }, 10.0)) << te_.size();
+  ASSERT_TRUE(waitFor([&] { return te_.size() >= 2013; }, 60.0)) << te_.size();
   EXPECT_EQ(te_.size(), 2013u);
   EXPECT_NEAR(te_.front().header.stamp.toSec(), 11.001, 1e-6);
   EXPECT_NEAR(te_.back().header.stamp.toSec(), 13.013, 1e-6);
@@ -211,14 +211,14 @@ TEST_F(NodeTest, AnswersGoodInputAndSurvivesBadInput) {
   // Sliding spectrum of the predicted TE (1024-sample window, hop 256): updates after 1024, 1280,
   // 1536, 1792 samples; the mesh frequency 1000 rpm * 20 / 60 = 333.3 Hz (where the TE excitation
   // sits) is among the three peaks.
-  ASSERT_TRUE(waitFor([&] { return spectra_.size() >= 4; }, 5.0)) << spectra_.size();
+  ASSERT_TRUE(waitFor([&] { return spectra_.size() >= 4; }, 60.0)) << spectra_.size();
   EXPECT_EQ(spectra_.size(), 4u);
   bool mesh_peak = false;
   for (double f : spectra_.back().frequencies_hz) mesh_peak |= std::abs(f - 1000.0 * 20 / 60) < spectra_.back().resolution_hz;
   EXPECT_TRUE(mesh_peak);
   // Per-mesh-period statistics: from the first sample on a tooth switch (11.003 s) blocks of 4
   // periods (12 samples, 12 ms) up to 13.013 s: 167 blocks; the mean mesh force T / r_b,p.
-  ASSERT_TRUE(waitFor([&] { return mesh_periods_.size() >= 167; }, 5.0)) << mesh_periods_.size();
+  ASSERT_TRUE(waitFor([&] { return mesh_periods_.size() >= 167; }, 60.0)) << mesh_periods_.size();
   EXPECT_EQ(mesh_periods_.size(), 167u);
   const double mean_force = 0.5 / reference_->mesh().geometry().baseRadius(0);
   for (std::size_t i = 0; i < mesh_periods_.size(); ++i) {
