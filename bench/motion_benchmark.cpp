@@ -1,8 +1,10 @@
 // Following the rig's measured motion (docs/model.md, "Following the rig's motion"):
 //  - BM_SlicedPropagation/<rpm>: SlicedModalPropagator over 1 ms steps at a constant speed, the
 //    cost per simulated second and per slice crossed (the work grows with speed x slices);
-//  - BM_SliceDecomposition: one slice's eigen-decomposition (what a bearing-stiffness change costs
-//    per slice, spread over the slices as they are crossed);
+//  - BM_SliceDecomposition: every slice decomposed again and crossed once (what a bearing-stiffness
+//    change costs, spread over the slices as they are crossed);
+//  - BM_AdvanceAfterBearingChange/<rpm>: the 1 ms advance right after a 1 % bearing change, which
+//    at 2000 rpm and more crosses (and so decomposes) every slice in one callback;
 //  - BM_PipelineEncoderRunUp: RigPipeline with torque and joint_states at 1 kHz each through a
 //    run-up 0 -> 6000 rpm in 10 s (model seconds per second of work = the real-time factor).
 // Run: devel/lib/drivetrain_stiffness/motion_benchmark --benchmark_repetitions=3 --benchmark_report_aggregates_only=true
@@ -68,6 +70,34 @@ static void BM_SliceDecomposition(benchmark::State& state) {
       static_cast<double>(prop.decompositions()) / static_cast<double>(std::max<benchmark::IterationCount>(1, state.iterations()));
 }
 BENCHMARK(BM_SliceDecomposition)->Unit(benchmark::kMicrosecond);
+
+// The callback right after a bearing-stiffness change at 6000 rpm: one 1 ms advance crosses every
+// slice twice, so it makes all 259 decompositions itself (issue 12 §2: under 0.5 ms). The bearing
+// stiffness alternates by 1 % (a preload step), so each slice is seeded by the neighbour behind it
+// under the new parameters, as in the pipeline; compare with BM_SlicedPropagation/6000, the same
+// advance without a change.
+static void BM_AdvanceAfterBearingChange(benchmark::State& state) {
+  const double rpm = static_cast<double>(state.range(0));
+  GearRotorParameters p[2] = {rigRotorParameters(rig(), *mesh(), {1.2e8, 1.2e8}),
+                              rigRotorParameters(rig(), *mesh(), {1.212e8, 1.212e8})};
+  SlicedModalPropagator prop(p[0], std::make_shared<const SlicedMesh>(mesh(), 256), 1e-6, 0.0);
+  const double f = rpm / 60.0 * 20.0, force = 0.1 / p[0].pinion_base_radius;
+  State6 y = State6::Zero();
+  y[2] = force / 2e8;
+  double phase = 0.0;
+  for (int i = 0; i < 10; ++i) prop.propagate(y, phase, f, 1e-3, force);
+  long k = 0;
+  const long general0 = prop.generalDecompositions(), all0 = prop.decompositions();
+  for (auto _ : state) {
+    prop.setParameters(p[++k % 2]);
+    if (!prop.propagate(y, phase, f, 1e-3, force)) state.SkipWithError("left the linear regime");
+  }
+  benchmark::DoNotOptimize(y);
+  const double n = static_cast<double>(std::max<benchmark::IterationCount>(1, state.iterations()));
+  state.counters["decompositions_per_advance"] = static_cast<double>(prop.decompositions() - all0) / n;
+  state.counters["general_per_advance"] = static_cast<double>(prop.generalDecompositions() - general0) / n;
+}
+BENCHMARK(BM_AdvanceAfterBearingChange)->Arg(2000)->Arg(6000)->Unit(benchmark::kMicrosecond);
 
 static void BM_PipelineEncoderRunUp(benchmark::State& state) {
   RigPipeline pipeline(rig(), PipelineOptions{});

@@ -44,6 +44,9 @@ SlicedMesh::SlicedMesh(std::shared_ptr<const AntiBacklashMesh> mesh, int slices)
     kc_[j] = mesh_->spec().spring_stiffness > 0.0 ? sc / 16.0 : 0.0;
   }
   anti_backlash_ = mesh_->spec().spring_stiffness > 0.0 || mesh_->preloadForce() > 0.0;
+  phasors_.resize(bounds_.size());
+  for (std::size_t k = 0; k < bounds_.size(); ++k) phasors_[k] = std::polar(1.0, kTwoPi * bounds_[k]);
+  phasors_.front() = phasors_.back() = 1.0;  // phase 0 and 1 turn: sin(2 pi) would round to -2.4e-16
 }
 
 int SlicedMesh::sliceAt(double p, bool backward) const {

@@ -13,21 +13,42 @@ namespace {
 
 using Complex = std::complex<double>;
 
-/// phi_1(z) = (e^z - 1) / z by its Taylor series, for |z| < 0.5 (16 terms: error < 0.5^16 / 17!).
-Complex phi1Series(Complex z) {
-  Complex sum = 1.0, term = 1.0;
-  for (int k = 2; k <= 16; ++k) {
-    term *= z / static_cast<double>(k);
-    sum += term;
+/// phi_1(z) = (e^z - 1) / z by its Taylor series, for |z| < 0.05: sum_k z^k / (k + 1)!, stopped
+/// once a term is below 1e-17 (|phi_1| > 0.97 there, so that is below half an ulp of the sum); at
+/// most 8 terms are needed (0.05^8 / 9! < 1e-16), 16 allowed.
+[[gnu::always_inline]] inline Complex phi1Series(Complex z) {
+  // 1/k as constants: a division per term would cost more than the rest of the term.
+  static constexpr double kInverse[18] = {0.0,       1.0,        1.0 / 2,  1.0 / 3,  1.0 / 4,  1.0 / 5,
+                                          1.0 / 6,   1.0 / 7,    1.0 / 8,  1.0 / 9,  1.0 / 10, 1.0 / 11,
+                                          1.0 / 12,  1.0 / 13,   1.0 / 14, 1.0 / 15, 1.0 / 16, 1.0 / 17};
+  double sr = 1.0, si = 0.0, tr = 1.0, ti = 0.0;  // sum and term, written out (no NaN-recovery branch)
+  for (int k = 2; k <= 17; ++k) {
+    const double r = (tr * z.real() - ti * z.imag()) * kInverse[k];
+    ti = (tr * z.imag() + ti * z.real()) * kInverse[k];
+    tr = r;
+    sr += tr;
+    si += ti;
+    if (std::fabs(tr) + std::fabs(ti) < 1e-17) break;
   }
-  return sum;
+  return {sr, si};
 }
 
 /// E(lambda, mu, h) = integral_0^h e^{lambda (h - s)} e^{mu s} ds, given e^{lambda h} and e^{mu h}.
-Complex forcedIntegral(Complex lambda, Complex mu, double h, Complex e_lambda, Complex e_mu) {
-  const Complex z = (mu - lambda) * h;
-  if (std::abs(z) < 0.5) return h * e_lambda * phi1Series(z);  // = (e^{mu h} - e^{lambda h}) / (mu - lambda)
-  return (e_mu - e_lambda) / (mu - lambda);
+/// The magnitude test and the division are written out: std::abs and std::norm of a complex call
+/// hypot in libstdc++, and a complex division calls __divdc3 (Annex G's scaling), which together
+/// cost as much as the exponentials of a slice step; |mu - lambda| is far from overflow here
+/// (the modes are below 1e7 rad/s).
+[[gnu::always_inline]] inline Complex forcedIntegral(Complex lambda, Complex mu, double h, Complex e_lambda, Complex e_mu) {
+  const double dr = mu.real() - lambda.real(), di = mu.imag() - lambda.imag();
+  const double zr = dr * h, zi = di * h;
+  // The difference quotient loses about eps / |z| to cancellation (the two exponentials agree to
+  // |z|): below |z| = 0.05 the series takes over, so E is accurate to 5e-15 either way. A larger
+  // threshold would send most slices at high speed (|lambda h| ~ 0.1 at 6000 rpm) to the series,
+  // which costs three times the quotient.
+  if (zr * zr + zi * zi < 0.0025) return h * e_lambda * phi1Series(Complex(zr, zi));  // = (e^{mu h} - e^{lambda h}) / (mu - lambda)
+  const double inv = 1.0 / (dr * dr + di * di);
+  const double nr = e_mu.real() - e_lambda.real(), ni = e_mu.imag() - e_lambda.imag();
+  return Complex((nr * dr + ni * di) * inv, (ni * dr - nr * di) * inv);
 }
 
 }  // namespace
@@ -71,6 +92,143 @@ Matrix6 SlicedModalPropagator::systemMatrix(int j) const {
 const SlicedModalPropagator::Slice& SlicedModalPropagator::slice(int j) const {
   Slice& s = cache_[static_cast<std::size_t>(j)];
   if (s.ready) return s;
+  ++decompositions_;
+  // Seeds for the three modes: a neighbouring slice already decomposed with these parameters (its
+  // mesh stiffness differs by one slice's step), else this slice's modes under the parameters
+  // before the last change. Crossing order makes the neighbour behind the motion the usual seed.
+  const int n = static_cast<int>(cache_.size());
+  const Slice& below = cache_[static_cast<std::size_t>(j == 0 ? n - 1 : j - 1)];
+  const Slice& above = cache_[static_cast<std::size_t>(j + 1 == n ? 0 : j + 1)];
+  bool done = false;
+  if (below.ready && below.has_upper) done = decomposeSeeded(j, s, below.upper);
+  if (!done && above.ready && above.has_upper) done = decomposeSeeded(j, s, above.upper);
+  if (!done && s.has_upper) done = decomposeSeeded(j, s, s.upper);
+  if (!done) decomposeGeneral(j, s);
+  s.ready = true;
+  return s;
+}
+
+bool SlicedModalPropagator::decomposeSeeded(int j, Slice& s, std::array<Complex, 3> seeds) const {
+  // The slice's modes as the quadratic eigenvalue problem Q(lambda) u = 0 with
+  // Q = lambda^2 M + lambda C + K, M = diag(m_p, m_g, m_s), and K, C = diag(bearing, bearing, 0) +
+  // (mesh) g g^T, g = (1, -1, 1) (meshBearingMatrix): the eigenvalues of A = [[0, I], [-M^-1 K, -M^-1 C]]
+  // are the roots of det Q, and its eigenvectors are (u, lambda u) (Tisseur and Meerbergen, "The
+  // quadratic eigenvalue problem", SIAM Review 43(2), 2001, section 3.4). With the bearing parts
+  // diagonal, Q = D(lambda) + sigma(lambda) g g^T, D_i = lambda^2 m_i + lambda c_i + k_i,
+  // sigma = lambda c_s + k_s, and by the matrix determinant lemma
+  //   det Q = D_0 D_1 D_2 + sigma (D_1 D_2 + D_0 D_2 + D_0 D_1),
+  // a closed form that Newton's method polishes from a seed in a few steps (the mesh stiffness moves
+  // little from one slice to the next). The null vector is u_i = g_i prod_{l != i} D_l (a column of
+  // adj Q = det(D) D^-1 - sigma adj-part, which for this rank-one update is that vector up to
+  // scale). M, C and K are symmetric, so the left eigenvector of A is (lambda M u + C u, M u) and
+  // the row of A's inverse eigenvector matrix is that over u^T (2 lambda M + C) u = u^T Q'(lambda) u
+  // (same reference). The result is accepted only if every root converged, the three are distinct
+  // with positive imaginary parts, and with their conjugates they reproduce trace(A) and det(A),
+  // which no set that repeats a root or misses one does; otherwise the caller falls back to the
+  // general eigensolver. Cost: about a tenth of Eigen's EigenSolver plus the inverse of V.
+  const SlicedMesh& m = *slices_;
+  const double ks = m.antiBacklash() ? m.k1(j) + m.kChain(j) : m.k1(j), cs = p_.mesh_damping;
+  const std::array<double, 3> mass{p_.pinion_mass, p_.gear_mass, m_s_};
+  const std::array<double, 3> kb{p_.bearing_stiffness[0], p_.bearing_stiffness[1], 0.0};
+  const std::array<double, 3> cb{p_.bearing_damping[0], p_.bearing_damping[1], 0.0};
+  const double g[3] = {1.0, -1.0, 1.0};
+  auto diag = [&](Complex l, std::array<Complex, 3>& d, std::array<Complex, 3>& dd) {
+    for (int i = 0; i < 3; ++i) {
+      d[i] = (l * mass[i] + cb[i]) * l + kb[i];
+      dd[i] = 2.0 * mass[i] * l + cb[i];
+    }
+  };
+  auto norm2 = [](Complex z) { return z.real() * z.real() + z.imag() * z.imag(); };
+  std::array<Complex, 3> d, dd;
+  for (Complex& l : seeds) {
+    bool converged = false;
+    for (int it = 0; it < 40 && !converged; ++it) {
+      diag(l, d, dd);
+      const Complex sigma = l * cs + ks;
+      const Complex pair_sum = d[1] * d[2] + d[0] * d[2] + d[0] * d[1];
+      const Complex f = d[0] * d[1] * d[2] + sigma * pair_sum;
+      const Complex df = dd[0] * d[1] * d[2] + d[0] * dd[1] * d[2] + d[0] * d[1] * dd[2] + cs * pair_sum +
+                         sigma * (dd[1] * d[2] + d[1] * dd[2] + dd[0] * d[2] + d[0] * dd[2] + dd[0] * d[1] + d[0] * dd[1]);
+      const double den = norm2(df);
+      if (!(den > 0.0) || !std::isfinite(den)) return false;
+      const Complex step((f.real() * df.real() + f.imag() * df.imag()) / den, (f.imag() * df.real() - f.real() * df.imag()) / den);
+      l -= step;
+      converged = norm2(step) <= 1e-28 * norm2(l);  // |step| <= 1e-14 |lambda|: the next step is at rounding
+    }
+    if (!converged || !(l.imag() > 0.0)) return false;
+  }
+  // Distinct, and with their conjugates the whole spectrum: sum = trace(A), product = det(A).
+  double scale = 0.0, re_sum = 0.0, log_product = 0.0;
+  for (int k = 0; k < 3; ++k) {
+    scale += std::sqrt(norm2(seeds[k]));
+    re_sum += 2.0 * seeds[k].real();
+    log_product += std::log(norm2(seeds[k]));
+    for (int l = 0; l < k; ++l) {
+      if (norm2(seeds[k] - seeds[l]) <= 1e-12 * norm2(seeds[k])) return false;
+    }
+  }
+  const double trace = -((cb[0] + cs) / mass[0] + (cb[1] + cs) / mass[1] + cs / mass[2]);
+  const Eigen::Matrix3d k_matrix = meshBearingMatrix(ks, p_.bearing_stiffness);
+  const double det_k = k_matrix.determinant();
+  if (!(det_k > 0.0) || std::abs(re_sum - trace) > 1e-9 * scale ||
+      std::abs(log_product - std::log(det_k / (mass[0] * mass[1] * mass[2]))) > 1e-9) {
+    return false;
+  }
+  // Eigenvectors, in the layout step() expects: k = 0..2 the modes with positive imaginary part
+  // (weight 2), k = 3..5 their conjugates (weight 0, kept for monodromy()).
+  const double w_ref = std::sqrt(std::max(1.0, (k_matrix.cwiseAbs().array().colwise() / Eigen::Array3d(mass[0], mass[1], mass[2])).maxCoeff()));
+  for (int k = 0; k < 3; ++k) {
+    const Complex l = seeds[k];
+    diag(l, d, dd);
+    CVector v;
+    Complex gu = 0.0;
+    for (int i = 0; i < 3; ++i) {
+      v[i] = g[i] * d[(i + 1) % 3] * d[(i + 2) % 3];
+      gu += g[i] * v[i];
+    }
+    double big = 0.0;
+    for (int i = 0; i < 3; ++i) big = std::max(big, norm2(v[i]));
+    if (!(big > 0.0) || !std::isfinite(big)) return false;
+    for (int i = 0; i < 3; ++i) v[i] /= std::sqrt(big);
+    gu /= std::sqrt(big);
+    for (int i = 0; i < 3; ++i) v[i + 3] = l * v[i];
+    Complex denominator = cs * gu * gu;  // u^T (2 lambda M + C) u
+    for (int i = 0; i < 3; ++i) denominator += dd[i] * v[i] * v[i];
+    const double den = norm2(denominator);
+    if (!(den > 0.0) || !std::isfinite(den)) return false;
+    const Complex inv_den = std::conj(denominator) / den;
+    Eigen::Matrix<Complex, 1, 6> row;
+    for (int i = 0; i < 3; ++i) {
+      const Complex cu = cb[i] * v[i] + cs * g[i] * gu;  // (C u)_i
+      row[i] = (l * mass[i] * v[i] + cu) * inv_den;
+      row[i + 3] = mass[i] * v[i] * inv_den;
+    }
+    s.lambda[k] = l;
+    s.lambda[k + 3] = std::conj(l);
+    s.v.col(k) = v;
+    s.v.col(k + 3) = v.conjugate();
+    s.v_inv.row(k) = row;
+    s.v_inv.row(k + 3) = row.conjugate();
+    s.weight[k] = 2.0;
+    s.weight[k + 3] = 0.0;
+    s.upper[k] = l;
+  }
+  // The same usability rule as the general path: the eigenbasis' condition in balanced coordinates.
+  Eigen::Matrix<double, 6, 1> dscale;
+  dscale << 1.0, 1.0, 1.0, w_ref, w_ref, w_ref;
+  const double condition = (dscale.cwiseInverse().asDiagonal() * s.v.cwiseAbs()).rowwise().sum().maxCoeff() *
+                           (s.v_inv.cwiseAbs() * dscale.asDiagonal()).rowwise().sum().maxCoeff();
+  s.usable = std::isfinite(condition) && condition < 1e8;
+  Eigen::Matrix<double, 6, 1> e_f, e_v;
+  e_f << 0.0, 0.0, 0.0, -1.0 / mass[0], 1.0 / mass[1], -1.0 / mass[2];
+  e_v << 0.0, 0.0, 0.0, 0.0, 0.0, 1.0 / mass[2];
+  s.force_dir = s.v_inv * e_f.cast<Complex>();
+  s.drive_dir = s.v_inv * e_v.cast<Complex>();
+  s.has_upper = true;
+  return true;
+}
+
+void SlicedModalPropagator::decomposeGeneral(int j, Slice& s) const {
   const Matrix6 a = systemMatrix(j);
   // Balance displacements against velocities (scale omega_ref = sqrt(max |A_vx|)) so that the
   // eigenvectors are well scaled; A = D A_b D^-1, V = D V_b, V^-1 = V_b^-1 D^-1.
@@ -79,7 +237,7 @@ const SlicedModalPropagator::Slice& SlicedModalPropagator::slice(int j) const {
   d << 1.0, 1.0, 1.0, w_ref, w_ref, w_ref;
   const Matrix6 a_b = d.cwiseInverse().asDiagonal() * a * d.asDiagonal();
   const Eigen::EigenSolver<Matrix6> eig(a_b, true);
-  ++decompositions_;
+  ++general_decompositions_;
   s.usable = eig.info() == Eigen::Success;
   if (s.usable) {
     const CMatrix v_b = eig.eigenvectors();
@@ -113,11 +271,17 @@ const SlicedModalPropagator::Slice& SlicedModalPropagator::slice(int j) const {
       if (s.weight[k] != 2.0) s.usable = false;  // a complex eigenvalue without its conjugate: not a real system's
     }
   }
-  s.ready = true;
-  return s;
+  s.has_upper = false;
+  if (s.usable && std::count(s.weight.begin(), s.weight.end(), 2.0) == 3) {
+    int i = 0;
+    for (int k = 0; k < 6; ++k) {
+      if (s.weight[k] == 2.0) s.upper[i++] = s.lambda[k].imag() > 0.0 ? s.lambda[k] : std::conj(s.lambda[k]);
+    }
+    s.has_upper = true;
+  }
 }
 
-void SlicedModalPropagator::step(const Slice& s, int j, State6& y, double theta0, double w, double h,
+void SlicedModalPropagator::step(const Slice& s, int j, State6& y, Complex e_theta0, double w, double h, Complex e_mu,
                                  double drive_force) const {
   const SlicedMesh& m = *slices_;
   const double ks = m.antiBacklash() ? m.k1(j) + m.kChain(j) : m.k1(j);
@@ -125,33 +289,36 @@ void SlicedModalPropagator::step(const Slice& s, int j, State6& y, double theta0
   // P e^{i w s} + Q e^{-i w s} + G with sin x = (e^{ix} - e^{-ix}) / 2i, cos x = (e^{ix} + e^{-ix}) / 2.
   const double u = -ks * te_amplitude_, wc = -p_.mesh_damping * te_amplitude_ * w;
   const double constant = m.antiBacklash() ? 0.0 : -m.k1(j) * backlash_;
-  const Complex e0(std::cos(theta0), std::sin(theta0));
-  const Complex p_coef = e0 * Complex(0.5 * wc, -0.5 * u), q_coef = std::conj(e0) * Complex(0.5 * wc, 0.5 * u);
-  const Complex mu(0.0, w);
-  const Complex e_mu = std::exp(mu * h), e_mu_conj = std::conj(e_mu);
+  const Complex p_coef = e_theta0 * Complex(0.5 * wc, -0.5 * u), q_coef = std::conj(e_theta0) * Complex(0.5 * wc, 0.5 * u);
+  const Complex mu(0.0, w), e_mu_conj = std::conj(e_mu);
   State6 next = State6::Zero();
   for (int k = 0; k < 6; ++k) {
     if (s.weight[k] == 0.0) continue;  // the conjugate of a mode already counted twice
     const Complex lambda = s.lambda[k];
-    Complex eta0 = 0.0;  // row k of V^-1 y (complex times real)
-    for (int i = 0; i < 6; ++i) eta0 += s.v_inv(k, i) * y[i];
+    double er = 0.0, ei = 0.0;  // row k of V^-1 y (complex times real)
+    for (int i = 0; i < 6; ++i) {
+      er += s.v_inv(k, i).real() * y[i];
+      ei += s.v_inv(k, i).imag() * y[i];
+    }
     const Complex e_l = std::exp(lambda * h);
     const Complex g = s.force_dir[k] * constant + s.drive_dir[k] * drive_force;
-    const Complex eta = e_l * eta0 +
+    const Complex eta = e_l * Complex(er, ei) +
                         s.force_dir[k] * (p_coef * forcedIntegral(lambda, mu, h, e_l, e_mu) +
                                           q_coef * forcedIntegral(lambda, -mu, h, e_l, e_mu_conj)) +
                         g * forcedIntegral(lambda, 0.0, h, e_l, 1.0);
-    next += s.weight[k] * (s.v.col(k) * eta).real();
+    // Re(v_k eta) only: the imaginary part would be dropped.
+    for (int i = 0; i < 6; ++i) next[i] += s.weight[k] * (s.v(i, k).real() * eta.real() - s.v(i, k).imag() * eta.imag());
   }
   y = next;
 }
 
-bool SlicedModalPropagator::linearRegime(int j, const State6& y, double theta, double w) const {
+bool SlicedModalPropagator::linearRegime(int j, const State6& y, Complex e_theta, double w) const {
   // The same conditions as GearRotorModel::forces in its linear regime: every spring closed and
   // no damper force clipped (Modelica ElastoBacklash's rule: the damper never pulls, |F_d| <= F_s).
+  // e_theta = e^{i theta}: cos and sin of the TE forcing's phase.
   const SlicedMesh& m = *slices_;
-  const double delta = y[2] + y[0] - y[1] - te_amplitude_ * std::sin(theta);
-  const double rate = y[5] + y[3] - y[4] - te_amplitude_ * w * std::cos(theta);
+  const double delta = y[2] + y[0] - y[1] - te_amplitude_ * e_theta.imag();
+  const double rate = y[5] + y[3] - y[4] - te_amplitude_ * w * e_theta.real();
   const double k1 = m.k1(j), kc = m.kChain(j);
   if (m.antiBacklash()) {
     const double fp = m.mesh().preloadForce();
@@ -168,15 +335,22 @@ bool SlicedModalPropagator::linearRegime(int j, const State6& y, double theta, d
 bool SlicedModalPropagator::propagate(State6& y, double& phase, double f, double duration, double drive_force) const {
   if (!(duration >= 0.0) || !std::isfinite(f) || !std::isfinite(phase) || !std::isfinite(drive_force)) return false;
   const SlicedMesh& m = *slices_;
+  const int n = m.size();
   const double w = kTwoPi * f;
   State6 z = y;
   double whole = std::floor(phase), frac = phase - whole, remaining = duration;
+  // The TE forcing's phasor e^{i 2 pi frac}: one sine and cosine where the call starts inside a
+  // slice, then carried: a step that ends on a boundary takes the boundary's tabulated phasor, and
+  // the phasor's advance over that step, e^{i w h} = e^{i 2 pi (boundary - frac)}, follows from the
+  // two. A slice crossed whole thus costs no sine or cosine beyond its modes' exponentials.
+  Complex e_theta = std::polar(1.0, kTwoPi * frac);
+  int j = -1;  // the current slice, found once, then the neighbour entered at each crossing
   while (remaining > 0.0) {
     if (f < 0.0 && frac == 0.0) {  // backwards from a period boundary: the top of the period below
       whole -= 1.0;
       frac = 1.0;
     }
-    const int j = m.sliceAt(frac == 1.0 ? std::nextafter(1.0, 0.0) : frac, f < 0.0);
+    if (j < 0) j = m.sliceAt(frac == 1.0 ? std::nextafter(1.0, 0.0) : frac, f < 0.0);
     const Slice& s = slice(j);
     if (!s.usable) return false;
     double h = remaining, next = frac + f * remaining;
@@ -190,19 +364,23 @@ bool SlicedModalPropagator::propagate(State6& y, double& phase, double f, double
         crossing = true;
       }
     }
-    step(s, j, z, kTwoPi * frac, w, h, drive_force);
+    const Complex e_end = crossing ? m.boundaryPhasor(f > 0.0 ? j + 1 : j) : e_theta * std::polar(1.0, w * h);
+    step(s, j, z, e_theta, w, h, e_end * std::conj(e_theta), drive_force);
+    e_theta = e_end;
     remaining = crossing ? remaining - h : 0.0;
     frac = next;
     if (frac >= 1.0) {
       whole += 1.0;
       frac -= 1.0;
     }
-    if (!z.allFinite() || !linearRegime(j, z, kTwoPi * frac, w)) return false;
+    if (!z.allFinite() || !linearRegime(j, z, e_theta, w)) return false;
     if (crossing) {
       ++crossed_;
-      // Right limit: the slice entered must also hold the contacts closed.
-      const int entered = m.sliceAt(frac, f < 0.0);
-      if (!linearRegime(entered, z, kTwoPi * frac, w)) return false;
+      // Right limit: the slice entered must also hold the contacts closed. Forwards it is the next
+      // slice (the first of the next period after the last); backwards the one below (the top one
+      // of the period below from the first), as sliceAt would find it.
+      j = f > 0.0 ? (j + 1 == n ? 0 : j + 1) : (j == 0 ? n - 1 : j - 1);
+      if (!linearRegime(j, z, e_theta, w)) return false;
     }
   }
   y = z;

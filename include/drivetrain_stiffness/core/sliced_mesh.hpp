@@ -17,6 +17,7 @@
 // propagation is tested against (dopri5 on the same model) and the model of the dopri5 fallback.
 #pragma once
 
+#include <complex>
 #include <memory>
 #include <vector>
 
@@ -35,6 +36,10 @@ class SlicedMesh {
   double end(int j) const { return bounds_[j + 1]; } ///< phase in (0, 1]
   double k1(int j) const { return k1_[j]; }          ///< [N/m]
   double kChain(int j) const { return kc_[j]; }      ///< [N/m]
+  /// e^{i 2 pi b_k} for boundary k in [0, size()] (b_0 = 0, b_size = 1: both exactly 1): the TE
+  /// forcing's phasor where a step starts or ends on a boundary, tabulated so that crossing a slice
+  /// costs no sine or cosine of its own.
+  std::complex<double> boundaryPhasor(int k) const { return phasors_[k]; }
   /// Slice holding phase p in [0, 1): start <= p < end, or with `backward` start < p <= end (the
   /// slice a reversed motion is in just after crossing a boundary).
   int sliceAt(double p, bool backward) const;
@@ -45,6 +50,7 @@ class SlicedMesh {
  private:
   std::shared_ptr<const AntiBacklashMesh> mesh_;
   std::vector<double> bounds_, k1_, kc_;
+  std::vector<std::complex<double>> phasors_;
   bool anti_backlash_ = false;
 };
 

@@ -53,6 +53,8 @@ class SlicedModalPropagator {
   /// sliced model at a constant speed); for the Floquet margin.
   Matrix6 monodromy(double f) const;
   long decompositions() const { return decompositions_; }
+  /// Of those, the ones Eigen's general eigensolver made (no seed, or the seeded solve refused).
+  long generalDecompositions() const { return general_decompositions_; }
   long slicesCrossed() const { return crossed_; }
 
  private:
@@ -65,19 +67,29 @@ class SlicedModalPropagator {
     /// y = sum_k weight_k Re(V_k eta_k): 2 for one member of a conjugate pair (the other, whose
     /// modal coordinate is its conjugate for a real state, gets 0), 1 for a real eigenvalue.
     std::array<double, 6> weight{};
-    bool ready = false, usable = false;
+    /// The three eigenvalues with positive imaginary part (when the spectrum is three complex
+    /// pairs): the seeds of this slice's next decomposition and of its neighbours'.
+    std::array<Complex, 3> upper{};
+    bool ready = false, usable = false, has_upper = false;
   };
   const Slice& slice(int j) const;
+  /// Slice j's modes by Newton on its characteristic polynomial from three seeds (the common case,
+  /// a few hundred nanoseconds); false where that does not give a verified spectrum.
+  bool decomposeSeeded(int j, Slice& s, std::array<Complex, 3> seeds) const;
+  /// Slice j's modes by Eigen's EigenSolver and a complex LU inverse (about 5 us).
+  void decomposeGeneral(int j, Slice& s) const;
   Matrix6 systemMatrix(int j) const;
-  /// One LTI piece inside slice j: y over h from theta0 = 2 pi phase.
-  void step(const Slice& s, int j, State6& y, double theta0, double w, double h, double drive_force) const;
-  bool linearRegime(int j, const State6& y, double theta, double w) const;
+  /// One LTI piece inside slice j: y over h from the phase theta0, given e^{i theta0} and e^{i w h}.
+  void step(const Slice& s, int j, State6& y, Complex e_theta0, double w, double h, Complex e_mu,
+            double drive_force) const;
+  /// Contacts closed at the TE forcing's phase theta, given e^{i theta}.
+  bool linearRegime(int j, const State6& y, Complex e_theta, double w) const;
 
   GearRotorParameters p_;
   std::shared_ptr<const SlicedMesh> slices_;
   double te_amplitude_, backlash_, m_s_ = 0.0;
   mutable std::vector<Slice> cache_;
-  mutable long decompositions_ = 0, crossed_ = 0;
+  mutable long decompositions_ = 0, general_decompositions_ = 0, crossed_ = 0;
 };
 
 }  // namespace drivetrain_stiffness
