@@ -111,7 +111,24 @@ BallBearing::BallBearing(const BallBearingSpec& spec, const Interference& interf
       inner_(raceContact(spec_, d_.alpha_free, true)),
       outer_(raceContact(spec_, d_.alpha_free, false)),
       kn_(combinedLoadDeflectionConstant(inner_.loadDeflectionConstant(), outer_.loadDeflectionConstant())) {
-  cos_psi_.resize(spec_.balls);
+  setAzimuths();
+}
+
+void BallBearing::assign(const BallBearingSpec& spec, const Interference& interference) {
+  // The constructor's steps in its order, everything that can throw before anything changes.
+  const Derived d = derive(spec, interference);
+  const HertzPointContact inner = raceContact(spec, d.alpha_free, true);
+  const HertzPointContact outer = raceContact(spec, d.alpha_free, false);
+  spec_ = spec;
+  d_ = d;
+  inner_ = inner;
+  outer_ = outer;
+  kn_ = combinedLoadDeflectionConstant(inner_.loadDeflectionConstant(), outer_.loadDeflectionConstant());
+  setAzimuths();
+}
+
+void BallBearing::setAzimuths() {
+  cos_psi_.resize(spec_.balls);  // the same ball count keeps the storage
   sin_psi_.resize(spec_.balls);
   for (int j = 0; j < spec_.balls; ++j) {
     const double psi = 2.0 * kPi * j / spec_.balls;

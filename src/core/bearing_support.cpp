@@ -38,8 +38,24 @@ Matrix5d rowTransform(double z, bool mirrored) {
 BearingSupport::BearingSupport(const BallBearingSpec& spec, Arrangement arrangement, double axial_preload,
                                const Interference& interference, TiltCondition tilt,
                                const SolverOptions& options)
-    : bearing_(spec, interference), arrangement_(arrangement), axial_preload_(axial_preload), tilt_(tilt),
-      options_(options) {
+    : bearing_(spec, interference) {
+  configure(arrangement, axial_preload, tilt, options);
+}
+
+void BearingSupport::assign(const BallBearingSpec& spec, Arrangement arrangement, double axial_preload,
+                            const Interference& interference, TiltCondition tilt, const SolverOptions& options) {
+  bearing_.assign(spec, interference);
+  configure(arrangement, axial_preload, tilt, options);
+}
+
+void BearingSupport::configure(Arrangement arrangement, double axial_preload, TiltCondition tilt,
+                               const SolverOptions& options) {
+  arrangement_ = arrangement;
+  axial_preload_ = axial_preload;
+  tilt_ = tilt;
+  options_ = options;
+  offset_ = 0.0;
+  const BallBearingSpec& spec = bearing_.spec();
   free_ << 1.0, 1.0, 1.0, 1.0, 1.0;
   if (tilt_ == TiltCondition::kConstrained) free_[kThetaX] = free_[kThetaY] = 0.0;
   requireNonNegative("axial_preload", axial_preload);

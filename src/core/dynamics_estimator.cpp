@@ -146,7 +146,7 @@ void DynamicsEstimator::parametersChanged() {
   if (!following_) startFollowing();
   const GearRotorParameters p = currentParameters();
   if (sliced_) sliced_->setParameters(p);
-  moving_model_ = std::make_unique<GearRotorModel>(p, moving_);
+  moving_model_->setParameters(p);  // in place: this runs on the per-input path (allocation_tests)
   periodic_stale_ = true;
   ++rebuilds_;
 }

@@ -72,6 +72,12 @@ GearRotorModel::GearRotorModel(const GearRotorParameters& p, std::shared_ptr<con
   m_s_ = p_.equivalentMass();
 }
 
+void GearRotorModel::setParameters(const GearRotorParameters& p) {
+  p.validate();
+  p_ = p;
+  m_s_ = p_.equivalentMass();
+}
+
 GearRotorForces GearRotorModel::forces(double t, const State6& y) const {
   MeshInstant m;
   excitation_->at(t, m);

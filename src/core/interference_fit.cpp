@@ -1,21 +1,29 @@
 #include "drivetrain_stiffness/core/interference_fit.hpp"
 
 #include <cmath>
+#include <string>
+#include <string_view>
 
 #include "drivetrain_stiffness/core/validation.hpp"
 
 namespace drivetrain_stiffness {
 namespace {
 
-void validateMaterial(const std::string& prefix, const ElasticMaterial& m) {
-  requireYoungsModulus(prefix + "youngs_modulus", m.youngs_modulus);
-  requireInHalfOpenRange(prefix + "poisson_ratio", m.poisson_ratio, 0.0, 0.5);
+// The field names are built only when a check fails: a preload input that changes an interference
+// or an axial preload rebuilds its support's bearing, and with it these fits, on the per-input path
+// (no heap allocation there: allocation_tests).
+void validateMaterial(std::string_view prefix, const ElasticMaterial& m) {
+  const bool modulus_ok = std::isfinite(m.youngs_modulus) && m.youngs_modulus >= kMinYoungsModulus &&
+                          m.youngs_modulus <= kMaxYoungsModulus;  // requireYoungsModulus's test
+  if (!modulus_ok) requireYoungsModulus(std::string(prefix) + "youngs_modulus", m.youngs_modulus);
+  const bool poisson_ok = std::isfinite(m.poisson_ratio) && m.poisson_ratio >= 0.0 && m.poisson_ratio < 0.5;
+  if (!poisson_ok) requireInHalfOpenRange(std::string(prefix) + "poisson_ratio", m.poisson_ratio, 0.0, 0.5);
 }
 
-void requireLess(const std::string& small_name, double small, const std::string& big_name, double big) {
+void requireLess(std::string_view small_name, double small, std::string_view big_name, double big) {
   if (!(small < big)) {
-    throw InvalidInput(small_name + " = " + formatValue(small) + " must be < " + big_name + " = " +
-                       formatValue(big));
+    throw InvalidInput(std::string(small_name) + " = " + formatValue(small) + " must be < " + std::string(big_name) +
+                       " = " + formatValue(big));
   }
 }
 

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 #include "drivetrain_stiffness/core/validation.hpp"
 
@@ -42,13 +43,18 @@ MeshEstimate StiffnessEstimator::meshAt(double signed_mesh_force, double pinion_
   return m;
 }
 
-std::shared_ptr<const BearingSupport> StiffnessEstimator::build(const BearingSupportConfig& c) {
-  return std::make_shared<const BearingSupport>(c.spec, c.arrangement, c.axial_preload, c.interference, c.tilt);
+std::unique_ptr<BearingSupport> StiffnessEstimator::build(const BearingSupportConfig& c) {
+  return std::make_unique<BearingSupport>(c.spec, c.arrangement, c.axial_preload, c.interference, c.tilt);
 }
 
 const StiffnessEstimate& StiffnessEstimator::reset() {
   std::vector<Support> supports;
-  for (const BearingSupportConfig& c : rig_.bearings) supports.push_back({c, build(c)});
+  for (const BearingSupportConfig& c : rig_.bearings) {
+    std::unique_ptr<BearingSupport> model = build(c);
+    // The spare starts as a copy: setPreloads assigns new geometry into it, never builds one.
+    auto spare = std::make_unique<BearingSupport>(*model);
+    supports.push_back({c, std::move(model), std::move(spare)});
+  }
   estimate_ = solveAll(0.0, 0.0, supports);
   supports_ = std::move(supports);
   workspace_.resize(supports_.size());
@@ -70,15 +76,8 @@ StiffnessEstimate StiffnessEstimator::solveAll(double torque, double pinion_angl
     e.axial_load = s.config.arrangement == Arrangement::kSingle ? s.config.axial_preload : 0.0;
     Vector5d load = Vector5d::Zero();
     load[kUx] = e.radial_load;
-    if (solutionStands(i, s, e.radial_load)) {
-      next.supports.push_back(estimate_.supports[i]);  // the solution and the load it was solved for
-      continue;
-    }
-    // Warm start from the previous solution of the same support when its model is unchanged.
-    const bool warm = i < estimate_.supports.size() && i < supports_.size() && supports_[i].model == s.model;
-    const Vector5d* start = warm ? &estimate_.supports[i].solution.displacement : nullptr;
     try {
-      e.solution = s.model->solve(load, start);
+      e.solution = s.model->solve(load);  // a new model: cold start
     } catch (const UnreachableLoad& error) {
       throw UnreachableLoad(s.config.name + ": " + error.what());
     }
@@ -97,12 +96,15 @@ void StiffnessEstimator::validateTorque(double torque) const {
 
 void StiffnessEstimator::validatePreloads(const std::vector<PreloadSetting>& settings) const {
   for (const PreloadSetting& p : settings) {
-    const bool known = std::any_of(supports_.begin(), supports_.end(), [&](const Support& s) { return s.config.name == p.name; });
-    if (!known) throw InvalidInput("preload.name = '" + p.name + "': no such bearing support");
-    const std::string prefix = "preload[" + p.name + "].";
-    auto check = [&](const std::string& field, double value, double limit) {
-      requireNonNegative(prefix + field, value);
-      if (value > limit) throwInvalid(prefix + field, value, "exceeds the limit " + formatValue(limit));
+    if (supportIndex(p.name) == supports_.size()) {
+      throw InvalidInput("preload.name = '" + p.name + "': no such bearing support");
+    }
+    auto check = [&](const char* field, double value, double limit) {
+      // The name is built only on failure: this runs at every preload input (twice).
+      if (std::isfinite(value) && value >= 0.0 && value <= limit) return;
+      const std::string name = "preload[" + p.name + "]." + field;
+      requireNonNegative(name, value);
+      throwInvalid(name, value, "exceeds the limit " + formatValue(limit));
     };
     check("axial_preload", p.axial_preload, limits_.max_preload);
     check("radial_preload", p.radial_preload, limits_.max_preload);
@@ -111,15 +113,21 @@ void StiffnessEstimator::validatePreloads(const std::vector<PreloadSetting>& set
   }
 }
 
+std::size_t StiffnessEstimator::supportIndex(const std::string& name) const {
+  std::size_t i = 0;
+  while (i < supports_.size() && supports_[i].config.name != name) ++i;
+  return i;
+}
+
 double StiffnessEstimator::radialLoad(const BearingSupportConfig& c, double mesh_force) {
   return c.radial_preload + c.mesh_load_share * mesh_force;
 }
 
-bool StiffnessEstimator::solutionStands(std::size_t i, const Support& s, double radial_load) const {
+bool StiffnessEstimator::solutionStands(std::size_t i, double radial_load) const {
   if (limits_.load_tolerance <= 0.0 || i >= estimate_.supports.size() || i >= supports_.size()) return false;
-  if (supports_[i].model != s.model || supports_[i].config.radial_preload != s.config.radial_preload) return false;
   const SupportEstimate& last = estimate_.supports[i];
-  return std::abs(radial_load - last.radial_load) <= limits_.load_tolerance * (last.radial_load + s.config.axial_preload);
+  return std::abs(radial_load - last.radial_load) <=
+         limits_.load_tolerance * (last.radial_load + supports_[i].config.axial_preload);
 }
 
 const StiffnessEstimate& StiffnessEstimator::setTorque(double torque, double pinion_angle) {
@@ -136,7 +144,7 @@ const StiffnessEstimate& StiffnessEstimator::setTorque(double torque, double pin
     const Support& s = supports_[i];
     Workspace& w = workspace_[i];
     w.radial_load = radialLoad(s.config, mesh_force);
-    w.solved = !solutionStands(i, s, w.radial_load);
+    w.solved = !solutionStands(i, w.radial_load);
     if (!w.solved) continue;
     Vector5d load = Vector5d::Zero();
     load[kUx] = w.radial_load;
@@ -163,27 +171,78 @@ const StiffnessEstimate& StiffnessEstimator::setTorque(double torque, double pin
 
 const StiffnessEstimate& StiffnessEstimator::setPreloads(const std::vector<PreloadSetting>& settings) {
   validatePreloads(settings);
-  std::vector<Support> next = supports_;
-  for (const PreloadSetting& p : settings) {
-    auto it = std::find_if(next.begin(), next.end(), [&](const Support& s) { return s.config.name == p.name; });
-    const std::string prefix = "preload[" + p.name + "].";
-    BearingSupportConfig c = it->config;
-    const bool geometry_changed = c.axial_preload != p.axial_preload || c.interference.inner != p.inner_interference ||
-                                  c.interference.outer != p.outer_interference;
-    c.axial_preload = p.axial_preload;
-    c.radial_preload = p.radial_preload;
-    c.interference = {p.inner_interference, p.outer_interference};
-    try {
-      *it = {c, geometry_changed ? build(c) : it->model};
-    } catch (const InvalidInput& e) {
-      throw InvalidInput(prefix + " " + e.what());
-    } catch (const UnreachableLoad& e) {
-      throw UnreachableLoad(prefix + " " + e.what());
-    }
+  // In place and all or nothing, with no allocation in steady state, as setTorque: the settings are
+  // staged in the workspaces (a support named twice takes its last), a support whose geometry
+  // changed (axial preload or interference) is rebuilt into its spare model, every support is
+  // solved into its workspace, and only when nothing threw are the settings, models and solutions
+  // swapped in. The numbers are those of building the changed supports anew and solving all: a
+  // rebuilt support is cold-started, the others warm-started from their last solution, and one
+  // whose model and radial preload are unchanged keeps its solution within ~load_tolerance.
+  const std::size_t n = supports_.size();
+  for (std::size_t i = 0; i < n; ++i) {
+    const BearingSupportConfig& c = supports_[i].config;
+    Workspace& w = workspace_[i];
+    w.axial_preload = c.axial_preload;
+    w.radial_preload = c.radial_preload;
+    w.interference = c.interference;
+    w.rebuilt = false;
   }
-  estimate_ = solveAll(estimate_.torque, last_pinion_angle_, next);
-  supports_ = std::move(next);
-  workspace_.resize(supports_.size());
+  for (const PreloadSetting& p : settings) {
+    const std::size_t i = supportIndex(p.name);  // known: validated above
+    Support& s = supports_[i];
+    Workspace& w = workspace_[i];
+    const bool geometry_changed = w.axial_preload != p.axial_preload || w.interference.inner != p.inner_interference ||
+                                  w.interference.outer != p.outer_interference;
+    w.axial_preload = p.axial_preload;
+    w.radial_preload = p.radial_preload;
+    w.interference = {p.inner_interference, p.outer_interference};
+    if (!geometry_changed) continue;
+    const BearingSupportConfig& c = s.config;
+    try {
+      s.spare->assign(c.spec, c.arrangement, w.axial_preload, w.interference, c.tilt);
+    } catch (const InvalidInput& e) {
+      throw InvalidInput("preload[" + p.name + "]. " + e.what());
+    } catch (const UnreachableLoad& e) {
+      throw UnreachableLoad("preload[" + p.name + "]. " + e.what());
+    }
+    w.rebuilt = true;
+  }
+  const double signed_force = meshForce(rig_.gears, 0, estimate_.torque);
+  const double mesh_force = std::abs(signed_force);
+  const MeshEstimate mesh = meshAt(signed_force, last_pinion_angle_);
+  for (std::size_t i = 0; i < n; ++i) {
+    const Support& s = supports_[i];
+    Workspace& w = workspace_[i];
+    w.radial_load = w.radial_preload + s.config.mesh_load_share * mesh_force;  // radialLoad(), new preload
+    const bool unchanged = !w.rebuilt && w.radial_preload == s.config.radial_preload;  // model and radial preload
+    w.solved = !(unchanged && solutionStands(i, w.radial_load));
+    if (!w.solved) continue;
+    Vector5d load = Vector5d::Zero();
+    load[kUx] = w.radial_load;
+    // Warm start from the previous solution of the same support when its model is unchanged.
+    const Vector5d* start = w.rebuilt ? nullptr : &estimate_.supports[i].solution.displacement;
+    try {
+      (w.rebuilt ? *s.spare : *s.model).solve(load, start, w.solution);
+    } catch (const UnreachableLoad& error) {
+      throw UnreachableLoad(s.config.name + ": " + error.what());
+    }
+    w.solution.stiffness *= s.config.stiffness_scale;  // see SupportEstimate
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    Support& s = supports_[i];
+    Workspace& w = workspace_[i];
+    s.config.axial_preload = w.axial_preload;
+    s.config.radial_preload = w.radial_preload;
+    s.config.interference = w.interference;
+    if (w.rebuilt) std::swap(s.model, s.spare);  // the old model becomes the next spare
+    if (!w.solved) continue;
+    SupportEstimate& e = estimate_.supports[i];
+    std::swap(e.solution, w.solution);
+    e.radial_load = w.radial_load;
+    e.axial_load = s.config.arrangement == Arrangement::kSingle ? s.config.axial_preload : 0.0;
+  }
+  estimate_.mesh_force = mesh_force;
+  estimate_.mesh = mesh;
   return estimate_;
 }
 

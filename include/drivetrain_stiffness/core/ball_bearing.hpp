@@ -94,6 +94,10 @@ class BallBearing {
  public:
   /// Validates `spec` and `interference`; throws InvalidInput naming the field on any bad value.
   BallBearing(const BallBearingSpec& spec, const Interference& interference = {});
+  /// Becomes BallBearing(spec, interference) in place, reusing the per-ball storage (no allocation
+  /// for the same number of balls): a support rebuilt for new preload settings. Throws what the
+  /// constructor throws, before anything changes.
+  void assign(const BallBearingSpec& spec, const Interference& interference);
 
   const BallBearingSpec& spec() const { return spec_; }
   double grooveCentreDistance() const { return d_.a0; }          ///< A [m]
@@ -125,6 +129,8 @@ class BallBearing {
     double alpha_free = 0, ri = 0, ar0 = 0;
   };
   static Derived derive(const BallBearingSpec& spec, const Interference& interference);
+  /// cos and sin of every ball's azimuth, for spec_.balls.
+  void setAzimuths();
   /// Radial and axial separation (a_r, a_z) of the groove curvature centres of ball j.
   void separation(int j, const Vector5d& q, double axial_offset, double& ar, double& az) const {
     ar = d_.ar0 + q[kUx] * cos_psi_[j] + q[kUy] * sin_psi_[j];

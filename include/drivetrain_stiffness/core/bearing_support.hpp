@@ -64,6 +64,13 @@ class BearingSupport {
   BearingSupport(const BallBearingSpec& spec, Arrangement arrangement, double axial_preload,
                  const Interference& interference = {},
                  TiltCondition tilt = TiltCondition::kConstrained, const SolverOptions& options = {});
+  /// Becomes BearingSupport(spec, arrangement, ...) in place, reusing the bearing's per-ball storage
+  /// (no allocation for the same number of balls): the stiffness estimator rebuilds a support for
+  /// new preload settings on its per-input path. Throws what the constructor throws; after a throw
+  /// the support is unusable until an assign succeeds (the estimator assigns only a spare).
+  void assign(const BallBearingSpec& spec, Arrangement arrangement, double axial_preload,
+              const Interference& interference = {}, TiltCondition tilt = TiltCondition::kConstrained,
+              const SolverOptions& options = {});
 
   const BallBearing& bearing() const { return bearing_; }
   Arrangement arrangement() const { return arrangement_; }
@@ -88,14 +95,16 @@ class BearingSupport {
   Vector5d totalLoad(const Vector5d& external_load) const;
 
  private:
+  /// The constructor's checks and derived geometry once bearing_ is set.
+  void configure(Arrangement arrangement, double axial_preload, TiltCondition tilt, const SolverOptions& options);
   Vector5d coldStart(const Vector5d& load) const;
   bool newton(const Vector5d& load, Vector5d& q, int& iterations, double& residual) const;
   void finish(BearingSolution& sol) const;
 
   BallBearing bearing_;
-  Arrangement arrangement_;
-  double axial_preload_;
-  TiltCondition tilt_;
+  Arrangement arrangement_ = Arrangement::kSingle;
+  double axial_preload_ = 0.0;
+  TiltCondition tilt_ = TiltCondition::kConstrained;
   Vector5d free_;  ///< 1 for an unknown DOF, 0 for a prescribed one
   SolverOptions options_;
   double offset_ = 0.0;

@@ -97,6 +97,10 @@ class GearRotorModel {
   GearRotorModel(const GearRotorParameters& p, std::shared_ptr<const GearExcitation> excitation);
 
   const GearRotorParameters& parameters() const { return p_; }
+  /// New parameters over the same excitation, as GearRotorModel(p, excitation) would have them
+  /// (validated first: a refusal changes nothing). No allocation: a bearing-stiffness change on
+  /// the per-input path.
+  void setParameters(const GearRotorParameters& p);
   const GearExcitation& excitation() const { return *excitation_; }
   double equivalentMass() const { return m_s_; }
 

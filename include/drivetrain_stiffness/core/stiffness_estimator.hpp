@@ -67,7 +67,8 @@ class StiffnessEstimator {
   /// loads every support radially in proportion to its mesh_load_share, on top of its radial
   /// preload, and with its sign sets the anti-backlash flank state.
   const StiffnessEstimate& setTorque(double torque, double pinion_angle = 0.0);
-  /// New settings for the named supports (others keep theirs). Unknown names are an error.
+  /// New settings for the named supports (others keep theirs). Unknown names are an error. In
+  /// place, as setTorque: no heap allocation once every support has been solved once.
   const StiffnessEstimate& setPreloads(const std::vector<PreloadSetting>& settings);
   /// The value checks of setTorque / setPreloads alone (InvalidInput naming the field), without
   /// solving: lets a caller refuse bad data before acting on its time stamp.
@@ -91,17 +92,22 @@ class StiffnessEstimator {
  private:
   struct Support {
     BearingSupportConfig config;
-    std::shared_ptr<const BearingSupport> model;
+    std::unique_ptr<BearingSupport> model;
+    /// setPreloads' scratch: new geometry is assigned into it (no allocation), and it is swapped
+    /// with `model` once every support has solved.
+    std::unique_ptr<BearingSupport> spare;
   };
-  /// Solves all supports for `torque` with `supports`; throws without touching the state.
+  /// Solves all `supports` (new models: cold starts) for `torque`; throws without touching the state.
   StiffnessEstimate solveAll(double torque, double pinion_angle, const std::vector<Support>& supports) const;
   MeshEstimate meshAt(double signed_mesh_force, double pinion_angle) const;
   /// Radial load of a support: its radial preload plus its share of the mesh force [N].
   static double radialLoad(const BearingSupportConfig& c, double mesh_force);
-  /// The ~load_tolerance shortcut: support i's last solution still stands for `radial_load` with
-  /// the support `s` (same model and radial preload, load within the tolerance).
-  bool solutionStands(std::size_t i, const Support& s, double radial_load) const;
-  static std::shared_ptr<const BearingSupport> build(const BearingSupportConfig& c);
+  /// The ~load_tolerance shortcut: support i's last solution still stands for `radial_load`, its
+  /// model and radial preload unchanged (the caller's part), the load within the tolerance.
+  bool solutionStands(std::size_t i, double radial_load) const;
+  /// Index of the support named `name`, or supports_.size().
+  std::size_t supportIndex(const std::string& name) const;
+  static std::unique_ptr<BearingSupport> build(const BearingSupportConfig& c);
 
   RigConfig rig_;
   EstimatorLimits limits_;
@@ -109,12 +115,16 @@ class StiffnessEstimator {
   std::array<double, 3> mean_k1_kchain_{};  ///< period means of k1, k_chain (for the flank state) and k1 + k_chain
   std::vector<Support> supports_;
   StiffnessEstimate estimate_;
-  /// setTorque's per-support scratch (one per support, sized with supports_): a new solution and
-  /// the load it is for, swapped into estimate_ once every support has solved.
+  /// setTorque's and setPreloads' per-support scratch (one per support, sized with supports_): a
+  /// new solution and the load it is for, swapped into estimate_ once every support has solved;
+  /// setPreloads stages the new settings here too.
   struct Workspace {
     BearingSolution solution;
     double radial_load = 0.0;
     bool solved = false;
+    double axial_preload = 0.0, radial_preload = 0.0;
+    Interference interference;
+    bool rebuilt = false;  ///< the spare model holds the new geometry
   };
   std::vector<Workspace> workspace_;
   double last_pinion_angle_ = 0.0;
