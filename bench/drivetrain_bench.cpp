@@ -91,7 +91,7 @@ int main(int argc, char** argv) {
   app.add_option("--scenes", scenes_arg, "comma-separated scene names (default: all)");
   app.add_option("--out", out_dir, "directory for bench.jsonl and the PNG plots");
   app.add_flag("--plot", plot, "write bench_<scene>.png with scripts/plot_bench.py (python3-matplotlib)");
-  app.add_flag("--quick", quick, "fewer settings per method; the scenes whose speed changes run 0.05 s instead of 1 s");
+  app.add_flag("--quick", quick, "fewer settings per method; the scenes whose speed changes run 0.05 s instead of 0.5 s");
   CLI11_PARSE(app, argc, argv);
 
   std::vector<std::string> names = ds::sceneNames();
@@ -111,7 +111,7 @@ int main(int argc, char** argv) {
   for (const std::string& name : names) {
     const std::vector<std::string> moving = ds::motionSceneNames();
     const bool motion_scene = std::find(moving.begin(), moving.end(), name) != moving.end();
-    const ds::Scene scene = ds::makeScene(name, rig, motion_scene ? (quick ? 0.05 : 1.0) : 0.0);
+    const ds::Scene scene = ds::makeScene(name, rig, motion_scene ? (quick ? 0.05 : 0.5) : 0.0);
     const bool si = scene.units == "SI";
     const double abs_per_rel = si ? 1e-6 : 1e-2;  // displacement scale: ~1 um (SI) or the unit gap
     auto record = [&](const Samples& s) {
@@ -293,7 +293,10 @@ int main(int argc, char** argv) {
     for (double rtol : quick ? std::vector<double>{1e-7} : std::vector<double>{1e-5, 1e-7, 1e-9}) {
       peer("odeint_dopri5", rtol, ds::bench::odeintDopri5);
     }
-    for (double rtol : quick ? std::vector<double>{1e-5} : std::vector<double>{1e-3, 1e-5, 1e-7}) {
+    // rosenbrock4 at 1e-7 through the slice boundaries of a motion scene ran over 4 min for 1 s of
+    // run_up (2026-11-25) and never reaches the others' errors: not run there.
+    for (double rtol : quick ? std::vector<double>{1e-5}
+                             : scene.motion ? std::vector<double>{1e-3, 1e-5} : std::vector<double>{1e-3, 1e-5, 1e-7}) {
       peer("odeint_rosenbrock4", rtol, ds::bench::odeintRosenbrock4);
     }
     for (double rtol : quick ? std::vector<double>{1e-7} : std::vector<double>{1e-5, 1e-7, 1e-9}) {
