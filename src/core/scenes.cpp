@@ -1,10 +1,12 @@
 #include "drivetrain_stiffness/core/scenes.hpp"
 
 #include <Eigen/Dense>
+#include <algorithm>
 #include <cmath>
 
 #include "drivetrain_stiffness/core/constants.hpp"
 #include "drivetrain_stiffness/core/rig_excitation.hpp"
+#include "drivetrain_stiffness/core/sliced_modal_propagator.hpp"
 #include "drivetrain_stiffness/core/stiffness_estimator.hpp"
 #include "drivetrain_stiffness/core/validation.hpp"
 
@@ -75,16 +77,43 @@ struct RigSceneSetup {
   bool parametric = false;       ///< choose the speed for mesh frequency = 2 f_1
 };
 
-Scene rigScene(const std::string& name, const std::string& description, RigSceneSetup setup) {
+/// The rotor of a rig scene: the mesh table, its mean stiffness and the model's parameters.
+struct RigRotor {
+  std::shared_ptr<AntiBacklashMesh> mesh;
+  double k_mean = 0.0;
+  GearRotorParameters p;
+};
+
+RigRotor rigRotor(const RigSceneSetup& setup) {
   const RigConfig& rig = setup.rig;
-  auto mesh = std::make_shared<AntiBacklashMesh>(rig);
-  const double k_mean = meanMeshStiffness(*mesh);
+  RigRotor r;
+  r.mesh = std::make_shared<AntiBacklashMesh>(rig);
+  r.k_mean = meanMeshStiffness(*r.mesh);
   std::array<double, 2> kb = bearingStiffness(rig, setup.excitation.torque.mean);
   for (double& k : kb) {
     // near-rigid scenes give the bearing stiffness as a ratio to the mesh
-    k = setup.bearing_scale > 1e3 ? setup.bearing_scale * k_mean : k * setup.bearing_scale;
+    k = setup.bearing_scale > 1e3 ? setup.bearing_scale * r.k_mean : k * setup.bearing_scale;
   }
-  const GearRotorParameters p = rigRotorParameters(rig, *mesh, kb);
+  r.p = rigRotorParameters(rig, *r.mesh, kb);
+  return r;
+}
+
+/// Explicit methods: 20 steps per period of the stiffest mode, rounded to divide the output interval.
+double suggestedStep(const RigRotor& r, double output_interval) {
+  const GearRotorParameters& p = r.p;
+  const double w_max = std::sqrt(std::max({(r.k_mean + p.bearing_stiffness[0]) / p.pinion_mass,
+                                           (r.k_mean + p.bearing_stiffness[1]) / p.gear_mass,
+                                           2.0 * r.k_mean / p.equivalentMass()}));
+  const double h = kTwoPi / w_max / 20.0;
+  return output_interval / std::ceil(output_interval / h);
+}
+
+Scene rigScene(const std::string& name, const std::string& description, RigSceneSetup setup) {
+  const RigConfig& rig = setup.rig;
+  const RigRotor rotor = rigRotor(setup);
+  const std::shared_ptr<AntiBacklashMesh>& mesh = rotor.mesh;
+  const double k_mean = rotor.k_mean;
+  const GearRotorParameters& p = rotor.p;
   if (setup.parametric) {
     // Lowest natural frequency of the linearised system (docs/model.md), mesh frequency = 2 f_1.
     Eigen::Matrix3d mm = Eigen::Vector3d(p.pinion_mass, p.gear_mass, p.equivalentMass()).asDiagonal();
@@ -108,11 +137,102 @@ Scene rigScene(const std::string& name, const std::string& description, RigScene
   s.output_interval = period / 32.0;
   s.duration = std::round(setup.duration / period) * period;
   s.transient = 0.3 * s.duration;
-  // Explicit methods: 20 steps per period of the stiffest mode, rounded to divide the output interval.
-  const double w_max = std::sqrt(std::max({(k_mean + p.bearing_stiffness[0]) / p.pinion_mass,
-                                           (k_mean + p.bearing_stiffness[1]) / p.gear_mass, 2.0 * k_mean / p.equivalentMass()}));
-  const double h = kTwoPi / w_max / 20.0;
-  s.suggested_step = s.output_interval / std::ceil(s.output_interval / h);
+  s.suggested_step = suggestedStep(rotor, s.output_interval);
+  return s;
+}
+
+// The sliced model along a scene's measured motion: reading interval k is SlicedExcitation k, its
+// motion anchored at reading k, so the slice lookup, TE and drive force are SlicedExcitation's own.
+// The right-hand side jumps at the slice boundaries and at the readings (the speed, hence de/dt,
+// changes there): both are time events.
+class MotionExcitation : public GearExcitation {
+ public:
+  MotionExcitation(const SceneMotion& m, double torque_gain, double torque) : interval_(m.reading_interval) {
+    for (std::size_t k = 0; k + 1 < m.readings(); ++k) {
+      pieces_.emplace_back(m.slices, m.te_amplitude, m.backlash, torque_gain, 0.0);
+      pieces_.back().setTorque(torque);
+      pieces_.back().setMotion(static_cast<double>(k) * interval_, m.phase[k], m.meshFrequency(k));
+    }
+    if (pieces_.empty()) throw InvalidInput("scene motion: needs at least two readings");
+  }
+  void at(double t, MeshInstant& out) const override { pieces_[piece(t)].at(t, out); }
+  double nextSwitch(double t) const override {
+    const std::size_t k = piece(t);
+    const double next = pieces_[k].nextSwitch(t);
+    return k + 1 < pieces_.size() ? std::min(next, readingTime(k + 1)) : next;
+  }
+
+ private:
+  double readingTime(std::size_t k) const { return static_cast<double>(k) * interval_; }
+  /// k with readingTime(k) <= t < readingTime(k + 1); the first before 0, the last after the end.
+  std::size_t piece(double t) const {
+    if (!(t > 0.0)) return 0;
+    std::size_t k = static_cast<std::size_t>(std::min(std::floor(t / interval_), static_cast<double>(pieces_.size() - 1)));
+    while (k + 1 < pieces_.size() && readingTime(k + 1) <= t) ++k;
+    while (k > 0 && readingTime(k) > t) --k;
+    return k;
+  }
+  double interval_;
+  std::vector<SlicedExcitation> pieces_;
+};
+
+/// [rad/s] from [rpm].
+double radPerSecond(double rpm) { return rpm * kTwoPi / 60.0; }
+
+/// The scenes whose speed changes: the pinion speed profile over [0, T] by name (the profiles of
+/// drivetrain_rig_sim's speed scenarios, src/tools/rig_scenarios.cpp; speed_steps' ramps are T/20,
+/// 50 ms at the 1 s default, as the scenario's).
+SpeedProfile motionProfile(const std::string& name, double T) {
+  if (name == "run_up") return SpeedProfile(SpeedRamp{0.0, radPerSecond(6000.0), 0.0, T});
+  if (name == "speed_steps") {
+    return SpeedProfile(SpeedSteps{radPerSecond(500.0),
+                                   {{T / 4.0, radPerSecond(1000.0)}, {T / 2.0, radPerSecond(2000.0)},
+                                    {3.0 * T / 4.0, radPerSecond(4000.0)}},
+                                   T / 20.0});
+  }
+  return SpeedProfile(SpeedReversal{radPerSecond(1000.0), 0.0, T});  // reverse
+}
+
+Scene motionScene(const std::string& name, const std::string& description, RigSceneSetup setup, double duration) {
+  constexpr double kReading = 1e-3;  // encoder readings at 1 kHz, as drivetrain_rig_sim's joint_rate
+  if (!(duration >= 0.02 && duration <= 100.0)) {
+    throwInvalid("duration", duration, "a motion scene needs 0.02 s (20 readings) to 100 s");
+  }
+  const long readings = std::lround(duration / kReading);
+  const double T = static_cast<double>(readings) * kReading;
+  const RigRotor rotor = rigRotor(setup);
+  auto motion = std::make_shared<SceneMotion>();
+  motion->pinion_speed = motionProfile(name, T);
+  motion->pinion_teeth = setup.rig.gears.teeth[0];
+  motion->initial_phase = 0.5 / 32.0;  // off the drive-flank switch at phase 0, as rigScene
+  motion->reading_interval = kReading;
+  double fastest = 0.0;  // [rad/s]
+  for (long k = 0; k <= readings; ++k) {
+    motion->phase.push_back(motion->closedFormPhase(static_cast<double>(k) * kReading));
+    fastest = std::max(fastest, std::abs(motion->pinion_speed.speed(static_cast<double>(k) * kReading)));
+  }
+  // The node's default ~motion_slices.
+  motion->slices = std::make_shared<const SlicedMesh>(rotor.mesh, 256);
+  motion->te_amplitude = setup.excitation.te_amplitude;
+  motion->backlash = setup.excitation.backlash;
+  // The live node's load follows the input (RigExcitationSpec::balanced_load): F_d = T / r_p.
+  const double torque_gain = 1.0 / rotor.p.pinion_base_radius;
+  motion->drive_force = torque_gain * setup.excitation.torque.mean;
+  Scene s;
+  s.name = name;
+  s.description = description;
+  s.model = std::make_shared<GearRotorModel>(rotor.p, std::make_shared<MotionExcitation>(*motion, torque_gain,
+                                                                                        setup.excitation.torque.mean));
+  s.initial = staticEquilibrium(*s.model, 0.0);
+  // At least 32 samples per mesh period at the fastest speed, a whole number per reading.
+  const double fastest_mesh_hz = fastest * motion->pinion_teeth / kTwoPi;
+  s.output_interval = kReading / std::max(1.0, std::ceil(32.0 * fastest_mesh_hz * kReading));
+  s.duration = T;
+  // The first tenth discarded (the start from static equilibrium rings for a few ms), cut half a
+  // sample off the grid so that fixed-step samples, whose times are sums of steps, fall on the same side.
+  s.transient = (std::round(0.1 * T / s.output_interval) + 0.5) * s.output_interval;
+  s.suggested_step = suggestedStep(rotor, s.output_interval);
+  s.motion = std::move(motion);
   return s;
 }
 
@@ -120,8 +240,12 @@ Scene rigScene(const std::string& name, const std::string& description, RigScene
 
 std::vector<std::string> sceneNames() {
   return {"nominal", "torque_steps", "low_preload", "bearing_rattle", "near_rigid_bearings",
-          "parametric_resonance", "kahraman_singh", "chaotic"};
+          "parametric_resonance", "kahraman_singh", "chaotic", "run_up", "speed_steps", "reverse"};
 }
+
+std::vector<std::string> motionSceneNames() { return {"run_up", "speed_steps", "reverse"}; }
+
+double SceneMotion::closedFormPhase(double t) const { return initial_phase + pinion_teeth * pinion_speed.angle(t) / kTwoPi; }
 
 double meanMeshStiffness(const AntiBacklashMesh& mesh) {
   double k = 0.0;
@@ -177,7 +301,12 @@ State6 staticEquilibrium(const GearRotorModel& model, double t) {
   return y;
 }
 
-Scene makeScene(const std::string& name, const RigConfig& rig_in) {
+Scene makeScene(const std::string& name, const RigConfig& rig_in, double duration) {
+  const std::vector<std::string> moving = motionSceneNames();
+  const bool motion = std::find(moving.begin(), moving.end(), name) != moving.end();
+  if (duration != 0.0 && !motion) {
+    throwInvalid("duration", duration, "only the motion scenes (run_up, speed_steps, reverse) take a duration");
+  }
   if (name == "kahraman_singh") {
     return oscillatorScene(name, 0.5, 0.05, 0.1, 0.01, {0.2, 0.1, 0.05}, 200,
                            "dimensionless backlash oscillator, k = 1 - 0.2 cos W t - 0.1 cos 2W t - 0.05 cos 3W t, "
@@ -235,8 +364,53 @@ Scene makeScene(const std::string& name, const RigConfig& rig_in) {
     setup.duration = 0.01;
     return rigScene(name, "mesh frequency at twice the lowest natural frequency", setup);
   }
+  if (motion) {
+    const double T = duration > 0.0 ? duration : 1.0;
+    const std::string held = ", torque " + formatValue(d.torque) + " N m held, sliced mesh (256 slices), encoder readings at 1 kHz";
+    if (name == "run_up") return motionScene(name, "pinion 0 -> 6000 rpm linearly over the scene" + held, setup, T);
+    if (name == "speed_steps") {
+      return motionScene(name, "pinion 500, 1000, 2000, 4000 rpm, a quarter of the scene each, each step a ramp of "
+                               "1/20 of the scene" + held, setup, T);
+    }
+    return motionScene(name, "pinion 1000 rpm cos(2 pi t / T): through zero at T/4 to -1000 rpm at T/2, zero again "
+                             "at 3T/4, back to +1000 rpm" + held, setup, T);
+  }
   throw InvalidInput("scene = '" + name + "': unknown (nominal, torque_steps, low_preload, bearing_rattle, "
-                     "near_rigid_bearings, parametric_resonance, kahraman_singh, chaotic)");
+                     "near_rigid_bearings, parametric_resonance, kahraman_singh, chaotic, run_up, speed_steps, reverse)");
+}
+
+State6 propagateMotionScene(const Scene& scene, const SlicedModalPropagator& exact, const IntegratorOptions& fallback,
+                            const Observer& observe, IntegrationStats* stats) {
+  if (!scene.motion) throw InvalidInput("scene '" + scene.name + "': at a constant speed, no measured motion to follow");
+  const SceneMotion& m = *scene.motion;
+  const double h = scene.output_interval;
+  const long per_reading = std::lround(m.reading_interval / h);
+  const long n = std::lround(scene.duration / h);
+  if (per_reading < 1 || n > per_reading * static_cast<long>(m.readings() - 1)) {
+    throw InvalidInput("scene '" + scene.name + "': the output grid does not fit the readings");
+  }
+  IntegrationStats st;
+  const long crossed = exact.slicesCrossed();
+  State6 y = scene.initial;
+  if (observe) observe(0.0, y);
+  double phase = m.phase[0];
+  for (long i = 0; i < n; ++i) {
+    const std::size_t k = static_cast<std::size_t>(i / per_reading);
+    const long into = i % per_reading;  // samples since reading k
+    if (into == 0) phase = m.phase[k];  // re-anchored at every reading, as the node does
+    const double f = m.meshFrequency(k);
+    const double t = static_cast<double>(i) * h;
+    if (!exact.propagate(y, phase, f, h, m.drive_force)) {
+      // A contact open: dopri5 over this sample interval on the same sliced model and motion.
+      y = integrate(*scene.model, IntegratorMethod::kDopri5, fallback, t, y, static_cast<double>(i + 1) * h, h, nullptr);
+      phase = m.phase[k] + f * (static_cast<double>(into + 1) * h);
+      if (st.fallbacks++ == 0) st.fallback_from = t;
+    }
+    if (observe) observe(static_cast<double>(i + 1) * h, y);
+  }
+  st.steps = exact.slicesCrossed() - crossed;
+  if (stats) *stats = st;
+  return y;
 }
 
 std::vector<SweepPoint> sweepOscillator(const OscillatorSweepSpec& spec, const std::vector<double>& frequencies) {

@@ -352,7 +352,7 @@ int main(int argc, char** argv) {
   auto* sim_cmd = app.add_subcommand("simulate", "integrate the 3-DOF transverse-torsional model on a named scene");
   sim_cmd->add_option("--config", sim.config, "gearbox YAML with gears, bearings and dynamics")->required();
   sim_cmd->add_option("--scene", sim.scene, "nominal, torque_steps, low_preload, bearing_rattle, near_rigid_bearings, "
-                                            "parametric_resonance, kahraman_singh, chaotic")->required();
+                                            "parametric_resonance, kahraman_singh, chaotic, run_up, speed_steps, reverse")->required();
   sim_cmd->add_option("--method", sim.method, "dopri5 (default, adaptive with events), rk4, trapezoidal, exponential "
                                               "(exact in the linear regime), quasi_static, linear_modal, auto");
   sim_cmd->add_option("--error-bound", sim.error_bound, "auto: relative RMS error of delta to meet (default 1e-6)");

@@ -3,6 +3,8 @@
 // physics it is named for.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include "drivetrain_stiffness/config/yaml_config.hpp"
 #include "drivetrain_stiffness/core/scenes.hpp"
 #include "drivetrain_stiffness/core/validation.hpp"
@@ -54,8 +56,11 @@ SceneRun run(const Scene& s, IntegratorMethod m) {
 }  // namespace
 
 TEST(Scenes, EveryMethodBoundedOrRefusesOnEveryScene) {
+  const std::vector<std::string> moving = motionSceneNames();
   for (const std::string& name : sceneNames()) {
-    const Scene s = makeScene(name, rig());
+    // The scenes whose speed changes at 50 ms instead of their default 1 s (test time).
+    const bool motion = std::find(moving.begin(), moving.end(), name) != moving.end();
+    const Scene s = makeScene(name, rig(), motion ? 0.05 : 0.0);
     double reference = 0.0;
     for (auto m : {IntegratorMethod::kDopri5, IntegratorMethod::kRk4, IntegratorMethod::kTrapezoidal}) {
       try {
