@@ -59,7 +59,7 @@ SlicedModalPropagator::SlicedModalPropagator(const GearRotorParameters& p, std::
   if (!slices_) throw InvalidInput("sliced propagator: no sliced mesh");
   requireNonNegative("transmission_error_amplitude", te_amplitude);
   requireNonNegative("backlash", backlash);
-  cache_.resize(static_cast<std::size_t>(slices_->size()));
+  for (auto& regime : cache_) regime.resize(static_cast<std::size_t>(slices_->size()));
   setParameters(p);
 }
 
@@ -70,45 +70,65 @@ void SlicedModalPropagator::setParameters(const GearRotorParameters& p) {
   }
   p_ = p;
   m_s_ = p.equivalentMass();
-  for (Slice& s : cache_) s.ready = false;
+  for (auto& regime : cache_) {
+    for (Slice& s : regime) s.ready = false;
+  }
 }
 
-Matrix6 SlicedModalPropagator::systemMatrix(int j) const {
-  // docs/model.md eqs M1-M3 in the linear regime: mesh force F = k_s delta + c_s delta' with
-  // delta = x + x_p - x_g - e (both anti-backlash flanks loaded: F_p cancels; an ordinary gear on
-  // its drive flank: k_s = k1, and the constant -k1 b goes to the forcing).
-  const SlicedMesh& s = *slices_;
+SlicedModalPropagator::MeshTerms SlicedModalPropagator::meshTerms(MeshRegime r, int j) const {
+  // docs/model.md eqs M1-M3 in a linear regime, as GearRotorModel::forces: the anti-backlash drive
+  // flank carries s1 = F_p + k1 delta with damping c1 = c k1 / (k1 + k_c), the back path
+  // s2 = F_p - k_c delta with c2 = c - c1, and F = F1 - F2. Both loaded: F = (k1 + k_c) delta + c delta'
+  // (F_p cancels); the back path lifted (above the knee): F = k1 delta + c1 delta' + F_p; the drive
+  // flank lifted (reversed torque past the reverse knee): F = k_c delta + c2 delta' - F_p. An
+  // ordinary gear on its drive flank: F = k1 (delta - b) + c delta'; on its back flank
+  // F = k1 (delta + b) + c delta'. The constant goes to the forcing, the rest to A.
+  const SlicedMesh& m = *slices_;
+  const double k1 = m.k1(j), kc = m.kChain(j), c = p_.mesh_damping;
+  if (m.antiBacklash()) {
+    const double c1 = k1 + kc > 0.0 ? c * k1 / (k1 + kc) : 0.0, fp = m.mesh().preloadForce();
+    switch (r) {
+      case MeshRegime::kBothFlanks: return {k1 + kc, c, 0.0};
+      case MeshRegime::kDriveFlank: return {k1, c1, fp};
+      case MeshRegime::kBackFlank: return {kc, c - c1, -fp};
+    }
+  }
+  return {k1, c, r == MeshRegime::kBackFlank ? k1 * backlash_ : -k1 * backlash_};
+}
+
+Matrix6 SlicedModalPropagator::systemMatrix(MeshRegime r, int j) const {
   // y' = [[0, I], [-M^-1 K, -M^-1 C]] y with M = diag(m_p, m_g, m_s) and K, C the shared
   // mesh-and-bearing assembly (meshBearingMatrix, the modal analysis' and the scenes').
-  const double ks = s.antiBacklash() ? s.k1(j) + s.kChain(j) : s.k1(j);
+  const MeshTerms t = meshTerms(r, j);
   const Eigen::Vector3d m_inv(1.0 / p_.pinion_mass, 1.0 / p_.gear_mass, 1.0 / m_s_);
   Matrix6 a = Matrix6::Zero();
   a.topRightCorner<3, 3>().setIdentity();
-  a.bottomLeftCorner<3, 3>() = -(m_inv.asDiagonal() * meshBearingMatrix(ks, p_.bearing_stiffness));
-  a.bottomRightCorner<3, 3>() = -(m_inv.asDiagonal() * meshBearingMatrix(p_.mesh_damping, p_.bearing_damping));
+  a.bottomLeftCorner<3, 3>() = -(m_inv.asDiagonal() * meshBearingMatrix(t.stiffness, p_.bearing_stiffness));
+  a.bottomRightCorner<3, 3>() = -(m_inv.asDiagonal() * meshBearingMatrix(t.damping, p_.bearing_damping));
   return a;
 }
 
-const SlicedModalPropagator::Slice& SlicedModalPropagator::slice(int j) const {
-  Slice& s = cache_[static_cast<std::size_t>(j)];
+const SlicedModalPropagator::Slice& SlicedModalPropagator::slice(MeshRegime r, int j) const {
+  std::vector<Slice>& cache = cache_[static_cast<std::size_t>(r)];
+  Slice& s = cache[static_cast<std::size_t>(j)];
   if (s.ready) return s;
   ++decompositions_;
   // Seeds for the three modes: a neighbouring slice already decomposed with these parameters (its
   // mesh stiffness differs by one slice's step), else this slice's modes under the parameters
   // before the last change. Crossing order makes the neighbour behind the motion the usual seed.
-  const int n = static_cast<int>(cache_.size());
-  const Slice& below = cache_[static_cast<std::size_t>(j == 0 ? n - 1 : j - 1)];
-  const Slice& above = cache_[static_cast<std::size_t>(j + 1 == n ? 0 : j + 1)];
+  const int n = static_cast<int>(cache.size());
+  const Slice& below = cache[static_cast<std::size_t>(j == 0 ? n - 1 : j - 1)];
+  const Slice& above = cache[static_cast<std::size_t>(j + 1 == n ? 0 : j + 1)];
   bool done = false;
-  if (below.ready && below.has_upper) done = decomposeSeeded(j, s, below.upper);
-  if (!done && above.ready && above.has_upper) done = decomposeSeeded(j, s, above.upper);
-  if (!done && s.has_upper) done = decomposeSeeded(j, s, s.upper);
-  if (!done) decomposeGeneral(j, s);
+  if (below.ready && below.has_upper) done = decomposeSeeded(r, j, s, below.upper);
+  if (!done && above.ready && above.has_upper) done = decomposeSeeded(r, j, s, above.upper);
+  if (!done && s.has_upper) done = decomposeSeeded(r, j, s, s.upper);
+  if (!done) decomposeGeneral(r, j, s);
   s.ready = true;
   return s;
 }
 
-bool SlicedModalPropagator::decomposeSeeded(int j, Slice& s, std::array<Complex, 3> seeds) const {
+bool SlicedModalPropagator::decomposeSeeded(MeshRegime r, int j, Slice& s, std::array<Complex, 3> seeds) const {
   // The slice's modes as the quadratic eigenvalue problem Q(lambda) u = 0 with
   // Q = lambda^2 M + lambda C + K, M = diag(m_p, m_g, m_s), and K, C = diag(bearing, bearing, 0) +
   // (mesh) g g^T, g = (1, -1, 1) (meshBearingMatrix): the eigenvalues of A = [[0, I], [-M^-1 K, -M^-1 C]]
@@ -126,8 +146,8 @@ bool SlicedModalPropagator::decomposeSeeded(int j, Slice& s, std::array<Complex,
   // with positive imaginary parts, and with their conjugates they reproduce trace(A) and det(A),
   // which no set that repeats a root or misses one does; otherwise the caller falls back to the
   // general eigensolver. Cost: about a tenth of Eigen's EigenSolver plus the inverse of V.
-  const SlicedMesh& m = *slices_;
-  const double ks = m.antiBacklash() ? m.k1(j) + m.kChain(j) : m.k1(j), cs = p_.mesh_damping;
+  const MeshTerms t = meshTerms(r, j);
+  const double ks = t.stiffness, cs = t.damping;
   const std::array<double, 3> mass{p_.pinion_mass, p_.gear_mass, m_s_};
   const std::array<double, 3> kb{p_.bearing_stiffness[0], p_.bearing_stiffness[1], 0.0};
   const std::array<double, 3> cb{p_.bearing_damping[0], p_.bearing_damping[1], 0.0};
@@ -228,8 +248,8 @@ bool SlicedModalPropagator::decomposeSeeded(int j, Slice& s, std::array<Complex,
   return true;
 }
 
-void SlicedModalPropagator::decomposeGeneral(int j, Slice& s) const {
-  const Matrix6 a = systemMatrix(j);
+void SlicedModalPropagator::decomposeGeneral(MeshRegime r, int j, Slice& s) const {
+  const Matrix6 a = systemMatrix(r, j);
   // Balance displacements against velocities (scale omega_ref = sqrt(max |A_vx|)) so that the
   // eigenvectors are well scaled; A = D A_b D^-1, V = D V_b, V^-1 = V_b^-1 D^-1.
   const double w_ref = std::sqrt(std::max(1.0, a.block<3, 3>(3, 0).cwiseAbs().maxCoeff()));
@@ -281,14 +301,13 @@ void SlicedModalPropagator::decomposeGeneral(int j, Slice& s) const {
   }
 }
 
-void SlicedModalPropagator::step(const Slice& s, int j, State6& y, Complex e_theta0, double w, double h, Complex e_mu,
-                                 double drive_force) const {
-  const SlicedMesh& m = *slices_;
-  const double ks = m.antiBacklash() ? m.k1(j) + m.kChain(j) : m.k1(j);
+void SlicedModalPropagator::step(const Slice& s, MeshRegime r, int j, State6& y, Complex e_theta0, double w, double h,
+                                 Complex e_mu, double drive_force) const {
+  const MeshTerms t = meshTerms(r, j);
   // Forcing in modal coordinates: U sin(theta) + W w cos(theta) + G, written as
   // P e^{i w s} + Q e^{-i w s} + G with sin x = (e^{ix} - e^{-ix}) / 2i, cos x = (e^{ix} + e^{-ix}) / 2.
-  const double u = -ks * te_amplitude_, wc = -p_.mesh_damping * te_amplitude_ * w;
-  const double constant = m.antiBacklash() ? 0.0 : -m.k1(j) * backlash_;
+  const double u = -t.stiffness * te_amplitude_, wc = -t.damping * te_amplitude_ * w;
+  const double constant = t.constant;
   const Complex p_coef = e_theta0 * Complex(0.5 * wc, -0.5 * u), q_coef = std::conj(e_theta0) * Complex(0.5 * wc, 0.5 * u);
   const Complex mu(0.0, w), e_mu_conj = std::conj(e_mu);
   State6 next = State6::Zero();
@@ -312,24 +331,41 @@ void SlicedModalPropagator::step(const Slice& s, int j, State6& y, Complex e_the
   y = next;
 }
 
-bool SlicedModalPropagator::linearRegime(int j, const State6& y, Complex e_theta, double w) const {
-  // The same conditions as GearRotorModel::forces in its linear regime: every spring closed and
-  // no damper force clipped (Modelica ElastoBacklash's rule: the damper never pulls, |F_d| <= F_s).
-  // e_theta = e^{i theta}: cos and sin of the TE forcing's phase.
+bool SlicedModalPropagator::inRegime(MeshRegime r, int j, const State6& y, Complex e_theta, double w) const {
+  // The conditions of GearRotorModel::forces for the regime: each loaded contact closed with its
+  // damper unclipped (Modelica ElastoBacklash's rule: the damper never pulls, |F_d| <= F_s), each
+  // lifted one open. e_theta = e^{i theta}: cos and sin of the TE forcing's phase.
   const SlicedMesh& m = *slices_;
   const double delta = y[2] + y[0] - y[1] - te_amplitude_ * e_theta.imag();
   const double rate = y[5] + y[3] - y[4] - te_amplitude_ * w * e_theta.real();
   const double k1 = m.k1(j), kc = m.kChain(j);
   if (m.antiBacklash()) {
     const double fp = m.mesh().preloadForce();
-    const double c1 = p_.mesh_damping * k1 / (k1 + kc), c2 = p_.mesh_damping - c1;
-    const double s1 = fp + k1 * delta, s2 = fp - kc * delta;
+    const double c1 = k1 + kc > 0.0 ? p_.mesh_damping * k1 / (k1 + kc) : 0.0, c2 = p_.mesh_damping - c1;
+    const double s1 = fp + k1 * delta, s2 = fp - kc * delta;  // k1 g1, k_c g2
     const double t1 = s1 + c1 * rate, t2 = s2 - c2 * rate;
-    return s1 > 0.0 && s2 > 0.0 && t1 >= 0.0 && t1 <= 2.0 * s1 && t2 >= 0.0 && t2 <= 2.0 * s2;
+    const bool drive_open = !(k1 > 0.0 && s1 > 0.0), back_open = !(kc > 0.0 && s2 > 0.0);
+    const bool drive_loaded = !drive_open && t1 >= 0.0 && t1 <= 2.0 * s1;
+    const bool back_loaded = !back_open && t2 >= 0.0 && t2 <= 2.0 * s2;
+    switch (r) {
+      case MeshRegime::kBothFlanks: return drive_loaded && back_loaded;
+      case MeshRegime::kDriveFlank: return drive_loaded && back_open;
+      case MeshRegime::kBackFlank: return back_loaded && drive_open;
+    }
+    return false;
   }
-  const double g = delta - backlash_;
-  const double total = k1 * g + p_.mesh_damping * rate;
-  return g > 0.0 && total >= 0.0 && total <= 2.0 * k1 * g;
+  // Ordinary gear: drive flank g = delta - b, back flank g = -delta - b (never both with b >= 0).
+  const double g = r == MeshRegime::kBackFlank ? -delta - backlash_ : delta - backlash_;
+  const double total = k1 * g + p_.mesh_damping * (r == MeshRegime::kBackFlank ? -rate : rate);
+  return r != MeshRegime::kBothFlanks && k1 > 0.0 && g > 0.0 && total >= 0.0 && total <= 2.0 * k1 * g;
+}
+
+std::optional<SlicedModalPropagator::MeshRegime> SlicedModalPropagator::regimeAt(int j, const State6& y, Complex e_theta,
+                                                                                 double w) const {
+  for (MeshRegime r : {MeshRegime::kBothFlanks, MeshRegime::kDriveFlank, MeshRegime::kBackFlank}) {
+    if (inRegime(r, j, y, e_theta, w)) return r;
+  }
+  return std::nullopt;  // a clipped damper or no contact at all: not linear
 }
 
 bool SlicedModalPropagator::propagate(State6& y, double& phase, double f, double duration, double drive_force) const {
@@ -345,13 +381,21 @@ bool SlicedModalPropagator::propagate(State6& y, double& phase, double f, double
   // two. A slice crossed whole thus costs no sine or cosine beyond its modes' exponentials.
   Complex e_theta = std::polar(1.0, kTwoPi * frac);
   int j = -1;  // the current slice, found once, then the neighbour entered at each crossing
+  MeshRegime regime = MeshRegime::kBothFlanks;
   while (remaining > 0.0) {
     if (f < 0.0 && frac == 0.0) {  // backwards from a period boundary: the top of the period below
       whole -= 1.0;
       frac = 1.0;
     }
-    if (j < 0) j = m.sliceAt(frac == 1.0 ? std::nextafter(1.0, 0.0) : frac, f < 0.0);
-    const Slice& s = slice(j);
+    if (j < 0) {
+      j = m.sliceAt(frac == 1.0 ? std::nextafter(1.0, 0.0) : frac, f < 0.0);
+      // The contacts the call starts with; it stays in them or hands the stretch back to the
+      // caller (dopri5 takes it), whose next call starts in the new ones.
+      const std::optional<MeshRegime> found = regimeAt(j, z, e_theta, w);
+      if (!found) return false;
+      regime = *found;
+    }
+    const Slice& s = slice(regime, j);
     if (!s.usable) return false;
     double h = remaining, next = frac + f * remaining;
     bool crossing = false;
@@ -365,7 +409,7 @@ bool SlicedModalPropagator::propagate(State6& y, double& phase, double f, double
       }
     }
     const Complex e_end = crossing ? m.boundaryPhasor(f > 0.0 ? j + 1 : j) : e_theta * std::polar(1.0, w * h);
-    step(s, j, z, e_theta, w, h, e_end * std::conj(e_theta), drive_force);
+    step(s, regime, j, z, e_theta, w, h, e_end * std::conj(e_theta), drive_force);
     e_theta = e_end;
     remaining = crossing ? remaining - h : 0.0;
     frac = next;
@@ -373,14 +417,14 @@ bool SlicedModalPropagator::propagate(State6& y, double& phase, double f, double
       whole += 1.0;
       frac -= 1.0;
     }
-    if (!z.allFinite() || !linearRegime(j, z, e_theta, w)) return false;
+    if (!z.allFinite() || !inRegime(regime, j, z, e_theta, w)) return false;
     if (crossing) {
       ++crossed_;
       // Right limit: the slice entered must also hold the contacts closed. Forwards it is the next
       // slice (the first of the next period after the last); backwards the one below (the top one
       // of the period below from the first), as sliceAt would find it.
       j = f > 0.0 ? (j + 1 == n ? 0 : j + 1) : (j == 0 ? n - 1 : j - 1);
-      if (!linearRegime(j, z, e_theta, w)) return false;
+      if (!inRegime(regime, j, z, e_theta, w)) return false;
     }
   }
   y = z;
@@ -395,7 +439,7 @@ Matrix6 SlicedModalPropagator::monodromy(double f) const {
   const int n = slices_->size();
   for (int i = 0; i < n; ++i) {
     const int j = f > 0.0 ? i : n - 1 - i;
-    const Slice& s = slice(j);
+    const Slice& s = slice(slices_->antiBacklash() ? MeshRegime::kBothFlanks : MeshRegime::kDriveFlank, j);
     const double tau = (slices_->end(j) - slices_->start(j)) / std::abs(f);
     CVector e;
     for (int k = 0; k < 6; ++k) e[k] = std::exp(s.lambda[k] * tau);

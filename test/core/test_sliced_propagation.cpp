@@ -159,6 +159,44 @@ TEST(SlicedModalPropagator, ThroughStandstillAndReversal) {
   EXPECT_LT(relativeError(h.propagated(y0, 0.9, pieces), h.reference(y0, 0.9, pieces)), 1e-8);
 }
 
+TEST(SlicedModalPropagator, OneFlankAboveTheKneeAndPastTheReverseKnee) {
+  // The anti-backlash gear far above its knee (the back path lifted: the seed rig's knee is at a
+  // pinion torque of 6.95 N*m, docs/calibration.md section 5) and past its reverse knee (-0.55 N*m:
+  // the drive flank lifted): each is linear with its own stiffness, damping share and the preload
+  // force as a constant, so the exact propagation holds there too (no dopri5), through a run-up and
+  // at standstill. 20 N*m, not 10: at 10 N*m the transients at the tooth switches during this
+  // run-up briefly reload the back path (dopri5 shows the flank force dipping from 1773 N to 957 N),
+  // a real change of regime that the propagation rightly hands back.
+  for (double torque : {20.0, -1.0}) {
+    Harness h(128, torque);
+    std::vector<Piece> pieces;
+    for (int k = 0; k < 20; ++k) pieces.push_back({1e-3, meshHz(1000.0 * (k + 0.5) / 20.0)});
+    pieces.push_back({2e-3, 0.0});
+    const State6 y0 = h.equilibrium(0.1);
+    const double delta = y0[2] + y0[0] - y0[1] - kTe * std::sin(kTwoPi * 0.1);
+    const double fp = mesh()->preloadForce(), kc = h.slices->kChain(h.slices->sliceAt(0.1, false));
+    if (torque > 0.0) {
+      EXPECT_LT(fp - kc * delta, 0.0) << "the back path should be lifted at " << torque << " N*m";
+    } else {
+      EXPECT_LT(fp + h.slices->k1(h.slices->sliceAt(0.1, false)) * delta, 0.0) << "the drive flank should be lifted";
+    }
+    EXPECT_LT(relativeError(h.propagated(y0, 0.1, pieces), h.reference(y0, 0.1, pieces)), 1e-8) << torque << " N*m";
+  }
+}
+
+TEST(SlicedModalPropagator, AFlankThatLiftsInsideAnAdvanceIsHandedBack) {
+  // From equilibrium at 1 N*m (both flanks) the drive force jumps to 10 N*m: the back path lifts
+  // within the advance, which the propagation must refuse (state and phase untouched) rather than
+  // carry on with the wrong stiffness; the caller then integrates that stretch with dopri5.
+  Harness h(128, 1.0);
+  const State6 y0 = h.equilibrium(0.3);
+  State6 y = y0;
+  double phase = 0.3;
+  EXPECT_FALSE(h.exact.propagate(y, phase, meshHz(1000), 2e-3, 10.0 / params().pinion_base_radius));
+  EXPECT_EQ(y, y0);
+  EXPECT_EQ(phase, 0.3);
+}
+
 TEST(SlicedModalPropagator, StandingStillSettlesOnTheClosedFormEquilibrium) {
   // At f = 0 the model is LTI with constant forcing: y(inf) = static equilibrium at that phase,
   // whatever the start (here displaced by 1 um and moving).

@@ -1,9 +1,11 @@
 // Exact propagation of the gear-rotor model's linear regime at any speed: the propagator of the
 // sliced model (sliced_mesh.hpp) over any duration, from one eigen-decomposition per slice.
 //
-// Inside slice j the model is linear time-invariant while its contacts stay closed (both
-// anti-backlash flanks loaded, or the drive flank of an ordinary gear; bearings without clearance):
-//   y' = A_j y + e_F (-k_s,j A sin(theta) - c_s A w cos(theta) - [ordinary gear] k1_j b) + e_v F_d / m_s,
+// Inside slice j the model is linear time-invariant while its contacts keep their state (both
+// anti-backlash flanks loaded, the drive flank alone above the knee or the back path alone past the
+// reverse knee; an ordinary gear's drive or back flank; bearings without clearance):
+//   y' = A_j y + e_F (-k_s,j A sin(theta) - c_s A w cos(theta) + F_0) + e_v F_d / m_s,
+// with k_s, c_s and the constant F_0 of the regime (meshTerms: 0, +F_p, -F_p, -k1 b or +k1 b),
 // theta = 2 pi phi(t) = theta_0 + w s (w = 2 pi f, f the signed mesh frequency, constant between
 // encoder readings), e_F = (0, 0, 0, -1/m_p, 1/m_g, -1/m_s) (the mesh force's action, docs/model.md
 // eqs M1-M3), F_d the drive force (torque held). With A_j = V diag(lambda) V^-1 and eta = V^-1 y,
@@ -19,13 +21,15 @@
 //
 // The decomposition of a slice is made the first time the slice is crossed after a parameter
 // change (setParameters), so a bearing-stiffness change costs nothing at the input that made it:
-// the work spreads over the next mesh period, a few microseconds per slice, and the results do not
-// depend on when it is done (deterministic replay).
+// the work spreads over the next mesh period, about a microsecond per slice (Newton from the
+// neighbouring slice's modes), and the results do not depend on when it is done (deterministic
+// replay). Each regime has its own slices' modes, made as the motion first needs them.
 #pragma once
 
 #include <array>
 #include <complex>
 #include <memory>
+#include <optional>
 #include <vector>
 
 #include <Eigen/Core>
@@ -61,6 +65,14 @@ class SlicedModalPropagator {
   using Complex = std::complex<double>;
   using CVector = Eigen::Matrix<Complex, 6, 1>;
   using CMatrix = Eigen::Matrix<Complex, 6, 6>;
+  /// Which flanks carry load. Anti-backlash gear: both (below the knee), the drive flank alone
+  /// (the back path lifted, above the knee) or the back path alone (past the reverse knee); an
+  /// ordinary gear: its drive or its back flank. Each is linear, with its own slices' modes.
+  enum class MeshRegime { kBothFlanks = 0, kDriveFlank = 1, kBackFlank = 2 };
+  /// The mesh force in a regime: stiffness * delta + damping * delta' + constant.
+  struct MeshTerms {
+    double stiffness, damping, constant;
+  };
   struct Slice {
     CMatrix v, v_inv;
     CVector lambda, force_dir, drive_dir;  ///< eigenvalues, V^-1 e_F, V^-1 e_v
@@ -72,23 +84,27 @@ class SlicedModalPropagator {
     std::array<Complex, 3> upper{};
     bool ready = false, usable = false, has_upper = false;
   };
-  const Slice& slice(int j) const;
+  MeshTerms meshTerms(MeshRegime r, int j) const;
+  const Slice& slice(MeshRegime r, int j) const;
   /// Slice j's modes by Newton on its characteristic polynomial from three seeds (the common case,
   /// a few hundred nanoseconds); false where that does not give a verified spectrum.
-  bool decomposeSeeded(int j, Slice& s, std::array<Complex, 3> seeds) const;
+  bool decomposeSeeded(MeshRegime r, int j, Slice& s, std::array<Complex, 3> seeds) const;
   /// Slice j's modes by Eigen's EigenSolver and a complex LU inverse (about 5 us).
-  void decomposeGeneral(int j, Slice& s) const;
-  Matrix6 systemMatrix(int j) const;
+  void decomposeGeneral(MeshRegime r, int j, Slice& s) const;
+  Matrix6 systemMatrix(MeshRegime r, int j) const;
   /// One LTI piece inside slice j: y over h from the phase theta0, given e^{i theta0} and e^{i w h}.
-  void step(const Slice& s, int j, State6& y, Complex e_theta0, double w, double h, Complex e_mu,
+  void step(const Slice& s, MeshRegime r, int j, State6& y, Complex e_theta0, double w, double h, Complex e_mu,
             double drive_force) const;
-  /// Contacts closed at the TE forcing's phase theta, given e^{i theta}.
-  bool linearRegime(int j, const State6& y, Complex e_theta, double w) const;
+  /// The contacts at y are those of regime r, with no damper clipped, at the TE forcing's phase
+  /// theta, given e^{i theta}.
+  bool inRegime(MeshRegime r, int j, const State6& y, Complex e_theta, double w) const;
+  /// The linear regime y is in, if any.
+  std::optional<MeshRegime> regimeAt(int j, const State6& y, Complex e_theta, double w) const;
 
   GearRotorParameters p_;
   std::shared_ptr<const SlicedMesh> slices_;
   double te_amplitude_, backlash_, m_s_ = 0.0;
-  mutable std::vector<Slice> cache_;
+  mutable std::array<std::vector<Slice>, 3> cache_;  ///< per MeshRegime, per slice
   mutable long decompositions_ = 0, general_decompositions_ = 0, crossed_ = 0;
 };
 
