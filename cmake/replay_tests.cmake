@@ -126,11 +126,18 @@ set_tests_properties(fault_recovery_sigkill_and_master_restart PROPERTIES TIMEOU
 # script below resolved by rosrun to the expected file, every launch file by `roslaunch --files`.
 # Fails if the sourcing or the lookup by package name breaks - e.g. the devel space back under
 # build/, where rosrun finds nothing (scripts/build says why).
+# The scripts are the executable ones in scripts/ that users run (motion_analysis.py is a module
+# that plot_replay.py imports, not executable, so rosrun does not find it); the optional executables
+# are listed when they are built.
 set(FRESH_SHELL_TOOLS stiffness_estimator drivetrain_cli drivetrain_replay drivetrain_rig_sim drivetrain_latency
-  plot_study.py plot_replay.py stiffness_summary.py rviz_screenshot drivetrain_campaign)
-if(TARGET drivetrain_bench)
-  list(APPEND FRESH_SHELL_TOOLS drivetrain_bench)
-endif()
+  drivetrain_calibration_mc
+  plot_study.py plot_replay.py stiffness_summary.py plot_bench.py summarize_bench.py rviz_screenshot drivetrain_campaign)
+foreach(optional drivetrain_bench bearing_benchmark mesh_benchmark motion_benchmark calibration_benchmark
+        pipeline_benchmark bag_benchmark)
+  if(TARGET ${optional})
+    list(APPEND FRESH_SHELL_TOOLS ${optional})
+  endif()
+endforeach()
 add_test(NAME ros_lookup_from_a_fresh_shell
   COMMAND ${CMAKE_CURRENT_SOURCE_DIR}/test/ros/check_fresh_shell.sh ${CATKIN_DEVEL_PREFIX} ${CMAKE_CURRENT_SOURCE_DIR}
           ${FRESH_SHELL_TOOLS})

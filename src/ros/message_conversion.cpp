@@ -13,6 +13,10 @@ ros::Time toRosTime(Stamp s) {
   return ros::Time(static_cast<std::uint32_t>(s.sec()), static_cast<std::uint32_t>(s.nsec()));
 }
 
+TorqueInput toTorqueInput(const geometry_msgs::WrenchStamped& msg, std::string_view publisher) {
+  return {fromRosTime(msg.header.stamp), msg.wrench.torque.z, {publisher, msg.header.seq, msg.header.frame_id}};
+}
+
 std::vector<PreloadSetting> toPreloadSettings(const drivetrain_stiffness::Preload& msg) {
   std::vector<PreloadSetting> settings;
   settings.reserve(msg.bearings.size());

@@ -205,9 +205,9 @@ void StiffnessEstimatorRos::onTorque(const ros::MessageEvent<const geometry_msgs
   const geometry_msgs::WrenchStamped& msg = *event.getConstMessage();
   std::lock_guard<std::mutex> lock(mutex_);
   observeClock();
-  const InputOrigin origin{event.getPublisherName(), msg.header.seq, msg.header.frame_id};
-  const InputOutcome outcome = pipeline_->torque(fromRosTime(msg.header.stamp), msg.wrench.torque.z, *publishers_, origin,
-                                                 backlogOf(event.getReceiptTime()));
+  const TorqueInput in = toTorqueInput(msg, event.getPublisherName());
+  const InputOutcome outcome =
+      pipeline_->torque(in.stamp, in.torque, *publishers_, in.origin, backlogOf(event.getReceiptTime()));
   if (outcome != InputOutcome::kAccepted) {
     ROS_WARN_THROTTLE(1.0, "stiffness_estimator: %s", pipeline_->counters().last_event.c_str());
   }

@@ -164,8 +164,8 @@ int run(int argc, char** argv) {
     const std::string& publisher = m.getCallerId();
     if (topicMatches(m.getTopic(), torque_topic)) {
       if (auto w = m.instantiate<geometry_msgs::WrenchStamped>()) {
-        pipeline.torque(fromRosTime(w->header.stamp), w->wrench.torque.z, writer,
-                        {publisher, w->header.seq, w->header.frame_id});
+        const TorqueInput in = toTorqueInput(*w, publisher);
+        pipeline.torque(in.stamp, in.torque, writer, in.origin);
         continue;
       }
     } else if (topicMatches(m.getTopic(), joint_states_topic)) {

@@ -9,6 +9,8 @@
 
 #include <geometry_msgs/WrenchStamped.h>
 
+#include "drivetrain_stiffness/core/constants.hpp"
+
 namespace drivetrain_stiffness {
 namespace {
 
@@ -202,7 +204,7 @@ LoadResult LoadGenerator::run() {
     // roscpp numbers header.seq itself (per publication, gaps = losses); set it the same way anyway.
     m.header.seq = next_seq_++;
     m.header.stamp = ros::Time::now();
-    m.wrench.torque.z = options_.nominal_torque + options_.ripple_torque * std::sin(2.0 * M_PI * options_.ripple_hz * t);
+    m.wrench.torque.z = options_.nominal_torque + options_.ripple_torque * std::sin(kTwoPi * options_.ripple_hz * t);
     torque_pub_.publish(m);
     if (r.sent == 0) first_send = now;
     last_send = now;

@@ -1,5 +1,7 @@
-// Conversions from the ROS-free pipeline's outputs to this package's messages, shared by the node,
-// the nodelet and the bag replay tool so that all three publish exactly the same fields.
+// Conversions between ROS messages and the ROS-free pipeline, shared by the node, the nodelet and
+// the bag replay tool: the input messages as the pipeline takes them, so that all three feed it
+// the same values, and its outputs as this package's messages, so that all three publish exactly
+// the same fields.
 #pragma once
 
 #include <ros/time.h>
@@ -13,7 +15,10 @@
 #include "drivetrain_stiffness/Stiffness.h"
 #include "drivetrain_stiffness/TransmissionError.h"
 #include "drivetrain_stiffness/pipeline/rig_pipeline.hpp"
+#include <geometry_msgs/WrenchStamped.h>
 #include <sensor_msgs/JointState.h>
+
+#include <string_view>
 
 namespace drivetrain_stiffness {
 
@@ -30,6 +35,17 @@ struct JointNames {
 /// gear's position when present. Without a pinion position: nullopt and `why` says what is missing
 /// (the pipeline counts it, RigPipeline::motionRefused).
 std::optional<MotionInput> toMotionInput(const sensor_msgs::JointState& msg, const JointNames& names, std::string& why);
+
+/// A torque message as RigPipeline::torque takes it: its stamp, the torque about the shaft axis
+/// (wrench.torque.z; the other components are not read) and its origin (the publisher's caller id,
+/// header.seq, header.frame_id). The origin's views point into `msg` and `publisher`: use the
+/// result while both live (node and replay pass it straight to the pipeline).
+struct TorqueInput {
+  Stamp stamp;
+  double torque = 0.0;
+  InputOrigin origin;
+};
+TorqueInput toTorqueInput(const geometry_msgs::WrenchStamped& msg, std::string_view publisher);
 
 /// A Preload message's settings, as the pipeline takes them (node and replay).
 std::vector<PreloadSetting> toPreloadSettings(const drivetrain_stiffness::Preload& msg);
