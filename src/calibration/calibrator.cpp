@@ -326,12 +326,14 @@ std::uint32_t Calibrator::countAtOperatingPoint(double torque) {
 }
 
 template <typename F>
-double Calibrator::spreadOf(F&& f) const {
+double Calibrator::spreadOf(F&& f, std::uint32_t depends_on) const {
   // A scalar output's standard deviation by linearisation: sqrt(g' P g), g by central differences.
+  // A parameter the output does not read has g_i = (f(a) - f(b)) / 2h = 0 exactly: skipping it
+  // changes no bit and saves two evaluations.
   const CalibrationVector& theta = estimate_.value;
   CalibrationVector g = CalibrationVector::Zero();
   for (int i = 0; i < kCalibrationSize; ++i) {
-    if (!(estimate_.prior_std[i] > 0.0)) continue;
+    if (!(estimate_.prior_std[i] > 0.0) || !(depends_on & (1u << i))) continue;
     const double step = 1e-4 * std::max(estimate_.prior_std[i], std::abs(theta[i]));
     CalibrationVector a = theta, b = theta;
     a[i] += step;
@@ -349,7 +351,9 @@ CalibrationBands Calibrator::bands(double torque, const StiffnessEstimator& supp
   // Period-mean mesh stiffness at this torque (its flank state per phase).
   auto mesh = [&](const CalibrationVector& p) { return model_.meanMeshStiffness(p, torque); };
   out.mesh_stiffness = mesh(theta);
-  const double mesh_std = spreadOf(mesh);
+  // StaticTeModel::meanMeshStiffness reads the mesh scale and the preload torque only (the flank
+  // states and k1, k_c): per stiffness message (1 kHz) five evaluations instead of eleven.
+  const double mesh_std = spreadOf(mesh, (1u << kMeshScale) | (1u << kPreloadTorque));
   out.mesh_stiffness_low = out.mesh_stiffness - k95 * mesh_std;
   out.mesh_stiffness_high = out.mesh_stiffness + k95 * mesh_std;
   // Bearing stiffness per shaft: the Hertz tangent at the current load (scale 1) times the scale.

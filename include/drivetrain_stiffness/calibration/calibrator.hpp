@@ -106,9 +106,10 @@ class Calibrator {
   bool inBand(double torque) const;
   void outputs(double torque, const StiffnessEstimator& supports);
   /// sqrt(g' P g) of a scalar function of the parameters, g by central differences at the estimate
-  /// (a template, not std::function: a capturing lambda would allocate on the per-window path).
+  /// (a template, not std::function: a capturing lambda would allocate on the per-window path), over
+  /// the parameters whose bits (1 << index) are set in depends_on (the others' g_i are exactly 0).
   template <typename F>
-  double spreadOf(F&& f) const;
+  double spreadOf(F&& f, std::uint32_t depends_on = ~0u) const;
   FeatureVector predict(const CalibrationVector& p, double torque) const;
 
   RigConfig rig_;
