@@ -4,6 +4,7 @@
 #include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "drivetrain_stiffness/core/constants.hpp"
 #include "drivetrain_stiffness/core/validation.hpp"
@@ -49,6 +50,14 @@ using Complex = std::complex<double>;
   const double inv = 1.0 / (dr * dr + di * di);
   const double nr = e_mu.real() - e_lambda.real(), ni = e_mu.imag() - e_lambda.imag();
   return Complex((nr * dr + ni * di) * inv, (ni * dr - nr * di) * inv);
+}
+
+double norm2(Complex z) { return z.real() * z.real() + z.imag() * z.imag(); }
+
+/// n / d written out (a complex division calls __divdc3; |d| is far from overflow here).
+Complex divide(Complex n, Complex d) {
+  const double inv = 1.0 / norm2(d);
+  return {(n.real() * d.real() + n.imag() * d.imag()) * inv, (n.imag() * d.real() - n.real() * d.imag()) * inv};
 }
 
 }  // namespace
@@ -301,32 +310,64 @@ void SlicedModalPropagator::decomposeGeneral(MeshRegime r, int j, Slice& s) cons
   }
 }
 
-void SlicedModalPropagator::step(const Slice& s, MeshRegime r, int j, State6& y, Complex e_theta0, double w, double h,
-                                 Complex e_mu, double drive_force) const {
+void SlicedModalPropagator::prepare(const Slice& s, MeshRegime r, int j, const State6& y, Complex e_theta0, double w,
+                                    double drive_force, Piece& out) const {
   const MeshTerms t = meshTerms(r, j);
   // Forcing in modal coordinates: U sin(theta) + W w cos(theta) + G, written as
   // P e^{i w s} + Q e^{-i w s} + G with sin x = (e^{ix} - e^{-ix}) / 2i, cos x = (e^{ix} + e^{-ix}) / 2.
   const double u = -t.stiffness * te_amplitude_, wc = -t.damping * te_amplitude_ * w;
-  const double constant = t.constant;
   const Complex p_coef = e_theta0 * Complex(0.5 * wc, -0.5 * u), q_coef = std::conj(e_theta0) * Complex(0.5 * wc, 0.5 * u);
-  const Complex mu(0.0, w), e_mu_conj = std::conj(e_mu);
-  State6 next = State6::Zero();
+  const Complex iw(0.0, w);
+  out.n = 0;
   for (int k = 0; k < 6; ++k) {
     if (s.weight[k] == 0.0) continue;  // the conjugate of a mode already counted twice
-    const Complex lambda = s.lambda[k];
+    const int i = out.n++;
+    out.k[i] = k;
     double er = 0.0, ei = 0.0;  // row k of V^-1 y (complex times real)
-    for (int i = 0; i < 6; ++i) {
-      er += s.v_inv(k, i).real() * y[i];
-      ei += s.v_inv(k, i).imag() * y[i];
+    for (int c = 0; c < 6; ++c) {
+      er += s.v_inv(k, c).real() * y[c];
+      ei += s.v_inv(k, c).imag() * y[c];
     }
+    out.eta0[i] = Complex(er, ei);
+    out.force_p[i] = s.force_dir[k] * p_coef;
+    out.force_q[i] = s.force_dir[k] * q_coef;
+    out.force_g[i] = s.force_dir[k] * t.constant + s.drive_dir[k] * drive_force;
+    // The particular solution (forced response) and the free part R = eta(0) - particular(0).
+    const Complex lambda = s.lambda[k], d1 = iw - lambda, d2 = -iw - lambda;
+    out.n1[i] = norm2(d1);
+    out.n2[i] = norm2(d2);
+    out.nl[i] = norm2(lambda);
+    out.particular[i] = out.n1[i] > 0.0 && out.n2[i] > 0.0 && out.nl[i] > 0.0;
+    if (!out.particular[i]) continue;
+    out.pf[i] = divide(out.force_p[i], d1);
+    out.qf[i] = divide(out.force_q[i], d2);
+    out.gf[i] = divide(-out.force_g[i], lambda);
+    out.r0[i] = out.eta0[i] - out.pf[i] - out.qf[i] - out.gf[i];
+  }
+}
+
+void SlicedModalPropagator::advance(const Slice& s, const Piece& piece, double w, double h, Complex e_mu, State6& y) const {
+  // eta(h) = e^{lambda h} R + P' e^{iwh} + Q' e^{-iwh} + G' (the particular form, no division), or
+  // where some |mu - lambda| h < 0.05 the same by the forced integrals E with their phi_1 series
+  // (the particular form would lose eps / |z| to cancellation there, as the quotient would).
+  const Complex mu(0.0, w), e_mu_conj = std::conj(e_mu);
+  State6 next = State6::Zero();
+  for (int i = 0; i < piece.n; ++i) {
+    const int k = piece.k[i];
+    const Complex lambda = s.lambda[k];
     const Complex e_l = std::exp(lambda * h);
-    const Complex g = s.force_dir[k] * constant + s.drive_dir[k] * drive_force;
-    const Complex eta = e_l * Complex(er, ei) +
-                        s.force_dir[k] * (p_coef * forcedIntegral(lambda, mu, h, e_l, e_mu) +
-                                          q_coef * forcedIntegral(lambda, -mu, h, e_l, e_mu_conj)) +
-                        g * forcedIntegral(lambda, 0.0, h, e_l, 1.0);
+    Complex eta;
+    const double h2 = h * h;
+    if (piece.particular[i] && piece.n1[i] * h2 >= 0.0025 && piece.n2[i] * h2 >= 0.0025 && piece.nl[i] * h2 >= 0.0025) {
+      eta = e_l * piece.r0[i] + piece.pf[i] * e_mu + piece.qf[i] * e_mu_conj + piece.gf[i];
+    } else {
+      eta = e_l * piece.eta0[i] + piece.force_p[i] * forcedIntegral(lambda, mu, h, e_l, e_mu) +
+            piece.force_q[i] * forcedIntegral(lambda, -mu, h, e_l, e_mu_conj) +
+            piece.force_g[i] * forcedIntegral(lambda, 0.0, h, e_l, 1.0);
+    }
     // Re(v_k eta) only: the imaginary part would be dropped.
-    for (int i = 0; i < 6; ++i) next[i] += s.weight[k] * (s.v(i, k).real() * eta.real() - s.v(i, k).imag() * eta.imag());
+    const double weight = s.weight[k];
+    for (int c = 0; c < 6; ++c) next[c] += weight * (s.v(c, k).real() * eta.real() - s.v(c, k).imag() * eta.imag());
   }
   y = next;
 }
@@ -366,6 +407,74 @@ std::optional<SlicedModalPropagator::MeshRegime> SlicedModalPropagator::regimeAt
     if (inRegime(r, j, y, e_theta, w)) return r;
   }
   return std::nullopt;  // a clipped damper or no contact at all: not linear
+}
+
+double SlicedModalPropagator::regimeMargin(const Slice& s, MeshRegime r, int j, const Piece& piece, Complex e_theta0,
+                                           double w) const {
+  // A lower bound, over any step from the prepared state while the slice lasts, of every condition
+  // of inRegime (each written as a force c0 + alpha delta + beta delta' that must stay >= 0), over
+  // the condition's scale. Per mode the exact solution is eta_k(t) = e^{lambda t} R_k + P'_k e^{iwt}
+  // + Q'_k e^{-iwt} + G'_k (prepare), and delta = Re sum_k w_k p_k eta_k - A sin(theta) with
+  // p_k = g . u_k (u_k the displacement half of v_k, g = (1, -1, 1)); delta' takes lambda_k on the
+  // free part and +-iw on the forced one. So each condition is a constant, decaying modes (each at
+  // most its size at t = 0, as Re lambda < 0) and one sinusoid at w: constant - sum |modes| -
+  // |sinusoid| bounds it below (|z| <= |Re z| + |Im z|, no hypot), here through an interval for
+  // delta and a bound on |delta'| shared by the conditions. A positive bound proves the
+  // contacts keep their state through the step, which the checks at the step's ends alone do not:
+  // a mode at 60 kHz can lift a flank and put it back inside one slice at low speed.
+  auto l1 = [](Complex z) { return std::fabs(z.real()) + std::fabs(z.imag()); };
+  const Complex iw(0.0, w);
+  // delta(t) in [delta_c - spread_d, delta_c + spread_d] and |delta'(t)| <= spread_r over the step.
+  double delta_c = 0.0, spread_d = 0.0, spread_r = 0.0;
+  Complex delta_sin = 0.0, rate_sin = 0.0;
+  for (int i = 0; i < piece.n; ++i) {
+    if (!piece.particular[i]) return -1.0;  // resonant or a zero eigenvalue: no bound
+    const int k = piece.k[i];
+    const Complex p = s.weight[k] * (s.v(0, k) - s.v(1, k) + s.v(2, k));
+    delta_c += (p * piece.gf[i]).real();
+    const Complex pp = p * piece.pf[i], pq = p * piece.qf[i], free = p * piece.r0[i];
+    delta_sin += pp + std::conj(pq);
+    rate_sin += iw * pp + std::conj(-iw * pq);
+    spread_d += l1(free);
+    spread_r += l1(s.lambda[k] * free);
+  }
+  // The TE's own terms: -e = Re(i A e^{i theta}), -e' = Re(-A w e^{i theta}).
+  delta_sin += Complex(0.0, te_amplitude_) * e_theta0;
+  rate_sin += -te_amplitude_ * w * e_theta0;
+  spread_d += l1(delta_sin);
+  spread_r += l1(rate_sin);
+  const SlicedMesh& sm = *slices_;
+  const double k1 = sm.k1(j), kc = sm.kChain(j);
+  double worst = std::numeric_limits<double>::infinity();
+  auto condition = [&](double c0, double alpha, double beta) {
+    const double bound = c0 + alpha * delta_c - std::fabs(alpha) * spread_d - std::fabs(beta) * spread_r;
+    worst = std::min(worst, bound / (std::fabs(c0) + std::fabs(alpha) * te_amplitude_ + 1e-300));
+  };
+
+  if (sm.antiBacklash()) {
+    const double fp = sm.mesh().preloadForce();
+    const double c1 = k1 + kc > 0.0 ? p_.mesh_damping * k1 / (k1 + kc) : 0.0, c2 = p_.mesh_damping - c1;
+    if (r != MeshRegime::kBackFlank) {
+      condition(fp, k1, 0.0);   // s1 > 0
+      condition(fp, k1, c1);    // t1 >= 0
+      condition(fp, k1, -c1);   // t1 <= 2 s1
+    } else {
+      condition(-fp, -k1, 0.0);  // s1 <= 0
+    }
+    if (r != MeshRegime::kDriveFlank) {
+      condition(fp, -kc, 0.0);  // s2 > 0
+      condition(fp, -kc, -c2);  // t2 >= 0
+      condition(fp, -kc, c2);   // t2 <= 2 s2
+    } else {
+      condition(-fp, kc, 0.0);  // s2 <= 0
+    }
+  } else {
+    const double sign = r == MeshRegime::kBackFlank ? -1.0 : 1.0, c = p_.mesh_damping;
+    condition(-k1 * backlash_, sign * k1, 0.0);        // g > 0
+    condition(-k1 * backlash_, sign * k1, sign * c);   // k1 g + c g' >= 0
+    condition(-k1 * backlash_, sign * k1, -sign * c);  // k1 g - c g' >= 0
+  }
+  return worst;
 }
 
 bool SlicedModalPropagator::propagate(State6& y, double& phase, double f, double duration, double drive_force) const {
@@ -408,10 +517,27 @@ bool SlicedModalPropagator::propagate(State6& y, double& phase, double f, double
         crossing = true;
       }
     }
+    // The contacts must keep their state through the step, not only at its ends: where the bound
+    // cannot show it, the step is cut to an eighth of the fastest mode's period, so that the checks
+    // at the ends sample every oscillation that could lift a flank (a change missed between two of
+    // them would be one that stays open for less than that).
+    Piece& piece = piece_;
+    prepare(s, regime, j, z, e_theta, w, drive_force, piece);
+    if (regimeMargin(s, regime, j, piece, e_theta, w) <= 0.0) {
+      double fastest = 0.0;
+      for (int k = 0; k < 6; ++k) fastest = std::max(fastest, std::abs(s.lambda[k]));
+      const double h_check = fastest > 0.0 ? kTwoPi / (8.0 * fastest) : h;
+      if (h_check < h) {
+        h = h_check;
+        next = frac + f * h;
+        crossing = false;
+        ++substeps_;
+      }
+    }
     const Complex e_end = crossing ? m.boundaryPhasor(f > 0.0 ? j + 1 : j) : e_theta * std::polar(1.0, w * h);
-    step(s, regime, j, z, e_theta, w, h, e_end * std::conj(e_theta), drive_force);
+    advance(s, piece, w, h, e_end * std::conj(e_theta), z);
     e_theta = e_end;
-    remaining = crossing ? remaining - h : 0.0;
+    remaining = crossing || h < remaining ? remaining - h : 0.0;
     frac = next;
     if (frac >= 1.0) {
       whole += 1.0;

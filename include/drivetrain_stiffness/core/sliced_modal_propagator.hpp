@@ -59,6 +59,8 @@ class SlicedModalPropagator {
   long decompositions() const { return decompositions_; }
   /// Of those, the ones Eigen's general eigensolver made (no seed, or the seeded solve refused).
   long generalDecompositions() const { return general_decompositions_; }
+  /// Steps cut short because the bound could not show the contacts keep their state through them.
+  long checkedSubsteps() const { return substeps_; }
   long slicesCrossed() const { return crossed_; }
 
  private:
@@ -92,12 +94,25 @@ class SlicedModalPropagator {
   /// Slice j's modes by Eigen's EigenSolver and a complex LU inverse (about 5 us).
   void decomposeGeneral(MeshRegime r, int j, Slice& s) const;
   Matrix6 systemMatrix(MeshRegime r, int j) const;
-  /// One LTI piece inside slice j: y over h from the phase theta0, given e^{i theta0} and e^{i w h}.
-  void step(const Slice& s, MeshRegime r, int j, State6& y, Complex e_theta0, double w, double h, Complex e_mu,
-            double drive_force) const;
+  /// One step's modal set-up from y inside slice j, independent of the step's length: modal
+  /// coordinates, forcing, and the particular solution with the free part R where they exist.
+  struct Piece {
+    int n = 0;
+    std::array<int, 6> k{};
+    std::array<Complex, 6> eta0{}, force_p{}, force_q{}, force_g{}, pf{}, qf{}, gf{}, r0{};
+    std::array<double, 6> n1{}, n2{}, nl{};  ///< |iw - lambda|^2, |-iw - lambda|^2, |lambda|^2
+    std::array<bool, 6> particular{};
+  };
+  void prepare(const Slice& s, MeshRegime r, int j, const State6& y, Complex e_theta0, double w, double drive_force,
+               Piece& out) const;
+  /// y over h from the prepared piece, given e^{i w h}.
+  void advance(const Slice& s, const Piece& piece, double w, double h, Complex e_mu, State6& y) const;
   /// The contacts at y are those of regime r, with no damper clipped, at the TE forcing's phase
   /// theta, given e^{i theta}.
   bool inRegime(MeshRegime r, int j, const State6& y, Complex e_theta, double w) const;
+  /// A lower bound of regime r's contact conditions over a whole step of length h from y (scaled
+  /// to the conditions' forces): > 0 proves the contacts keep their state through it.
+  double regimeMargin(const Slice& s, MeshRegime r, int j, const Piece& piece, Complex e_theta0, double w) const;
   /// The linear regime y is in, if any.
   std::optional<MeshRegime> regimeAt(int j, const State6& y, Complex e_theta, double w) const;
 
@@ -105,7 +120,8 @@ class SlicedModalPropagator {
   std::shared_ptr<const SlicedMesh> slices_;
   double te_amplitude_, backlash_, m_s_ = 0.0;
   mutable std::array<std::vector<Slice>, 3> cache_;  ///< per MeshRegime, per slice
-  mutable long decompositions_ = 0, general_decompositions_ = 0, crossed_ = 0;
+  mutable Piece piece_;
+  mutable long decompositions_ = 0, general_decompositions_ = 0, crossed_ = 0, substeps_ = 0;
 };
 
 }  // namespace drivetrain_stiffness
