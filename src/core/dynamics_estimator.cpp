@@ -5,7 +5,7 @@
 #include <complex>
 
 #include "drivetrain_stiffness/core/constants.hpp"
-#include "drivetrain_stiffness/core/scenes.hpp"
+#include "drivetrain_stiffness/core/rig_model.hpp"
 #include "drivetrain_stiffness/core/validation.hpp"
 
 namespace drivetrain_stiffness {

@@ -22,6 +22,7 @@
 #include "drivetrain_stiffness/core/dynamics_estimator.hpp"
 #include "drivetrain_stiffness/core/modal_analysis.hpp"
 #include "drivetrain_stiffness/core/reduced_models.hpp"
+#include "drivetrain_stiffness/core/rig_model.hpp"
 #include "drivetrain_stiffness/core/stiffness_estimator.hpp"
 #include "drivetrain_stiffness/core/scenes.hpp"
 #include "drivetrain_stiffness/core/validation.hpp"
