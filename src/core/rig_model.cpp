@@ -8,6 +8,8 @@
 
 namespace drivetrain_stiffness {
 
+void requireDampingRatio(std::string_view field, double value) { requireInClosedRange(field, value, 0.0, kMaxDampingRatio); }
+
 double meanMeshStiffness(const AntiBacklashMesh& mesh) {
   double k = 0.0;
   const int n = 256;

@@ -6,12 +6,28 @@
 #pragma once
 
 #include <array>
+#include <string_view>
 
 #include "drivetrain_stiffness/core/anti_backlash_mesh.hpp"
 #include "drivetrain_stiffness/core/gear_rotor_model.hpp"
 #include "drivetrain_stiffness/core/rig_config.hpp"
 
 namespace drivetrain_stiffness {
+
+/// The damping ratios zeta of the `dynamics:` block (mesh_damping_ratio, bearing_damping_ratio),
+/// one rule for the gearbox YAML, the run-time settings (parameters, dynamic_reconfigure, replay)
+/// and DynamicsEstimator::setDamping: 0 <= zeta <= 1.
+/// - 1 is allowed. It is critical damping of the single mode the ratio is defined on (c = 2 zeta
+///   sqrt(k m), below), not of the coupled 3-DOF model, whose modes it only approaches; and where
+///   a slice's eigenbasis is defective or nearly so (critically damped, or close to it from either
+///   side) SlicedModalPropagator finds it ill-conditioned and dopri5 integrates that interval, as
+///   it would for 0.999. Refusing exactly 1 would protect nothing, and dynamic_reconfigure (a
+///   closed [min, max] slider) could not show a half-open range.
+/// - Above 1 is refused: gear meshes and bearings damp at a few per cent; a ratio past critical
+///   is a percentage typed for a fraction (5 for 0.05), not a rig.
+constexpr double kMaxDampingRatio = 1.0;
+/// Throws InvalidInput("<field> = <value>: ...") unless 0 <= value <= kMaxDampingRatio (NaN included).
+void requireDampingRatio(std::string_view field, double value);
 
 /// Mean mesh stiffness over one period: k1, plus k_c for an anti-backlash gear [N/m].
 double meanMeshStiffness(const AntiBacklashMesh& mesh);
