@@ -108,6 +108,12 @@ add_test(NAME speed_sweep_peaks_at_the_estimated_modes
   COMMAND ${CATKIN_DEVEL_PREFIX}/env.sh /usr/bin/python3 ${CMAKE_CURRENT_SOURCE_DIR}/test/replay/check_speed_sweep.py
           ${DEVEL_BIN} ${CMAKE_CURRENT_SOURCE_DIR} ${CMAKE_CURRENT_BINARY_DIR}/speed_sweep_test)
 
+# RigVisualizer's display scale: the run-time settings' rule, from the constructor and setExaggeration.
+catkin_add_gtest(rig_visualization_tests test/core/test_main.cpp test/ros/test_rig_visualization.cpp)
+target_link_libraries(rig_visualization_tests ${PROJECT_NAME}_messages ${PROJECT_NAME}_config)
+target_compile_definitions(rig_visualization_tests PRIVATE DRIVETRAIN_SOURCE_DIR="${CMAKE_CURRENT_SOURCE_DIR}")
+add_dependencies(rig_visualization_tests ${PROJECT_NAME}_generate_messages_cpp)
+
 # drivetrain_replay's bag writer writes the same bytes as rosbag::Bag, and rosbag::View reads them.
 catkin_add_gtest(bag_writer_tests test/ros/test_bag_writer.cpp)
 target_include_directories(bag_writer_tests PRIVATE ${CMAKE_CURRENT_SOURCE_DIR}/src/tools include)

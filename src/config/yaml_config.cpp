@@ -6,6 +6,7 @@
 #include <ios>
 #include <set>
 
+#include "drivetrain_stiffness/core/rig_model.hpp"
 #include "drivetrain_stiffness/core/validation.hpp"
 
 namespace drivetrain_stiffness {
@@ -265,8 +266,8 @@ static void checkDynamics(const DynamicsConfig& c) {
   requirePositive("dynamics.gear_mass", c.gear_mass);
   requirePositive("dynamics.pinion_inertia", c.pinion_inertia);
   requirePositive("dynamics.gear_inertia", c.gear_inertia);
-  requireInHalfOpenRange("dynamics.mesh_damping_ratio", c.mesh_damping_ratio, 0.0, 1.0);
-  requireInHalfOpenRange("dynamics.bearing_damping_ratio", c.bearing_damping_ratio, 0.0, 1.0);
+  requireDampingRatio("dynamics.mesh_damping_ratio", c.mesh_damping_ratio);
+  requireDampingRatio("dynamics.bearing_damping_ratio", c.bearing_damping_ratio);
   for (int i = 0; i < 2; ++i) requireNonNegative("dynamics.bearing_clearance[" + std::to_string(i) + "]", c.bearing_clearance[i]);
   requirePositive("dynamics.speed_rpm", c.speed_rpm);
   requireNonNegative("dynamics.transmission_error_amplitude", c.transmission_error_amplitude);

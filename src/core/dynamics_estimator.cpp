@@ -5,7 +5,7 @@
 #include <complex>
 
 #include "drivetrain_stiffness/core/constants.hpp"
-#include "drivetrain_stiffness/core/scenes.hpp"
+#include "drivetrain_stiffness/core/rig_model.hpp"
 #include "drivetrain_stiffness/core/validation.hpp"
 
 namespace drivetrain_stiffness {
@@ -122,8 +122,8 @@ void DynamicsEstimator::setBearingStiffness(const std::array<double, 2>& k, std:
 }
 
 void DynamicsEstimator::setDamping(double mesh_damping_ratio, double bearing_damping_ratio) {
-  requireNonNegative("mesh_damping_ratio", mesh_damping_ratio);
-  requireNonNegative("bearing_damping_ratio", bearing_damping_ratio);
+  requireDampingRatio("mesh_damping_ratio", mesh_damping_ratio);
+  requireDampingRatio("bearing_damping_ratio", bearing_damping_ratio);
   const DynamicsConfig before = rig_.dynamics;
   rig_.dynamics.mesh_damping_ratio = mesh_damping_ratio;
   rig_.dynamics.bearing_damping_ratio = bearing_damping_ratio;

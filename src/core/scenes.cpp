@@ -247,60 +247,6 @@ std::vector<std::string> motionSceneNames() { return {"run_up", "speed_steps", "
 
 double SceneMotion::closedFormPhase(double t) const { return initial_phase + pinion_teeth * pinion_speed.angle(t) / kTwoPi; }
 
-double meanMeshStiffness(const AntiBacklashMesh& mesh) {
-  double k = 0.0;
-  const int n = 256;
-  for (int i = 0; i < n; ++i) {
-    const CompositeMesh c = mesh.at((i + 0.5) / n, 0.0);
-    k += (c.k1 + (mesh.spec().spring_stiffness > 0 ? c.k_chain : 0.0)) / n;
-  }
-  return k;
-}
-
-GearRotorParameters rigRotorParameters(const RigConfig& rig, const AntiBacklashMesh& mesh,
-                                       const std::array<double, 2>& bearing_stiffness) {
-  const DynamicsConfig& d = rig.dynamics;
-  GearRotorParameters p;
-  p.pinion_mass = d.pinion_mass;
-  p.gear_mass = d.gear_mass;
-  p.pinion_inertia = d.pinion_inertia;
-  p.gear_inertia = d.gear_inertia;
-  p.pinion_base_radius = mesh.geometry().baseRadius(0);
-  p.gear_base_radius = mesh.geometry().baseRadius(1);
-  for (int i = 0; i < 2; ++i) {
-    if (!(bearing_stiffness[i] > 0.0)) {
-      throwInvalid(std::string("bearing stiffness of the ") + (i == 0 ? "pinion" : "gear") + " shaft", bearing_stiffness[i],
-                   "the 3-DOF model needs each shaft supported (give that shaft a bearing in 'bearings:')");
-    }
-    p.bearing_stiffness[i] = bearing_stiffness[i];
-    const double m = i == 0 ? p.pinion_mass : p.gear_mass;
-    p.bearing_damping[i] = 2.0 * d.bearing_damping_ratio * std::sqrt(p.bearing_stiffness[i] * m);
-    p.bearing_clearance[i] = d.bearing_clearance[i];
-  }
-  p.mesh_damping = 2.0 * d.mesh_damping_ratio * std::sqrt(meanMeshStiffness(mesh) * p.equivalentMass());
-  return p;
-}
-
-State6 staticEquilibrium(const GearRotorModel& model, double t) {
-  MeshInstant m;
-  model.excitation().at(t, m);
-  const GearRotorParameters& p = model.parameters();
-  const double ks = m.k_drive + m.k_back;
-  const Eigen::Matrix3d k = meshBearingMatrix(ks, p.bearing_stiffness);
-  // Mesh force k_s (delta - o) with delta = x + x_p - x_g - e and o the backlash an ordinary gear
-  // must close on the loaded flank (b sign(F), seed 000 eq 17): e + o enters as k_s (e + o) on each row.
-  const bool ordinary = m.k_back == 0.0 && m.preload_force == 0.0;
-  const double offset = m.te + (ordinary ? std::copysign(m.backlash, m.drive_force) : 0.0);
-  const Eigen::Vector3d f(ks * offset, -ks * offset, m.drive_force + ks * offset);
-  State6 y = State6::Zero();
-  const Eigen::FullPivLU<Eigen::Matrix3d> lu(k);
-  if (lu.rank() < 3) {
-    throw InvalidInput("static equilibrium: the stiffness matrix is singular (a shaft without bearing stiffness, or no mesh stiffness)");
-  }
-  y.head<3>() = lu.solve(f);
-  return y;
-}
-
 Scene makeScene(const std::string& name, const RigConfig& rig_in, double duration) {
   const std::vector<std::string> moving = motionSceneNames();
   const bool motion = std::find(moving.begin(), moving.end(), name) != moving.end();

@@ -8,13 +8,16 @@
 
 namespace drivetrain_stiffness {
 
+void requireLoadTolerance(std::string_view field, double value) {
+  requireInClosedRange(field, value, 0.0, kMaxLoadTolerance);
+}
+
 StiffnessEstimator::StiffnessEstimator(const RigConfig& rig, const EstimatorLimits& limits)
     : rig_(rig), limits_(limits), mesh_(std::make_shared<const AntiBacklashMesh>(rig)) {
   requirePositive("max_abs_torque", limits.max_abs_torque);
   requirePositive("max_preload", limits.max_preload);
   requirePositive("max_interference", limits.max_interference);
-  requireNonNegative("load_tolerance", limits.load_tolerance);
-  if (limits.load_tolerance > 0.1) throwInvalid("load_tolerance", limits.load_tolerance, "must be <= 0.1");
+  requireLoadTolerance("load_tolerance", limits.load_tolerance);
   if (rig.bearings.empty()) throw InvalidInput("bearings: at least one support is required");
   for (const BearingSupportConfig& b : rig.bearings) {
     requireInHalfOpenRange("bearings[" + b.name + "].stiffness_scale", b.stiffness_scale, 0.05, 20.0);

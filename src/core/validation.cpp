@@ -56,4 +56,11 @@ void requireInHalfOpenRange(std::string_view field, double value, double lower, 
   }
 }
 
+void requireInClosedRange(std::string_view field, double value, double lower, double upper) {
+  requireFinite(field, value);
+  if (!(value >= lower && value <= upper)) {
+    throwInvalid(std::string(field), value, "must lie in [" + formatValue(lower) + ", " + formatValue(upper) + "]");
+  }
+}
+
 }  // namespace drivetrain_stiffness

@@ -4,7 +4,7 @@
 #include <cmath>
 
 #include "drivetrain_stiffness/core/constants.hpp"
-#include "drivetrain_stiffness/core/scenes.hpp"
+#include "drivetrain_stiffness/core/rig_model.hpp"
 #include "drivetrain_stiffness/core/validation.hpp"
 
 namespace drivetrain_stiffness {
@@ -45,10 +45,7 @@ void PipelineOptions::validate() const {
   requirePositive("max_abs_torque", limits.max_abs_torque);
   requirePositive("max_preload", limits.max_preload);
   requirePositive("max_interference", limits.max_interference);
-  requireNonNegative("bearing_load_tolerance", limits.load_tolerance);
-  if (limits.load_tolerance > 0.1) {
-    throw InvalidInput("bearing_load_tolerance = " + formatValue(limits.load_tolerance) + ": must be <= 0.1");
-  }
+  requireLoadTolerance("bearing_load_tolerance", limits.load_tolerance);  // StiffnessEstimator's rule
   requirePositive("output_rate", output_rate);
   if (output_rate > 1e6) throw InvalidInput("output_rate = " + formatValue(output_rate) + ": must be <= 1e6 Hz");
   requirePositive("max_gap", max_gap);

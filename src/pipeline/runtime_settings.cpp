@@ -1,5 +1,6 @@
 #include "drivetrain_stiffness/pipeline/runtime_settings.hpp"
 
+#include "drivetrain_stiffness/core/rig_model.hpp"
 #include "drivetrain_stiffness/core/validation.hpp"
 
 namespace drivetrain_stiffness {
@@ -14,11 +15,15 @@ void requireIn(const char* field, double value, double lo, double hi, const char
 
 }  // namespace
 
+void requireExaggeration(double exaggeration) {
+  requireInClosedRange("exaggeration", exaggeration, kMinExaggeration, kMaxExaggeration);
+}
+
 void RuntimeSettings::validate() const {
-  requireIn("mesh_damping_ratio", mesh_damping_ratio, 0.0, 1.0, "");
-  requireIn("bearing_damping_ratio", bearing_damping_ratio, 0.0, 1.0, "");
+  requireDampingRatio("mesh_damping_ratio", mesh_damping_ratio);
+  requireDampingRatio("bearing_damping_ratio", bearing_damping_ratio);
   requireIn("stiffness_rate", stiffness_rate, 0.0, 1e5, " Hz");
-  requireIn("exaggeration", exaggeration, 1.0, 1e8, "");
+  requireExaggeration(exaggeration);
   requireIn("tf_rate", tf_rate, 0.0, 1000.0, " Hz");
 }
 

@@ -53,8 +53,7 @@ RigVisualizer::RigVisualizer(const SpurGearGeometry& g, double face_width, doubl
 }
 
 void RigVisualizer::setExaggeration(double exaggeration) {
-  requireFinite("exaggeration", exaggeration);
-  if (exaggeration < 1.0) throw InvalidInput("exaggeration = " + formatValue(exaggeration) + ": must be >= 1");
+  requireExaggeration(exaggeration);  // the settings' rule (runtime_settings.hpp)
   exaggeration_ = exaggeration;
 }
 

@@ -4,11 +4,23 @@
 #include <cmath>
 
 #include "drivetrain_stiffness/core/constants.hpp"
-#include "drivetrain_stiffness/core/scenes.hpp"
+#include "drivetrain_stiffness/core/enum_names.hpp"
+#include "drivetrain_stiffness/core/rig_model.hpp"
 #include "drivetrain_stiffness/core/stiffness_estimator.hpp"
 #include "drivetrain_stiffness/core/validation.hpp"
 
 namespace drivetrain_stiffness {
+
+namespace {
+constexpr EnumName<SweepDirection> kSweepDirections[] = {
+    {SweepDirection::kUp, "up"}, {SweepDirection::kDown, "down"}, {SweepDirection::kBoth, "both"}};
+}  // namespace
+
+const char* toString(SweepDirection d) { return enumName(kSweepDirections, d); }
+SweepDirection parseSweepDirection(const std::string& field, const std::string& text) {
+  return parseEnum(kSweepDirections, field, text);
+}
+
 SweepOutput torqueSweep(const RigConfig& rig, const SweepSpec& spec) {
   if (!rig.dynamics.present) throw InvalidInput("sweep: the gearbox file has no 'dynamics:' block");
   requirePositive("sweep.start", spec.start);

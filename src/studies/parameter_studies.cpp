@@ -17,7 +17,7 @@
 #include <limits>
 
 #include "drivetrain_stiffness/core/modal_analysis.hpp"
-#include "drivetrain_stiffness/core/scenes.hpp"
+#include "drivetrain_stiffness/core/rig_model.hpp"
 #include "drivetrain_stiffness/core/stiffness_estimator.hpp"
 #include "drivetrain_stiffness/core/validation.hpp"
 #include "drivetrain_stiffness/spectral/frequency_sweep.hpp"

@@ -22,6 +22,7 @@
 #include "drivetrain_stiffness/core/dynamics_estimator.hpp"
 #include "drivetrain_stiffness/core/modal_analysis.hpp"
 #include "drivetrain_stiffness/core/reduced_models.hpp"
+#include "drivetrain_stiffness/core/rig_model.hpp"
 #include "drivetrain_stiffness/core/stiffness_estimator.hpp"
 #include "drivetrain_stiffness/core/scenes.hpp"
 #include "drivetrain_stiffness/core/validation.hpp"
@@ -279,10 +280,7 @@ int runTorqueSweep(const SweepArgs& args) {
   const ds::RigConfig rig = ds::loadRigFile(args.config);
   ds::SweepSpec spec = args.spec;
   spec.fidelity = ds::parseFidelity("--fidelity", args.fidelity);
-  if (args.direction == "up") spec.direction = ds::SweepDirection::kUp;
-  else if (args.direction == "down") spec.direction = ds::SweepDirection::kDown;
-  else if (args.direction == "both") spec.direction = ds::SweepDirection::kBoth;
-  else throw ds::InvalidInput("--direction = '" + args.direction + "': must be up, down or both");
+  spec.direction = ds::parseSweepDirection("--direction", args.direction);
   const ds::SweepOutput sweep = ds::torqueSweep(rig, spec);
   static const char* kNames[3] = {"x_p", "x_g", "x"};
   nlohmann::json coords = nlohmann::json::object();
@@ -317,7 +315,7 @@ int runTorqueSweep(const SweepArgs& args) {
   }
   const nlohmann::json out = {{"fidelity", args.fidelity}, {"frequency_hz", sweep.frequency}, {"coordinates", coords},
                               {"torque_amplitude", spec.torque_amplitude}, {"settle_s", spec.settle}, {"measure_s", spec.measure},
-                              {"direction", args.direction}, {"sample_interval_s", sweep.sample_interval},
+                              {"direction", ds::toString(spec.direction)}, {"sample_interval_s", sweep.sample_interval},
                               {"spectrum_resolution_hz", sweep.spectrum_resolution},
                               {"units", "Hz, m (RMS about the mean)"}};
   std::cout << out.dump(2) << std::endl;

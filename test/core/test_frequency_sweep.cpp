@@ -103,3 +103,18 @@ TEST(FrequencySweep, RejectsBadRanges) {
   spec.step = 0.0;
   EXPECT_THROW(torqueSweep(rig, spec), InvalidInput);
 }
+
+// --direction reads the enum's one name table (core/enum_names.hpp): names round-trip, and a
+// refusal names the field, the text and every accepted name.
+TEST(FrequencySweep, DirectionNamesRoundTrip) {
+  for (const SweepDirection d : {SweepDirection::kUp, SweepDirection::kDown, SweepDirection::kBoth}) {
+    EXPECT_EQ(parseSweepDirection("--direction", toString(d)), d);
+  }
+  EXPECT_STREQ(toString(SweepDirection::kBoth), "both");
+  try {
+    parseSweepDirection("--direction", "sideways");
+    ADD_FAILURE() << "accepted 'sideways'";
+  } catch (const InvalidInput& e) {
+    EXPECT_STREQ(e.what(), "--direction = 'sideways': must be 'up', 'down' or 'both'");
+  }
+}

@@ -5,11 +5,13 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <fstream>
 #include <functional>
 #include <limits>
 #include <tuple>
 
 #include "drivetrain_stiffness/config/yaml_config.hpp"
+#include "drivetrain_stiffness/core/rig_model.hpp"
 #include "drivetrain_stiffness/core/scenes.hpp"
 #include "drivetrain_stiffness/core/validation.hpp"
 #include "drivetrain_stiffness/pipeline/rig_pipeline.hpp"
@@ -423,4 +425,119 @@ TEST(RigPipeline, LoopStampsBeforeClockResetOnce) {
   EXPECT_FALSE(p.observeClock(at(0.01), r));
   EXPECT_EQ(p.counters().clock_resets, 0u);
   EXPECT_EQ(p.estimator().current().supports[0].solution.radialStiffness(), k);
+}
+
+// One rule per setting (issue 15 section 4): every entry that takes a value refuses the same values
+// with a message naming its field, and accepts the same edges.
+namespace {
+
+// The message of the InvalidInput `f` throws, or "" (and a failure) when it accepts.
+template <typename F>
+std::string refusalOf(F f, const std::string& what) {
+  try {
+    f();
+  } catch (const InvalidInput& e) {
+    return e.what();
+  }
+  ADD_FAILURE() << what << " accepted";
+  return {};
+}
+
+// seed_servo.yaml with the dynamics block's `key` set to `value`, written beside the test's files
+// (its bearing files referenced by absolute path).
+std::string gearboxWith(const std::string& key, const std::string& value) {
+  const std::string source = DRIVETRAIN_SOURCE_DIR;
+  std::ifstream in(source + "/config/gearboxes/seed_servo.yaml");
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  for (std::size_t at; (at = text.find("../bearings/")) != std::string::npos;) text.replace(at, 12, source + "/config/bearings/");
+  const std::size_t line = text.find("  " + key + ":");
+  EXPECT_NE(line, std::string::npos) << key;
+  text.replace(line, text.find('\n', line) - line, "  " + key + ": " + value);
+  const std::string path = testing::TempDir() + "one_rule_" + key + ".yaml";
+  std::ofstream(path) << text;
+  return path;
+}
+
+}  // namespace
+
+// The damping ratios: [0, 1] (kMaxDampingRatio, core/rig_model.hpp) from the gearbox YAML, the
+// run-time settings (parameters, dynamic_reconfigure, replay) and DynamicsEstimator::setDamping.
+TEST(OneRule, DampingRatioIsTheSameFromEveryEntry) {
+  for (const std::string field : {"mesh_damping_ratio", "bearing_damping_ratio"}) {
+    const std::pair<const char*, double> refused[] = {{"-0.01", -0.01}, {"1.000001", 1.000001}, {"1.5", 1.5}};
+    for (const auto& [text, value] : refused) {
+      const std::string named = field + " = " + formatValue(value);
+      const std::string path = gearboxWith(field, text);
+      const std::string yaml = refusalOf([&] { loadRigFile(path); }, "YAML " + named);
+      EXPECT_EQ(yaml.rfind(path + ": ", 0), 0u) << yaml;
+      EXPECT_NE(yaml.find("dynamics." + named + ": must lie in [0, 1]"), std::string::npos) << yaml;
+    }
+    for (const double value : {-0.01, 1.000001, 1.5, std::nan("")}) {
+      const std::string named = field + " = " + formatValue(value);
+      RuntimeSettings s;
+      (field == "mesh_damping_ratio" ? s.mesh_damping_ratio : s.bearing_damping_ratio) = value;
+      const std::string settings = refusalOf([&] { s.validate(); }, "settings " + named);
+      EXPECT_EQ(settings.rfind(named + ": must ", 0), 0u) << settings;
+      DynamicsEstimator est(rig(), {1.2e8, 1.2e8}, 1000.0);
+      const std::string set = refusalOf(
+          [&] { field == "mesh_damping_ratio" ? est.setDamping(value, 0.02) : est.setDamping(0.05, value); }, "setDamping " + named);
+      EXPECT_EQ(set, settings);
+    }
+    // The edges pass everywhere; 1 (critical damping of the mode the ratio is defined on) runs:
+    // the exact propagation hands an ill-conditioned eigenbasis to dopri5, and the samples stay finite.
+    for (const double value : {0.0, 1.0}) {
+      const std::string text = value == 0.0 ? "0" : "1";
+      const RigConfig loaded = loadRigFile(gearboxWith(field, text));
+      RuntimeSettings s = RuntimeSettings::forRig(loaded);
+      EXPECT_EQ(field == "mesh_damping_ratio" ? s.mesh_damping_ratio : s.bearing_damping_ratio, value);
+      EXPECT_NO_THROW(s.validate());
+      DynamicsEstimator est(rig(), {1.2e8, 1.2e8}, 1000.0);
+      est.reset(0.0, 0.1);
+      std::size_t samples = 0;
+      est.advanceTo(0.05, [&](const DynamicsSample&) {});
+      EXPECT_NO_THROW(field == "mesh_damping_ratio" ? est.setDamping(value, 0.02) : est.setDamping(0.05, value));
+      est.advanceTo(0.1, [&](const DynamicsSample& d) {
+        ++samples;
+        EXPECT_TRUE(d.state.allFinite()) << field << " " << value;
+      });
+      EXPECT_GT(samples, 40u);
+    }
+  }
+}
+
+// The bearing load tolerance: [0, 0.1] (kMaxLoadTolerance) from the pipeline's options
+// (~bearing_load_tolerance) and StiffnessEstimator, each naming the field its user knows.
+TEST(OneRule, LoadToleranceIsTheSameFromEveryEntry) {
+  for (const double value : {-1e-3, 0.100001, 0.5, std::nan("")}) {
+    PipelineOptions o;
+    o.limits.load_tolerance = value;
+    const std::string v = formatValue(value);
+    const std::string options = refusalOf([&] { o.validate(); }, "options " + v);
+    EXPECT_EQ(options.rfind("bearing_load_tolerance = " + v + ": must ", 0), 0u) << options;
+    // The same refusal, under the estimator's own name for the field.
+    EXPECT_EQ("bearing_" + refusalOf([&] { (void)StiffnessEstimator(rig(), o.limits); }, "estimator " + v), options);
+  }
+  for (const double value : {0.0, 0.1}) {
+    PipelineOptions o;
+    o.limits.load_tolerance = value;
+    EXPECT_NO_THROW(o.validate());
+    EXPECT_NO_THROW((void)StiffnessEstimator(rig(), o.limits));
+  }
+}
+
+// The display scale: [1, 1e8] (requireExaggeration, runtime_settings.hpp) from the settings; the
+// visualizer calls the same check (test/ros/test_rig_visualization.cpp).
+TEST(OneRule, ExaggerationIsTheSameFromTheSettingsAndItsCheck) {
+  for (const double value : {0.999, 1.0000001e8, -1.0, std::nan("")}) {
+    RuntimeSettings s;
+    s.exaggeration = value;
+    const std::string message = refusalOf([&] { s.validate(); }, "settings");
+    EXPECT_EQ(message.rfind("exaggeration = " + formatValue(value) + ": must ", 0), 0u) << message;
+    EXPECT_EQ(refusalOf([&] { requireExaggeration(value); }, "check"), message);
+  }
+  for (const double value : {1.0, 1e8}) {
+    RuntimeSettings s;
+    s.exaggeration = value;
+    EXPECT_NO_THROW(s.validate());
+  }
 }

@@ -90,7 +90,8 @@ class DynamicsEstimator {
   /// The bearing stiffness per shaft [N/m] the model runs with now: the last one taken up (it can
   /// lag the estimator's by up to the 1 % above).
   const std::array<double, 2>& bearingStiffness() const { return bearing_stiffness_; }
-  /// Damping ratios of the dynamics block (mesh, bearings); the model is rebuilt, the state kept.
+  /// Damping ratios of the dynamics block (mesh, bearings), each in [0, 1] (requireDampingRatio,
+  /// InvalidInput naming the ratio otherwise); the model is rebuilt, the state kept.
   void setDamping(double mesh_damping_ratio, double bearing_damping_ratio);
   /// full: exact-exponential / dopri5; quasi_static and linear_modal: reduced_models.hpp. The
   /// state carries over (a reduced model starts from the full state at the switch).

@@ -32,8 +32,8 @@ struct BearingSupportConfig {
 struct DynamicsConfig {
   double pinion_mass = 0.0, gear_mass = 0.0;        ///< [kg]
   double pinion_inertia = 0.0, gear_inertia = 0.0;  ///< [kg m^2]
-  double mesh_damping_ratio = 0.05;                 ///< of the torsional mode: c_s = 2 zeta sqrt(k_mean m_s)
-  double bearing_damping_ratio = 0.02;              ///< of each shaft on its bearing: c_b = 2 zeta sqrt(k_r m)
+  double mesh_damping_ratio = 0.05;                 ///< of the torsional mode: c_s = 2 zeta sqrt(k_mean m_s); [0, 1] (requireDampingRatio)
+  double bearing_damping_ratio = 0.02;              ///< of each shaft on its bearing: c_b = 2 zeta sqrt(k_r m); [0, 1]
   std::array<double, 2> bearing_clearance{{0.0, 0.0}};  ///< radial half-gap [m]
   double speed_rpm = 1000.0;                        ///< pinion speed
   double transmission_error_amplitude = 0.0;        ///< manufacturing TE at mesh frequency [m]

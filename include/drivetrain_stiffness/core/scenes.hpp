@@ -23,6 +23,7 @@
 #include "drivetrain_stiffness/core/anti_backlash_mesh.hpp"
 #include "drivetrain_stiffness/core/integrators.hpp"
 #include "drivetrain_stiffness/core/rig_config.hpp"
+#include "drivetrain_stiffness/core/rig_model.hpp"
 #include "drivetrain_stiffness/core/sliced_mesh.hpp"
 #include "drivetrain_stiffness/core/speed_profile.hpp"
 
@@ -86,18 +87,6 @@ Scene makeScene(const std::string& name, const RigConfig& rig, double duration =
 /// scene without motion.
 State6 propagateMotionScene(const Scene& scene, const SlicedModalPropagator& exact, const IntegratorOptions& fallback,
                             const Observer& observe, IntegrationStats* stats = nullptr);
-
-/// Mean mesh stiffness over one period: k1, plus k_c for an anti-backlash gear [N/m].
-double meanMeshStiffness(const AntiBacklashMesh& mesh);
-
-/// The rotor parameters of a rig: masses and inertias from its `dynamics:` block, base radii from
-/// the gears, the given bearing stiffness per shaft, and damping from the configured ratios
-/// (c_s = 2 zeta sqrt(k_mean m_s) for the torsional mode, c_b = 2 zeta sqrt(k_r m) per shaft).
-GearRotorParameters rigRotorParameters(const RigConfig& rig, const AntiBacklashMesh& mesh,
-                                       const std::array<double, 2>& bearing_stiffness);
-
-/// Static equilibrium of the linearised model at t (K q = f), the start state of SI scenes.
-State6 staticEquilibrium(const GearRotorModel& model, double t);
 
 /// Frequency sweep of the dimensionless backlash oscillator (Kahraman & Singh style): at each
 /// frequency W the oscillator runs `settle` periods from the state the previous frequency left

@@ -9,6 +9,7 @@
 #include <array>
 #include <memory>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "drivetrain_stiffness/core/rig_config.hpp"
@@ -34,6 +35,14 @@ struct EstimatorLimits {
   /// stiffness grows as Q^(1/3) (Hertz), so the stiffness lags the exact one by about tol / 3.
   double load_tolerance = 0.0;
 };
+
+/// The bound of EstimatorLimits::load_tolerance, one rule for StiffnessEstimator and the pipeline's
+/// options (~bearing_load_tolerance): 0 <= tol <= 0.1 (past 10 % of the load the stiffness would lag
+/// the exact one by more than ~3 %, tol / 3 by Hertz).
+constexpr double kMaxLoadTolerance = 0.1;
+/// Throws InvalidInput("<field> = <value>: ...") outside [0, kMaxLoadTolerance] (NaN included);
+/// `field` is the name the caller's user knows (load_tolerance, bearing_load_tolerance).
+void requireLoadTolerance(std::string_view field, double value);
 
 struct SupportEstimate {
   std::string name;

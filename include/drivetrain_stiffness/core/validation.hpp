@@ -50,5 +50,7 @@ void requireYoungsModulus(std::string_view field, double value);
 void requireInOpenRange(std::string_view field, double value, double lower, double upper);
 /// lower <= value < upper.
 void requireInHalfOpenRange(std::string_view field, double value, double lower, double upper);
+/// lower <= value <= upper.
+void requireInClosedRange(std::string_view field, double value, double lower, double upper);
 
 }  // namespace drivetrain_stiffness

@@ -23,7 +23,8 @@ struct VisualizationFrames {
 
 class RigVisualizer {
  public:
-  /// exaggeration >= 1 scales the model's displacements for display (InvalidInput otherwise).
+  /// exaggeration in [1, 1e8] (requireExaggeration, the settings' rule) scales the model's
+  /// displacements for display (InvalidInput otherwise).
   RigVisualizer(const SpurGearGeometry& geometry, double face_width, double nominal_mesh_force,
                 const VisualizationFrames& frames, double exaggeration);
   void setExaggeration(double exaggeration);

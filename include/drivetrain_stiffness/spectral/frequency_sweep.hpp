@@ -9,6 +9,7 @@
 #pragma once
 
 #include <array>
+#include <string>
 #include <vector>
 
 #include "drivetrain_stiffness/core/reduced_models.hpp"
@@ -18,6 +19,9 @@
 namespace drivetrain_stiffness {
 
 enum class SweepDirection { kUp, kDown, kBoth };
+const char* toString(SweepDirection d);
+/// "up", "down" or "both"; anything else throws InvalidInput naming `field` and every accepted name.
+SweepDirection parseSweepDirection(const std::string& field, const std::string& text);
 
 struct SweepSpec {
   double start = 60.0, stop = 3000.0, step = 60.0;  ///< [Hz] (seed 000 section 4.2: 0-3 kHz in 60 Hz steps)
