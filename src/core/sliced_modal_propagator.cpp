@@ -14,6 +14,14 @@ namespace {
 
 using Complex = std::complex<double>;
 
+double norm2(Complex z) { return z.real() * z.real() + z.imag() * z.imag(); }
+
+/// n / d written out (a complex division calls __divdc3; |d| is far from overflow here).
+Complex divide(Complex n, Complex d) {
+  const double inv = 1.0 / norm2(d);
+  return {(n.real() * d.real() + n.imag() * d.imag()) * inv, (n.imag() * d.real() - n.real() * d.imag()) * inv};
+}
+
 /// phi_1(z) = (e^z - 1) / z by its Taylor series, for |z| < 0.05: sum_k z^k / (k + 1)!, stopped
 /// once a term is below 1e-17 (|phi_1| > 0.97 there, so that is below half an ulp of the sum); at
 /// most 8 terms are needed (0.05^8 / 9! < 1e-16), 16 allowed.
@@ -40,24 +48,13 @@ using Complex = std::complex<double>;
 /// cost as much as the exponentials of a slice step; |mu - lambda| is far from overflow here
 /// (the modes are below 1e7 rad/s).
 [[gnu::always_inline]] inline Complex forcedIntegral(Complex lambda, Complex mu, double h, Complex e_lambda, Complex e_mu) {
-  const double dr = mu.real() - lambda.real(), di = mu.imag() - lambda.imag();
-  const double zr = dr * h, zi = di * h;
+  const Complex d = mu - lambda, z = d * h;
   // The difference quotient loses about eps / |z| to cancellation (the two exponentials agree to
   // |z|): below |z| = 0.05 the series takes over, so E is accurate to 5e-15 either way. A larger
   // threshold would send most slices at high speed (|lambda h| ~ 0.1 at 6000 rpm) to the series,
   // which costs three times the quotient.
-  if (zr * zr + zi * zi < 0.0025) return h * e_lambda * phi1Series(Complex(zr, zi));  // = (e^{mu h} - e^{lambda h}) / (mu - lambda)
-  const double inv = 1.0 / (dr * dr + di * di);
-  const double nr = e_mu.real() - e_lambda.real(), ni = e_mu.imag() - e_lambda.imag();
-  return Complex((nr * dr + ni * di) * inv, (ni * dr - nr * di) * inv);
-}
-
-double norm2(Complex z) { return z.real() * z.real() + z.imag() * z.imag(); }
-
-/// n / d written out (a complex division calls __divdc3; |d| is far from overflow here).
-Complex divide(Complex n, Complex d) {
-  const double inv = 1.0 / norm2(d);
-  return {(n.real() * d.real() + n.imag() * d.imag()) * inv, (n.imag() * d.real() - n.real() * d.imag()) * inv};
+  if (norm2(z) < 0.0025) return h * e_lambda * phi1Series(z);  // = (e^{mu h} - e^{lambda h}) / (mu - lambda)
+  return divide(e_mu - e_lambda, d);
 }
 
 }  // namespace
@@ -167,7 +164,6 @@ bool SlicedModalPropagator::decomposeSeeded(MeshRegime r, int j, Slice& s, std::
       dd[i] = 2.0 * mass[i] * l + cb[i];
     }
   };
-  auto norm2 = [](Complex z) { return z.real() * z.real() + z.imag() * z.imag(); };
   std::array<Complex, 3> d, dd;
   for (Complex& l : seeds) {
     bool converged = false;
