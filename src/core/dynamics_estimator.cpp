@@ -263,9 +263,14 @@ void DynamicsEstimator::setFidelity(Fidelity fidelity) { fidelity_ = fidelity; }
 bool DynamicsEstimator::floquetMargin(double* margin) const {
   Matrix6 monodromy;
   if (following_) {
-    // The sliced model at the measured speed, as if it were held (standing: no period).
+    // The sliced model at the measured speed, as if it were held (standing: no period), in the
+    // contact regime the state is in now: above the anti-backlash knee the back path is lifted and
+    // the drive flank alone sets the stiffness, so the both-flank period map would describe a
+    // motion that is not happening. In no linear regime (a flank opening), no margin.
     if (!sliced_ || mesh_frequency_ == 0.0) return false;
-    monodromy = sliced_->monodromy(mesh_frequency_);
+    const std::optional<Matrix6> m = sliced_->monodromy(mesh_frequency_, y_, phase_);
+    if (!m) return false;
+    monodromy = *m;
   } else {
     if (!propagator_) return false;
     monodromy = propagator_->monodromy();

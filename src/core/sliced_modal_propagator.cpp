@@ -555,13 +555,26 @@ bool SlicedModalPropagator::propagate(State6& y, double& phase, double f, double
 }
 
 Matrix6 SlicedModalPropagator::monodromy(double f) const {
+  return monodromyIn(slices_->antiBacklash() ? MeshRegime::kBothFlanks : MeshRegime::kDriveFlank, f);
+}
+
+std::optional<Matrix6> SlicedModalPropagator::monodromy(double f, const State6& y, double phase) const {
+  requireFinite("mesh frequency", f);
+  requireFinite("mesh phase", phase);
+  const double frac = phase - std::floor(phase);
+  const std::optional<MeshRegime> r = regimeAt(slices_->sliceAt(frac, f < 0.0), y, std::polar(1.0, kTwoPi * frac), kTwoPi * f);
+  if (!r) return std::nullopt;
+  return monodromyIn(*r, f);
+}
+
+Matrix6 SlicedModalPropagator::monodromyIn(MeshRegime r, double f) const {
   requireFinite("mesh frequency", f);
   if (f == 0.0) throw InvalidInput("monodromy: the mesh must turn (mesh frequency 0)");
   Matrix6 phi = Matrix6::Identity();
   const int n = slices_->size();
   for (int i = 0; i < n; ++i) {
     const int j = f > 0.0 ? i : n - 1 - i;
-    const Slice& s = slice(slices_->antiBacklash() ? MeshRegime::kBothFlanks : MeshRegime::kDriveFlank, j);
+    const Slice& s = slice(r, j);
     const double tau = (slices_->end(j) - slices_->start(j)) / std::abs(f);
     CVector e;
     for (int k = 0; k < 6; ++k) e[k] = std::exp(s.lambda[k] * tau);

@@ -315,6 +315,43 @@ TEST(SlicedModalPropagator, SeededModesGiveTheMonodromyOfTheJacobians) {
   EXPECT_LT(diff.cwiseAbs().maxCoeff(), 1e-11 * ref_b.cwiseAbs().maxCoeff());
 }
 
+// Above the anti-backlash knee the back path is lifted and the drive flank alone carries the
+// mesh: the period map that gives the Floquet margin must be that regime's. Checked as above
+// against the product of the Pade exponentials of the model's own Jacobian at states in that
+// regime (GearRotorModel::forces decides the contacts there, sharing no code with the propagator's
+// regime test), and shown to differ from the both-flank map it replaced.
+TEST(SlicedModalPropagator, MonodromyIsTheRegimeTheStateIsIn) {
+  const double torque = 20.0;  // N*m: well above the seed rig's knee of 6.95 N*m (docs/calibration.md section 5)
+  Harness h(256, torque);
+  const double f = meshHz(1000);
+  Eigen::Matrix<double, 6, 1> d;  // balanced units, as above
+  d << 1.0, 1.0, 1.0, 1e5, 1e5, 1e5;
+  Matrix6 reference = Matrix6::Identity();
+  for (int j = 0; j < h.slices->size(); ++j) {
+    const double mid = 0.5 * (h.slices->start(j) + h.slices->end(j));
+    const State6 y = h.equilibrium(mid);
+    h.excitation->setMotion(0.0, mid, f);
+    ASSERT_EQ(h.model.forces(0.0, y).regime.code[1], 0) << "the back path should be lifted at slice " << j;
+    const Matrix6 a_b = d.cwiseInverse().asDiagonal() * h.model.jacobian(0.0, y) * d.asDiagonal();
+    reference = d.asDiagonal() * Matrix6((a_b * ((h.slices->end(j) - h.slices->start(j)) / f)).exp()) *
+                d.cwiseInverse().asDiagonal() * reference;
+  }
+  const std::optional<Matrix6> fast = h.exact.monodromy(f, h.equilibrium(0.1), 0.1);
+  ASSERT_TRUE(fast.has_value());
+  const auto balanced = [&](const Matrix6& m) { return Matrix6(d.cwiseInverse().asDiagonal() * m * d.asDiagonal()); };
+  const double scale = balanced(reference).cwiseAbs().maxCoeff();
+  EXPECT_LT((balanced(*fast) - balanced(reference)).cwiseAbs().maxCoeff(), 1e-11 * scale);
+  // The both-flank map (the mesh about twice as stiff) is a different motion.
+  EXPECT_GT((balanced(h.exact.monodromy(f)) - balanced(reference)).cwiseAbs().maxCoeff(), 1e-3 * scale);
+  // A state in no linear regime has no period map: the mesh closing so fast that the drive
+  // flank's damper force would exceed its spring force (clipped: |F_d| <= F_s, the regime rule).
+  State6 slamming = h.equilibrium(0.1);
+  slamming[5] += 1e3;  // m/s along the line of action
+  h.excitation->setMotion(0.0, 0.1, f);
+  ASSERT_EQ(h.model.forces(0.0, slamming).regime.code[1], 0);
+  EXPECT_FALSE(h.exact.monodromy(f, slamming, 0.1).has_value());
+}
+
 TEST(SlicedModalPropagator, ABearingChangeIsReseededAndStaysExact) {
   // After a bearing-stiffness change every slice is decomposed again as it is crossed, seeded by
   // the slice behind it: no general eigensolver at all, and still dopri5's answer. A change by a

@@ -107,6 +107,8 @@ class DynamicsEstimator {
   const GearRotorModel& model() const { return *model_; }  ///< nominal phase; time relative to the last reset
   /// 1 - max |Floquet multiplier| of the current model over one mesh period, from the exact
   /// propagators (a few 6x6 products); false if there is no linear regime (bearing clearance).
+  /// Following the measured motion: at the measured speed held, in the contact regime the state is
+  /// in (false in none, and standing still); at the nominal speed: the both-flank regime.
   bool floquetMargin(double* margin) const;
   const State6& state() const { return y_; }
 

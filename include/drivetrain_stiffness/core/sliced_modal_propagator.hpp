@@ -54,8 +54,15 @@ class SlicedModalPropagator {
   /// integrates that stretch with dopri5 instead), or a slice has no usable eigenbasis.
   bool propagate(State6& y, double& phase, double f, double duration, double drive_force) const;
   /// Homogeneous propagator over one mesh period at mesh frequency f != 0 (the monodromy matrix of the
-  /// sliced model at a constant speed); for the Floquet margin.
+  /// sliced model at a constant speed) with every contact of the mesh loaded: both anti-backlash
+  /// flanks, an ordinary gear's drive flank.
   Matrix6 monodromy(double f) const;
+  /// The same in the contact regime that y is in at mesh phase `phase` [turns]: both flanks below
+  /// the anti-backlash knee, the drive flank alone above it, the back path alone past the reverse
+  /// knee (an ordinary gear: its drive or its back flank), for the Floquet margin of the motion the
+  /// node follows. nullopt where y is in no linear regime (a contact opening or closing, a clipped
+  /// damper): no period-long linearisation describes it.
+  std::optional<Matrix6> monodromy(double f, const State6& y, double phase) const;
   long decompositions() const { return decompositions_; }
   /// Of those, the ones Eigen's general eigensolver made (no seed, or the seeded solve refused).
   long generalDecompositions() const { return general_decompositions_; }
@@ -115,6 +122,7 @@ class SlicedModalPropagator {
   double regimeMargin(const Slice& s, MeshRegime r, int j, const Piece& piece, Complex e_theta0, double w) const;
   /// The linear regime y is in, if any.
   std::optional<MeshRegime> regimeAt(int j, const State6& y, Complex e_theta, double w) const;
+  Matrix6 monodromyIn(MeshRegime r, double f) const;
 
   GearRotorParameters p_;
   std::shared_ptr<const SlicedMesh> slices_;
