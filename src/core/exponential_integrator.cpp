@@ -16,6 +16,21 @@ bool stepInside(const TorqueProfile& torque, double a, double b) {
   }
   return false;
 }
+// The stiffest natural scale [rad/s], which bounds the Magnus step (convergence needs the integral
+// of ||A|| < pi): the fastest of the shafts on their bearings with the stiffest mesh, the
+// torsional mode and the TE forcing.
+double fastestRate(const GearRotorModel& model, const RigExcitation& excitation, double t0) {
+  const GearRotorParameters& p = model.parameters();
+  const double period = 1.0 / excitation.meshFrequency(), te_omega = kTwoPi * excitation.meshFrequency();
+  double k_max = 0.0;
+  for (int i = 0; i < 64; ++i) {
+    MeshInstant mi;
+    excitation.at(t0 + period * (i + 0.5) / 64, mi);
+    k_max = std::max(k_max, mi.k_drive + mi.k_back);
+  }
+  return std::sqrt(std::max({(k_max + p.bearing_stiffness[0]) / p.pinion_mass, (k_max + p.bearing_stiffness[1]) / p.gear_mass,
+                             2.0 * k_max / model.equivalentMass(), te_omega * te_omega}));
+}
 // State indices of the augmented system.
 enum : int { kXp = 0, kXg, kX, kVp, kVg, kV, kSin, kCos, kOne, kU, kUdot };
 }  // namespace
@@ -52,16 +67,7 @@ PeriodicExponentialPropagator::PeriodicExponentialPropagator(const GearRotorMode
   excitation_->at(t0, m);
   mean_force_ = m.drive_force - torque_gain_ * (spec.torque.at(t0) - spec.torque.mean);
 
-  // Stiffest natural scale bounds the Magnus step (convergence needs the integral of ||A|| < pi).
-  double k_max = 0.0;
-  for (int i = 0; i < 64; ++i) {
-    MeshInstant mi;
-    excitation_->at(t0 + period * (i + 0.5) / 64, mi);
-    k_max = std::max(k_max, mi.k_drive + mi.k_back);
-  }
-  const double w_max = std::sqrt(std::max({(k_max + p.bearing_stiffness[0]) / p.pinion_mass,
-                                           (k_max + p.bearing_stiffness[1]) / p.gear_mass,
-                                           2.0 * k_max / model.equivalentMass(), te_omega_ * te_omega_}));
+  const double w_max = fastestRate(model, *excitation_, t0);
   const double h_max = step_factor / w_max;
   // The set-up costs one Magnus step (an 11x11 exponential, ~5 us) per h_max over a mesh period:
   // a slow mesh makes that hours (0.001 rpm on the seed-000 rig: 2e9 steps). Refused up front.
@@ -180,6 +186,12 @@ bool PeriodicExponentialPropagator::linearRegime(int j, const Eigen::Matrix<doub
   const double g = delta - backlash_offset_[j];
   const double total = k1 * g + p.mesh_damping * rate;
   return g > 0.0 && total >= 0.0 && total <= 2.0 * k1 * g;
+}
+
+double PeriodicExponentialPropagator::estimatedSetupSteps(const GearRotorModel& model, const RigExcitation& excitation,
+                                                          double t0, double step_factor) {
+  requirePositive("magnus_step_factor", step_factor);
+  return fastestRate(model, excitation, t0) / (step_factor * excitation.meshFrequency());
 }
 
 Matrix6 PeriodicExponentialPropagator::monodromy() const {

@@ -3,8 +3,10 @@
 
 #include <Eigen/Dense>
 #include <complex>
+#include <vector>
 
 #include "drivetrain_stiffness/config/yaml_config.hpp"
+#include "drivetrain_stiffness/core/integrators.hpp"
 #include "drivetrain_stiffness/core/reduced_models.hpp"
 #include "drivetrain_stiffness/core/scenes.hpp"
 #include "drivetrain_stiffness/core/validation.hpp"
@@ -114,6 +116,57 @@ TEST(ReducedModels, AutomaticChoiceIsTheCheapestThatMeetsTheBound) {
   const AutoChoice r = chooseAutomatically(*rattle.model, 0.0, rattle.initial, rattle.output_interval, pilot, 1e-3);
   EXPECT_EQ(r.method, IntegratorMethod::kDopri5);  // clearance: no exact propagation
   EXPECT_NEAR(r.relative_tolerance, 1e-5, 1e-18);
+}
+
+// auto weighs the exponential method's set-up (one 11x11 exponential per 1/omega_max over a mesh
+// period) against dopri5's work over the run, from counts, not clocks: on the stiff
+// near_rigid_bearings scene (bearings 100x stiffer: omega_max about 10x the nominal one, so about
+// 10x the Magnus steps) a 3 ms run is cheaper with dopri5, a long one with the exponential method.
+// Whatever it picks must meet its bound against an independent dopri5 at rtol 1e-12 over the
+// run (after the scene's start transient, as the bench's err_rms_rel), and a chosen exponential method must give exactly what a fresh one gives (its
+// propagators are the pilot's, built once).
+TEST(ReducedModels, AutoWeighsTheSetUpAgainstTheRunAndMeetsItsBound) {
+  for (const char* name : {"nominal", "near_rigid_bearings", "low_preload"}) {
+    const Scene s = makeScene(name, rig());
+    const double pilot = std::min(0.25 * s.duration, 40.0 * s.output_interval), bound = 1e-6;
+    const AutoChoice c = chooseAutomatically(*s.model, 0.0, s.initial, s.output_interval, pilot, bound, s.duration);
+    // The error as the bench measures it (err_rms_rel: delta after the scene's start transient).
+    std::vector<double> chosen, reference;
+    integrateChoice(*s.model, c, 0.0, s.initial, s.duration, s.output_interval, [&](double t, const State6& y) {
+      if (t >= s.transient) chosen.push_back(s.model->forces(t, y).delta);
+    });
+    IntegratorOptions tight;
+    tight.relative_tolerance = 1e-12;
+    tight.absolute_tolerance = 1e-18;
+    tight.max_step = 1e-4;
+    integrate(*s.model, IntegratorMethod::kDopri5, tight, 0.0, s.initial, s.duration, s.output_interval,
+              [&](double t, const State6& y) {
+                if (t >= s.transient) reference.push_back(s.model->forces(t, y).delta);
+              });
+    ASSERT_EQ(chosen.size(), reference.size()) << name;
+    double e = 0.0, r = 0.0;
+    for (std::size_t i = 0; i < chosen.size(); ++i) {
+      e += (chosen[i] - reference[i]) * (chosen[i] - reference[i]);
+      r += reference[i] * reference[i];
+    }
+    EXPECT_LE(std::sqrt(e / r), bound) << name << ": " << c.reason;
+    if (c.method == IntegratorMethod::kExponential) {
+      ASSERT_TRUE(c.exponential) << name;
+      std::vector<double> fresh;
+      integrate(*s.model, IntegratorMethod::kExponential, IntegratorOptions{}, 0.0, s.initial, s.duration, s.output_interval,
+                [&](double t, const State6& y) {
+                  if (t >= s.transient) fresh.push_back(s.model->forces(t, y).delta);
+                });
+      EXPECT_EQ(fresh, chosen) << name;
+    }
+  }
+  const Scene stiff = makeScene("near_rigid_bearings", rig());
+  const double pilot = 10 * stiff.output_interval;
+  const AutoChoice short_run = chooseAutomatically(*stiff.model, 0.0, stiff.initial, stiff.output_interval, pilot, 1e-6, 3e-3);
+  EXPECT_EQ(short_run.method, IntegratorMethod::kDopri5) << short_run.reason;
+  EXPECT_FALSE(short_run.exponential);
+  const AutoChoice long_run = chooseAutomatically(*stiff.model, 0.0, stiff.initial, stiff.output_interval, pilot, 1e-6, 10.0);
+  EXPECT_EQ(long_run.method, IntegratorMethod::kExponential) << long_run.reason;
 }
 
 // Review findings: the backlash offset of an ordinary gear in both reduced models (and its sign

@@ -36,6 +36,12 @@ class PeriodicExponentialPropagator {
   static constexpr double kMaxIntervalsPerPeriod = 65536;
   static constexpr double kMaxSetupSteps = 2e6;
 
+  /// The Magnus steps the constructor would take over one mesh period (period / h_max; the
+  /// constructor also cuts at the table's nodes and switches, a few per cent more), without
+  /// building anything: the set-up cost that `auto` weighs against the other methods.
+  static double estimatedSetupSteps(const GearRotorModel& model, const RigExcitation& excitation, double t0,
+                                    double step_factor = 1.0);
+
   int intervalsPerPeriod() const { return static_cast<int>(propagators_.size()); }
   long magnusSteps() const { return magnus_steps_; }
 

@@ -8,12 +8,17 @@
 //    a linear time-invariant system, propagated exactly by one matrix exponential per output
 //    interval (TE generator and first-order-hold torque as in the exponential method).
 //  - auto: runs each candidate, cheapest first (quasi_static, linear_modal, exponential when the
-//    model can be linear, dopri5 at rtol = bound / 100), over a pilot window against a tight dopri5
-//    pilot, and uses the first whose relative RMS error of delta meets half the bound.
+//    model can be linear, dopri5 at rtol = bound / 100), over a pilot window, and uses the first
+//    whose relative RMS error of delta meets half the bound against the reference: the
+//    exponential method where it was built and kept its contacts closed (bound >= 1e-6), dopri5 at
+//    rtol = bound / 100 otherwise. The exponential method is built only where its set-up is
+//    predicted cheaper than dopri5's work over the run, and then only once, for the pilot and the run.
 #pragma once
 
+#include <memory>
 #include <string>
 
+#include "drivetrain_stiffness/core/exponential_integrator.hpp"
 #include "drivetrain_stiffness/core/integrators.hpp"
 #include "drivetrain_stiffness/core/rig_excitation.hpp"
 
@@ -35,12 +40,27 @@ struct AutoChoice {
   double pilot_duration = 0.0;       ///< [s]
   std::vector<std::pair<std::string, double>> pilot_errors;  ///< candidate, relative RMS error of delta
   std::string reason;
+  /// The exponential method's propagators built for the pilot (time origin t0, the pilot's output
+  /// interval): integrateChoice reuses them, so their setup is paid once.
+  std::shared_ptr<const PeriodicExponentialPropagator> exponential;
 };
 
+/// The cost of one Magnus step of the exponential method's set-up (an 11x11 matrix exponential)
+/// in steps of dopri5 on the same model: `auto`'s exchange rate between the two. Measured with
+/// drivetrain_bench (2026-11-25, scenes nominal and near_rigid_bearings): 4.4-9.7 us per Magnus
+/// step against 0.44-1.0 us per dopri5 step.
+constexpr double kMagnusStepCost = 10.0;
+/// The smallest error bound for which the exponential method, its contacts closed through the
+/// pilot, serves as the reference (its err_rms_rel against dopri5 at rtol 1e-12 is at most 1.2e-8
+/// on the bench scenes: 40x below half this bound).
+constexpr double kExponentialReferenceBound = 1e-6;
+
 /// Picks the cheapest fidelity and method whose pilot error meets `error_bound` (relative RMS of
-/// delta). The pilot covers `pilot_duration` from (t0, y0).
+/// delta). The pilot covers `pilot_duration` from (t0, y0); `run_duration` [s] is the span the
+/// choice will run (it weighs the exponential method's set-up against dopri5's work; 0: unknown,
+/// taken as long, so the set-up is worth paying).
 AutoChoice chooseAutomatically(const GearRotorModel& model, double t0, const State6& y0, double output_interval,
-                               double pilot_duration, double error_bound);
+                               double pilot_duration, double error_bound, double run_duration = 0.0);
 
 /// Runs `choice` (from chooseAutomatically) over the whole span.
 State6 integrateChoice(const GearRotorModel& model, const AutoChoice& choice, double t0, const State6& y0, double t_end,
