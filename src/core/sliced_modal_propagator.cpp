@@ -66,6 +66,7 @@ SlicedModalPropagator::SlicedModalPropagator(const GearRotorParameters& p, std::
   requireNonNegative("transmission_error_amplitude", te_amplitude);
   requireNonNegative("backlash", backlash);
   for (auto& regime : cache_) regime.resize(static_cast<std::size_t>(slices_->size()));
+  for (auto& regime : conditions_) regime.resize(static_cast<std::size_t>(slices_->size()));
   setParameters(p);
 }
 
@@ -78,6 +79,12 @@ void SlicedModalPropagator::setParameters(const GearRotorParameters& p) {
   m_s_ = p.equivalentMass();
   for (auto& regime : cache_) {
     for (Slice& s : regime) s.ready = false;
+  }
+  // The contact rules depend on the damping: tabulated here, read at every step (a few us for all
+  // slices, no allocation: the tables keep their size).
+  for (MeshRegime r : {MeshRegime::kBothFlanks, MeshRegime::kDriveFlank, MeshRegime::kBackFlank}) {
+    std::vector<RegimeConditions>& table = conditions_[static_cast<std::size_t>(r)];
+    for (int j = 0; j < slices_->size(); ++j) table[static_cast<std::size_t>(j)] = makeConditions(r, j);
   }
 }
 
@@ -92,7 +99,7 @@ SlicedModalPropagator::MeshTerms SlicedModalPropagator::meshTerms(MeshRegime r, 
   const SlicedMesh& m = *slices_;
   const double k1 = m.k1(j), kc = m.kChain(j), c = p_.mesh_damping;
   if (m.antiBacklash()) {
-    const double c1 = k1 + kc > 0.0 ? c * k1 / (k1 + kc) : 0.0, fp = m.mesh().preloadForce();
+    const double c1 = driveFlankDamping(j), fp = m.mesh().preloadForce();
     switch (r) {
       case MeshRegime::kBothFlanks: return {k1 + kc, c, 0.0};
       case MeshRegime::kDriveFlank: return {k1, c1, fp};
@@ -100,6 +107,57 @@ SlicedModalPropagator::MeshTerms SlicedModalPropagator::meshTerms(MeshRegime r, 
     }
   }
   return {k1, c, r == MeshRegime::kBackFlank ? k1 * backlash_ : -k1 * backlash_};
+}
+
+double SlicedModalPropagator::driveFlankDamping(int j) const {
+  // The mesh damping shared as the stiffness is (GearRotorModel::forces): c1 = c k1 / (k1 + k_c).
+  const double k1 = slices_->k1(j), kc = slices_->kChain(j);
+  return k1 + kc > 0.0 ? p_.mesh_damping * k1 / (k1 + kc) : 0.0;
+}
+
+SlicedModalPropagator::RegimeConditions SlicedModalPropagator::makeConditions(MeshRegime r, int j) const {
+  // The contact rules of GearRotorModel::forces for regime r, each a force linear in the mesh
+  // deflection and its rate, c0 + alpha delta + beta delta', that must be > 0 (strict) or >= 0.
+  // A loaded contact: closed, its spring force s > 0, and its damper unclipped, 0 <= s + c g' <= 2 s
+  // (Modelica ElastoBacklash's rule: the damper never pulls, |F_d| <= F_s); a lifted one: open,
+  // s <= 0. inRegime evaluates them at a state, regimeMargin bounds them over a step: one list.
+  RegimeConditions out;
+  auto add = [&](double c0, double alpha, double beta, bool strict) {
+    // The rule's force scale for regimeMargin: its constant and the TE amplitude's share.
+    const double scale = std::fabs(c0) + std::fabs(alpha) * te_amplitude_ + 1e-300;
+    out.c[out.n++] = {c0, alpha, beta, std::fabs(alpha), std::fabs(beta), 1.0 / scale, strict};
+  };
+  const SlicedMesh& m = *slices_;
+  const double k1 = m.k1(j), kc = m.kChain(j);
+  if (m.antiBacklash()) {
+    // Drive flank s1 = F_p + k1 delta (damper c1), back path s2 = F_p - k_c delta (damper c2, on -delta').
+    const double fp = m.mesh().preloadForce(), c1 = driveFlankDamping(j), c2 = p_.mesh_damping - c1;
+    if (r != MeshRegime::kBackFlank) {
+      if (!(k1 > 0.0)) out.possible = false;  // no drive tooth pair to load
+      add(fp, k1, 0.0, true);                 // s1 > 0
+      add(fp, k1, c1, false);                 // t1 = s1 + c1 delta' >= 0
+      add(fp, k1, -c1, false);                // 2 s1 - t1 >= 0
+    } else if (k1 > 0.0) {
+      add(-fp, -k1, 0.0, false);  // -s1 >= 0 (with k1 = 0 the drive flank is open anyway)
+    }
+    if (r != MeshRegime::kDriveFlank) {
+      if (!(kc > 0.0)) out.possible = false;
+      add(fp, -kc, 0.0, true);   // s2 > 0
+      add(fp, -kc, -c2, false);  // t2 = s2 - c2 delta' >= 0
+      add(fp, -kc, c2, false);   // 2 s2 - t2 >= 0
+    } else if (kc > 0.0) {
+      add(-fp, kc, 0.0, false);  // -s2 >= 0
+    }
+    return out;
+  }
+  // Ordinary gear: drive flank g = delta - b, back flank g = -delta - b (never both with b >= 0),
+  // here times k1: k1 g > 0, k1 g + c g' >= 0, k1 g - c g' >= 0.
+  if (r == MeshRegime::kBothFlanks || !(k1 > 0.0)) out.possible = false;
+  const double sign = r == MeshRegime::kBackFlank ? -1.0 : 1.0, c = p_.mesh_damping;
+  add(-k1 * backlash_, sign * k1, 0.0, true);
+  add(-k1 * backlash_, sign * k1, sign * c, false);
+  add(-k1 * backlash_, sign * k1, -sign * c, false);
+  return out;
 }
 
 Matrix6 SlicedModalPropagator::systemMatrix(MeshRegime r, int j) const {
@@ -369,32 +427,18 @@ void SlicedModalPropagator::advance(const Slice& s, const Piece& piece, double w
 }
 
 bool SlicedModalPropagator::inRegime(MeshRegime r, int j, const State6& y, Complex e_theta, double w) const {
-  // The conditions of GearRotorModel::forces for the regime: each loaded contact closed with its
-  // damper unclipped (Modelica ElastoBacklash's rule: the damper never pulls, |F_d| <= F_s), each
-  // lifted one open. e_theta = e^{i theta}: cos and sin of the TE forcing's phase.
-  const SlicedMesh& m = *slices_;
+  // The conditions of regime r at y, with the TE forcing's phase theta given as e_theta = e^{i theta}.
+  const RegimeConditions& rc = conditions(r, j);
+  if (!rc.possible) return false;
   const double delta = y[2] + y[0] - y[1] - te_amplitude_ * e_theta.imag();
   const double rate = y[5] + y[3] - y[4] - te_amplitude_ * w * e_theta.real();
-  const double k1 = m.k1(j), kc = m.kChain(j);
-  if (m.antiBacklash()) {
-    const double fp = m.mesh().preloadForce();
-    const double c1 = k1 + kc > 0.0 ? p_.mesh_damping * k1 / (k1 + kc) : 0.0, c2 = p_.mesh_damping - c1;
-    const double s1 = fp + k1 * delta, s2 = fp - kc * delta;  // k1 g1, k_c g2
-    const double t1 = s1 + c1 * rate, t2 = s2 - c2 * rate;
-    const bool drive_open = !(k1 > 0.0 && s1 > 0.0), back_open = !(kc > 0.0 && s2 > 0.0);
-    const bool drive_loaded = !drive_open && t1 >= 0.0 && t1 <= 2.0 * s1;
-    const bool back_loaded = !back_open && t2 >= 0.0 && t2 <= 2.0 * s2;
-    switch (r) {
-      case MeshRegime::kBothFlanks: return drive_loaded && back_loaded;
-      case MeshRegime::kDriveFlank: return drive_loaded && back_open;
-      case MeshRegime::kBackFlank: return back_loaded && drive_open;
-    }
-    return false;
+  bool holds = true;
+  for (int i = 0; i < rc.n; ++i) {
+    const ContactCondition& c = rc.c[i];
+    const double force = c.c0 + c.alpha * delta + c.beta * rate;
+    holds &= c.strict ? force > 0.0 : force >= 0.0;  // NaN fails both
   }
-  // Ordinary gear: drive flank g = delta - b, back flank g = -delta - b (never both with b >= 0).
-  const double g = r == MeshRegime::kBackFlank ? -delta - backlash_ : delta - backlash_;
-  const double total = k1 * g + p_.mesh_damping * (r == MeshRegime::kBackFlank ? -rate : rate);
-  return r != MeshRegime::kBothFlanks && k1 > 0.0 && g > 0.0 && total >= 0.0 && total <= 2.0 * k1 * g;
+  return holds;
 }
 
 std::optional<SlicedModalPropagator::MeshRegime> SlicedModalPropagator::regimeAt(int j, const State6& y, Complex e_theta,
@@ -407,9 +451,9 @@ std::optional<SlicedModalPropagator::MeshRegime> SlicedModalPropagator::regimeAt
 
 double SlicedModalPropagator::regimeMargin(const Slice& s, MeshRegime r, int j, const Piece& piece, Complex e_theta0,
                                            double w) const {
-  // A lower bound, over any step from the prepared state while the slice lasts, of every condition
-  // of inRegime (each written as a force c0 + alpha delta + beta delta' that must stay >= 0), over
-  // the condition's scale. Per mode the exact solution is eta_k(t) = e^{lambda t} R_k + P'_k e^{iwt}
+  // A lower bound, over any step from the prepared state while the slice lasts, of every contact
+  // rule of the regime (conditions(): forces c0 + alpha delta + beta delta' that must stay >= 0),
+  // over the rule's scale. Per mode the exact solution is eta_k(t) = e^{lambda t} R_k + P'_k e^{iwt}
   // + Q'_k e^{-iwt} + G'_k (prepare), and delta = Re sum_k w_k p_k eta_k - A sin(theta) with
   // p_k = g . u_k (u_k the displacement half of v_k, g = (1, -1, 1)); delta' takes lambda_k on the
   // free part and +-iw on the forced one. So each condition is a constant, decaying modes (each at
@@ -439,36 +483,13 @@ double SlicedModalPropagator::regimeMargin(const Slice& s, MeshRegime r, int j, 
   rate_sin += -te_amplitude_ * w * e_theta0;
   spread_d += l1(delta_sin);
   spread_r += l1(rate_sin);
-  const SlicedMesh& sm = *slices_;
-  const double k1 = sm.k1(j), kc = sm.kChain(j);
+  const RegimeConditions& rc = conditions(r, j);
+  if (!rc.possible) return -1.0;
   double worst = std::numeric_limits<double>::infinity();
-  auto condition = [&](double c0, double alpha, double beta) {
-    const double bound = c0 + alpha * delta_c - std::fabs(alpha) * spread_d - std::fabs(beta) * spread_r;
-    worst = std::min(worst, bound / (std::fabs(c0) + std::fabs(alpha) * te_amplitude_ + 1e-300));
-  };
-
-  if (sm.antiBacklash()) {
-    const double fp = sm.mesh().preloadForce();
-    const double c1 = k1 + kc > 0.0 ? p_.mesh_damping * k1 / (k1 + kc) : 0.0, c2 = p_.mesh_damping - c1;
-    if (r != MeshRegime::kBackFlank) {
-      condition(fp, k1, 0.0);   // s1 > 0
-      condition(fp, k1, c1);    // t1 >= 0
-      condition(fp, k1, -c1);   // t1 <= 2 s1
-    } else {
-      condition(-fp, -k1, 0.0);  // s1 <= 0
-    }
-    if (r != MeshRegime::kDriveFlank) {
-      condition(fp, -kc, 0.0);  // s2 > 0
-      condition(fp, -kc, -c2);  // t2 >= 0
-      condition(fp, -kc, c2);   // t2 <= 2 s2
-    } else {
-      condition(-fp, kc, 0.0);  // s2 <= 0
-    }
-  } else {
-    const double sign = r == MeshRegime::kBackFlank ? -1.0 : 1.0, c = p_.mesh_damping;
-    condition(-k1 * backlash_, sign * k1, 0.0);        // g > 0
-    condition(-k1 * backlash_, sign * k1, sign * c);   // k1 g + c g' >= 0
-    condition(-k1 * backlash_, sign * k1, -sign * c);  // k1 g - c g' >= 0
+  for (int i = 0; i < rc.n; ++i) {
+    const ContactCondition& c = rc.c[i];
+    const double bound = c.c0 + c.alpha * delta_c - c.abs_alpha * spread_d - c.abs_beta * spread_r;
+    worst = std::min(worst, bound * c.inverse_scale);  // the scale is positive: the sign is the bound's
   }
   return worst;
 }

@@ -94,6 +94,25 @@ class SlicedModalPropagator {
     bool ready = false, usable = false, has_upper = false;
   };
   MeshTerms meshTerms(MeshRegime r, int j) const;
+  /// The anti-backlash drive flank's share of the mesh damping in slice j, c k1 / (k1 + k_c).
+  double driveFlankDamping(int j) const;
+  /// One contact rule: the force c0 + alpha delta + beta delta' must be > 0 (strict) or >= 0;
+  /// |alpha|, |beta| and 1 / (|c0| + |alpha| A) kept for regimeMargin's bound.
+  struct ContactCondition {
+    double c0, alpha, beta, abs_alpha, abs_beta, inverse_scale;
+    bool strict;
+  };
+  /// Regime r's contact rules in slice j (at most six); `possible` false where a contact the
+  /// regime loads has no stiffness in the slice.
+  struct RegimeConditions {
+    std::array<ContactCondition, 6> c{};
+    int n = 0;
+    bool possible = true;
+  };
+  RegimeConditions makeConditions(MeshRegime r, int j) const;
+  const RegimeConditions& conditions(MeshRegime r, int j) const {
+    return conditions_[static_cast<std::size_t>(r)][static_cast<std::size_t>(j)];
+  }
   const Slice& slice(MeshRegime r, int j) const;
   /// Slice j's modes by Newton on its characteristic polynomial from three seeds (the common case,
   /// a few hundred nanoseconds); false where that does not give a verified spectrum.
@@ -128,6 +147,7 @@ class SlicedModalPropagator {
   std::shared_ptr<const SlicedMesh> slices_;
   double te_amplitude_, backlash_, m_s_ = 0.0;
   mutable std::array<std::vector<Slice>, 3> cache_;  ///< per MeshRegime, per slice
+  std::array<std::vector<RegimeConditions>, 3> conditions_;  ///< per MeshRegime, per slice (makeConditions)
   mutable Piece piece_;
   mutable long decompositions_ = 0, general_decompositions_ = 0, crossed_ = 0, substeps_ = 0;
 };
