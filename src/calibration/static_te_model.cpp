@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "drivetrain_stiffness/core/constants.hpp"
 #include "drivetrain_stiffness/core/stiffness_estimator.hpp"
@@ -188,8 +189,37 @@ double StaticTeModel::at(const CalibrationVector& p, double phase, double torque
   return loaded - base + p[kTeOffset];
 }
 
+const StaticTeModel::BothFlankMean& StaticTeModel::bothFlankMean(const CalibrationVector& p) const {
+  for (const BothFlankMean& c : both_flank_means_) {
+    if (c.scale == p[kMeshScale] && c.preload == p[kPreloadTorque]) return c;
+  }
+  BothFlankMean& c = both_flank_means_[next_both_flank_mean_];
+  next_both_flank_mean_ = (next_both_flank_mean_ + 1) % both_flank_means_.size();
+  c.scale = p[kMeshScale];
+  c.preload = p[kPreloadTorque];
+  c.mean = 0.0;
+  c.force_low = -std::numeric_limits<double>::infinity();
+  c.force_high = std::numeric_limits<double>::infinity();
+  for (const GridPoint& g : grid_) {
+    const Flanks f = flanks(p, 0.0, g.k1, g.k2);
+    c.mean += g.weight * (f.k1 + f.kc);  // as meanMeshStiffness sums it: the same bits
+    // AntiBacklashMesh::flankContact keeps both flanks for -F_p (1 + k_c/k1) <= F <= F_p (1 + k1/k_c);
+    // the range is taken 1e-12 inside those bounds, far beyond the rounding of its products.
+    if (!(f.kc > 0.0) || !(f.k1 > 0.0)) {
+      c.force_low = 1.0;  // an ordinary gear (or no tooth): never both flanks
+      c.force_high = -1.0;
+      break;
+    }
+    c.force_high = std::min(c.force_high, f.fp * (f.k1 + f.kc) / f.kc * (1.0 - 1e-12));
+    c.force_low = std::max(c.force_low, -f.fp * (f.k1 + f.kc) / f.k1 * (1.0 - 1e-12));
+  }
+  return c;
+}
+
 double StaticTeModel::meanMeshStiffness(const CalibrationVector& p, double torque) const {
   const double force = meshForce(torque);
+  const BothFlankMean& both = bothFlankMean(p);
+  if (force >= both.force_low && force <= both.force_high) return both.mean;
   double k = 0.0;
   for (const GridPoint& g : grid_) {
     const Flanks f = flanks(p, force, g.k1, g.k2);

@@ -135,6 +135,33 @@ TEST(StaticTeModel, KneeIsWhereTheBackHalfLifts) {
   EXPECT_NEAR(model.kneeTorque(q) / knee, 1.2, 1e-12);
 }
 
+// The period-mean mesh stiffness is asked for at every stiffness message; where both flanks are
+// loaded at every phase it does not depend on the force, and the model keeps it per parameter
+// vector. That must be invisible: each value equals, bit for bit, the one a fresh model gives, in
+// every flank state and across the knee (where the force range of the kept value ends), whatever
+// was asked before; and below the knee it equals the both-flank period mean of the mesh table, an
+// independent integral (periodMean above).
+TEST(StaticTeModel, KeptBothFlankMeanIsInvisible) {
+  const RigConfig rig = seedRig();
+  const StaticTeModel warm(rig);
+  const CalibrationVector p = nominal(rig);
+  CalibrationVector q = p;
+  q[kMeshScale] = 0.9;
+  q[kPreloadTorque] *= 1.1;
+  const double knee = warm.kneeTorque(p);
+  for (int pass = 0; pass < 2; ++pass) {
+    for (double torque : {0.1, -0.3, 0.5 * knee, 0.999 * knee, 1.001 * knee, 2.0 * knee, -5.0, 0.0}) {
+      for (const CalibrationVector& v : {p, q}) {
+        const StaticTeModel fresh(rig);
+        EXPECT_EQ(warm.meanMeshStiffness(v, torque), fresh.meanMeshStiffness(v, torque)) << torque << " pass " << pass;
+      }
+    }
+  }
+  const AntiBacklashMesh mesh(rig.gears, rig.anti_backlash, rig.mesh_model, rig.mesh_samples, 1.0);
+  const double both = periodMean(mesh, [](double k1, double kc) { return k1 + kc; });
+  EXPECT_NEAR(warm.meanMeshStiffness(p, 0.1) / both, 1.0, 2e-4);
+}
+
 TEST(StaticTeModel, BearingDeflectionIsTheSecantNotTheTangent) {
   RigConfig rig = seedRig();
   StaticTeModel model(rig);

@@ -18,6 +18,7 @@
 #pragma once
 
 #include <array>
+#include <limits>
 #include <cmath>
 #include <complex>
 #include <cstdint>
@@ -159,6 +160,18 @@ class StaticTeModel {
   std::array<double, 2> base_radius_{};
   /// Scratch solutions for shaftDeflection (one per support): no allocation once sized.
   std::vector<BearingSolution> loaded_, unloaded_;
+  /// meanMeshStiffness with both flanks loaded at every grid point, per (mesh scale, preload
+  /// torque), and the mesh-force range inside which that holds: there the mean does not depend on
+  /// the force, and the calibration's bands ask for it at every stiffness message (1 kHz) with a
+  /// handful of parameter vectors that change only when the estimate does. A few entries, reused
+  /// in turn; not for concurrent use (one Calibrator owns one model).
+  struct BothFlankMean {
+    double scale = std::numeric_limits<double>::quiet_NaN(), preload = 0.0, mean = 0.0, force_low = 0.0,
+           force_high = -1.0;
+  };
+  const BothFlankMean& bothFlankMean(const CalibrationVector& p) const;
+  mutable std::array<BothFlankMean, 16> both_flank_means_{};
+  mutable std::size_t next_both_flank_mean_ = 0;
 };
 
 }  // namespace drivetrain_stiffness
