@@ -146,7 +146,9 @@ void DynamicsEstimator::parametersChanged() {
   if (!following_) startFollowing();
   const GearRotorParameters p = currentParameters();
   if (sliced_) sliced_->setParameters(p);
+  if (mean_sliced_) mean_sliced_->setParameters(p);
   moving_model_->setParameters(p);  // in place: this runs on the per-input path (allocation_tests)
+  mean_model_->setParameters(p);
   periodic_stale_ = true;
   ++rebuilds_;
 }
@@ -175,15 +177,23 @@ void DynamicsEstimator::startFollowing() {
     // The live node's load follows the input (RigExcitationSpec::balanced_load): F_d = T / r_p.
     moving_ = std::make_shared<SlicedExcitation>(slices_, rig_.dynamics.transmission_error_amplitude, rig_.dynamics.backlash,
                                                  1.0 / p.pinion_base_radius, 0.0);
+    // linear_modal along the measured motion: the same model with the period's mean stiffness.
+    mean_slices_ = SlicedMesh::periodMean(*slices_);
+    mean_moving_ = std::make_shared<SlicedExcitation>(mean_slices_, rig_.dynamics.transmission_error_amplitude,
+                                                      rig_.dynamics.backlash, 1.0 / p.pinion_base_radius, 0.0);
   }
   const bool clearance = p.bearing_clearance[0] > 0.0 || p.bearing_clearance[1] > 0.0;
   if (!sliced_ && !clearance) {
     sliced_ = std::make_unique<SlicedModalPropagator>(p, slices_, rig_.dynamics.transmission_error_amplitude,
                                                       rig_.dynamics.backlash);
+    mean_sliced_ = std::make_unique<SlicedModalPropagator>(p, mean_slices_, rig_.dynamics.transmission_error_amplitude,
+                                                           rig_.dynamics.backlash);
   } else if (sliced_) {
     sliced_->setParameters(p);
+    mean_sliced_->setParameters(p);
   }
   moving_model_ = std::make_unique<GearRotorModel>(p, moving_);
+  mean_model_ = std::make_unique<GearRotorModel>(p, mean_moving_);
   // The state sits on grid sample k_; the nominal phase there (RigExcitation: turns = f t).
   t_state_ = k_ * interval_;
   mesh_frequency_ = nominalMeshFrequency();
@@ -227,15 +237,24 @@ void DynamicsEstimator::propagateTo(double t_rel) {
                        formatValue(kMaxSlicesPerAdvance) + " in one call); reset at the new time instead");
   }
   const double drive_force = *torque_ / mesh_->geometry().baseRadius(0);
-  if (sliced_ && sliced_->propagate(y_, phase_, mesh_frequency_, h, drive_force)) {
+  if (fidelity_ == Fidelity::kQuasiStatic) {
+    propagateQuasiStatic(h, drive_force);
+    t_state_ = t_rel;
+    return;
+  }
+  // full: the sliced model; linear_modal: the same with the period's mean stiffness (one slice).
+  const bool mean = fidelity_ == Fidelity::kLinearModal;
+  const SlicedModalPropagator* exact = mean ? mean_sliced_.get() : sliced_.get();
+  if (exact && exact->propagate(y_, phase_, mesh_frequency_, h, drive_force)) {
     phase_ = wrapTurns(phase_);
     t_state_ = t_rel;
     return;
   }
   // A contact open (or bearing clearance): dopri5 on the same sliced model along the same motion.
-  moving_->setMotion(t_state_, phase_, mesh_frequency_);
-  moving_->setTorque(*torque_);
-  y_ = integrate(*moving_model_, IntegratorMethod::kDopri5, fallback_, t_state_, y_, t_rel, h, nullptr);
+  SlicedExcitation& excitation = mean ? *mean_moving_ : *moving_;
+  excitation.setMotion(t_state_, phase_, mesh_frequency_);
+  excitation.setTorque(*torque_);
+  y_ = integrate(mean ? *mean_model_ : *moving_model_, IntegratorMethod::kDopri5, fallback_, t_state_, y_, t_rel, h, nullptr);
   phase_ = wrapTurns(phase_ + mesh_frequency_ * h);
   t_state_ = t_rel;
   ++fallback_intervals_;
@@ -283,9 +302,67 @@ bool DynamicsEstimator::floquetMargin(double* margin) const {
 DynamicsSample DynamicsEstimator::sample(double t_rel, const State6& y) const { return sampleOf(*model_, t_rel, y); }
 
 DynamicsSample DynamicsEstimator::movingSample() const {
-  moving_->setMotion(t_state_, phase_, mesh_frequency_);
-  moving_->setTorque(*torque_);
-  return sampleOf(*moving_model_, t_state_, y_);
+  const bool mean = fidelity_ == Fidelity::kLinearModal;
+  SlicedExcitation& excitation = mean ? *mean_moving_ : *moving_;
+  excitation.setMotion(t_state_, phase_, mesh_frequency_);
+  excitation.setTorque(*torque_);
+  return sampleOf(mean ? *mean_model_ : *moving_model_, t_state_, y_);
+}
+
+void DynamicsEstimator::propagateQuasiStatic(double h, double drive_force) {
+  // quasi_static along the measured motion (reduced_models.hpp: m_s -> 0): each shaft is a damped
+  // oscillator on its bearing pushed by -/+ F_d, held over the step, so it is propagated exactly;
+  // the mesh deflection is the static one of the slice the phase is in, in the flank state that
+  // force puts it in (AntiBacklashMesh::flankContact: both flanks delta = F / (k1 + k_c); the back
+  // path lifted delta = (F - F_p) / k1; the drive flank lifted delta = (F + F_p) / k_c; an ordinary
+  // gear F / k1 + b sign F), so delta' = 0 inside a slice and the torsional coordinate follows
+  // from delta = x + x_p - x_g - e.
+  const GearRotorParameters& p = moving_model_->parameters();
+  shaftStep(p.pinion_mass, p.bearing_damping[0], p.bearing_stiffness[0], -drive_force, h, y_[0], y_[3]);
+  shaftStep(p.gear_mass, p.bearing_damping[1], p.bearing_stiffness[1], drive_force, h, y_[1], y_[4]);
+  phase_ = wrapTurns(phase_ + mesh_frequency_ * h);
+  // On the period's tooth switch (to 1e-7 of a period: where a sample lands on it) the slice the
+  // motion enters, the right limit in time, as meshForSample reports the nominal model's.
+  double look = phase_;
+  if (std::min(phase_, 1.0 - phase_) < 1e-7 && mesh_frequency_ != 0.0) {
+    look = wrapTurns(phase_ + std::copysign(1e-6, mesh_frequency_));
+  }
+  const int j = slices_->sliceAt(look, mesh_frequency_ < 0.0);
+  const double k1 = slices_->k1(j), kc = slices_->kChain(j), fp = slices_->mesh().preloadForce();
+  double delta = 0.0;
+  if (slices_->antiBacklash()) {
+    switch (AntiBacklashMesh::flankContact(drive_force, k1, kc, fp)) {
+      case FlankContact::kBoth: delta = drive_force / (k1 + kc); break;
+      case FlankContact::kDriveOnly: delta = (drive_force - fp) / k1; break;
+      case FlankContact::kBackOnly: delta = (drive_force + fp) / kc; break;
+    }
+  } else if (k1 > 0.0) {
+    delta = drive_force / k1 + std::copysign(rig_.dynamics.backlash, drive_force);
+  }
+  const double a = rig_.dynamics.transmission_error_amplitude, theta = kTwoPi * phase_;
+  y_[2] = delta - y_[0] + y_[1] + a * std::sin(theta);
+  y_[5] = -y_[3] + y_[4] + a * kTwoPi * mesh_frequency_ * std::cos(theta);
+}
+
+void DynamicsEstimator::shaftStep(double m, double c, double k, double force, double h, double& x, double& v) {
+  // m x'' + c x' + k x = F held: about the static deflection F / k, the free response of the damped
+  // oscillator, u = e^{-sigma t} (u0 cos(w_d t) + (v0 + sigma u0) sin(w_d t) / w_d) and
+  // v = e^{-sigma t} (v0 cos(w_d t) - (sigma v0 + (k/m) u0) sin(w_d t) / w_d), sigma = c / 2m,
+  // w_d = sqrt(k/m - sigma^2) (substitute to check: u'' + 2 sigma u' + (k/m) u = 0, u(0) = u0,
+  // u'(0) = v0). Over-damped, w_d is imaginary and the same expressions are real (cosh, sinh);
+  // critically damped, sin(w_d t) / w_d -> t. Tested against dopri5 (test_dynamics_estimator.cpp).
+  if (!(k > 0.0)) {  // no bearing stiffness: the shaft is free, F / m accelerates it
+    x += v * h + 0.5 * force / m * h * h;
+    v += force / m * h;
+    return;
+  }
+  const double sigma = 0.5 * c / m, w2 = k / m;
+  const std::complex<double> wd = std::sqrt(std::complex<double>(w2 - sigma * sigma, 0.0));
+  const std::complex<double> cos_term = std::cos(wd * h);
+  const std::complex<double> sinc = std::abs(wd * h) < 1e-8 ? std::complex<double>(h, 0.0) : std::sin(wd * h) / wd;
+  const double decay = std::exp(-sigma * h), u0 = x - force / k, v0 = v;
+  x = force / k + decay * (u0 * cos_term.real() + (v0 + sigma * u0) * sinc.real());
+  v = decay * (v0 * cos_term.real() - (sigma * v0 + w2 * u0) * sinc.real());
 }
 
 DynamicsSample DynamicsEstimator::sampleOf(const GearRotorModel& model, double t_rel, const State6& y) const {

@@ -49,6 +49,22 @@ SlicedMesh::SlicedMesh(std::shared_ptr<const AntiBacklashMesh> mesh, int slices)
   phasors_.front() = phasors_.back() = 1.0;  // phase 0 and 1 turn: sin(2 pi) would round to -2.4e-16
 }
 
+std::shared_ptr<const SlicedMesh> SlicedMesh::periodMean(const SlicedMesh& fine) {
+  std::shared_ptr<SlicedMesh> mean(new SlicedMesh());
+  mean->mesh_ = fine.mesh_;
+  mean->anti_backlash_ = fine.anti_backlash_;
+  double k1 = 0.0, kc = 0.0;
+  for (int j = 0; j < fine.size(); ++j) {
+    k1 += fine.k1(j) * (fine.end(j) - fine.start(j));
+    kc += fine.kChain(j) * (fine.end(j) - fine.start(j));
+  }
+  mean->bounds_ = {0.0, 1.0};
+  mean->k1_ = {k1};
+  mean->kc_ = {kc};
+  mean->phasors_ = {1.0, 1.0};
+  return mean;
+}
+
 int SlicedMesh::sliceAt(double p, bool backward) const {
   // upper_bound: first boundary > p, so bounds_[j] <= p < bounds_[j + 1].
   int j = static_cast<int>(std::upper_bound(bounds_.begin(), bounds_.end(), p) - bounds_.begin()) - 1;

@@ -2,9 +2,12 @@
 // every sample on its grid, keeps phase resolution at large epochs and refuses time going back.
 #include <gtest/gtest.h>
 
+#include <Eigen/Dense>
+
 #include "drivetrain_stiffness/config/yaml_config.hpp"
 #include "drivetrain_stiffness/core/constants.hpp"
 #include "drivetrain_stiffness/core/dynamics_estimator.hpp"
+#include "drivetrain_stiffness/core/reduced_models.hpp"
 #include "drivetrain_stiffness/core/rig_excitation.hpp"
 #include "drivetrain_stiffness/core/scenes.hpp"
 #include "drivetrain_stiffness/core/sliced_mesh.hpp"
@@ -261,4 +264,92 @@ TEST(DynamicsEstimator, BearingChangeWhileRunningBuildsNothingInTheCall) {
   double mean = 0.0;
   for (std::size_t i = out.size() - 30; i < out.size(); ++i) mean += out[i].mesh_force / 30.0;
   EXPECT_NEAR(mean, 0.1 / 5.6382e-3, 0.3 * 17.7);
+}
+
+// The reduced fidelities follow the measured motion too (until 2026-11-25 the full model ran
+// whenever the encoders drove the phase). quasi_static: at the nominal phase and speed its shafts
+// must move exactly as the nominal quasi_static's, which propagates them by Eigen's matrix
+// exponential (reduced_models.cpp, ShaftPropagator: code shared with nothing here), and its mesh
+// deflection is the static one, so its TE differs from the nominal's only by the slicing of the
+// stiffness; standing still it must settle on the closed-form static equilibrium of the full model.
+TEST(DynamicsEstimator, QuasiStaticFollowsTheMeasuredMotion) {
+  const double rpm = 1000.0, f = 20.0 * rpm / 60.0;  // z_p = 20 (seed 000 Table 1)
+  DynamicsEstimator est(rig(), {1.2e8, 1.2e8}, 1000.0);
+  est.setFidelity(Fidelity::kQuasiStatic);
+  est.reset(0.0, 0.1);
+  const State6 y0 = est.state();
+  std::vector<DynamicsSample> online;
+  for (int k = 1; k <= 40; ++k) {
+    const double t = 1e-3 * k - 3e-4;  // readings off the output grid
+    est.advanceTo(t, [&](const DynamicsSample& s) { online.push_back(s); });
+    est.followMotion(t, f * t, f);
+  }
+  ASSERT_TRUE(est.followingMotion());
+  std::vector<State6> nominal;
+  integrateReduced(est.model(), Fidelity::kQuasiStatic, 0.0, y0, 0.039, est.outputInterval(),
+                   [&](double, const State6& y) { nominal.push_back(y); });
+  ASSERT_GE(nominal.size(), online.size() + 1);
+  for (std::size_t i = 0; i < online.size(); ++i) {
+    const State6& a = online[i].state;
+    const State6& b = nominal[i + 1];  // the nominal run's first call is the start state
+    EXPECT_NEAR(a[0], b[0], 1e-9 * std::abs(b[0])) << "x_p at sample " << i;
+    EXPECT_NEAR(a[1], b[1], 1e-9 * std::abs(b[1])) << "x_g at sample " << i;
+    EXPECT_NEAR(a[3], b[3], 1e-9 * std::abs(b[0]) * 5e4) << "v_p at sample " << i;  // velocities against x w_n
+    // The mesh deflection: static at both (slicing error of the stiffness, docs/model.md: ~1e-5).
+    EXPECT_NEAR(online[i].dynamic_te, est.model().forces(online[i].t, b).delta, 2e-3 * std::abs(online[i].dynamic_te));
+  }
+  // Standing still: the static equilibrium of the full model at that phase (K y = F, closed form).
+  const double t_stop = 0.04, phase = f * t_stop;
+  est.advanceTo(t_stop, nullptr);
+  est.followMotion(t_stop, phase, 0.0);
+  est.advanceTo(0.5, nullptr);
+  auto slices = std::make_shared<const SlicedMesh>(
+      std::make_shared<const AntiBacklashMesh>(rig().gears, rig().anti_backlash, rig().mesh_model, rig().mesh_samples), 256);
+  const GearRotorParameters p = est.model().parameters();
+  auto standing = std::make_shared<SlicedExcitation>(slices, 1e-6, 0.0, 1.0 / p.pinion_base_radius, 0.0);
+  standing->setTorque(0.1);
+  standing->setMotion(0.0, phase, 0.0);
+  const State6 eq = staticEquilibrium(GearRotorModel(p, standing), 0.0);
+  for (int i = 0; i < 3; ++i) EXPECT_NEAR(est.state()[i], eq[i], 1e-9 * eq.head<3>().cwiseAbs().maxCoeff()) << i;
+  for (int i = 3; i < 6; ++i) EXPECT_NEAR(est.state()[i], 0.0, 1e-9) << i;
+}
+
+// linear_modal along the measured motion holds the period's mean stiffness: a linear time-invariant
+// system forced by the TE sine alone, so at a constant speed its steady TE is exactly a constant
+// plus one sine at the mesh frequency (the full model's has every mesh harmonic), and the constant
+// is F / k_mean with k_mean the mean of the sliced stiffness over the period.
+TEST(DynamicsEstimator, LinearModalFollowsTheMeasuredMotion) {
+  const double f = 20.0 * 1000.0 / 60.0;
+  DynamicsEstimator est(rig(), {1.2e8, 1.2e8}, 10000.0);
+  est.setFidelity(Fidelity::kLinearModal);
+  est.reset(0.0, 0.1);
+  std::vector<DynamicsSample> online;
+  for (int k = 1; k <= 60; ++k) {
+    const double t = 1e-3 * k;
+    est.advanceTo(t, [&](const DynamicsSample& s) { online.push_back(s); });
+    est.followMotion(t, f * t, f);
+  }
+  EXPECT_EQ(est.fallbackIntervals(), 0);
+  std::vector<std::pair<double, double>> steady;
+  for (const DynamicsSample& s : online) {
+    if (s.t >= 0.03) steady.emplace_back(s.t, s.dynamic_te);
+  }
+  ASSERT_GT(steady.size(), 200u);
+  Eigen::MatrixXd basis(steady.size(), 3);
+  Eigen::VectorXd values(steady.size());
+  for (std::size_t i = 0; i < steady.size(); ++i) {
+    basis(i, 0) = std::sin(kTwoPi * f * steady[i].first);
+    basis(i, 1) = std::cos(kTwoPi * f * steady[i].first);
+    basis(i, 2) = 1.0;
+    values[i] = steady[i].second;
+  }
+  const Eigen::Vector3d fit = basis.colPivHouseholderQr().solve(values);
+  const double residual = (basis * fit - values).norm() / std::sqrt(static_cast<double>(steady.size()));
+  EXPECT_LT(residual, 1e-6 * std::hypot(fit[0], fit[1])) << "harmonics in a time-invariant model";
+  const SlicedMesh fine(std::make_shared<const AntiBacklashMesh>(rig().gears, rig().anti_backlash, rig().mesh_model,
+                                                                 rig().mesh_samples), 256);
+  double k_mean = 0.0;
+  for (int j = 0; j < fine.size(); ++j) k_mean += (fine.k1(j) + fine.kChain(j)) * (fine.end(j) - fine.start(j));
+  const double force = 0.1 / est.model().parameters().pinion_base_radius;
+  EXPECT_NEAR(fit[2], force / k_mean, 1e-6 * force / k_mean);
 }

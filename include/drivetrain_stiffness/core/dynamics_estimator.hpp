@@ -123,6 +123,10 @@ class DynamicsEstimator {
   void startFollowing();
   /// Measured motion: the state from t_state_ to t_rel, exact or (a contact open) dopri5.
   void propagateTo(double t_rel);
+  /// quasi_static along the measured motion: the shafts exactly, the mesh in static deflection.
+  void propagateQuasiStatic(double h, double drive_force);
+  /// A shaft on its bearing, m x'' + c x' + k x = force held, propagated exactly over h.
+  static void shaftStep(double m, double c, double k, double force, double h, double& x, double& v);
   void advanceFollowing(double t_rel, const std::function<void(const DynamicsSample&)>& sink);
   GearRotorParameters currentParameters() const;
   /// After a bearing-stiffness or damping change (see the class comment).
@@ -150,6 +154,11 @@ class DynamicsEstimator {
   std::shared_ptr<SlicedExcitation> moving_;
   std::unique_ptr<GearRotorModel> moving_model_;
   std::unique_ptr<SlicedModalPropagator> sliced_;
+  // linear_modal along the measured motion: the same three, with the period's mean stiffness.
+  std::shared_ptr<const SlicedMesh> mean_slices_;
+  std::shared_ptr<SlicedExcitation> mean_moving_;
+  std::unique_ptr<GearRotorModel> mean_model_;
+  std::unique_ptr<SlicedModalPropagator> mean_sliced_;
   bool following_ = false;
   bool periodic_stale_ = false;  ///< parameters changed while following: rebuild the periodic ones at reset
   double t_state_ = 0.0, phase_ = 0.0, mesh_frequency_ = 0.0;

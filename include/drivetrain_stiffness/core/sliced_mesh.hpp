@@ -30,6 +30,10 @@ class SlicedMesh {
  public:
   /// `slices` uniform slices per mesh period (>= 4, <= 65536), split further at the switching phases.
   SlicedMesh(std::shared_ptr<const AntiBacklashMesh> mesh, int slices);
+  /// One slice over the whole period holding `fine`'s mean k1 and k_c (weighted by slice width):
+  /// the stiffness the `linear_modal` fidelity holds (no parametric excitation), along a measured
+  /// motion as at the nominal speed.
+  static std::shared_ptr<const SlicedMesh> periodMean(const SlicedMesh& fine);
 
   int size() const { return static_cast<int>(k1_.size()); }
   double start(int j) const { return bounds_[j]; }   ///< phase in [0, 1)
@@ -48,6 +52,7 @@ class SlicedMesh {
   bool antiBacklash() const { return anti_backlash_; }
 
  private:
+  SlicedMesh() = default;
   std::shared_ptr<const AntiBacklashMesh> mesh_;
   std::vector<double> bounds_, k1_, kc_;
   std::vector<std::complex<double>> phasors_;
