@@ -277,4 +277,13 @@ void BearingSupport::finish(BearingSolution& sol) const {
   }
 }
 
+std::optional<double> radialSecantStiffness(const BearingSupport& support, const Vector5d& external_load,
+                                            const BearingSolution& at_load) {
+  if (external_load[kUx] == 0.0) return std::nullopt;
+  Vector5d unloaded = external_load;
+  unloaded[kUx] = 0.0;
+  const BearingSolution base = support.solve(unloaded);
+  return external_load[kUx] / (at_load.displacement[kUx] - base.displacement[kUx]);
+}
+
 }  // namespace drivetrain_stiffness

@@ -21,6 +21,27 @@ SweepDirection parseSweepDirection(const std::string& field, const std::string& 
   return parseEnum(kSweepDirections, field, text);
 }
 
+std::vector<double> frequencyGrid(const std::string& field, double start, double stop, double step) {
+  requireFinite(field + ".start", start);
+  requirePositive(field + ".step", step);
+  if (!(stop >= start)) throwInvalid(field + ".stop", stop, "must be >= " + field + ".start");
+  const long n = static_cast<long>(std::floor((stop - start) / step + 1e-9));
+  std::vector<double> grid;
+  grid.reserve(n + 1);
+  for (long i = 0; i <= n; ++i) grid.push_back(start + i * step);
+  return grid;
+}
+
+double largestRelativeDifference(const std::vector<double>& a, const std::vector<double>& b) {
+  if (a.size() != b.size()) throwInvalid("responses", b.size(), "points against " + std::to_string(a.size()) + ": must be equal");
+  double worst = 0.0;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    if (!(a[i] >= 0.0 && b[i] >= 0.0)) throwInvalid("response[" + std::to_string(i) + "]", std::min(a[i], b[i]), "must be >= 0");
+    if (std::max(a[i], b[i]) > 0.0) worst = std::max(worst, std::abs(a[i] - b[i]) / std::max(a[i], b[i]));
+  }
+  return worst;
+}
+
 SweepOutput torqueSweep(const RigConfig& rig, const SweepSpec& spec) {
   if (!rig.dynamics.present) throw InvalidInput("sweep: the gearbox file has no 'dynamics:' block");
   requirePositive("sweep.start", spec.start);
@@ -48,9 +69,7 @@ SweepOutput torqueSweep(const RigConfig& rig, const SweepSpec& spec) {
   const double mesh_period = 1.0 / RigExcitation(mesh, p, ex).meshFrequency();
   const double dt = mesh_period / std::max(32.0, std::ceil(20.0 * spec.stop * mesh_period));
 
-  const long n = static_cast<long>(std::floor((spec.stop - spec.start) / spec.step + 1e-9));
-  std::vector<double> frequencies;
-  for (long i = 0; i <= n; ++i) frequencies.push_back(spec.start + i * spec.step);
+  const std::vector<double> frequencies = frequencyGrid("sweep", spec.start, spec.stop, spec.step);
 
   double t = 0.0;
   State6 y;

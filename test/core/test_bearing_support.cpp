@@ -4,6 +4,7 @@
 
 #include <cmath>
 
+#include <optional>
 #include <random>
 
 #include "bearing_fixtures.hpp"
@@ -230,4 +231,34 @@ TEST(BearingSupport, Seed000PreloadTrendsForServoBearing) {
     EXPECT_GT(sol.radialStiffness(), previous) << fr;
     previous = sol.radialStiffness();
   }
+}
+
+// The radial secant stiffness (drivetrain_cli bearing's radial_secant). Zero clearance, pure
+// radial load: F_r(u_r) is homogeneous of degree 1.5 and u_r(0) = 0, so the secant F_r / u_r is
+// the tangent / 1.5 (the law of ZeroClearanceRadialStiffnessIsOnePointFiveSecant above).
+TEST(BearingSupport, RadialSecantOfAZeroClearanceBearingIsTwoThirdsOfTheTangent) {
+  const BearingSupport s(test::deepGroove(20, 0.0), Arrangement::kSingle, 0.0);
+  for (double fr : {100.0, 1000.0}) {
+    const Vector5d f = load(fr, 0.0);
+    const BearingSolution sol = s.solve(f);
+    const std::optional<double> secant = radialSecantStiffness(s, f, sol);
+    ASSERT_TRUE(secant.has_value());
+    EXPECT_NEAR(*secant / (sol.radialStiffness() / 1.5), 1.0, 1e-7) << fr;
+  }
+  EXPECT_FALSE(radialSecantStiffness(s, load(0.0, 0.0), s.solve(load(0.0, 0.0))).has_value());
+}
+
+// Preloaded, with an axial load: by the mean value theorem the secant between F_x = 0 and F_x is
+// the tangent dF_x/du_x somewhere in between; with every ball loaded on the way the tangent is
+// monotone, so the secant lies between the tangents at the two ends.
+TEST(BearingSupport, RadialSecantLiesBetweenTheEndTangents) {
+  const BearingSupport s(test::acbb7013(), Arrangement::kSingle, 1000.0);
+  const Vector5d f = load(500.0, 1000.0);
+  const BearingSolution sol = s.solve(f);
+  const double k0 = s.solve(load(0.0, 1000.0)).radialStiffness(), k1 = sol.radialStiffness();
+  const std::optional<double> secant = radialSecantStiffness(s, f, sol);
+  ASSERT_TRUE(secant.has_value());
+  EXPECT_NE(k0, k1);
+  EXPECT_GT(*secant, std::min(k0, k1));
+  EXPECT_LT(*secant, std::max(k0, k1));
 }

@@ -118,3 +118,28 @@ TEST(FrequencySweep, DirectionNamesRoundTrip) {
     EXPECT_STREQ(e.what(), "--direction = 'sideways': must be 'up', 'down' or 'both'");
   }
 }
+
+// The stepped grid: start + i step for i = 0 .. floor((stop - start) / step + 1e-9), each point
+// from its index (0.5 + 14 * 0.05 is 1.2 to the last bit, where adding 0.05 fourteen times is not).
+TEST(FrequencySweep, GridPointsComeFromTheirIndex) {
+  const std::vector<double> g = frequencyGrid("f", 0.5, 1.2, 0.05);
+  ASSERT_EQ(g.size(), 15u);  // (1.2 - 0.5) / 0.05 = 14 steps, end included within 1e-9
+  for (std::size_t i = 0; i < g.size(); ++i) EXPECT_EQ(g[i], 0.5 + static_cast<double>(i) * 0.05);
+  const std::vector<double> hz = frequencyGrid("f", 6000, 11000, 250);
+  ASSERT_EQ(hz.size(), 21u);
+  EXPECT_EQ(hz.back(), 11000.0);
+  EXPECT_EQ(frequencyGrid("f", 60, 3000, 60).size(), 50u);  // seed 000 section 4.2: 60 Hz to 3 kHz in 60 Hz steps
+  EXPECT_EQ(frequencyGrid("f", 1, 1.9, 0.5).size(), 2u);   // stop between points: not reached
+  EXPECT_THROW(frequencyGrid("f", 1, 2, 0.0), InvalidInput);
+  EXPECT_THROW(frequencyGrid("f", 2, 1, 0.1), InvalidInput);
+}
+
+// Up against down: max |a - b| / max(a, b) over the points with a positive maximum, by hand:
+// |2 - 1| / 2 = 0.5 beats |4 - 5| / 5 = 0.2; the (0, 0) point is skipped.
+TEST(FrequencySweep, LargestRelativeDifferenceByHand) {
+  EXPECT_DOUBLE_EQ(largestRelativeDifference({1, 2, 0, 4}, {1, 1, 0, 5}), 0.5);
+  EXPECT_DOUBLE_EQ(largestRelativeDifference({3, 0}, {3, 0}), 0.0);
+  EXPECT_DOUBLE_EQ(largestRelativeDifference({0}, {7}), 1.0);  // a branch with no response at all
+  EXPECT_THROW(largestRelativeDifference({1, 2}, {1}), InvalidInput);
+  EXPECT_THROW(largestRelativeDifference({NAN}, {1}), InvalidInput);
+}

@@ -17,6 +17,7 @@
 #pragma once
 
 #include <array>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -110,5 +111,12 @@ class BearingSupport {
   double offset_ = 0.0;
   std::array<Matrix5d, 2> to_row_;  ///< q_row = to_row_[i] q (rigid transfer and mirror)
 };
+
+/// Radial secant stiffness F_x / (u_x(F) - u_x(F0)) [N/m] of `support` between the external load F
+/// (solved: `at_load`) and the same load with F_x = 0 (F0, solved here): what a static deflection
+/// measurement from no radial load to F_x sees. Null when F_x = 0. By the mean value theorem it is
+/// the tangent dF_x/du_x somewhere between the two (test_bearing_support.cpp).
+std::optional<double> radialSecantStiffness(const BearingSupport& support, const Vector5d& external_load,
+                                            const BearingSolution& at_load);
 
 }  // namespace drivetrain_stiffness

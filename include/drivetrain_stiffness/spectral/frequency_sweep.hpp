@@ -48,6 +48,19 @@ struct SweepOutput {
   double sample_interval = 0.0;                      ///< common output step of the record [s]
 };
 
+/// The stepped grid start, start + step, ... up to stop (included when (stop - start) / step is
+/// whole within 1e-9): start + i step for i = 0 .. floor((stop - start) / step + 1e-9), each point
+/// computed from i, so no rounding accumulates along the grid. Needs step > 0 and stop >= start
+/// (InvalidInput naming `field` otherwise).
+std::vector<double> frequencyGrid(const std::string& field, double start, double stop, double step);
+
+/// The largest disagreement of two responses on the same grid, relative to the larger of each
+/// pair: max_i |a_i - b_i| / max(a_i, b_i) over the points where that maximum is positive, 0 when
+/// there is none (a, b >= 0, equal sizes: InvalidInput otherwise). Up against down sweep: a value
+/// near 0 is one branch; a large one (up to 1) is a jump between two branches of a nonlinear
+/// response (seed 000 section 4.2).
+double largestRelativeDifference(const std::vector<double>& a, const std::vector<double>& b);
+
 /// Runs the sweep on the rig (needs a dynamics block); bearing stiffness from the bearing model at
 /// the rig's mean torque.
 SweepOutput torqueSweep(const RigConfig& rig, const SweepSpec& spec);

@@ -1,21 +1,30 @@
-#include "study_command.hpp"
-
-#include "python_script.hpp"  // NOLINT(build/include_subdir)
-
+// `drivetrain_cli study NAME --config FILE --out DIR`: one seed parameter study
+// (parameter_studies.hpp) to DIR/NAME.csv and, unless --no-png, DIR/NAME.png (scripts/plot_study.py);
+// a JSON summary with the first and last rows on stdout.
 #include <filesystem>
 #include <iostream>
 #include <nlohmann/json.hpp>
+#include <string>
 #include <vector>
 
+#include "python_script.hpp"  // NOLINT(build/include_subdir): src/tools
 #include "drivetrain_stiffness/config/yaml_config.hpp"
 #include "drivetrain_stiffness/core/validation.hpp"
 #include "drivetrain_stiffness/studies/parameter_studies.hpp"
+#include "subcommand.hpp"
 
-namespace drivetrain_stiffness {
+namespace drivetrain_stiffness::cli {
+namespace {
+
+struct StudyArgs {
+  std::string name, config, out;
+  std::string plot_script = DRIVETRAIN_PLOT_STUDY_SCRIPT;  ///< matplotlib script drawing the PNG from the CSV
+  bool png = true;
+};
 
 int runStudyCommand(const StudyArgs& args) {
   const RigConfig rig = loadRigFile(args.config);
-  const StudyTable table = runStudy(args.name, rig);  // before touching the file system
+  const StudyTable table = drivetrain_stiffness::runStudy(args.name, rig);  // before touching the file system
   if (table.rows.empty()) throw InvalidInput("study '" + args.name + "' produced no rows");
   std::error_code ec;
   std::filesystem::create_directories(args.out, ec);
@@ -41,4 +50,18 @@ int runStudyCommand(const StudyArgs& args) {
   return 0;
 }
 
-}  // namespace drivetrain_stiffness
+}  // namespace
+
+Subcommand addStudyCommand(CLI::App& app) {
+  auto args = std::make_shared<StudyArgs>();
+  CLI::App* cmd = app.add_subcommand("study", "a seed 000 parameter study (Figs 4, 5, 9, 10, 11) to CSV and PNG");
+  cmd->add_option("name", args->name, "bearing_shrink, bearing_preload, rms_sweep, resonance_shrink or resonance_preload")
+      ->required()->check(CLI::IsMember(studyNames()));
+  cmd->add_option("--config", args->config, "gearbox YAML with gears, bearings and dynamics")->required();
+  cmd->add_option("--out", args->out, "output directory (created if missing)")->required();
+  cmd->add_flag("!--no-png", args->png, "write the CSV only");
+  cmd->add_option("--plot-script", args->plot_script, "matplotlib script: SCRIPT CSV PNG");
+  return {cmd, [args] { return runStudyCommand(*args); }};
+}
+
+}  // namespace drivetrain_stiffness::cli
