@@ -24,8 +24,7 @@ DynamicsEstimator::DynamicsEstimator(const RigConfig& rig, const std::array<doub
 
 DynamicsEstimator::DynamicsEstimator(const RigConfig& rig, const std::array<double, 2>& bearing_stiffness,
                                      double output_rate, std::shared_ptr<const AntiBacklashMesh> mesh)
-    : rig_(rig), bearing_stiffness_(bearing_stiffness), requested_rate_(output_rate), torque_(std::make_shared<double>(0.0)),
-      mesh_(std::move(mesh)) {
+    : rig_(rig), bearing_stiffness_(bearing_stiffness), requested_rate_(output_rate), mesh_(std::move(mesh)) {
   if (!rig.dynamics.present) throw InvalidInput("dynamics: the gearbox file has no 'dynamics:' block");
   requirePositive("output_rate", output_rate);
   for (int i = 0; i < 2; ++i) requireNonNegative("bearing_stiffness[" + std::to_string(i) + "]", bearing_stiffness[i]);
@@ -60,11 +59,11 @@ void DynamicsEstimator::buildModel() {
   spec.te_amplitude = d.transmission_error_amplitude;
   spec.backlash = d.backlash;
   spec.balanced_load = true;
-  spec.torque.kind = TorqueProfile::Kind::kLive;
+  spec.torque.kind = TorqueProfile::Kind::kInput;  // the measured torque, given to the model below
   spec.torque.mean = d.torque;
-  spec.torque.live = torque_;
   auto excitation = std::make_shared<RigExcitation>(mesh_, p, spec);
-  auto model = std::make_shared<GearRotorModel>(p, excitation);
+  auto model = std::make_unique<GearRotorModel>(p, excitation);
+  model->setTorqueInput(torque_);
   const double period = 1.0 / excitation->meshFrequency();
   const double per_period = std::max(1.0, std::round(period * requested_rate_));
   const double interval = period / per_period;
@@ -76,7 +75,7 @@ void DynamicsEstimator::buildModel() {
     propagator = std::make_unique<PeriodicExponentialPropagator>(*model, 0.0, interval);
   }
   // Kept only now, all together: a refused rebuild leaves the last model, grid and propagators.
-  propagator_ = std::move(propagator);  // first: the old one refers to the old model
+  propagator_ = std::move(propagator);
   model_ = std::move(model);
   interval_ = interval;
 }
@@ -92,14 +91,16 @@ void DynamicsEstimator::reset(double t, double torque) {
   t_state_ = 0.0;
   origin_ = t;
   k_ = 0;
-  *torque_ = torque;
+  torque_ = torque;
+  model_->setTorqueInput(torque);
   y_ = staticEquilibrium(*model_, 0.0);
   started_ = true;
 }
 
 void DynamicsEstimator::setTorque(double torque) {
   requireFinite("torque", torque);
-  *torque_ = torque;
+  torque_ = torque;
+  model_->setTorqueInput(torque);
 }
 
 void DynamicsEstimator::setBearingStiffness(const std::array<double, 2>& k, std::optional<double> at) {
@@ -226,7 +227,7 @@ void DynamicsEstimator::propagateTo(double t_rel) {
                        formatValue(mesh_frequency_) + " Hz crosses " + formatValue(crossings) + " phase slices (more than " +
                        formatValue(kMaxSlicesPerAdvance) + " in one call); reset at the new time instead");
   }
-  const double drive_force = *torque_ / mesh_->geometry().baseRadius(0);
+  const double drive_force = torque_ / mesh_->geometry().baseRadius(0);
   if (sliced_ && sliced_->propagate(y_, phase_, mesh_frequency_, h, drive_force)) {
     phase_ = wrapTurns(phase_);
     t_state_ = t_rel;
@@ -234,7 +235,7 @@ void DynamicsEstimator::propagateTo(double t_rel) {
   }
   // A contact open (or bearing clearance): dopri5 on the same sliced model along the same motion.
   moving_->setMotion(t_state_, phase_, mesh_frequency_);
-  moving_->setTorque(*torque_);
+  moving_->setTorque(torque_);
   y_ = integrate(*moving_model_, IntegratorMethod::kDopri5, fallback_, t_state_, y_, t_rel, h, nullptr);
   phase_ = wrapTurns(phase_ + mesh_frequency_ * h);
   t_state_ = t_rel;
@@ -279,7 +280,7 @@ DynamicsSample DynamicsEstimator::sample(double t_rel, const State6& y) const { 
 
 DynamicsSample DynamicsEstimator::movingSample() const {
   moving_->setMotion(t_state_, phase_, mesh_frequency_);
-  moving_->setTorque(*torque_);
+  moving_->setTorque(torque_);
   return sampleOf(*moving_model_, t_state_, y_);
 }
 
@@ -290,11 +291,11 @@ DynamicsSample DynamicsEstimator::sampleOf(const GearRotorModel& model, double t
   s.dynamic_te = model.forces(t_rel, y).delta;  // from the state: continuous
   // On a tooth switch the force, static TE and flank flags jump: report the right limit.
   MeshInstant m;
-  const GearRotorForces f = model.forces(meshForSample(model.excitation(), t_rel, interval_, m), y);
+  const GearRotorForces f = model.forces(meshForSample(model, t_rel, interval_, m), y);
   s.mesh_force = f.mesh;
   // The switch itself (a sample lands on it to rounding, either side), not 1e-6 of an interval after it.
   s.phase = m.phase < 1e-6 || 1.0 - m.phase < 1e-6 ? 0.0 : m.phase;
-  s.torque = *torque_;
+  s.torque = torque_;
   const double ks = m.k_drive + m.k_back;
   s.static_te = ks > 0.0 ? m.drive_force / ks : 0.0;
   s.drive_flank_loaded = f.regime.code[0] == 1;
@@ -318,7 +319,7 @@ void DynamicsEstimator::advanceTo(double t, const std::function<void(const Dynam
     return;
   }
   const long k_end = k_ + static_cast<long>(samples);
-  const double torque = *torque_;
+  const double torque = torque_;
   if (fidelity_ != Fidelity::kFull && k_end > k_) {
     // Reduced fidelities run on the same grid; the observer's first call is the start state.
     const long k0 = k_;
