@@ -24,8 +24,7 @@ DynamicsEstimator::DynamicsEstimator(const RigConfig& rig, const std::array<doub
 
 DynamicsEstimator::DynamicsEstimator(const RigConfig& rig, const std::array<double, 2>& bearing_stiffness,
                                      double output_rate, std::shared_ptr<const AntiBacklashMesh> mesh)
-    : rig_(rig), bearing_stiffness_(bearing_stiffness), requested_rate_(output_rate), torque_(std::make_shared<double>(0.0)),
-      mesh_(std::move(mesh)) {
+    : rig_(rig), bearing_stiffness_(bearing_stiffness), requested_rate_(output_rate), mesh_(std::move(mesh)) {
   if (!rig.dynamics.present) throw InvalidInput("dynamics: the gearbox file has no 'dynamics:' block");
   requirePositive("output_rate", output_rate);
   for (int i = 0; i < 2; ++i) requireNonNegative("bearing_stiffness[" + std::to_string(i) + "]", bearing_stiffness[i]);
@@ -60,11 +59,11 @@ void DynamicsEstimator::buildModel() {
   spec.te_amplitude = d.transmission_error_amplitude;
   spec.backlash = d.backlash;
   spec.balanced_load = true;
-  spec.torque.kind = TorqueProfile::Kind::kLive;
+  spec.torque.kind = TorqueProfile::Kind::kInput;  // the measured torque, given to the model below
   spec.torque.mean = d.torque;
-  spec.torque.live = torque_;
   auto excitation = std::make_shared<RigExcitation>(mesh_, p, spec);
-  auto model = std::make_shared<GearRotorModel>(p, excitation);
+  auto model = std::make_unique<GearRotorModel>(p, excitation);
+  model->setTorqueInput(torque_);
   const double period = 1.0 / excitation->meshFrequency();
   const double per_period = std::max(1.0, std::round(period * requested_rate_));
   const double interval = period / per_period;
@@ -76,7 +75,7 @@ void DynamicsEstimator::buildModel() {
     propagator = std::make_unique<PeriodicExponentialPropagator>(*model, 0.0, interval);
   }
   // Kept only now, all together: a refused rebuild leaves the last model, grid and propagators.
-  propagator_ = std::move(propagator);  // first: the old one refers to the old model
+  propagator_ = std::move(propagator);
   model_ = std::move(model);
   interval_ = interval;
 }
@@ -92,14 +91,16 @@ void DynamicsEstimator::reset(double t, double torque) {
   t_state_ = 0.0;
   origin_ = t;
   k_ = 0;
-  *torque_ = torque;
+  torque_ = torque;
+  model_->setTorqueInput(torque);
   y_ = staticEquilibrium(*model_, 0.0);
   started_ = true;
 }
 
 void DynamicsEstimator::setTorque(double torque) {
   requireFinite("torque", torque);
-  *torque_ = torque;
+  torque_ = torque;
+  model_->setTorqueInput(torque);
 }
 
 void DynamicsEstimator::setBearingStiffness(const std::array<double, 2>& k, std::optional<double> at) {
@@ -236,7 +237,7 @@ void DynamicsEstimator::propagateTo(double t_rel) {
                        formatValue(mesh_frequency_) + " Hz crosses " + formatValue(crossings) + " phase slices (more than " +
                        formatValue(kMaxSlicesPerAdvance) + " in one call); reset at the new time instead");
   }
-  const double drive_force = *torque_ / mesh_->geometry().baseRadius(0);
+  const double drive_force = torque_ / mesh_->geometry().baseRadius(0);
   if (fidelity_ == Fidelity::kQuasiStatic) {
     propagateQuasiStatic(h, drive_force);
     t_state_ = t_rel;
@@ -253,7 +254,7 @@ void DynamicsEstimator::propagateTo(double t_rel) {
   // A contact open (or bearing clearance): dopri5 on the same sliced model along the same motion.
   SlicedExcitation& excitation = mean ? *mean_moving_ : *moving_;
   excitation.setMotion(t_state_, phase_, mesh_frequency_);
-  excitation.setTorque(*torque_);
+  excitation.setTorque(torque_);
   y_ = integrate(mean ? *mean_model_ : *moving_model_, IntegratorMethod::kDopri5, fallback_, t_state_, y_, t_rel, h, nullptr);
   phase_ = wrapTurns(phase_ + mesh_frequency_ * h);
   t_state_ = t_rel;
@@ -305,7 +306,7 @@ DynamicsSample DynamicsEstimator::movingSample() const {
   const bool mean = fidelity_ == Fidelity::kLinearModal;
   SlicedExcitation& excitation = mean ? *mean_moving_ : *moving_;
   excitation.setMotion(t_state_, phase_, mesh_frequency_);
-  excitation.setTorque(*torque_);
+  excitation.setTorque(torque_);
   return sampleOf(mean ? *mean_model_ : *moving_model_, t_state_, y_);
 }
 
@@ -350,7 +351,8 @@ void DynamicsEstimator::shaftStep(double m, double c, double k, double force, do
   // v = e^{-sigma t} (v0 cos(w_d t) - (sigma v0 + (k/m) u0) sin(w_d t) / w_d), sigma = c / 2m,
   // w_d = sqrt(k/m - sigma^2) (substitute to check: u'' + 2 sigma u' + (k/m) u = 0, u(0) = u0,
   // u'(0) = v0). Over-damped, w_d is imaginary and the same expressions are real (cosh, sinh);
-  // critically damped, sin(w_d t) / w_d -> t. Tested against dopri5 (test_dynamics_estimator.cpp).
+  // critically damped, sin(w_d t) / w_d -> t. Tested against the nominal quasi_static, whose shafts
+  // go by Eigen's matrix exponential (test_dynamics_estimator.cpp).
   if (!(k > 0.0)) {  // no bearing stiffness: the shaft is free, F / m accelerates it
     x += v * h + 0.5 * force / m * h * h;
     v += force / m * h;
@@ -372,11 +374,11 @@ DynamicsSample DynamicsEstimator::sampleOf(const GearRotorModel& model, double t
   s.dynamic_te = model.forces(t_rel, y).delta;  // from the state: continuous
   // On a tooth switch the force, static TE and flank flags jump: report the right limit.
   MeshInstant m;
-  const GearRotorForces f = model.forces(meshForSample(model.excitation(), t_rel, interval_, m), y);
+  const GearRotorForces f = model.forces(meshForSample(model, t_rel, interval_, m), y);
   s.mesh_force = f.mesh;
   // The switch itself (a sample lands on it to rounding, either side), not 1e-6 of an interval after it.
   s.phase = m.phase < 1e-6 || 1.0 - m.phase < 1e-6 ? 0.0 : m.phase;
-  s.torque = *torque_;
+  s.torque = torque_;
   const double ks = m.k_drive + m.k_back;
   s.static_te = ks > 0.0 ? m.drive_force / ks : 0.0;
   s.drive_flank_loaded = f.regime.code[0] == 1;
@@ -400,7 +402,7 @@ void DynamicsEstimator::advanceTo(double t, const std::function<void(const Dynam
     return;
   }
   const long k_end = k_ + static_cast<long>(samples);
-  const double torque = *torque_;
+  const double torque = torque_;
   if (fidelity_ != Fidelity::kFull && k_end > k_) {
     // Reduced fidelities run on the same grid; the observer's first call is the start state.
     const long k0 = k_;

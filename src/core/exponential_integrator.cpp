@@ -35,11 +35,15 @@ double fastestRate(const GearRotorModel& model, const RigExcitation& excitation,
 enum : int { kXp = 0, kXg, kX, kVp, kVg, kV, kSin, kCos, kOne, kU, kUdot };
 }  // namespace
 
+double PeriodicExponentialPropagator::torqueAt(double t) const {
+  return held_ ? model_.torqueInput() : rig().spec().torque.at(t);
+}
+
 PeriodicExponentialPropagator::PeriodicExponentialPropagator(const GearRotorModel& model, double t0,
                                                              double output_interval, double step_factor)
     : model_(model), t0_(t0), interval_(output_interval) {
-  excitation_ = dynamic_cast<const RigExcitation*>(&model.excitation());
-  if (!excitation_) throw InvalidInput("method exponential: needs a rig excitation (mesh stiffness periodic in the mesh phase)");
+  if (!model_.rigExcitation()) throw InvalidInput("method exponential: needs a rig excitation (mesh stiffness periodic in the mesh phase)");
+  const RigExcitation& excitation = rig();
   const GearRotorParameters& p = model.parameters();
   if (p.bearing_clearance[0] > 0.0 || p.bearing_clearance[1] > 0.0) {
     throw InvalidInput("method exponential: bearing clearance makes the model nonlinear at every crossing; use dopri5");
@@ -47,8 +51,8 @@ PeriodicExponentialPropagator::PeriodicExponentialPropagator(const GearRotorMode
   requireFinite("t0", t0);
   requirePositive("output_interval", output_interval);
   requirePositive("magnus_step_factor", step_factor);
-  const RigExcitationSpec& spec = excitation_->spec();
-  const double period = 1.0 / excitation_->meshFrequency();
+  const RigExcitationSpec& spec = excitation.spec();
+  const double period = 1.0 / excitation.meshFrequency();
   const double n_real = period / output_interval;
   // Checked before lround: a slow mesh on a fine grid asks for more intervals than a long holds.
   if (!(n_real <= kMaxIntervalsPerPeriod)) {
@@ -60,14 +64,17 @@ PeriodicExponentialPropagator::PeriodicExponentialPropagator(const GearRotorMode
     throwInvalid("output_interval", output_interval, "must divide the mesh period " + formatValue(period) + " s");
   }
   te_amplitude_ = spec.te_amplitude;
-  te_omega_ = kTwoPi * excitation_->meshFrequency();
+  te_omega_ = kTwoPi * excitation.meshFrequency();
   te_phase_ = kTwoPi * spec.initial_phase;
-  torque_gain_ = excitation_->torqueGain();
+  torque_gain_ = excitation.torqueGain();
+  torque_mean_ = spec.torque.mean;
+  held_ = excitation.takesTorqueInput();
+  preload_force_ = excitation.mesh().preloadForce();
   MeshInstant m;
-  excitation_->at(t0, m);
-  mean_force_ = m.drive_force - torque_gain_ * (spec.torque.at(t0) - spec.torque.mean);
+  model_.meshAt(t0, m);
+  mean_force_ = m.drive_force - torque_gain_ * (torqueAt(t0) - spec.torque.mean);
 
-  const double w_max = fastestRate(model, *excitation_, t0);
+  const double w_max = fastestRate(model, excitation, t0);
   const double h_max = step_factor / w_max;
   // The set-up costs one Magnus step (an 11x11 exponential, ~5 us) per h_max over a mesh period:
   // a slow mesh makes that hours (0.001 rpm on the seed-000 rig: 2e9 steps). Refused up front.
@@ -80,8 +87,8 @@ PeriodicExponentialPropagator::PeriodicExponentialPropagator(const GearRotorMode
   // A(t) is linear in t inside each piece and the Gauss-point Magnus step keeps its order.
   std::vector<double> kinks;
   {
-    const std::vector<double> nodes = excitation_->mesh().tableNodePhases();
-    const double f = excitation_->meshFrequency(), phase0 = spec.initial_phase;
+    const std::vector<double> nodes = excitation.mesh().tableNodePhases();
+    const double f = excitation.meshFrequency(), phase0 = spec.initial_phase;
     const double first_turn = std::floor(phase0 + f * t0);
     for (int cycle = 0; cycle <= 1; ++cycle) {
       for (double node : nodes) {
@@ -89,7 +96,7 @@ PeriodicExponentialPropagator::PeriodicExponentialPropagator(const GearRotorMode
         if (t > t0 && t < t0 + period) kinks.push_back(t);
       }
     }
-    for (double t = excitation_->nextSwitch(t0); t < t0 + period; t = excitation_->nextSwitch(t)) kinks.push_back(t);
+    for (double t = excitation.nextSwitch(t0); t < t0 + period; t = excitation.nextSwitch(t)) kinks.push_back(t);
     std::sort(kinks.begin(), kinks.end());
   }
 
@@ -108,7 +115,7 @@ PeriodicExponentialPropagator::PeriodicExponentialPropagator(const GearRotorMode
   for (long j = 0; j < n; ++j) {
     const double a = t0 + j * output_interval, b = a + output_interval;
     MeshInstant mj;
-    excitation_->at(a, mj);
+    excitation.at(a, mj);
     k1_[j] = mj.k_drive;
     kc_[j] = mj.k_back;
     backlash_offset_[j] = mj.backlash;
@@ -138,7 +145,7 @@ PeriodicExponentialPropagator::PeriodicExponentialPropagator(const GearRotorMode
 
 PeriodicExponentialPropagator::Matrix11 PeriodicExponentialPropagator::systemMatrix(double t) const {
   MeshInstant m;
-  excitation_->at(t, m);
+  rig().at(t, m);  // stiffness, preload and backlash: the drive force enters through the u columns
   const GearRotorParameters& p = model_.parameters();
   const double ks = m.k_drive + m.k_back, cs = p.mesh_damping;
   const bool anti_backlash = m.k_back > 0.0 || m.preload_force > 0.0;
@@ -176,7 +183,7 @@ bool PeriodicExponentialPropagator::linearRegime(int j, const Eigen::Matrix<doub
   const GearRotorParameters& p = model_.parameters();
   const double delta = z[kX] + z[kXp] - z[kXg] - te_amplitude_ * z[kSin];
   const double rate = z[kV] + z[kVp] - z[kVg] - te_amplitude_ * te_omega_ * z[kCos];
-  const double k1 = k1_[j], kc = kc_[j], fp = excitation_->mesh().preloadForce();
+  const double k1 = k1_[j], kc = kc_[j], fp = preload_force_;
   if (kc > 0.0 || fp > 0.0) {
     const double c1 = p.mesh_damping * k1 / (k1 + kc), c2 = p.mesh_damping - c1;
     const double s1 = fp + k1 * delta, s2 = fp - kc * delta;
@@ -212,7 +219,7 @@ PeriodicExponentialPropagator::Augmented PeriodicExponentialPropagator::augment(
 
 bool PeriodicExponentialPropagator::step(long k, Augmented& z, double torque_k, double torque_next) const {
   const long n = static_cast<long>(propagators_.size());
-  const double mean = excitation_->spec().torque.mean;
+  const double mean = torque_mean_;
   Eigen::Matrix<double, 11, 1> w;
   w.head<9>() = z;
   w[kU] = torque_k - mean;
@@ -235,7 +242,7 @@ State6 PeriodicExponentialPropagator::run(const State6& y0, double t_end, const 
     throwInvalid("t_end", t_end, "must be t0 plus a whole number of output intervals " + formatValue(interval_));
   }
   IntegrationStats st;
-  const TorqueProfile& torque = excitation_->spec().torque;
+  const TorqueProfile& torque = rig().spec().torque;
   Eigen::Matrix<double, 9, 1> z;
   z.head<6>() = y0;
   z[kSin] = std::sin(te_omega_ * t0_ + te_phase_);
@@ -243,11 +250,11 @@ State6 PeriodicExponentialPropagator::run(const State6& y0, double t_end, const 
   z[kOne] = 1.0;
   if (observe) observe(t0_, y0);
   const int n = static_cast<int>(propagators_.size());
-  double u = torque.at(t0_) - torque.mean;
+  double u = torqueAt(t0_) - torque.mean;
   Eigen::Matrix<double, 11, 1> w;
   for (long k = 0; k < k_end; ++k) {
     const double t_next = t0_ + (k + 1) * interval_;
-    const double u_next = torque.at(t_next) - torque.mean;
+    const double u_next = torqueAt(t_next) - torque.mean;
     if (torque.kind == TorqueProfile::Kind::kSteps && stepInside(torque, t_next - interval_, t_next)) {
       // A torque step inside this interval: a first-order hold would smear it, so this one
       // interval is integrated by dopri5 (exact switch time) and the propagation resumes after it.

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 
+#include "drivetrain_stiffness/core/rig_excitation.hpp"
 #include "drivetrain_stiffness/core/validation.hpp"
 
 namespace drivetrain_stiffness {
@@ -72,6 +73,26 @@ GearRotorModel::GearRotorModel(const GearRotorParameters& p, std::shared_ptr<con
   m_s_ = p_.equivalentMass();
 }
 
+GearRotorModel::GearRotorModel(const GearRotorParameters& p, std::shared_ptr<const RigExcitation> excitation)
+    : GearRotorModel(p, std::shared_ptr<const GearExcitation>(excitation)) {
+  rig_ = std::move(excitation);
+  torque_input_used_ = rig_->takesTorqueInput();
+}
+
+GearRotorModel::GearRotorModel(const GearRotorParameters& p, std::shared_ptr<RigExcitation> excitation)
+    : GearRotorModel(p, std::shared_ptr<const RigExcitation>(std::move(excitation))) {}
+
+void GearRotorModel::setTorqueInput(double torque) {
+  if (!torque_input_used_) throw InvalidInput("torque input: the model's excitation has a torque profile of its own");
+  requireFinite("torque", torque);
+  torque_input_ = torque;
+}
+
+void GearRotorModel::meshAt(double t, MeshInstant& m) const {
+  excitation_->at(t, m);
+  if (torque_input_used_) m.drive_force = rig_->driveForce(torque_input_);
+}
+
 void GearRotorModel::setParameters(const GearRotorParameters& p) {
   p.validate();
   p_ = p;
@@ -80,7 +101,7 @@ void GearRotorModel::setParameters(const GearRotorParameters& p) {
 
 GearRotorForces GearRotorModel::forces(double t, const State6& y) const {
   MeshInstant m;
-  excitation_->at(t, m);
+  meshAt(t, m);
   GearRotorForces f;
   f.delta = y[2] + y[0] - y[1] - m.te;
   f.delta_rate = y[5] + y[3] - y[4] - m.te_rate;
@@ -166,24 +187,24 @@ Matrix6 GearRotorModel::jacobian(double t, const State6& y) const {
 
 double GearRotorModel::energy(double t, const State6& y) const {
   MeshInstant m;
-  excitation_->at(t, m);
+  meshAt(t, m);
   const double delta = y[2] + y[0] - y[1] - m.te;
   const double ks = m.k_drive + m.k_back;
   return 0.5 * (p_.pinion_mass * y[3] * y[3] + p_.gear_mass * y[4] * y[4] + m_s_ * y[5] * y[5]) +
          0.5 * (p_.bearing_stiffness[0] * y[0] * y[0] + p_.bearing_stiffness[1] * y[1] * y[1] + ks * delta * delta);
 }
 
-double meshForSample(const GearExcitation& excitation, double t, double interval, MeshInstant& m) {
-  excitation.at(t, m);
+double meshForSample(const GearRotorModel& model, double t, double interval, MeshInstant& m) {
+  model.meshAt(t, m);
   if (std::min(m.phase, 1.0 - m.phase) >= 1e-7) return t;
   const MeshInstant at_t = m;
   // Step 1e-6 of a mesh period past the switch (the phase rate from one interval ahead), so the
   // step stays well above the phase rounding at any output rate.
   MeshInstant ahead;
-  excitation.at(t + interval, ahead);
+  model.meshAt(t + interval, ahead);
   const double advance = std::fmod(ahead.phase - at_t.phase + 2.0, 1.0);  // periods per interval
   const double after = t + (advance > 1e-9 ? 1e-6 / advance : 1e-6) * interval;
-  excitation.at(after, m);
+  model.meshAt(after, m);
   // Only the stiffness side changes; the continuous inputs stay those at t.
   m.te = at_t.te;
   m.te_rate = at_t.te_rate;

@@ -62,7 +62,7 @@ FloquetResult floquet(const GearRotorModel& model, const State6& y_ref, double t
   requirePositive("period", period);
   if (steps < 1) throwInvalid("steps", steps, "must be >= 1");
   Matrix6 phi;
-  if (dynamic_cast<const RigExcitation*>(&model.excitation())) {
+  if (model.rigExcitation()) {
     // Exact for the linear regime: the product of the interval propagators (64 per period).
     const PeriodicExponentialPropagator propagator(model, t0, period / 64.0);
     phi = propagator.monodromy();

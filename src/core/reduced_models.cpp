@@ -13,7 +13,7 @@ namespace drivetrain_stiffness {
 namespace {
 
 const RigExcitation& rigExcitation(const GearRotorModel& model, const char* what) {
-  const auto* e = dynamic_cast<const RigExcitation*>(&model.excitation());
+  const RigExcitation* e = model.rigExcitation();
   if (!e) throw InvalidInput(std::string("fidelity ") + what + ": needs a rig excitation");
   return *e;
 }
@@ -83,11 +83,11 @@ State6 integrateReduced(const GearRotorModel& model, Fidelity fidelity, double t
     const ShaftPropagator pin(p.pinion_mass, p.bearing_damping[0], p.bearing_stiffness[0], interval);
     const ShaftPropagator gear(p.gear_mass, p.bearing_damping[1], p.bearing_stiffness[1], interval);
     MeshInstant m;
-    model.excitation().at(t0, m);
+    model.meshAt(t0, m);
     double f = m.drive_force;
     for (long k = 0; k < n; ++k) {
       const double t = t0 + (k + 1) * interval;
-      meshForSample(model.excitation(), t, interval, m);  // on a tooth switch: the right limit
+      meshForSample(model, t, interval, m);  // on a tooth switch: the right limit
       pin.step(y[0], y[3], -f, -m.drive_force, interval);   // the pinion is pushed back by the mesh force
       gear.step(y[1], y[4], f, m.drive_force, interval);
       f = m.drive_force;
@@ -106,10 +106,14 @@ State6 integrateReduced(const GearRotorModel& model, Fidelity fidelity, double t
     const double ks = meanStiffness(e), cs = p.mesh_damping, ms = model.equivalentMass();
     const double a_te = e.spec().te_amplitude, w = kTwoPi * e.meshFrequency(), psi = kTwoPi * e.spec().initial_phase;
     const TorqueProfile& torque = e.spec().torque;
+    // The pinion torque at each sample: the model's input if it takes one (held), else the profile's.
+    const bool held = e.takesTorqueInput();
+    const double input = model.torqueInput();
+    auto torqueAt = [&](double t) { return held ? input : torque.at(t); };
     MeshInstant m0;
-    e.at(t0, m0);
+    model.meshAt(t0, m0);
     const double gain = e.torqueGain();
-    const double mean_force = m0.drive_force - gain * (torque.at(t0) - torque.mean);
+    const double mean_force = m0.drive_force - gain * (torqueAt(t0) - torque.mean);
     // State [x_p x_g x v_p v_g v sin cos 1 u u'] as in the exponential method, stiffness at its mean.
     Eigen::Matrix<double, 11, 11> a = Eigen::Matrix<double, 11, 11>::Zero();
     Eigen::Matrix<double, 1, 11> f = Eigen::Matrix<double, 1, 11>::Zero();
@@ -141,10 +145,10 @@ State6 integrateReduced(const GearRotorModel& model, Fidelity fidelity, double t
     z[6] = std::sin(w * t0 + psi);
     z[7] = std::cos(w * t0 + psi);
     z[8] = 1.0;
-    double u = torque.at(t0) - torque.mean;
+    double u = torqueAt(t0) - torque.mean;
     for (long k = 0; k < n; ++k) {
       const double t = t0 + (k + 1) * interval;
-      const double u_next = torque.at(t) - torque.mean;
+      const double u_next = torqueAt(t) - torque.mean;
       z[9] = u;
       z[10] = (u_next - u) / interval;
       z = phi * z;
@@ -206,7 +210,7 @@ AutoChoice chooseAutomatically(const GearRotorModel& model, double t0, const Sta
   // 100 (which on the stiff near_rigid_bearings scene errs by about the bound itself): for bounds
   // >= kExponentialReferenceBound the reduced fidelities are measured against it, and it is chosen
   // if neither meets the bound.
-  const auto* rig = dynamic_cast<const RigExcitation*>(&model.excitation());
+  const RigExcitation* rig = model.rigExcitation();
   const GearRotorParameters& p = model.parameters();
   bool exponential_closed = false;
   std::vector<double> exponential;

@@ -31,7 +31,7 @@ double TorqueProfile::at(double t) const {
                            kTwoPi * chirp_end * std::max(0.0, t - chirp_duration);
       return mean + amplitude * std::sin(phase);
     }
-    case Kind::kLive: return live ? *live : mean;
+    case Kind::kInput: return 0.0;  // the model adds its input (RigExcitation::driveForce)
   }
   return mean;
 }
@@ -90,7 +90,7 @@ void RigExcitation::at(double t, MeshInstant& out) const {
   const double w = kTwoPi * mesh_frequency_;
   out.te = spec_.te_amplitude * std::sin(w * t + kTwoPi * spec_.initial_phase);
   out.te_rate = spec_.te_amplitude * w * std::cos(w * t + kTwoPi * spec_.initial_phase);
-  out.drive_force = torque_gain_ * spec_.torque.at(t) + load_term_;
+  out.drive_force = driveForce(spec_.torque.at(t));
 }
 
 double RigExcitation::nextSwitch(double t) const {

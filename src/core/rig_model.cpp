@@ -46,7 +46,7 @@ GearRotorParameters rigRotorParameters(const RigConfig& rig, const AntiBacklashM
 
 State6 staticEquilibrium(const GearRotorModel& model, double t) {
   MeshInstant m;
-  model.excitation().at(t, m);
+  model.meshAt(t, m);  // with the torque input, if the model takes one
   const GearRotorParameters& p = model.parameters();
   const double ks = m.k_drive + m.k_back;
   const Eigen::Matrix3d k = meshBearingMatrix(ks, p.bearing_stiffness);

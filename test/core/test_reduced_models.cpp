@@ -36,7 +36,7 @@ std::shared_ptr<GearRotorModel> withInertiaScale(const Scene& s, double scale) {
   GearRotorParameters p = s.model->parameters();
   p.pinion_inertia *= scale;
   p.gear_inertia *= scale;
-  const auto& e = dynamic_cast<const RigExcitation&>(s.model->excitation());
+  const RigExcitation& e = *s.model->rigExcitation();
   auto mesh = std::shared_ptr<const AntiBacklashMesh>(&e.mesh(), [](const AntiBacklashMesh*) {});
   return std::make_shared<GearRotorModel>(p, std::make_shared<RigExcitation>(mesh, p, e.spec()));
 }
@@ -66,7 +66,7 @@ TEST(ReducedModels, QuasiStaticIsTheLightTorsionLimit) {
 // with the TE entering the mesh force as -(k_s + i w c_s) A on (x_p, x_g, x) with signs (-1, +1, -1).
 TEST(ReducedModels, LinearModalMatchesAnalyticFrequencyResponse) {
   const Scene s = makeScene("nominal", rig());
-  const auto& e = dynamic_cast<const RigExcitation&>(s.model->excitation());
+  const RigExcitation& e = *s.model->rigExcitation();
   const GearRotorParameters& p = s.model->parameters();
   double ks = 0.0;
   for (int i = 0; i < 512; ++i) {
@@ -177,7 +177,7 @@ TEST(ReducedModels, OrdinaryGearBacklashOffset) {
     RigConfig r = ordinary;
     r.dynamics.torque = torque;
     const Scene s = makeScene("nominal", r);
-    const auto& e = dynamic_cast<const RigExcitation&>(s.model->excitation());
+    const RigExcitation& e = *s.model->rigExcitation();
     MeshInstant m;
     e.at(0.0, m);
     const double b = std::copysign(5e-6, m.drive_force);

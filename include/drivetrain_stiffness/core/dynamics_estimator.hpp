@@ -138,9 +138,11 @@ class DynamicsEstimator {
   RigConfig rig_;
   std::array<double, 2> bearing_stiffness_;
   double requested_rate_;
-  std::shared_ptr<double> torque_;
+  double torque_ = 0.0;  ///< the measured torque held [N·m]; also the nominal model's torque input
   std::shared_ptr<const AntiBacklashMesh> mesh_;
-  std::shared_ptr<const GearRotorModel> model_;
+  /// The nominal-phase model, its torque input kept equal to torque_; the propagators hold copies
+  /// of their own, so a rebuild replaces each whole.
+  std::unique_ptr<GearRotorModel> model_;
   std::unique_ptr<PeriodicExponentialPropagator> propagator_;
   IntegratorOptions fallback_;
   double interval_ = 0.0, origin_ = 0.0;

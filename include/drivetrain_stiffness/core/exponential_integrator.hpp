@@ -28,7 +28,9 @@ class PeriodicExponentialPropagator {
  public:
   /// `output_interval` must divide the mesh period (within 1e-9); `step_factor` bounds each Magnus
   /// step to step_factor / omega_max. Throws InvalidInput when the model cannot be linear (bearing
-  /// clearance, an excitation other than RigExcitation).
+  /// clearance, a model without a rig excitation). The propagator keeps its own copy of the model
+  /// (with its torque input at this moment): replacing or changing the caller's model later changes
+  /// nothing here.
   PeriodicExponentialPropagator(const GearRotorModel& model, double t0, double output_interval, double step_factor = 1.0);
   /// Set-up bounds (InvalidInput beyond): stored output intervals per mesh period (9x11 doubles
   /// each: 52 MB at the bound) and Magnus steps per mesh period (seconds of set-up at the bound;
@@ -67,10 +69,15 @@ class PeriodicExponentialPropagator {
   Matrix11 systemMatrix(double t) const;
   bool linearRegime(int j, const Eigen::Matrix<double, 9, 1>& z) const;
 
-  const GearRotorModel& model_;
-  const RigExcitation* excitation_ = nullptr;
+  const RigExcitation& rig() const { return *model_.rigExcitation(); }
+  /// The pinion torque at t [N·m]: the model's input if it takes one (held), else the profile's.
+  double torqueAt(double t) const;
+
+  GearRotorModel model_;  ///< its own: systemMatrix(), the regime check and the dopri5 hand-over read it
   double t0_ = 0.0, interval_ = 0.0, te_amplitude_ = 0.0, te_omega_ = 0.0, te_phase_ = 0.0;
   double torque_gain_ = 0.0, mean_force_ = 0.0;
+  double torque_mean_ = 0.0, preload_force_ = 0.0;  ///< [N·m], [N]: read per step
+  bool held_ = false;  ///< the torque is the model's input
   std::vector<Propagator> propagators_;
   std::vector<double> k1_, kc_, backlash_offset_;  // at the sample times of one period
   long magnus_steps_ = 0;

@@ -66,14 +66,6 @@ class GearExcitation {
   virtual double nextSwitch(double t) const = 0;
 };
 
-/// Output samples on a grid that divides the mesh period land exactly on the tooth switch at phase
-/// 0, where the mesh stiffness jumps and rounding would pick either side at random. The convention
-/// for samples: the right limit. Fills `m` at t, or 1e-6 of a mesh period later when t is within
-/// 1e-7 of a period of a switch (beyond the phase rounding, ~1e-9 periods after 1e4 s, and far
-/// below what the state moves in), and returns the time used. te, te_rate and drive_force, which
-/// are continuous, stay those at t.
-double meshForSample(const GearExcitation& excitation, double t, double interval, MeshInstant& m);
-
 /// Forces and their regime at a state (which contacts are closed), for event detection.
 struct ContactRegime {
   std::array<int, 4> code{{0, 0, 0, 0}};  ///< drive flank, back flank, bearing 1, bearing 2
@@ -92,9 +84,19 @@ struct GearRotorForces {
   ContactRegime regime;
 };
 
+class RigExcitation;
+
+/// The model: its parameters by value, its excitation shared (immutable: every copy of a model sees
+/// the same one), and for a rig the torque input. A copy is a whole model of its own.
 class GearRotorModel {
  public:
   GearRotorModel(const GearRotorParameters& p, std::shared_ptr<const GearExcitation> excitation);
+  /// A rig's model. The exact propagation, the Floquet analysis and the reduced fidelities need the
+  /// excitation's mesh frequency, TE and torque profile, which only a rig excitation has: the model
+  /// keeps it by its type (rigExcitation()) rather than have them find out by a downcast.
+  GearRotorModel(const GearRotorParameters& p, std::shared_ptr<const RigExcitation> excitation);
+  /// The same (a shared_ptr<RigExcitation> would otherwise convert to either of the two above).
+  GearRotorModel(const GearRotorParameters& p, std::shared_ptr<RigExcitation> excitation);
 
   const GearRotorParameters& parameters() const { return p_; }
   /// New parameters over the same excitation, as GearRotorModel(p, excitation) would have them
@@ -102,7 +104,19 @@ class GearRotorModel {
   /// the per-input path.
   void setParameters(const GearRotorParameters& p);
   const GearExcitation& excitation() const { return *excitation_; }
+  /// The rig excitation the model was built on, or null (sliced, constant or test excitations).
+  const RigExcitation* rigExcitation() const { return rig_.get(); }
   double equivalentMass() const { return m_s_; }
+
+  /// The pinion torque input u [N·m] of a rig excitation whose torque profile is kInput (the
+  /// online estimator's measured torque, held until the next measurement): from now on the drive
+  /// force is RigExcitation::driveForce(u). Its owner sets it; nothing else holds it. InvalidInput
+  /// for a model without a torque input (its torque is a function of time) or a non-finite u.
+  void setTorqueInput(double torque);
+  double torqueInput() const { return torque_input_; }  ///< [N·m]; 0 until set
+  /// The mesh and load state at t as the model sees it: the excitation's, with the drive force of
+  /// the torque input when it takes one. forces(), energy() and the samples read it here.
+  void meshAt(double t, MeshInstant& m) const;
 
   /// y' = f(t, y).
   void rhs(double t, const State6& y, State6& dydt) const;
@@ -118,8 +132,19 @@ class GearRotorModel {
  private:
   GearRotorParameters p_;
   std::shared_ptr<const GearExcitation> excitation_;
+  std::shared_ptr<const RigExcitation> rig_;  ///< the same object as excitation_, by type; null if not a rig's
   double m_s_ = 0.0;
+  bool torque_input_used_ = false;  ///< rig_ takes its torque from torque_input_
+  double torque_input_ = 0.0;       ///< u [N·m]
 };
+
+/// Output samples on a grid that divides the mesh period land exactly on the tooth switch at phase
+/// 0, where the mesh stiffness jumps and rounding would pick either side at random. The convention
+/// for samples: the right limit. Fills `m` (GearRotorModel::meshAt) at t, or 1e-6 of a mesh period
+/// later when t is within 1e-7 of a period of a switch (beyond the phase rounding, ~1e-9 periods
+/// after 1e4 s, and far below what the state moves in), and returns the time used. te, te_rate and
+/// drive_force, which are continuous, stay those at t.
+double meshForSample(const GearRotorModel& model, double t, double interval, MeshInstant& m);
 
 /// Excitation with constant mesh stiffness and load, for tests and the linear limit.
 class ConstantExcitation : public GearExcitation {
