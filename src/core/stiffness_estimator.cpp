@@ -61,6 +61,9 @@ const StiffnessEstimate& StiffnessEstimator::reset() {
   estimate_ = solveAll(0.0, 0.0, supports);
   supports_ = std::move(supports);
   workspace_.resize(supports_.size());
+  // The mesh phase a preload is solved at (setPreloads) is the last torque's: a reset estimator is
+  // a fresh one, at angle 0, not at the angle of the run before the reset.
+  last_pinion_angle_ = 0.0;
   return estimate_;
 }
 
