@@ -12,12 +12,16 @@ void requireLoadTolerance(std::string_view field, double value) {
   requireInClosedRange(field, value, 0.0, kMaxLoadTolerance);
 }
 
+void EstimatorLimits::validate(std::string_view load_tolerance_field) const {
+  requirePositive("max_abs_torque", max_abs_torque);
+  requirePositive("max_preload", max_preload);
+  requirePositive("max_interference", max_interference);
+  requireLoadTolerance(load_tolerance_field, load_tolerance);
+}
+
 StiffnessEstimator::StiffnessEstimator(const RigConfig& rig, const EstimatorLimits& limits)
     : rig_(rig), limits_(limits), mesh_(std::make_shared<const AntiBacklashMesh>(rig)) {
-  requirePositive("max_abs_torque", limits.max_abs_torque);
-  requirePositive("max_preload", limits.max_preload);
-  requirePositive("max_interference", limits.max_interference);
-  requireLoadTolerance("load_tolerance", limits.load_tolerance);
+  limits.validate();
   if (rig.bearings.empty()) throw InvalidInput("bearings: at least one support is required");
   for (const BearingSupportConfig& b : rig.bearings) {
     requireInHalfOpenRange("bearings[" + b.name + "].stiffness_scale", b.stiffness_scale, 0.05, 20.0);

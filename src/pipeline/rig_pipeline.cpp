@@ -42,10 +42,7 @@ std::vector<std::pair<std::string, std::uint64_t>> namedCounters(const PipelineC
 }
 
 void PipelineOptions::validate() const {
-  requirePositive("max_abs_torque", limits.max_abs_torque);
-  requirePositive("max_preload", limits.max_preload);
-  requirePositive("max_interference", limits.max_interference);
-  requireLoadTolerance("bearing_load_tolerance", limits.load_tolerance);  // StiffnessEstimator's rule
+  limits.validate("bearing_load_tolerance");  // StiffnessEstimator's rules, under the parameter's name
   requirePositive("output_rate", output_rate);
   if (output_rate > 1e6) throw InvalidInput("output_rate = " + formatValue(output_rate) + ": must be <= 1e6 Hz");
   requirePositive("max_gap", max_gap);

@@ -525,6 +525,25 @@ TEST(OneRule, LoadToleranceIsTheSameFromEveryEntry) {
   }
 }
 
+// The input limits (~max_abs_torque, ~max_preload, ~max_interference): one rule
+// (EstimatorLimits::validate) from the options and from the estimator, with the same refusal.
+TEST(OneRule, InputLimitsAreTheSameFromEveryEntry) {
+  using Field = double EstimatorLimits::*;
+  const std::pair<const char*, Field> fields[] = {{"max_abs_torque", &EstimatorLimits::max_abs_torque},
+                                                  {"max_preload", &EstimatorLimits::max_preload},
+                                                  {"max_interference", &EstimatorLimits::max_interference}};
+  for (const auto& [name, field] : fields) {
+    for (const double value : {0.0, -1.0, std::nan(""), std::numeric_limits<double>::infinity()}) {
+      PipelineOptions o;
+      o.limits.*field = value;
+      const std::string v = formatValue(value);
+      const std::string options = refusalOf([&] { o.validate(); }, std::string("options ") + name + " " + v);
+      EXPECT_EQ(options.rfind(std::string(name) + " = " + v + ": must ", 0), 0u) << options;
+      EXPECT_EQ(refusalOf([&] { (void)StiffnessEstimator(rig(), o.limits); }, std::string("estimator ") + name), options);
+    }
+  }
+}
+
 // The display scale: [1, 1e8] (requireExaggeration, runtime_settings.hpp) from the settings; the
 // visualizer calls the same check (test/ros/test_rig_visualization.cpp).
 TEST(OneRule, ExaggerationIsTheSameFromTheSettingsAndItsCheck) {

@@ -34,6 +34,11 @@ struct EstimatorLimits {
   /// total load (radial + axial preload) since its last solve; 0 = every update. Ball-contact
   /// stiffness grows as Q^(1/3) (Hertz), so the stiffness lags the exact one by about tol / 3.
   double load_tolerance = 0.0;
+  /// The limits' own rules, in one place for the estimator and the pipeline's options: each bound
+  /// > 0, and the load tolerance by requireLoadTolerance (below) under `load_tolerance_field`, the
+  /// name the caller's user knows (load_tolerance, ~bearing_load_tolerance). InvalidInput naming
+  /// the field otherwise.
+  void validate(std::string_view load_tolerance_field = "load_tolerance") const;
 };
 
 /// The bound of EstimatorLimits::load_tolerance, one rule for StiffnessEstimator and the pipeline's
