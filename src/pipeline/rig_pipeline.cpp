@@ -119,7 +119,7 @@ void RigPipeline::reset(const std::string& reason) {
     dynamics_->stop();
     try {
       dynamics_->setBearingStiffness(estimator_->shaftRadialStiffness());
-    } catch (const std::exception& e) {
+    } catch (const Error& e) {
       dynamicsError("dynamics", e);
     }
   }
@@ -356,14 +356,12 @@ void RigPipeline::calibrate(Stamp stamp, const Reading& reading, bool continuous
       sink.calibration(stamp, calibrator_->estimate());
       ++counters_.calibration_out;
     }
-  } catch (const InvalidInput& e) {
-    calibrationError(e);
-  } catch (const UnreachableLoad& e) {
+  } catch (const Error& e) {
     calibrationError(e);
   }
 }
 
-void RigPipeline::calibrationError(const std::exception& e) {
+void RigPipeline::calibrationError(const Error& e) {
   ++counters_.calibration_errors;
   counters_.last_event = std::string("calibration: ") + e.what();
   calibrator_->interrupt();
@@ -423,7 +421,7 @@ void RigPipeline::followAnchor(Stamp stamp) {
     const double t = std::max(secondsBetween(stamp, dynamics_epoch_), dynamics_->time());
     const Stamp at{dynamics_epoch_.ns + std::llround(t * 1e9)};
     dynamics_->followMotion(t, meshTurns(pinionAngle(at)), meshTurns(anchor_->speed));
-  } catch (const std::exception& e) {
+  } catch (const Error& e) {
     dynamicsError("dynamics", e);
   }
 }
@@ -451,13 +449,13 @@ void RigPipeline::pushStiffness(Stamp stamp, const StiffnessEstimate& estimate, 
     std::optional<double> at;
     if (dynamics_->started()) at = advanced ? secondsBetween(stamp, dynamics_epoch_) : dynamics_->time();
     dynamics_->setBearingStiffness(estimator_->shaftRadialStiffness(), at);
-  } catch (const std::exception& e) {
+  } catch (const Error& e) {
     dynamicsError("dynamics", e);
   }
   updateResonance(stamp, estimate, sink);
 }
 
-void RigPipeline::dynamicsError(const std::string& where, const std::exception& e) {
+void RigPipeline::dynamicsError(const std::string& where, const Error& e) {
   ++counters_.dynamics_errors;
   counters_.last_event = where + ": " + e.what();
 }
@@ -478,7 +476,7 @@ bool RigPipeline::advanceDynamicsTo(Stamp stamp, PipelineSink& sink) {
   if (t <= dynamics_->time() || t - dynamics_->time() > options_.max_gap) return false;
   try {
     emitUpTo(t, sink);
-  } catch (const std::exception& e) {
+  } catch (const Error& e) {
     dynamicsError("dynamics (restarted at the next torque input)", e);
     dynamics_->stop();
     mesh_block_ = MeshPeriodAccumulator{};
@@ -493,24 +491,25 @@ void RigPipeline::emitUpTo(double t, PipelineSink& sink) {
   // A member, not a capture: the lambda must stay within std::function's small buffer (two
   // pointers), or every advance allocates (allocation_tests).
   advance_mesh_frequency_ = dynamics_->meshFrequency();
-  try {
-    dynamics_->advanceTo(t, [&](const DynamicsSample& relative) {
-      DynamicsSample s = relative;
-      const Stamp sample_stamp{dynamics_epoch_.ns + std::llround(relative.t * 1e9)};
-      s.t = sample_stamp.toSec();
-      sink.transmissionError(sample_stamp, s);
-      ++counters_.te_out;
-      if (te_spectrum_->push(s.dynamic_te)) {
-        sink.spectrum(sample_stamp, *te_spectrum_);
-        ++counters_.spectra_out;
-      }
-      meshPeriodSample(sample_stamp, s, advance_mesh_frequency_, sink);
-    });
-  } catch (...) {
-    counters_.simulated_s += dynamics_->time() - from;
-    throw;
-  }
-  counters_.simulated_s += dynamics_->time() - from;
+  // The time integrated counts whether the advance ends or throws (a throw passes on untouched).
+  struct CountSimulated {
+    const DynamicsEstimator& dynamics;
+    double from;
+    double& simulated;
+    ~CountSimulated() { simulated += dynamics.time() - from; }
+  } count{*dynamics_, from, counters_.simulated_s};
+  dynamics_->advanceTo(t, [&](const DynamicsSample& relative) {
+    DynamicsSample s = relative;
+    const Stamp sample_stamp{dynamics_epoch_.ns + std::llround(relative.t * 1e9)};
+    s.t = sample_stamp.toSec();
+    sink.transmissionError(sample_stamp, s);
+    ++counters_.te_out;
+    if (te_spectrum_->push(s.dynamic_te)) {
+      sink.spectrum(sample_stamp, *te_spectrum_);
+      ++counters_.spectra_out;
+    }
+    meshPeriodSample(sample_stamp, s, advance_mesh_frequency_, sink);
+  });
 }
 
 void RigPipeline::advanceDynamics(Stamp stamp, double torque, PipelineSink& sink) {
@@ -528,20 +527,20 @@ void RigPipeline::advanceDynamics(Stamp stamp, double torque, PipelineSink& sink
     }
     // Else another stream took the dynamics past this stamp: the torque applies from there.
     if (t > dynamics_->time()) emitUpTo(t, sink);
-  } catch (const std::exception& e) {
+  } catch (const Error& e) {
     // The state stays at its last good sample and every later input would fail the same way:
     // restart the model here (counted), as after a gap.
     dynamicsError("dynamics (restarted at this input)", e);
     try {
       restartDynamics(stamp, torque);
-    } catch (const std::exception& again) {
+    } catch (const Error& again) {
       dynamicsError("dynamics", again);
     }
   }
   held_torque_ = torque;
   try {
     dynamics_->setTorque(torque);  // the new torque holds from here on, whatever happened above
-  } catch (const std::exception& e) {
+  } catch (const Error& e) {
     dynamicsError("dynamics", e);
   }
 }
@@ -583,7 +582,7 @@ void RigPipeline::updateResonance(Stamp stamp, const StiffnessEstimate& estimate
     springs_at_resonance_ = springs;
     sink.resonance(stamp, r);
     ++counters_.resonance_out;
-  } catch (const std::exception& e) {
+  } catch (const Error& e) {
     dynamicsError("resonance", e);
   }
 }

@@ -39,6 +39,10 @@
 // (InvalidInput naming the field); the state is left as it was. A torque whose header.frame_id is
 // not ~torque_frame is rejected before its value is read (the sign of torque.z selects the loaded
 // flank, and only that frame says which way is positive). Every input is counted.
+// Errors: the pipeline catches the library's own exceptions only (drivetrain_stiffness::Error,
+// core/errors.hpp: InvalidInput, UnreachableLoad, UnstableIntegration), and counts each (rejected
+// inputs, dynamics_errors, calibration_errors) with its reason in last_event. Anything else, a
+// programming error such as std::logic_error or std::out_of_range, passes through to the caller.
 // Transport rules: messages a numbering publisher sent that never arrived are counted as dropped
 // (SequenceGaps). An input the caller marks as backlogged (it waited too long in the subscriber
 // queue) passes every rule and drives the dynamics at its stamp, but skips the stiffness update
@@ -54,6 +58,7 @@
 #include <vector>
 
 #include "drivetrain_stiffness/calibration/calibrator.hpp"
+#include "drivetrain_stiffness/core/errors.hpp"
 #include "drivetrain_stiffness/core/dynamics_estimator.hpp"
 #include "drivetrain_stiffness/core/modal_analysis.hpp"
 #include "drivetrain_stiffness/core/motion.hpp"
@@ -305,7 +310,10 @@ class RigPipeline {
   /// Dynamics at static equilibrium under `torque` from `stamp` on (new epoch, empty spectrum).
   void restartDynamics(Stamp stamp, double torque);
   void updateResonance(Stamp stamp, const StiffnessEstimate& estimate, PipelineSink& sink);
-  void dynamicsError(const std::string& where, const std::exception& e);
+  /// A failure of the dynamics or the resonance on the library's own error (errors.hpp): counted
+  /// in dynamics_errors with `where` and the reason in last_event. Nothing wider is caught: a
+  /// programming error leaves the pipeline.
+  void dynamicsError(const std::string& where, const Error& e);
 
   /// The running block of MeshPeriodStatistics (plain values: no allocation per sample).
   struct MeshPeriodAccumulator {
@@ -357,7 +365,7 @@ class RigPipeline {
   void calibrate(Stamp stamp, const Reading& reading, bool continuous, PipelineSink& sink);
   /// A window the calibration could not evaluate (the library's own errors only): counted, reason
   /// in last_event, the window dropped.
-  void calibrationError(const std::exception& e);
+  void calibrationError(const Error& e);
   /// The reading unwrapped against `last` (null: none recent), its speed measured or differentiated.
   Reading unwrapReading(Stamp stamp, const MotionInput& reading, const Reading* last) const;
   double held_torque_ = 0.0;
