@@ -21,7 +21,7 @@ double meanMeshStiffness(const AntiBacklashMesh& mesh) {
 }
 
 GearRotorParameters rigRotorParameters(const RigConfig& rig, const AntiBacklashMesh& mesh,
-                                       const std::array<double, 2>& bearing_stiffness) {
+                                       const std::array<double, 2>& bearing_stiffness, const DampingRatios& damping) {
   const DynamicsConfig& d = rig.dynamics;
   GearRotorParameters p;
   p.pinion_mass = d.pinion_mass;
@@ -37,10 +37,10 @@ GearRotorParameters rigRotorParameters(const RigConfig& rig, const AntiBacklashM
     }
     p.bearing_stiffness[i] = bearing_stiffness[i];
     const double m = i == 0 ? p.pinion_mass : p.gear_mass;
-    p.bearing_damping[i] = 2.0 * d.bearing_damping_ratio * std::sqrt(p.bearing_stiffness[i] * m);
+    p.bearing_damping[i] = 2.0 * damping.bearing * std::sqrt(p.bearing_stiffness[i] * m);
     p.bearing_clearance[i] = d.bearing_clearance[i];
   }
-  p.mesh_damping = 2.0 * d.mesh_damping_ratio * std::sqrt(meanMeshStiffness(mesh) * p.equivalentMass());
+  p.mesh_damping = 2.0 * damping.mesh * std::sqrt(meanMeshStiffness(mesh) * p.equivalentMass());
   return p;
 }
 

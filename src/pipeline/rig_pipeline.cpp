@@ -83,24 +83,38 @@ void PipelineOptions::validate() const {
 RigPipeline::RigPipeline(const RigConfig& rig, const PipelineOptions& options)
     : RigPipeline(rig, options, RuntimeSettings::forRig(rig)) {}
 
-RigPipeline::RigPipeline(const RigConfig& rig, const PipelineOptions& options, const RuntimeSettings& settings)
-    : rig_(rig), options_(options), settings_(settings) {
-  options_.validate();
-  settings_.validate();
-  rig_.dynamics.mesh_damping_ratio = settings_.mesh_damping_ratio;
-  rig_.dynamics.bearing_damping_ratio = settings_.bearing_damping_ratio;
-  if (options_.dynamics && rig_.dynamics.present) {
+namespace {
+/// The rig as the pipeline runs it, built once and shared read only by the stiffness estimator, the
+/// dynamics and the calibration: the gearbox with the start-up damping ratios of the run-time
+/// settings and, with dynamics, the nominal speed of the options.
+std::shared_ptr<const RigConfig> runningRig(const RigConfig& gearbox, const PipelineOptions& options,
+                                            const RuntimeSettings& settings) {
+  options.validate();
+  settings.validate();
+  auto rig = std::make_shared<RigConfig>(gearbox);
+  rig->dynamics.mesh_damping_ratio = settings.mesh_damping_ratio;
+  rig->dynamics.bearing_damping_ratio = settings.bearing_damping_ratio;
+  if (options.dynamics && rig->dynamics.present) {
     // One speed for both mesh phases: the stiffness estimate's and the dynamics' (their grid too).
-    if (!(options_.pinion_speed_rpm > 0.0)) {
-      throw InvalidInput("pinion_speed_rpm = " + formatValue(options_.pinion_speed_rpm) + ": must be > 0 with dynamics");
+    if (!(options.pinion_speed_rpm > 0.0)) {
+      throw InvalidInput("pinion_speed_rpm = " + formatValue(options.pinion_speed_rpm) + ": must be > 0 with dynamics");
     }
-    rig_.dynamics.speed_rpm = options_.pinion_speed_rpm;
+    rig->dynamics.speed_rpm = options.pinion_speed_rpm;
   }
+  return rig;
+}
+}  // namespace
+
+RigPipeline::RigPipeline(const RigConfig& rig, const PipelineOptions& options, const RuntimeSettings& settings)
+    : rig_(runningRig(rig, options, settings)), options_(options), settings_(settings) {
   estimator_ = std::make_unique<StiffnessEstimator>(rig_, options_.limits);
-  if (options_.calibrate && rig_.calibration.present && rig_.dynamics.present) calibrator_ = std::make_unique<Calibrator>(rig_);
+  // One mesh table for the rig: the stiffness estimator's, shared read only with the dynamics and
+  // the calibration.
+  if (options_.calibrate && rig_->calibration.present && rig_->dynamics.present) {
+    calibrator_ = std::make_unique<Calibrator>(rig_, estimator_->sharedMesh());
+  }
   pinion_speed_ = options_.pinion_speed_rpm * kTwoPi / 60.0;
   if (options_.dynamics) {
-    // One mesh table for the rig: the stiffness estimator's, shared read-only with the dynamics.
     dynamics_ = std::make_unique<DynamicsEstimator>(rig_, estimator_->shaftRadialStiffness(), options_.output_rate,
                                                     estimator_->sharedMesh());
     dynamics_->setFidelity(settings_.fidelity);
@@ -560,7 +574,9 @@ void RigPipeline::updateResonance(Stamp stamp, const StiffnessEstimate& estimate
       }
       if (within) return;
     }
-    const GearRotorParameters p = rigRotorParameters(rig_, estimator_->mesh(), kb);
+    // The run-time settings' damping (the shared rig keeps the start-up one).
+    const DampingRatios damping{settings_.mesh_damping_ratio, settings_.bearing_damping_ratio};
+    const GearRotorParameters p = rigRotorParameters(*rig_, estimator_->mesh(), kb, damping);
     ResonanceEstimate r;
     r.modes = modalAnalysis(p, estimate.mesh.mean);
     ++counters_.modal_updates;
@@ -593,8 +609,6 @@ void RigPipeline::apply(const RuntimeSettings& settings) {
                                settings.bearing_damping_ratio != settings_.bearing_damping_ratio;
   settings_ = settings;
   if (damping_changed) {
-    rig_.dynamics.mesh_damping_ratio = settings.mesh_damping_ratio;
-    rig_.dynamics.bearing_damping_ratio = settings.bearing_damping_ratio;
     if (dynamics_) dynamics_->setDamping(settings.mesh_damping_ratio, settings.bearing_damping_ratio);
     last_resonance_.reset();  // damped frequencies and ratios changed: republish at the next input
   }

@@ -274,7 +274,10 @@ class RigPipeline {
   const DynamicsEstimator* dynamics() const { return dynamics_.get(); }
   /// The live calibration (rule 11), or null without a calibration block or with ~calibrate off.
   const Calibrator* calibrator() const { return calibrator_.get(); }
-  const RigConfig& rig() const { return rig_; }
+  /// The rig as the pipeline runs it (shared read only with the estimator, the dynamics and the
+  /// calibration): the gearbox with the nominal speed and the start-up damping; the current damping
+  /// is settings()'.
+  const RigConfig& rig() const { return *rig_; }
   const std::optional<ResonanceEstimate>& lastResonance() const { return last_resonance_; }
   /// Pinion angle at `stamp` [rad]: the last encoder reading extrapolated at its speed, or the
   /// nominal speed's angle since the dynamics origin (plus ~mesh_phase_offset as an angle).
@@ -336,7 +339,7 @@ class RigPipeline {
   MeshPeriodAccumulator mesh_block_;
   double advance_mesh_frequency_ = 0.0;  ///< [Hz] the dynamics' during the current emitUpTo
 
-  RigConfig rig_;
+  std::shared_ptr<const RigConfig> rig_;  ///< first: the members below share it
   PipelineOptions options_;
   RuntimeSettings settings_;
   std::unique_ptr<StiffnessEstimator> estimator_;
