@@ -120,7 +120,7 @@ RigPipeline::RigPipeline(const RigConfig& rig, const PipelineOptions& options, c
     dynamics_->setFidelity(settings_.fidelity);
     dynamics_->setMotionSlices(options_.motion_slices);
     te_spectrum_ = std::make_unique<SlidingSpectrum>(options_.spectrum_window, options_.spectrum_hop,
-                                                     dynamics_->outputInterval(), 3);
+                                                     dynamics_->outputInterval(), SpectrumPeaks::kMaxPeaks);
   }
 }
 
@@ -445,7 +445,7 @@ void RigPipeline::afterUpdate(Stamp stamp, const StiffnessEstimate& estimate, Pi
   const bool due = settings_.stiffness_rate <= 0.0 || !last_stiffness_out_ || stamp < *last_stiffness_out_ ||
                    secondsBetween(stamp, *last_stiffness_out_) >= 1.0 / settings_.stiffness_rate;
   if (due) {
-    sink.stiffness(stamp, estimate);
+    sink.stiffness(stamp, estimate, stiffnessBands(estimate));
     last_stiffness_out_ = stamp;
     ++counters_.stiffness_out;
   } else {
@@ -516,10 +516,19 @@ void RigPipeline::emitUpTo(double t, PipelineSink& sink) {
     DynamicsSample s = relative;
     const Stamp sample_stamp{dynamics_epoch_.ns + std::llround(relative.t * 1e9)};
     s.t = sample_stamp.toSec();
-    sink.transmissionError(sample_stamp, s);
+    SampleContext context;
+    context.pinion_angle = pinionAngle(sample_stamp);
+    context.resonance = last_resonance_ ? &*last_resonance_ : nullptr;
+    sink.transmissionError(sample_stamp, s, context);
     ++counters_.te_out;
     if (te_spectrum_->push(s.dynamic_te)) {
-      sink.spectrum(sample_stamp, *te_spectrum_);
+      const std::vector<SpectralPeak>& peaks = te_spectrum_->peaks();
+      SpectrumPeaks& out = spectrum_peaks_;
+      out.count = std::min(peaks.size(), SpectrumPeaks::kMaxPeaks);
+      std::copy_n(peaks.begin(), out.count, out.peaks.begin());
+      out.resolution = te_spectrum_->resolution();
+      out.window_seconds = te_spectrum_->windowSeconds();
+      sink.spectrum(sample_stamp, out);
       ++counters_.spectra_out;
     }
     meshPeriodSample(sample_stamp, s, advance_mesh_frequency_, sink);
@@ -596,11 +605,28 @@ void RigPipeline::updateResonance(Stamp stamp, const StiffnessEstimate& estimate
     r.floquet_margin = r.floquet_valid ? margin : 0.0;
     last_resonance_ = r;
     springs_at_resonance_ = springs;
-    sink.resonance(stamp, r);
+    sink.resonance(stamp, r, resonanceBands(r));
     ++counters_.resonance_out;
   } catch (const Error& e) {
     dynamicsError("resonance", e);
   }
+}
+
+CalibrationBands RigPipeline::stiffnessBands(const StiffnessEstimate& estimate) const {
+  if (calibrator_) return calibrator_->bands(estimate.torque, *estimator_, false);
+  CalibrationBands b;  // no calibration: the drawing's model, bounds of zero width
+  b.mesh_stiffness = b.mesh_stiffness_low = b.mesh_stiffness_high = estimate.mesh.mean;
+  b.bearing_stiffness = b.bearing_stiffness_low = b.bearing_stiffness_high = estimator_->shaftRadialStiffness();
+  return b;
+}
+
+CalibrationBands RigPipeline::resonanceBands(const ResonanceEstimate& estimate) const {
+  if (calibrator_) return calibrator_->bands(estimator_->current().torque, *estimator_, true);
+  CalibrationBands b;  // no calibration: the drawing's frequencies, bounds of zero width
+  for (std::size_t i = 0; i < estimate.modes.size(); ++i) {
+    b.natural_frequency[i] = b.natural_frequency_low[i] = b.natural_frequency_high[i] = estimate.modes[i].natural_frequency;
+  }
+  return b;
 }
 
 void RigPipeline::apply(const RuntimeSettings& settings) {

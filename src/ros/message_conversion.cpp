@@ -80,21 +80,21 @@ drivetrain_stiffness::TransmissionError toTransmissionErrorMsg(Stamp stamp, cons
   return m;
 }
 
-drivetrain_stiffness::SpectralPeaks toSpectralPeaksMsg(Stamp stamp, const std::string& frame_id, const SlidingSpectrum& spectrum) {
+drivetrain_stiffness::SpectralPeaks toSpectralPeaksMsg(Stamp stamp, const std::string& frame_id, const SpectrumPeaks& in) {
   drivetrain_stiffness::SpectralPeaks peaks;
   peaks.header.stamp = toRosTime(stamp);
   peaks.header.frame_id = frame_id;
-  for (const SpectralPeak& p : spectrum.peaks()) {
-    peaks.frequencies_hz.push_back(p.frequency);
-    peaks.amplitudes.push_back(p.amplitude);
+  for (std::size_t i = 0; i < in.count; ++i) {
+    peaks.frequencies_hz.push_back(in.peaks[i].frequency);
+    peaks.amplitudes.push_back(in.peaks[i].amplitude);
   }
   // Flat copies of the strongest peak, for plotting tools that do not index arrays.
-  if (!spectrum.peaks().empty()) {
-    peaks.peak_frequency_hz = spectrum.peaks().front().frequency;
-    peaks.peak_amplitude = spectrum.peaks().front().amplitude;
+  if (in.count > 0) {
+    peaks.peak_frequency_hz = in.peaks[0].frequency;
+    peaks.peak_amplitude = in.peaks[0].amplitude;
   }
-  peaks.window_s = spectrum.windowSeconds();
-  peaks.resolution_hz = spectrum.resolution();
+  peaks.window_s = in.window_seconds;
+  peaks.resolution_hz = in.resolution;
   return peaks;
 }
 

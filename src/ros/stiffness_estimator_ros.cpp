@@ -257,6 +257,7 @@ void StiffnessEstimatorRos::onReconfigure(drivetrain_stiffness::EstimatorConfig&
     next.exaggeration = config.exaggeration;
     next.tf_rate = config.tf_rate;
     pipeline_->apply(next);
+    publishers_->apply(pipeline_->settings());  // the same settings for the drawing (tf rate, exaggeration)
     applied_config_ = config;
     ++reconfigurations_;
   } catch (const InvalidInput& e) {

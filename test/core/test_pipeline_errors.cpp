@@ -31,10 +31,10 @@ Stamp at(double seconds) { return Stamp{kEpoch + std::llround(seconds * 1e9)}; }
 struct InjectingSink : PipelineSink {
   int samples = 0, throw_at = -1;
   std::function<void()> on_sample, on_resonance;
-  void transmissionError(Stamp, const DynamicsSample&) override {
+  void transmissionError(Stamp, const DynamicsSample&, const SampleContext&) override {
     if (++samples == throw_at && on_sample) on_sample();
   }
-  void resonance(Stamp, const ResonanceEstimate&) override {
+  void resonance(Stamp, const ResonanceEstimate&, const CalibrationBands&) override {
     if (on_resonance) on_resonance();
   }
 };

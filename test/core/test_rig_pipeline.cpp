@@ -35,19 +35,19 @@ struct Recorder : PipelineSink {
   std::vector<Stamp> te_stamps;
   std::vector<std::pair<Stamp, ResonanceEstimate>> resonance_out;
   int spectra = 0;
-  void stiffness(Stamp s, const StiffnessEstimate& e) override {
+  void stiffness(Stamp s, const StiffnessEstimate& e, const CalibrationBands&) override {
     for (const SupportEstimate& b : e.supports) EXPECT_TRUE(std::isfinite(b.solution.radialStiffness()));
     EXPECT_TRUE(std::isfinite(e.mesh.current.composite));
     stiffness_out.emplace_back(s, e);
   }
-  void transmissionError(Stamp stamp, const DynamicsSample& s) override {
+  void transmissionError(Stamp stamp, const DynamicsSample& s, const SampleContext&) override {
     EXPECT_EQ(s.t, stamp.toSec());
     te_stamps.push_back(stamp);
     EXPECT_TRUE(s.state.allFinite() && std::isfinite(s.dynamic_te) && std::isfinite(s.mesh_force));
     te.push_back(s);
   }
-  void spectrum(Stamp, const SlidingSpectrum&) override { ++spectra; }
-  void resonance(Stamp s, const ResonanceEstimate& r) override {
+  void spectrum(Stamp, const SpectrumPeaks&) override { ++spectra; }
+  void resonance(Stamp s, const ResonanceEstimate& r, const CalibrationBands&) override {
     for (const Mode& m : r.modes) EXPECT_TRUE(std::isfinite(m.natural_frequency) && std::isfinite(m.damping_ratio));
     resonance_out.emplace_back(s, r);
   }

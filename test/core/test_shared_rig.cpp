@@ -20,7 +20,7 @@ Stamp at(double seconds) { return Stamp{kEpoch + std::llround(seconds * 1e9)}; }
 
 struct LastResonance : PipelineSink {
   std::optional<ResonanceEstimate> last;
-  void resonance(Stamp, const ResonanceEstimate& r) override { last = r; }
+  void resonance(Stamp, const ResonanceEstimate& r, const CalibrationBands&) override { last = r; }
 };
 
 ResonanceEstimate resonanceAfterOneTorque(RigPipeline& p) {

@@ -55,7 +55,7 @@ std::vector<PreloadSetting> toPreloadSettings(const drivetrain_stiffness::Preloa
 void fillStiffnessMsg(Stamp stamp, const std::string& frame_id, const StiffnessEstimate& estimate,
                       drivetrain_stiffness::Stiffness& out);
 drivetrain_stiffness::TransmissionError toTransmissionErrorMsg(Stamp stamp, const std::string& frame_id, const DynamicsSample& s);
-drivetrain_stiffness::SpectralPeaks toSpectralPeaksMsg(Stamp stamp, const std::string& frame_id, const SlidingSpectrum& spectrum);
+drivetrain_stiffness::SpectralPeaks toSpectralPeaksMsg(Stamp stamp, const std::string& frame_id, const SpectrumPeaks& peaks);
 drivetrain_stiffness::Resonance toResonanceMsg(Stamp stamp, const std::string& frame_id, const ResonanceEstimate& r);
 /// The calibrated stiffness and natural frequencies with their 95 % bounds into the stiffness and
 /// resonance messages (docs/calibration.md section 4); refuses a non-finite number, naming it.
