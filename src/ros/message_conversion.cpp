@@ -17,13 +17,17 @@ TorqueInput toTorqueInput(const geometry_msgs::WrenchStamped& msg, std::string_v
   return {fromRosTime(msg.header.stamp), msg.wrench.torque.z, {publisher, msg.header.seq, msg.header.frame_id}};
 }
 
-std::vector<PreloadSetting> toPreloadSettings(const drivetrain_stiffness::Preload& msg) {
-  std::vector<PreloadSetting> settings;
-  settings.reserve(msg.bearings.size());
-  for (const auto& b : msg.bearings) {
-    settings.push_back({b.name, b.axial_preload, b.radial_preload, b.inner_interference, b.outer_interference});
+void toPreloadSettings(const drivetrain_stiffness::Preload& msg, std::vector<PreloadSetting>& out) {
+  out.resize(msg.bearings.size());  // keeps the capacity and the elements' strings
+  for (std::size_t i = 0; i < out.size(); ++i) {
+    const auto& b = msg.bearings[i];
+    PreloadSetting& s = out[i];
+    s.name = b.name;  // std::string assignment: reuses the element's buffer
+    s.axial_preload = b.axial_preload;
+    s.radial_preload = b.radial_preload;
+    s.inner_interference = b.inner_interference;
+    s.outer_interference = b.outer_interference;
   }
-  return settings;
 }
 
 void fillStiffnessMsg(Stamp stamp, const std::string& frame_id, const StiffnessEstimate& estimate,
