@@ -11,13 +11,10 @@ namespace drivetrain_stiffness {
 void requireDampingRatio(std::string_view field, double value) { requireInClosedRange(field, value, 0.0, kMaxDampingRatio); }
 
 double meanMeshStiffness(const AntiBacklashMesh& mesh) {
-  double k = 0.0;
-  const int n = 256;
-  for (int i = 0; i < n; ++i) {
-    const CompositeMesh c = mesh.at((i + 0.5) / n, 0.0);
-    k += (c.k1 + (mesh.spec().spring_stiffness > 0 ? c.k_chain : 0.0)) / n;
-  }
-  return k;
+  // The table's exact period means (AntiBacklashMesh::periodMeans): k1 + k_c while both flanks carry
+  // load (seed 000 eq 1), k1 alone for an ordinary gear (no scissor spring).
+  const AntiBacklashMesh::PeriodMeans& m = mesh.periodMeans();
+  return m.k1 + (mesh.spec().spring_stiffness > 0 ? m.k_chain : 0.0);
 }
 
 GearRotorParameters rigRotorParameters(const RigConfig& rig, const AntiBacklashMesh& mesh,

@@ -32,14 +32,10 @@ StiffnessEstimator::StiffnessEstimator(std::shared_ptr<const RigConfig> rig, con
   for (const BearingSupportConfig& b : rig_->bearings) {
     requireInHalfOpenRange("bearings[" + b.name + "].stiffness_scale", b.stiffness_scale, 0.05, 20.0);
   }
-  // Period means of k1 and k_chain, computed once: they decide the flank state of the mean
-  // stiffness (the table itself is fixed until the gear parameters change).
-  const int n = 512;
-  for (int i = 0; i < n; ++i) {
-    const CompositeMesh c = mesh_->at((i + 0.5) / n, 0.0);
-    mean_k1_kchain_[0] += c.k1 / n;
-    mean_k1_kchain_[1] += c.k_chain / n;
-  }
+  // Period means of k1 and k_chain (the table's exact ones, as meanMeshStiffness takes them): they
+  // decide the flank state of the mean stiffness.
+  mean_k1_kchain_[0] = mesh_->periodMeans().k1;
+  mean_k1_kchain_[1] = mesh_->periodMeans().k_chain;
   reset();
 }
 

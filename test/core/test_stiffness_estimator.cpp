@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "drivetrain_stiffness/config/yaml_config.hpp"
+#include "drivetrain_stiffness/core/rig_model.hpp"
 #include "drivetrain_stiffness/core/stiffness_estimator.hpp"
 
 using namespace drivetrain_stiffness;
@@ -59,4 +60,14 @@ TEST(StiffnessEstimator, ResetEstimatorBehavesAsAFreshOne) {
   expectSame(used.setTorque(-0.05, 0.7), fresh.setTorque(-0.05, 0.7));
   expectSame(used.setPreloads(preloads(900.0)), fresh.setPreloads(preloads(900.0)));
   EXPECT_TRUE(used.shaftRadialStiffness() == fresh.shaftRadialStiffness());
+}
+
+// One mean mesh stiffness in the library: the estimator's period mean (both flanks loaded at a
+// small torque) is meanMeshStiffness, which the rotor damping and the reduced models take too.
+TEST(StiffnessEstimator, MeanMeshStiffnessIsTheLibrarysOne) {
+  StiffnessEstimator e(rig());
+  const StiffnessEstimate& s = e.setTorque(0.01, 0.3);
+  ASSERT_EQ(s.mesh.current.contact, FlankContact::kBoth);
+  EXPECT_EQ(s.mesh.mean, meanMeshStiffness(e.mesh()));
+  EXPECT_EQ(s.mesh.mean, e.mesh().periodMeans().k1 + e.mesh().periodMeans().k_chain);
 }

@@ -29,7 +29,8 @@ constexpr double kMaxDampingRatio = 1.0;
 /// Throws InvalidInput("<field> = <value>: ...") unless 0 <= value <= kMaxDampingRatio (NaN included).
 void requireDampingRatio(std::string_view field, double value);
 
-/// Mean mesh stiffness over one period: k1, plus k_c for an anti-backlash gear [N/m].
+/// Mean mesh stiffness over one period: k1, plus k_c for an anti-backlash gear [N/m]; the exact
+/// period mean of the phase table (AntiBacklashMesh::periodMeans), the one mean every user takes.
 double meanMeshStiffness(const AntiBacklashMesh& mesh);
 
 /// The damping ratios zeta of the model [-]: the `dynamics:` block's, or the run-time settings'
