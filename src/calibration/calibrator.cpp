@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <numeric>
+#include <stdexcept>
+#include <utility>
 
 #include <Eigen/Cholesky>
 #include <Eigen/LU>
@@ -34,11 +36,21 @@ namespace {
 constexpr double k95 = 1.959963984540054;  // two-sided 95 % of the normal distribution
 }  // namespace
 
-Calibrator::Calibrator(const RigConfig& rig)
-    : rig_(rig),
-      config_(rig.calibration),
-      model_(rig),
-      regression_(rig.gears.teeth[0], rig.gears.teeth[1]) {
+namespace {
+const RigConfig& required(const std::shared_ptr<const RigConfig>& rig) {
+  if (!rig) throw std::invalid_argument("Calibrator: no rig");  // a caller's bug, not bad data
+  return *rig;
+}
+}  // namespace
+
+Calibrator::Calibrator(const RigConfig& rig) : Calibrator(std::make_shared<const RigConfig>(rig)) {}
+
+Calibrator::Calibrator(std::shared_ptr<const RigConfig> shared_rig, std::shared_ptr<const AntiBacklashMesh> mesh)
+    : rig_(std::move(shared_rig)),
+      config_(required(rig_).calibration),
+      model_(*rig_, std::move(mesh)),
+      regression_(rig_->gears.teeth[0], rig_->gears.teeth[1]) {
+  const RigConfig& rig = *rig_;
   if (!config_.present) throw InvalidInput("calibration: the gearbox has no calibration block");
   if (!rig.dynamics.present) throw InvalidInput("calibration: needs the gearbox's dynamics block (masses for the modes)");
   teeth_[0] = rig.gears.teeth[0];
@@ -358,9 +370,9 @@ CalibrationBands Calibrator::bands(double torque, const StiffnessEstimator& supp
   out.mesh_stiffness_high = out.mesh_stiffness + k95 * mesh_std;
   // Bearing stiffness per shaft: the Hertz tangent at the current load (scale 1) times the scale.
   std::array<double, 2> unit{0.0, 0.0};
-  for (std::size_t i = 0; i < rig_.bearings.size(); ++i) {
+  for (std::size_t i = 0; i < rig_->bearings.size(); ++i) {
     const SupportEstimate& s = supports.current().supports[i];
-    unit[rig_.bearings[i].shaft] += s.solution.radialStiffness() / supports.supportConfig(i).stiffness_scale;
+    unit[rig_->bearings[i].shaft] += s.solution.radialStiffness() / supports.supportConfig(i).stiffness_scale;
   }
   for (int s = 0; s < 2; ++s) {
     const int index = s == 0 ? kPinionBearingScale : kGearBearingScale;
@@ -372,7 +384,7 @@ CalibrationBands Calibrator::bands(double torque, const StiffnessEstimator& supp
   // Natural frequencies of the calibrated model (modal_analysis.hpp), each with its band.
   auto modes = [&](const CalibrationVector& p) {
     const std::array<double, 2> kb{p[kPinionBearingScale] * unit[0], p[kGearBearingScale] * unit[1]};
-    return modalAnalysis(rigRotorParameters(rig_, supports.mesh(), kb), model_.meanMeshStiffness(p, torque));
+    return modalAnalysis(rigRotorParameters(*rig_, supports.mesh(), kb), model_.meanMeshStiffness(p, torque));
   };
   const std::array<Mode, 3> m = modes(theta);
   // The three frequencies' gradients together: two modal analyses per parameter that moves them.

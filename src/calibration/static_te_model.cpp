@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <utility>
 
 #include "drivetrain_stiffness/core/constants.hpp"
 #include "drivetrain_stiffness/core/stiffness_estimator.hpp"
@@ -21,9 +22,15 @@ const char* calibrationName(int index) {
   }
 }
 
-StaticTeModel::StaticTeModel(const RigConfig& rig) {
-  // The drawing's tooth stiffness (scale 1): the calibrated scale multiplies it.
-  unit_ = std::make_unique<AntiBacklashMesh>(rig.gears, rig.anti_backlash, rig.mesh_model, rig.mesh_samples, 1.0);
+StaticTeModel::StaticTeModel(const RigConfig& rig, std::shared_ptr<const AntiBacklashMesh> rig_mesh) {
+  // The drawing's tooth stiffness (scale 1): the calibrated scale multiplies it. The rig's own
+  // table is that table when the rig's scale is 1 (the same constructor arguments, so the same
+  // numbers); a rig with another scale needs one at scale 1 of its own.
+  if (rig_mesh && rig_mesh->stiffnessScale() == 1.0) {
+    unit_ = std::move(rig_mesh);
+  } else {
+    unit_ = std::make_shared<const AntiBacklashMesh>(rig.gears, rig.anti_backlash, rig.mesh_model, rig.mesh_samples, 1.0);
+  }
   const AntiBacklashMesh& mesh = *unit_;
   switches_ = mesh.switchingPhases();
   spring_ = rig.anti_backlash.spring_stiffness;

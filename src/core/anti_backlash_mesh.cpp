@@ -72,6 +72,14 @@ AntiBacklashMesh::AntiBacklashMesh(const GearPairSpec& gears, const AntiBacklash
       const CompositeMesh c = exactAt(phi, 0.0);
       seg.values.push_back({c.k1, c.k2, c.k_chain});
     }
+    // The segment's exact integral: trapezoid over its nodes, spacing (b - a) / (n - 1).
+    const double h = (b - a) / (per_segment - 1);
+    for (int j = 0; j < per_segment; ++j) {
+      const double w = (j == 0 || j == per_segment - 1) ? 0.5 * h : h;
+      means_.k1 += w * seg.values[j][0];
+      means_.k2 += w * seg.values[j][1];
+      means_.k_chain += w * seg.values[j][2];
+    }
     segments_.push_back(std::move(seg));
   }
 }

@@ -3,6 +3,7 @@
 #include <Eigen/Eigenvalues>
 #include <cmath>
 #include <complex>
+#include <stdexcept>
 
 #include "drivetrain_stiffness/core/constants.hpp"
 #include "drivetrain_stiffness/core/rig_model.hpp"
@@ -19,13 +20,16 @@ double wrapTurns(double x) {
 
 DynamicsEstimator::DynamicsEstimator(const RigConfig& rig, const std::array<double, 2>& bearing_stiffness,
                                      double output_rate)
-    : DynamicsEstimator(rig, bearing_stiffness, output_rate,
+    : DynamicsEstimator(std::make_shared<const RigConfig>(rig), bearing_stiffness, output_rate,
                         std::make_shared<const AntiBacklashMesh>(rig)) {}
 
-DynamicsEstimator::DynamicsEstimator(const RigConfig& rig, const std::array<double, 2>& bearing_stiffness,
+DynamicsEstimator::DynamicsEstimator(std::shared_ptr<const RigConfig> rig, const std::array<double, 2>& bearing_stiffness,
                                      double output_rate, std::shared_ptr<const AntiBacklashMesh> mesh)
-    : rig_(rig), bearing_stiffness_(bearing_stiffness), requested_rate_(output_rate), mesh_(std::move(mesh)) {
-  if (!rig.dynamics.present) throw InvalidInput("dynamics: the gearbox file has no 'dynamics:' block");
+    : rig_(std::move(rig)), bearing_stiffness_(bearing_stiffness), requested_rate_(output_rate),
+      mesh_(std::move(mesh)) {
+  if (!rig_) throw std::invalid_argument("DynamicsEstimator: no rig");  // a caller's bug, not bad data
+  damping_ = DampingRatios::of(rig_->dynamics);
+  if (!rig_->dynamics.present) throw InvalidInput("dynamics: the gearbox file has no 'dynamics:' block");
   requirePositive("output_rate", output_rate);
   for (int i = 0; i < 2; ++i) requireNonNegative("bearing_stiffness[" + std::to_string(i) + "]", bearing_stiffness[i]);
   if (!mesh_) throw InvalidInput("dynamics: no mesh table");
@@ -45,15 +49,15 @@ void DynamicsEstimator::build() {
   try {
     buildModel();
   } catch (const InvalidInput& e) {
-    throw InvalidInput("dynamics.speed_rpm = " + formatValue(rig_.dynamics.speed_rpm) + " with output_rate = " +
+    throw InvalidInput("dynamics.speed_rpm = " + formatValue(rig_->dynamics.speed_rpm) + " with output_rate = " +
                        formatValue(requested_rate_) + ": " + e.what());
   }
   ++rebuilds_;
 }
 
 void DynamicsEstimator::buildModel() {
-  const DynamicsConfig& d = rig_.dynamics;
-  const GearRotorParameters p = rigRotorParameters(rig_, *mesh_, bearing_stiffness_);
+  const DynamicsConfig& d = rig_->dynamics;
+  const GearRotorParameters p = currentParameters();
   RigExcitationSpec spec;
   spec.speed = d.speed_rpm * kTwoPi / 60.0;
   spec.te_amplitude = d.transmission_error_amplitude;
@@ -125,13 +129,12 @@ void DynamicsEstimator::setBearingStiffness(const std::array<double, 2>& k, std:
 void DynamicsEstimator::setDamping(double mesh_damping_ratio, double bearing_damping_ratio) {
   requireDampingRatio("mesh_damping_ratio", mesh_damping_ratio);
   requireDampingRatio("bearing_damping_ratio", bearing_damping_ratio);
-  const DynamicsConfig before = rig_.dynamics;
-  rig_.dynamics.mesh_damping_ratio = mesh_damping_ratio;
-  rig_.dynamics.bearing_damping_ratio = bearing_damping_ratio;
+  const DampingRatios before = damping_;
+  damping_ = {mesh_damping_ratio, bearing_damping_ratio};
   try {
     parametersChanged();
   } catch (...) {
-    rig_.dynamics = before;
+    damping_ = before;  // refused: the last model stays
     throw;
   }
 }
@@ -154,10 +157,12 @@ void DynamicsEstimator::parametersChanged() {
   ++rebuilds_;
 }
 
-GearRotorParameters DynamicsEstimator::currentParameters() const { return rigRotorParameters(rig_, *mesh_, bearing_stiffness_); }
+GearRotorParameters DynamicsEstimator::currentParameters() const {
+  return rigRotorParameters(*rig_, *mesh_, bearing_stiffness_, damping_);
+}
 
 double DynamicsEstimator::nominalMeshFrequency() const {
-  return rig_.dynamics.speed_rpm / 60.0 * mesh_->geometry().spec().teeth[0];
+  return rig_->dynamics.speed_rpm / 60.0 * mesh_->geometry().spec().teeth[0];
 }
 
 void DynamicsEstimator::setMotionSlices(int slices) {
@@ -176,19 +181,19 @@ void DynamicsEstimator::startFollowing() {
   if (!slices_) {
     slices_ = std::make_shared<const SlicedMesh>(mesh_, motion_slices_);
     // The live node's load follows the input (RigExcitationSpec::balanced_load): F_d = T / r_p.
-    moving_ = std::make_shared<SlicedExcitation>(slices_, rig_.dynamics.transmission_error_amplitude, rig_.dynamics.backlash,
+    moving_ = std::make_shared<SlicedExcitation>(slices_, rig_->dynamics.transmission_error_amplitude, rig_->dynamics.backlash,
                                                  1.0 / p.pinion_base_radius, 0.0);
     // linear_modal along the measured motion: the same model with the period's mean stiffness.
     mean_slices_ = SlicedMesh::periodMean(*slices_);
-    mean_moving_ = std::make_shared<SlicedExcitation>(mean_slices_, rig_.dynamics.transmission_error_amplitude,
-                                                      rig_.dynamics.backlash, 1.0 / p.pinion_base_radius, 0.0);
+    mean_moving_ = std::make_shared<SlicedExcitation>(mean_slices_, rig_->dynamics.transmission_error_amplitude,
+                                                      rig_->dynamics.backlash, 1.0 / p.pinion_base_radius, 0.0);
   }
   const bool clearance = p.bearing_clearance[0] > 0.0 || p.bearing_clearance[1] > 0.0;
   if (!sliced_ && !clearance) {
-    sliced_ = std::make_unique<SlicedModalPropagator>(p, slices_, rig_.dynamics.transmission_error_amplitude,
-                                                      rig_.dynamics.backlash);
-    mean_sliced_ = std::make_unique<SlicedModalPropagator>(p, mean_slices_, rig_.dynamics.transmission_error_amplitude,
-                                                           rig_.dynamics.backlash);
+    sliced_ = std::make_unique<SlicedModalPropagator>(p, slices_, rig_->dynamics.transmission_error_amplitude,
+                                                      rig_->dynamics.backlash);
+    mean_sliced_ = std::make_unique<SlicedModalPropagator>(p, mean_slices_, rig_->dynamics.transmission_error_amplitude,
+                                                           rig_->dynamics.backlash);
   } else if (sliced_) {
     sliced_->setParameters(p);
     mean_sliced_->setParameters(p);
@@ -338,9 +343,9 @@ void DynamicsEstimator::propagateQuasiStatic(double h, double drive_force) {
       case FlankContact::kBackOnly: delta = (drive_force + fp) / kc; break;
     }
   } else if (k1 > 0.0) {
-    delta = drive_force / k1 + std::copysign(rig_.dynamics.backlash, drive_force);
+    delta = drive_force / k1 + std::copysign(rig_->dynamics.backlash, drive_force);
   }
-  const double a = rig_.dynamics.transmission_error_amplitude, theta = kTwoPi * phase_;
+  const double a = rig_->dynamics.transmission_error_amplitude, theta = kTwoPi * phase_;
   y_[2] = delta - y_[0] + y_[1] + a * std::sin(theta);
   y_[5] = -y_[3] + y_[4] + a * kTwoPi * mesh_frequency_ * std::cos(theta);
 }

@@ -7,6 +7,7 @@
 #include "drivetrain_stiffness/core/constants.hpp"
 #include "drivetrain_stiffness/core/exponential_integrator.hpp"
 #include "drivetrain_stiffness/core/enum_names.hpp"
+#include "drivetrain_stiffness/core/rig_model.hpp"
 #include "drivetrain_stiffness/core/validation.hpp"
 
 namespace drivetrain_stiffness {
@@ -27,16 +28,9 @@ long gridCount(double t0, double t_end, double interval) {
   return std::lround(n);
 }
 
-double meanStiffness(const RigExcitation& e) {
-  double k = 0.0;
-  const int n = 512;
-  for (int i = 0; i < n; ++i) {
-    MeshInstant m;
-    e.at((i + 0.5) / n / e.meshFrequency(), m);
-    k += (m.k_drive + m.k_back) / n;
-  }
-  return k;
-}
+// The excitation's k_drive + k_back is the table's k1 + k_c (k1 alone without a scissor spring):
+// its period mean is meanMeshStiffness, the one mean of the library.
+double meanStiffness(const RigExcitation& e) { return meanMeshStiffness(e.mesh()); }
 
 // One shaft on its bearing, m x'' + c x' + k x = f(t), f linear over the interval (first-order
 // hold): exact propagation through the exponential of [[0,1,0,0],[-k/m,-c/m,1/m,0],[0,0,0,1],[0,0,0,0]].

@@ -11,17 +11,14 @@ namespace drivetrain_stiffness {
 void requireDampingRatio(std::string_view field, double value) { requireInClosedRange(field, value, 0.0, kMaxDampingRatio); }
 
 double meanMeshStiffness(const AntiBacklashMesh& mesh) {
-  double k = 0.0;
-  const int n = 256;
-  for (int i = 0; i < n; ++i) {
-    const CompositeMesh c = mesh.at((i + 0.5) / n, 0.0);
-    k += (c.k1 + (mesh.spec().spring_stiffness > 0 ? c.k_chain : 0.0)) / n;
-  }
-  return k;
+  // The table's exact period means (AntiBacklashMesh::periodMeans): k1 + k_c while both flanks carry
+  // load (seed 000 eq 1), k1 alone for an ordinary gear (no scissor spring).
+  const AntiBacklashMesh::PeriodMeans& m = mesh.periodMeans();
+  return m.k1 + (mesh.spec().spring_stiffness > 0 ? m.k_chain : 0.0);
 }
 
 GearRotorParameters rigRotorParameters(const RigConfig& rig, const AntiBacklashMesh& mesh,
-                                       const std::array<double, 2>& bearing_stiffness) {
+                                       const std::array<double, 2>& bearing_stiffness, const DampingRatios& damping) {
   const DynamicsConfig& d = rig.dynamics;
   GearRotorParameters p;
   p.pinion_mass = d.pinion_mass;
@@ -37,10 +34,10 @@ GearRotorParameters rigRotorParameters(const RigConfig& rig, const AntiBacklashM
     }
     p.bearing_stiffness[i] = bearing_stiffness[i];
     const double m = i == 0 ? p.pinion_mass : p.gear_mass;
-    p.bearing_damping[i] = 2.0 * d.bearing_damping_ratio * std::sqrt(p.bearing_stiffness[i] * m);
+    p.bearing_damping[i] = 2.0 * damping.bearing * std::sqrt(p.bearing_stiffness[i] * m);
     p.bearing_clearance[i] = d.bearing_clearance[i];
   }
-  p.mesh_damping = 2.0 * d.mesh_damping_ratio * std::sqrt(meanMeshStiffness(mesh) * p.equivalentMass());
+  p.mesh_damping = 2.0 * damping.mesh * std::sqrt(meanMeshStiffness(mesh) * p.equivalentMass());
   return p;
 }
 

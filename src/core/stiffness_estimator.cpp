@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 #include <utility>
 
 #include "drivetrain_stiffness/core/validation.hpp"
@@ -12,24 +13,29 @@ void requireLoadTolerance(std::string_view field, double value) {
   requireInClosedRange(field, value, 0.0, kMaxLoadTolerance);
 }
 
+void EstimatorLimits::validate(std::string_view load_tolerance_field) const {
+  requirePositive("max_abs_torque", max_abs_torque);
+  requirePositive("max_preload", max_preload);
+  requirePositive("max_interference", max_interference);
+  requireLoadTolerance(load_tolerance_field, load_tolerance);
+}
+
 StiffnessEstimator::StiffnessEstimator(const RigConfig& rig, const EstimatorLimits& limits)
-    : rig_(rig), limits_(limits), mesh_(std::make_shared<const AntiBacklashMesh>(rig)) {
-  requirePositive("max_abs_torque", limits.max_abs_torque);
-  requirePositive("max_preload", limits.max_preload);
-  requirePositive("max_interference", limits.max_interference);
-  requireLoadTolerance("load_tolerance", limits.load_tolerance);
-  if (rig.bearings.empty()) throw InvalidInput("bearings: at least one support is required");
-  for (const BearingSupportConfig& b : rig.bearings) {
+    : StiffnessEstimator(std::make_shared<const RigConfig>(rig), limits) {}
+
+StiffnessEstimator::StiffnessEstimator(std::shared_ptr<const RigConfig> rig, const EstimatorLimits& limits)
+    : rig_(std::move(rig)), limits_(limits) {
+  if (!rig_) throw std::invalid_argument("StiffnessEstimator: no rig");  // a caller's bug, not bad data
+  mesh_ = std::make_shared<const AntiBacklashMesh>(*rig_);
+  limits.validate();
+  if (rig_->bearings.empty()) throw InvalidInput("bearings: at least one support is required");
+  for (const BearingSupportConfig& b : rig_->bearings) {
     requireInHalfOpenRange("bearings[" + b.name + "].stiffness_scale", b.stiffness_scale, 0.05, 20.0);
   }
-  // Period means of k1 and k_chain, computed once: they decide the flank state of the mean
-  // stiffness (the table itself is fixed until the gear parameters change).
-  const int n = 512;
-  for (int i = 0; i < n; ++i) {
-    const CompositeMesh c = mesh_->at((i + 0.5) / n, 0.0);
-    mean_k1_kchain_[0] += c.k1 / n;
-    mean_k1_kchain_[1] += c.k_chain / n;
-  }
+  // Period means of k1 and k_chain (the table's exact ones, as meanMeshStiffness takes them): they
+  // decide the flank state of the mean stiffness.
+  mean_k1_kchain_[0] = mesh_->periodMeans().k1;
+  mean_k1_kchain_[1] = mesh_->periodMeans().k_chain;
   reset();
 }
 
@@ -52,7 +58,7 @@ std::unique_ptr<BearingSupport> StiffnessEstimator::build(const BearingSupportCo
 
 const StiffnessEstimate& StiffnessEstimator::reset() {
   std::vector<Support> supports;
-  for (const BearingSupportConfig& c : rig_.bearings) {
+  for (const BearingSupportConfig& c : rig_->bearings) {
     std::unique_ptr<BearingSupport> model = build(c);
     // The spare starts as a copy: setPreloads assigns new geometry into it, never builds one.
     auto spare = std::make_unique<BearingSupport>(*model);
@@ -61,6 +67,9 @@ const StiffnessEstimate& StiffnessEstimator::reset() {
   estimate_ = solveAll(0.0, 0.0, supports);
   supports_ = std::move(supports);
   workspace_.resize(supports_.size());
+  // The mesh phase a preload is solved at (setPreloads) is the last torque's: a reset estimator is
+  // a fresh one, at angle 0, not at the angle of the run before the reset.
+  last_pinion_angle_ = 0.0;
   return estimate_;
 }
 
@@ -68,7 +77,7 @@ StiffnessEstimate StiffnessEstimator::solveAll(double torque, double pinion_angl
                                                const std::vector<Support>& supports) const {
   StiffnessEstimate next;
   next.torque = torque;
-  const double signed_force = meshForce(rig_.gears, 0, torque);
+  const double signed_force = meshForce(rig_->gears, 0, torque);
   next.mesh_force = std::abs(signed_force);
   next.mesh = meshAt(signed_force, pinion_angle);
   for (std::size_t i = 0; i < supports.size(); ++i) {
@@ -136,7 +145,7 @@ bool StiffnessEstimator::solutionStands(std::size_t i, double radial_load) const
 const StiffnessEstimate& StiffnessEstimator::setTorque(double torque, double pinion_angle) {
   validateTorque(torque);
   requireFinite("pinion_angle", pinion_angle);
-  const double signed_force = meshForce(rig_.gears, 0, torque);
+  const double signed_force = meshForce(rig_->gears, 0, torque);
   const double mesh_force = std::abs(signed_force);
   // In place and all or nothing, with no allocation in steady state: the supports whose load moved
   // past ~load_tolerance are solved into their workspace (warm-started from their last solution,
@@ -210,7 +219,7 @@ const StiffnessEstimate& StiffnessEstimator::setPreloads(const std::vector<Prelo
     }
     w.rebuilt = true;
   }
-  const double signed_force = meshForce(rig_.gears, 0, estimate_.torque);
+  const double signed_force = meshForce(rig_->gears, 0, estimate_.torque);
   const double mesh_force = std::abs(signed_force);
   const MeshEstimate mesh = meshAt(signed_force, last_pinion_angle_);
   for (std::size_t i = 0; i < n; ++i) {
@@ -252,7 +261,7 @@ const StiffnessEstimate& StiffnessEstimator::setPreloads(const std::vector<Prelo
 std::array<double, 2> StiffnessEstimator::shaftRadialStiffness() const {
   std::array<double, 2> k{{0.0, 0.0}};
   for (std::size_t i = 0; i < estimate_.supports.size(); ++i)
-    k[rig_.bearings[i].shaft] += estimate_.supports[i].solution.radialStiffness();
+    k[rig_->bearings[i].shaft] += estimate_.supports[i].solution.radialStiffness();
   return k;
 }
 

@@ -42,10 +42,7 @@ std::vector<std::pair<std::string, std::uint64_t>> namedCounters(const PipelineC
 }
 
 void PipelineOptions::validate() const {
-  requirePositive("max_abs_torque", limits.max_abs_torque);
-  requirePositive("max_preload", limits.max_preload);
-  requirePositive("max_interference", limits.max_interference);
-  requireLoadTolerance("bearing_load_tolerance", limits.load_tolerance);  // StiffnessEstimator's rule
+  limits.validate("bearing_load_tolerance");  // StiffnessEstimator's rules, under the parameter's name
   requirePositive("output_rate", output_rate);
   if (output_rate > 1e6) throw InvalidInput("output_rate = " + formatValue(output_rate) + ": must be <= 1e6 Hz");
   requirePositive("max_gap", max_gap);
@@ -86,30 +83,44 @@ void PipelineOptions::validate() const {
 RigPipeline::RigPipeline(const RigConfig& rig, const PipelineOptions& options)
     : RigPipeline(rig, options, RuntimeSettings::forRig(rig)) {}
 
-RigPipeline::RigPipeline(const RigConfig& rig, const PipelineOptions& options, const RuntimeSettings& settings)
-    : rig_(rig), options_(options), settings_(settings) {
-  options_.validate();
-  settings_.validate();
-  rig_.dynamics.mesh_damping_ratio = settings_.mesh_damping_ratio;
-  rig_.dynamics.bearing_damping_ratio = settings_.bearing_damping_ratio;
-  if (options_.dynamics && rig_.dynamics.present) {
+namespace {
+/// The rig as the pipeline runs it, built once and shared read only by the stiffness estimator, the
+/// dynamics and the calibration: the gearbox with the start-up damping ratios of the run-time
+/// settings and, with dynamics, the nominal speed of the options.
+std::shared_ptr<const RigConfig> runningRig(const RigConfig& gearbox, const PipelineOptions& options,
+                                            const RuntimeSettings& settings) {
+  options.validate();
+  settings.validate();
+  auto rig = std::make_shared<RigConfig>(gearbox);
+  rig->dynamics.mesh_damping_ratio = settings.mesh_damping_ratio;
+  rig->dynamics.bearing_damping_ratio = settings.bearing_damping_ratio;
+  if (options.dynamics && rig->dynamics.present) {
     // One speed for both mesh phases: the stiffness estimate's and the dynamics' (their grid too).
-    if (!(options_.pinion_speed_rpm > 0.0)) {
-      throw InvalidInput("pinion_speed_rpm = " + formatValue(options_.pinion_speed_rpm) + ": must be > 0 with dynamics");
+    if (!(options.pinion_speed_rpm > 0.0)) {
+      throw InvalidInput("pinion_speed_rpm = " + formatValue(options.pinion_speed_rpm) + ": must be > 0 with dynamics");
     }
-    rig_.dynamics.speed_rpm = options_.pinion_speed_rpm;
+    rig->dynamics.speed_rpm = options.pinion_speed_rpm;
   }
+  return rig;
+}
+}  // namespace
+
+RigPipeline::RigPipeline(const RigConfig& rig, const PipelineOptions& options, const RuntimeSettings& settings)
+    : rig_(runningRig(rig, options, settings)), options_(options), settings_(settings) {
   estimator_ = std::make_unique<StiffnessEstimator>(rig_, options_.limits);
-  if (options_.calibrate && rig_.calibration.present && rig_.dynamics.present) calibrator_ = std::make_unique<Calibrator>(rig_);
+  // One mesh table for the rig: the stiffness estimator's, shared read only with the dynamics and
+  // the calibration.
+  if (options_.calibrate && rig_->calibration.present && rig_->dynamics.present) {
+    calibrator_ = std::make_unique<Calibrator>(rig_, estimator_->sharedMesh());
+  }
   pinion_speed_ = options_.pinion_speed_rpm * kTwoPi / 60.0;
   if (options_.dynamics) {
-    // One mesh table for the rig: the stiffness estimator's, shared read-only with the dynamics.
     dynamics_ = std::make_unique<DynamicsEstimator>(rig_, estimator_->shaftRadialStiffness(), options_.output_rate,
                                                     estimator_->sharedMesh());
     dynamics_->setFidelity(settings_.fidelity);
     dynamics_->setMotionSlices(options_.motion_slices);
     te_spectrum_ = std::make_unique<SlidingSpectrum>(options_.spectrum_window, options_.spectrum_hop,
-                                                     dynamics_->outputInterval(), 3);
+                                                     dynamics_->outputInterval(), SpectrumPeaks::kMaxPeaks);
   }
 }
 
@@ -122,7 +133,7 @@ void RigPipeline::reset(const std::string& reason) {
     dynamics_->stop();
     try {
       dynamics_->setBearingStiffness(estimator_->shaftRadialStiffness());
-    } catch (const std::exception& e) {
+    } catch (const Error& e) {
       dynamicsError("dynamics", e);
     }
   }
@@ -359,14 +370,12 @@ void RigPipeline::calibrate(Stamp stamp, const Reading& reading, bool continuous
       sink.calibration(stamp, calibrator_->estimate());
       ++counters_.calibration_out;
     }
-  } catch (const InvalidInput& e) {
-    calibrationError(e);
-  } catch (const UnreachableLoad& e) {
+  } catch (const Error& e) {
     calibrationError(e);
   }
 }
 
-void RigPipeline::calibrationError(const std::exception& e) {
+void RigPipeline::calibrationError(const Error& e) {
   ++counters_.calibration_errors;
   counters_.last_event = std::string("calibration: ") + e.what();
   calibrator_->interrupt();
@@ -426,7 +435,7 @@ void RigPipeline::followAnchor(Stamp stamp) {
     const double t = std::max(secondsBetween(stamp, dynamics_epoch_), dynamics_->time());
     const Stamp at{dynamics_epoch_.ns + std::llround(t * 1e9)};
     dynamics_->followMotion(t, meshTurns(pinionAngle(at)), meshTurns(anchor_->speed));
-  } catch (const std::exception& e) {
+  } catch (const Error& e) {
     dynamicsError("dynamics", e);
   }
 }
@@ -436,7 +445,7 @@ void RigPipeline::afterUpdate(Stamp stamp, const StiffnessEstimate& estimate, Pi
   const bool due = settings_.stiffness_rate <= 0.0 || !last_stiffness_out_ || stamp < *last_stiffness_out_ ||
                    secondsBetween(stamp, *last_stiffness_out_) >= 1.0 / settings_.stiffness_rate;
   if (due) {
-    sink.stiffness(stamp, estimate);
+    sink.stiffness(stamp, estimate, stiffnessBands(estimate));
     last_stiffness_out_ = stamp;
     ++counters_.stiffness_out;
   } else {
@@ -454,13 +463,13 @@ void RigPipeline::pushStiffness(Stamp stamp, const StiffnessEstimate& estimate, 
     std::optional<double> at;
     if (dynamics_->started()) at = advanced ? secondsBetween(stamp, dynamics_epoch_) : dynamics_->time();
     dynamics_->setBearingStiffness(estimator_->shaftRadialStiffness(), at);
-  } catch (const std::exception& e) {
+  } catch (const Error& e) {
     dynamicsError("dynamics", e);
   }
   updateResonance(stamp, estimate, sink);
 }
 
-void RigPipeline::dynamicsError(const std::string& where, const std::exception& e) {
+void RigPipeline::dynamicsError(const std::string& where, const Error& e) {
   ++counters_.dynamics_errors;
   counters_.last_event = where + ": " + e.what();
 }
@@ -481,7 +490,7 @@ bool RigPipeline::advanceDynamicsTo(Stamp stamp, PipelineSink& sink) {
   if (t <= dynamics_->time() || t - dynamics_->time() > options_.max_gap) return false;
   try {
     emitUpTo(t, sink);
-  } catch (const std::exception& e) {
+  } catch (const Error& e) {
     dynamicsError("dynamics (restarted at the next torque input)", e);
     dynamics_->stop();
     mesh_block_ = MeshPeriodAccumulator{};
@@ -496,24 +505,34 @@ void RigPipeline::emitUpTo(double t, PipelineSink& sink) {
   // A member, not a capture: the lambda must stay within std::function's small buffer (two
   // pointers), or every advance allocates (allocation_tests).
   advance_mesh_frequency_ = dynamics_->meshFrequency();
-  try {
-    dynamics_->advanceTo(t, [&](const DynamicsSample& relative) {
-      DynamicsSample s = relative;
-      const Stamp sample_stamp{dynamics_epoch_.ns + std::llround(relative.t * 1e9)};
-      s.t = sample_stamp.toSec();
-      sink.transmissionError(sample_stamp, s);
-      ++counters_.te_out;
-      if (te_spectrum_->push(s.dynamic_te)) {
-        sink.spectrum(sample_stamp, *te_spectrum_);
-        ++counters_.spectra_out;
-      }
-      meshPeriodSample(sample_stamp, s, advance_mesh_frequency_, sink);
-    });
-  } catch (...) {
-    counters_.simulated_s += dynamics_->time() - from;
-    throw;
-  }
-  counters_.simulated_s += dynamics_->time() - from;
+  // The time integrated counts whether the advance ends or throws (a throw passes on untouched).
+  struct CountSimulated {
+    const DynamicsEstimator& dynamics;
+    double from;
+    double& simulated;
+    ~CountSimulated() { simulated += dynamics.time() - from; }
+  } count{*dynamics_, from, counters_.simulated_s};
+  dynamics_->advanceTo(t, [&](const DynamicsSample& relative) {
+    DynamicsSample s = relative;
+    const Stamp sample_stamp{dynamics_epoch_.ns + std::llround(relative.t * 1e9)};
+    s.t = sample_stamp.toSec();
+    SampleContext context;
+    context.pinion_angle = pinionAngle(sample_stamp);
+    context.resonance = last_resonance_ ? &*last_resonance_ : nullptr;
+    sink.transmissionError(sample_stamp, s, context);
+    ++counters_.te_out;
+    if (te_spectrum_->push(s.dynamic_te)) {
+      const std::vector<SpectralPeak>& peaks = te_spectrum_->peaks();
+      SpectrumPeaks& out = spectrum_peaks_;
+      out.count = std::min(peaks.size(), SpectrumPeaks::kMaxPeaks);
+      std::copy_n(peaks.begin(), out.count, out.peaks.begin());
+      out.resolution = te_spectrum_->resolution();
+      out.window_seconds = te_spectrum_->windowSeconds();
+      sink.spectrum(sample_stamp, out);
+      ++counters_.spectra_out;
+    }
+    meshPeriodSample(sample_stamp, s, advance_mesh_frequency_, sink);
+  });
 }
 
 void RigPipeline::advanceDynamics(Stamp stamp, double torque, PipelineSink& sink) {
@@ -531,20 +550,20 @@ void RigPipeline::advanceDynamics(Stamp stamp, double torque, PipelineSink& sink
     }
     // Else another stream took the dynamics past this stamp: the torque applies from there.
     if (t > dynamics_->time()) emitUpTo(t, sink);
-  } catch (const std::exception& e) {
+  } catch (const Error& e) {
     // The state stays at its last good sample and every later input would fail the same way:
     // restart the model here (counted), as after a gap.
     dynamicsError("dynamics (restarted at this input)", e);
     try {
       restartDynamics(stamp, torque);
-    } catch (const std::exception& again) {
+    } catch (const Error& again) {
       dynamicsError("dynamics", again);
     }
   }
   held_torque_ = torque;
   try {
     dynamics_->setTorque(torque);  // the new torque holds from here on, whatever happened above
-  } catch (const std::exception& e) {
+  } catch (const Error& e) {
     dynamicsError("dynamics", e);
   }
 }
@@ -564,7 +583,9 @@ void RigPipeline::updateResonance(Stamp stamp, const StiffnessEstimate& estimate
       }
       if (within) return;
     }
-    const GearRotorParameters p = rigRotorParameters(rig_, estimator_->mesh(), kb);
+    // The run-time settings' damping (the shared rig keeps the start-up one).
+    const DampingRatios damping{settings_.mesh_damping_ratio, settings_.bearing_damping_ratio};
+    const GearRotorParameters p = rigRotorParameters(*rig_, estimator_->mesh(), kb, damping);
     ResonanceEstimate r;
     r.modes = modalAnalysis(p, estimate.mesh.mean);
     ++counters_.modal_updates;
@@ -584,11 +605,28 @@ void RigPipeline::updateResonance(Stamp stamp, const StiffnessEstimate& estimate
     r.floquet_margin = r.floquet_valid ? margin : 0.0;
     last_resonance_ = r;
     springs_at_resonance_ = springs;
-    sink.resonance(stamp, r);
+    sink.resonance(stamp, r, resonanceBands(r));
     ++counters_.resonance_out;
-  } catch (const std::exception& e) {
+  } catch (const Error& e) {
     dynamicsError("resonance", e);
   }
+}
+
+CalibrationBands RigPipeline::stiffnessBands(const StiffnessEstimate& estimate) const {
+  if (calibrator_) return calibrator_->bands(estimate.torque, *estimator_, false);
+  CalibrationBands b;  // no calibration: the drawing's model, bounds of zero width
+  b.mesh_stiffness = b.mesh_stiffness_low = b.mesh_stiffness_high = estimate.mesh.mean;
+  b.bearing_stiffness = b.bearing_stiffness_low = b.bearing_stiffness_high = estimator_->shaftRadialStiffness();
+  return b;
+}
+
+CalibrationBands RigPipeline::resonanceBands(const ResonanceEstimate& estimate) const {
+  if (calibrator_) return calibrator_->bands(estimator_->current().torque, *estimator_, true);
+  CalibrationBands b;  // no calibration: the drawing's frequencies, bounds of zero width
+  for (std::size_t i = 0; i < estimate.modes.size(); ++i) {
+    b.natural_frequency[i] = b.natural_frequency_low[i] = b.natural_frequency_high[i] = estimate.modes[i].natural_frequency;
+  }
+  return b;
 }
 
 void RigPipeline::apply(const RuntimeSettings& settings) {
@@ -597,8 +635,6 @@ void RigPipeline::apply(const RuntimeSettings& settings) {
                                settings.bearing_damping_ratio != settings_.bearing_damping_ratio;
   settings_ = settings;
   if (damping_changed) {
-    rig_.dynamics.mesh_damping_ratio = settings.mesh_damping_ratio;
-    rig_.dynamics.bearing_damping_ratio = settings.bearing_damping_ratio;
     if (dynamics_) dynamics_->setDamping(settings.mesh_damping_ratio, settings.bearing_damping_ratio);
     last_resonance_.reset();  // damped frequencies and ratios changed: republish at the next input
   }

@@ -17,13 +17,17 @@ TorqueInput toTorqueInput(const geometry_msgs::WrenchStamped& msg, std::string_v
   return {fromRosTime(msg.header.stamp), msg.wrench.torque.z, {publisher, msg.header.seq, msg.header.frame_id}};
 }
 
-std::vector<PreloadSetting> toPreloadSettings(const drivetrain_stiffness::Preload& msg) {
-  std::vector<PreloadSetting> settings;
-  settings.reserve(msg.bearings.size());
-  for (const auto& b : msg.bearings) {
-    settings.push_back({b.name, b.axial_preload, b.radial_preload, b.inner_interference, b.outer_interference});
+void toPreloadSettings(const drivetrain_stiffness::Preload& msg, std::vector<PreloadSetting>& out) {
+  out.resize(msg.bearings.size());  // keeps the capacity and the elements' strings
+  for (std::size_t i = 0; i < out.size(); ++i) {
+    const auto& b = msg.bearings[i];
+    PreloadSetting& s = out[i];
+    s.name = b.name;  // std::string assignment: reuses the element's buffer
+    s.axial_preload = b.axial_preload;
+    s.radial_preload = b.radial_preload;
+    s.inner_interference = b.inner_interference;
+    s.outer_interference = b.outer_interference;
   }
-  return settings;
 }
 
 void fillStiffnessMsg(Stamp stamp, const std::string& frame_id, const StiffnessEstimate& estimate,
@@ -80,21 +84,21 @@ drivetrain_stiffness::TransmissionError toTransmissionErrorMsg(Stamp stamp, cons
   return m;
 }
 
-drivetrain_stiffness::SpectralPeaks toSpectralPeaksMsg(Stamp stamp, const std::string& frame_id, const SlidingSpectrum& spectrum) {
+drivetrain_stiffness::SpectralPeaks toSpectralPeaksMsg(Stamp stamp, const std::string& frame_id, const SpectrumPeaks& in) {
   drivetrain_stiffness::SpectralPeaks peaks;
   peaks.header.stamp = toRosTime(stamp);
   peaks.header.frame_id = frame_id;
-  for (const SpectralPeak& p : spectrum.peaks()) {
-    peaks.frequencies_hz.push_back(p.frequency);
-    peaks.amplitudes.push_back(p.amplitude);
+  for (std::size_t i = 0; i < in.count; ++i) {
+    peaks.frequencies_hz.push_back(in.peaks[i].frequency);
+    peaks.amplitudes.push_back(in.peaks[i].amplitude);
   }
   // Flat copies of the strongest peak, for plotting tools that do not index arrays.
-  if (!spectrum.peaks().empty()) {
-    peaks.peak_frequency_hz = spectrum.peaks().front().frequency;
-    peaks.peak_amplitude = spectrum.peaks().front().amplitude;
+  if (in.count > 0) {
+    peaks.peak_frequency_hz = in.peaks[0].frequency;
+    peaks.peak_amplitude = in.peaks[0].amplitude;
   }
-  peaks.window_s = spectrum.windowSeconds();
-  peaks.resolution_hz = spectrum.resolution();
+  peaks.window_s = in.window_seconds;
+  peaks.resolution_hz = in.resolution;
   return peaks;
 }
 

@@ -15,58 +15,45 @@ double nominalMeshForce(const RigConfig& rig) {
 }  // namespace
 
 MessageSink::MessageSink(const RigPipeline& pipeline, const OutputSettings& settings)
-    : pipeline_(pipeline),
-      settings_(settings),
+    : settings_(settings),
+      tf_rate_(pipeline.settings().tf_rate),
+      exaggeration_(pipeline.settings().exaggeration),
       visualizer_(pipeline.estimator().mesh().geometry(), pipeline.rig().gears.face_width, nominalMeshForce(pipeline.rig()),
                   settings.frames, pipeline.settings().exaggeration) {}
 
-void MessageSink::stiffness(Stamp stamp, const StiffnessEstimate& estimate) {
+void MessageSink::apply(const RuntimeSettings& settings) {
+  tf_rate_ = settings.tf_rate;
+  exaggeration_ = settings.exaggeration;
+}
+
+void MessageSink::stiffness(Stamp stamp, const StiffnessEstimate& estimate, const CalibrationBands& bands) {
   fillStiffnessMsg(stamp, settings_.frames.rig, estimate, stiffness_msg_);
-  fillStiffnessBands(stiffnessBands(estimate), stiffness_msg_);
+  fillStiffnessBands(bands, stiffness_msg_);
   stiffness_msg_.header.seq = stiffness_seq_++;
   emitStiffness(stiffness_msg_);
 }
 
-void MessageSink::transmissionError(Stamp stamp, const DynamicsSample& sample) {
+void MessageSink::transmissionError(Stamp stamp, const DynamicsSample& sample, const SampleContext& context) {
   drivetrain_stiffness::TransmissionError te = toTransmissionErrorMsg(stamp, settings_.frames.pinion, sample);
   te.header.seq = te_seq_++;
   emitTransmissionError(te);
-  const RuntimeSettings& run = pipeline_.settings();
-  if (run.tf_rate <= 0.0) return;
+  if (tf_rate_ <= 0.0) return;
   // Decided on sample stamps, so a replay draws the same frames as the live node.
-  if (last_tf_ && !(stamp < *last_tf_) && secondsBetween(stamp, *last_tf_) < 1.0 / run.tf_rate) return;
+  if (last_tf_ && !(stamp < *last_tf_) && secondsBetween(stamp, *last_tf_) < 1.0 / tf_rate_) return;
   last_tf_ = stamp;
-  if (run.exaggeration != visualizer_.exaggeration()) visualizer_.setExaggeration(run.exaggeration);
-  emitTransforms(visualizer_.transforms(toRosTime(stamp), sample, pipeline_.pinionAngle(stamp)));
-  emitMarkers(visualizer_.markers(toRosTime(stamp), sample, pipeline_.lastResonance()));
+  if (exaggeration_ != visualizer_.exaggeration()) visualizer_.setExaggeration(exaggeration_);
+  emitTransforms(visualizer_.transforms(toRosTime(stamp), sample, context.pinion_angle));
+  emitMarkers(visualizer_.markers(toRosTime(stamp), sample, context.resonance));
 }
 
-void MessageSink::spectrum(Stamp stamp, const SlidingSpectrum& spectrum) {
-  emitSpectrum(toSpectralPeaksMsg(stamp, settings_.frames.pinion, spectrum));
+void MessageSink::spectrum(Stamp stamp, const SpectrumPeaks& peaks) {
+  emitSpectrum(toSpectralPeaksMsg(stamp, settings_.frames.pinion, peaks));
 }
 
-void MessageSink::resonance(Stamp stamp, const ResonanceEstimate& estimate) {
+void MessageSink::resonance(Stamp stamp, const ResonanceEstimate& estimate, const CalibrationBands& bands) {
   drivetrain_stiffness::Resonance m = toResonanceMsg(stamp, settings_.frames.rig, estimate);
-  CalibrationBands b;
-  if (const Calibrator* c = pipeline_.calibrator()) {
-    b = c->bands(pipeline_.estimator().current().torque, pipeline_.estimator(), true);
-  } else {  // no calibration: the drawing's frequencies, bounds of zero width
-    for (int i = 0; i < 3; ++i) {
-      b.natural_frequency[i] = b.natural_frequency_low[i] = b.natural_frequency_high[i] = estimate.modes[i].natural_frequency;
-    }
-  }
-  fillResonanceBands(b, m);
+  fillResonanceBands(bands, m);
   emitResonance(m);
-}
-
-CalibrationBands MessageSink::stiffnessBands(const StiffnessEstimate& estimate) const {
-  if (const Calibrator* c = pipeline_.calibrator()) return c->bands(estimate.torque, pipeline_.estimator(), false);
-  // No calibration: the drawing's model, bounds of zero width.
-  CalibrationBands b;
-  b.mesh_stiffness = b.mesh_stiffness_low = b.mesh_stiffness_high = estimate.mesh.mean;
-  const std::array<double, 2> k = pipeline_.estimator().shaftRadialStiffness();
-  b.bearing_stiffness = b.bearing_stiffness_low = b.bearing_stiffness_high = k;
-  return b;
 }
 
 void MessageSink::measuredTe(Stamp stamp, const MeasuredTeSample& sample) {

@@ -79,7 +79,7 @@ std::vector<geometry_msgs::TransformStamped> RigVisualizer::transforms(const ros
 }
 
 visualization_msgs::MarkerArray RigVisualizer::markers(const ros::Time& stamp, const DynamicsSample& s,
-                                                       const std::optional<ResonanceEstimate>& resonance) const {
+                                                       const ResonanceEstimate* resonance) const {
   visualization_msgs::MarkerArray out;
   const std::string* frames[2] = {&frames_.pinion, &frames_.gear};
   const float colours[2][3] = {{0.2f, 0.45f, 0.85f}, {0.6f, 0.6f, 0.62f}};

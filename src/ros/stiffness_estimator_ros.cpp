@@ -221,7 +221,8 @@ void StiffnessEstimatorRos::onPreload(const ros::MessageEvent<const drivetrain_s
   std::lock_guard<std::mutex> lock(mutex_);
   observeClock();
   const InputOrigin origin{event.getPublisherName(), msg.header.seq, msg.header.frame_id};
-  if (pipeline_->preload(fromRosTime(msg.header.stamp), toPreloadSettings(msg), *publishers_, origin) !=
+  toPreloadSettings(msg, preload_settings_);
+  if (pipeline_->preload(fromRosTime(msg.header.stamp), preload_settings_, *publishers_, origin) !=
       InputOutcome::kAccepted) {
     ROS_WARN_THROTTLE(1.0, "stiffness_estimator: %s", pipeline_->counters().last_event.c_str());
   }
@@ -257,6 +258,7 @@ void StiffnessEstimatorRos::onReconfigure(drivetrain_stiffness::EstimatorConfig&
     next.exaggeration = config.exaggeration;
     next.tf_rate = config.tf_rate;
     pipeline_->apply(next);
+    publishers_->apply(pipeline_->settings());  // the same settings for the drawing (tf rate, exaggeration)
     applied_config_ = config;
     ++reconfigurations_;
   } catch (const InvalidInput& e) {

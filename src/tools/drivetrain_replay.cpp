@@ -150,6 +150,7 @@ int run(int argc, char** argv) {
   ReplayInput input(bag_path, torque_topic, preload_topic, joint_states_topic);
   const JointNames joints = readJointNames(get);
   std::string joint_refusal;
+  std::vector<PreloadSetting> preload_settings;  // each preload message's, converted in place
   ReplayWriter writer(pipeline, readOutputSettings(get), out_bag,
                       compression == "none" ? BagCompression::None : BagCompression::Lz4, csv_dir);
   std::uint64_t messages = 0, wrong_type = 0;
@@ -180,7 +181,8 @@ int run(int argc, char** argv) {
         continue;
       }
     } else if (auto p = m.instantiate<drivetrain_stiffness::Preload>()) {
-      pipeline.preload(fromRosTime(p->header.stamp), toPreloadSettings(*p), writer, {publisher, p->header.seq, p->header.frame_id});
+      toPreloadSettings(*p, preload_settings);
+      pipeline.preload(fromRosTime(p->header.stamp), preload_settings, writer, {publisher, p->header.seq, p->header.frame_id});
       continue;
     }
     ++wrong_type;  // counted and reported, never silently skipped

@@ -129,7 +129,7 @@ class TruthSink : public PipelineSink {
       : epoch_ns_(epoch_ns), joint_rate_(joint_rate), lead_(lead), te_(te), filled_(filled) {}
   double correction = 0.0;  ///< [m] c(T) of the torque the dynamics hold (see makeLoadSweep)
 
-  void transmissionError(Stamp stamp, const DynamicsSample& sample) override {
+  void transmissionError(Stamp stamp, const DynamicsSample& sample, const SampleContext&) override {
     // The output grid is the readings' grid (output_rate = joint_rate, the mesh period a whole
     // number of readings, the dynamics started on a reading): sample j at j / joint_rate after the
     // start, to the nanosecond rounding of the stamps.

@@ -4,31 +4,18 @@
 // inputs between them (supports rebuilt and re-solved, the dynamics' bearing stiffness changed).
 #include <gtest/gtest.h>
 
-#include <atomic>
 #include <cmath>
-#include <cstdlib>
-#include <new>
 #include <vector>
 
 #include "drivetrain_stiffness/config/yaml_config.hpp"
+#include "counting_new.hpp"  // NOLINT(build/include_subdir)
 #include "drivetrain_stiffness/pipeline/rig_pipeline.hpp"
 #include "ripple_torque_feed.hpp"  // NOLINT(build/include_subdir)
 #include "seed_rig.hpp"            // NOLINT(build/include_subdir)
 #include "static_te_encoder.hpp"   // NOLINT(build/include_subdir)
 
-namespace {
-std::atomic<long> g_allocations{0};
-}  // namespace
-
-void* operator new(std::size_t n) {
-  ++g_allocations;
-  if (void* p = std::malloc(n == 0 ? 1 : n)) return p;
-  throw std::bad_alloc();
-}
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
-
 using namespace drivetrain_stiffness;
+using test::allocationCount;
 
 namespace {
 
@@ -38,9 +25,9 @@ long allocationsPerSecondOfInputs(const PipelineOptions& options, Backlog backlo
   RigPipeline pipeline(test::seedServo(), options);
   RippleTorqueFeed feed(pipeline);
   for (int i = 0; i < 20000; ++i) feed.next();
-  const long before = g_allocations.load();
+  const long before = allocationCount();
   for (int i = 0; i < 10000; ++i) feed.next(backlog);
-  return g_allocations.load() - before;
+  return allocationCount() - before;
 }
 
 }  // namespace
@@ -79,9 +66,9 @@ TEST(NoAllocation, TorqueAndEncoderInputsThroughARunUp) {
     pipeline.motion(Stamp{kEpoch + 1000000LL * k + 400000LL}, m, sink);
   };
   for (int k = 0; k < 1000; ++k) step(k);
-  const long before = g_allocations.load();
+  const long before = allocationCount();
   for (int k = 1000; k < 2000; ++k) step(k);
-  const long n = g_allocations.load() - before;
+  const long n = allocationCount() - before;
   EXPECT_EQ(n, 0) << n / 2e3 << " heap allocations per input";
   EXPECT_EQ(pipeline.counters().accepted_motion, 2000u);
   EXPECT_STREQ(pipeline.phaseSource(), "encoders");
@@ -106,9 +93,9 @@ TEST(NoAllocation, EncoderReadingsThroughCalibrationUpdates) {
   };
   for (int k = 0; k < 25000; ++k) step(k);  // 5 s: baseline, then loaded windows
   const std::uint64_t updates_before = pipeline.calibrator()->estimate().updates;
-  const long before = g_allocations.load();
+  const long before = allocationCount();
   for (int k = 25000; k < 35000; ++k) step(k);
-  const long n = g_allocations.load() - before;
+  const long n = allocationCount() - before;
   EXPECT_EQ(n, 0) << n / 1e4 << " heap allocations per reading";
   EXPECT_GE(pipeline.calibrator()->estimate().updates, updates_before + 2);
   EXPECT_EQ(pipeline.calibrator()->estimate().gated, 0u);
@@ -183,9 +170,9 @@ TEST(NoAllocation, PreloadInputsInSteadyState) {
   ASSERT_TRUE(pipeline.dynamics()->followingMotion());   // switched to the sliced propagation
   const PipelineCounters before_counters = pipeline.counters();
   const long dynamics_changes_before = pipeline.dynamics()->rebuilds();
-  const long before = g_allocations.load();
+  const long before = allocationCount();
   for (long k = 23000; k < 33000; ++k) step(k, true);  // 1 s: 20 preload inputs, 10000 torque inputs
-  const long n = g_allocations.load() - before;
+  const long n = allocationCount() - before;
   EXPECT_EQ(n, 0) << n / 20.0 << " heap allocations per preload input (with 500 torque inputs each)";
   const PipelineCounters& c = pipeline.counters();
   EXPECT_EQ(c.accepted_preload - before_counters.accepted_preload, 20u);

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <fstream>
 #include <iostream>
+#include <memory>
 #include <random>
 
 #include <gtest/gtest.h>
@@ -116,6 +117,35 @@ TEST(StaticTeModel, MeanTeMatchesTheFlankStateClosedForms) {
   CalibrationVector stiffer = p;
   stiffer[kMeshScale] = 1.25;
   EXPECT_NEAR(model.features(stiffer, t_high, none, 0.0, none)[0] / drive, 1.0 / 1.25, 2e-4);
+}
+
+// One mesh table per rig: the model reads the rig's own table (the stiffness estimator's) when it
+// is the drawing's (mesh.stiffness_scale 1), and builds one at scale 1 otherwise, whose tooth
+// stiffness is the scaled table's divided by the scale (AntiBacklashMesh multiplies k1 and k2).
+TEST(StaticTeModel, SharesTheRigsTableOnlyAtTheDrawingsScale) {
+  const RigConfig rig = seedRig();
+  ASSERT_EQ(rig.mesh_stiffness_scale, 1.0);
+  const auto table = std::make_shared<const AntiBacklashMesh>(rig);
+  const StaticTeModel shared(rig, table);
+  EXPECT_EQ(&shared.unitMesh(), table.get());
+  // Features identical to a model with its own table: the same constructor arguments.
+  const StaticTeModel own(rig);
+  EXPECT_NE(&own.unitMesh(), table.get());
+  const CalibrationVector p = nominal(rig);
+  const std::array<double, 2> none{0.0, 0.0};
+  EXPECT_TRUE(shared.features(p, 3.0, none, 0.0, none) == own.features(p, 3.0, none, 0.0, none));
+
+  RigConfig softer = rig;
+  softer.mesh_stiffness_scale = 0.8;
+  const auto scaled = std::make_shared<const AntiBacklashMesh>(softer);
+  const StaticTeModel unit(softer, scaled);
+  EXPECT_NE(&unit.unitMesh(), scaled.get());
+  EXPECT_EQ(unit.unitMesh().stiffnessScale(), 1.0);
+  for (const double phase : {0.1, 0.45, 0.8}) {
+    const CompositeMesh a = unit.unitMesh().at(phase, 0.0), b = scaled->at(phase, 0.0);
+    EXPECT_NEAR(a.k1, b.k1 / 0.8, 1e-9 * a.k1) << phase;
+    EXPECT_NEAR(a.k2, b.k2 / 0.8, 1e-9 * a.k2) << phase;
+  }
 }
 
 TEST(StaticTeModel, KneeIsWhereTheBackHalfLifts) {

@@ -26,8 +26,8 @@ Stamp at(double seconds) { return Stamp{kEpoch + std::llround(seconds * 1e9)}; }
 struct Counting : PipelineSink {
   int stiffness_out = 0;
   std::vector<std::pair<Stamp, double>> te;  // stamp, dynamic TE
-  void stiffness(Stamp, const StiffnessEstimate&) override { ++stiffness_out; }
-  void transmissionError(Stamp stamp, const DynamicsSample& s) override {
+  void stiffness(Stamp, const StiffnessEstimate&, const CalibrationBands&) override { ++stiffness_out; }
+  void transmissionError(Stamp stamp, const DynamicsSample& s, const SampleContext&) override {
     ASSERT_TRUE(std::isfinite(s.dynamic_te));
     te.emplace_back(stamp, s.dynamic_te);
   }

@@ -28,7 +28,7 @@ struct Recorder : PipelineSink {
   std::vector<DynamicsSample> te;
   std::vector<MeshPeriodStatistics> blocks;
   std::vector<Stamp> stamps;
-  void transmissionError(Stamp, const DynamicsSample& s) override { te.push_back(s); }
+  void transmissionError(Stamp, const DynamicsSample& s, const SampleContext&) override { te.push_back(s); }
   void meshPeriod(Stamp stamp, const MeshPeriodStatistics& s) override {
     EXPECT_TRUE(stamp == s.end);
     stamps.push_back(stamp);

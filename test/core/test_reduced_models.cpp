@@ -68,12 +68,10 @@ TEST(ReducedModels, LinearModalMatchesAnalyticFrequencyResponse) {
   const Scene s = makeScene("nominal", rig());
   const RigExcitation& e = *s.model->rigExcitation();
   const GearRotorParameters& p = s.model->parameters();
-  double ks = 0.0;
-  for (int i = 0; i < 512; ++i) {
-    MeshInstant m;
-    e.at((i + 0.5) / 512 / e.meshFrequency(), m);
-    ks += (m.k_drive + m.k_back) / 512;
-  }
+  // The model's mean stiffness: the phase table's exact period mean of k_drive + k_back = k1 + k_c
+  // (checked against two independent quadratures in test_mesh_stiffness.cpp,
+  // AntiBacklashMesh.PeriodMeansAreTheExactIntegralsOfThePhaseTable).
+  const double ks = e.mesh().periodMeans().k1 + e.mesh().periodMeans().k_chain;
   const double w = 2 * M_PI * e.meshFrequency(), a = e.spec().te_amplitude, cs = p.mesh_damping, ms = s.model->equivalentMass();
   using C = std::complex<double>;
   Eigen::Matrix3cd d;

@@ -35,19 +35,19 @@ struct Recorder : PipelineSink {
   std::vector<Stamp> te_stamps;
   std::vector<std::pair<Stamp, ResonanceEstimate>> resonance_out;
   int spectra = 0;
-  void stiffness(Stamp s, const StiffnessEstimate& e) override {
+  void stiffness(Stamp s, const StiffnessEstimate& e, const CalibrationBands&) override {
     for (const SupportEstimate& b : e.supports) EXPECT_TRUE(std::isfinite(b.solution.radialStiffness()));
     EXPECT_TRUE(std::isfinite(e.mesh.current.composite));
     stiffness_out.emplace_back(s, e);
   }
-  void transmissionError(Stamp stamp, const DynamicsSample& s) override {
+  void transmissionError(Stamp stamp, const DynamicsSample& s, const SampleContext&) override {
     EXPECT_EQ(s.t, stamp.toSec());
     te_stamps.push_back(stamp);
     EXPECT_TRUE(s.state.allFinite() && std::isfinite(s.dynamic_te) && std::isfinite(s.mesh_force));
     te.push_back(s);
   }
-  void spectrum(Stamp, const SlidingSpectrum&) override { ++spectra; }
-  void resonance(Stamp s, const ResonanceEstimate& r) override {
+  void spectrum(Stamp, const SpectrumPeaks&) override { ++spectra; }
+  void resonance(Stamp s, const ResonanceEstimate& r, const CalibrationBands&) override {
     for (const Mode& m : r.modes) EXPECT_TRUE(std::isfinite(m.natural_frequency) && std::isfinite(m.damping_ratio));
     resonance_out.emplace_back(s, r);
   }
@@ -522,6 +522,25 @@ TEST(OneRule, LoadToleranceIsTheSameFromEveryEntry) {
     o.limits.load_tolerance = value;
     EXPECT_NO_THROW(o.validate());
     EXPECT_NO_THROW((void)StiffnessEstimator(rig(), o.limits));
+  }
+}
+
+// The input limits (~max_abs_torque, ~max_preload, ~max_interference): one rule
+// (EstimatorLimits::validate) from the options and from the estimator, with the same refusal.
+TEST(OneRule, InputLimitsAreTheSameFromEveryEntry) {
+  using Field = double EstimatorLimits::*;
+  const std::pair<const char*, Field> fields[] = {{"max_abs_torque", &EstimatorLimits::max_abs_torque},
+                                                  {"max_preload", &EstimatorLimits::max_preload},
+                                                  {"max_interference", &EstimatorLimits::max_interference}};
+  for (const auto& [name, field] : fields) {
+    for (const double value : {0.0, -1.0, std::nan(""), std::numeric_limits<double>::infinity()}) {
+      PipelineOptions o;
+      o.limits.*field = value;
+      const std::string v = formatValue(value);
+      const std::string options = refusalOf([&] { o.validate(); }, std::string("options ") + name + " " + v);
+      EXPECT_EQ(options.rfind(std::string(name) + " = " + v + ": must ", 0), 0u) << options;
+      EXPECT_EQ(refusalOf([&] { (void)StiffnessEstimator(rig(), o.limits); }, std::string("estimator ") + name), options);
+    }
   }
 }
 

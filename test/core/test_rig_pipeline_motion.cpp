@@ -20,7 +20,7 @@ constexpr int kZp = 20, kZg = 40;  // seed 000 Table 1
 
 struct Recorder : PipelineSink {
   std::vector<DynamicsSample> te;
-  void transmissionError(Stamp stamp, const DynamicsSample& s) override {
+  void transmissionError(Stamp stamp, const DynamicsSample& s, const SampleContext&) override {
     EXPECT_EQ(s.t, stamp.toSec());
     EXPECT_TRUE(s.state.allFinite() && std::isfinite(s.dynamic_te) && std::isfinite(s.mesh_force));
     te.push_back(s);

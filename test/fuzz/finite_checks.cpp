@@ -74,31 +74,46 @@ void requireAllFinite(const ResonanceEstimate& r) {
   check("resonance.floquet_margin", r.floquet_margin);
 }
 
-void requireAllFinite(const SlidingSpectrum& spectrum) {
-  for (const SpectralPeak& p : spectrum.peaks()) {
-    check("spectrum.peak.frequency", p.frequency);
-    check("spectrum.peak.amplitude", p.amplitude);
+void requireAllFinite(const SpectrumPeaks& peaks) {
+  if (peaks.count > SpectrumPeaks::kMaxPeaks) throw FuzzFinding("spectrum.count beyond its storage");
+  for (std::size_t i = 0; i < peaks.count; ++i) {
+    check("spectrum.peak.frequency", peaks.peaks[i].frequency);
+    check("spectrum.peak.amplitude", peaks.peaks[i].amplitude);
   }
-  check("spectrum.resolution", spectrum.resolution());
-  check("spectrum.window_s", spectrum.windowSeconds());
+  check("spectrum.resolution", peaks.resolution);
+  check("spectrum.window_s", peaks.window_seconds);
 }
 
-void FiniteSink::stiffness(Stamp, const StiffnessEstimate& estimate) {
+void requireAllFinite(const CalibrationBands& b) {
+  for (double v : {b.mesh_stiffness, b.mesh_stiffness_low, b.mesh_stiffness_high}) check("bands.mesh_stiffness", v);
+  for (int i = 0; i < 2; ++i) {
+    for (double v : {b.bearing_stiffness[i], b.bearing_stiffness_low[i], b.bearing_stiffness_high[i]}) check("bands.bearing_stiffness", v);
+  }
+  for (int i = 0; i < 3; ++i) {
+    for (double v : {b.natural_frequency[i], b.natural_frequency_low[i], b.natural_frequency_high[i]}) check("bands.natural_frequency", v);
+  }
+}
+
+void FiniteSink::stiffness(Stamp, const StiffnessEstimate& estimate, const CalibrationBands& bands) {
   requireAllFinite(estimate);
+  requireAllFinite(bands);
   ++outputs;
 }
-void FiniteSink::transmissionError(Stamp stamp, const DynamicsSample& sample) {
+void FiniteSink::transmissionError(Stamp stamp, const DynamicsSample& sample, const SampleContext& context) {
   requireAllFinite(sample);
+  check("te.context.pinion_angle", context.pinion_angle);
+  if (context.resonance) requireAllFinite(*context.resonance);
   // The documented contract of the sample stamp (rig_pipeline.hpp): sample.t is exactly the stamp.
   if (sample.t != stamp.toSec()) throw FuzzFinding("te.t differs from its stamp");
   ++outputs;
 }
-void FiniteSink::spectrum(Stamp, const SlidingSpectrum& spectrum) {
-  requireAllFinite(spectrum);
+void FiniteSink::spectrum(Stamp, const SpectrumPeaks& peaks) {
+  requireAllFinite(peaks);
   ++outputs;
 }
-void FiniteSink::resonance(Stamp, const ResonanceEstimate& estimate) {
+void FiniteSink::resonance(Stamp, const ResonanceEstimate& estimate, const CalibrationBands& bands) {
   requireAllFinite(estimate);
+  requireAllFinite(bands);
   ++outputs;
 }
 // The calibration's and the mesh-period outputs (rule 11, the per-period statistics): every number

@@ -49,7 +49,7 @@ struct CollectingSink : PipelineSink {
   std::vector<drivetrain_stiffness::MeasuredTe> measured_tes;
   std::vector<drivetrain_stiffness::TransmissionError> tes;
   std::vector<drivetrain_stiffness::MeshPeriodStats> periods;
-  void transmissionError(Stamp stamp, const DynamicsSample& s) override { tes.push_back(toTransmissionErrorMsg(stamp, pinion_frame, s)); }
+  void transmissionError(Stamp stamp, const DynamicsSample& s, const SampleContext&) override { tes.push_back(toTransmissionErrorMsg(stamp, pinion_frame, s)); }
   void meshPeriod(Stamp stamp, const MeshPeriodStatistics& s) override { periods.push_back(toMeshPeriodStatsMsg(stamp, pinion_frame, s)); }
   void measuredTe(Stamp stamp, const MeasuredTeSample& s) override { measured_tes.push_back(toMeasuredTeMsg(stamp, pinion_frame, s)); }
   void calibration(Stamp stamp, const CalibrationEstimate& e) override { calibrations.push_back(toCalibrationMsg(stamp, rig_frame, e)); }

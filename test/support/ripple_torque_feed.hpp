@@ -12,8 +12,8 @@ namespace drivetrain_stiffness {
 
 struct ReadingSink : PipelineSink {
   double sum = 0.0;
-  void stiffness(Stamp, const StiffnessEstimate& e) override { sum += e.mesh.current.composite; }
-  void transmissionError(Stamp, const DynamicsSample& s) override { sum += s.dynamic_te; }
+  void stiffness(Stamp, const StiffnessEstimate& e, const CalibrationBands&) override { sum += e.mesh.current.composite; }
+  void transmissionError(Stamp, const DynamicsSample& s, const SampleContext&) override { sum += s.dynamic_te; }
 };
 
 class RippleTorqueFeed {

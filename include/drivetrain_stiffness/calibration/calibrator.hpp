@@ -23,6 +23,7 @@
 
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <optional>
 
 #include "drivetrain_stiffness/calibration/order_regression.hpp"
@@ -78,7 +79,12 @@ struct MeasuredTeSample {
 class Calibrator {
  public:
   /// The rig's calibration block gives the priors and the data rules. Throws InvalidInput for a
-  /// rig without one, or an invalid one.
+  /// rig without one, or an invalid one. The rig is read only and shared (the pipeline's); `mesh`,
+  /// if given, is the rig's own mesh table (AntiBacklashMesh(rig), read only, shared with the
+  /// stiffness estimator), which the static TE model uses instead of building its own when it
+  /// holds the drawing's stiffness (StaticTeModel).
+  explicit Calibrator(std::shared_ptr<const RigConfig> rig, std::shared_ptr<const AntiBacklashMesh> mesh = nullptr);
+  /// The same on a copy of `rig`.
   explicit Calibrator(const RigConfig& rig);
 
   /// What a reading produced (bit flags).
@@ -91,6 +97,8 @@ class Calibrator {
   /// The readings broke off (encoder time-out, a reset, a jump): the open window is dropped.
   void interrupt();
   const CalibrationEstimate& estimate() const { return estimate_; }
+  const RigConfig& rig() const { return *rig_; }
+  const StaticTeModel& model() const { return model_; }
   /// The parameter values (same as estimate().value) and their covariance.
   const CalibrationVector& parameters() const { return estimate_.value; }
   const CalibrationMatrix& covariance() const { return covariance_; }
@@ -112,8 +120,8 @@ class Calibrator {
   double spreadOf(F&& f, std::uint32_t depends_on = ~0u) const;
   FeatureVector predict(const CalibrationVector& p, double torque) const;
 
-  RigConfig rig_;
-  CalibrationConfig config_;
+  std::shared_ptr<const RigConfig> rig_;
+  const CalibrationConfig& config_;  ///< rig_->calibration
   StaticTeModel model_;
   OrderRegression regression_;
   int teeth_[2] = {0, 0};

@@ -52,8 +52,12 @@ using FeatureVector = Eigen::Matrix<double, kFeatureSize, 1>;
 class StaticTeModel {
  public:
   /// Tabulates the drawing's tooth stiffness (scale 1) over one mesh period. Throws InvalidInput for
-  /// an invalid rig.
-  explicit StaticTeModel(const RigConfig& rig);
+  /// an invalid rig. `rig_mesh`, if given, must be the rig's own mesh table (AntiBacklashMesh(rig):
+  /// its gears, anti_backlash, mesh model and samples); when its mesh.stiffness_scale is 1 it is the
+  /// drawing's table and is used read only (one table per rig) instead of a copy built here.
+  explicit StaticTeModel(const RigConfig& rig, std::shared_ptr<const AntiBacklashMesh> rig_mesh = nullptr);
+  /// The table of the drawing's tooth stiffness this model reads (shared or its own).
+  const AntiBacklashMesh& unitMesh() const { return *unit_; }
 
   /// Each shaft's displacement along the line of action at pinion torque `torque`, from the
   /// supports' exact static solutions at their current settings in `supports`, at scale 1 (divide
@@ -143,8 +147,8 @@ class StaticTeModel {
     double phase = 0.0;
   };
   std::vector<GridPoint> grid_;
-  std::unique_ptr<AntiBacklashMesh> unit_;
-  std::vector<double> switches_;  ///< switching phases in [0, 1)  ///< the drawing's mesh (scale 1): k1', k2' at any phase
+  std::shared_ptr<const AntiBacklashMesh> unit_;  ///< the drawing's mesh (scale 1): k1', k2' at any phase
+  std::vector<double> switches_;  ///< switching phases in [0, 1)
   /// The flank state at tooth stiffness k1', k2' (scale 1) for p and F: k1, k_c, F_p and the
   /// contact by AntiBacklashMesh's criterion.
   struct Flanks {

@@ -78,6 +78,16 @@ class AntiBacklashMesh {
   /// All phases in [0, 1) where the phase table's interpolation has a node (its slope may change),
   /// switching phases included, sorted. Between two of them k1, k2, k_c are linear in phase.
   std::vector<double> tableNodePhases() const;
+  /// Period means of k1, k2 and k_c [N/m]: the exact integrals over one mesh period of what at()
+  /// returns. at() interpolates linearly between the nodes of each segment, so the trapezoid over a
+  /// segment's nodes is its exact integral; the sum over the segments, which tile [0, 1), is the
+  /// period mean. Computed once with the table: the resolution is the table's own, and no sampling
+  /// of the steps at the switching phases enters (a midpoint rule over N phases misplaces each step
+  /// by up to half a sample: 256 and 512 samples gave different means).
+  struct PeriodMeans {
+    double k1 = 0.0, k2 = 0.0, k_chain = 0.0;
+  };
+  const PeriodMeans& periodMeans() const { return means_; }
   /// Drive-flank-only table (the ordinary gear pair) and the g2 table.
   const MeshStiffnessTable& driveTable() const { return *drive_; }
   const MeshStiffnessTable& backTable() const { return *back_; }
@@ -101,6 +111,7 @@ class AntiBacklashMesh {
   };
   std::vector<double> breaks_;
   std::vector<Segment> segments_;
+  PeriodMeans means_;
 };
 
 }  // namespace drivetrain_stiffness

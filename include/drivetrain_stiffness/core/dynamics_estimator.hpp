@@ -28,6 +28,7 @@
 #include "drivetrain_stiffness/core/exponential_integrator.hpp"
 #include "drivetrain_stiffness/core/reduced_models.hpp"
 #include "drivetrain_stiffness/core/rig_config.hpp"
+#include "drivetrain_stiffness/core/rig_model.hpp"
 #include "drivetrain_stiffness/core/sliced_modal_propagator.hpp"
 
 namespace drivetrain_stiffness {
@@ -47,10 +48,11 @@ class DynamicsEstimator {
  public:
   /// rig needs a dynamics block; bearing stiffness [N/m] per shaft; output rate [Hz].
   DynamicsEstimator(const RigConfig& rig, const std::array<double, 2>& bearing_stiffness, double output_rate);
-  /// The same with the rig's mesh table already built (the stiffness estimator's, shared): it must
-  /// be the table of rig.gears, rig.anti_backlash, rig.mesh_model and rig.mesh_samples.
-  DynamicsEstimator(const RigConfig& rig, const std::array<double, 2>& bearing_stiffness, double output_rate,
-                    std::shared_ptr<const AntiBacklashMesh> mesh);
+  /// The same with the rig shared read only (the pipeline's) and its mesh table already built (the
+  /// stiffness estimator's, shared): it must be the table of rig.gears, rig.anti_backlash,
+  /// rig.mesh_model and rig.mesh_samples. The damping ratios start as the rig's (setDamping).
+  DynamicsEstimator(std::shared_ptr<const RigConfig> rig, const std::array<double, 2>& bearing_stiffness,
+                    double output_rate, std::shared_ptr<const AntiBacklashMesh> mesh);
 
   /// Restart at static equilibrium under `torque` at absolute time t.
   void reset(double t, double torque);
@@ -90,9 +92,11 @@ class DynamicsEstimator {
   /// The bearing stiffness per shaft [N/m] the model runs with now: the last one taken up (it can
   /// lag the estimator's by up to the 1 % above).
   const std::array<double, 2>& bearingStiffness() const { return bearing_stiffness_; }
-  /// Damping ratios of the dynamics block (mesh, bearings), each in [0, 1] (requireDampingRatio,
-  /// InvalidInput naming the ratio otherwise); the model is rebuilt, the state kept.
+  /// Damping ratios of the model (mesh, bearings) in place of the dynamics block's, each in [0, 1]
+  /// (requireDampingRatio, InvalidInput naming the ratio otherwise); the model is rebuilt, the
+  /// state kept.
   void setDamping(double mesh_damping_ratio, double bearing_damping_ratio);
+  const DampingRatios& damping() const { return damping_; }
   /// full: exact-exponential / dopri5; quasi_static and linear_modal: reduced_models.hpp. The
   /// state carries over (a reduced model starts from the full state at the switch).
   void setFidelity(Fidelity fidelity);
@@ -104,6 +108,8 @@ class DynamicsEstimator {
   long rebuilds() const { return rebuilds_; }
   long fallbackIntervals() const { return fallback_intervals_; }
   bool exact() const { return following_ ? sliced_ != nullptr : propagator_ != nullptr; }  ///< exact propagation available
+  const RigConfig& rig() const { return *rig_; }
+  const AntiBacklashMesh& mesh() const { return *mesh_; }
   const GearRotorModel& model() const { return *model_; }  ///< nominal phase; time relative to the last reset
   /// 1 - max |Floquet multiplier| of the current model over one mesh period, from the exact
   /// propagators (a few 6x6 products); false if there is no linear regime (bearing clearance).
@@ -135,7 +141,8 @@ class DynamicsEstimator {
   void moveTo(double t);
   double nominalMeshFrequency() const;  ///< [Hz]
 
-  RigConfig rig_;
+  std::shared_ptr<const RigConfig> rig_;
+  DampingRatios damping_;  ///< the rig's until setDamping
   std::array<double, 2> bearing_stiffness_;
   double requested_rate_;
   double torque_ = 0.0;  ///< the measured torque held [N·m]; also the nominal model's torque input

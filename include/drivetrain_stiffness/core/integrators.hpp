@@ -14,9 +14,9 @@
 #pragma once
 
 #include <functional>
-#include <stdexcept>
 #include <string>
 
+#include "drivetrain_stiffness/core/errors.hpp"
 #include "drivetrain_stiffness/core/gear_rotor_model.hpp"
 
 namespace drivetrain_stiffness {
@@ -25,9 +25,10 @@ enum class IntegratorMethod { kRk4, kTrapezoidal, kDopri5, kExponential };
 IntegratorMethod parseIntegratorMethod(const std::string& field, const std::string& text);
 const char* toString(IntegratorMethod method);
 
-class UnstableIntegration : public std::runtime_error {
+/// The integration diverged or ran out of steps (one of the library's own errors, errors.hpp).
+class UnstableIntegration : public Error {
  public:
-  using std::runtime_error::runtime_error;
+  using Error::Error;
 };
 
 struct IntegratorOptions {

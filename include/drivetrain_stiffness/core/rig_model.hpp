@@ -29,14 +29,27 @@ constexpr double kMaxDampingRatio = 1.0;
 /// Throws InvalidInput("<field> = <value>: ...") unless 0 <= value <= kMaxDampingRatio (NaN included).
 void requireDampingRatio(std::string_view field, double value);
 
-/// Mean mesh stiffness over one period: k1, plus k_c for an anti-backlash gear [N/m].
+/// Mean mesh stiffness over one period: k1, plus k_c for an anti-backlash gear [N/m]; the exact
+/// period mean of the phase table (AntiBacklashMesh::periodMeans), the one mean every user takes.
 double meanMeshStiffness(const AntiBacklashMesh& mesh);
 
+/// The damping ratios zeta of the model [-]: the `dynamics:` block's, or the run-time settings'
+/// that replace them (the rig itself is read only and shared).
+struct DampingRatios {
+  double mesh = 0.0, bearing = 0.0;
+  static DampingRatios of(const DynamicsConfig& d) { return {d.mesh_damping_ratio, d.bearing_damping_ratio}; }
+};
+
 /// The rotor parameters of a rig: masses and inertias from its `dynamics:` block, base radii from
-/// the gears, the given bearing stiffness per shaft, and damping from the configured ratios
+/// the gears, the given bearing stiffness per shaft, and damping from the given ratios
 /// (c_s = 2 zeta sqrt(k_mean m_s) for the torsional mode, c_b = 2 zeta sqrt(k_r m) per shaft).
 GearRotorParameters rigRotorParameters(const RigConfig& rig, const AntiBacklashMesh& mesh,
-                                       const std::array<double, 2>& bearing_stiffness);
+                                       const std::array<double, 2>& bearing_stiffness, const DampingRatios& damping);
+/// The same with the `dynamics:` block's damping ratios.
+inline GearRotorParameters rigRotorParameters(const RigConfig& rig, const AntiBacklashMesh& mesh,
+                                              const std::array<double, 2>& bearing_stiffness) {
+  return rigRotorParameters(rig, mesh, bearing_stiffness, DampingRatios::of(rig.dynamics));
+}
 
 /// Static equilibrium of the linearised model at t (K q = f), the start state of SI scenes.
 State6 staticEquilibrium(const GearRotorModel& model, double t);

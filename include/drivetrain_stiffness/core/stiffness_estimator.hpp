@@ -34,6 +34,11 @@ struct EstimatorLimits {
   /// total load (radial + axial preload) since its last solve; 0 = every update. Ball-contact
   /// stiffness grows as Q^(1/3) (Hertz), so the stiffness lags the exact one by about tol / 3.
   double load_tolerance = 0.0;
+  /// The limits' own rules, in one place for the estimator and the pipeline's options: each bound
+  /// > 0, and the load tolerance by requireLoadTolerance (below) under `load_tolerance_field`, the
+  /// name the caller's user knows (load_tolerance, ~bearing_load_tolerance). InvalidInput naming
+  /// the field otherwise.
+  void validate(std::string_view load_tolerance_field = "load_tolerance") const;
 };
 
 /// The bound of EstimatorLimits::load_tolerance, one rule for StiffnessEstimator and the pipeline's
@@ -70,6 +75,10 @@ struct StiffnessEstimate {
 class StiffnessEstimator {
  public:
   /// Validates the rig and limits and solves the initial state (torque 0, preloads from the config).
+  /// The rig is read only, and shared: the pipeline hands the same one to the dynamics and the
+  /// calibration (the preloads that change at run time are this estimator's state, not the rig's).
+  explicit StiffnessEstimator(std::shared_ptr<const RigConfig> rig, const EstimatorLimits& limits = {});
+  /// The same on a copy of `rig`.
   StiffnessEstimator(const RigConfig& rig, const EstimatorLimits& limits = {});
 
   /// New pinion torque [N·m] at pinion angle [rad]; the mesh force F = |T| / r_b (seed 000 eq 14)
@@ -90,7 +99,8 @@ class StiffnessEstimator {
   /// Current radial stiffness per shaft (pinion, gear) [N/m]: the supports of each shaft in
   /// parallel, as the 3-DOF model's k_r1, k_r2 (seed 000 eq 15).
   std::array<double, 2> shaftRadialStiffness() const;
-  const RigConfig& rig() const { return rig_; }
+  const RigConfig& rig() const { return *rig_; }
+  std::shared_ptr<const RigConfig> sharedRig() const { return rig_; }
   /// Support i's configuration with its current preload settings, and its Hertz model.
   const BearingSupportConfig& supportConfig(std::size_t i) const { return supports_.at(i).config; }
   const BearingSupport& supportModel(std::size_t i) const { return *supports_.at(i).model; }
@@ -118,7 +128,7 @@ class StiffnessEstimator {
   std::size_t supportIndex(const std::string& name) const;
   static std::unique_ptr<BearingSupport> build(const BearingSupportConfig& c);
 
-  RigConfig rig_;
+  std::shared_ptr<const RigConfig> rig_;
   EstimatorLimits limits_;
   std::shared_ptr<const AntiBacklashMesh> mesh_;
   std::array<double, 3> mean_k1_kchain_{};  ///< period means of k1, k_chain (for the flank state) and k1 + k_chain

@@ -4,23 +4,12 @@
 #pragma once
 
 #include <cmath>
-#include <stdexcept>
 #include <string>
 #include <string_view>
 
+#include "drivetrain_stiffness/core/errors.hpp"  // InvalidInput, UnreachableLoad
+
 namespace drivetrain_stiffness {
-
-/// Thrown for any input that is not physically or geometrically admissible.
-class InvalidInput : public std::invalid_argument {
- public:
-  using std::invalid_argument::invalid_argument;
-};
-
-/// Thrown when a well-formed input has no admissible solution (e.g. a load the bearing cannot carry).
-class UnreachableLoad : public std::runtime_error {
- public:
-  using std::runtime_error::runtime_error;
-};
 
 /// Formats a double with enough digits to reproduce it (used in every error message).
 std::string formatValue(double value);

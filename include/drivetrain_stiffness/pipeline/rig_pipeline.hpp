@@ -39,6 +39,10 @@
 // (InvalidInput naming the field); the state is left as it was. A torque whose header.frame_id is
 // not ~torque_frame is rejected before its value is read (the sign of torque.z selects the loaded
 // flank, and only that frame says which way is positive). Every input is counted.
+// Errors: the pipeline catches the library's own exceptions only (drivetrain_stiffness::Error,
+// core/errors.hpp: InvalidInput, UnreachableLoad, UnstableIntegration), and counts each (rejected
+// inputs, dynamics_errors, calibration_errors) with its reason in last_event. Anything else, a
+// programming error such as std::logic_error or std::out_of_range, passes through to the caller.
 // Transport rules: messages a numbering publisher sent that never arrived are counted as dropped
 // (SequenceGaps). An input the caller marks as backlogged (it waited too long in the subscriber
 // queue) passes every rule and drives the dynamics at its stamp, but skips the stiffness update
@@ -54,6 +58,7 @@
 #include <vector>
 
 #include "drivetrain_stiffness/calibration/calibrator.hpp"
+#include "drivetrain_stiffness/core/errors.hpp"
 #include "drivetrain_stiffness/core/dynamics_estimator.hpp"
 #include "drivetrain_stiffness/core/modal_analysis.hpp"
 #include "drivetrain_stiffness/core/motion.hpp"
@@ -167,18 +172,44 @@ struct MeshPeriodStatistics {
   double torque = 0.0;            ///< [N*m]
 };
 
-/// Receives the pipeline's outputs; every method is optional.
+/// What the tf frames and markers of a transmission-error sample need besides the sample: plain
+/// values of that moment, so that a sink never asks the pipeline back in the middle of an advance.
+struct SampleContext {
+  double pinion_angle = 0.0;  ///< [rad] at the sample's stamp (RigPipeline::pinionAngle)
+  /// The last published resonance estimate, null when there is none since the last reset; points
+  /// at the pipeline's copy, valid during the call only.
+  const ResonanceEstimate* resonance = nullptr;
+};
+
+/// The TE spectrum's strongest lines over the sliding window, copied out of it (fixed storage: no
+/// allocation per spectrum).
+struct SpectrumPeaks {
+  static constexpr std::size_t kMaxPeaks = 3;  ///< the lines the pipeline keeps (te_spectrum)
+  std::array<SpectralPeak, kMaxPeaks> peaks{};  ///< the first `count`, strongest first
+  std::size_t count = 0;
+  double resolution = 0.0;      ///< [Hz] bin spacing, 1 / window_seconds
+  double window_seconds = 0.0;  ///< [s]
+};
+
+/// Receives the pipeline's outputs as plain values; every method is optional. A sink may throw the
+/// library's own Error (a message it refuses, e.g. a non-finite number): the pipeline counts it.
 class PipelineSink {
  public:
   virtual ~PipelineSink() = default;
-  /// After an accepted input (throttled to ~stiffness_rate); stamp = the input's.
-  virtual void stiffness(Stamp /*stamp*/, const StiffnessEstimate& /*estimate*/) {}
+  /// After an accepted input (throttled to ~stiffness_rate); stamp = the input's. `bands`: the
+  /// calibrated stiffness at the estimate's torque with its 95 % bounds, or without a calibration
+  /// the drawing's model (mesh: estimate.mesh.mean; bearings: the shafts' radial stiffness) with
+  /// bounds of zero width; the natural frequencies are not filled.
+  virtual void stiffness(Stamp /*stamp*/, const StiffnessEstimate& /*estimate*/, const CalibrationBands& /*bands*/) {}
   /// One transmission-error sample on the output grid, at `stamp` (exact; sample.t = stamp.toSec()).
-  virtual void transmissionError(Stamp /*stamp*/, const DynamicsSample& /*sample*/) {}
+  virtual void transmissionError(Stamp /*stamp*/, const DynamicsSample& /*sample*/, const SampleContext& /*context*/) {}
   /// New TE spectrum peaks; stamp of the newest sample in the window.
-  virtual void spectrum(Stamp /*stamp*/, const SlidingSpectrum& /*spectrum*/) {}
-  /// The resonance estimate moved by more than the threshold (or after a reset); stamp = the input's.
-  virtual void resonance(Stamp /*stamp*/, const ResonanceEstimate& /*estimate*/) {}
+  virtual void spectrum(Stamp /*stamp*/, const SpectrumPeaks& /*peaks*/) {}
+  /// The resonance estimate moved by more than the threshold (or after a reset); stamp = the
+  /// input's. `bands`: the calibrated stiffness and natural frequencies at the current torque with
+  /// their 95 % bounds, or without a calibration the estimate's frequencies with bounds of zero
+  /// width (the stiffness entries then unfilled).
+  virtual void resonance(Stamp /*stamp*/, const ResonanceEstimate& /*estimate*/, const CalibrationBands& /*bands*/) {}
   /// One encoder reading's measured TE (baseline and shaft orders removed) beside the calibrated
   /// model's; stamp = the reading's (rule 11).
   virtual void measuredTe(Stamp /*stamp*/, const MeasuredTeSample& /*sample*/) {}
@@ -269,7 +300,10 @@ class RigPipeline {
   const DynamicsEstimator* dynamics() const { return dynamics_.get(); }
   /// The live calibration (rule 11), or null without a calibration block or with ~calibrate off.
   const Calibrator* calibrator() const { return calibrator_.get(); }
-  const RigConfig& rig() const { return rig_; }
+  /// The rig as the pipeline runs it (shared read only with the estimator, the dynamics and the
+  /// calibration): the gearbox with the nominal speed and the start-up damping; the current damping
+  /// is settings()'.
+  const RigConfig& rig() const { return *rig_; }
   const std::optional<ResonanceEstimate>& lastResonance() const { return last_resonance_; }
   /// Pinion angle at `stamp` [rad]: the last encoder reading extrapolated at its speed, or the
   /// nominal speed's angle since the dynamics origin (plus ~mesh_phase_offset as an angle).
@@ -305,7 +339,15 @@ class RigPipeline {
   /// Dynamics at static equilibrium under `torque` from `stamp` on (new epoch, empty spectrum).
   void restartDynamics(Stamp stamp, double torque);
   void updateResonance(Stamp stamp, const StiffnessEstimate& estimate, PipelineSink& sink);
-  void dynamicsError(const std::string& where, const std::exception& e);
+  /// The sinks' bands (PipelineSink::stiffness, ::resonance): the calibration's, or the drawing's
+  /// model with bounds of zero width.
+  CalibrationBands stiffnessBands(const StiffnessEstimate& estimate) const;
+  CalibrationBands resonanceBands(const ResonanceEstimate& estimate) const;
+  SpectrumPeaks spectrum_peaks_;  ///< the sink's copy of the spectrum (reused)
+  /// A failure of the dynamics or the resonance on the library's own error (errors.hpp): counted
+  /// in dynamics_errors with `where` and the reason in last_event. Nothing wider is caught: a
+  /// programming error leaves the pipeline.
+  void dynamicsError(const std::string& where, const Error& e);
 
   /// The running block of MeshPeriodStatistics (plain values: no allocation per sample).
   struct MeshPeriodAccumulator {
@@ -328,7 +370,7 @@ class RigPipeline {
   MeshPeriodAccumulator mesh_block_;
   double advance_mesh_frequency_ = 0.0;  ///< [Hz] the dynamics' during the current emitUpTo
 
-  RigConfig rig_;
+  std::shared_ptr<const RigConfig> rig_;  ///< first: the members below share it
   PipelineOptions options_;
   RuntimeSettings settings_;
   std::unique_ptr<StiffnessEstimator> estimator_;
@@ -357,7 +399,7 @@ class RigPipeline {
   void calibrate(Stamp stamp, const Reading& reading, bool continuous, PipelineSink& sink);
   /// A window the calibration could not evaluate (the library's own errors only): counted, reason
   /// in last_event, the window dropped.
-  void calibrationError(const std::exception& e);
+  void calibrationError(const Error& e);
   /// The reading unwrapped against `last` (null: none recent), its speed measured or differentiated.
   Reading unwrapReading(Stamp stamp, const MotionInput& reading, const Reading* last) const;
   double held_torque_ = 0.0;

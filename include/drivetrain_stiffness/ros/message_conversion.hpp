@@ -47,15 +47,17 @@ struct TorqueInput {
 };
 TorqueInput toTorqueInput(const geometry_msgs::WrenchStamped& msg, std::string_view publisher);
 
-/// A Preload message's settings, as the pipeline takes them (node and replay).
-std::vector<PreloadSetting> toPreloadSettings(const drivetrain_stiffness::Preload& msg);
+/// A Preload message's settings into the caller's `out`, as the pipeline takes them (node and
+/// replay). `out` is resized and its elements assigned in place (names into their strings), so a
+/// buffer kept by the caller allocates nothing once it has held a message as large, names as long.
+void toPreloadSettings(const drivetrain_stiffness::Preload& msg, std::vector<PreloadSetting>& out);
 
 /// The stiffness message into `out`, reusing its bearings array and strings: the sinks keep one
 /// message and refill it for every update (1 kHz and more) instead of allocating one per update.
 void fillStiffnessMsg(Stamp stamp, const std::string& frame_id, const StiffnessEstimate& estimate,
                       drivetrain_stiffness::Stiffness& out);
 drivetrain_stiffness::TransmissionError toTransmissionErrorMsg(Stamp stamp, const std::string& frame_id, const DynamicsSample& s);
-drivetrain_stiffness::SpectralPeaks toSpectralPeaksMsg(Stamp stamp, const std::string& frame_id, const SlidingSpectrum& spectrum);
+drivetrain_stiffness::SpectralPeaks toSpectralPeaksMsg(Stamp stamp, const std::string& frame_id, const SpectrumPeaks& peaks);
 drivetrain_stiffness::Resonance toResonanceMsg(Stamp stamp, const std::string& frame_id, const ResonanceEstimate& r);
 /// The calibrated stiffness and natural frequencies with their 95 % bounds into the stiffness and
 /// resonance messages (docs/calibration.md section 4); refuses a non-finite number, naming it.

@@ -24,23 +24,23 @@ struct OutputSettings {
 
 class MessageSink : public PipelineSink {
  public:
-  /// The pipeline supplies the rig geometry, the nominal pinion angle, the last resonance and the
-  /// run-time settings (exaggeration, tf rate).
+  /// The rig geometry and the start-up run-time settings (exaggeration, tf rate) are read from the
+  /// pipeline here, once; afterwards the sink works on the values each output brings.
   MessageSink(const RigPipeline& pipeline, const OutputSettings& settings);
 
-  void stiffness(Stamp stamp, const StiffnessEstimate& estimate) override;
-  void transmissionError(Stamp stamp, const DynamicsSample& sample) override;
-  void spectrum(Stamp stamp, const SlidingSpectrum& spectrum) override;
-  void resonance(Stamp stamp, const ResonanceEstimate& estimate) override;
+  void stiffness(Stamp stamp, const StiffnessEstimate& estimate, const CalibrationBands& bands) override;
+  void transmissionError(Stamp stamp, const DynamicsSample& sample, const SampleContext& context) override;
+  void spectrum(Stamp stamp, const SpectrumPeaks& peaks) override;
+  void resonance(Stamp stamp, const ResonanceEstimate& estimate, const CalibrationBands& bands) override;
   void measuredTe(Stamp stamp, const MeasuredTeSample& sample) override;
   void calibration(Stamp stamp, const CalibrationEstimate& estimate) override;
   void meshPeriod(Stamp stamp, const MeshPeriodStatistics& stats) override;
 
-  const OutputSettings& settings() const { return settings_; }
+  /// New run-time settings, as applied to the pipeline (RigPipeline::apply): the sink draws with
+  /// their tf rate and exaggeration from the next output on.
+  void apply(const RuntimeSettings& settings);
 
- private:
-  /// The calibration's stiffness bands at this estimate's torque, or the drawing's model (zero width).
-  CalibrationBands stiffnessBands(const StiffnessEstimate& estimate) const;
+  const OutputSettings& settings() const { return settings_; }
 
  protected:
   virtual void emitStiffness(const drivetrain_stiffness::Stiffness& msg) = 0;
@@ -54,8 +54,9 @@ class MessageSink : public PipelineSink {
   virtual void emitMarkers(const visualization_msgs::MarkerArray& markers) = 0;
 
  private:
-  const RigPipeline& pipeline_;
   OutputSettings settings_;
+  double tf_rate_ = 0.0;       ///< [Hz] the run-time settings' (~tf_rate)
+  double exaggeration_ = 1.0;  ///< the run-time settings' (~exaggeration), taken up at the next tf output
   RigVisualizer visualizer_;
   std::optional<Stamp> last_tf_;
   drivetrain_stiffness::Stiffness stiffness_msg_;  ///< refilled per update (publish serializes it at once)

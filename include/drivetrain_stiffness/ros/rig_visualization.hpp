@@ -33,8 +33,9 @@ class RigVisualizer {
   /// rig -> pinion and rig -> gear at sample.t; pinion_angle is the nominal pinion angle [rad].
   std::vector<geometry_msgs::TransformStamped> transforms(const ros::Time& stamp, const DynamicsSample& sample,
                                                          double pinion_angle) const;
+  /// `resonance`: the current estimate, shown as text (null: none yet).
   visualization_msgs::MarkerArray markers(const ros::Time& stamp, const DynamicsSample& sample,
-                                          const std::optional<ResonanceEstimate>& resonance) const;
+                                          const ResonanceEstimate* resonance) const;
   /// Unit vector of the line of action in the rig frame (the sense of positive x_p, x_g).
   std::array<double, 2> lineOfAction() const { return {sin_aw_, -cos_aw_}; }
 

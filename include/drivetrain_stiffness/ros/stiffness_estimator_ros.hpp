@@ -10,6 +10,7 @@
 #include <mutex>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include <diagnostic_updater/diagnostic_updater.h>
 #include <boost/thread/recursive_mutex.hpp>
@@ -54,6 +55,7 @@ class StiffnessEstimatorRos {
 
   std::mutex mutex_;  // callbacks may run on several threads (nodelet, multi-threaded spinners)
   std::unique_ptr<RigPipeline> pipeline_;
+  std::vector<PreloadSetting> preload_settings_;  ///< each preload message's, converted in place (under mutex_)
   std::unique_ptr<Publishers> publishers_;
   ros::Subscriber torque_sub_, preload_sub_, joint_states_sub_;
   JointNames joints_;

@@ -1,0 +1,97 @@
+// What the pipeline catches: the library's own errors (drivetrain_stiffness::Error) are counted
+// with their reason and the pipeline goes on; a programming error (std::logic_error,
+// std::out_of_range, ...) is not caught, so a test that hits one fails instead of seeing a
+// dynamics error in the counters. The errors are injected through a sink, whose callbacks run
+// inside the pipeline's guarded sections (the TE samples inside the advance, the resonance inside
+// its update).
+#include <gtest/gtest.h>
+
+#include <functional>
+#include <stdexcept>
+#include <type_traits>
+
+#include "drivetrain_stiffness/config/yaml_config.hpp"
+#include "drivetrain_stiffness/core/errors.hpp"
+#include "drivetrain_stiffness/core/integrators.hpp"
+#include "drivetrain_stiffness/pipeline/rig_pipeline.hpp"
+
+using namespace drivetrain_stiffness;
+
+namespace {
+
+const RigConfig& rig() {
+  static const RigConfig r = loadRigFile(std::string(DRIVETRAIN_SOURCE_DIR) + "/config/gearboxes/seed_servo.yaml");
+  return r;
+}
+
+constexpr std::int64_t kEpoch = 1767225600LL * 1000000000LL;  // 2026-01-01
+Stamp at(double seconds) { return Stamp{kEpoch + std::llround(seconds * 1e9)}; }
+
+// Runs `on_sample` at the n-th TE sample (1-based) and `on_resonance` at every resonance.
+struct InjectingSink : PipelineSink {
+  int samples = 0, throw_at = -1;
+  std::function<void()> on_sample, on_resonance;
+  void transmissionError(Stamp, const DynamicsSample&, const SampleContext&) override {
+    if (++samples == throw_at && on_sample) on_sample();
+  }
+  void resonance(Stamp, const ResonanceEstimate&, const CalibrationBands&) override {
+    if (on_resonance) on_resonance();
+  }
+};
+
+}  // namespace
+
+// The exceptions the library throws on purpose share one base, and none of them is a logic_error
+// (which the pipeline leaves to surface).
+static_assert(std::is_base_of_v<Error, InvalidInput> && std::is_base_of_v<Error, UnreachableLoad> &&
+              std::is_base_of_v<Error, UnstableIntegration>);
+static_assert(!std::is_base_of_v<std::logic_error, Error>);
+
+TEST(PipelineErrors, TheLibrarysOwnErrorInTheDynamicsIsCountedAndTheModelRestarts) {
+  RigPipeline p(rig(), PipelineOptions{});
+  InjectingSink sink;
+  sink.throw_at = 5;
+  sink.on_sample = [] { throw UnstableIntegration("injected divergence"); };
+  ASSERT_EQ(p.torque(at(0.0), 0.1, sink), InputOutcome::kAccepted);
+  // 10 ms at the 1 kHz grid: the 5th sample throws; the input is still accepted (its stiffness is
+  // good), the dynamics restart at it, counted once with the reason.
+  EXPECT_EQ(p.torque(at(0.010), 0.1, sink), InputOutcome::kAccepted);
+  EXPECT_EQ(p.counters().dynamics_errors, 1u);
+  EXPECT_NE(p.counters().last_event.find("injected divergence"), std::string::npos) << p.counters().last_event;
+  EXPECT_TRUE(p.dynamics()->started());
+  // And it goes on: the next 10 ms give their samples.
+  const int before = sink.samples;
+  EXPECT_EQ(p.torque(at(0.020), 0.1, sink), InputOutcome::kAccepted);
+  EXPECT_GE(sink.samples - before, 9);
+  EXPECT_EQ(p.counters().dynamics_errors, 1u);
+}
+
+TEST(PipelineErrors, ALogicErrorInsideTheAdvanceSurfaces) {
+  RigPipeline p(rig(), PipelineOptions{});
+  InjectingSink sink;
+  sink.throw_at = 5;
+  sink.on_sample = [] { throw std::logic_error("a bug"); };
+  ASSERT_EQ(p.torque(at(0.0), 0.1, sink), InputOutcome::kAccepted);
+  EXPECT_THROW(p.torque(at(0.010), 0.1, sink), std::logic_error);
+  EXPECT_EQ(p.counters().dynamics_errors, 0u);  // not mistaken for a dynamics failure
+}
+
+TEST(PipelineErrors, AnOutOfRangeInsideTheResonanceUpdateSurfaces) {
+  RigPipeline p(rig(), PipelineOptions{});
+  InjectingSink sink;
+  sink.on_resonance = [] {
+    const std::vector<int> none;
+    (void)none.at(3);  // a bad index: std::out_of_range
+  };
+  EXPECT_THROW(p.torque(at(0.0), 0.1, sink), std::out_of_range);
+  EXPECT_EQ(p.counters().dynamics_errors, 0u);
+}
+
+TEST(PipelineErrors, TheLibrarysOwnErrorInTheResonanceIsCounted) {
+  RigPipeline p(rig(), PipelineOptions{});
+  InjectingSink sink;
+  sink.on_resonance = [] { throw InvalidInput("resonance: injected refusal"); };
+  EXPECT_EQ(p.torque(at(0.0), 0.1, sink), InputOutcome::kAccepted);
+  EXPECT_EQ(p.counters().dynamics_errors, 1u);
+  EXPECT_NE(p.counters().last_event.find("injected refusal"), std::string::npos) << p.counters().last_event;
+}
