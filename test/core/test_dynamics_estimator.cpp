@@ -12,14 +12,12 @@
 #include "drivetrain_stiffness/core/scenes.hpp"
 #include "drivetrain_stiffness/core/sliced_mesh.hpp"
 #include "drivetrain_stiffness/core/validation.hpp"
+#include "seed_rig.hpp"  // NOLINT(build/include_subdir)
 
 using namespace drivetrain_stiffness;
 
 namespace {
-const RigConfig& rig() {
-  static const RigConfig r = loadRigFile(std::string(DRIVETRAIN_SOURCE_DIR) + "/config/gearboxes/seed_servo.yaml");
-  return r;
-}
+const RigConfig& rig() { return test::seedServo(); }
 }  // namespace
 
 TEST(DynamicsEstimator, GridAndSteadyState) {

@@ -10,15 +10,13 @@
 #include "drivetrain_stiffness/core/validation.hpp"
 #include "drivetrain_stiffness/pipeline/rig_pipeline.hpp"
 #include "drivetrain_stiffness/pipeline/sequence_gaps.hpp"
+#include "seed_rig.hpp"  // NOLINT(build/include_subdir)
 
 using namespace drivetrain_stiffness;
 
 namespace {
 
-const RigConfig& rig() {
-  static const RigConfig r = loadRigFile(std::string(DRIVETRAIN_SOURCE_DIR) + "/config/gearboxes/seed_servo.yaml");
-  return r;
-}
+const RigConfig& rig() { return test::seedServo(); }
 
 constexpr std::int64_t kEpoch = 1767225600LL * 1000000000LL;  // 2026-01-01
 Stamp at(double seconds) { return Stamp{kEpoch + std::llround(seconds * 1e9)}; }

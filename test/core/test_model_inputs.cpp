@@ -12,14 +12,12 @@
 #include "drivetrain_stiffness/core/reduced_models.hpp"
 #include "drivetrain_stiffness/core/rig_model.hpp"
 #include "drivetrain_stiffness/core/validation.hpp"
+#include "seed_rig.hpp"  // NOLINT(build/include_subdir)
 
 using namespace drivetrain_stiffness;
 
 namespace {
-const RigConfig& rig() {
-  static const RigConfig r = loadRigFile(std::string(DRIVETRAIN_SOURCE_DIR) + "/config/gearboxes/seed_servo.yaml");
-  return r;
-}
+const RigConfig& rig() { return test::seedServo(); }
 
 std::shared_ptr<const AntiBacklashMesh> mesh() {
   static const auto m = std::make_shared<const AntiBacklashMesh>(rig());

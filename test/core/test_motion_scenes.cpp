@@ -13,14 +13,12 @@
 #include "drivetrain_stiffness/core/scenes.hpp"
 #include "drivetrain_stiffness/core/sliced_modal_propagator.hpp"
 #include "drivetrain_stiffness/core/validation.hpp"
+#include "seed_rig.hpp"  // NOLINT(build/include_subdir)
 
 using namespace drivetrain_stiffness;
 
 namespace {
-const RigConfig& rig() {
-  static const RigConfig r = loadRigFile(std::string(DRIVETRAIN_SOURCE_DIR) + "/config/gearboxes/seed_servo.yaml");
-  return r;
-}
+const RigConfig& rig() { return test::seedServo(); }
 
 constexpr double kT = 0.04;               // [s] 40 readings: T/4 and T/20 fall on readings
 constexpr double kRpm = kTwoPi / 60.0;    // 1 rpm in rad/s

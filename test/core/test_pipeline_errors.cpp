@@ -14,18 +14,14 @@
 #include "drivetrain_stiffness/core/errors.hpp"
 #include "drivetrain_stiffness/core/integrators.hpp"
 #include "drivetrain_stiffness/pipeline/rig_pipeline.hpp"
+#include "seed_rig.hpp"  // NOLINT(build/include_subdir)
 
 using namespace drivetrain_stiffness;
 
 namespace {
 
-const RigConfig& rig() {
-  static const RigConfig r = loadRigFile(std::string(DRIVETRAIN_SOURCE_DIR) + "/config/gearboxes/seed_servo.yaml");
-  return r;
-}
-
-constexpr std::int64_t kEpoch = 1767225600LL * 1000000000LL;  // 2026-01-01
-Stamp at(double seconds) { return Stamp{kEpoch + std::llround(seconds * 1e9)}; }
+const RigConfig& rig() { return test::seedServo(); }
+Stamp at(double seconds) { return test::stampAt(seconds); }
 
 // Runs `on_sample` at the n-th TE sample (1-based) and `on_resonance` at every resonance.
 struct InjectingSink : PipelineSink {

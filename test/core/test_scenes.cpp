@@ -8,14 +8,12 @@
 #include "drivetrain_stiffness/config/yaml_config.hpp"
 #include "drivetrain_stiffness/core/scenes.hpp"
 #include "drivetrain_stiffness/core/validation.hpp"
+#include "seed_rig.hpp"  // NOLINT(build/include_subdir)
 
 using namespace drivetrain_stiffness;
 
 namespace {
-const RigConfig& rig() {
-  static const RigConfig r = loadRigFile(std::string(DRIVETRAIN_SOURCE_DIR) + "/config/gearboxes/seed_servo.yaml");
-  return r;
-}
+const RigConfig& rig() { return test::seedServo(); }
 
 IntegratorOptions optionsFor(const Scene& s, IntegratorMethod m) {
   IntegratorOptions o;

@@ -9,15 +9,13 @@
 #include "drivetrain_stiffness/config/yaml_config.hpp"
 #include "drivetrain_stiffness/core/rig_model.hpp"
 #include "drivetrain_stiffness/core/stiffness_estimator.hpp"
+#include "seed_rig.hpp"  // NOLINT(build/include_subdir)
 
 using namespace drivetrain_stiffness;
 
 namespace {
 
-const RigConfig& rig() {
-  static const RigConfig r = loadRigFile(std::string(DRIVETRAIN_SOURCE_DIR) + "/config/gearboxes/seed_servo.yaml");
-  return r;
-}
+const RigConfig& rig() { return test::seedServo(); }
 
 std::vector<PreloadSetting> preloads(double axial) {
   return {{"pinion_bearing", axial, 1000.0, 0.0, 0.0}, {"gear_bearing", axial, 1000.0, 0.0, 0.0}};
