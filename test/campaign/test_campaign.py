@@ -267,7 +267,10 @@ class LabScheduler(unittest.TestCase):
         procs.append(subprocess.Popen(["setpriv", "--reuid=65534", "--regid=65534", "--clear-groups", "dask-worker", address,
                                        "--nworkers", "1", "--nthreads", "1", "--no-dashboard", "--host", "127.0.0.1",
                                        "--local-directory", space], env={"PATH": "/usr/bin:/bin", "HOME": space},
-                                      stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL))
+                                      # in its own directory: `nobody` may not enter the checkout's
+                                      # (a clone under a 0700 mktemp directory), and a worker that
+                                      # cannot read its working directory never joins
+                                      cwd=space, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL))
         refused = campaign(os.path.join(tmp, "out"), [bags], "--scheduler", address, check=False)
         self.assertEqual(refused.returncode, 1, refused.stderr)
         self.assertRegex(refused.stderr, r"worker tcp://127\.0\.0\.1:\d+: cannot read '" + bags + "/bag_000.bag'")
