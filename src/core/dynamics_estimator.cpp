@@ -172,21 +172,28 @@ void DynamicsEstimator::setMotionSlices(int slices) {
   motion_slices_ = slices;
   slices_.reset();
   sliced_.reset();
-  moving_.reset();
+  mean_slices_.reset();
+  mean_sliced_.reset();
   moving_model_.reset();
+  mean_model_.reset();
 }
 
 void DynamicsEstimator::startFollowing() {
   const GearRotorParameters p = currentParameters();
   if (!slices_) {
     slices_ = std::make_shared<const SlicedMesh>(mesh_, motion_slices_);
-    // The live node's load follows the input (RigExcitationSpec::balanced_load): F_d = T / r_p.
-    moving_ = std::make_shared<SlicedExcitation>(slices_, rig_->dynamics.transmission_error_amplitude, rig_->dynamics.backlash,
-                                                 1.0 / p.pinion_base_radius, 0.0);
     // linear_modal along the measured motion: the same model with the period's mean stiffness.
-    mean_slices_ = SlicedMesh::periodMean(*slices_);
-    mean_moving_ = std::make_shared<SlicedExcitation>(mean_slices_, rig_->dynamics.transmission_error_amplitude,
-                                                      rig_->dynamics.backlash, 1.0 / p.pinion_base_radius, 0.0);
+    mean_slices_ = SlicedMesh::periodMean(mesh_);
+    // The live node's load follows the input (RigExcitationSpec::balanced_load): F_d = T / r_p.
+    moving_model_ = std::make_unique<GearRotorModel>(
+        p, std::make_shared<const SlicedExcitation>(slices_, rig_->dynamics.transmission_error_amplitude,
+                                                    rig_->dynamics.backlash, 1.0 / p.pinion_base_radius, 0.0));
+    mean_model_ = std::make_unique<GearRotorModel>(
+        p, std::make_shared<const SlicedExcitation>(mean_slices_, rig_->dynamics.transmission_error_amplitude,
+                                                    rig_->dynamics.backlash, 1.0 / p.pinion_base_radius, 0.0));
+  } else {
+    moving_model_->setParameters(p);
+    mean_model_->setParameters(p);
   }
   const bool clearance = p.bearing_clearance[0] > 0.0 || p.bearing_clearance[1] > 0.0;
   if (!sliced_ && !clearance) {
@@ -198,8 +205,6 @@ void DynamicsEstimator::startFollowing() {
     sliced_->setParameters(p);
     mean_sliced_->setParameters(p);
   }
-  moving_model_ = std::make_unique<GearRotorModel>(p, moving_);
-  mean_model_ = std::make_unique<GearRotorModel>(p, mean_moving_);
   // The state sits on grid sample k_; the nominal phase there (RigExcitation: turns = f t).
   t_state_ = k_ * interval_;
   mesh_frequency_ = nominalMeshFrequency();
@@ -257,10 +262,7 @@ void DynamicsEstimator::propagateTo(double t_rel) {
     return;
   }
   // A contact open (or bearing clearance): dopri5 on the same sliced model along the same motion.
-  SlicedExcitation& excitation = mean ? *mean_moving_ : *moving_;
-  excitation.setMotion(t_state_, phase_, mesh_frequency_);
-  excitation.setTorque(torque_);
-  y_ = integrate(mean ? *mean_model_ : *moving_model_, IntegratorMethod::kDopri5, fallback_, t_state_, y_, t_rel, h, nullptr);
+  y_ = integrate(movingModelAtState(), IntegratorMethod::kDopri5, fallback_, t_state_, y_, t_rel, h, nullptr);
   phase_ = wrapTurns(phase_ + mesh_frequency_ * h);
   t_state_ = t_rel;
   ++fallback_intervals_;
@@ -307,13 +309,14 @@ bool DynamicsEstimator::floquetMargin(double* margin) const {
 
 DynamicsSample DynamicsEstimator::sample(double t_rel, const State6& y) const { return sampleOf(*model_, t_rel, y); }
 
-DynamicsSample DynamicsEstimator::movingSample() const {
-  const bool mean = fidelity_ == Fidelity::kLinearModal;
-  SlicedExcitation& excitation = mean ? *mean_moving_ : *moving_;
-  excitation.setMotion(t_state_, phase_, mesh_frequency_);
-  excitation.setTorque(torque_);
-  return sampleOf(mean ? *mean_model_ : *moving_model_, t_state_, y_);
+GearRotorModel& DynamicsEstimator::movingModelAtState() {
+  GearRotorModel& model = fidelity_ == Fidelity::kLinearModal ? *mean_model_ : *moving_model_;
+  model.setMotionInput(MeshMotion{t_state_, phase_, mesh_frequency_});
+  model.setTorqueInput(torque_);
+  return model;
 }
+
+DynamicsSample DynamicsEstimator::movingSample() { return sampleOf(movingModelAtState(), t_state_, y_); }
 
 void DynamicsEstimator::propagateQuasiStatic(double h, double drive_force) {
   // quasi_static along the measured motion (reduced_models.hpp: m_s -> 0): each shaft is a damped

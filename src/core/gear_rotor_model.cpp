@@ -5,6 +5,7 @@
 #include <limits>
 
 #include "drivetrain_stiffness/core/rig_excitation.hpp"
+#include "drivetrain_stiffness/core/sliced_mesh.hpp"
 #include "drivetrain_stiffness/core/validation.hpp"
 
 namespace drivetrain_stiffness {
@@ -64,6 +65,12 @@ double GearRotorParameters::equivalentMass() const {
                 gear_base_radius * gear_base_radius / gear_inertia);
 }
 
+void MeshMotion::validate() const {
+  requireFinite("t0", t0);
+  requireFinite("mesh phase", phase0);
+  requireFinite("mesh frequency", frequency);
+}
+
 double ConstantExcitation::nextSwitch(double) const { return std::numeric_limits<double>::infinity(); }
 
 GearRotorModel::GearRotorModel(const GearRotorParameters& p, std::shared_ptr<const GearExcitation> excitation)
@@ -82,6 +89,27 @@ GearRotorModel::GearRotorModel(const GearRotorParameters& p, std::shared_ptr<con
 GearRotorModel::GearRotorModel(const GearRotorParameters& p, std::shared_ptr<RigExcitation> excitation)
     : GearRotorModel(p, std::shared_ptr<const RigExcitation>(std::move(excitation))) {}
 
+GearRotorModel::GearRotorModel(const GearRotorParameters& p, std::shared_ptr<const SlicedExcitation> excitation)
+    : GearRotorModel(p, std::shared_ptr<const GearExcitation>(excitation)) {
+  sliced_ = std::move(excitation);
+  torque_input_used_ = true;
+  motion_input_ = sliced_->motion();
+  torque_input_ = sliced_->torque();
+}
+
+GearRotorModel::GearRotorModel(const GearRotorParameters& p, std::shared_ptr<SlicedExcitation> excitation)
+    : GearRotorModel(p, std::shared_ptr<const SlicedExcitation>(std::move(excitation))) {}
+
+void GearRotorModel::setMotionInput(const MeshMotion& motion) {
+  if (!sliced_) throw InvalidInput("motion input: the model's excitation has a mesh phase of its own");
+  motion.validate();
+  motion_input_ = motion;
+}
+
+double GearRotorModel::nextSwitch(double t) const {
+  return sliced_ ? sliced_->nextSwitch(t, motion_input_) : excitation_->nextSwitch(t);
+}
+
 void GearRotorModel::setTorqueInput(double torque) {
   if (!torque_input_used_) throw InvalidInput("torque input: the model's excitation has a torque profile of its own");
   requireFinite("torque", torque);
@@ -89,6 +117,10 @@ void GearRotorModel::setTorqueInput(double torque) {
 }
 
 void GearRotorModel::meshAt(double t, MeshInstant& m) const {
+  if (sliced_) {
+    sliced_->at(t, motion_input_, torque_input_, m);
+    return;
+  }
   excitation_->at(t, m);
   if (torque_input_used_) m.drive_force = rig_->driveForce(torque_input_);
 }

@@ -195,7 +195,7 @@ State6 integrate(const GearRotorModel& model, IntegratorMethod method, const Int
   Dopri5 dp(model, o, st);
   // Velocities are compared with displacements through the fastest natural scale: omega_ref = sqrt(k/m).
   MeshInstant mi;
-  model.excitation().at(t0, mi);
+  model.meshAt(t0, mi);
   const GearRotorParameters& p = model.parameters();
   const double k_ref = std::max({mi.k_drive + mi.k_back, p.bearing_stiffness[0], p.bearing_stiffness[1], 1.0});
   const double m_ref = std::min({model.equivalentMass(), p.pinion_mass, p.gear_mass});
@@ -213,7 +213,7 @@ State6 integrate(const GearRotorModel& model, IntegratorMethod method, const Int
                                 formatValue(t0) + " s to " + formatValue(t_end) + " s (stopped at " + formatValue(t) +
                                 " s): the work bound of one call");
     }
-    const double switch_time = model.excitation().nextSwitch(t);
+    const double switch_time = model.nextSwitch(t);
     double h_try = std::min({h, o.max_step, t_end - t});
     bool hits_switch = false;
     if (switch_time - t <= h_try) { h_try = switch_time - t; hits_switch = true; }

@@ -149,9 +149,8 @@ class MotionExcitation : public GearExcitation {
  public:
   MotionExcitation(const SceneMotion& m, double torque_gain, double torque) : interval_(m.reading_interval) {
     for (std::size_t k = 0; k + 1 < m.readings(); ++k) {
-      pieces_.emplace_back(m.slices, m.te_amplitude, m.backlash, torque_gain, 0.0);
-      pieces_.back().setTorque(torque);
-      pieces_.back().setMotion(static_cast<double>(k) * interval_, m.phase[k], m.meshFrequency(k));
+      pieces_.emplace_back(m.slices, m.te_amplitude, m.backlash, torque_gain, 0.0,
+                           MeshMotion{static_cast<double>(k) * interval_, m.phase[k], m.meshFrequency(k)}, torque);
     }
     if (pieces_.empty()) throw InvalidInput("scene motion: needs at least two readings");
   }

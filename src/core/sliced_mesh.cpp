@@ -49,18 +49,18 @@ SlicedMesh::SlicedMesh(std::shared_ptr<const AntiBacklashMesh> mesh, int slices)
   phasors_.front() = phasors_.back() = 1.0;  // phase 0 and 1 turn: sin(2 pi) would round to -2.4e-16
 }
 
-std::shared_ptr<const SlicedMesh> SlicedMesh::periodMean(const SlicedMesh& fine) {
+std::shared_ptr<const SlicedMesh> SlicedMesh::periodMean(std::shared_ptr<const AntiBacklashMesh> mesh) {
+  if (!mesh) throw InvalidInput("sliced mesh: no mesh table");
   std::shared_ptr<SlicedMesh> mean(new SlicedMesh());
-  mean->mesh_ = fine.mesh_;
-  mean->anti_backlash_ = fine.anti_backlash_;
-  double k1 = 0.0, kc = 0.0;
-  for (int j = 0; j < fine.size(); ++j) {
-    k1 += fine.k1(j) * (fine.end(j) - fine.start(j));
-    kc += fine.kChain(j) * (fine.end(j) - fine.start(j));
-  }
+  mean->mesh_ = std::move(mesh);
+  // The table's exact period means, as meanMeshStiffness and the nominal linear_modal take them
+  // (AntiBacklashMesh::periodMeans); k_c only with a scissor spring, as the slices above hold it.
+  const AntiBacklashMesh::PeriodMeans& m = mean->mesh_->periodMeans();
+  const bool spring = mean->mesh_->spec().spring_stiffness > 0.0;
+  mean->anti_backlash_ = spring || mean->mesh_->preloadForce() > 0.0;
   mean->bounds_ = {0.0, 1.0};
-  mean->k1_ = {k1};
-  mean->kc_ = {kc};
+  mean->k1_ = {m.k1};
+  mean->kc_ = {spring ? m.k_chain : 0.0};
   mean->phasors_ = {1.0, 1.0};
   return mean;
 }
@@ -74,57 +74,51 @@ int SlicedMesh::sliceAt(double p, bool backward) const {
 }
 
 SlicedExcitation::SlicedExcitation(std::shared_ptr<const SlicedMesh> slices, double te_amplitude, double backlash,
-                                   double torque_gain, double load_term)
+                                   double torque_gain, double load_term, const MeshMotion& motion, double torque)
     : slices_(std::move(slices)), te_amplitude_(te_amplitude), backlash_(backlash), torque_gain_(torque_gain),
-      load_term_(load_term) {
+      load_term_(load_term), motion_(motion), torque_(torque) {
   if (!slices_) throw InvalidInput("sliced excitation: no sliced mesh");
   requireNonNegative("transmission_error_amplitude", te_amplitude);
   requireNonNegative("backlash", backlash);
   requireFinite("torque_gain", torque_gain);
   requireFinite("load_term", load_term);
+  motion_.validate();
+  requireFinite("torque", torque);
 }
 
-void SlicedExcitation::setMotion(double t0, double phase0, double mesh_frequency) {
-  requireFinite("t0", t0);
-  requireFinite("mesh phase", phase0);
-  requireFinite("mesh frequency", mesh_frequency);
-  t0_ = t0;
-  phase0_ = phase0;
-  f_ = mesh_frequency;
-}
-
-void SlicedExcitation::at(double t, MeshInstant& out) const {
-  const double turns = phaseAt(t);
+void SlicedExcitation::at(double t, const MeshMotion& motion, double torque, MeshInstant& out) const {
+  const double turns = motion.phaseAt(t);
   out.phase = turns - std::floor(turns);
   // On a boundary the slice the motion enters (the right limit in time): nextSwitch returns times
   // whose phase is on or past the boundary, so this agrees with the events dopri5 steps onto.
-  const int j = slices_->sliceAt(out.phase, f_ < 0.0);
+  const int j = slices_->sliceAt(out.phase, motion.frequency < 0.0);
   out.k_drive = slices_->k1(j);
   out.k_back = slices_->kChain(j);
   out.preload_force = slices_->mesh().preloadForce();
   out.backlash = backlash_;
-  const double w = kTwoPi * f_;
+  const double w = kTwoPi * motion.frequency;
   out.te = te_amplitude_ * std::sin(kTwoPi * out.phase);
   out.te_rate = te_amplitude_ * w * std::cos(kTwoPi * out.phase);
-  out.drive_force = torque_gain_ * torque_ + load_term_;
+  out.drive_force = torque_gain_ * torque + load_term_;
 }
 
-double SlicedExcitation::nextSwitch(double t) const {
-  if (f_ == 0.0) return std::numeric_limits<double>::infinity();
-  const double turns = phaseAt(t);
+double SlicedExcitation::nextSwitch(double t, const MeshMotion& motion) const {
+  const double f = motion.frequency;
+  if (f == 0.0) return std::numeric_limits<double>::infinity();
+  const double turns = motion.phaseAt(t);
   double whole = std::floor(turns);
   const double p = turns - whole;
   const SlicedMesh& s = *slices_;
-  const int j = s.sliceAt(p, f_ < 0.0);
+  const int j = s.sliceAt(p, f < 0.0);
   // Backwards from a period boundary (p = 0) the slice is the top one of the period below.
-  if (f_ < 0.0 && p == 0.0) whole -= 1.0;
-  const double target = whole + (f_ > 0.0 ? s.end(j) : s.start(j));
+  if (f < 0.0 && p == 0.0) whole -= 1.0;
+  const double target = whole + (f > 0.0 ? s.end(j) : s.start(j));
   // The first time whose computed phase is on or past the boundary (a few ulps at most): at that
   // time at() already gives the slice beyond, and the next call looks for the boundary after it.
   // Without this the phase of the returned time can round to just short of the boundary, and every
   // later call returns that same boundary again (dopri5 would crawl by one ulp per step).
-  double time = t0_ + (target - phase0_) / f_;
-  for (int i = 0; i < 64 && (f_ > 0.0 ? phaseAt(time) < target : phaseAt(time) > target); ++i) {
+  double time = motion.t0 + (target - motion.phase0) / f;
+  for (int i = 0; i < 64 && (f > 0.0 ? motion.phaseAt(time) < target : motion.phaseAt(time) > target); ++i) {
     time = std::nextafter(time, std::numeric_limits<double>::infinity());
   }
   return time > t ? time : std::nextafter(t, std::numeric_limits<double>::infinity());

@@ -1,7 +1,8 @@
 // The model's inputs and ownership: the measured torque as the model's input (against seed 000
-// eq 14 and against the same torque as a constant profile), the rig excitation known by type
-// (refusals where there is none), and an exact propagator independent of the model it was built
-// from.
+// eq 14 and against the same torque as a constant profile), the measured motion as the input of a
+// model over the sliced mesh (two models over one excitation each at its own motion), the rig
+// excitation known by type (refusals where there is none), and an exact propagator independent of
+// the model it was built from.
 #include <gtest/gtest.h>
 
 #include "drivetrain_stiffness/config/yaml_config.hpp"
@@ -11,6 +12,7 @@
 #include "drivetrain_stiffness/core/modal_analysis.hpp"
 #include "drivetrain_stiffness/core/reduced_models.hpp"
 #include "drivetrain_stiffness/core/rig_model.hpp"
+#include "drivetrain_stiffness/core/sliced_mesh.hpp"
 #include "drivetrain_stiffness/core/validation.hpp"
 #include "seed_rig.hpp"  // NOLINT(build/include_subdir)
 
@@ -133,4 +135,56 @@ TEST(ModelInputs, EstimatorTorqueReachesTheReducedFidelities) {
     ASSERT_EQ(n, 60) << toString(f);
     EXPECT_NEAR(sum / n, 0.4 / 5.6382e-3, 0.02 * 70.9) << toString(f);
   }
+}
+
+// The measured motion is the input of the model, not a setting of the excitation it shares: two
+// models over one immutable SlicedExcitation, each at its own motion and torque, see each its own
+// mesh phase (phi = phi_0 + f (t - t_0), sliced_mesh.hpp), its own TE rate (e' = 2 pi f A cos 2 pi phi)
+// and its own drive force (T / r_p), and the same as an excitation built with that motion alone.
+TEST(ModelInputs, MotionInputBelongsToTheModel) {
+  const auto slices = std::make_shared<const SlicedMesh>(mesh(), 64);
+  const double a = 1e-6, r_p = params().pinion_base_radius;
+  const auto shared = std::make_shared<const SlicedExcitation>(slices, a, 0.0, 1.0 / r_p, 0.0);
+  GearRotorModel forward(params(), shared), reversed(params(), shared);
+  forward.setMotionInput(MeshMotion{0.01, 0.25, 333.0});
+  forward.setTorqueInput(0.4);
+  reversed.setMotionInput(MeshMotion{0.0, 0.9, -100.0});
+  reversed.setTorqueInput(-0.2);
+  MeshInstant f, r;
+  forward.meshAt(0.0112, f);   // 0.25 + 333 * 0.0012 = 0.6496 turns
+  reversed.meshAt(0.0112, r);  // 0.9 - 100 * 0.0112 = -0.22 -> 0.78 turns
+  EXPECT_NEAR(f.phase, 0.6496, 1e-12);
+  EXPECT_NEAR(r.phase, 0.78, 1e-12);
+  EXPECT_NEAR(f.te_rate, kTwoPi * 333.0 * a * std::cos(kTwoPi * 0.6496), 1e-12);
+  EXPECT_NEAR(r.te_rate, kTwoPi * -100.0 * a * std::cos(kTwoPi * 0.78), 1e-12);
+  EXPECT_NEAR(f.drive_force, 0.4 / r_p, 1e-9);
+  EXPECT_NEAR(r.drive_force, -0.2 / r_p, 1e-9);
+  // Each model's next slice boundary is along its own motion: forward past 0.6496, backward below 0.78.
+  const SlicedExcitation alone_f(slices, a, 0.0, 1.0 / r_p, 0.0, MeshMotion{0.01, 0.25, 333.0}, 0.4);
+  const SlicedExcitation alone_r(slices, a, 0.0, 1.0 / r_p, 0.0, MeshMotion{0.0, 0.9, -100.0}, -0.2);
+  EXPECT_EQ(forward.nextSwitch(0.0112), alone_f.nextSwitch(0.0112));
+  EXPECT_EQ(reversed.nextSwitch(0.0112), alone_r.nextSwitch(0.0112));
+  EXPECT_GT(forward.nextSwitch(0.0112), 0.0112);
+  EXPECT_LT(slices->sliceAt(0.6496 + 333.0 * (forward.nextSwitch(0.0112) - 0.0112) - 1e-9, false),
+            slices->sliceAt(0.6496 + 333.0 * (forward.nextSwitch(0.0112) - 0.0112) + 1e-9, false));
+  MeshInstant alone;
+  alone_f.at(0.0112, alone);
+  EXPECT_EQ(alone.phase, f.phase);
+  EXPECT_EQ(alone.k_drive, f.k_drive);
+  EXPECT_EQ(alone.drive_force, f.drive_force);
+  // The shared excitation kept its own (standing, no torque): neither model wrote into it.
+  shared->at(0.0112, alone);
+  EXPECT_EQ(alone.phase, 0.0);
+  EXPECT_EQ(alone.te_rate, 0.0);
+  EXPECT_EQ(alone.drive_force, 0.0);
+  // A rig model has a mesh phase of its own; a non-finite motion names its field.
+  GearRotorModel rig_model(params(), excitation(TorqueProfile::Kind::kInput, 0.1));
+  EXPECT_THROW(rig_model.setMotionInput(MeshMotion{0.0, 0.0, 10.0}), InvalidInput);
+  try {
+    forward.setMotionInput(MeshMotion{0.0, 0.0, NAN});
+    ADD_FAILURE() << "a NaN mesh frequency was taken";
+  } catch (const InvalidInput& e) {
+    EXPECT_NE(std::string(e.what()).find("mesh frequency"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(forward.motionInput().frequency, 333.0);  // a refusal changes nothing
 }

@@ -37,28 +37,28 @@ struct Piece {
 
 struct Harness {
   std::shared_ptr<const SlicedMesh> slices;
-  std::shared_ptr<SlicedExcitation> excitation;
+  std::shared_ptr<const SlicedExcitation> excitation;
   GearRotorModel model;
   SlicedModalPropagator exact;
   double drive_force;
   explicit Harness(int n, double torque = 0.1)
       : slices(std::make_shared<const SlicedMesh>(mesh(), n)),
-        excitation(std::make_shared<SlicedExcitation>(slices, kTe, 0.0, 1.0 / params().pinion_base_radius, 0.0)),
+        excitation(std::make_shared<const SlicedExcitation>(slices, kTe, 0.0, 1.0 / params().pinion_base_radius, 0.0)),
         model(params(), excitation),
         exact(params(), slices, kTe, 0.0),
         drive_force(torque / params().pinion_base_radius) {
-    excitation->setTorque(torque);
+    model.setTorqueInput(torque);
   }
-  /// dopri5 at rtol 1e-12 through the pieces (the excitation re-anchored at each, as the node does).
+  /// dopri5 at rtol 1e-12 through the pieces (the motion input re-anchored at each, as the node does).
   State6 reference(State6 y, double phase, const std::vector<Piece>& pieces) { return reference(model, y, phase, pieces); }
-  State6 reference(const GearRotorModel& on, State6 y, double phase, const std::vector<Piece>& pieces) {
+  State6 reference(GearRotorModel on, State6 y, double phase, const std::vector<Piece>& pieces) {
     IntegratorOptions o;
     o.relative_tolerance = 1e-12;
     o.absolute_tolerance = 1e-20;
     o.max_step = 2e-5;
     double t = 0.0;
     for (const Piece& p : pieces) {
-      excitation->setMotion(t, phase, p.f);
+      on.setMotionInput(MeshMotion{t, phase, p.f});
       y = integrate(on, IntegratorMethod::kDopri5, o, t, y, t + p.duration, p.duration, nullptr);
       phase += p.f * p.duration;
       t += p.duration;
@@ -70,7 +70,7 @@ struct Harness {
     return y;
   }
   State6 equilibrium(double phase) {
-    excitation->setMotion(0.0, phase, 0.0);
+    model.setMotionInput(MeshMotion{0.0, phase, 0.0});
     return staticEquilibrium(model, 0.0);
   }
 };
@@ -109,7 +109,7 @@ TEST(SlicedModalPropagator, SystemMatrixIsTheModelsJacobian) {
   const int j = 5;
   const double phase = 0.5 * (h.slices->start(j) + h.slices->end(j));
   const State6 y = h.equilibrium(phase);
-  h.excitation->setMotion(0.0, phase, meshHz(1000));
+  h.model.setMotionInput(MeshMotion{0.0, phase, meshHz(1000)});
   const Matrix6 jac = h.model.jacobian(0.0, y);
   // Finite differences of the model's right-hand side in the linear regime (independent of both).
   for (int c = 0; c < 6; ++c) {
@@ -294,7 +294,7 @@ TEST(SlicedModalPropagator, SeededModesGiveTheMonodromyOfTheJacobians) {
   for (int j = 0; j < h.slices->size(); ++j) {
     const double mid = 0.5 * (h.slices->start(j) + h.slices->end(j));
     const State6 y = h.equilibrium(mid);
-    h.excitation->setMotion(0.0, mid, f);
+    h.model.setMotionInput(MeshMotion{0.0, mid, f});
     const Matrix6 a = h.model.jacobian(0.0, y);
     // In balanced units (velocities over omega_ref = 1e5 rad/s) the Pade approximant is accurate;
     // on A as it is, whose blocks span ten decades, it loses five digits.
@@ -328,7 +328,7 @@ TEST(SlicedModalPropagator, MonodromyIsTheRegimeTheStateIsIn) {
   for (int j = 0; j < h.slices->size(); ++j) {
     const double mid = 0.5 * (h.slices->start(j) + h.slices->end(j));
     const State6 y = h.equilibrium(mid);
-    h.excitation->setMotion(0.0, mid, f);
+    h.model.setMotionInput(MeshMotion{0.0, mid, f});
     ASSERT_EQ(h.model.forces(0.0, y).regime.code[1], 0) << "the back path should be lifted at slice " << j;
     const Matrix6 a_b = d.cwiseInverse().asDiagonal() * h.model.jacobian(0.0, y) * d.asDiagonal();
     reference = d.asDiagonal() * Matrix6((a_b * ((h.slices->end(j) - h.slices->start(j)) / f)).exp()) *
@@ -345,7 +345,7 @@ TEST(SlicedModalPropagator, MonodromyIsTheRegimeTheStateIsIn) {
   // flank's damper force would exceed its spring force (clipped: |F_d| <= F_s, the regime rule).
   State6 slamming = h.equilibrium(0.1);
   slamming[5] += 1e3;  // m/s along the line of action
-  h.excitation->setMotion(0.0, 0.1, f);
+  h.model.setMotionInput(MeshMotion{0.0, 0.1, f});
   ASSERT_EQ(h.model.forces(0.0, slamming).regime.code[1], 0);
   EXPECT_FALSE(h.exact.monodromy(f, slamming, 0.1).has_value());
 }
@@ -363,8 +363,9 @@ TEST(SlicedModalPropagator, ABearingChangeIsReseededAndStaysExact) {
     GearRotorParameters changed = params();
     changed.bearing_stiffness = {1.2e8 * factor, 1.3e8 * factor};
     h.exact.setParameters(changed);
-    const GearRotorModel stiffer(changed, h.excitation);
-    h.excitation->setMotion(0.0, 0.2, 0.0);
+    GearRotorModel stiffer(changed, h.excitation);
+    stiffer.setTorqueInput(h.model.torqueInput());
+    stiffer.setMotionInput(MeshMotion{0.0, 0.2, 0.0});
     const State6 y0 = staticEquilibrium(stiffer, 0.0);
     const long general = h.exact.generalDecompositions();
     const std::vector<Piece> pieces(8, Piece{1e-3, meshHz(1500)});
@@ -383,12 +384,11 @@ TEST(SlicedModalPropagator, ABearingChangeIsReseededAndStaysExact) {
 // the past and dopri5 crawled one ulp per step for ever.
 TEST(SlicedExcitation, NextSwitchBackwardsFromAPeriodBoundary) {
   auto slices = std::make_shared<const SlicedMesh>(mesh(), 256);
-  SlicedExcitation e(slices, kTe, 0.0, 1.0, 0.0);
   for (double phase0 : {0.0, 1.0, 3.0}) {
-    e.setMotion(0.184, phase0, -100.0);
+    const SlicedExcitation e(slices, kTe, 0.0, 1.0, 0.0, MeshMotion{0.184, phase0, -100.0});
     const double top = slices->start(slices->size() - 1);  // the top slice of the period below
     EXPECT_NEAR(e.nextSwitch(0.184), 0.184 + (1.0 - top) / 100.0, 1e-15) << "phase0 = " << phase0;
-    e.setMotion(0.184, phase0, -5e-101);  // a speed that is all but zero: the switch is far ahead
-    EXPECT_GT(e.nextSwitch(0.184), 1e90);
+    // A speed that is all but zero: the switch is far ahead.
+    EXPECT_GT(e.nextSwitch(0.184, MeshMotion{0.184, phase0, -5e-101}), 1e90);
   }
 }

@@ -122,7 +122,10 @@ class DynamicsEstimator {
   void build();
   void buildModel();  ///< build() without the rebuild count and the settings named in a refusal
   DynamicsSample sample(double t_rel, const State6& y) const;
-  DynamicsSample movingSample() const;  ///< the sample at the state (measured motion)
+  DynamicsSample movingSample();  ///< the sample at the state (measured motion)
+  /// The model over the sliced mesh the fidelity runs (linear_modal: the period's mean), its motion
+  /// and torque inputs set to the state's.
+  GearRotorModel& movingModelAtState();
   /// The sample of `model` (nominal or measured phase) at t_rel (relative to the last reset).
   DynamicsSample sampleOf(const GearRotorModel& model, double t_rel, const State6& y) const;
   /// Onto the measured-motion propagation at the state's time and the nominal phase there.
@@ -157,15 +160,14 @@ class DynamicsEstimator {
   State6 y_ = State6::Zero();
   bool started_ = false;
   // Measured motion (followMotion): the sliced model, its exact propagator, the model over it for
-  // the dopri5 fallback and the samples; the state's own time, phase and mesh frequency.
+  // the dopri5 fallback and the samples (its excitation immutable, the motion and torque its inputs);
+  // the state's own time, phase and mesh frequency.
   int motion_slices_ = 256;
   std::shared_ptr<const SlicedMesh> slices_;
-  std::shared_ptr<SlicedExcitation> moving_;
   std::unique_ptr<GearRotorModel> moving_model_;
   std::unique_ptr<SlicedModalPropagator> sliced_;
-  // linear_modal along the measured motion: the same three, with the period's mean stiffness.
+  // linear_modal along the measured motion: the same, with the period's mean stiffness.
   std::shared_ptr<const SlicedMesh> mean_slices_;
-  std::shared_ptr<SlicedExcitation> mean_moving_;
   std::unique_ptr<GearRotorModel> mean_model_;
   std::unique_ptr<SlicedModalPropagator> mean_sliced_;
   bool following_ = false;

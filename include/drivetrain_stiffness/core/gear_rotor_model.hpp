@@ -56,6 +56,17 @@ struct MeshInstant {
   double phase = 0.0;            ///< mesh phase [-]
 };
 
+/// The rig's measured motion over one reading interval: mesh phase phi(t) = phase0 + frequency
+/// (t - t0) [turns] at a signed mesh frequency [Hz] (0: standing, < 0: reversed).
+struct MeshMotion {
+  double t0 = 0.0;         ///< [s]
+  double phase0 = 0.0;     ///< [turns] at t0, not wrapped
+  double frequency = 0.0;  ///< [Hz]
+  double phaseAt(double t) const { return phase0 + frequency * (t - t0); }  ///< [turns], not wrapped
+  /// InvalidInput naming the field for a non-finite one.
+  void validate() const;
+};
+
 /// Supplies MeshInstant as a function of time (torque input, mesh stiffness by phase, TE).
 class GearExcitation {
  public:
@@ -85,6 +96,7 @@ struct GearRotorForces {
 };
 
 class RigExcitation;
+class SlicedExcitation;
 
 /// The model: its parameters by value, its excitation shared (immutable: every copy of a model sees
 /// the same one), and for a rig the torque input. A copy is a whole model of its own.
@@ -97,6 +109,10 @@ class GearRotorModel {
   GearRotorModel(const GearRotorParameters& p, std::shared_ptr<const RigExcitation> excitation);
   /// The same (a shared_ptr<RigExcitation> would otherwise convert to either of the two above).
   GearRotorModel(const GearRotorParameters& p, std::shared_ptr<RigExcitation> excitation);
+  /// The sliced mesh along a measured motion (the estimator following the encoders): the motion
+  /// and the torque are the model's inputs (setMotionInput, setTorqueInput), not the excitation's.
+  GearRotorModel(const GearRotorParameters& p, std::shared_ptr<const SlicedExcitation> excitation);
+  GearRotorModel(const GearRotorParameters& p, std::shared_ptr<SlicedExcitation> excitation);
 
   const GearRotorParameters& parameters() const { return p_; }
   /// New parameters over the same excitation, as GearRotorModel(p, excitation) would have them
@@ -114,9 +130,17 @@ class GearRotorModel {
   /// for a model without a torque input (its torque is a function of time) or a non-finite u.
   void setTorqueInput(double torque);
   double torqueInput() const { return torque_input_; }  ///< [N·m]; 0 until set
+  /// The measured motion input of a model over a SlicedExcitation: from now on the mesh phase is
+  /// motion.phaseAt(t). Its owner re-anchors it at each encoder reading. InvalidInput for any
+  /// other model or a non-finite field.
+  void setMotionInput(const MeshMotion& motion);
+  const MeshMotion& motionInput() const { return motion_input_; }
   /// The mesh and load state at t as the model sees it: the excitation's, with the drive force of
   /// the torque input when it takes one. forces(), energy() and the samples read it here.
   void meshAt(double t, MeshInstant& m) const;
+  /// The excitation's next switch after t (GearExcitation::nextSwitch), along the motion input
+  /// when the model takes one.
+  double nextSwitch(double t) const;
 
   /// y' = f(t, y).
   void rhs(double t, const State6& y, State6& dydt) const;
@@ -133,6 +157,8 @@ class GearRotorModel {
   GearRotorParameters p_;
   std::shared_ptr<const GearExcitation> excitation_;
   std::shared_ptr<const RigExcitation> rig_;  ///< the same object as excitation_, by type; null if not a rig's
+  std::shared_ptr<const SlicedExcitation> sliced_;  ///< the same, by type; null if not sliced
+  MeshMotion motion_input_;                         ///< used with sliced_
   double m_s_ = 0.0;
   bool torque_input_used_ = false;  ///< rig_ takes its torque from torque_input_
   double torque_input_ = 0.0;       ///< u [N·m]

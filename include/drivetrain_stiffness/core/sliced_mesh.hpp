@@ -11,9 +11,9 @@
 // The slicing is the model's only approximation: a piecewise-constant stiffness whose error against
 // the phase table falls as 1/slices^2 (midpoint rule; measured in docs/model.md).
 //
-// SlicedExcitation drives GearRotorModel with that stiffness along a measured motion: the mesh
-// phase phi(t) = phi_0 + f (t - t_0) [turns] at a signed mesh frequency f [Hz] (0: standing, < 0:
-// reversed), re-anchored by the caller at each encoder reading. It is the reference the exact
+// SlicedExcitation drives GearRotorModel with that stiffness along a measured motion (MeshMotion):
+// the mesh phase phi(t) = phi_0 + f (t - t_0) [turns] at a signed mesh frequency f [Hz] (0:
+// standing, < 0: reversed), re-anchored by the model's owner at each encoder reading. It is the reference the exact
 // propagation is tested against (dopri5 on the same model) and the model of the dopri5 fallback.
 #pragma once
 
@@ -30,10 +30,11 @@ class SlicedMesh {
  public:
   /// `slices` uniform slices per mesh period (>= 4, <= 65536), split further at the switching phases.
   SlicedMesh(std::shared_ptr<const AntiBacklashMesh> mesh, int slices);
-  /// One slice over the whole period holding `fine`'s mean k1 and k_c (weighted by slice width):
-  /// the stiffness the `linear_modal` fidelity holds (no parametric excitation), along a measured
+  /// One slice over the whole period holding the table's exact period means of k1 and k_c
+  /// (AntiBacklashMesh::periodMeans, the one mean every user takes: meanMeshStiffness): the
+  /// stiffness the `linear_modal` fidelity holds (no parametric excitation), along a measured
   /// motion as at the nominal speed.
-  static std::shared_ptr<const SlicedMesh> periodMean(const SlicedMesh& fine);
+  static std::shared_ptr<const SlicedMesh> periodMean(std::shared_ptr<const AntiBacklashMesh> mesh);
 
   int size() const { return static_cast<int>(k1_.size()); }
   double start(int j) const { return bounds_[j]; }   ///< phase in [0, 1)
@@ -59,26 +60,31 @@ class SlicedMesh {
   bool anti_backlash_ = false;
 };
 
+/// Immutable once built, so every model over it sees the same excitation. Its own motion and torque
+/// (the constructor's) serve where the excitation stands alone (a scene's piece between two
+/// readings); a GearRotorModel built on it takes the motion and the torque as its inputs instead
+/// (setMotionInput, setTorqueInput) and evaluates at(t, motion, torque, out).
 class SlicedExcitation : public GearExcitation {
  public:
   /// te_amplitude [m] of e = A sin(2 pi phi) (the manufacturing TE at mesh frequency, as
   /// RigExcitation's); backlash [m] of an ordinary gear; drive force = torque_gain T + load_term [N].
   SlicedExcitation(std::shared_ptr<const SlicedMesh> slices, double te_amplitude, double backlash, double torque_gain,
-                   double load_term);
-  /// From time t0 on, phase(t) = phase0 + f (t - t0) [turns], f [Hz] signed, finite.
-  void setMotion(double t0, double phase0, double mesh_frequency);
-  void setTorque(double torque) { torque_ = torque; }
-  double phaseAt(double t) const { return phase0_ + f_ * (t - t0_); }  ///< [turns], not wrapped
-  double meshFrequency() const { return f_; }
-  void at(double t, MeshInstant& out) const override;
+                   double load_term, const MeshMotion& motion = MeshMotion(), double torque = 0.0);
+  void at(double t, MeshInstant& out) const override { at(t, motion_, torque_, out); }
   /// The next slice boundary the motion crosses after t; +inf when standing (f = 0).
-  double nextSwitch(double t) const override;
+  double nextSwitch(double t) const override { return nextSwitch(t, motion_); }
+  /// The same along `motion` at pinion torque `torque` [N·m] (a model's inputs).
+  void at(double t, const MeshMotion& motion, double torque, MeshInstant& out) const;
+  double nextSwitch(double t, const MeshMotion& motion) const;
+  const MeshMotion& motion() const { return motion_; }
+  double torque() const { return torque_; }  ///< [N·m]
   const SlicedMesh& slices() const { return *slices_; }
 
  private:
   std::shared_ptr<const SlicedMesh> slices_;
   double te_amplitude_, backlash_, torque_gain_, load_term_;
-  double t0_ = 0.0, phase0_ = 0.0, f_ = 0.0, torque_ = 0.0;
+  MeshMotion motion_;
+  double torque_;
 };
 
 }  // namespace drivetrain_stiffness
