@@ -35,6 +35,7 @@ std::vector<std::pair<std::string, std::uint64_t>> namedCounters(const PipelineC
           {"clock_jump_resets", c.clock_resets},          {"stamp_jump_resets", c.stamp_resets},
           {"gap_restarts", c.gap_restarts},               {"dynamics_errors", c.dynamics_errors},
           {"stiffness_published", c.stiffness_out},       {"stiffness_coalesced", c.stiffness_coalesced},
+          {"stiffness_refused", c.stiffness_refused},
           {"transmission_error_published", c.te_out},     {"te_spectra_published", c.spectra_out},
           {"resonance_published", c.resonance_out},       {"modal_updates", c.modal_updates},
           {"measured_te_published", c.measured_te_out},   {"calibration_published", c.calibration_out},
@@ -225,17 +226,20 @@ InputOutcome RigPipeline::apply(const char* topic, Stamp stamp, std::optional<St
   if (time_ok != InputOutcome::kAccepted) {
     return reject(time_ok, topic, "stamp " + formatValue(stamp.toSec()) + " s", rejected);
   }
+  const StiffnessEstimate* estimate = nullptr;
   try {
     // Transactional: throws without changing the state. No estimate: a shed input (no stiffness update).
-    const StiffnessEstimate* estimate = update();
-    ++accepted;
-    last = stamp;
-    if (estimate) afterUpdate(stamp, *estimate, sink);
+    estimate = update();
   } catch (const InvalidInput& e) {
     return reject(InputOutcome::kInvalidValue, topic, e.what(), rejected);
   } catch (const UnreachableLoad& e) {
     return reject(InputOutcome::kUnreachableLoad, topic, e.what(), rejected);
   }
+  // Taken: whatever becomes of its outputs (each guarded and counted on its own) the input is
+  // counted accepted once and never also rejected.
+  ++accepted;
+  last = stamp;
+  if (estimate) afterUpdate(stamp, *estimate, sink);
   return InputOutcome::kAccepted;
 }
 
@@ -445,9 +449,16 @@ void RigPipeline::afterUpdate(Stamp stamp, const StiffnessEstimate& estimate, Pi
   const bool due = settings_.stiffness_rate <= 0.0 || !last_stiffness_out_ || stamp < *last_stiffness_out_ ||
                    secondsBetween(stamp, *last_stiffness_out_) >= 1.0 / settings_.stiffness_rate;
   if (due) {
-    sink.stiffness(stamp, estimate, stiffnessBands(estimate));
-    last_stiffness_out_ = stamp;
-    ++counters_.stiffness_out;
+    try {
+      sink.stiffness(stamp, estimate, stiffnessBands(estimate));
+      last_stiffness_out_ = stamp;
+      ++counters_.stiffness_out;
+    } catch (const Error& e) {
+      // The sink refused the message (a field it will not publish, such as a non-finite one): the
+      // input stays taken, the dynamics still get its stiffness below, the refusal is counted.
+      ++counters_.stiffness_refused;
+      counters_.last_event = std::string("stiffness message not published: ") + e.what();
+    }
   } else {
     ++counters_.stiffness_coalesced;
   }

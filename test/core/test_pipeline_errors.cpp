@@ -26,7 +26,10 @@ Stamp at(double seconds) { return test::stampAt(seconds); }
 // Runs `on_sample` at the n-th TE sample (1-based) and `on_resonance` at every resonance.
 struct InjectingSink : PipelineSink {
   int samples = 0, throw_at = -1;
-  std::function<void()> on_sample, on_resonance;
+  std::function<void()> on_sample, on_resonance, on_stiffness;
+  void stiffness(Stamp, const StiffnessEstimate&, const CalibrationBands&) override {
+    if (on_stiffness) on_stiffness();
+  }
   void transmissionError(Stamp, const DynamicsSample&, const SampleContext&) override {
     if (++samples == throw_at && on_sample) on_sample();
   }
@@ -90,4 +93,31 @@ TEST(PipelineErrors, TheLibrarysOwnErrorInTheResonanceIsCounted) {
   EXPECT_EQ(p.torque(at(0.0), 0.1, sink), InputOutcome::kAccepted);
   EXPECT_EQ(p.counters().dynamics_errors, 1u);
   EXPECT_NE(p.counters().last_event.find("injected refusal"), std::string::npos) << p.counters().last_event;
+}
+
+// A stiffness message the sink refuses (the ROS sink refuses a non-finite field, InvalidInput):
+// the input was taken (its stiffness is in the estimator and reaches the dynamics), so it is
+// counted accepted once and not also rejected, and the refusal has a count of its own.
+TEST(PipelineErrors, ARefusedStiffnessMessageLeavesTheInputAcceptedOnce) {
+  RigPipeline p(rig(), PipelineOptions{});  // stiffness_rate 0 (RuntimeSettings): a message per input
+  ASSERT_EQ(p.settings().stiffness_rate, 0.0);
+  InjectingSink sink;
+  int refusals = 0;
+  sink.on_stiffness = [&] {
+    if (++refusals <= 2) throw InvalidInput("stiffness.mesh_mean = nan: not finite, not published");
+  };
+  ASSERT_EQ(p.torque(at(0.0), 0.1, sink), InputOutcome::kAccepted);
+  ASSERT_EQ(p.torque(at(0.010), 0.2, sink), InputOutcome::kAccepted);
+  EXPECT_EQ(p.counters().accepted_torque, 2u);
+  EXPECT_EQ(p.counters().rejected_torque, 0u);
+  EXPECT_EQ(p.counters().invalid_values, 0u);
+  EXPECT_EQ(p.counters().stiffness_refused, 2u);
+  EXPECT_EQ(p.counters().stiffness_out, 0u);
+  EXPECT_NE(p.counters().last_event.find("not published"), std::string::npos) << p.counters().last_event;
+  // The dynamics ran over the refused inputs (10 samples at the 1 kHz grid), and the third input's
+  // message is published.
+  EXPECT_GE(sink.samples, 9);
+  ASSERT_EQ(p.torque(at(0.020), 0.2, sink), InputOutcome::kAccepted);
+  EXPECT_EQ(p.counters().stiffness_out, 1u);
+  EXPECT_EQ(p.counters().stiffness_refused, 2u);
 }

@@ -41,7 +41,8 @@
 // flank, and only that frame says which way is positive). Every input is counted.
 // Errors: the pipeline catches the library's own exceptions only (drivetrain_stiffness::Error,
 // core/errors.hpp: InvalidInput, UnreachableLoad, UnstableIntegration), and counts each (rejected
-// inputs, dynamics_errors, calibration_errors) with its reason in last_event. Anything else, a
+// inputs, dynamics_errors, calibration_errors, stiffness_refused) with its reason in last_event; an
+// input is either accepted or rejected, never both (a refused output is the output's count). Anything else, a
 // programming error such as std::logic_error or std::out_of_range, passes through to the caller.
 // Transport rules: messages a numbering publisher sent that never arrived are counted as dropped
 // (SequenceGaps). An input the caller marks as backlogged (it waited too long in the subscriber
@@ -247,6 +248,7 @@ struct PipelineCounters {
   std::uint64_t clock_resets = 0, stamp_resets = 0, gap_restarts = 0;
   std::uint64_t dynamics_errors = 0;
   std::uint64_t stiffness_out = 0, stiffness_coalesced = 0;  ///< published, and skipped by ~stiffness_rate
+  std::uint64_t stiffness_refused = 0;  ///< stiffness messages the sink refused (its reason in last_event)
   std::uint64_t te_out = 0, spectra_out = 0, resonance_out = 0;
   std::uint64_t modal_updates = 0;  ///< modal analyses actually run (see RigPipeline::updateResonance)
   std::uint64_t measured_te_out = 0, calibration_out = 0;  ///< published (rule 11)
