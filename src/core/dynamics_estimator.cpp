@@ -254,18 +254,26 @@ void DynamicsEstimator::propagateTo(double t_rel) {
     return;
   }
   // full: the sliced model; linear_modal: the same with the period's mean stiffness (one slice).
-  const bool mean = fidelity_ == Fidelity::kLinearModal;
-  const SlicedModalPropagator* exact = mean ? mean_sliced_.get() : sliced_.get();
-  if (exact && exact->propagate(y_, phase_, mesh_frequency_, h, drive_force)) {
-    phase_ = wrapTurns(phase_);
-    t_state_ = t_rel;
-    return;
+  // Exact through every change of the contacts between linear regimes (located on the exact
+  // solution); where the state is in none (a damper clipped for a moment as a flank lifts or
+  // lands) dopri5 on the same sliced model along the same motion takes over for at most one period
+  // of the fastest mode, then the exact propagation again. With bearing clearance, dopri5 alone.
+  const SlicedModalPropagator* exact = fidelity_ == Fidelity::kLinearModal ? mean_sliced_.get() : sliced_.get();
+  while (t_state_ < t_rel) {
+    const double left = t_rel - t_state_;
+    const double done = exact ? exact->propagateLinear(y_, phase_, mesh_frequency_, left, drive_force) : 0.0;
+    if (done >= left) break;
+    t_state_ += done;
+    if (!(t_state_ < t_rel)) break;
+    const double stretch = exact ? std::min(t_rel - t_state_, exact->fastestPeriodBound()) : t_rel - t_state_;
+    const double end = stretch >= t_rel - t_state_ ? t_rel : t_state_ + stretch;
+    y_ = integrate(movingModelAtState(), IntegratorMethod::kDopri5, fallback_, t_state_, y_, end, end - t_state_, nullptr);
+    phase_ += mesh_frequency_ * (end - t_state_);
+    t_state_ = end;
+    ++fallback_intervals_;
   }
-  // A contact open (or bearing clearance): dopri5 on the same sliced model along the same motion.
-  y_ = integrate(movingModelAtState(), IntegratorMethod::kDopri5, fallback_, t_state_, y_, t_rel, h, nullptr);
-  phase_ = wrapTurns(phase_ + mesh_frequency_ * h);
+  phase_ = wrapTurns(phase_);
   t_state_ = t_rel;
-  ++fallback_intervals_;
 }
 
 void DynamicsEstimator::advanceFollowing(double t_rel, const std::function<void(const DynamicsSample&)>& sink) {

@@ -86,6 +86,12 @@ void SlicedModalPropagator::setParameters(const GearRotorParameters& p) {
     std::vector<RegimeConditions>& table = conditions_[static_cast<std::size_t>(r)];
     for (int j = 0; j < slices_->size(); ++j) table[static_cast<std::size_t>(j)] = makeConditions(r, j);
   }
+  // trace(M^-1 K) = (k_b1 + k) / m_p + (k_b2 + k) / m_g + k / m_s at the stiffest mesh k of any
+  // regime (both flanks: k1 + k_c), which bounds every omega^2 of the undamped problem.
+  double k = 0.0;
+  for (int j = 0; j < slices_->size(); ++j) k = std::max(k, slices_->k1(j) + slices_->kChain(j));
+  const double trace = (p.bearing_stiffness[0] + k) / p.pinion_mass + (p.bearing_stiffness[1] + k) / p.gear_mass + k / m_s_;
+  fastest_period_bound_ = trace > 0.0 ? kTwoPi / std::sqrt(trace) : std::numeric_limits<double>::infinity();
 }
 
 SlicedModalPropagator::MeshTerms SlicedModalPropagator::meshTerms(MeshRegime r, int j) const {
@@ -495,12 +501,28 @@ double SlicedModalPropagator::regimeMargin(const Slice& s, MeshRegime r, int j, 
 }
 
 bool SlicedModalPropagator::propagate(State6& y, double& phase, double f, double duration, double drive_force) const {
-  if (!(duration >= 0.0) || !std::isfinite(f) || !std::isfinite(phase) || !std::isfinite(drive_force)) return false;
+  State6 z = y;
+  double p = phase;
+  if (!(propagateLinear(z, p, f, duration, drive_force) >= duration)) return false;
+  y = z;
+  phase = p;
+  return true;
+}
+
+double SlicedModalPropagator::propagateLinear(State6& y, double& phase, double f, double duration,
+                                              double drive_force) const {
+  if (!(duration >= 0.0) || !std::isfinite(f) || !std::isfinite(phase) || !std::isfinite(drive_force)) return 0.0;
   const SlicedMesh& m = *slices_;
   const int n = m.size();
   const double w = kTwoPi * f;
-  State6 z = y;
-  double whole = std::floor(phase), frac = phase - whole, remaining = duration;
+  State6 z = y, z_end;
+  double whole = std::floor(phase), frac = phase - whole, remaining = duration, done = 0.0;
+  // What was propagated goes back to the caller, up to where no linear regime holds.
+  const auto handBack = [&] {
+    y = z;
+    phase = whole + frac;
+    return remaining > 0.0 ? done : duration;
+  };
   // The TE forcing's phasor e^{i 2 pi frac}: one sine and cosine where the call starts inside a
   // slice, then carried: a step that ends on a boundary takes the boundary's tabulated phasor, and
   // the phasor's advance over that step, e^{i w h} = e^{i 2 pi (boundary - frac)}, follows from the
@@ -508,6 +530,7 @@ bool SlicedModalPropagator::propagate(State6& y, double& phase, double f, double
   Complex e_theta = std::polar(1.0, kTwoPi * frac);
   int j = -1;  // the current slice, found once, then the neighbour entered at each crossing
   MeshRegime regime = MeshRegime::kBothFlanks;
+  int changes = 0;
   while (remaining > 0.0) {
     if (f < 0.0 && frac == 0.0) {  // backwards from a period boundary: the top of the period below
       whole -= 1.0;
@@ -515,14 +538,14 @@ bool SlicedModalPropagator::propagate(State6& y, double& phase, double f, double
     }
     if (j < 0) {
       j = m.sliceAt(frac == 1.0 ? std::nextafter(1.0, 0.0) : frac, f < 0.0);
-      // The contacts the call starts with; it stays in them or hands the stretch back to the
-      // caller (dopri5 takes it), whose next call starts in the new ones.
+      // The contacts the call starts with; where they are in no linear regime (a damper clipped
+      // as a flank lifts or lands) the caller integrates on (dopri5) and calls again.
       const std::optional<MeshRegime> found = regimeAt(j, z, e_theta, w);
-      if (!found) return false;
+      if (!found) return handBack();
       regime = *found;
     }
     const Slice& s = slice(regime, j);
-    if (!s.usable) return false;
+    if (!s.usable) return handBack();
     double h = remaining, next = frac + f * remaining;
     bool crossing = false;
     if (f != 0.0) {
@@ -552,27 +575,71 @@ bool SlicedModalPropagator::propagate(State6& y, double& phase, double f, double
       }
     }
     const Complex e_end = crossing ? m.boundaryPhasor(f > 0.0 ? j + 1 : j) : e_theta * std::polar(1.0, w * h);
-    advance(s, piece, w, h, e_end * std::conj(e_theta), z);
+    advance(s, piece, w, h, e_end * std::conj(e_theta), z_end);
+    if (!z_end.allFinite()) return handBack();
+    const bool leaves = !inRegime(regime, j, z_end, e_end, w);
+    if (leaves) {
+      // A contact changed inside the step. The exact solution of this regime holds up to the
+      // change, so the change is located on it: bisection on the step's length, the contacts
+      // tested as at the ends (40 halvings: to 1e-12 of the step, itself at most an eighth of the
+      // fastest mode's period where the bound cannot clear it). The state just past the change
+      // goes on in the regime it is in there.
+      if (++changes > kMaxChangesPerCall) return handBack();  // chatter: dopri5's to resolve
+      double lo = 0.0, hi = h;
+      Complex e_hi = e_end;
+      for (int it = 0; it < kEventHalvings; ++it) {
+        const double mid = 0.5 * (lo + hi);
+        const Complex e_mu = std::polar(1.0, w * mid);
+        advance(s, piece, w, mid, e_mu, z_end);
+        if (inRegime(regime, j, z_end, e_theta * e_mu, w)) {
+          lo = mid;
+        } else {
+          hi = mid;
+          e_hi = e_theta * e_mu;
+        }
+      }
+      if (hi < h) {
+        advance(s, piece, w, hi, e_hi * std::conj(e_theta), z);
+        e_theta = e_hi;
+        frac += f * hi;  // inside the slice: short of the boundary the step would have reached
+        remaining -= hi;
+        done += hi;
+        ++events_;
+        const std::optional<MeshRegime> found = regimeAt(j, z, e_theta, w);
+        if (!found) return handBack();
+        regime = *found;
+        continue;
+      }
+      // At the step's very end (to the bisection's resolution): the step stands as it was.
+      advance(s, piece, w, h, e_end * std::conj(e_theta), z_end);
+    }
+    z = z_end;
     e_theta = e_end;
     remaining = crossing || h < remaining ? remaining - h : 0.0;
+    done += h;
     frac = next;
     if (frac >= 1.0) {
       whole += 1.0;
       frac -= 1.0;
     }
-    if (!z.allFinite() || !inRegime(regime, j, z, e_theta, w)) return false;
     if (crossing) {
       ++crossed_;
-      // Right limit: the slice entered must also hold the contacts closed. Forwards it is the next
-      // slice (the first of the next period after the last); backwards the one below (the top one
-      // of the period below from the first), as sliceAt would find it.
+      // Right limit: the slice entered must also hold the contacts. Forwards it is the next slice
+      // (the first of the next period after the last); backwards the one below (the top one of the
+      // period below from the first), as sliceAt would find it. The stiffness steps there, so the
+      // contacts may change on the boundary itself.
       j = f > 0.0 ? (j + 1 == n ? 0 : j + 1) : (j == 0 ? n - 1 : j - 1);
-      if (!inRegime(regime, j, z, e_theta, w)) return false;
+    }
+    if ((leaves || crossing) && !inRegime(regime, j, z, e_theta, w)) {
+      const std::optional<MeshRegime> found = regimeAt(j, z, e_theta, w);
+      if (!found) return handBack();
+      regime = *found;
+      ++events_;
     }
   }
   y = z;
   phase = whole + frac;
-  return true;
+  return duration;
 }
 
 Matrix6 SlicedModalPropagator::monodromy(double f) const {

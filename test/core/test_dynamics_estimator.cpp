@@ -241,6 +241,56 @@ TEST(DynamicsEstimator, FollowsAMeasuredRunUpExactly) {
   EXPECT_EQ(next, online.size());
 }
 
+// Following the measured motion through a flank that lifts: at 1000 rpm the torque steps from 1 to
+// 10 N m, above the seed rig's knee of 6.95 N m (docs/calibration.md section 5), so the back path
+// lifts. The exact propagation locates the change and goes on in the drive flank's regime; dopri5
+// covers only the moments in no linear regime (the back path's damper clipped as it opens), each at
+// most one period of the fastest mode. The samples equal a tight dopri5 run (rtol 1e-12) of the same
+// sliced model through the whole advance, to the fallback's tolerance.
+TEST(DynamicsEstimator, FollowsTheMotionThroughAFlankThatLifts) {
+  const double f = 20.0 * 1000.0 / 60.0;  // mesh frequency at 1000 rpm, z_p = 20
+  DynamicsEstimator est(rig(), {1.2e8, 1.2e8}, 10000.0);
+  est.reset(0.0, 1.0);
+  est.advanceTo(0.0, nullptr);
+  est.followMotion(0.0, 0.0, f);
+  est.advanceTo(5e-3, nullptr);
+  const State6 y5 = est.state();
+  est.setTorque(10.0);
+  std::vector<DynamicsSample> online;
+  est.advanceTo(7e-3, [&](const DynamicsSample& s) { online.push_back(s); });
+  ASSERT_EQ(online.size(), 20u);
+  ASSERT_NE(est.slicedPropagator(), nullptr);
+  EXPECT_GT(est.slicedPropagator()->regimeChanges(), 0) << "the lift was not located";
+  // dopri5 stretches: each at most one fastest period (~17 us), far fewer than the 20 samples.
+  EXPECT_LT(est.fallbackIntervals(), 20);
+  std::printf("regime changes %ld, dopri5 stretches %ld\n", est.slicedPropagator()->regimeChanges(), est.fallbackIntervals());
+  // Reference: the same sliced model (256 slices) at 10 N m from the state at 5 ms.
+  auto slices = std::make_shared<const SlicedMesh>(
+      std::make_shared<const AntiBacklashMesh>(rig().gears, rig().anti_backlash, rig().mesh_model, rig().mesh_samples), 256);
+  const GearRotorParameters p = est.model().parameters();
+  GearRotorModel model(p, std::make_shared<const SlicedExcitation>(slices, 1e-6, 0.0, 1.0 / p.pinion_base_radius, 0.0));
+  model.setTorqueInput(10.0);
+  model.setMotionInput(MeshMotion{0.0, 0.0, f});
+  IntegratorOptions o;
+  o.relative_tolerance = 1e-12;
+  o.absolute_tolerance = 1e-20;
+  o.max_step = 2e-6;
+  State6 y = y5;
+  double t = 5e-3, scale = 0.0, worst = 0.0;
+  bool lifted = false;
+  for (const DynamicsSample& s : online) {
+    y = integrate(model, IntegratorMethod::kDopri5, o, t, y, s.t, s.t - t, nullptr);
+    t = s.t;
+    const double delta = y[0] - y[1] + y[2] - 1e-6 * std::sin(kTwoPi * f * t);
+    scale = std::max(scale, std::abs(delta));
+    worst = std::max(worst, std::abs(s.dynamic_te - delta));
+    lifted |= !s.back_flank_loaded;
+  }
+  EXPECT_TRUE(lifted) << "the back path never lifted: the test does not test the change";
+  std::printf("worst TE difference against dopri5 at rtol 1e-12: %.3g of the largest TE\n", worst / scale);
+  EXPECT_LT(worst, 1e-6 * scale) << "worst TE difference " << worst << " m of " << scale << " m";
+}
+
 // A bearing-stiffness change while running costs no set-up inside the call: the dynamics go on
 // with the speed-independent propagation, whose slices are decomposed as they are crossed.
 TEST(DynamicsEstimator, BearingChangeWhileRunningBuildsNothingInTheCall) {

@@ -49,10 +49,23 @@ class SlicedModalPropagator {
   const GearRotorParameters& parameters() const { return p_; }
 
   /// Propagates y over `duration` [s] (>= 0) from the mesh phase `phase` [turns] at the signed mesh
-  /// frequency f [Hz] with the drive force F_d [N] held. Returns false, leaving y and phase as they
-  /// were, if a contact leaves the linear regime at a slice boundary or at the end (the caller
-  /// integrates that stretch with dopri5 instead), or a slice has no usable eigenbasis.
+  /// frequency f [Hz] with the drive force F_d [N] held, through every change of the contacts from
+  /// one linear regime to another (a flank lifting above the knee, landing again), each located on
+  /// the exact solution. Returns the time propagated [s], y and phase moved to it: `duration` when
+  /// the whole stretch was linear, less where the state entered no linear regime (a damper clipped
+  /// as a contact opens or closes) or a slice had no usable eigenbasis; the caller integrates on
+  /// from there (dopri5) and calls again.
+  double propagateLinear(State6& y, double& phase, double f, double duration, double drive_force) const;
+  /// The same all or nothing: false, leaving y and phase as they were, where propagateLinear would
+  /// stop short.
   bool propagate(State6& y, double& phase, double f, double duration, double drive_force) const;
+  /// A lower bound of the period of the fastest mode [s] over every slice and regime, 2 pi /
+  /// sqrt(trace(M^-1 K)) at the stiffest slice (the trace bounds the largest eigenvalue of the
+  /// undamped problem, all of them >= 0): how long a dopri5 stretch through a nonlinear moment
+  /// need be at most before the exact propagation is tried again.
+  double fastestPeriodBound() const { return fastest_period_bound_; }
+  /// Changes of the contacts located and gone through (inside a step or on a slice boundary).
+  long regimeChanges() const { return events_; }
   /// Homogeneous propagator over one mesh period at mesh frequency f != 0 (the monodromy matrix of the
   /// sliced model at a constant speed) with every contact of the mesh loaded: both anti-backlash
   /// flanks, an ordinary gear's drive flank.
@@ -149,7 +162,10 @@ class SlicedModalPropagator {
   mutable std::array<std::vector<Slice>, 3> cache_;  ///< per MeshRegime, per slice
   std::array<std::vector<RegimeConditions>, 3> conditions_;  ///< per MeshRegime, per slice (makeConditions)
   mutable Piece piece_;
-  mutable long decompositions_ = 0, general_decompositions_ = 0, crossed_ = 0, substeps_ = 0;
+  mutable long decompositions_ = 0, general_decompositions_ = 0, crossed_ = 0, substeps_ = 0, events_ = 0;
+  double fastest_period_bound_ = 0.0;
+  static constexpr int kEventHalvings = 40;
+  static constexpr int kMaxChangesPerCall = 64;  ///< more in one call is chatter: handed back
 };
 
 }  // namespace drivetrain_stiffness
