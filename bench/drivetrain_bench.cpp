@@ -213,10 +213,9 @@ int main(int argc, char** argv) {
     }
 
     // Exact propagation at any speed (the scenes whose speed changes): SlicedModalPropagator along
-    // the scene's readings, as the node follows the encoders. Its setup is one eigen-decomposition
-    // per slice, made here by crossing every slice once; steps = slices crossed.
-    // The sliced propagation of the scene (sliced_exact, and auto along a measured motion): built
-    // fresh, and one run of it along the scene's readings (steps = slices crossed).
+    // the scene's readings, as the node follows the encoders (propagateMotionScene), built fresh
+    // for sliced_exact and for auto along a measured motion. Its setup is one eigen-decomposition
+    // per slice, made for sliced_exact by crossing every slice once; steps = slices crossed.
     const auto makeSliced = [&] {
       return std::make_unique<const ds::SlicedModalPropagator>(scene.model->parameters(), scene.motion->slices,
                                                                scene.motion->te_amplitude, scene.motion->backlash);

@@ -2,9 +2,11 @@
 
 #include <cmath>
 
+#include "drivetrain_stiffness/core/constants.hpp"
+
 namespace drivetrain_stiffness {
 namespace {
-constexpr double kRadToDeg = 180.0 / M_PI;
+constexpr double kRadToDeg = 180.0 / kPi;
 
 nlohmann::json contactJson(const HertzPointContact& c) {
   return {{"rx", c.rx()},

@@ -6,12 +6,13 @@
 #include <ios>
 #include <set>
 
+#include "drivetrain_stiffness/core/constants.hpp"
 #include "drivetrain_stiffness/core/rig_model.hpp"
 #include "drivetrain_stiffness/core/validation.hpp"
 
 namespace drivetrain_stiffness {
 namespace {
-constexpr double kDegToRad = M_PI / 180.0;
+constexpr double kDegToRad = kPi / 180.0;
 
 const std::set<std::string> kBearingKeys = {
     "type", "balls", "ball_diameter", "pitch_diameter", "inner_groove_conformity",

@@ -2,12 +2,12 @@
 
 #include <cmath>
 
+#include "drivetrain_stiffness/core/constants.hpp"
 #include "drivetrain_stiffness/core/enum_names.hpp"
 #include "drivetrain_stiffness/core/validation.hpp"
 
 namespace drivetrain_stiffness {
 namespace {
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kMaxDiameter = 10.0;  // [m]
 
 void validateSpec(const BallBearingSpec& s) {

@@ -3,6 +3,7 @@
 #include <Eigen/Cholesky>
 #include <cmath>
 
+#include "drivetrain_stiffness/core/constants.hpp"
 #include "drivetrain_stiffness/core/enum_names.hpp"
 #include "drivetrain_stiffness/core/validation.hpp"
 
@@ -264,8 +265,8 @@ void BearingSupport::finish(BearingSolution& sol) const {
       sol.max_contact_pressure = std::max(sol.max_contact_pressure, b.max_pressure);
       if (bearing_.spec().type == BearingType::kAngularContact && b.contact_angle < 0.0 && b.load > 1e-9) {
         throw UnreachableLoad("load drives a ball of an angular-contact bearing against its missing shoulder "
-                              "(contact angle " + formatValue(b.contact_angle * 180.0 / 3.14159265358979) +
-                              " deg at azimuth " + formatValue(b.azimuth * 180.0 / 3.14159265358979) +
+                              "(contact angle " + formatValue(b.contact_angle * 180.0 / kPi) +
+                              " deg at azimuth " + formatValue(b.azimuth * 180.0 / kPi) +
                               " deg); raise the axial preload or use type deep_groove");
       }
     }

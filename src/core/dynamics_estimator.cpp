@@ -256,21 +256,19 @@ void DynamicsEstimator::propagateTo(double t_rel) {
   // full: the sliced model; linear_modal: the same with the period's mean stiffness (one slice).
   // Exact through every change of the contacts between linear regimes (located on the exact
   // solution); where the state is in none (a damper clipped for a moment as a flank lifts or
-  // lands) dopri5 on the same sliced model along the same motion takes over for at most one period
-  // of the fastest mode, then the exact propagation again. With bearing clearance, dopri5 alone.
+  // lands) dopri5 on the same sliced model along the same motion takes over for a stretch
+  // (propagateMeasured). With bearing clearance, dopri5 alone.
   const SlicedModalPropagator* exact = fidelity_ == Fidelity::kLinearModal ? mean_sliced_.get() : sliced_.get();
-  while (t_state_ < t_rel) {
-    const double left = t_rel - t_state_;
-    const double done = exact ? exact->propagateLinear(y_, phase_, mesh_frequency_, left, drive_force) : 0.0;
-    if (done >= left) break;
-    t_state_ += done;
-    if (!(t_state_ < t_rel)) break;
-    const double stretch = exact ? std::min(t_rel - t_state_, exact->fastestPeriodBound()) : t_rel - t_state_;
-    const double end = stretch >= t_rel - t_state_ ? t_rel : t_state_ + stretch;
-    y_ = integrate(movingModelAtState(), IntegratorMethod::kDopri5, fallback_, t_state_, y_, end, end - t_state_, nullptr);
-    phase_ += mesh_frequency_ * (end - t_state_);
-    t_state_ = end;
+  const auto dopri5 = [this](double t0, double t1, State6& y, double& phase) {
+    t_state_ = t0;  // the motion input's anchor (movingModelAtState)
+    y = integrate(movingModelAtState(), IntegratorMethod::kDopri5, fallback_, t0, y, t1, t1 - t0, nullptr);
+    phase += mesh_frequency_ * (t1 - t0);
     ++fallback_intervals_;
+  };
+  if (exact) {
+    propagateMeasured(*exact, y_, phase_, mesh_frequency_, t_state_, t_rel, drive_force, dopri5);
+  } else {
+    dopri5(t_state_, t_rel, y_, phase_);
   }
   phase_ = wrapTurns(phase_);
   t_state_ = t_rel;

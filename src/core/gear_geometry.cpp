@@ -3,11 +3,11 @@
 #include <algorithm>
 #include <cmath>
 
+#include "drivetrain_stiffness/core/constants.hpp"
 #include "drivetrain_stiffness/core/validation.hpp"
 
 namespace drivetrain_stiffness {
 namespace {
-constexpr double kPi = 3.14159265358979323846;
 std::string gearField(const char* name, int i) { return std::string("gears.") + name + "[" + std::to_string(i) + "]"; }
 }  // namespace
 

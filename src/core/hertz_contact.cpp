@@ -2,12 +2,12 @@
 
 #include <cmath>
 
+#include "drivetrain_stiffness/core/constants.hpp"
 #include "drivetrain_stiffness/core/enum_names.hpp"
 #include "drivetrain_stiffness/core/validation.hpp"
 
 namespace drivetrain_stiffness {
 namespace {
-constexpr double kPi = 3.14159265358979323846;
 
 // F(rho) as a function of ln(kappa) for kappa > 1: [(k^2+1)E - 2F] / [(k^2-1)E]
 // (Hamrock & Brewe 1983, the exact ellipticity relation solved for F(rho)). Monotonically increasing from 0 at kappa = 1.

@@ -345,12 +345,16 @@ State6 propagateMotionScene(const Scene& scene, const SlicedModalPropagator& exa
     if (into == 0) phase = m.phase[k];  // re-anchored at every reading, as the node does
     const double f = m.meshFrequency(k);
     const double t = static_cast<double>(i) * h;
-    if (!exact.propagate(y, phase, f, h, m.drive_force)) {
-      // A contact open: dopri5 over this sample interval on the same sliced model and motion.
-      y = integrate(*scene.model, IntegratorMethod::kDopri5, fallback, t, y, static_cast<double>(i + 1) * h, h, nullptr);
-      phase = m.phase[k] + f * (static_cast<double>(into + 1) * h);
-      if (st.fallbacks++ == 0) st.fallback_from = t;
-    }
+    // As the node propagates: exact through the changes of the contacts, dopri5 on the same sliced
+    // model and motion through each moment in no linear regime (fallbacks: the sample intervals
+    // that needed it).
+    const long stretches = propagateMeasured(exact, y, phase, f, t, static_cast<double>(i + 1) * h, m.drive_force,
+                                             [&](double t0, double t1, State6& z, double& p) {
+                                               z = integrate(*scene.model, IntegratorMethod::kDopri5, fallback, t0, z, t1,
+                                                             t1 - t0, nullptr);
+                                               p += f * (t1 - t0);
+                                             });
+    if (stretches > 0 && st.fallbacks++ == 0) st.fallback_from = t;
     if (observe) observe(static_cast<double>(i + 1) * h, y);
   }
   st.steps = exact.slicesCrossed() - crossed;

@@ -516,12 +516,12 @@ double SlicedModalPropagator::propagateLinear(State6& y, double& phase, double f
   const int n = m.size();
   const double w = kTwoPi * f;
   State6 z = y, z_end;
-  double whole = std::floor(phase), frac = phase - whole, remaining = duration, done = 0.0;
+  double whole = std::floor(phase), frac = phase - whole, remaining = duration;
   // What was propagated goes back to the caller, up to where no linear regime holds.
   const auto handBack = [&] {
     y = z;
     phase = whole + frac;
-    return remaining > 0.0 ? done : duration;
+    return remaining > 0.0 ? duration - remaining : duration;
   };
   // The TE forcing's phasor e^{i 2 pi frac}: one sine and cosine where the call starts inside a
   // slice, then carried: a step that ends on a boundary takes the boundary's tabulated phasor, and
@@ -601,9 +601,10 @@ double SlicedModalPropagator::propagateLinear(State6& y, double& phase, double f
       if (hi < h) {
         advance(s, piece, w, hi, e_hi * std::conj(e_theta), z);
         e_theta = e_hi;
-        frac += f * hi;  // inside the slice: short of the boundary the step would have reached
+        // Inside the slice, short of the boundary the step would have reached (kept there where
+        // the change lies within rounding of it, so the next step's length is not negative).
+        frac = std::clamp(frac + f * hi, m.start(j), m.end(j));
         remaining -= hi;
-        done += hi;
         ++events_;
         const std::optional<MeshRegime> found = regimeAt(j, z, e_theta, w);
         if (!found) return handBack();
@@ -616,7 +617,6 @@ double SlicedModalPropagator::propagateLinear(State6& y, double& phase, double f
     z = z_end;
     e_theta = e_end;
     remaining = crossing || h < remaining ? remaining - h : 0.0;
-    done += h;
     frac = next;
     if (frac >= 1.0) {
       whole += 1.0;

@@ -8,11 +8,11 @@
 #include <cmath>
 #include <complex>
 
+#include "drivetrain_stiffness/core/constants.hpp"
 #include "drivetrain_stiffness/core/validation.hpp"
 
 namespace drivetrain_stiffness {
 namespace {
-constexpr double kPi = 3.14159265358979323846;
 
 // Log-parabola through three positive values around index k: offset in bins and peak height.
 void refine(double a, double b, double c, double* offset, double* height) {

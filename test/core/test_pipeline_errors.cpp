@@ -114,6 +114,10 @@ TEST(PipelineErrors, ARefusedStiffnessMessageLeavesTheInputAcceptedOnce) {
   EXPECT_EQ(p.counters().stiffness_refused, 2u);
   EXPECT_EQ(p.counters().stiffness_out, 0u);
   EXPECT_NE(p.counters().last_event.find("not published"), std::string::npos) << p.counters().last_event;
+  // The input's stiffness went on to the dynamics and the resonance (pushStiffness, after the
+  // refused message): the first input's modal analysis was run and published.
+  EXPECT_GE(p.counters().modal_updates, 1u);
+  EXPECT_GE(p.counters().resonance_out, 1u);
   // The dynamics ran over the refused inputs (10 samples at the 1 kHz grid), and the third input's
   // message is published.
   EXPECT_GE(sink.samples, 9);

@@ -129,7 +129,7 @@ class GearRotorModel {
   /// force is RigExcitation::driveForce(u). Its owner sets it; nothing else holds it. InvalidInput
   /// for a model without a torque input (its torque is a function of time) or a non-finite u.
   void setTorqueInput(double torque);
-  double torqueInput() const { return torque_input_; }  ///< [N·m]; 0 until set
+  double torqueInput() const { return torque_input_; }  ///< [N·m]; 0 (a sliced excitation's own) until set
   /// The measured motion input of a model over a SlicedExcitation: from now on the mesh phase is
   /// motion.phaseAt(t). Its owner re-anchors it at each encoder reading. InvalidInput for any
   /// other model or a non-finite field.

@@ -56,6 +56,8 @@ class SlicedModalPropagator {
   /// as a contact opens or closes) or a slice had no usable eigenbasis; the caller integrates on
   /// from there (dopri5) and calls again.
   double propagateLinear(State6& y, double& phase, double f, double duration, double drive_force) const;
+  /// Returns 0, y and phase untouched, for a negative or NaN duration or a non-finite f, phase or
+  /// drive force.
   /// The same all or nothing: false, leaving y and phase as they were, where propagateLinear would
   /// stop short.
   bool propagate(State6& y, double& phase, double f, double duration, double drive_force) const;
@@ -167,5 +169,35 @@ class SlicedModalPropagator {
   static constexpr int kEventHalvings = 40;
   static constexpr int kMaxChangesPerCall = 64;  ///< more in one call is chatter: handed back
 };
+
+/// The propagation along a measured motion as the online estimator runs it (and the bench's motion
+/// scenes, as it): over [t, t_end] at mesh frequency f with the drive force held, exact as far as
+/// the contacts stay in linear regimes (propagateLinear), and through each moment in none by
+/// `nonlinear(t0, t1, y, phase)` (dopri5 on the same sliced model and motion, moving y and phase to
+/// t1), over one fastest period (fastestPeriodBound) at first, doubled while the exact propagation
+/// still cannot start, back to one period once it has. After kMaxNonlinearStretches stretches in
+/// one call the rest of the interval goes to `nonlinear` in one piece (whose own work bound then
+/// holds). A template, not a std::function: the estimator's per-input path allocates nothing.
+/// Returns the number of stretches.
+inline constexpr long kMaxNonlinearStretches = 256;
+template <typename Nonlinear>
+long propagateMeasured(const SlicedModalPropagator& exact, State6& y, double& phase, double f, double t, double t_end,
+                       double drive_force, Nonlinear&& nonlinear) {
+  long stretches = 0;
+  double stretch = exact.fastestPeriodBound();
+  while (t < t_end) {
+    const double left = t_end - t;
+    const double done = exact.propagateLinear(y, phase, f, left, drive_force);
+    if (done >= left) break;
+    t += done;
+    if (!(t < t_end)) break;
+    stretch = done > 0.0 ? exact.fastestPeriodBound() : stretch;
+    const double end = ++stretches > kMaxNonlinearStretches || stretch >= t_end - t ? t_end : t + stretch;
+    nonlinear(t, end, y, phase);
+    t = end;
+    stretch *= 2.0;  // the next one, should the exact propagation still not start there
+  }
+  return stretches;
+}
 
 }  // namespace drivetrain_stiffness
