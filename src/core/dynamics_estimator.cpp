@@ -147,12 +147,13 @@ void DynamicsEstimator::parametersChanged() {
     build();
     return;
   }
-  if (!following_) startFollowing();
-  const GearRotorParameters p = currentParameters();
-  if (sliced_) sliced_->setParameters(p);
-  if (mean_sliced_) mean_sliced_->setParameters(p);
-  moving_model_->setParameters(p);  // in place: this runs on the per-input path (allocation_tests)
-  mean_model_->setParameters(p);
+  if (following_) {
+    const GearRotorParameters p = currentParameters();
+    full_.setParameters(p);
+    mean_.setParameters(p);
+  } else {
+    startFollowing();  // with the parameters as they are now
+  }
   periodic_stale_ = true;
   ++rebuilds_;
 }
@@ -170,40 +171,36 @@ void DynamicsEstimator::setMotionSlices(int slices) {
   if (slices == motion_slices_) return;
   if (following_) throw InvalidInput("motion_slices: cannot change while following the measured motion (reset first)");
   motion_slices_ = slices;
-  slices_.reset();
-  sliced_.reset();
-  mean_slices_.reset();
-  mean_sliced_.reset();
-  moving_model_.reset();
-  mean_model_.reset();
+  full_ = SlicedDynamics{};
+  mean_ = SlicedDynamics{};
+}
+
+void DynamicsEstimator::SlicedDynamics::build(std::shared_ptr<const SlicedMesh> mesh_slices, const GearRotorParameters& p,
+                                              const DynamicsConfig& d) {
+  slices = std::move(mesh_slices);
+  // The live node's load follows the input (RigExcitationSpec::balanced_load): F_d = T / r_p.
+  model = std::make_unique<GearRotorModel>(
+      p, std::make_shared<const SlicedExcitation>(slices, d.transmission_error_amplitude, d.backlash,
+                                                  1.0 / p.pinion_base_radius, 0.0));
+  const bool clearance = p.bearing_clearance[0] > 0.0 || p.bearing_clearance[1] > 0.0;
+  exact = clearance ? nullptr
+                    : std::make_unique<SlicedModalPropagator>(p, slices, d.transmission_error_amplitude, d.backlash);
+}
+
+void DynamicsEstimator::SlicedDynamics::setParameters(const GearRotorParameters& p) {
+  model->setParameters(p);
+  if (exact) exact->setParameters(p);
 }
 
 void DynamicsEstimator::startFollowing() {
   const GearRotorParameters p = currentParameters();
-  if (!slices_) {
-    slices_ = std::make_shared<const SlicedMesh>(mesh_, motion_slices_);
+  if (!full_.model) {
+    full_.build(std::make_shared<const SlicedMesh>(mesh_, motion_slices_), p, rig_->dynamics);
     // linear_modal along the measured motion: the same model with the period's mean stiffness.
-    mean_slices_ = SlicedMesh::periodMean(mesh_);
-    // The live node's load follows the input (RigExcitationSpec::balanced_load): F_d = T / r_p.
-    moving_model_ = std::make_unique<GearRotorModel>(
-        p, std::make_shared<const SlicedExcitation>(slices_, rig_->dynamics.transmission_error_amplitude,
-                                                    rig_->dynamics.backlash, 1.0 / p.pinion_base_radius, 0.0));
-    mean_model_ = std::make_unique<GearRotorModel>(
-        p, std::make_shared<const SlicedExcitation>(mean_slices_, rig_->dynamics.transmission_error_amplitude,
-                                                    rig_->dynamics.backlash, 1.0 / p.pinion_base_radius, 0.0));
+    mean_.build(SlicedMesh::periodMean(mesh_), p, rig_->dynamics);
   } else {
-    moving_model_->setParameters(p);
-    mean_model_->setParameters(p);
-  }
-  const bool clearance = p.bearing_clearance[0] > 0.0 || p.bearing_clearance[1] > 0.0;
-  if (!sliced_ && !clearance) {
-    sliced_ = std::make_unique<SlicedModalPropagator>(p, slices_, rig_->dynamics.transmission_error_amplitude,
-                                                      rig_->dynamics.backlash);
-    mean_sliced_ = std::make_unique<SlicedModalPropagator>(p, mean_slices_, rig_->dynamics.transmission_error_amplitude,
-                                                           rig_->dynamics.backlash);
-  } else if (sliced_) {
-    sliced_->setParameters(p);
-    mean_sliced_->setParameters(p);
+    full_.setParameters(p);
+    mean_.setParameters(p);
   }
   // The state sits on grid sample k_; the nominal phase there (RigExcitation: turns = f t).
   t_state_ = k_ * interval_;
@@ -238,15 +235,19 @@ double DynamicsEstimator::meshPhase() const { return following_ ? phase_ : nomin
 
 double DynamicsEstimator::meshFrequency() const { return following_ ? mesh_frequency_ : nominalMeshFrequency(); }
 
-void DynamicsEstimator::propagateTo(double t_rel) {
-  const double h = t_rel - t_state_;
-  if (!(h > 0.0)) return;
-  const double crossings = std::abs(mesh_frequency_) * h * slices_->size();
+void DynamicsEstimator::requireSliceBound(double t_rel) const {
+  const double h = t_rel - t_state_, crossings = std::abs(mesh_frequency_) * h * full_.slices->size();
   if (crossings > kMaxSlicesPerAdvance) {
     throw InvalidInput("t = " + formatValue(origin_ + t_rel) + ": " + formatValue(h) + " s at a mesh frequency of " +
                        formatValue(mesh_frequency_) + " Hz crosses " + formatValue(crossings) + " phase slices (more than " +
                        formatValue(kMaxSlicesPerAdvance) + " in one call); reset at the new time instead");
   }
+}
+
+void DynamicsEstimator::propagateTo(double t_rel) {
+  const double h = t_rel - t_state_;
+  if (!(h > 0.0)) return;
+  requireSliceBound(t_rel);
   const double drive_force = torque_ / mesh_->geometry().baseRadius(0);
   if (fidelity_ == Fidelity::kQuasiStatic) {
     propagateQuasiStatic(h, drive_force);
@@ -258,7 +259,7 @@ void DynamicsEstimator::propagateTo(double t_rel) {
   // solution); where the state is in none (a damper clipped for a moment as a flank lifts or
   // lands) dopri5 on the same sliced model along the same motion takes over for a stretch
   // (propagateMeasured). With bearing clearance, dopri5 alone.
-  const SlicedModalPropagator* exact = fidelity_ == Fidelity::kLinearModal ? mean_sliced_.get() : sliced_.get();
+  const SlicedModalPropagator* exact = moving().exact.get();
   const auto dopri5 = [this](double t0, double t1, State6& y, double& phase) {
     t_state_ = t0;  // the motion input's anchor (movingModelAtState)
     y = integrate(movingModelAtState(), IntegratorMethod::kDopri5, fallback_, t0, y, t1, t1 - t0, nullptr);
@@ -275,13 +276,7 @@ void DynamicsEstimator::propagateTo(double t_rel) {
 }
 
 void DynamicsEstimator::advanceFollowing(double t_rel, const std::function<void(const DynamicsSample&)>& sink) {
-  const double crossings = std::abs(mesh_frequency_) * (t_rel - t_state_) * slices_->size();
-  if (crossings > kMaxSlicesPerAdvance) {
-    throw InvalidInput("t = " + formatValue(origin_ + t_rel) + ": " + formatValue(t_rel - t_state_) +
-                       " s at a mesh frequency of " + formatValue(mesh_frequency_) + " Hz crosses " + formatValue(crossings) +
-                       " phase slices (more than " + formatValue(kMaxSlicesPerAdvance) +
-                       " in one call); reset at the new time instead");
-  }
+  requireSliceBound(t_rel);
   const long k_end = static_cast<long>(std::floor(t_rel / interval_ + 1e-9));
   while (k_ < k_end) {
     propagateTo((k_ + 1) * interval_);
@@ -300,8 +295,8 @@ bool DynamicsEstimator::floquetMargin(double* margin) const {
     // contact regime the state is in now: above the anti-backlash knee the back path is lifted and
     // the drive flank alone sets the stiffness, so the both-flank period map would describe a
     // motion that is not happening. In no linear regime (a flank opening), no margin.
-    if (!sliced_ || mesh_frequency_ == 0.0) return false;
-    const std::optional<Matrix6> m = sliced_->monodromy(mesh_frequency_, y_, phase_);
+    if (!full_.exact || mesh_frequency_ == 0.0) return false;
+    const std::optional<Matrix6> m = full_.exact->monodromy(mesh_frequency_, y_, phase_);
     if (!m) return false;
     monodromy = *m;
   } else {
@@ -316,7 +311,7 @@ bool DynamicsEstimator::floquetMargin(double* margin) const {
 DynamicsSample DynamicsEstimator::sample(double t_rel, const State6& y) const { return sampleOf(*model_, t_rel, y); }
 
 GearRotorModel& DynamicsEstimator::movingModelAtState() {
-  GearRotorModel& model = fidelity_ == Fidelity::kLinearModal ? *mean_model_ : *moving_model_;
+  GearRotorModel& model = *moving().model;
   model.setMotionInput(MeshMotion{t_state_, phase_, mesh_frequency_});
   model.setTorqueInput(torque_);
   return model;
@@ -332,7 +327,7 @@ void DynamicsEstimator::propagateQuasiStatic(double h, double drive_force) {
   // path lifted delta = (F - F_p) / k1; the drive flank lifted delta = (F + F_p) / k_c; an ordinary
   // gear F / k1 + b sign F), so delta' = 0 inside a slice and the torsional coordinate follows
   // from delta = x + x_p - x_g - e.
-  const GearRotorParameters& p = moving_model_->parameters();
+  const GearRotorParameters& p = full_.model->parameters();
   shaftStep(p.pinion_mass, p.bearing_damping[0], p.bearing_stiffness[0], -drive_force, h, y_[0], y_[3]);
   shaftStep(p.gear_mass, p.bearing_damping[1], p.bearing_stiffness[1], drive_force, h, y_[1], y_[4]);
   phase_ = wrapTurns(phase_ + mesh_frequency_ * h);
@@ -342,10 +337,11 @@ void DynamicsEstimator::propagateQuasiStatic(double h, double drive_force) {
   if (std::min(phase_, 1.0 - phase_) < 1e-7 && mesh_frequency_ != 0.0) {
     look = wrapTurns(phase_ + std::copysign(1e-6, mesh_frequency_));
   }
-  const int j = slices_->sliceAt(look, mesh_frequency_ < 0.0);
-  const double k1 = slices_->k1(j), kc = slices_->kChain(j), fp = slices_->mesh().preloadForce();
+  const SlicedMesh& slices = *full_.slices;
+  const int j = slices.sliceAt(look, mesh_frequency_ < 0.0);
+  const double k1 = slices.k1(j), kc = slices.kChain(j), fp = slices.mesh().preloadForce();
   double delta = 0.0;
-  if (slices_->antiBacklash()) {
+  if (slices.antiBacklash()) {
     switch (AntiBacklashMesh::flankContact(drive_force, k1, kc, fp)) {
       case FlankContact::kBoth: delta = drive_force / (k1 + kc); break;
       case FlankContact::kDriveOnly: delta = (drive_force - fp) / k1; break;

@@ -531,18 +531,21 @@ double SlicedModalPropagator::propagateLinear(State6& y, double& phase, double f
   int j = -1;  // the current slice, found once, then the neighbour entered at each crossing
   MeshRegime regime = MeshRegime::kBothFlanks;
   int changes = 0;
+  // The regime the state is in, in slice j; false in none (a damper clipped as a flank lifts or
+  // lands: the caller integrates on with dopri5 and calls again).
+  const auto takeRegime = [&] {
+    const std::optional<MeshRegime> found = regimeAt(j, z, e_theta, w);
+    if (found) regime = *found;
+    return found.has_value();
+  };
   while (remaining > 0.0) {
     if (f < 0.0 && frac == 0.0) {  // backwards from a period boundary: the top of the period below
       whole -= 1.0;
       frac = 1.0;
     }
-    if (j < 0) {
+    if (j < 0) {  // the contacts the call starts with
       j = m.sliceAt(frac == 1.0 ? std::nextafter(1.0, 0.0) : frac, f < 0.0);
-      // The contacts the call starts with; where they are in no linear regime (a damper clipped
-      // as a flank lifts or lands) the caller integrates on (dopri5) and calls again.
-      const std::optional<MeshRegime> found = regimeAt(j, z, e_theta, w);
-      if (!found) return handBack();
-      regime = *found;
+      if (!takeRegime()) return handBack();
     }
     const Slice& s = slice(regime, j);
     if (!s.usable) return handBack();
@@ -579,25 +582,11 @@ double SlicedModalPropagator::propagateLinear(State6& y, double& phase, double f
     if (!z_end.allFinite()) return handBack();
     const bool leaves = !inRegime(regime, j, z_end, e_end, w);
     if (leaves) {
-      // A contact changed inside the step. The exact solution of this regime holds up to the
-      // change, so the change is located on it: bisection on the step's length, the contacts
-      // tested as at the ends (40 halvings: to 1e-12 of the step, itself at most an eighth of the
-      // fastest mode's period where the bound cannot clear it). The state just past the change
-      // goes on in the regime it is in there.
+      // A contact changed inside the step: located on this regime's exact solution, the state
+      // just past the change goes on in the regime it is in there.
       if (++changes > kMaxChangesPerCall) return handBack();  // chatter: dopri5's to resolve
-      double lo = 0.0, hi = h;
       Complex e_hi = e_end;
-      for (int it = 0; it < kEventHalvings; ++it) {
-        const double mid = 0.5 * (lo + hi);
-        const Complex e_mu = std::polar(1.0, w * mid);
-        advance(s, piece, w, mid, e_mu, z_end);
-        if (inRegime(regime, j, z_end, e_theta * e_mu, w)) {
-          lo = mid;
-        } else {
-          hi = mid;
-          e_hi = e_theta * e_mu;
-        }
-      }
+      const double hi = locateChange(s, piece, regime, j, e_theta, w, h, &e_hi);
       if (hi < h) {
         advance(s, piece, w, hi, e_hi * std::conj(e_theta), z);
         e_theta = e_hi;
@@ -606,13 +595,10 @@ double SlicedModalPropagator::propagateLinear(State6& y, double& phase, double f
         frac = std::clamp(frac + f * hi, m.start(j), m.end(j));
         remaining -= hi;
         ++events_;
-        const std::optional<MeshRegime> found = regimeAt(j, z, e_theta, w);
-        if (!found) return handBack();
-        regime = *found;
+        if (!takeRegime()) return handBack();
         continue;
       }
       // At the step's very end (to the bisection's resolution): the step stands as it was.
-      advance(s, piece, w, h, e_end * std::conj(e_theta), z_end);
     }
     z = z_end;
     e_theta = e_end;
@@ -631,15 +617,32 @@ double SlicedModalPropagator::propagateLinear(State6& y, double& phase, double f
       j = f > 0.0 ? (j + 1 == n ? 0 : j + 1) : (j == 0 ? n - 1 : j - 1);
     }
     if ((leaves || crossing) && !inRegime(regime, j, z, e_theta, w)) {
-      const std::optional<MeshRegime> found = regimeAt(j, z, e_theta, w);
-      if (!found) return handBack();
-      regime = *found;
+      if (!takeRegime()) return handBack();
       ++events_;
     }
   }
-  y = z;
-  phase = whole + frac;
-  return duration;
+  return handBack();  // remaining is 0: the whole duration
+}
+
+double SlicedModalPropagator::locateChange(const Slice& s, const Piece& piece, MeshRegime r, int j, Complex e_theta,
+                                           double w, double h, Complex* e_hi) const {
+  // Bisection on the step's length, the contacts tested as at the step's ends (kEventHalvings = 40:
+  // to 1e-12 of the step, itself at most an eighth of the fastest mode's period where the bound
+  // cannot clear it), from the state in regime r at 0 to the state out of it at h.
+  double lo = 0.0, hi = h;
+  State6 z;
+  for (int it = 0; it < kEventHalvings; ++it) {
+    const double mid = 0.5 * (lo + hi);
+    const Complex e_mu = std::polar(1.0, w * mid);
+    advance(s, piece, w, mid, e_mu, z);
+    if (inRegime(r, j, z, e_theta * e_mu, w)) {
+      lo = mid;
+    } else {
+      hi = mid;
+      *e_hi = e_theta * e_mu;
+    }
+  }
+  return hi;
 }
 
 Matrix6 SlicedModalPropagator::monodromy(double f) const {

@@ -85,7 +85,7 @@ class DynamicsEstimator {
   /// Slices per mesh period of the measured-motion propagation (before its first use; default 256).
   void setMotionSlices(int slices);
   /// The speed-independent propagator (null until the motion is followed or a rebuild is avoided).
-  const SlicedModalPropagator* slicedPropagator() const { return sliced_.get(); }
+  const SlicedModalPropagator* slicedPropagator() const { return full_.exact.get(); }
   /// A stiffness change by more than 1 % takes effect (see the class comment); smaller ones are
   /// ignored. With `at` (absolute time >= time(), no output sample before it: advanceTo(at) first)
   /// the state is first propagated to `at` with the stiffness before, so the change takes effect at
@@ -109,7 +109,7 @@ class DynamicsEstimator {
   double outputInterval() const { return interval_; }
   long rebuilds() const { return rebuilds_; }
   long fallbackIntervals() const { return fallback_intervals_; }
-  bool exact() const { return following_ ? sliced_ != nullptr : propagator_ != nullptr; }  ///< exact propagation available
+  bool exact() const { return following_ ? full_.exact != nullptr : propagator_ != nullptr; }  ///< exact propagation available
   const RigConfig& rig() const { return *rig_; }
   const AntiBacklashMesh& mesh() const { return *mesh_; }
   const GearRotorModel& model() const { return *model_; }  ///< nominal phase; time relative to the last reset
@@ -161,17 +161,25 @@ class DynamicsEstimator {
   long k_ = 0;
   State6 y_ = State6::Zero();
   bool started_ = false;
-  // Measured motion (followMotion): the sliced model, its exact propagator, the model over it for
-  // the dopri5 fallback and the samples (its excitation immutable, the motion and torque its inputs);
-  // the state's own time, phase and mesh frequency.
+  // Measured motion (followMotion): over one sliced mesh, its exact propagator (none with bearing
+  // clearance) and the model over it for the dopri5 stretches and the samples (its excitation
+  // immutable, the motion and torque its inputs).
+  struct SlicedDynamics {
+    std::shared_ptr<const SlicedMesh> slices;
+    std::unique_ptr<GearRotorModel> model;
+    std::unique_ptr<SlicedModalPropagator> exact;
+    void build(std::shared_ptr<const SlicedMesh> mesh_slices, const GearRotorParameters& p, const DynamicsConfig& d);
+    void setParameters(const GearRotorParameters& p);  ///< in place: on the per-input path (allocation_tests)
+  };
+  /// The one the fidelity runs along the measured motion: full_, or mean_ for linear_modal.
+  const SlicedDynamics& moving() const { return fidelity_ == Fidelity::kLinearModal ? mean_ : full_; }
+  /// Refuses (InvalidInput, the caller resets) an advance to t_rel that would cross more than
+  /// kMaxSlicesPerAdvance slices at the present mesh frequency.
+  void requireSliceBound(double t_rel) const;
   int motion_slices_ = 256;
-  std::shared_ptr<const SlicedMesh> slices_;
-  std::unique_ptr<GearRotorModel> moving_model_;
-  std::unique_ptr<SlicedModalPropagator> sliced_;
-  // linear_modal along the measured motion: the same, with the period's mean stiffness.
-  std::shared_ptr<const SlicedMesh> mean_slices_;
-  std::unique_ptr<GearRotorModel> mean_model_;
-  std::unique_ptr<SlicedModalPropagator> mean_sliced_;
+  SlicedDynamics full_;  ///< the fine slices (full fidelity, quasi_static's slice lookup)
+  SlicedDynamics mean_;  ///< linear_modal: one slice holding the period's mean stiffness
+  // The state's own time, phase and mesh frequency.
   bool following_ = false;
   bool periodic_stale_ = false;  ///< parameters changed while following: rebuild the periodic ones at reset
   double t_state_ = 0.0, phase_ = 0.0, mesh_frequency_ = 0.0;

@@ -148,6 +148,12 @@ class SlicedModalPropagator {
                Piece& out) const;
   /// y over h from the prepared piece, given e^{i w h}.
   void advance(const Slice& s, const Piece& piece, double w, double h, Complex e_mu, State6& y) const;
+  /// Where, within a step of length h that starts in regime r (slice j, TE phasor e_theta) and
+  /// ends out of it, the state leaves r on the prepared piece's exact solution: the first length
+  /// found out of r (h itself where the change is at the end to the bisection's resolution), with
+  /// the TE phasor there in *e_hi (left as it was when that is h).
+  double locateChange(const Slice& s, const Piece& piece, MeshRegime r, int j, Complex e_theta, double w, double h,
+                      Complex* e_hi) const;
   /// The contacts at y are those of regime r, with no damper clipped, at the TE forcing's phase
   /// theta, given e^{i theta}.
   bool inRegime(MeshRegime r, int j, const State6& y, Complex e_theta, double w) const;
