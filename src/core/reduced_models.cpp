@@ -154,6 +154,20 @@ State6 integrateReduced(const GearRotorModel& model, Fidelity fidelity, double t
   throw InvalidInput("integrateReduced: use integrate() for the full model");
 }
 
+namespace {
+// The options auto runs a method with, in its pilot and in the run: dopri5 at the chosen rtol (the
+// absolute tolerance 1e-6 of it, in metres), every method with steps of at most 0.1 ms.
+IntegratorOptions autoOptions(IntegratorMethod method, double relative_tolerance) {
+  IntegratorOptions o;
+  o.max_step = 1e-4;
+  if (method == IntegratorMethod::kDopri5) {
+    o.relative_tolerance = relative_tolerance;
+    o.absolute_tolerance = relative_tolerance * 1e-6;
+  }
+  return o;
+}
+}  // namespace
+
 AutoChoice chooseAutomatically(const GearRotorModel& model, double t0, const State6& y0, double interval,
                                double pilot_duration, double error_bound, double run_duration) {
   requirePositive("error_bound", error_bound);
@@ -184,10 +198,7 @@ AutoChoice chooseAutomatically(const GearRotorModel& model, double t0, const Sta
   // dopri5 at rtol = bound / 100 over the pilot: the last candidate, the count of steps that
   // predicts its cost over the run, and the reference where the exponential method is not one.
   choice.relative_tolerance = std::max(error_bound / 100.0, 1e-11);
-  IntegratorOptions dopri;
-  dopri.max_step = 1e-4;
-  dopri.relative_tolerance = choice.relative_tolerance;
-  dopri.absolute_tolerance = choice.relative_tolerance * 1e-6;
+  const IntegratorOptions dopri = autoOptions(IntegratorMethod::kDopri5, choice.relative_tolerance);
   IntegrationStats dopri_stats;
   std::vector<double> reference = deltas([&](const Observer& o) {
     integrate(model, IntegratorMethod::kDopri5, dopri, t0, y0, t_end, interval, o, &dopri_stats);
@@ -266,14 +277,9 @@ AutoChoice chooseAutomatically(const GearRotorModel& model, double t0, const Sta
 State6 integrateChoice(const GearRotorModel& model, const AutoChoice& choice, double t0, const State6& y0, double t_end,
                        double interval, const Observer& observe, IntegrationStats* stats) {
   if (choice.fidelity != Fidelity::kFull) return integrateReduced(model, choice.fidelity, t0, y0, t_end, interval, observe);
-  IntegratorOptions o;
-  o.max_step = 1e-4;
+  const IntegratorOptions o = autoOptions(choice.method, choice.relative_tolerance);
   if (choice.method == IntegratorMethod::kExponential && choice.exponential) {
     return choice.exponential->run(y0, t_end, observe, o, stats);  // the pilot's propagators, built once
-  }
-  if (choice.method == IntegratorMethod::kDopri5) {
-    o.relative_tolerance = choice.relative_tolerance;
-    o.absolute_tolerance = choice.relative_tolerance * 1e-6;
   }
   return integrate(model, choice.method, o, t0, y0, t_end, interval, observe, stats);
 }
