@@ -1,5 +1,5 @@
 """Results cached by what determines them: the bag's SHA-256, the gearbox and parameter files'
-contents, the replay program's bytes, the plot option and this package's VERSION. A re-run
+contents, the replay program's bytes, the plot and bag-output options and this package's VERSION. A re-run
 processes nothing; a campaign grown by one bag processes one. An entry whose bag report has gone
 is not a hit (the row points at it)."""
 
@@ -21,12 +21,13 @@ def file_digest(path):
 
 
 class ResultCache:
-    def __init__(self, directory, replay, config, params, plots):
+    def __init__(self, directory, replay, config, params, plots, bag_outputs="report"):
         self.directory = directory
         os.makedirs(directory, exist_ok=True)
         # The context every key shares: what else decides a row besides the bag.
         self.context = json.dumps({"version": VERSION, "replay": file_digest(replay), "config": file_digest(config),
-                                   "params": file_digest(params), "plots": bool(plots)}, sort_keys=True)
+                                   "params": file_digest(params), "plots": bool(plots),
+                                   "bag_outputs": bag_outputs}, sort_keys=True)
 
     def key(self, sha256):
         return hashlib.sha256((self.context + sha256).encode()).hexdigest()

@@ -11,15 +11,16 @@ import yaml
 
 from . import detector, inputs, report, table
 from .cache import ResultCache
-from .replay_task import run_replay
+from .replay_task import BAG_OUTPUTS, run_replay
 
 
 class CampaignError(Exception):
     """A campaign that cannot start (options, files, a cluster that cannot read the bags)."""
 
 
-def gearbox_facts(config):
-    """The pinion's teeth (for speeds from mesh frequencies); refuses a gearbox without calibration."""
+def check_gearbox(config):
+    """Refuses a gearbox file that cannot be read or has no calibration: block (the replay would
+    refuse every bag's --calibrate), before any bag is touched."""
     try:
         with open(config) as f:
             doc = yaml.safe_load(f)
@@ -28,10 +29,6 @@ def gearbox_facts(config):
     if not isinstance(doc, dict) or not isinstance(doc.get("calibration"), dict):
         raise CampaignError(f"--config '{config}': no calibration: block; a campaign replays every bag with "
                             "calibration (docs/calibration.md)")
-    try:
-        return int(doc["gears"]["teeth"][0])
-    except (KeyError, TypeError, ValueError, IndexError) as e:
-        raise CampaignError(f"--config '{config}': gears.teeth: {e}") from e
 
 
 def _stem(path):
@@ -46,12 +43,17 @@ def _progress(total):
                 bar_format="{l_bar}{bar}| {n_fmt}/{total_fmt} bags [{elapsed}<{remaining}{postfix}]")
 
 
-def run(bags, config, params, out_dir, engine, replay, plots=True, cache_dir=None, detector_options=None, log=print):
+def run(bags, config, params, out_dir, engine, replay, plots=True, cache_dir=None, detector_options=None, log=print,
+        bag_outputs="report"):
     """Runs the campaign on `engine` (engine.SerialEngine or engine.DaskEngine); returns a dict with
-    the rows (campaign order) and what was processed."""
+    the rows (campaign order) and what was processed. bag_outputs: "report" (each bag's report keeps
+    the topics it needs, replay_task.REPORT_TOPICS) or "all" (every output topic, as
+    `drivetrain_replay --report` alone)."""
+    if bag_outputs not in BAG_OUTPUTS:
+        raise CampaignError(f"--bag-outputs: '{bag_outputs}' ({' or '.join(BAG_OUTPUTS)})")
     wall_start = time.monotonic()
     config, params, replay = (os.path.abspath(p) if p else None for p in (config, params, replay))
-    pinion_teeth = gearbox_facts(config)
+    check_gearbox(config)
     out_dir = os.path.abspath(out_dir)
     paths = inputs.expand_bags(bags, exclude=out_dir)
     bag_root = os.path.join(out_dir, "bags")
@@ -67,7 +69,7 @@ def run(bags, config, params, out_dir, engine, replay, plots=True, cache_dir=Non
         raise CampaignError("the workers cannot use the campaign's files (bags, gearbox, drivetrain_replay and "
                             f"{bag_root} must be at the same paths on every worker):\n" + "\n".join(lines))
 
-    cache = ResultCache(cache_dir or os.path.join(out_dir, "cache"), replay, config, params, plots)
+    cache = ResultCache(cache_dir or os.path.join(out_dir, "cache"), replay, config, params, plots, bag_outputs)
     rows, jobs, first_path, duplicates = [], [], {}, {}
     # A bag whose path, size and modification time are those of an earlier run keeps its SHA-256:
     # a re-run of a large campaign reads no bag at all (a changed or touched bag is hashed again).
@@ -99,7 +101,8 @@ def run(bags, config, params, out_dir, engine, replay, plots=True, cache_dir=Non
             rows.append(cached)
             continue
         jobs.append({"bag": os.path.abspath(path), "given": path, "sha256": sha, "replay": replay, "config": config,
-                     "params": params, "plots": plots, "pinion_teeth": pinion_teeth, "campaign_dir": out_dir,
+                     "params": params, "plots": plots, "bag_outputs": bag_outputs,
+                     "campaign_dir": out_dir,
                      "out_dir": os.path.join(bag_root, f"{_stem(path)}-{sha[:8]}")})
 
     failed = 0

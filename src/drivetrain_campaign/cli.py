@@ -50,6 +50,11 @@ def parser():
     p.add_argument("--tls-key", help="--scheduler over TLS: this client's private key (PEM)")
     p.add_argument("--cache", metavar="DIR", help="result cache (default DIR/cache)")
     p.add_argument("--no-plots", action="store_true", help="bag reports without PNG plots (faster; campaign plots stay)")
+    p.add_argument("--bag-outputs", choices=("report", "all"), default="report",
+                   help="what each bag's report keeps: report (summary, report.md and its plots, calibrated gearbox, "
+                        "the calibration, resonance, spectrum and per-mesh-period CSV files; the default) or all "
+                        "(every output topic in outputs.bag and csv/, as drivetrain_replay --report alone: about "
+                        "2.3x the bag)")
     p.add_argument("--replay", help="the drivetrain_replay program (found beside this tool or in the devel space)")
     p.add_argument("--alarm-fraction", type=float, default=0.05, help="relative change that raises the alarm (0.05)")
     p.add_argument("--alarm-threshold", type=float, default=5.0, help="CUSUM decision interval h (5)")
@@ -90,7 +95,7 @@ def main(argv=None, script_dir=None):
         return EXIT_REFUSED
     try:
         campaign.run(args.bags, args.config, args.params, args.out, engine, replay, plots=not args.no_plots,
-                     cache_dir=args.cache,
+                     cache_dir=args.cache, bag_outputs=args.bag_outputs,
                      detector_options={"fraction": args.alarm_fraction, "threshold": args.alarm_threshold,
                                        "reference_bags": args.reference_bags},
                      log=lambda line: print(line, file=sys.stderr))

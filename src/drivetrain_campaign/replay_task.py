@@ -6,10 +6,8 @@ leaves no half-written report where the retried task will put its own; its repla
 with it (PR_SET_PDEATHSIG), so it cannot write on after the retry started.
 """
 
-import csv
 import ctypes
 import json
-import math
 import os
 import shutil
 import signal
@@ -22,6 +20,16 @@ MODES = 3  # natural frequencies of the 3-DOF model (seed 000 §3)
 
 _PR_SET_PDEATHSIG = 1
 
+# What each bag's report keeps (--bag-outputs report, the default): the small topics (a row per
+# calibration window, resonance change, spectrum or block of mesh periods), which the row and a
+# reader of the report need, and with plots the topics plot_replay.py reads from outputs.bag. Not
+# the per-reading measured_te (5 kHz) nor, without plots, the 1 kHz stiffness and TE: those are
+# 2.3x the input bag, and formatting them took the replay from 1.0 to 1.15 cores, which two
+# workers on two cores could not give (docs/campaign.md, Figures). --bag-outputs all keeps every topic.
+REPORT_TOPICS = ("te_spectrum", "resonance", "calibration", "mesh_period_stats")
+PLOT_TOPICS = ("transmission_error", "stiffness", "resonance", "mesh_period_stats")
+BAG_OUTPUTS = ("report", "all")
+
 
 def _die_with_parent():
     """In the child before exec: SIGKILL when the worker that started it dies (Linux)."""
@@ -31,12 +39,22 @@ def _die_with_parent():
         pass  # not Linux: a lost worker's replay then runs to its end, into its own scratch directory
 
 
+def report_topics(plots, bag_outputs):
+    """drivetrain_replay's --topics for a bag's report: "all", or the report's topics (and the plots')."""
+    if bag_outputs == "all":
+        return "all"
+    names = set(REPORT_TOPICS) | (set(PLOT_TOPICS) if plots else set())
+    return ",".join(sorted(names))
+
+
 def replay_command(job, out_dir):
+    plots = job.get("plots", True)
     cmd = [job["replay"], "--bag", job["bag"], "--config", job["config"], "--report", out_dir,
-           "--calibrate", os.path.join(out_dir, "calibrated_gearbox.yaml")]
+           "--calibrate", os.path.join(out_dir, "calibrated_gearbox.yaml"),
+           "--topics", report_topics(plots, job.get("bag_outputs", "report"))]
     if job.get("params"):
         cmd += ["--params", job["params"]]
-    if not job.get("plots", True):
+    if not plots:
         cmd.append("--no-plots")
     return cmd
 
@@ -85,7 +103,7 @@ def bag_row(job, returncode, stderr, summary, out_dir):
     for kind in ("accepted", "rejected", "dropped"):
         row[kind] = sum(int(v) for k, v in counters.items() if k.startswith(kind + "_"))
     row["wrong_type"] = summary.get("wrong_type", 0)
-    row.update(period_statistics(os.path.join(out_dir, "csv", "mesh_period_stats.csv"), job["pinion_teeth"]))
+    row.update(period_statistics(summary))
     frequencies = summary.get("final_resonance_hz") or []
     for i in range(MODES):
         row[f"natural_frequency_{i + 1}"] = frequencies[i] if i < len(frequencies) else None
@@ -98,28 +116,15 @@ def bag_row(job, returncode, stderr, summary, out_dir):
     return row
 
 
-def period_statistics(path, pinion_teeth):
+PERIOD_KEYS = ("speed_min", "speed_max", "torque_min", "torque_max", "te_rms", "te_peak_to_peak", "mesh_force_mean")
+
+
+def period_statistics(summary):
     """Speed and torque ranges and TE figures over the bag's per-mesh-period blocks
-    (msg/MeshPeriodStats.msg): pinion speed = 2 pi f_mesh / z_p [rad/s]; torque = the block's mean
-    held pinion torque [N*m]; te_rms = RMS about each block's mean, combined over blocks by time
-    (sqrt of the time-weighted mean square) [m]; te_peak_to_peak = the largest block's [m];
-    mesh_force_mean = time-weighted [N]. Empty when the bag gave no block."""
-    keys = ("speed_min", "speed_max", "torque_min", "torque_max", "te_rms", "te_peak_to_peak", "mesh_force_mean")
-    out = dict.fromkeys(keys)
-    if not os.path.exists(path):
-        return out
-    speeds, torques, weight, square, force, p2p = [], [], 0.0, 0.0, 0.0, 0.0
-    with open(path, newline="") as f:
-        for r in csv.DictReader(f):
-            duration = float(r["duration"])
-            speeds.append(2.0 * math.pi * float(r["mesh_frequency"]) / pinion_teeth)
-            torques.append(float(r["torque"]))
-            weight += duration
-            square += duration * float(r["te_rms"]) ** 2
-            force += duration * float(r["mesh_force_mean"])
-            p2p = max(p2p, float(r["te_peak_to_peak"]))
-    if not speeds or weight <= 0.0:
-        return out
-    out.update(speed_min=min(speeds), speed_max=max(speeds), torque_min=min(torques), torque_max=max(torques),
-               te_rms=math.sqrt(square / weight), te_peak_to_peak=p2p, mesh_force_mean=force / weight)
-    return out
+    (msg/MeshPeriodStats.msg), as drivetrain_replay sums them into summary.json's "mesh_periods"
+    (src/tools/mesh_period_totals.hpp): pinion speed = 2 pi f_mesh / z_p [rad/s]; torque = the
+    block's mean held pinion torque [N*m]; te_rms = RMS about each block's mean, combined over
+    blocks by time [m]; te_peak_to_peak = the largest block's [m]; mesh_force_mean = time-weighted
+    [N]. Empty when the bag gave no block."""
+    totals = summary.get("mesh_periods") or {}
+    return {k: totals.get(k) for k in PERIOD_KEYS}

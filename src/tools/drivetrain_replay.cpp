@@ -107,6 +107,7 @@ int run(int argc, char** argv) {
               joint_states_topic = "joint_states";
   std::string plot_script = DRIVETRAIN_PLOT_REPLAY_SCRIPT;
   std::string compression = "lz4";
+  std::string topics_option = "all";
   bool plots = true;
   app.add_option("--bag", bag_path, "Recorded bag with the rig's torque and preload")->required();
   app.add_option("--config", config, "Gearbox YAML, as the node's ~gearbox_config")->required();
@@ -115,6 +116,11 @@ int run(int argc, char** argv) {
   app.add_option("--compression", compression, "Chunk compression of --out: lz4 (as rosbag record --lz4) or none")
       ->check(CLI::IsMember({"lz4", "none"}));
   app.add_option("--csv", csv_dir, "Directory for one CSV file per output topic");
+  app.add_option("--topics", topics_option,
+                 "Output topics written to --out and --csv (and the report's): all, or a comma-separated list of "
+                 "stiffness, transmission_error, te_spectrum, resonance, measured_te, calibration, mesh_period_stats, "
+                 "tf, rig_markers")
+      ->capture_default_str();
   app.add_option("--calibrate", calibrate_out,
                  "Gearbox YAML to write with the calibrated values (needs a calibration: block in --config and a window "
                  "that updated the calibration)");
@@ -131,6 +137,7 @@ int run(int argc, char** argv) {
     return app.exit(e) == 0 ? kExitOk : kExitRefused;
   }
 
+  const OutputTopics topics = OutputTopics::parse("--topics", topics_option);  // refused before anything is read
   const RigConfig rig = loadRigFile(config);
   const YamlParameters get = readParameterFile(params);
   RigPipeline pipeline(rig, readPipelineOptions(get, rig), readRuntimeSettings(get, rig));
@@ -152,7 +159,7 @@ int run(int argc, char** argv) {
   std::string joint_refusal;
   std::vector<PreloadSetting> preload_settings;  // each preload message's, converted in place
   ReplayWriter writer(pipeline, readOutputSettings(get), out_bag,
-                      compression == "none" ? BagCompression::None : BagCompression::Lz4, csv_dir);
+                      compression == "none" ? BagCompression::None : BagCompression::Lz4, csv_dir, topics);
   std::uint64_t messages = 0, wrong_type = 0;
   std::optional<ros::Time> first, last;
   const auto start = std::chrono::steady_clock::now();  // only for the printed speed
@@ -202,11 +209,14 @@ int run(int argc, char** argv) {
   summary["messages"] = messages;
   summary["wrong_type"] = wrong_type;
   summary["span_s"] = span;
+  summary["topics"] = topics.describe();  // what --out and the CSV files hold
   // [s since the epoch] the first and last stamp read (null for a bag without one): a campaign sorts by start.
   summary["start"] = first ? nlohmann::json(first->toSec()) : nlohmann::json(nullptr);
   summary["end"] = last ? nlohmann::json(last->toSec()) : nlohmann::json(nullptr);
   summary["counters"] = countersJson(pipeline.counters());
   summary["calibration"] = calibrationJson(pipeline);
+  // The per-mesh-period statistics over the bag (a campaign's row): speed, torque, TE RMS, force.
+  summary["mesh_periods"] = writer.meshPeriodTotals().json();
   // --calibrate: written or refused (no window updated the calibration); the other outputs stand either way.
   std::string calibrate_error;
   if (!calibrate_out.empty()) {

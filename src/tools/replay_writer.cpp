@@ -1,12 +1,16 @@
 #include "replay_writer.hpp"  // NOLINT(build/include_subdir)
 
+#include <algorithm>
 #include <cerrno>
+#include <iterator>
 #include <charconv>
 #include <cstring>
 #include <iostream>
 #include <stdexcept>
 
 #include <tf2_msgs/TFMessage.h>
+
+#include "drivetrain_stiffness/core/errors.hpp"
 
 namespace drivetrain_stiffness {
 
@@ -116,9 +120,39 @@ void CsvFile::close() {
   if (error) std::rethrow_exception(error);
 }
 
+OutputTopics OutputTopics::parse(const std::string& option, const std::string& list) {
+  if (list == "all") return all();
+  unsigned bits = 0;
+  std::size_t begin = 0;
+  while (true) {
+    const std::size_t end = std::min(list.find(',', begin), list.size());
+    const std::string name = list.substr(begin, end - begin);
+    const auto* found = std::find_if(std::begin(kNames), std::end(kNames), [&](const char* n) { return name == n; });
+    if (found == std::end(kNames)) {
+      std::string known;
+      for (const char* n : kNames) known += std::string(known.empty() ? "" : ", ") + n;
+      throw InvalidInput(option + " = '" + list + "': unknown topic '" + name + "' (all, or a comma-separated list of: " +
+                         known + ")");
+    }
+    bits |= 1u << static_cast<unsigned>(found - std::begin(kNames));
+    if (end == list.size()) break;
+    begin = end + 1;
+  }
+  return OutputTopics(bits);
+}
+
+std::string OutputTopics::describe() const {
+  if (bits_ == all().bits_) return "all";
+  std::string out;
+  for (unsigned t = 0; t < kCount; ++t) {
+    if (has(static_cast<Topic>(t))) out += std::string(out.empty() ? "" : ",") + kNames[t];
+  }
+  return out;
+}
+
 ReplayWriter::ReplayWriter(const RigPipeline& pipeline, const OutputSettings& settings, const std::string& out_bag,
-                           BagCompression compression, const std::string& csv_dir)
-    : MessageSink(pipeline, settings) {
+                           BagCompression compression, const std::string& csv_dir, OutputTopics topics)
+    : MessageSink(pipeline, settings), topics_(topics), mesh_period_totals_(pipeline.rig().gears.teeth[0]) {
   // BagWriter, not rosbag::Bag: rosbag's per-message syscalls cap the replay near 300x (bag_writer.hpp).
   if (!out_bag.empty()) bag_ = std::make_unique<BagWriter>(out_bag, compression);
   if (csv_dir.empty()) return;
@@ -130,25 +164,25 @@ ReplayWriter::ReplayWriter(const RigPipeline& pipeline, const OutputSettings& se
       bearings += "," + s.name + "." + f;
     }
   }
-  stiffness_csv_ = std::make_unique<CsvFile>(csv_dir + "/stiffness.csv",
+  if (topics_.has(OutputTopics::kStiffness)) stiffness_csv_ = std::make_unique<CsvFile>(csv_dir + "/stiffness.csv",
       "stamp,torque,mesh_force,mesh_phase,mesh_stiffness,mesh_stiffness_mean,mesh_stiffness_drive,mesh_stiffness_back,"
       "drive_flank_loaded,back_flank_loaded" + bearings +
       ",calibrated,mesh_stiffness_mean_calibrated,mesh_stiffness_mean_low,mesh_stiffness_mean_high,"
       "pinion_bearing_stiffness_calibrated,pinion_bearing_stiffness_low,pinion_bearing_stiffness_high,"
       "gear_bearing_stiffness_calibrated,gear_bearing_stiffness_low,gear_bearing_stiffness_high");
-  te_csv_ = std::make_unique<CsvFile>(csv_dir + "/transmission_error.csv",
+  if (topics_.has(OutputTopics::kTransmissionError)) te_csv_ = std::make_unique<CsvFile>(csv_dir + "/transmission_error.csv",
       "stamp,dynamic_te,static_te,x_p,x_g,x,mesh_force,mesh_phase,torque,drive_flank_loaded,back_flank_loaded");
-  spectrum_csv_ = std::make_unique<CsvFile>(csv_dir + "/te_spectrum.csv",
+  if (topics_.has(OutputTopics::kTeSpectrum)) spectrum_csv_ = std::make_unique<CsvFile>(csv_dir + "/te_spectrum.csv",
       "stamp,peak_frequency_hz,peak_amplitude,f2_hz,a2,f3_hz,a3,window_s,resolution_hz");
-  resonance_csv_ = std::make_unique<CsvFile>(csv_dir + "/resonance.csv",
+  if (topics_.has(OutputTopics::kResonance)) resonance_csv_ = std::make_unique<CsvFile>(csv_dir + "/resonance.csv",
       "stamp,f1_hz,f2_hz,f3_hz,zeta1,zeta2,zeta3,dominant1,dominant2,dominant3,floquet_valid,floquet_margin,"
       "calibrated,f1_hz_calibrated,f1_hz_low,f1_hz_high,f2_hz_calibrated,f2_hz_low,f2_hz_high,f3_hz_calibrated,f3_hz_low,"
       "f3_hz_high");
   // The calibration's files, named after the message fields in message order (the ctest
   // replay_writes_the_calibration checks the columns against msg/); header only without a calibration.
-  measured_te_csv_ = std::make_unique<CsvFile>(csv_dir + "/measured_te.csv", "stamp,te,predicted,residual,torque,mesh_phase");
+  if (topics_.has(OutputTopics::kMeasuredTe)) measured_te_csv_ = std::make_unique<CsvFile>(csv_dir + "/measured_te.csv", "stamp,te,predicted,residual,torque,mesh_phase");
   // Per block of whole mesh periods, named after the MeshPeriodStats fields in message order.
-  mesh_period_csv_ = std::make_unique<CsvFile>(csv_dir + "/mesh_period_stats.csv",
+  if (topics_.has(OutputTopics::kMeshPeriodStats)) mesh_period_csv_ = std::make_unique<CsvFile>(csv_dir + "/mesh_period_stats.csv",
       "stamp,te_mean,te_rms,te_peak_to_peak,mesh_force_mean,mesh_force_rms,mesh_force_peak_to_peak,mesh_frequency,torque,"
       "periods,samples,duration");
   std::string parameters, identified;
@@ -161,7 +195,7 @@ ReplayWriter::ReplayWriter(const RigPipeline& pipeline, const OutputSettings& se
                         "natural_frequency_2", "natural_frequency_3"}) {
     bands += std::string(",") + f + "," + f + "_low," + f + "_high";
   }
-  calibration_csv_ = std::make_unique<CsvFile>(csv_dir + "/calibration.csv",
+  if (topics_.has(OutputTopics::kCalibration)) calibration_csv_ = std::make_unique<CsvFile>(csv_dir + "/calibration.csv",
       "stamp" + parameters + identified +
       ",nis,excited,baseline,outcome,windows,baseline_windows,updates,gated,not_excited,window_torque,window_speed,"
       "series_compliance,series_compliance_std" + bands +
@@ -178,7 +212,7 @@ void ReplayWriter::close() {
 }
 
 void ReplayWriter::emitStiffness(const drivetrain_stiffness::Stiffness& m) {
-  if (bag_) bag_->write("/stiffness", m.header.stamp, m);
+  if (auto* bag = bagFor(OutputTopics::kStiffness)) bag->write("/stiffness", m.header.stamp, m);
   if (!stiffness_csv_) return;
   CsvFile& c = *stiffness_csv_;
   c.stamp(m.header.stamp).number(m.torque).number(m.mesh_force).number(m.mesh_phase).number(m.mesh_stiffness);
@@ -195,7 +229,7 @@ void ReplayWriter::emitStiffness(const drivetrain_stiffness::Stiffness& m) {
 }
 
 void ReplayWriter::emitTransmissionError(const drivetrain_stiffness::TransmissionError& m) {
-  if (bag_) bag_->write("/transmission_error", m.header.stamp, m);
+  if (auto* bag = bagFor(OutputTopics::kTransmissionError)) bag->write("/transmission_error", m.header.stamp, m);
   if (!te_csv_) return;
   te_csv_->stamp(m.header.stamp).number(m.dynamic_te).number(m.static_te).number(m.x_p).number(m.x_g).number(m.x);
   te_csv_->number(m.mesh_force).number(m.mesh_phase).number(m.torque).number(m.drive_flank_loaded).number(m.back_flank_loaded);
@@ -203,7 +237,7 @@ void ReplayWriter::emitTransmissionError(const drivetrain_stiffness::Transmissio
 }
 
 void ReplayWriter::emitSpectrum(const drivetrain_stiffness::SpectralPeaks& m) {
-  if (bag_) bag_->write("/te_spectrum", m.header.stamp, m);
+  if (auto* bag = bagFor(OutputTopics::kTeSpectrum)) bag->write("/te_spectrum", m.header.stamp, m);
   if (!spectrum_csv_) return;
   spectrum_csv_->stamp(m.header.stamp);
   for (std::size_t i = 0; i < 3; ++i) {
@@ -214,7 +248,7 @@ void ReplayWriter::emitSpectrum(const drivetrain_stiffness::SpectralPeaks& m) {
 }
 
 void ReplayWriter::emitResonance(const drivetrain_stiffness::Resonance& m) {
-  if (bag_) bag_->write("/resonance", m.header.stamp, m);
+  if (auto* bag = bagFor(OutputTopics::kResonance)) bag->write("/resonance", m.header.stamp, m);
   if (!resonance_csv_) return;
   resonance_csv_->stamp(m.header.stamp);
   for (double f : m.frequencies_hz) resonance_csv_->number(f);
@@ -227,14 +261,14 @@ void ReplayWriter::emitResonance(const drivetrain_stiffness::Resonance& m) {
 }
 
 void ReplayWriter::emitMeasuredTe(const drivetrain_stiffness::MeasuredTe& m) {
-  if (bag_) bag_->write("/measured_te", m.header.stamp, m);
+  if (auto* bag = bagFor(OutputTopics::kMeasuredTe)) bag->write("/measured_te", m.header.stamp, m);
   if (!measured_te_csv_) return;
   measured_te_csv_->stamp(m.header.stamp).number(m.te).number(m.predicted).number(m.residual).number(m.torque);
   measured_te_csv_->number(m.mesh_phase).endRow();
 }
 
 void ReplayWriter::emitCalibration(const drivetrain_stiffness::Calibration& m) {
-  if (bag_) bag_->write("/calibration", m.header.stamp, m);
+  if (auto* bag = bagFor(OutputTopics::kCalibration)) bag->write("/calibration", m.header.stamp, m);
   if (!calibration_csv_) return;
   CsvFile& c = *calibration_csv_;
   c.stamp(m.header.stamp);
@@ -261,7 +295,8 @@ void ReplayWriter::emitCalibration(const drivetrain_stiffness::Calibration& m) {
 }
 
 void ReplayWriter::emitMeshPeriodStats(const drivetrain_stiffness::MeshPeriodStats& m) {
-  if (bag_) bag_->write("/mesh_period_stats", m.header.stamp, m);
+  mesh_period_totals_.add(m);
+  if (auto* bag = bagFor(OutputTopics::kMeshPeriodStats)) bag->write("/mesh_period_stats", m.header.stamp, m);
   if (!mesh_period_csv_) return;
   CsvFile& c = *mesh_period_csv_;
   c.stamp(m.header.stamp).number(m.te_mean).number(m.te_rms).number(m.te_peak_to_peak);
@@ -271,14 +306,17 @@ void ReplayWriter::emitMeshPeriodStats(const drivetrain_stiffness::MeshPeriodSta
 }
 
 void ReplayWriter::emitTransforms(const std::vector<geometry_msgs::TransformStamped>& t) {
-  if (!bag_ || t.empty()) return;
+  BagWriter* bag = bagFor(OutputTopics::kTf);
+  if (!bag || t.empty()) return;
   tf2_msgs::TFMessage msg;
   msg.transforms = t;
-  bag_->write("/tf", t.front().header.stamp, msg);
+  bag->write("/tf", t.front().header.stamp, msg);
 }
 
 void ReplayWriter::emitMarkers(const visualization_msgs::MarkerArray& m) {
-  if (bag_ && !m.markers.empty()) bag_->write("/rig_markers", m.markers.front().header.stamp, m);
+  if (BagWriter* bag = bagFor(OutputTopics::kRigMarkers); bag && !m.markers.empty()) {
+    bag->write("/rig_markers", m.markers.front().header.stamp, m);
+  }
 }
 
 }  // namespace drivetrain_stiffness

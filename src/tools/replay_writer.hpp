@@ -12,9 +12,35 @@
 
 
 #include "bag_writer.hpp"  // NOLINT(build/include_subdir)
+#include "mesh_period_totals.hpp"  // NOLINT(build/include_subdir)
 #include "drivetrain_stiffness/ros/message_sink.hpp"
 
 namespace drivetrain_stiffness {
+
+/// Which output topics drivetrain_replay writes (--topics): each selected topic goes to --out and,
+/// where it has one, to its CSV file. The messages are built either way (the pipeline and the sink
+/// run identically); only their writing is skipped. A campaign keeps a bag's report small with it
+/// (measured_te at the encoders' 5 kHz is the largest file: docs/campaign.md).
+class OutputTopics {
+ public:
+  /// In the order of kNames; a bit per topic.
+  enum Topic : unsigned { kStiffness, kTransmissionError, kTeSpectrum, kResonance, kMeasuredTe, kCalibration,
+                          kMeshPeriodStats, kTf, kRigMarkers, kCount };
+  /// The topic names as written to the bag (without the leading '/'), as --topics takes them.
+  static constexpr const char* kNames[kCount] = {"stiffness", "transmission_error", "te_spectrum", "resonance",
+                                                 "measured_te", "calibration", "mesh_period_stats", "tf",
+                                                 "rig_markers"};
+  static OutputTopics all() { return OutputTopics((1u << kCount) - 1u); }
+  /// "all", or names from kNames separated by commas; throws InvalidInput naming `option` and the
+  /// unknown or empty name.
+  static OutputTopics parse(const std::string& option, const std::string& list);
+  bool has(Topic t) const { return (bits_ >> t) & 1u; }
+  std::string describe() const;  ///< "all" or the names, comma-separated, in kNames order
+
+ private:
+  explicit OutputTopics(unsigned bits) : bits_(bits) {}
+  unsigned bits_;
+};
 
 /// One CSV file whose rows are formatted and written on a background thread (OrderedWorker), in
 /// row order: the analysis thread only records the cells. Numbers in shortest round-trip form.
@@ -53,10 +79,12 @@ class CsvFile {
 
 class ReplayWriter : public MessageSink {
  public:
-  /// out_bag and csv_dir may be empty (not written).
+  /// out_bag and csv_dir may be empty (not written); only `topics` go to either.
   ReplayWriter(const RigPipeline& pipeline, const OutputSettings& settings, const std::string& out_bag,
-               BagCompression compression, const std::string& csv_dir);
+               BagCompression compression, const std::string& csv_dir, OutputTopics topics = OutputTopics::all());
   void close();
+  /// Every mesh_period_stats block so far, summed (whether or not --topics writes the topic).
+  const MeshPeriodTotals& meshPeriodTotals() const { return mesh_period_totals_; }
 
  protected:
   void emitStiffness(const drivetrain_stiffness::Stiffness& m) override;
@@ -70,6 +98,11 @@ class ReplayWriter : public MessageSink {
   void emitMarkers(const visualization_msgs::MarkerArray& m) override;
 
  private:
+  /// The bag, if --out was given and the topic is selected.
+  BagWriter* bagFor(OutputTopics::Topic t) const { return topics_.has(t) ? bag_.get() : nullptr; }
+
+  OutputTopics topics_;
+  MeshPeriodTotals mesh_period_totals_;
   std::unique_ptr<BagWriter> bag_;
   std::unique_ptr<CsvFile> stiffness_csv_, te_csv_, spectrum_csv_, resonance_csv_, measured_te_csv_, calibration_csv_,
       mesh_period_csv_;

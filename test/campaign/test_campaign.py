@@ -137,6 +137,24 @@ class Campaign(unittest.TestCase):
         order = [os.path.basename(x["bag"]) for x in table if x["bag"].startswith(self.step)]
         self.assertEqual(order, [f"bag_00{i}.bag" for i in range(6)])
 
+    def test_bag_reports_keep_what_they_need_unless_all_is_asked(self):
+        # Default (--bag-outputs report): the summary, the calibrated gearbox and the small CSV files,
+        # none of the per-reading or per-sample ones; --bag-outputs all: every topic, the same row.
+        r = {os.path.basename(x["bag"]): x for x in rows(self.serial)}
+        report = os.path.join(self.serial, r["bag_000.bag"]["report"])
+        self.assertEqual(sorted(os.listdir(os.path.join(report, "csv"))),
+                         ["calibration.csv", "mesh_period_stats.csv", "resonance.csv", "te_spectrum.csv"])
+        self.assertTrue(os.path.exists(os.path.join(report, "calibrated_gearbox.yaml")))
+        out = os.path.join(self.tmp, "all_outputs")
+        bag = os.path.join(self.step, "bag_000.bag")
+        campaign(out, [bag], "--serial", "--bag-outputs", "all")
+        full = rows(out)[0]
+        self.assertIn("measured_te.csv", os.listdir(os.path.join(out, full["report"], "csv")))
+        self.assertIn("stiffness.csv", os.listdir(os.path.join(out, full["report"], "csv")))
+        for column, value in full.items():
+            if column not in ("alarm", "alarm_reason", "out_of_family", "family_reason", "duplicates"):
+                self.assertEqual(value, r["bag_000.bag"][column], column)  # a one-bag campaign has no reference
+
     def test_change_detector_raises_on_a_ten_percent_loss(self):
         r = {os.path.basename(x["bag"]): x for x in rows(self.serial)}
         with open(os.path.join(self.step, "truth.csv"), newline="") as f:
