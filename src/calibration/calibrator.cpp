@@ -74,6 +74,7 @@ Calibrator::Calibrator(std::shared_ptr<const RigConfig> shared_rig, std::shared_
     state_prior_std_[i] = estimate_.prior_std[i] / (mean[i] * mean[i]);
   }
   state_covariance_ = state_prior_std_.cwiseAbs2().asDiagonal();
+  model_error_.reset(state_covariance_);
   covariance_ = estimate_.prior_std.cwiseAbs2().asDiagonal();
   estimate_.value = mean;
   estimate_.std = estimate_.prior_std;
@@ -248,8 +249,8 @@ void Calibrator::update(const FeatureVector& z, const FeatureVector& z_std, doub
   // Random walk since the last update (a preload that relaxes, wear): relative to the prior spread.
   const double t = window_.t1;
   const double dt = has_update_t_ ? std::max(0.0, t - last_update_t_) : 0.0;
-  CalibrationMatrix prior = state_covariance_;
-  prior.diagonal() += (config_.drift * config_.drift * dt) * state_prior_std_.cwiseAbs2();
+  const CalibrationMatrix Q = ((config_.drift * config_.drift * dt) * state_prior_std_.cwiseAbs2()).asDiagonal();
+  const CalibrationMatrix prior = state_covariance_ + Q;
 
   auto jacobian = [&](const CalibrationVector& p, Eigen::Matrix<double, kFeatureSize, kCalibrationSize>& H) {
     H.setZero();
@@ -273,12 +274,17 @@ void Calibrator::update(const FeatureVector& z, const FeatureVector& z_std, doub
   // Measurement noise: the window's own, the relative model error and the floor (docs/calibration.md).
   // The model error repeats at an operating point: the n-th window there carries n times its
   // variance, so a long dwell adds no more than one window's worth of model information.
+  // N (the fit's, the baseline's and the floor's variance) and M (the model error) apart, for
+  // model_error_ (model_error_scale.hpp).
   Eigen::Matrix<double, kFeatureSize, kFeatureSize> R = Eigen::Matrix<double, kFeatureSize, kFeatureSize>::Zero();
   const FeatureVector h0 = predict(state_, torque);
   const double repeats = static_cast<double>(countAtOperatingPoint(torque));
+  FeatureVector noise, model_variance;
   for (int i = 0; i < kFeatureSize; ++i) {
     const double model = config_.model_error * std::abs(h0[i]);
-    R(i, i) = z_std[i] * z_std[i] + repeats * model * model + config_.te_noise_floor * config_.te_noise_floor;
+    noise[i] = z_std[i] * z_std[i] + config_.te_noise_floor * config_.te_noise_floor;
+    model_variance[i] = repeats * model * model;
+    R(i, i) = z_std[i] * z_std[i] + model_variance[i] + config_.te_noise_floor * config_.te_noise_floor;
   }
   Eigen::Matrix<double, kFeatureSize, kCalibrationSize> H;
   jacobian(state_, H);
@@ -294,6 +300,8 @@ void Calibrator::update(const FeatureVector& z, const FeatureVector& z_std, doub
     estimate_.predicted = h0;
     return;
   }
+  model_error_.predict(Q);
+  const FeatureVector variance = model_error_.innovationVariance(H, noise);  // before the update, at the prior's H
   // Iterated EKF (Gauss-Newton on the posterior mode): relinearise at the new estimate.
   CalibrationVector theta = state_;
   Eigen::Matrix<double, kCalibrationSize, kFeatureSize> K;
@@ -315,6 +323,7 @@ void Calibrator::update(const FeatureVector& z, const FeatureVector& z_std, doub
   const CalibrationMatrix IKH = CalibrationMatrix::Identity() - K * H;
   state_covariance_ = IKH * prior * IKH.transpose() + K * R * K.transpose();
   state_covariance_ = 0.5 * (state_covariance_ + state_covariance_.transpose()).eval();
+  model_error_.update(innovation, variance, noise, model_variance, K, H);
   state_ = theta;
   last_update_t_ = t;
   has_update_t_ = true;
@@ -412,16 +421,24 @@ CalibrationBands Calibrator::bands(double torque, const StiffnessEstimator& supp
 void Calibrator::outputs(double torque, const StiffnessEstimator& supports) {
   CalibrationEstimate& e = estimate_;
   // The parameters and their covariance from the state's (first order in c -> 1/c).
+  // The reported covariance: the filter's own while the windows show a model error within the
+  // configured allowance; widened to the estimate's real covariance under the model error they
+  // show where it exceeds it (model_error_scale.hpp). Never narrowed: a model error that repeats
+  // at an operating point is invisible in the innovations, and bands learned down from them were
+  // overconfident after a 10-min dwell at one load (docs/calibration.md, section 3).
   const CalibrationVector theta = toParameters(state_);
   const CalibrationMatrix J = parameterJacobian(state_);
-  covariance_ = J * state_covariance_ * J.transpose();
+  e.model_error_scale = model_error_.scale();
+  const bool wider = (e.model_error_scale.array() > 1.0).any();
+  const CalibrationMatrix P = wider ? model_error_.covariance(1.0) : state_covariance_;
+  covariance_ = J * P * J.transpose();
   e.value = theta;
   e.std = covariance_.diagonal().cwiseMax(0.0).cwiseSqrt();
   // Identified: the data have at least tripled the prior's information (std below half the prior's),
   // judged in the state's coordinates, where the measurement is linear in the bearing factors: the
   // scale's std also shrinks as s^2 when the estimate falls, which is not information.
   for (int i = 0; i < kCalibrationSize; ++i) {
-    e.identified[i] = state_prior_std_[i] > 0.0 && std::sqrt(std::max(0.0, state_covariance_(i, i))) < 0.5 * state_prior_std_[i];
+    e.identified[i] = state_prior_std_[i] > 0.0 && std::sqrt(std::max(0.0, P(i, i))) < 0.5 * state_prior_std_[i];
   }
   // Series compliance at the reference torque: mean TE above zero torque over the mesh force.
   const double tr = config_.reference_torque;

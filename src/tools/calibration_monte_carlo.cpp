@@ -99,6 +99,7 @@ int main(int argc, char** argv) {
     std::uniform_real_distribution<double> uni(0.0, 1.0);
     int covered_mesh = 0, covered_tp = 0, covered_compliance = 0, flags_right = 0;
     double worst_mesh = 0.0, worst_tp = 0.0, worst_compliance = 0.0;
+    double z2_mesh = 0.0, z2_tp = 0.0, z2_compliance = 0.0;  // sums of (error / std)^2: 1 per run on average if the stds are right
     double worst_drift = 0.0;  // [sigmas at the dwell's start] the largest move over the dwell
     int drifted = 0;           // runs with a move beyond 1 sigma
     for (int run = 0; run < runs; ++run) {
@@ -144,6 +145,10 @@ int main(int argc, char** argv) {
       covered_mesh += cm;
       covered_tp += ct;
       covered_compliance += cc;
+      auto z2 = [](double error, double std) { return error * error / std::max(std * std, 1e-300); };
+      z2_mesh += z2(e.value[kMeshScale] - p[kMeshScale], e.std[kMeshScale]);
+      z2_tp += z2(e.value[kPreloadTorque] - p[kPreloadTorque], e.std[kPreloadTorque]);
+      z2_compliance += z2(e.series_compliance - compliance, e.series_compliance_std);
       const bool flags = e.identified[kMeshScale] && e.identified[kPreloadTorque] && !e.identified[kPinionBearingScale] &&
                          !e.identified[kGearBearingScale];
       flags_right += flags;
@@ -158,6 +163,7 @@ int main(int argc, char** argv) {
       line["series_compliance"] = {{"truth", compliance}, {"estimate", e.series_compliance}, {"std", e.series_compliance_std}};
       line["error"] = {{"mesh_stiffness_scale", em}, {"preload_torque", et}, {"series_compliance", ec}};
       line["covered"] = {{"mesh_stiffness_scale", cm}, {"preload_torque", ct}, {"series_compliance", cc}};
+      line["model_error_scale"] = {e.model_error_scale[0], e.model_error_scale[1], e.model_error_scale[2]};
       if (dwell > 0.0) {
         // Drift over the dwell: each estimate's move in units of its std at the dwell's start and end.
         nlohmann::json drift;
@@ -188,6 +194,9 @@ int main(int argc, char** argv) {
     summary["worst_error"] = {{"mesh_stiffness_scale", worst_mesh}, {"preload_torque", worst_tp}, {"series_compliance", worst_compliance}};
     summary["covered"] = {{"mesh_stiffness_scale", covered_mesh}, {"preload_torque", covered_tp}, {"series_compliance", covered_compliance}};
     summary["identification_flags_right"] = flags_right;
+    const double n = std::max(1, runs);
+    summary["rms_error_over_std"] = {{"mesh_stiffness_scale", std::sqrt(z2_mesh / n)}, {"preload_torque", std::sqrt(z2_tp / n)},
+                                     {"series_compliance", std::sqrt(z2_compliance / n)}};
     if (dwell > 0.0) summary["dwell"] = {{"seconds", dwell}, {"torque", dwell_torque}, {"worst_sigmas", worst_drift}, {"runs_beyond_1_sigma", drifted}};
     std::cout << nlohmann::json{{"summary", summary}}.dump() << std::endl;
   } catch (const std::exception& e) {

@@ -89,6 +89,9 @@ nlohmann::json calibrationJson(const RigPipeline& pipeline) {
   j["updates"] = e.updates;
   j["gated"] = e.gated;
   j["not_excited"] = e.not_excited;
+  // The model error the windows show per feature (mean TE, |C_1|, |C_2|), as a multiple of the
+  // configured allowance; above 1 the std and bands above are widened (model_error_scale.hpp).
+  j["model_error_scale"] = {e.model_error_scale[0], e.model_error_scale[1], e.model_error_scale[2]};
   return j;
 }
 

@@ -26,6 +26,7 @@
 #include <memory>
 #include <optional>
 
+#include "drivetrain_stiffness/calibration/model_error_scale.hpp"
 #include "drivetrain_stiffness/calibration/order_regression.hpp"
 #include "drivetrain_stiffness/calibration/static_te_model.hpp"
 #include "drivetrain_stiffness/core/rig_config.hpp"
@@ -48,6 +49,9 @@ struct CalibrationEstimate {
   bool excited = false;      ///< the last window was usable (baseline or update)
   bool baseline = false;     ///< a baseline exists
   double nis = 0.0;          ///< normalised innovation squared of the last loaded window (3 dof)
+  /// Per feature (mean TE, |C_1|, |C_2|): the model-error variance the windows show, as a multiple
+  /// of the configured allowance (model_error_scale.hpp); the reported std and bands use it.
+  FeatureVector model_error_scale = FeatureVector::Ones();
   std::uint64_t windows = 0, baseline_windows = 0, updates = 0, gated = 0, not_excited = 0;
   double window_torque = 0.0;  ///< [N·m] mean torque of the last window
   double window_speed = 0.0;   ///< [rad/s] mean pinion speed of the last window
@@ -137,6 +141,9 @@ class Calibrator {
   CalibrationVector state_ = CalibrationVector::Zero(), state_prior_std_ = CalibrationVector::Zero();
   CalibrationMatrix state_covariance_ = CalibrationMatrix::Zero();
   CalibrationMatrix covariance_ = CalibrationMatrix::Zero();  ///< of the parameters (scales), by linearisation
+  /// The estimate's covariance under the model error the windows show (state coordinates); the
+  /// filter's own state_covariance_ keeps the configured allowance and drives the gains.
+  ModelErrorScale model_error_;
   /// State to parameters (c -> 1/c for the bearing entries), and that map's Jacobian at the state.
   static CalibrationVector toParameters(const CalibrationVector& state);
   static CalibrationMatrix parameterJacobian(const CalibrationVector& state);
