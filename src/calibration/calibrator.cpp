@@ -93,6 +93,11 @@ CalibrationMatrix Calibrator::parameterJacobian(const CalibrationVector& state) 
   return J;
 }
 
+CalibrationMatrix Calibrator::filterCovariance() const {
+  const CalibrationMatrix J = parameterJacobian(state_);
+  return J * state_covariance_ * J.transpose();
+}
+
 void Calibrator::interrupt() {
   window_.open = false;
   filtered_torque_.reset();
@@ -436,7 +441,9 @@ void Calibrator::outputs(double torque, const StiffnessEstimator& supports) {
   e.std = covariance_.diagonal().cwiseMax(0.0).cwiseSqrt();
   // Identified: the data have at least tripled the prior's information (std below half the prior's),
   // judged in the state's coordinates, where the measurement is linear in the bearing factors: the
-  // scale's std also shrinks as s^2 when the estimate falls, which is not information.
+  // scale's std also shrinks as s^2 when the estimate falls, which is not information. On the
+  // reported covariance: information the windows seem to give but their model error takes back
+  // (c > 1) does not count.
   for (int i = 0; i < kCalibrationSize; ++i) {
     e.identified[i] = state_prior_std_[i] > 0.0 && std::sqrt(std::max(0.0, P(i, i))) < 0.5 * state_prior_std_[i];
   }

@@ -10,6 +10,7 @@ void ModelErrorScale::reset(const CalibrationMatrix& prior) {
   for (auto& s : score_) s.fill(0.0);
   noise_part_ = prior;
   for (auto& p : model_part_) p.setZero();
+  scored_.fill(0);
   windows_ = 0;
 }
 
@@ -29,6 +30,7 @@ void ModelErrorScale::update(const FeatureVector& nu, const FeatureVector& varia
       const double v = a + gridValue(k) * m;  // the innovation's variance if the model error were c M
       score_[j][k] += m * (nu2 - v) / (v * v);
     }
+    ++scored_[j];
   }
   // Joseph form with each part of the true noise: P_N takes K N K', P_Mj takes K_j M_j K_j'.
   const CalibrationMatrix IKH = CalibrationMatrix::Identity() - K * H;
@@ -43,6 +45,7 @@ FeatureVector ModelErrorScale::scale() const {
   FeatureVector c = FeatureVector::Ones();
   if (windows_ < kMinWindows) return c;
   for (int j = 0; j < kFeatureSize; ++j) {
+    if (scored_[j] == 0) continue;  // never an allowance: nothing to scale
     const auto& s = score_[j];
     // The score falls as c grows (more variance explains the innovations); its root is the ML c.
     if (!(s[0] > 0.0)) {

@@ -20,12 +20,13 @@ MODES = 3  # natural frequencies of the 3-DOF model (seed 000 §3)
 
 _PR_SET_PDEATHSIG = 1
 
-# What each bag's report keeps (--bag-outputs report, the default): the small topics (a row per
-# calibration window, resonance change, spectrum or block of mesh periods), which the row and a
-# reader of the report need, and with plots the topics plot_replay.py reads from outputs.bag. Not
-# the per-reading measured_te (5 kHz) nor, without plots, the 1 kHz stiffness and TE: those are
-# 2.3x the input bag, and formatting them took the replay from 1.0 to 1.15 cores, which two
-# workers on two cores could not give (docs/campaign.md, Figures). --bag-outputs all keeps every topic.
+# What each bag's report keeps (--bag-outputs report, the default): in csv/ and outputs.bag the
+# small topics (a row per calibration window, resonance change, spectrum or block of mesh
+# periods), which a reader of the report needs, and with plots also, in outputs.bag alone, the
+# topics plot_replay.py reads from it. Not the per-reading measured_te (5 kHz) nor the 1 kHz
+# stiffness and TE as CSV: those are 2.3x the input bag, and formatting them took the replay from
+# 1.0 to 1.15 cores, which two workers on two cores could not give (docs/campaign.md, Figures).
+# --bag-outputs all keeps every topic in both.
 REPORT_TOPICS = ("te_spectrum", "resonance", "calibration", "mesh_period_stats")
 PLOT_TOPICS = ("transmission_error", "stiffness", "resonance", "mesh_period_stats")
 BAG_OUTPUTS = ("report", "all")
@@ -40,18 +41,23 @@ def _die_with_parent():
 
 
 def report_topics(plots, bag_outputs):
-    """drivetrain_replay's --topics for a bag's report: "all", or the report's topics (and the plots')."""
+    """drivetrain_replay's --topics (outputs.bag) and --csv-topics (csv/) for a bag's report, as
+    summary.json names them (OutputTopics::describe: "all", or the names in the message order)."""
     if bag_outputs == "all":
-        return "all"
-    names = set(REPORT_TOPICS) | (set(PLOT_TOPICS) if plots else set())
-    return ",".join(sorted(names))
+        return "all", "all"
+    order = ("stiffness", "transmission_error", "te_spectrum", "resonance", "measured_te", "calibration",
+             "mesh_period_stats", "tf", "rig_markers")
+    csv_names = set(REPORT_TOPICS)
+    bag_names = csv_names | (set(PLOT_TOPICS) if plots else set())
+    return tuple(",".join(t for t in order if t in names) for names in (bag_names, csv_names))
 
 
 def replay_command(job, out_dir):
     plots = job.get("plots", True)
+    bag_topics, csv_topics = report_topics(plots, job.get("bag_outputs", "report"))
     cmd = [job["replay"], "--bag", job["bag"], "--config", job["config"], "--report", out_dir,
            "--calibrate", os.path.join(out_dir, "calibrated_gearbox.yaml"),
-           "--topics", report_topics(plots, job.get("bag_outputs", "report"))]
+           "--topics", bag_topics, "--csv-topics", csv_topics]
     if job.get("params"):
         cmd += ["--params", job["params"]]
     if not plots:

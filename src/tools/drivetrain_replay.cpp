@@ -110,7 +110,7 @@ int run(int argc, char** argv) {
               joint_states_topic = "joint_states";
   std::string plot_script = DRIVETRAIN_PLOT_REPLAY_SCRIPT;
   std::string compression = "lz4";
-  std::string topics_option = "all";
+  std::string topics_option = "all", csv_topics_option;
   bool plots = true;
   app.add_option("--bag", bag_path, "Recorded bag with the rig's torque and preload")->required();
   app.add_option("--config", config, "Gearbox YAML, as the node's ~gearbox_config")->required();
@@ -124,6 +124,7 @@ int run(int argc, char** argv) {
                  "stiffness, transmission_error, te_spectrum, resonance, measured_te, calibration, mesh_period_stats, "
                  "tf, rig_markers")
       ->capture_default_str();
+  app.add_option("--csv-topics", csv_topics_option, "Output topics written to --csv alone (default: --topics)");
   app.add_option("--calibrate", calibrate_out,
                  "Gearbox YAML to write with the calibrated values (needs a calibration: block in --config and a window "
                  "that updated the calibration)");
@@ -140,7 +141,14 @@ int run(int argc, char** argv) {
     return app.exit(e) == 0 ? kExitOk : kExitRefused;
   }
 
-  const OutputTopics topics = OutputTopics::parse("--topics", topics_option);  // refused before anything is read
+  // Refused before anything is read: an unknown name, or a report whose plots would miss their topics.
+  const OutputTopics topics = OutputTopics::parse("--topics", topics_option);
+  const OutputTopics csv_topics = csv_topics_option.empty() ? topics : OutputTopics::parse("--csv-topics", csv_topics_option);
+  const OutputTopics plotted = OutputTopics::parse("", "transmission_error,stiffness,resonance,mesh_period_stats");
+  if (!report_dir.empty() && plots && !topics.includes(plotted)) {
+    throw InvalidInput("--topics = '" + topics_option + "': the report's plots read " + plotted.describe() +
+                       " from its outputs.bag; add them, or pass --no-plots");
+  }
   const RigConfig rig = loadRigFile(config);
   const YamlParameters get = readParameterFile(params);
   RigPipeline pipeline(rig, readPipelineOptions(get, rig), readRuntimeSettings(get, rig));
@@ -162,7 +170,7 @@ int run(int argc, char** argv) {
   std::string joint_refusal;
   std::vector<PreloadSetting> preload_settings;  // each preload message's, converted in place
   ReplayWriter writer(pipeline, readOutputSettings(get), out_bag,
-                      compression == "none" ? BagCompression::None : BagCompression::Lz4, csv_dir, topics);
+                      compression == "none" ? BagCompression::None : BagCompression::Lz4, csv_dir, topics, csv_topics);
   std::uint64_t messages = 0, wrong_type = 0;
   std::optional<ros::Time> first, last;
   const auto start = std::chrono::steady_clock::now();  // only for the printed speed
@@ -212,7 +220,8 @@ int run(int argc, char** argv) {
   summary["messages"] = messages;
   summary["wrong_type"] = wrong_type;
   summary["span_s"] = span;
-  summary["topics"] = topics.describe();  // what --out and the CSV files hold
+  summary["topics"] = topics.describe();  // what --out holds
+  summary["csv_topics"] = csv_topics.describe();  // what the CSV files hold
   // [s since the epoch] the first and last stamp read (null for a bag without one): a campaign sorts by start.
   summary["start"] = first ? nlohmann::json(first->toSec()) : nlohmann::json(nullptr);
   summary["end"] = last ? nlohmann::json(last->toSec()) : nlohmann::json(nullptr);

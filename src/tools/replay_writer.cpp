@@ -151,8 +151,12 @@ std::string OutputTopics::describe() const {
 }
 
 ReplayWriter::ReplayWriter(const RigPipeline& pipeline, const OutputSettings& settings, const std::string& out_bag,
-                           BagCompression compression, const std::string& csv_dir, OutputTopics topics)
-    : MessageSink(pipeline, settings), topics_(topics), mesh_period_totals_(pipeline.rig().gears.teeth[0]) {
+                           BagCompression compression, const std::string& csv_dir, OutputTopics bag_topics,
+                           OutputTopics csv_topics)
+    : MessageSink(pipeline, settings),
+      bag_topics_(bag_topics),
+      csv_topics_(csv_topics),
+      mesh_period_totals_(pipeline.rig().gears.teeth[0]) {
   // BagWriter, not rosbag::Bag: rosbag's per-message syscalls cap the replay near 300x (bag_writer.hpp).
   if (!out_bag.empty()) bag_ = std::make_unique<BagWriter>(out_bag, compression);
   if (csv_dir.empty()) return;
@@ -164,25 +168,25 @@ ReplayWriter::ReplayWriter(const RigPipeline& pipeline, const OutputSettings& se
       bearings += "," + s.name + "." + f;
     }
   }
-  if (topics_.has(OutputTopics::kStiffness)) stiffness_csv_ = std::make_unique<CsvFile>(csv_dir + "/stiffness.csv",
+  if (csv_topics_.has(OutputTopics::kStiffness)) stiffness_csv_ = std::make_unique<CsvFile>(csv_dir + "/stiffness.csv",
       "stamp,torque,mesh_force,mesh_phase,mesh_stiffness,mesh_stiffness_mean,mesh_stiffness_drive,mesh_stiffness_back,"
       "drive_flank_loaded,back_flank_loaded" + bearings +
       ",calibrated,mesh_stiffness_mean_calibrated,mesh_stiffness_mean_low,mesh_stiffness_mean_high,"
       "pinion_bearing_stiffness_calibrated,pinion_bearing_stiffness_low,pinion_bearing_stiffness_high,"
       "gear_bearing_stiffness_calibrated,gear_bearing_stiffness_low,gear_bearing_stiffness_high");
-  if (topics_.has(OutputTopics::kTransmissionError)) te_csv_ = std::make_unique<CsvFile>(csv_dir + "/transmission_error.csv",
+  if (csv_topics_.has(OutputTopics::kTransmissionError)) te_csv_ = std::make_unique<CsvFile>(csv_dir + "/transmission_error.csv",
       "stamp,dynamic_te,static_te,x_p,x_g,x,mesh_force,mesh_phase,torque,drive_flank_loaded,back_flank_loaded");
-  if (topics_.has(OutputTopics::kTeSpectrum)) spectrum_csv_ = std::make_unique<CsvFile>(csv_dir + "/te_spectrum.csv",
+  if (csv_topics_.has(OutputTopics::kTeSpectrum)) spectrum_csv_ = std::make_unique<CsvFile>(csv_dir + "/te_spectrum.csv",
       "stamp,peak_frequency_hz,peak_amplitude,f2_hz,a2,f3_hz,a3,window_s,resolution_hz");
-  if (topics_.has(OutputTopics::kResonance)) resonance_csv_ = std::make_unique<CsvFile>(csv_dir + "/resonance.csv",
+  if (csv_topics_.has(OutputTopics::kResonance)) resonance_csv_ = std::make_unique<CsvFile>(csv_dir + "/resonance.csv",
       "stamp,f1_hz,f2_hz,f3_hz,zeta1,zeta2,zeta3,dominant1,dominant2,dominant3,floquet_valid,floquet_margin,"
       "calibrated,f1_hz_calibrated,f1_hz_low,f1_hz_high,f2_hz_calibrated,f2_hz_low,f2_hz_high,f3_hz_calibrated,f3_hz_low,"
       "f3_hz_high");
   // The calibration's files, named after the message fields in message order (the ctest
   // replay_writes_the_calibration checks the columns against msg/); header only without a calibration.
-  if (topics_.has(OutputTopics::kMeasuredTe)) measured_te_csv_ = std::make_unique<CsvFile>(csv_dir + "/measured_te.csv", "stamp,te,predicted,residual,torque,mesh_phase");
+  if (csv_topics_.has(OutputTopics::kMeasuredTe)) measured_te_csv_ = std::make_unique<CsvFile>(csv_dir + "/measured_te.csv", "stamp,te,predicted,residual,torque,mesh_phase");
   // Per block of whole mesh periods, named after the MeshPeriodStats fields in message order.
-  if (topics_.has(OutputTopics::kMeshPeriodStats)) mesh_period_csv_ = std::make_unique<CsvFile>(csv_dir + "/mesh_period_stats.csv",
+  if (csv_topics_.has(OutputTopics::kMeshPeriodStats)) mesh_period_csv_ = std::make_unique<CsvFile>(csv_dir + "/mesh_period_stats.csv",
       "stamp,te_mean,te_rms,te_peak_to_peak,mesh_force_mean,mesh_force_rms,mesh_force_peak_to_peak,mesh_frequency,torque,"
       "periods,samples,duration");
   std::string parameters, identified;
@@ -195,7 +199,7 @@ ReplayWriter::ReplayWriter(const RigPipeline& pipeline, const OutputSettings& se
                         "natural_frequency_2", "natural_frequency_3"}) {
     bands += std::string(",") + f + "," + f + "_low," + f + "_high";
   }
-  if (topics_.has(OutputTopics::kCalibration)) calibration_csv_ = std::make_unique<CsvFile>(csv_dir + "/calibration.csv",
+  if (csv_topics_.has(OutputTopics::kCalibration)) calibration_csv_ = std::make_unique<CsvFile>(csv_dir + "/calibration.csv",
       "stamp" + parameters + identified +
       ",nis,excited,baseline,outcome,windows,baseline_windows,updates,gated,not_excited,window_torque,window_speed,"
       "series_compliance,series_compliance_std" + bands +

@@ -17,8 +17,8 @@
 
 namespace drivetrain_stiffness {
 
-/// Which output topics drivetrain_replay writes (--topics): each selected topic goes to --out and,
-/// where it has one, to its CSV file. The messages are built either way (the pipeline and the sink
+/// Which output topics drivetrain_replay writes (--topics to the bag and the CSV files,
+/// --csv-topics to the CSV files alone). The messages are built either way (the pipeline and the sink
 /// run identically); only their writing is skipped. A campaign keeps a bag's report small with it
 /// (measured_te at the encoders' 5 kHz is the largest file: docs/campaign.md).
 class OutputTopics {
@@ -35,6 +35,7 @@ class OutputTopics {
   /// unknown or empty name.
   static OutputTopics parse(const std::string& option, const std::string& list);
   bool has(Topic t) const { return (bits_ >> t) & 1u; }
+  bool includes(const OutputTopics& other) const { return (other.bits_ & ~bits_) == 0u; }
   std::string describe() const;  ///< "all" or the names, comma-separated, in kNames order
 
  private:
@@ -79,9 +80,11 @@ class CsvFile {
 
 class ReplayWriter : public MessageSink {
  public:
-  /// out_bag and csv_dir may be empty (not written); only `topics` go to either.
+  /// out_bag and csv_dir may be empty (not written); only `bag_topics` go to the bag and only
+  /// `csv_topics` to the CSV files.
   ReplayWriter(const RigPipeline& pipeline, const OutputSettings& settings, const std::string& out_bag,
-               BagCompression compression, const std::string& csv_dir, OutputTopics topics = OutputTopics::all());
+               BagCompression compression, const std::string& csv_dir, OutputTopics bag_topics = OutputTopics::all(),
+               OutputTopics csv_topics = OutputTopics::all());
   void close();
   /// Every mesh_period_stats block so far, summed (whether or not --topics writes the topic).
   const MeshPeriodTotals& meshPeriodTotals() const { return mesh_period_totals_; }
@@ -99,9 +102,9 @@ class ReplayWriter : public MessageSink {
 
  private:
   /// The bag, if --out was given and the topic is selected.
-  BagWriter* bagFor(OutputTopics::Topic t) const { return topics_.has(t) ? bag_.get() : nullptr; }
+  BagWriter* bagFor(OutputTopics::Topic t) const { return bag_topics_.has(t) ? bag_.get() : nullptr; }
 
-  OutputTopics topics_;
+  OutputTopics bag_topics_, csv_topics_;
   MeshPeriodTotals mesh_period_totals_;
   std::unique_ptr<BagWriter> bag_;
   std::unique_ptr<CsvFile> stiffness_csv_, te_csv_, spectrum_csv_, resonance_csv_, measured_te_csv_, calibration_csv_,

@@ -154,6 +154,25 @@ class Campaign(unittest.TestCase):
         for column, value in full.items():
             if column not in ("alarm", "alarm_reason", "out_of_family", "family_reason", "duplicates"):
                 self.assertEqual(value, r["bag_000.bag"][column], column)  # a one-bag campaign has no reference
+        # One report directory per bag serves every option: after a run with the default, a cached
+        # row of an earlier `all` run must not be taken for a report that no longer holds its topics.
+        campaign(out, [bag], "--serial")
+        self.assertEqual(processed(out), 1)
+        campaign(out, [bag], "--serial", "--bag-outputs", "all")
+        self.assertEqual(processed(out), 1)
+        self.assertIn("measured_te.csv", os.listdir(os.path.join(out, full["report"], "csv")))
+        # With plots (these tests run without): outputs.bag also gets what plot_replay.py reads, the
+        # CSV files stay the report's; the replay refuses a report whose plots would miss a topic.
+        sys.path.insert(0, os.path.join(ROOT, "src"))
+        from drivetrain_campaign.replay_task import replay_command
+        job = {"replay": REPLAY, "bag": bag, "config": CONFIG, "plots": True, "bag_outputs": "report"}
+        cmd = replay_command(job, "/nonexistent")
+        bag_topics = cmd[cmd.index("--topics") + 1].split(",")
+        csv_topics = cmd[cmd.index("--csv-topics") + 1].split(",")
+        for plotted in ("transmission_error", "stiffness", "resonance", "mesh_period_stats"):
+            self.assertIn(plotted, bag_topics)
+        self.assertEqual(sorted(csv_topics), ["calibration", "mesh_period_stats", "resonance", "te_spectrum"])
+        self.assertNotIn("--no-plots", cmd)
 
     def test_change_detector_raises_on_a_ten_percent_loss(self):
         r = {os.path.basename(x["bag"]): x for x in rows(self.serial)}

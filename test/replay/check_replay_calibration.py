@@ -291,6 +291,37 @@ if s:
             theirs = [(m._type, str(m)) for _, m, _ in full.read_messages(topics=["/" + t])]
             check(mine == theirs and mine, "--topics: /%s differs from the full replay's (%d, %d messages)"
                   % (t, len(mine), len(theirs)))
+# summary.json's mesh_periods (a campaign row's speed, torque and TE columns) against the blocks of
+# mesh_period_stats.csv summed here: the same numbers to the last bit (the same operations in the
+# same order: speed 2 pi f / z_p, duration-weighted squares and forces, the largest peak-to-peak).
+header, body = rows(os.path.join(work, "a", "mesh_period_stats.csv"))
+blocks = [dict(zip(header, (float(v) for v in row))) for row in body]
+z_p = int(yaml.safe_load(open(config))["gears"]["teeth"][0])
+speeds = [2.0 * math.pi * b["mesh_frequency"] / z_p for b in blocks]
+torques = [b["torque"] for b in blocks]
+weight = square = force = p2p = 0.0
+for b in blocks:
+    weight += b["duration"]
+    square += b["duration"] * (b["te_rms"] * b["te_rms"])
+    force += b["duration"] * b["mesh_force_mean"]
+    p2p = max(p2p, b["te_peak_to_peak"])
+expected = {"blocks": len(blocks), "speed_min": min(speeds), "speed_max": max(speeds), "torque_min": min(torques),
+            "torque_max": max(torques), "te_rms": math.sqrt(square / weight), "te_peak_to_peak": p2p,
+            "mesh_force_mean": force / weight}
+check(len(blocks) > 0 and summary["mesh_periods"] == expected,
+      "summary mesh_periods %s != %s from mesh_period_stats.csv" % (summary.get("mesh_periods"), expected))
+# A report whose plots would miss their topics is refused before anything is read.
+r, _ = replay("topics_no_plots", "--topics", "calibration", "--report", os.path.join(work, "topics_report"), expect=1)
+check("the report's plots read" in r.stderr and "--no-plots" in r.stderr, "report without plot topics: " + r.stderr.strip())
+# --csv-topics: the CSV directory alone gets its own list.
+_, s = replay("csv_topics", "--topics", "calibration,resonance", "--csv-topics", "calibration")
+if s:
+    check(sorted(os.listdir(os.path.join(work, "csv_topics"))) == ["calibration.csv"],
+          "--csv-topics: CSV files %s" % sorted(os.listdir(os.path.join(work, "csv_topics"))))
+    with rosbag.Bag(os.path.join(work, "csv_topics.bag")) as b:
+        check(sorted(b.get_type_and_topic_info().topics) == ["/calibration", "/resonance"], "--csv-topics: bag topics")
+    check(s["topics"] == "resonance,calibration" and s["csv_topics"] == "calibration",
+          "--csv-topics: summary %r %r" % (s.get("topics"), s.get("csv_topics")))
 r, _ = replay("topics_unknown", "--topics", "calibration,measured_tee", expect=1)
 check("--topics = 'calibration,measured_tee': unknown topic 'measured_tee'" in r.stderr, "unknown topic: " + r.stderr.strip())
 check(not os.path.exists(os.path.join(work, "topics_unknown.bag")), "unknown topic: replayed anyway")

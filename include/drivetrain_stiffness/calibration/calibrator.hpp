@@ -106,6 +106,9 @@ class Calibrator {
   /// The parameter values (same as estimate().value) and their covariance.
   const CalibrationVector& parameters() const { return estimate_.value; }
   const CalibrationMatrix& covariance() const { return covariance_; }
+  /// The filter's own covariance of the parameters, under the configured model-error allowance
+  /// (what covariance() reports unless the windows show more model error: model_error_scale.hpp).
+  CalibrationMatrix filterCovariance() const;
   /// The calibrated stiffness at pinion torque `torque` (the supports at their current load), and
   /// with `with_modes` the natural frequencies, each with its 95 % bounds. Const; allocation-free.
   CalibrationBands bands(double torque, const StiffnessEstimator& supports, bool with_modes) const;

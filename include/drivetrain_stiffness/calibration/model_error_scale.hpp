@@ -17,16 +17,19 @@
 // mean TE, |C_1|, |C_2|), and c may be re-estimated at any time without replaying the windows.
 // With c = 1 it is the filter's own covariance.
 //
-// c_j is estimated by maximum likelihood from the innovations nu_ij, whose variance is
-// a_ij + c_j M_ij (a = diag(H P_true- H') + N): the root of the score
+// c_j is estimated from the innovations nu_ij, whose variance is a_ij + c_j M_ij, as the root of
+// the maximum-likelihood score
 //
 //     sum_i M_ij (nu_ij^2 - (a_ij + c M_ij)) / (a_ij + c M_ij)^2 = 0,
 //
-// kept on a fixed grid of c (allocation-free), the root interpolated in log c and clamped to the
-// grid's ends (1e-4 to 1e2: the model error between 1 % and 10x the allowance). Windows where the
-// parameters' uncertainty dominates the innovation (the early ones) weigh little. Before
-// kMinWindows accepted windows c = 1. A model error larger than the allowance (c > 1) widens the
-// bands.
+// a plug-in approximation: a_ij = diag(H P_true- H') + N is taken at the running estimate of c
+// when the window arrives (c = 1 for the first ones), not as a function of each c tried. The score
+// is kept on a fixed grid of c (allocation-free), the root interpolated in log c and clamped to
+// the grid's ends (1e-4 to 1e2: the model error's std between 1 % and 10x the allowance's). Windows
+// where the parameters' uncertainty dominates the innovation (the early ones) weigh little. Before
+// kMinWindows accepted windows, and for a feature that never had an allowance, c = 1. Windows the
+// calibrator's NIS gate rejects are not counted: the largest innovations are left out, so a c
+// above 1 comes out low (the bands widen too little rather than too much).
 #pragma once
 
 #include <array>
@@ -43,6 +46,7 @@ class ModelErrorScale {
   using FeatureRows = Eigen::Matrix<double, kFeatureSize, kCalibrationSize>;
   using Gain = Eigen::Matrix<double, kCalibrationSize, kFeatureSize>;
 
+  ModelErrorScale() { reset(CalibrationMatrix::Zero()); }
   /// Starts at the prior covariance (state coordinates).
   void reset(const CalibrationMatrix& prior);
   /// The random walk between updates (the filter's Q).
@@ -64,6 +68,7 @@ class ModelErrorScale {
   std::array<std::array<double, kGrid>, kFeatureSize> score_{};
   CalibrationMatrix noise_part_ = CalibrationMatrix::Zero();                 ///< P_N (the prior included)
   std::array<CalibrationMatrix, kFeatureSize> model_part_{};                 ///< P_Mj
+  std::array<std::uint64_t, kFeatureSize> scored_{};  ///< windows with an allowance, per feature
   std::uint64_t windows_ = 0;
 };
 
