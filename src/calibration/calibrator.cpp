@@ -289,6 +289,7 @@ void Calibrator::update(const FeatureVector& z, const FeatureVector& z_std, doub
     const double model = config_.model_error * std::abs(h0[i]);
     noise[i] = z_std[i] * z_std[i] + config_.te_noise_floor * config_.te_noise_floor;
     model_variance[i] = repeats * model * model;
+    // Summed in the order R always was, not as noise + model_variance: the same bits as before.
     R(i, i) = z_std[i] * z_std[i] + model_variance[i] + config_.te_noise_floor * config_.te_noise_floor;
   }
   Eigen::Matrix<double, kFeatureSize, kCalibrationSize> H;

@@ -23,11 +23,16 @@ def file_digest(path):
     return digest.hexdigest()
 
 
+def _names(topics):
+    """A --topics list as a set: summary.json and report_topics name the same topics in other orders."""
+    return frozenset((topics or "").split(","))
+
+
 class ResultCache:
     def __init__(self, directory, replay, config, params, plots, bag_outputs="report"):
         self.directory = directory
         os.makedirs(directory, exist_ok=True)
-        self.topics = report_topics(plots, bag_outputs)
+        self.topics = tuple(_names(t) for t in report_topics(plots, bag_outputs))
         # The context every key shares: what else decides a row besides the bag. The replay's own
         # libraries (a catkin build links them shared) change without the program's bytes changing.
         libraries = sorted(glob.glob(os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(replay))),
@@ -60,7 +65,7 @@ class ResultCache:
                     summary = json.load(f)
             except (OSError, ValueError):
                 return None
-            if (summary.get("topics"), summary.get("csv_topics")) != self.topics:
+            if (_names(summary.get("topics")), _names(summary.get("csv_topics"))) != self.topics:
                 return None
         return row
 

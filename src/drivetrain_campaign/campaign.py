@@ -101,8 +101,7 @@ def run(bags, config, params, out_dir, engine, replay, plots=True, cache_dir=Non
             rows.append(cached)
             continue
         jobs.append({"bag": os.path.abspath(path), "given": path, "sha256": sha, "replay": replay, "config": config,
-                     "params": params, "plots": plots, "bag_outputs": bag_outputs,
-                     "campaign_dir": out_dir,
+                     "params": params, "plots": plots, "bag_outputs": bag_outputs, "campaign_dir": out_dir,
                      "out_dir": os.path.join(bag_root, f"{_stem(path)}-{sha[:8]}")})
 
     failed = 0

@@ -41,15 +41,13 @@ def _die_with_parent():
 
 
 def report_topics(plots, bag_outputs):
-    """drivetrain_replay's --topics (outputs.bag) and --csv-topics (csv/) for a bag's report, as
-    summary.json names them (OutputTopics::describe: "all", or the names in the message order)."""
+    """drivetrain_replay's --topics (outputs.bag) and --csv-topics (csv/) for a bag's report: "all",
+    or comma-separated names (summary.json lists the same names in the message order)."""
     if bag_outputs == "all":
         return "all", "all"
-    order = ("stiffness", "transmission_error", "te_spectrum", "resonance", "measured_te", "calibration",
-             "mesh_period_stats", "tf", "rig_markers")
     csv_names = set(REPORT_TOPICS)
     bag_names = csv_names | (set(PLOT_TOPICS) if plots else set())
-    return tuple(",".join(t for t in order if t in names) for names in (bag_names, csv_names))
+    return ",".join(sorted(bag_names)), ",".join(sorted(csv_names))
 
 
 def replay_command(job, out_dir):

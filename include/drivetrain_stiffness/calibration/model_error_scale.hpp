@@ -61,7 +61,6 @@ class ModelErrorScale {
   FeatureVector scale() const;
   /// P_true at max(scale(), min_scale) per feature: the calibrator passes 1 (bands only widen).
   CalibrationMatrix covariance(double min_scale = 0.0) const;
-  std::uint64_t windows() const { return windows_; }
 
  private:
   static double gridValue(int k);
