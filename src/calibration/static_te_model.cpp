@@ -54,6 +54,7 @@ StaticTeModel::StaticTeModel(const RigConfig& rig, std::shared_ptr<const AntiBac
       grid_.push_back(g);
     }
   }
+  for (BothFlankMean& c : both_flank_means_) c.points.resize(grid_.size());  // no allocation on the bands' path
 }
 
 bool StaticTeModel::nearSwitch(double phase, double guard) const {
@@ -140,17 +141,30 @@ double StaticTeModel::bearingTerm(const CalibrationVector& p, const std::array<d
 }
 
 void StaticTeModel::shaftDeflection(double torque, const StiffnessEstimator& supports, std::array<double, 2>& out) {
+  // Two memos, both exact (the solves are deterministic functions of the supports' settings and
+  // models, which supportsRevision names, and of the torque): the unloaded solutions do not depend
+  // on the torque, and the calibrator asks for the same torque at every encoder reading until the
+  // next torque message (5 kHz encoders on 1 kHz torque: five times).
+  const long revision = supports.supportsRevision();
+  if (revision == deflection_memo_.revision && torque == deflection_memo_.torque) {
+    out = deflection_memo_.shafts;
+    return;
+  }
   const double force = std::abs(meshForce(torque));
   const std::size_t n = supports.rig().bearings.size();
   loaded_.resize(n);
   unloaded_.resize(n);
+  const bool unloaded_known = revision == deflection_memo_.revision;
+  deflection_memo_.revision = 0;  // invalid until this call's solves have all succeeded
   out = {0.0, 0.0};
   Vector5d load = Vector5d::Zero();
   for (std::size_t i = 0; i < n; ++i) {
     const BearingSupportConfig& c = supports.supportConfig(i);
     const BearingSupport& model = supports.supportModel(i);
-    load[kUx] = c.radial_preload;
-    model.solve(load, nullptr, unloaded_[i]);
+    if (!unloaded_known) {
+      load[kUx] = c.radial_preload;
+      model.solve(load, nullptr, unloaded_[i]);
+    }
     load[kUx] = c.radial_preload + c.mesh_load_share * force;
     model.solve(load, &unloaded_[i].displacement, loaded_[i]);
     // The secant deflection of the support under the mesh force, carried to the gear by the lever
@@ -158,6 +172,7 @@ void StaticTeModel::shaftDeflection(double torque, const StiffnessEstimator& sup
     out[c.shaft] += c.mesh_load_share * (loaded_[i].displacement[kUx] - unloaded_[i].displacement[kUx]);
   }
   if (torque < 0.0) out = {-out[0], -out[1]};
+  deflection_memo_ = {revision, torque, out};
 }
 
 void StaticTeModel::waveform(const CalibrationVector& p, double torque, const std::array<double, 2>& shafts,
@@ -207,18 +222,26 @@ const StaticTeModel::BothFlankMean& StaticTeModel::bothFlankMean(const Calibrati
   c.mean = 0.0;
   c.force_low = -std::numeric_limits<double>::infinity();
   c.force_high = std::numeric_limits<double>::infinity();
-  for (const GridPoint& g : grid_) {
+  bool never_both = false;
+  for (std::size_t j = 0; j < grid_.size(); ++j) {
+    const GridPoint& g = grid_[j];
     const Flanks f = flanks(p, 0.0, g.k1, g.k2);
+    // The operands of AntiBacklashMesh::flankContact's products, formed as it forms them, so the
+    // flank state read from them is its state bit for bit.
+    c.points[j] = {f.k1, f.kc, f.k1 + f.kc, f.fp * (f.k1 + f.kc)};
     c.mean += g.weight * (f.k1 + f.kc);  // as meanMeshStiffness sums it: the same bits
     // AntiBacklashMesh::flankContact keeps both flanks for -F_p (1 + k_c/k1) <= F <= F_p (1 + k1/k_c);
     // the range is taken 1e-12 inside those bounds, far beyond the rounding of its products.
     if (!(f.kc > 0.0) || !(f.k1 > 0.0)) {
-      c.force_low = 1.0;  // an ordinary gear (or no tooth): never both flanks
-      c.force_high = -1.0;
-      break;
+      never_both = true;  // an ordinary gear (or no tooth): never both flanks
+      continue;  // the other points' flank stiffnesses are still wanted
     }
     c.force_high = std::min(c.force_high, f.fp * (f.k1 + f.kc) / f.kc * (1.0 - 1e-12));
     c.force_low = std::max(c.force_low, -f.fp * (f.k1 + f.kc) / f.k1 * (1.0 - 1e-12));
+  }
+  if (never_both) {
+    c.force_low = 1.0;
+    c.force_high = -1.0;
   }
   return c;
 }
@@ -227,11 +250,20 @@ double StaticTeModel::meanMeshStiffness(const CalibrationVector& p, double torqu
   const double force = meshForce(torque);
   const BothFlankMean& both = bothFlankMean(p);
   if (force >= both.force_low && force <= both.force_high) return both.mean;
+  // Each point's flank state by AntiBacklashMesh::flankContact's criterion on the entry's cached
+  // k1, k_c and F_p (k1 + k_c): the numbers of flanks() at this force, without its divisions.
   double k = 0.0;
-  for (const GridPoint& g : grid_) {
-    const Flanks f = flanks(p, force, g.k1, g.k2);
-    const double ks = f.contact == FlankContact::kBoth ? f.k1 + f.kc : (f.contact == FlankContact::kDriveOnly ? f.k1 : f.kc);
-    k += g.weight * ks;
+  for (std::size_t j = 0; j < grid_.size(); ++j) {
+    const FlankPoint& f = both.points[j];
+    double ks;
+    if (!(f.kc > 0.0) || force * f.kc > f.fp_sum) {
+      ks = f.k1;  // drive flank only (or an ordinary gear)
+    } else if (force * f.k1 < -f.fp_sum) {
+      ks = f.kc;  // back path only
+    } else {
+      ks = f.sum;
+    }
+    k += grid_[j].weight * ks;
   }
   return k;
 }

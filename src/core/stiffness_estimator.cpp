@@ -1,6 +1,7 @@
 #include "drivetrain_stiffness/core/stiffness_estimator.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <stdexcept>
 #include <utility>
@@ -52,6 +53,11 @@ MeshEstimate StiffnessEstimator::meshAt(double signed_mesh_force, double pinion_
   return m;
 }
 
+long StiffnessEstimator::nextSupportsRevision() {
+  static std::atomic<long> next{0};
+  return ++next;
+}
+
 std::unique_ptr<BearingSupport> StiffnessEstimator::build(const BearingSupportConfig& c) {
   return std::make_unique<BearingSupport>(c.spec, c.arrangement, c.axial_preload, c.interference, c.tilt);
 }
@@ -70,6 +76,7 @@ const StiffnessEstimate& StiffnessEstimator::reset() {
   // The mesh phase a preload is solved at (setPreloads) is the last torque's: a reset estimator is
   // a fresh one, at angle 0, not at the angle of the run before the reset.
   last_pinion_angle_ = 0.0;
+  supports_revision_ = nextSupportsRevision();
   return estimate_;
 }
 
@@ -253,6 +260,7 @@ const StiffnessEstimate& StiffnessEstimator::setPreloads(const std::vector<Prelo
     e.radial_load = w.radial_load;
     e.axial_load = s.config.arrangement == Arrangement::kSingle ? s.config.axial_preload : 0.0;
   }
+  supports_revision_ = nextSupportsRevision();
   estimate_.mesh_force = mesh_force;
   estimate_.mesh = mesh;
   return estimate_;

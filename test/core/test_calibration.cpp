@@ -190,6 +190,14 @@ TEST(StaticTeModel, KeptBothFlankMeanIsInvisible) {
   const AntiBacklashMesh mesh(rig.gears, rig.anti_backlash, rig.mesh_model, rig.mesh_samples, 1.0);
   const double both = periodMean(mesh, [](double k1, double kc) { return k1 + kc; });
   EXPECT_NEAR(warm.meanMeshStiffness(p, 0.1) / both, 1.0, 2e-4);
+  // Outside the both-flank range the flank states come from the kept k1, k_c per grid point; far
+  // above the knee every phase has the back half lifted (the mean is k1's), far past the reverse
+  // knee every phase runs through the spring chain alone (k_c's): the independent integrals again.
+  // (Reverse knee: -F_p (1 + k_c/k1) ~ -97 N of mesh force, ~ -1.3 N·m; -20 N·m is far past it.)
+  const double drive = periodMean(mesh, [](double k1, double) { return k1; });
+  const double back = periodMean(mesh, [](double, double kc) { return kc; });
+  EXPECT_NEAR(warm.meanMeshStiffness(p, 3.0 * knee) / drive, 1.0, 2e-4);
+  EXPECT_NEAR(warm.meanMeshStiffness(p, -20.0) / back, 1.0, 2e-4);
 }
 
 TEST(StaticTeModel, BearingDeflectionIsTheSecantNotTheTangent) {
@@ -215,6 +223,42 @@ TEST(StaticTeModel, BearingDeflectionIsTheSecantNotTheTangent) {
   // float axially, which k_xx (axial displacement held) does not (docs/calibration.md).
   estimator.setTorque(4.0);
   EXPECT_GT(d[0], 1.2 * (4.0 / model.baseRadius()[0]) / estimator.shaftRadialStiffness()[0]);
+}
+
+// shaftDeflection keeps its last result and the unloaded solutions (the calibrator asks at every
+// encoder reading, five per torque message). A new preload, a reset, or another estimator must
+// never get a kept value: each answer equals a fresh model's, bit for bit.
+TEST(StaticTeModel, KeptShaftDeflectionFollowsThePreloads) {
+  const RigConfig rig = seedRig();
+  StaticTeModel warm(rig);
+  StiffnessEstimator a(rig), b(rig);
+  const BearingSupportConfig& c = rig.bearings[0];
+  b.setPreloads({{c.name, 0.5 * c.axial_preload, c.radial_preload, c.interference.inner, c.interference.outer}});
+  auto fresh = [&](double torque, const StiffnessEstimator& e) {
+    StaticTeModel model(rig);
+    std::array<double, 2> d{};
+    model.shaftDeflection(torque, e, d);
+    return d;
+  };
+  std::array<double, 2> d{};
+  warm.shaftDeflection(4.0, a, d);
+  const std::array<double, 2> a4 = fresh(4.0, a);
+  EXPECT_EQ(d, a4);
+  warm.shaftDeflection(4.0, a, d);  // the same question: the kept answer
+  EXPECT_EQ(d, a4);
+  warm.shaftDeflection(4.0, b, d);  // another estimator, the same torque: a half axial preload
+  EXPECT_EQ(d, fresh(4.0, b));
+  EXPECT_GT(std::abs(d[0]), 1.05 * std::abs(a4[0]));  // a softer support: the cache was not used
+  warm.shaftDeflection(-2.0, b, d);
+  EXPECT_EQ(d, fresh(-2.0, b));
+  // A preload change on the same estimator, at the torque asked last.
+  b.setPreloads({{c.name, c.axial_preload, c.radial_preload + 50.0, c.interference.inner, c.interference.outer}});
+  warm.shaftDeflection(-2.0, b, d);
+  EXPECT_EQ(d, fresh(-2.0, b));
+  b.reset();
+  warm.shaftDeflection(-2.0, b, d);
+  EXPECT_EQ(d, fresh(-2.0, b));
+  EXPECT_NE(a.supportsRevision(), b.supportsRevision());
 }
 
 TEST(OrderRegression, SeparatesMeshHarmonicsFromShaftOrders) {

@@ -162,16 +162,32 @@ class StaticTeModel {
   double deflection(const CalibrationVector& p, double force, double k1u, double k2u) const;
   double spring_ = 0.0;  ///< k_te [N/m]
   std::array<double, 2> base_radius_{};
-  /// Scratch solutions for shaftDeflection (one per support): no allocation once sized.
+  /// Scratch solutions for shaftDeflection (one per support): no allocation once sized. unloaded_
+  /// holds the solutions at the radial preloads alone for deflection_memo_.revision.
   std::vector<BearingSolution> loaded_, unloaded_;
+  /// shaftDeflection's last result, for the supports' revision (StiffnessEstimator::
+  /// supportsRevision, never 0) it was solved at; revision 0: nothing valid, unloaded_ included.
+  struct DeflectionMemo {
+    long revision = 0;
+    double torque = 0.0;
+    std::array<double, 2> shafts{};
+  };
+  DeflectionMemo deflection_memo_;
   /// meanMeshStiffness with both flanks loaded at every grid point, per (mesh scale, preload
   /// torque), and the mesh-force range inside which that holds: there the mean does not depend on
   /// the force, and the calibration's bands ask for it at every stiffness message (1 kHz) with a
   /// handful of parameter vectors that change only when the estimate does. A few entries, reused
   /// in turn; not for concurrent use (one Calibrator owns one model).
+  /// Per grid point for one (mesh scale, preload torque): k1, k_c, k1 + k_c and F_p (k1 + k_c) [N].
+  struct FlankPoint {
+    double k1 = 0.0, kc = 0.0, sum = 0.0, fp_sum = 0.0;
+  };
   struct BothFlankMean {
     double scale = std::numeric_limits<double>::quiet_NaN(), preload = 0.0, mean = 0.0, force_low = 0.0,
            force_high = -1.0;
+    /// The grid's flank stiffnesses at this entry's parameters: meanMeshStiffness at a force
+    /// outside [force_low, force_high] (above or near the knee) reads its flank states from them.
+    std::vector<FlankPoint> points;
   };
   const BothFlankMean& bothFlankMean(const CalibrationVector& p) const;
   mutable std::array<BothFlankMean, 16> both_flank_means_{};

@@ -104,6 +104,11 @@ class StiffnessEstimator {
   /// Support i's configuration with its current preload settings, and its Hertz model.
   const BearingSupportConfig& supportConfig(std::size_t i) const { return supports_.at(i).config; }
   const BearingSupport& supportModel(std::size_t i) const { return *supports_.at(i).model; }
+  /// Changes whenever a support's settings or model may have changed (reset, setPreloads), never
+  /// with the torque, and is unique across every estimator of the process: a cache of results that
+  /// depend on supportConfig / supportModel alone (StaticTeModel::shaftDeflection) is valid while
+  /// it stays the same.
+  long supportsRevision() const { return supports_revision_; }
   const AntiBacklashMesh& mesh() const { return *mesh_; }
   /// The same read-only table, for the dynamics of the same rig (built once, shared).
   std::shared_ptr<const AntiBacklashMesh> sharedMesh() const { return mesh_; }
@@ -147,6 +152,9 @@ class StiffnessEstimator {
   };
   std::vector<Workspace> workspace_;
   double last_pinion_angle_ = 0.0;
+  long supports_revision_ = 0;
+  /// The next supports_revision_ (process-wide, so two estimators never share one).
+  static long nextSupportsRevision();
 };
 
 }  // namespace drivetrain_stiffness
