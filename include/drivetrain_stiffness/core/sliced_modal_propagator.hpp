@@ -63,8 +63,8 @@ class SlicedModalPropagator {
   bool propagate(State6& y, double& phase, double f, double duration, double drive_force) const;
   /// A lower bound of the period of the fastest mode [s] over every slice and regime, 2 pi /
   /// sqrt(trace(M^-1 K)) at the stiffest slice (the trace bounds the largest eigenvalue of the
-  /// undamped problem, all of them >= 0): how long a dopri5 stretch through a nonlinear moment
-  /// need be at most before the exact propagation is tried again.
+  /// undamped problem, all of them >= 0): the time scale of propagateMeasured's dopri5 stretches
+  /// through a nonlinear moment (the first is kFirstNonlinearStretch of it).
   double fastestPeriodBound() const { return fastest_period_bound_; }
   /// Changes of the contacts located and gone through (inside a step or on a slice boundary).
   long regimeChanges() const { return events_; }
@@ -185,14 +185,21 @@ class SlicedModalPropagator {
 /// kMaxNonlinearStretches stretches in one call the rest of the interval goes to `nonlinear` in one
 /// piece (whose own work bound then holds). A template, not a std::function: the estimator's
 /// per-input path allocates nothing. Returns the number of stretches.
-inline constexpr long kMaxNonlinearStretches = 256;
 /// The first stretch, as a fraction of the fastest period. A damper clips for a small part of a
-/// period where a flank lifts or lands (docs/model.md, "Where no linear regime holds"): on the 48 s
+/// period where a flank lifts or lands (docs/model.md, "Following the rig's motion"): on the 48 s
 /// load_sweep bag a first stretch of a whole period had dopri5 integrate 62.5 ms of rig time in
 /// 4,525 stretches, one of 1/16 of a period 7.6 ms in 8,273 (2.1 million right-hand sides against
 /// 0.5 million). The doubling search costs one refused propagateLinear per doubling, about a
 /// microsecond, against ~10 us of dopri5 per sixteenth of a period at rtol 1e-8.
 inline constexpr double kFirstNonlinearStretch = 1.0 / 16.0;
+/// At most this many stretches per call: 256 whole-period stretches' worth of the shorter ones
+/// (the work bound of a call is about the same as with 256 whole periods: ~10 us of dopri5 and a
+/// refused propagateLinear each). Where a flank lifts and lands again after a tiny exact advance,
+/// each stretch starts again at the first length, so a 1 ms call could take ~940 stretches at
+/// worst (a review's estimate for the seed rig's 17 us period), which the old 256 would have cut
+/// off to one dopri5 piece; measured near the knee, the most in one call was 24 at 1 ms (motion
+/// scenes) and 6 (MeasuredPropagationThroughChatterStaysFarBelowTheStretchCap).
+inline constexpr long kMaxNonlinearStretches = static_cast<long>(256 / kFirstNonlinearStretch);
 template <typename Nonlinear>
 long propagateMeasured(const SlicedModalPropagator& exact, State6& y, double& phase, double f, double t, double t_end,
                        double drive_force, Nonlinear&& nonlinear) {
