@@ -220,15 +220,14 @@ const StaticTeModel::BothFlankMean& StaticTeModel::bothFlankMean(const Calibrati
   c.scale = p[kMeshScale];
   c.preload = p[kPreloadTorque];
   c.mean = 0.0;
+  c.fp = p[kPreloadTorque] / base_radius_[1];  // as flanks() forms F_p
   c.force_low = -std::numeric_limits<double>::infinity();
   c.force_high = std::numeric_limits<double>::infinity();
   bool never_both = false;
   for (std::size_t j = 0; j < grid_.size(); ++j) {
     const GridPoint& g = grid_[j];
     const Flanks f = flanks(p, 0.0, g.k1, g.k2);
-    // The operands of AntiBacklashMesh::flankContact's products, formed as it forms them, so the
-    // flank state read from them is its state bit for bit.
-    c.points[j] = {f.k1, f.kc, f.k1 + f.kc, f.fp * (f.k1 + f.kc)};
+    c.points[j] = {f.k1, f.kc};
     c.mean += g.weight * (f.k1 + f.kc);  // as meanMeshStiffness sums it: the same bits
     // AntiBacklashMesh::flankContact keeps both flanks for -F_p (1 + k_c/k1) <= F <= F_p (1 + k1/k_c);
     // the range is taken 1e-12 inside those bounds, far beyond the rounding of its products.
@@ -250,19 +249,13 @@ double StaticTeModel::meanMeshStiffness(const CalibrationVector& p, double torqu
   const double force = meshForce(torque);
   const BothFlankMean& both = bothFlankMean(p);
   if (force >= both.force_low && force <= both.force_high) return both.mean;
-  // Each point's flank state by AntiBacklashMesh::flankContact's criterion on the entry's cached
-  // k1, k_c and F_p (k1 + k_c): the numbers of flanks() at this force, without its divisions.
+  // Each point's flank state from the entry's k1, k_c and F_p: flanks() at this force, without
+  // its divisions.
   double k = 0.0;
   for (std::size_t j = 0; j < grid_.size(); ++j) {
     const FlankPoint& f = both.points[j];
-    double ks;
-    if (!(f.kc > 0.0) || force * f.kc > f.fp_sum) {
-      ks = f.k1;  // drive flank only (or an ordinary gear)
-    } else if (force * f.k1 < -f.fp_sum) {
-      ks = f.kc;  // back path only
-    } else {
-      ks = f.sum;
-    }
+    const FlankContact contact = AntiBacklashMesh::flankContact(force, f.k1, f.kc, both.fp);
+    const double ks = contact == FlankContact::kBoth ? f.k1 + f.kc : (contact == FlankContact::kDriveOnly ? f.k1 : f.kc);
     k += grid_[j].weight * ks;
   }
   return k;

@@ -178,13 +178,14 @@ class StaticTeModel {
   /// the force, and the calibration's bands ask for it at every stiffness message (1 kHz) with a
   /// handful of parameter vectors that change only when the estimate does. A few entries, reused
   /// in turn; not for concurrent use (one Calibrator owns one model).
-  /// Per grid point for one (mesh scale, preload torque): k1, k_c, k1 + k_c and F_p (k1 + k_c) [N].
+  /// Per grid point for one (mesh scale, preload torque): k1 and k_c [N/m].
   struct FlankPoint {
-    double k1 = 0.0, kc = 0.0, sum = 0.0, fp_sum = 0.0;
+    double k1 = 0.0, kc = 0.0;
   };
   struct BothFlankMean {
     double scale = std::numeric_limits<double>::quiet_NaN(), preload = 0.0, mean = 0.0, force_low = 0.0,
            force_high = -1.0;
+    double fp = 0.0;  ///< F_p [N] at this entry's preload torque
     /// The grid's flank stiffnesses at this entry's parameters: meanMeshStiffness at a force
     /// outside [force_low, force_high] (above or near the knee) reads its flank states from them.
     std::vector<FlankPoint> points;

@@ -197,8 +197,8 @@ inline constexpr double kFirstNonlinearStretch = 1.0 / 16.0;
 /// refused propagateLinear each). Where a flank lifts and lands again after a tiny exact advance,
 /// each stretch starts again at the first length, so a 1 ms call could take ~940 stretches at
 /// worst (a review's estimate for the seed rig's 17 us period), which the old 256 would have cut
-/// off to one dopri5 piece; measured near the knee, the most in one call was 24 at 1 ms (motion
-/// scenes) and 6 (MeasuredPropagationThroughChatterStaysFarBelowTheStretchCap).
+/// off to one dopri5 piece; measured at 0.8-1.2 x the knee torque, the most in one 1 ms call was 80
+/// (run_up; 38 with whole-period stretches) and 11 (MeasuredPropagationThroughChatterStaysFarBelowTheStretchCap).
 inline constexpr long kMaxNonlinearStretches = static_cast<long>(256 / kFirstNonlinearStretch);
 template <typename Nonlinear>
 long propagateMeasured(const SlicedModalPropagator& exact, State6& y, double& phase, double f, double t, double t_end,
