@@ -96,13 +96,32 @@ void DynamicsEstimator::reset(double t, double torque) {
   origin_ = t;
   k_ = 0;
   torque_ = torque;
+  interval_torque_ = torque;
+  torque_changes_ = 0;
   model_->setTorqueInput(torque);
   y_ = staticEquilibrium(*model_, 0.0);
   started_ = true;
 }
 
-void DynamicsEstimator::setTorque(double torque) {
+void DynamicsEstimator::setTorque(double torque, std::optional<double> at) {
   requireFinite("torque", torque);
+  if (at) requireFinite("at", *at);
+  if (started_ && !following_ && at) {
+    // Nominal phase: the state sits on sample k_; a torque stamped inside the interval that
+    // follows takes effect at its stamp (advanceTo applies it there), not at the sample.
+    // A stamp on the sample to rounding (1e-9 of an interval: a picosecond at 1 kHz) is taken there.
+    const double offset = (*at - origin_) - k_ * interval_;
+    if (offset > 1e-9 * interval_ && offset < interval_) {
+      if (torque_changes_ == 0) interval_torque_ = torque_;
+      if (torque_changes_ < kMaxTorqueChangesPerInterval) {
+        torque_change_[torque_changes_++] = {offset, torque};
+      } else {
+        // More than kMaxTorqueChangesPerInterval inputs inside one output interval: the last
+        // one's torque is replaced (its stamp kept), so no storage grows on the input path.
+        torque_change_[kMaxTorqueChangesPerInterval - 1].torque = torque;
+      }
+    }
+  }
   torque_ = torque;
   model_->setTorqueInput(torque);
 }
@@ -207,6 +226,16 @@ void DynamicsEstimator::startFollowing() {
   mesh_frequency_ = nominalMeshFrequency();
   phase_ = wrapTurns(mesh_frequency_ * t_state_);
   following_ = true;
+  // Torque inputs already taken inside the interval that follows: each from its own stamp.
+  if (torque_changes_ > 0) {
+    const double start = t_state_;
+    torque_ = interval_torque_;
+    for (int i = 0; i < torque_changes_; ++i) {
+      propagateTo(start + torque_change_[i].offset);
+      torque_ = torque_change_[i].torque;
+    }
+    torque_changes_ = 0;
+  }
 }
 
 void DynamicsEstimator::moveTo(double t) {
@@ -396,6 +425,42 @@ DynamicsSample DynamicsEstimator::sampleOf(const GearRotorModel& model, double t
   return s;
 }
 
+void DynamicsEstimator::advanceIntervalWithTorqueChanges() {
+  // The interval from sample k_ with the torque held at its start, then each input from its stamp
+  // (rule 10). Exact: the held torque's propagation plus each step's size times the response to a
+  // unit step at its instant (PeriodicExponentialPropagator::torqueStepResponse); where the
+  // contacts leave the linear regime, dopri5 piecewise between the stamps.
+  const double t_k = k_ * interval_, t_next = (k_ + 1) * interval_;
+  bool done = false;
+  if (propagator_) {
+    State6 added = State6::Zero();
+    double before = interval_torque_;
+    for (int i = 0; i < torque_changes_; ++i) {
+      added += (torque_change_[i].torque - before) * propagator_->torqueStepResponse(k_, torque_change_[i].offset);
+      before = torque_change_[i].torque;
+    }
+    PeriodicExponentialPropagator::Augmented z = propagator_->augment(t_k, y_);
+    if (propagator_->step(k_, z, interval_torque_, interval_torque_, &added)) {
+      y_ = z.head<6>();
+      done = true;
+    }
+  }
+  if (!done) {
+    double from = t_k, held = interval_torque_;
+    for (int i = 0; i <= torque_changes_; ++i) {
+      const double to = i < torque_changes_ ? t_k + torque_change_[i].offset : t_next;
+      model_->setTorqueInput(held);
+      if (to > from) y_ = integrate(*model_, IntegratorMethod::kDopri5, fallback_, from, y_, to, to - from, nullptr);
+      if (i < torque_changes_) held = torque_change_[i].torque;
+      from = to;
+    }
+    model_->setTorqueInput(torque_);
+    ++fallback_intervals_;
+  }
+  ++k_;
+  torque_changes_ = 0;
+}
+
 void DynamicsEstimator::advanceTo(double t, const std::function<void(const DynamicsSample&)>& sink) {
   requireFinite("t", t);
   if (!started_) throw InvalidInput("dynamics: advanceTo before reset");
@@ -413,6 +478,11 @@ void DynamicsEstimator::advanceTo(double t, const std::function<void(const Dynam
   }
   const long k_end = k_ + static_cast<long>(samples);
   const double torque = torque_;
+  if (k_end > k_ && torque_changes_ > 0 && fidelity_ == Fidelity::kFull) {
+    advanceIntervalWithTorqueChanges();
+    if (sink) sink(sample(k_ * interval_, y_));
+  }
+  if (k_end > k_) torque_changes_ = 0;  // reduced fidelities hold each torque from the sample before it
   if (fidelity_ != Fidelity::kFull && k_end > k_) {
     // Reduced fidelities run on the same grid; the observer's first call is the start state.
     const long k0 = k_;

@@ -107,11 +107,19 @@ PeriodicExponentialPropagator::PeriodicExponentialPropagator(const GearRotorMode
   scale << 1e-6, 1e-6, 1e-6, 1e-6 * w_max, 1e-6 * w_max, 1e-6 * w_max, 1.0, 1.0, 1.0, 1.0, 1.0 / output_interval;
   const Matrix11 d = scale.asDiagonal(), d_inv = scale.cwiseInverse().asDiagonal();
 
+  for (int i = 0; i < 6; ++i) scale7_[i] = scale[i];
+  scale7_[6] = scale[kU];
   propagators_.resize(n);
   k1_.resize(n);
   kc_.resize(n);
   backlash_offset_.resize(n);
+  piece_begin_.assign(1, 0);
+  tail_begin_.assign(1, 0);
+  node_count_.resize(n);
+  // Node propagators kept per mesh period: at most kMaxStoredNodes (every node_stride_-th node).
+  node_stride_ = static_cast<int>(std::max(1.0, std::ceil(period / h_max * 1.05 / kMaxStoredNodes)));
   const double c_g = 0.5 - std::sqrt(3.0) / 6.0, c_g2 = 0.5 + std::sqrt(3.0) / 6.0;
+  std::vector<Matrix11> step_exps;  // one interval's Magnus steps, balanced units
   for (long j = 0; j < n; ++j) {
     const double a = t0 + j * output_interval, b = a + output_interval;
     MeshInstant mj;
@@ -126,21 +134,103 @@ PeriodicExponentialPropagator::PeriodicExponentialPropagator(const GearRotorMode
     if (b - cuts.back() <= 1e-12 * output_interval) cuts.pop_back();
     cuts.push_back(b);
     Matrix11 phi = Matrix11::Identity();
+    step_exps.clear();
     for (std::size_t c = 0; c + 1 < cuts.size(); ++c) {
       const double len = cuts[c + 1] - cuts[c];
       const int steps = std::max(1, static_cast<int>(std::ceil(len / h_max)));
       const double h = len / steps;
+      pieces_.push_back({cuts[c], h, steps, static_cast<int>(step_exps.size())});
       for (int s = 0; s < steps; ++s) {
         const double t = cuts[c] + s * h;
         const Matrix11 a1 = systemMatrix(t + c_g * h), a2 = systemMatrix(t + c_g2 * h);
         // Omega = h/2 (A1 + A2) + sqrt(3) h^2 / 12 [A2, A1]  (4th-order Magnus, Gauss points).
         const Matrix11 omega = 0.5 * h * (a1 + a2) + std::sqrt(3.0) / 12.0 * h * h * (a2 * a1 - a1 * a2);
-        phi = (d_inv * omega * d).exp() * phi;  // in balanced units
+        step_exps.push_back((d_inv * omega * d).exp());  // in balanced units
+        phi = step_exps.back() * phi;
         ++magnus_steps_;
       }
     }
     propagators_[j] = (d * phi * d_inv).topRows<9>();
+    // Phi(b, node) backwards from the end, kept at the nodes stride, 2 stride, ... and the last.
+    const int m = static_cast<int>(step_exps.size());
+    const int kept = (m + node_stride_ - 1) / node_stride_;
+    tails_.resize(tails_.size() + kept);
+    // Only the state rows: the torque response needs no TE or torque row.
+    Eigen::Matrix<double, 6, 11> tail = Eigen::Matrix<double, 6, 11>::Identity();
+    for (int node = m; node >= 1; --node) {
+      if (node == m || node % node_stride_ == 0) {
+        Tail& out = tails_[tail_begin_.back() + (node + node_stride_ - 1) / node_stride_ - 1];
+        // Back to physical units: d (rows) tail d^-1 (columns).
+        for (int c = 0; c < 7; ++c) {
+          const int col = c < 6 ? c : static_cast<int>(kU);
+          for (int r = 0; r < 6; ++r) out(r, c) = scale[r] * tail(r, col) / scale[col];
+        }
+      }
+      tail = tail * step_exps[node - 1];
+    }
+    node_count_[j] = m;
+    piece_begin_.push_back(static_cast<int>(pieces_.size()));
+    tail_begin_.push_back(static_cast<int>(tails_.size()));
   }
+}
+
+PeriodicExponentialPropagator::Vector7 PeriodicExponentialPropagator::magnusStepOnTorque(double t, double h,
+                                                                                        const Vector7& v) const {
+  // The constructor's 4th-order Magnus step over [t, t + h] applied to a vector of the state and
+  // the torque slot only. That subspace is invariant: no TE generator row (sin, cos, 1) reads the
+  // state or the torque, and the torque slot's own row reads only u', zero for a step. So the
+  // 7x7 restriction of Omega (commutator included, as the rows outside add nothing to it) acts
+  // alone, and exp(Omega) v is summed as its Taylor series on the vector, in balanced units where
+  // |Omega| is about h omega_max <= the step factor: to 1e-17 of the sum within some 30 terms,
+  // matrix-vector products instead of a matrix exponential.
+  const double c_g = 0.5 - std::sqrt(3.0) / 6.0, c_g2 = 0.5 + std::sqrt(3.0) / 6.0;
+  Matrix7 a1, a2;
+  const auto restrict = [this](const Matrix11& full, Matrix7& out) {
+    static constexpr int kIndex[7] = {kXp, kXg, kX, kVp, kVg, kV, kU};
+    for (int r = 0; r < 7; ++r)
+      for (int c = 0; c < 7; ++c) out(r, c) = full(kIndex[r], kIndex[c]) * scale7_[c] / scale7_[r];
+  };
+  restrict(systemMatrix(t + c_g * h), a1);
+  restrict(systemMatrix(t + c_g2 * h), a2);
+  const Matrix7 omega = 0.5 * h * (a1 + a2) + std::sqrt(3.0) / 12.0 * h * h * (a2 * a1 - a1 * a2);
+  Vector7 term = v.cwiseQuotient(scale7_), sum = term;
+  for (int n = 1; n < 60; ++n) {
+    term = omega * term / static_cast<double>(n);
+    sum += term;
+    if (term.cwiseAbs().maxCoeff() <= 1e-17 * sum.cwiseAbs().maxCoeff()) break;
+  }
+  return sum.cwiseProduct(scale7_);
+}
+
+State6 PeriodicExponentialPropagator::torqueStepResponse(long k, double offset) const {
+  requireFinite("offset", offset);
+  if (offset < 0.0 || offset > interval_ * (1.0 + 1e-12)) {
+    throwInvalid("offset", offset, "must lie in the output interval [0, " + formatValue(interval_) + "] s");
+  }
+  const long n = static_cast<long>(propagators_.size());
+  const int j = static_cast<int>(((k % n) + n) % n);
+  const double t = t0_ + j * interval_ + offset;  // the instant, in the first mesh period
+  // The step holding t: its piece (the last whose start is <= t) and its place in the piece.
+  int p = piece_begin_[j];
+  while (p + 1 < piece_begin_[j + 1] && pieces_[p + 1].start <= t) ++p;
+  const MagnusPiece& piece = pieces_[p];
+  const int local = std::clamp(static_cast<int>(std::floor((t - piece.start) / piece.h)), 0, piece.steps - 1);
+  const int m = node_count_[j];
+  int node = piece.first_node + local + 1;  // the node that ends the step holding t
+  const double step_end = piece.start + (local + 1) * piece.h;
+  // Unit torque state at t (no displacement, velocity or TE), carried to that node exactly...
+  Vector7 v = Vector7::Zero();
+  v[6] = 1.0;
+  if (step_end - t > 0.0) v = magnusStepOnTorque(t, step_end - t, v);
+  // ... and on to the next kept node (node_stride_ > 1 only for very slow meshes).
+  while (node < m && node % node_stride_ != 0) {
+    int q = piece_begin_[j];
+    while (q + 1 < piece_begin_[j + 1] && pieces_[q + 1].first_node <= node) ++q;
+    const MagnusPiece& next = pieces_[q];
+    v = magnusStepOnTorque(next.start + (node - next.first_node) * next.h, next.h, v);
+    ++node;
+  }
+  return tails_[tail_begin_[j] + (node + node_stride_ - 1) / node_stride_ - 1] * v;
 }
 
 PeriodicExponentialPropagator::Matrix11 PeriodicExponentialPropagator::systemMatrix(double t) const {
@@ -217,14 +307,16 @@ PeriodicExponentialPropagator::Augmented PeriodicExponentialPropagator::augment(
   return z;
 }
 
-bool PeriodicExponentialPropagator::step(long k, Augmented& z, double torque_k, double torque_next) const {
+bool PeriodicExponentialPropagator::step(long k, Augmented& z, double torque_k, double torque_next,
+                                         const State6* added) const {
   const long n = static_cast<long>(propagators_.size());
   const double mean = torque_mean_;
   Eigen::Matrix<double, 11, 1> w;
   w.head<9>() = z;
   w[kU] = torque_k - mean;
   w[kUdot] = (torque_next - torque_k) / interval_;
-  const Augmented next = propagators_[((k % n) + n) % n] * w;
+  Augmented next = propagators_[((k % n) + n) % n] * w;
+  if (added) next.head<6>() += *added;
   if (!next.allFinite() || next.head<3>().cwiseAbs().maxCoeff() > divergence_limit_) {
     throw UnstableIntegration("integrator exponential: displacement beyond the divergence limit at sample " + std::to_string(k + 1));
   }
@@ -255,26 +347,26 @@ State6 PeriodicExponentialPropagator::run(const State6& y0, double t_end, const 
   for (long k = 0; k < k_end; ++k) {
     const double t_next = t0_ + (k + 1) * interval_;
     const double u_next = torqueAt(t_next) - torque.mean;
-    if (torque.kind == TorqueProfile::Kind::kSteps && stepInside(torque, t_next - interval_, t_next)) {
-      // A torque step inside this interval: a first-order hold would smear it, so this one
-      // interval is integrated by dopri5 (exact switch time) and the propagation resumes after it.
-      IntegrationStats part;
-      const State6 y_next = integrate(model_, IntegratorMethod::kDopri5, fallback, t_next - interval_, z.head<6>(),
-                                      t_next, interval_, nullptr, &part);
-      st.rhs_evaluations += part.rhs_evaluations;
-      z.head<6>() = y_next;
-      z[kSin] = std::sin(te_omega_ * t_next + te_phase_);
-      z[kCos] = std::cos(te_omega_ * t_next + te_phase_);
-      u = u_next;
-      ++st.steps;
-      ++st.events;
-      if (observe) observe(t_next, y_next);
-      continue;
-    }
     w.head<9>() = z;
     w[kU] = u;
     w[kUdot] = (u_next - u) / interval_;
-    const Eigen::Matrix<double, 9, 1> z_next = propagators_[k % n] * w;
+    Eigen::Matrix<double, 9, 1> z_next;
+    if (torque.kind == TorqueProfile::Kind::kSteps && stepInside(torque, t_next - interval_, t_next)) {
+      // Torque steps inside this interval: the torque held from its start, plus each step's size
+      // times the response to a unit step at its instant (exact: the system is linear).
+      w[kUdot] = 0.0;
+      z_next = propagators_[k % n] * w;
+      double before = u + torque.mean;
+      for (const auto& step : torque.steps) {
+        if (step.first > t_next - interval_ && step.first <= t_next) {
+          z_next.head<6>() += (step.second - before) * torqueStepResponse(k, step.first - (t_next - interval_));
+          before = step.second;
+          ++st.events;
+        }
+      }
+    } else {
+      z_next = propagators_[k % n] * w;
+    }
     if (!linearRegime(static_cast<int>((k + 1) % n), z_next)) {
       // A contact opened: dopri5 takes over from the last sample in the linear regime.
       const double t_k = t0_ + k * interval_;

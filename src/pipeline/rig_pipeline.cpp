@@ -547,6 +547,7 @@ void RigPipeline::emitUpTo(double t, PipelineSink& sink) {
 }
 
 void RigPipeline::advanceDynamics(Stamp stamp, double torque, PipelineSink& sink) {
+  std::optional<double> at;  // the stamp on the dynamics' clock, once the dynamics run up to it
   try {
     const double t = dynamics_->started() ? secondsBetween(stamp, dynamics_epoch_) : 0.0;
     const bool gap = dynamics_->started() && t - dynamics_->time() > options_.max_gap;
@@ -561,6 +562,7 @@ void RigPipeline::advanceDynamics(Stamp stamp, double torque, PipelineSink& sink
     }
     // Else another stream took the dynamics past this stamp: the torque applies from there.
     if (t > dynamics_->time()) emitUpTo(t, sink);
+    at = t;
   } catch (const Error& e) {
     // The state stays at its last good sample and every later input would fail the same way:
     // restart the model here (counted), as after a gap.
@@ -573,7 +575,7 @@ void RigPipeline::advanceDynamics(Stamp stamp, double torque, PipelineSink& sink
   }
   held_torque_ = torque;
   try {
-    dynamics_->setTorque(torque);  // the new torque holds from here on, whatever happened above
+    dynamics_->setTorque(torque, at);  // the new torque holds from its stamp on, whatever happened above
   } catch (const Error& e) {
     dynamicsError("dynamics", e);
   }

@@ -2,6 +2,8 @@
 // every sample on its grid, keeps phase resolution at large epochs and refuses time going back.
 #include <gtest/gtest.h>
 
+#include <cstdio>
+
 #include <Eigen/Dense>
 
 #include "drivetrain_stiffness/config/yaml_config.hpp"
@@ -87,6 +89,114 @@ TEST(DynamicsEstimator, MatchesOfflineDopri5AcrossATorqueChange) {
   for (int i = 20; i < 30; ++i) before += online[i].mesh_force / 10;
   for (int i = 50; i < 60; ++i) after += online[i].mesh_force / 10;
   EXPECT_NEAR(after / before, 4.0, 0.2);
+}
+
+// Rule 10 at the nominal phase: torque inputs stamped inside an output interval take effect at
+// their stamps, not at the sample before. Two inputs 0.4 and 0.7 ms into a 1 ms interval; the
+// reference is dopri5 at rtol 1e-11 switching the torque exactly there. The same run switching at
+// the sample instead differs from it by far more than the tolerance, so the check can fail.
+TEST(DynamicsEstimator, TorqueTakesEffectAtItsStampInsideAnInterval) {
+  DynamicsEstimator est(rig(), {1.2e8, 1.2e8}, 1000.0);
+  est.reset(0.0, 0.1);
+  std::vector<double> online;
+  auto keep = [&](const DynamicsSample& s) { online.push_back(s.dynamic_te); };
+  est.advanceTo(0.0304, keep);
+  est.setTorque(0.4, 0.0304);
+  est.advanceTo(0.0307, keep);
+  est.setTorque(0.25, 0.0307);
+  est.advanceTo(0.06, keep);
+  ASSERT_EQ(online.size(), 60u);
+  EXPECT_EQ(est.fallbackIntervals(), 0);  // the exact propagators carried both steps
+
+  IntegratorOptions o;
+  o.relative_tolerance = 1e-11;
+  o.absolute_tolerance = 1e-17;
+  o.max_step = 1e-4;
+  // dopri5 through the torque history {(t_i, T_i)}, samples every 1 ms after t = 0.
+  auto reference = [&](const std::vector<std::pair<double, double>>& history) {
+    DynamicsEstimator offline(rig(), {1.2e8, 1.2e8}, 1000.0);
+    offline.reset(0.0, 0.1);
+    std::vector<double> out;
+    State6 y = offline.state();
+    double from = 0.0;
+    for (std::size_t i = 0; i <= history.size(); ++i) {
+      const double to = i < history.size() ? history[i].first : 0.06;
+      // Output on the 1 ms grid: integrate between grid points and the switching instants.
+      double t = from;
+      while (t < to - 1e-12) {
+        const double grid = std::floor(t * 1000.0 + 1e-9) / 1000.0 + 1e-3, next = std::min(grid, to);
+        y = integrate(offline.model(), IntegratorMethod::kDopri5, o, t, y, next, next - t, nullptr);
+        if (std::abs(next - grid) < 1e-12) out.push_back(offline.model().forces(next, y).delta);
+        t = next;
+      }
+      if (i < history.size()) offline.setTorque(history[i].second);
+      from = to;
+    }
+    return out;
+  };
+  auto rms = [](const std::vector<double>& a, const std::vector<double>& b) {
+    double e = 0.0, r = 0.0;
+    for (std::size_t i = 0; i < b.size(); ++i) {
+      e += (a[i] - b[i]) * (a[i] - b[i]);
+      r += b[i] * b[i];
+    }
+    return std::sqrt(e / r);
+  };
+  const std::vector<double> at_stamps = reference({{0.0304, 0.4}, {0.0307, 0.25}});
+  const std::vector<double> at_sample = reference({{0.030, 0.25}});
+  ASSERT_EQ(at_stamps.size(), online.size());
+  std::printf("TE against dopri5 switching at the stamps: %.3g (RMS, relative); held from the sample: %.3g\n",
+              rms(online, at_stamps), rms(at_sample, at_stamps));
+  EXPECT_LT(rms(online, at_stamps), 1e-7);
+  EXPECT_GT(rms(at_sample, at_stamps), 1e-4);  // holding from the sample would be this far off
+}
+
+// More torque inputs inside one output interval than it keeps stamps for: the last kept input
+// takes the newest torque, nothing grows, and the result is the same as giving that input the
+// newest torque directly (bit for bit).
+TEST(DynamicsEstimator, TorqueInputsBeyondThoseKeptPerIntervalFoldIntoTheLast) {
+  const int kept = DynamicsEstimator::kMaxTorqueChangesPerInterval;
+  auto run = [&](int inputs) {
+    DynamicsEstimator est(rig(), {1.2e8, 1.2e8}, 1000.0);
+    est.reset(0.0, 0.1);
+    est.advanceTo(0.010, nullptr);
+    for (int i = 0; i < inputs; ++i) {
+      const double at = 0.010 + 2e-5 * (i + 1);
+      est.advanceTo(at, nullptr);
+      // Input i carries 0.1 + 0.01 i, except that the folded run gives the last kept one the
+      // torque of the overflowing run's newest input.
+      const bool last_kept = inputs == kept && i == kept - 1;
+      est.setTorque(last_kept ? 0.1 + 0.01 * (kept + 3) : 0.1 + 0.01 * i, at);
+    }
+    est.advanceTo(0.020, nullptr);
+    return est.state();
+  };
+  const State6 overflowing = run(kept + 4), folded = run(kept);
+  EXPECT_TRUE(overflowing.allFinite());
+  EXPECT_EQ(overflowing, folded);
+}
+
+// Torque inputs taken inside an interval at the nominal phase, then a bearing change that moves
+// the dynamics onto the sliced propagation: the inputs keep their stamps there too. The same as
+// moving onto it first (a damping setting at the sample) and giving the inputs there, bit for bit.
+TEST(DynamicsEstimator, TorqueStampsSurviveTheMoveOntoTheSlicedPropagation) {
+  auto run = [](bool move_first) {
+    DynamicsEstimator est(rig(), {1.2e8, 1.2e8}, 1000.0);
+    est.reset(0.0, 0.1);
+    est.advanceTo(0.030, nullptr);
+    if (move_first) est.setDamping(est.damping().mesh, est.damping().bearing);
+    est.advanceTo(0.0304, nullptr);
+    est.setTorque(0.4, 0.0304);
+    est.advanceTo(0.0307, nullptr);
+    est.setTorque(0.25, 0.0307);
+    est.advanceTo(0.0308, nullptr);
+    est.setBearingStiffness({1.5e8, 1.5e8}, 0.0308);
+    est.advanceTo(0.040, nullptr);
+    return est.state();
+  };
+  const State6 pending = run(false), moved = run(true);
+  EXPECT_TRUE(pending.allFinite());
+  EXPECT_EQ(pending, moved);
 }
 
 TEST(DynamicsEstimator, RefusesTimeGoingBackwards) {

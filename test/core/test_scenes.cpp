@@ -148,12 +148,17 @@ TEST(Scenes, ExponentialMethod) {
   EXPECT_EQ(st.fallbacks, 1);  // the g2 flank opens: dopri5 takes over
   EXPECT_LT(relErr(low_exp, low_ref), 1e-5);
 
-  // Torque steps: the interval holding a step is integrated by dopri5, so the step stays sharp.
+  // Torque steps at 5, 10 and 15 ms, each inside an output interval (5 ms is 53.3 intervals of
+  // 93.75 us): carried exactly by the unit-step responses at their instants, with no dopri5 (no
+  // right-hand side evaluated) and no smearing. The reference is dopri5 at rtol 1e-12 landing on
+  // each step.
   const Scene steps = makeScene("torque_steps", rig());
   const std::vector<double> steps_ref = deltas(steps, IntegratorMethod::kDopri5, ref, nullptr);
   const std::vector<double> steps_exp = deltas(steps, IntegratorMethod::kExponential, handover, &st);
   ASSERT_EQ(steps_exp.size(), steps_ref.size());
   EXPECT_EQ(st.fallbacks, 0);
+  EXPECT_EQ(st.events, 3);
+  EXPECT_EQ(st.rhs_evaluations, 0);
   EXPECT_LT(relErr(steps_exp, steps_ref), 1e-7);
 
   const Scene rattle = makeScene("bearing_rattle", rig());

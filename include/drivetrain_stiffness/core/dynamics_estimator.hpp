@@ -2,8 +2,8 @@
 //
 // The state lives on a fixed output grid (the requested rate rounded so that a whole number of
 // samples fits one mesh period). advanceTo(t) integrates from the last sample to the last grid
-// point <= t with the measured torque held (zero-order hold, applied from the next sample: latency
-// <= one output interval) and the load following it quasi-statically (drive force T / r_p), using
+// point <= t with the measured torque held (zero-order hold from each input's own stamp: setTorque
+// with `at`) and the load following it quasi-statically (drive force T / r_p), using
 // the exact-exponential propagators while the contacts stay closed and dopri5 for any interval in
 // which they do not. Times are absolute seconds of the caller's clock; internally they are taken
 // relative to the reset time so that 1e9-second epochs keep full phase resolution.
@@ -70,9 +70,15 @@ class DynamicsEstimator {
   void advanceTo(double t, const std::function<void(const DynamicsSample&)>& sink);
   /// Forget the state: started() is false until the next reset() (the model is kept).
   void stop() { started_ = false; }
-  /// New measured torque: from the next output sample (nominal phase), or from time() on when
-  /// following the measured motion.
-  void setTorque(double torque);
+  /// New measured torque, from `at` (absolute time >= time(), no output sample before it:
+  /// advanceTo(at) first) when given, else from time(). Following the measured motion the state is
+  /// at `at` already; at the nominal phase it sits on the sample before, and the next interval is
+  /// integrated with the torque held before up to `at` and this one from there, exactly (full
+  /// fidelity: PeriodicExponentialPropagator::torqueStepResponse; the reduced ones hold it from
+  /// the sample before). At most kMaxTorqueChangesPerInterval inputs per output interval keep
+  /// their own stamps; beyond that the last one's torque is replaced.
+  void setTorque(double torque, std::optional<double> at = std::nullopt);
+  static constexpr int kMaxTorqueChangesPerInterval = 16;
   /// The measured motion from absolute time t on: mesh phase [turns] at t and signed mesh
   /// frequency [Hz] (z_p * pinion speed / 2 pi). t >= time(); the caller has advanced to t (no
   /// output sample lies between time() and t). The state is propagated to t with the motion
@@ -139,6 +145,8 @@ class DynamicsEstimator {
   /// A shaft on its bearing, m x'' + c x' + k x = force held, propagated exactly over h.
   static void shaftStep(double m, double c, double k, double force, double h, double& x, double& v);
   void advanceFollowing(double t_rel, const std::function<void(const DynamicsSample&)>& sink);
+  /// Nominal phase, full fidelity: the interval from sample k_ through the torque inputs inside it.
+  void advanceIntervalWithTorqueChanges();
   GearRotorParameters currentParameters() const;
   /// After a bearing-stiffness or damping change (see the class comment).
   void parametersChanged();
@@ -151,6 +159,14 @@ class DynamicsEstimator {
   std::array<double, 2> bearing_stiffness_;
   double requested_rate_;
   double torque_ = 0.0;  ///< the measured torque held [N·m]; also the nominal model's torque input
+  /// Nominal phase: the torque inputs stamped inside the interval after sample k_ (offset from the
+  /// sample [s], torque [N·m]), and the torque held at that sample.
+  struct TorqueChange {
+    double offset = 0.0, torque = 0.0;
+  };
+  std::array<TorqueChange, kMaxTorqueChangesPerInterval> torque_change_{};
+  int torque_changes_ = 0;
+  double interval_torque_ = 0.0;
   std::shared_ptr<const AntiBacklashMesh> mesh_;
   /// The nominal-phase model, its torque input kept equal to torque_; the propagators hold copies
   /// of their own, so a rebuild replaces each whole.

@@ -4,9 +4,11 @@
 // ordinary gear; bearings without clearance) the model is linear with coefficients periodic in the
 // mesh phase: z' = A(t) z + b u(t) with the augmented state z = [y; sin; cos; 1] (the TE at mesh
 // frequency generated exactly by its own two states, the mean load by the constant state) and the
-// torque fluctuation u(t) entering with a first-order hold (exact for constant torque; an output
-// interval that contains a torque step is integrated by dopri5 instead, so steps stay sharp; a
-// smooth fluctuation carries the hold's O(dt^2) error). One mesh period is split at the
+// torque fluctuation u(t) entering with a first-order hold (exact for constant torque; a smooth
+// fluctuation carries the hold's O(dt^2) error). A torque step inside an output interval, at any
+// instant, is exact too: the system is linear, so the step adds its size times the response at the
+// interval's end to a unit step at that instant (torqueStepResponse), which the constructor keeps
+// the means for (the propagators from the Magnus nodes to the interval's end). One mesh period is split at the
 // output samples and at the tooth-count switches; each piece is propagated by 4th-order Magnus
 // steps (Gauss points, Blanes, Casas, Oteo & Ros, Phys. Rep. 470 (2009) 151, eq. 4.4) and the
 // products over each output interval are stored. Streaming then costs one 9x11 matrix-vector
@@ -51,8 +53,18 @@ class PeriodicExponentialPropagator {
   /// [y; sin; cos; 1] at time t (the TE generator states in phase with the excitation).
   Augmented augment(double t, const State6& y) const;
   /// One output interval: from z at sample k (time t0 + k dt) with torques u_k, u_k+1 [N·m] at its
-  /// ends; returns false, leaving z untouched, if the contacts leave the linear regime.
-  bool step(long k, Augmented& z, double torque_k, double torque_next) const;
+  /// ends, plus `added` (the torque steps inside it: their torqueStepResponse times their size) on
+  /// the state; returns false, leaving z untouched, if the contacts leave the linear regime.
+  bool step(long k, Augmented& z, double torque_k, double torque_next, const State6* added = nullptr) const;
+  /// The state at the end of output interval k in the linear regime due to a unit step of the
+  /// pinion torque (1 N·m) at `offset` [s] after the interval's start (0 <= offset <= interval),
+  /// everything else zero: Phi(t_k+1, t_k + offset) applied to the torque state. One Magnus step
+  /// from the instant to the next stored node (and at most a few more, see kMaxStoredNodes), then a
+  /// stored 6x7 product: a few microseconds.
+  State6 torqueStepResponse(long k, double offset) const;
+  /// Stored node propagators per mesh period at most (6x7 doubles each: 2.8 MB); beyond that every
+  /// n-th node is kept and torqueStepResponse takes up to n - 1 more Magnus steps.
+  static constexpr long kMaxStoredNodes = 8192;
   /// Homogeneous propagator over one mesh period (the monodromy matrix of the linear regime).
   Matrix6 monodromy() const;
   double t0() const { return t0_; }
@@ -67,6 +79,18 @@ class PeriodicExponentialPropagator {
   using Matrix11 = Eigen::Matrix<double, 11, 11>;
   using Propagator = Eigen::Matrix<double, 9, 11>;
   Matrix11 systemMatrix(double t) const;
+  using Matrix7 = Eigen::Matrix<double, 7, 7>;
+  using Vector7 = Eigen::Matrix<double, 7, 1>;  ///< the state and the torque slot
+  /// One 4th-order Magnus step over [t, t + h] applied to v (physical units), on the state and
+  /// torque slot alone (with u' = 0 they evolve by themselves).
+  Vector7 magnusStepOnTorque(double t, double h, const Vector7& v) const;
+  /// Constant-length Magnus steps of one output interval between two cuts; nodes count from the
+  /// interval's start (node 0) to its end.
+  struct MagnusPiece {
+    double start, h;  ///< [s], in the first mesh period
+    int steps, first_node;
+  };
+  using Tail = Eigen::Matrix<double, 6, 7>;  ///< Phi(interval end, node): state rows, state + torque columns
   bool linearRegime(int j, const Eigen::Matrix<double, 9, 1>& z) const;
 
   const RigExcitation& rig() const { return *model_.rigExcitation(); }
@@ -80,6 +104,11 @@ class PeriodicExponentialPropagator {
   bool held_ = false;  ///< the torque is the model's input
   std::vector<Propagator> propagators_;
   std::vector<double> k1_, kc_, backlash_offset_;  // at the sample times of one period
+  std::vector<MagnusPiece> pieces_;
+  std::vector<int> piece_begin_, tail_begin_, node_count_;  ///< per interval (piece_begin_, tail_begin_: one more)
+  std::vector<Tail> tails_;  ///< per interval, at nodes stride, 2 stride, ..., and the last
+  int node_stride_ = 1;
+  Vector7 scale7_;  ///< the constructor's balancing of the state and the torque slot
   long magnus_steps_ = 0;
   double divergence_limit_ = IntegratorOptions{}.divergence_limit;  ///< [m], for step()
 };
