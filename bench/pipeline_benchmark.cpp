@@ -2,11 +2,18 @@
 // an input processed in full (stiffness update, bearing handover, resonance check, stiffness
 // output) against one shed under backlog (rules and dynamics only), the ratio that tells how much
 // an overloaded node gains by shedding (docs/reliability.md, "Overload"). The node adds roscpp's
-// deserialization and one publish per output on top.
+// deserialization and one publish per output on top. BM_TorqueStepResponse: what a torque input
+// stamped between two output samples adds at the nominal phase (rule 10: the exact response to a
+// unit step at its instant, PeriodicExponentialPropagator::torqueStepResponse), at the live 1 kHz
+// output grid of the seed rig at 1000 rpm.
 // Run: devel/lib/drivetrain_stiffness/pipeline_benchmark --benchmark_repetitions=3 --benchmark_report_aggregates_only=true
 #include <benchmark/benchmark.h>
 
+#include <cmath>
+
 #include "drivetrain_stiffness/config/yaml_config.hpp"
+#include "drivetrain_stiffness/core/dynamics_estimator.hpp"
+#include "drivetrain_stiffness/core/exponential_integrator.hpp"
 #include "drivetrain_stiffness/pipeline/rig_pipeline.hpp"
 #include "ripple_torque_feed.hpp"  // NOLINT(build/include_subdir)
 
@@ -32,5 +39,20 @@ BENCHMARK(BM_TorqueInputFull);
 
 static void BM_TorqueInputShed(benchmark::State& state) { torqueInputs(state, Backlog::kShed); }
 BENCHMARK(BM_TorqueInputShed);
+
+static void BM_TorqueStepResponse(benchmark::State& state) {
+  const RigConfig rig = loadRigFile(DRIVETRAIN_SOURCE_DIR "/config/gearboxes/seed_servo.yaml");
+  DynamicsEstimator dynamics(rig, {1.2e8, 1.2e8}, 1000.0);
+  dynamics.reset(0.0, 0.1);
+  const PeriodicExponentialPropagator propagator(dynamics.model(), 0.0, dynamics.outputInterval());
+  long k = 0;
+  for (auto _ : state) {
+    // Instants spread over the interval (golden-ratio steps), intervals over the mesh period.
+    const double offset = dynamics.outputInterval() * (0.6180339887 * static_cast<double>(k) -
+                                                        std::floor(0.6180339887 * static_cast<double>(k)));
+    benchmark::DoNotOptimize(propagator.torqueStepResponse(k++, offset));
+  }
+}
+BENCHMARK(BM_TorqueStepResponse);
 
 BENCHMARK_MAIN();

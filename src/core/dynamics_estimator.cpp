@@ -76,7 +76,8 @@ void DynamicsEstimator::buildModel() {
   if (!(interval > 0.0 && std::isfinite(interval))) throwInvalid("mesh period", period, "gives no usable output grid");
   std::unique_ptr<PeriodicExponentialPropagator> propagator;
   if (d.bearing_clearance[0] == 0.0 && d.bearing_clearance[1] == 0.0) {
-    propagator = std::make_unique<PeriodicExponentialPropagator>(*model, 0.0, interval);
+    // With the settling bound: near a knee the intervals go to dopri5 (advanceTo).
+    propagator = std::make_unique<PeriodicExponentialPropagator>(*model, 0.0, interval, 1.0, true);
   }
   // Kept only now, all together: a refused rebuild leaves the last model, grid and propagators.
   propagator_ = std::move(propagator);
@@ -432,7 +433,9 @@ void DynamicsEstimator::advanceIntervalWithTorqueChanges() {
   // contacts leave the linear regime, dopri5 piecewise between the stamps.
   const double t_k = k_ * interval_, t_next = (k_ + 1) * interval_;
   bool done = false;
-  if (propagator_) {
+  bool settles = propagator_ && propagator_->contactsSettle(interval_torque_);
+  for (int i = 0; i < torque_changes_ && settles; ++i) settles = propagator_->contactsSettle(torque_change_[i].torque);
+  if (settles) {
     State6 added = State6::Zero();
     double before = interval_torque_;
     for (int i = 0; i < torque_changes_; ++i) {
@@ -478,6 +481,7 @@ void DynamicsEstimator::advanceTo(double t, const std::function<void(const Dynam
   }
   const long k_end = k_ + static_cast<long>(samples);
   const double torque = torque_;
+  const bool settles = propagator_ && propagator_->contactsSettle(torque);
   if (k_end > k_ && torque_changes_ > 0 && fidelity_ == Fidelity::kFull) {
     advanceIntervalWithTorqueChanges();
     if (sink) sink(sample(k_ * interval_, y_));
@@ -498,7 +502,8 @@ void DynamicsEstimator::advanceTo(double t, const std::function<void(const Dynam
   while (k_ < k_end) {
     const double t_k = k_ * interval_, t_next = (k_ + 1) * interval_;
     bool done = false;
-    if (propagator_) {
+    // Near a knee a flank may lift and land again between two samples (contactsSettle): dopri5.
+    if (settles) {
       PeriodicExponentialPropagator::Augmented z = propagator_->augment(t_k, y_);
       if (propagator_->step(k_, z, torque, torque)) {
         y_ = z.head<6>();

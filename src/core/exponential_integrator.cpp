@@ -2,8 +2,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <Eigen/Eigenvalues>
+#include <complex>
 #include <unsupported/Eigen/MatrixFunctions>
 
+#include "drivetrain_stiffness/core/anti_backlash_mesh.hpp"
 #include "drivetrain_stiffness/core/constants.hpp"
 #include "drivetrain_stiffness/core/validation.hpp"
 
@@ -40,7 +43,8 @@ double PeriodicExponentialPropagator::torqueAt(double t) const {
 }
 
 PeriodicExponentialPropagator::PeriodicExponentialPropagator(const GearRotorModel& model, double t0,
-                                                             double output_interval, double step_factor)
+                                                             double output_interval, double step_factor,
+                                                             bool tabulate_settling)
     : model_(model), t0_(t0), interval_(output_interval) {
   if (!model_.rigExcitation()) throw InvalidInput("method exponential: needs a rig excitation (mesh stiffness periodic in the mesh phase)");
   const RigExcitation& excitation = rig();
@@ -140,6 +144,7 @@ PeriodicExponentialPropagator::PeriodicExponentialPropagator(const GearRotorMode
       const int steps = std::max(1, static_cast<int>(std::ceil(len / h_max)));
       const double h = len / steps;
       pieces_.push_back({cuts[c], h, steps, static_cast<int>(step_exps.size())});
+      piece_operators_.push_back(pieceOperators(cuts[c], len));
       for (int s = 0; s < steps; ++s) {
         const double t = cuts[c] + s * h;
         const Matrix11 a1 = systemMatrix(t + c_g * h), a2 = systemMatrix(t + c_g2 * h);
@@ -172,27 +177,129 @@ PeriodicExponentialPropagator::PeriodicExponentialPropagator(const GearRotorMode
     piece_begin_.push_back(static_cast<int>(pieces_.size()));
     tail_begin_.push_back(static_cast<int>(tails_.size()));
   }
+  if (tabulate_settling && preload_force_ > 0.0) tabulateSettling(excitation, kinks, period);
 }
 
-PeriodicExponentialPropagator::Vector7 PeriodicExponentialPropagator::magnusStepOnTorque(double t, double h,
-                                                                                        const Vector7& v) const {
-  // The constructor's 4th-order Magnus step over [t, t + h] applied to a vector of the state and
-  // the torque slot only. That subspace is invariant: no TE generator row (sin, cos, 1) reads the
-  // state or the torque, and the torque slot's own row reads only u', zero for a step. So the
-  // 7x7 restriction of Omega (commutator included, as the rows outside add nothing to it) acts
-  // alone, and exp(Omega) v is summed as its Taylor series on the vector, in balanced units where
-  // |Omega| is about h omega_max <= the step factor: to 1e-17 of the sum within some 30 terms,
-  // matrix-vector products instead of a matrix exponential.
-  const double c_g = 0.5 - std::sqrt(3.0) / 6.0, c_g2 = 0.5 + std::sqrt(3.0) / 6.0;
-  Matrix7 a1, a2;
-  const auto restrict = [this](const Matrix11& full, Matrix7& out) {
+void PeriodicExponentialPropagator::tabulateSettling(const RigExcitation& excitation, const std::vector<double>& kinks,
+                                                     double period) {
+  // The stiffness over one period: uniformly, and on both sides of every switch and table node.
+  std::vector<double> times;
+  for (int i = 0; i < 128; ++i) times.push_back(t0_ + period * i / 128.0);
+  for (double t : kinks) {
+    times.push_back(t - 1e-9 * period);
+    times.push_back(t + 1e-9 * period);
+  }
+  std::sort(times.begin(), times.end());
+  const std::size_t n = times.size();
+  std::vector<double> k1(n), kc(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    MeshInstant m;
+    excitation.at(times[i], m);
+    k1[i] = m.k_drive;
+    kc[i] = m.k_back;
+  }
+  // gain: how far the mesh deflection can swing past its new static value, per unit of a step of
+  // that static value, with both flanks loaded: a tooth switch steps the static deflection by J
+  // (the shafts' static positions depend on the force alone, so the step is J on the torsional
+  // coordinate x), and from rest at the old static state the deflection moves as
+  // delta - delta_new = c e^{A t} (J e_x) = J sum_k (c v_k) e^{lambda_k t} (w_k e_x), bounded by
+  // J sum_k |c v_k| |w_k e_x| (A's modes v_k, the rows w_k of V^-1; c reads delta = x + x_p - x_g).
+  // The largest over 16 phases (the modes change little with the phase; 16 decompositions, not one
+  // per sample).
+  double gain = 0.0;
+  for (int i = 0; i < 16; ++i) {
+    const Matrix6 a = systemMatrix(t0_ + period * (i + 0.5) / 16.0).topLeftCorner<6, 6>();
+    const Eigen::EigenSolver<Matrix6> es(a);
+    if (es.info() != Eigen::Success) {
+      gain = INFINITY;
+      break;
+    }
+    const Eigen::Matrix<std::complex<double>, 6, 6> v = es.eigenvectors(), w = v.inverse();
+    double g = 0.0;
+    for (int k = 0; k < 6; ++k) g += std::abs(v(2, k) + v(0, k) - v(1, k)) * std::abs(w(k, 2));
+    gain = std::isfinite(g) ? std::max(gain, g) : INFINITY;
+  }
+  // Held mesh force F with both flanks loaded at every phase: the static deflection
+  // delta = F / (k1 + k_c) and its distance to the thresholds (the back path lifts at
+  // delta = F_p / k_c, the drive flank at delta = -F_p / k1; AntiBacklashMesh::flankContact). Where
+  // the swing that a step J of the static deflection starts can reach a threshold (distance below
+  // kSettleMargin gain J) a flank may lift and land again between two samples, which the regime
+  // check at the samples cannot see; so may it where F leaves both flanks loaded at some phase.
+  // Those forces are marked. Grid: log-spaced in |F| / F_p from 1e-3 to 1e4, both signs.
+  const double fp = preload_force_;
+  const int per_sign = 240;
+  std::vector<double> forces = {0.0};
+  for (int i = 0; i < per_sign; ++i) {
+    const double f = fp * std::pow(10.0, -3.0 + 7.0 * i / (per_sign - 1));
+    forces.push_back(f);
+    forces.push_back(-f);
+  }
+  std::sort(forces.begin(), forces.end());
+  std::vector<double> delta(n), margin(n);
+  for (double f : forces) {
+    bool ok = true;
+    for (std::size_t i = 0; i < n && ok; ++i) {
+      const double a = k1[i], c = kc[i];
+      ok = a > 0.0 && c > 0.0 && AntiBacklashMesh::flankContact(f, a, c, fp) == FlankContact::kBoth;
+      delta[i] = f / (a + c);
+      margin[i] = std::min(fp / c - delta[i], delta[i] + fp / a);
+    }
+    for (std::size_t i = 0; i < n && ok; ++i) {
+      const double jump = std::abs(delta[i] - delta[i == 0 ? n - 1 : i - 1]);  // the period wraps
+      ok = margin[i] > kSettleMargin * gain * jump;
+    }
+    settle_force_.push_back(f);
+    settle_ok_.push_back(ok ? 1 : 0);
+  }
+}
+
+bool PeriodicExponentialPropagator::contactsSettle(double torque) const {
+  if (settle_force_.empty()) return true;  // not tabulated, or an ordinary gear
+  // The held mesh force (the drive force of the torsional coordinate's equilibrium).
+  const double f = mean_force_ + torque_gain_ * (torque - torque_mean_);
+  if (!std::isfinite(f)) return false;
+  const auto it = std::lower_bound(settle_force_.begin(), settle_force_.end(), f);
+  const std::size_t hi =
+      std::min<std::size_t>(static_cast<std::size_t>(it - settle_force_.begin()), settle_force_.size() - 1);
+  const std::size_t lo = hi > 0 ? hi - 1 : 0;
+  return settle_ok_[lo] && settle_ok_[hi];  // both neighbours on the grid
+}
+
+PeriodicExponentialPropagator::PieceOperators PeriodicExponentialPropagator::pieceOperators(double start,
+                                                                                            double length) const {
+  // The system matrix on the state and the torque slot, balanced, is linear in t inside a piece
+  // (the pieces end on every table node and switch): A(start + tau) = A0 + tau A1, read at two
+  // interior points so that no switch at either end is evaluated on its wrong side.
+  const auto restricted = [this](double t) {
     static constexpr int kIndex[7] = {kXp, kXg, kX, kVp, kVg, kV, kU};
+    const Matrix11 full = systemMatrix(t);
+    Matrix7 out;
     for (int r = 0; r < 7; ++r)
       for (int c = 0; c < 7; ++c) out(r, c) = full(kIndex[r], kIndex[c]) * scale7_[c] / scale7_[r];
+    return out;
   };
-  restrict(systemMatrix(t + c_g * h), a1);
-  restrict(systemMatrix(t + c_g2 * h), a2);
-  const Matrix7 omega = 0.5 * h * (a1 + a2) + std::sqrt(3.0) / 12.0 * h * h * (a2 * a1 - a1 * a2);
+  const double ta = length / 3.0, tb = 2.0 * length / 3.0;
+  const Matrix7 aa = restricted(start + ta), ab = restricted(start + tb);
+  PieceOperators ops;
+  ops.a1 = (ab - aa) / (tb - ta);
+  ops.a0 = aa - ta * ops.a1;
+  ops.commutator = ops.a1 * ops.a0 - ops.a0 * ops.a1;
+  return ops;
+}
+
+PeriodicExponentialPropagator::Vector7 PeriodicExponentialPropagator::magnusStepOnTorque(const PieceOperators& ops,
+                                                                                        double tau, double h,
+                                                                                        const Vector7& v) const {
+  // The constructor's 4th-order Magnus step over [tau, tau + h] of a piece applied to a vector of
+  // the state and the torque slot only. That subspace is invariant: no TE generator row (sin, cos,
+  // 1) reads the state or the torque, and the torque slot's own row reads only u', zero for a
+  // step. So the 7x7 restriction of Omega (commutator included, as the rows outside add nothing to
+  // it) acts alone. With A linear in the piece, the Gauss points t1, t2 = tau + (1/2 -+ sqrt(3)/6) h
+  // give Omega = h/2 (A(t1) + A(t2)) + sqrt(3) h^2/12 [A(t2), A(t1)] = h A(tau + h/2) +
+  // h^3/12 [A1, A0]. exp(Omega) v is summed as its Taylor series on the vector, in balanced units
+  // where |Omega| is about h omega_max <= the step factor: to 1e-17 of the sum within some 25
+  // terms, matrix-vector products instead of a matrix exponential.
+  const Matrix7 omega = h * (ops.a0 + (tau + 0.5 * h) * ops.a1) + (h * h * h / 12.0) * ops.commutator;
   Vector7 term = v.cwiseQuotient(scale7_), sum = term;
   for (int n = 1; n < 60; ++n) {
     term = omega * term / static_cast<double>(n);
@@ -221,13 +328,13 @@ State6 PeriodicExponentialPropagator::torqueStepResponse(long k, double offset) 
   // Unit torque state at t (no displacement, velocity or TE), carried to that node exactly...
   Vector7 v = Vector7::Zero();
   v[6] = 1.0;
-  if (step_end - t > 0.0) v = magnusStepOnTorque(t, step_end - t, v);
+  if (step_end - t > 0.0) v = magnusStepOnTorque(piece_operators_[p], t - piece.start, step_end - t, v);
   // ... and on to the next kept node (node_stride_ > 1 only for very slow meshes).
   while (node < m && node % node_stride_ != 0) {
     int q = piece_begin_[j];
     while (q + 1 < piece_begin_[j + 1] && pieces_[q + 1].first_node <= node) ++q;
     const MagnusPiece& next = pieces_[q];
-    v = magnusStepOnTorque(next.start + (node - next.first_node) * next.h, next.h, v);
+    v = magnusStepOnTorque(piece_operators_[q], (node - next.first_node) * next.h, next.h, v);
     ++node;
   }
   return tails_[tail_begin_[j] + (node + node_stride_ - 1) / node_stride_ - 1] * v;

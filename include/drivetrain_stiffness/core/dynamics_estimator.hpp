@@ -5,7 +5,8 @@
 // point <= t with the measured torque held (zero-order hold from each input's own stamp: setTorque
 // with `at`) and the load following it quasi-statically (drive force T / r_p), using
 // the exact-exponential propagators while the contacts stay closed and dopri5 for any interval in
-// which they do not. Times are absolute seconds of the caller's clock; internally they are taken
+// which they do not, or in which they might open and close again unseen at the samples (a torque
+// near an anti-backlash knee: PeriodicExponentialPropagator::contactsSettle). Times are absolute seconds of the caller's clock; internally they are taken
 // relative to the reset time so that 1e9-second epochs keep full phase resolution.
 //
 // Two ways to drive the mesh phase (docs/model.md "Following the rig's motion"):

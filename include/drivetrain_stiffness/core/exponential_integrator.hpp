@@ -33,7 +33,10 @@ class PeriodicExponentialPropagator {
   /// clearance, a model without a rig excitation). The propagator keeps its own copy of the model
   /// (with its torque input at this moment): replacing or changing the caller's model later changes
   /// nothing here.
-  PeriodicExponentialPropagator(const GearRotorModel& model, double t0, double output_interval, double step_factor = 1.0);
+  /// `tabulate_settling`: also tabulate contactsSettle (an anti-backlash mesh; 16 6x6
+  /// eigen-decompositions and a scan of 481 forces over ~150 phases, ~3 ms).
+  PeriodicExponentialPropagator(const GearRotorModel& model, double t0, double output_interval, double step_factor = 1.0,
+                                bool tabulate_settling = false);
   /// Set-up bounds (InvalidInput beyond): stored output intervals per mesh period (9x11 doubles
   /// each: 52 MB at the bound) and Magnus steps per mesh period (seconds of set-up at the bound;
   /// the seed-000 rig needs 1.7e6 at 1 rpm).
@@ -60,11 +63,20 @@ class PeriodicExponentialPropagator {
   /// pinion torque (1 N·m) at `offset` [s] after the interval's start (0 <= offset <= interval),
   /// everything else zero: Phi(t_k+1, t_k + offset) applied to the torque state. One Magnus step
   /// from the instant to the next stored node (and at most a few more, see kMaxStoredNodes), then a
-  /// stored 6x7 product: a few microseconds.
+  /// stored 6x7 product: about half a microsecond (BM_TorqueStepResponse).
   State6 torqueStepResponse(long k, double offset) const;
   /// Stored node propagators per mesh period at most (6x7 doubles each: 2.8 MB); beyond that every
   /// n-th node is kept and torqueStepResponse takes up to n - 1 more Magnus steps.
   static constexpr long kMaxStoredNodes = 8192;
+  /// False where a held pinion torque [N·m] puts the anti-backlash mesh so near a knee that the
+  /// ringing after a tooth switch may lift a flank and land it again between two samples, which
+  /// step() cannot see (it checks the regime at the samples): somewhere in the period the static
+  /// deflection's distance to a flank threshold is below kSettleMargin times the modal bound of
+  /// the swing that its step at a switch starts, or a flank is lifted at some phase. The caller
+  /// integrates those intervals otherwise (DynamicsEstimator: dopri5, which locates every contact
+  /// change). Always true unless the constructor tabulated it.
+  bool contactsSettle(double torque) const;
+  static constexpr double kSettleMargin = 1.5;
   /// Homogeneous propagator over one mesh period (the monodromy matrix of the linear regime).
   Matrix6 monodromy() const;
   double t0() const { return t0_; }
@@ -79,11 +91,19 @@ class PeriodicExponentialPropagator {
   using Matrix11 = Eigen::Matrix<double, 11, 11>;
   using Propagator = Eigen::Matrix<double, 9, 11>;
   Matrix11 systemMatrix(double t) const;
+  void tabulateSettling(const RigExcitation& excitation, const std::vector<double>& kinks, double period);
+  std::vector<double> settle_force_;  ///< mesh forces [N], ascending, for contactsSettle
+  std::vector<char> settle_ok_;
   using Matrix7 = Eigen::Matrix<double, 7, 7>;
   using Vector7 = Eigen::Matrix<double, 7, 1>;  ///< the state and the torque slot
-  /// One 4th-order Magnus step over [t, t + h] applied to v (physical units), on the state and
-  /// torque slot alone (with u' = 0 they evolve by themselves).
-  Vector7 magnusStepOnTorque(double t, double h, const Vector7& v) const;
+  /// A piece's system matrix on the state and torque slot (balanced), A0 + tau A1, and [A1, A0].
+  struct PieceOperators {
+    Matrix7 a0, a1, commutator;
+  };
+  PieceOperators pieceOperators(double start, double length) const;
+  /// One 4th-order Magnus step over [tau, tau + h] of a piece (tau from its start) applied to v
+  /// (physical units), on the state and torque slot alone (with u' = 0 they evolve by themselves).
+  Vector7 magnusStepOnTorque(const PieceOperators& ops, double tau, double h, const Vector7& v) const;
   /// Constant-length Magnus steps of one output interval between two cuts; nodes count from the
   /// interval's start (node 0) to its end.
   struct MagnusPiece {
@@ -105,6 +125,7 @@ class PeriodicExponentialPropagator {
   std::vector<Propagator> propagators_;
   std::vector<double> k1_, kc_, backlash_offset_;  // at the sample times of one period
   std::vector<MagnusPiece> pieces_;
+  std::vector<PieceOperators> piece_operators_;  ///< one per piece
   std::vector<int> piece_begin_, tail_begin_, node_count_;  ///< per interval (piece_begin_, tail_begin_: one more)
   std::vector<Tail> tails_;  ///< per interval, at nodes stride, 2 stride, ..., and the last
   int node_stride_ = 1;
