@@ -122,6 +122,9 @@ PeriodicExponentialPropagator::PeriodicExponentialPropagator(const GearRotorMode
   node_count_.resize(n);
   // Node propagators kept per mesh period: at most kMaxStoredNodes (every node_stride_-th node).
   node_stride_ = static_cast<int>(std::max(1.0, std::ceil(period / h_max * 1.05 / kMaxStoredNodes)));
+  // What torqueStepResponse needs (node products, per-piece operators) only where the torque can
+  // step inside an interval: the model's own input (the node) or a step profile.
+  torque_steps_ = held_ || spec.torque.kind == TorqueProfile::Kind::kSteps;
   const double c_g = 0.5 - std::sqrt(3.0) / 6.0, c_g2 = 0.5 + std::sqrt(3.0) / 6.0;
   std::vector<Matrix11> step_exps;  // one interval's Magnus steps, balanced units
   for (long j = 0; j < n; ++j) {
@@ -144,7 +147,7 @@ PeriodicExponentialPropagator::PeriodicExponentialPropagator(const GearRotorMode
       const int steps = std::max(1, static_cast<int>(std::ceil(len / h_max)));
       const double h = len / steps;
       pieces_.push_back({cuts[c], h, steps, static_cast<int>(step_exps.size())});
-      piece_operators_.push_back(pieceOperators(cuts[c], len));
+      if (torque_steps_) piece_operators_.push_back(pieceOperators(cuts[c], len));
       for (int s = 0; s < steps; ++s) {
         const double t = cuts[c] + s * h;
         const Matrix11 a1 = systemMatrix(t + c_g * h), a2 = systemMatrix(t + c_g2 * h);
@@ -158,11 +161,11 @@ PeriodicExponentialPropagator::PeriodicExponentialPropagator(const GearRotorMode
     propagators_[j] = (d * phi * d_inv).topRows<9>();
     // Phi(b, node) backwards from the end, kept at the nodes stride, 2 stride, ... and the last.
     const int m = static_cast<int>(step_exps.size());
-    const int kept = (m + node_stride_ - 1) / node_stride_;
+    const int kept = torque_steps_ ? (m + node_stride_ - 1) / node_stride_ : 0;
     tails_.resize(tails_.size() + kept);
     // Only the state rows: the torque response needs no TE or torque row.
     Eigen::Matrix<double, 6, 11> tail = Eigen::Matrix<double, 6, 11>::Identity();
-    for (int node = m; node >= 1; --node) {
+    for (int node = m; node >= 1 && torque_steps_; --node) {
       if (node == m || node % node_stride_ == 0) {
         Tail& out = tails_[tail_begin_.back() + (node + node_stride_ - 1) / node_stride_ - 1];
         // Back to physical units: d (rows) tail d^-1 (columns).
@@ -310,6 +313,10 @@ PeriodicExponentialPropagator::Vector7 PeriodicExponentialPropagator::magnusStep
 }
 
 State6 PeriodicExponentialPropagator::torqueStepResponse(long k, double offset) const {
+  if (!torque_steps_) {
+    throw InvalidInput("torque step response: this propagator's torque cannot step (neither the model's input nor a step "
+                       "profile), so its node products were not built");
+  }
   requireFinite("offset", offset);
   if (offset < 0.0 || offset > interval_ * (1.0 + 1e-12)) {
     throwInvalid("offset", offset, "must lie in the output interval [0, " + formatValue(interval_) + "] s");

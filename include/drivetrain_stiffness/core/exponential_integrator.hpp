@@ -63,7 +63,8 @@ class PeriodicExponentialPropagator {
   /// pinion torque (1 N·m) at `offset` [s] after the interval's start (0 <= offset <= interval),
   /// everything else zero: Phi(t_k+1, t_k + offset) applied to the torque state. One Magnus step
   /// from the instant to the next stored node (and at most a few more, see kMaxStoredNodes), then a
-  /// stored 6x7 product: about half a microsecond (BM_TorqueStepResponse).
+  /// stored 6x7 product: about half a microsecond (BM_TorqueStepResponse). Built only where the
+  /// torque can step (the model's own input, or a step profile); InvalidInput otherwise.
   State6 torqueStepResponse(long k, double offset) const;
   /// Stored node propagators per mesh period at most (6x7 doubles each: 2.8 MB); beyond that every
   /// n-th node is kept and torqueStepResponse takes up to n - 1 more Magnus steps.
@@ -129,6 +130,7 @@ class PeriodicExponentialPropagator {
   std::vector<int> piece_begin_, tail_begin_, node_count_;  ///< per interval (piece_begin_, tail_begin_: one more)
   std::vector<Tail> tails_;  ///< per interval, at nodes stride, 2 stride, ..., and the last
   int node_stride_ = 1;
+  bool torque_steps_ = false;  ///< node products and piece operators built (torqueStepResponse)
   Vector7 scale7_;  ///< the constructor's balancing of the state and the torque slot
   long magnus_steps_ = 0;
   double divergence_limit_ = IntegratorOptions{}.divergence_limit;  ///< [m], for step()
