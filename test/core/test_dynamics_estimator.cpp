@@ -421,10 +421,11 @@ TEST(DynamicsEstimator, FollowsAMeasuredRunUpExactly) {
 
 // Following the measured motion through a flank that lifts: at 1000 rpm the torque steps from 1 to
 // 10 N m, above the seed rig's knee of 6.95 N m (docs/calibration.md section 5), so the back path
-// lifts. The exact propagation locates the change and goes on in the drive flank's regime; dopri5
-// covers only the moments in no linear regime (the back path's damper clipped as it opens), each at
-// most one period of the fastest mode. The samples equal a tight dopri5 run (rtol 1e-12) of the same
-// sliced model through the whole advance, to the fallback's tolerance.
+// lifts. The exact propagation locates each change (the back path's damper clipping at zero as it
+// opens, the gap opening, the landings of the ringing after it) and goes on in the regime the state
+// is in, each linear (sliced_modal_propagator.hpp, FlankState): no dopri5 at all. The samples equal a
+// tight dopri5 run (rtol 1e-12) of the same sliced model through the whole advance to 1e-8 of the
+// largest TE (1.8e-10 measured; 7.2e-9 while the clipped moments were dopri5's at rtol 1e-8).
 TEST(DynamicsEstimator, FollowsTheMotionThroughAFlankThatLifts) {
   const double f = 20.0 * 1000.0 / 60.0;  // mesh frequency at 1000 rpm, z_p = 20
   DynamicsEstimator est(rig(), {1.2e8, 1.2e8}, 10000.0);
@@ -439,8 +440,7 @@ TEST(DynamicsEstimator, FollowsTheMotionThroughAFlankThatLifts) {
   ASSERT_EQ(online.size(), 20u);
   ASSERT_NE(est.slicedPropagator(), nullptr);
   EXPECT_GT(est.slicedPropagator()->regimeChanges(), 0) << "the lift was not located";
-  // dopri5 stretches: from a sixteenth of the fastest period (~1 us) up, far fewer than the 20 samples.
-  EXPECT_LT(est.fallbackIntervals(), 20);
+  EXPECT_EQ(est.fallbackIntervals(), 0) << "a dopri5 stretch: some moment was in no linear regime";
   std::printf("regime changes %ld, dopri5 stretches %ld\n", est.slicedPropagator()->regimeChanges(), est.fallbackIntervals());
   // Reference: the same sliced model (256 slices) at 10 N m from the state at 5 ms.
   auto slices = std::make_shared<const SlicedMesh>(
@@ -466,7 +466,7 @@ TEST(DynamicsEstimator, FollowsTheMotionThroughAFlankThatLifts) {
   }
   EXPECT_TRUE(lifted) << "the back path never lifted: the test does not test the change";
   std::printf("worst TE difference against dopri5 at rtol 1e-12: %.3g of the largest TE\n", worst / scale);
-  EXPECT_LT(worst, 1e-6 * scale) << "worst TE difference " << worst << " m of " << scale << " m";
+  EXPECT_LT(worst, 1e-8 * scale) << "worst TE difference " << worst << " m of " << scale << " m";
 }
 
 // A bearing-stiffness change while running costs no set-up inside the call: the dynamics go on

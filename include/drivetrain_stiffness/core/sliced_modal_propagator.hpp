@@ -1,11 +1,13 @@
 // Exact propagation of the gear-rotor model's linear regime at any speed: the propagator of the
 // sliced model (sliced_mesh.hpp) over any duration, from one eigen-decomposition per slice.
 //
-// Inside slice j the model is linear time-invariant while its contacts keep their state (both
-// anti-backlash flanks loaded, the drive flank alone above the knee or the back path alone past the
-// reverse knee; an ordinary gear's drive or back flank; bearings without clearance):
+// Inside slice j the model is linear time-invariant while its contacts keep their state (each flank
+// unloaded, loaded or stiffened: both anti-backlash flanks loaded, the drive flank alone above the
+// knee or the back path alone past the reverse knee, a flank's damper clipped as it opens or
+// lands; an ordinary gear's drive or back flank; bearings without clearance):
 //   y' = A_j y + e_F (-k_s,j A sin(theta) - c_s A w cos(theta) + F_0) + e_v F_d / m_s,
-// with k_s, c_s and the constant F_0 of the regime (meshTerms: 0, +F_p, -F_p, -k1 b or +k1 b),
+// with k_s, c_s and the constant F_0 of the regime (meshTerms: 0, +F_p, -F_p, -k1 b or +k1 b; a
+// stiffened flank twice its stiffness and constant, no damper),
 // theta = 2 pi phi(t) = theta_0 + w s (w = 2 pi f, f the signed mesh frequency, constant between
 // encoder readings), e_F = (0, 0, 0, -1/m_p, 1/m_g, -1/m_s) (the mesh force's action, docs/model.md
 // eqs M1-M3), F_d the drive force (torque held). With A_j = V diag(lambda) V^-1 and eta = V^-1 y,
@@ -50,10 +52,11 @@ class SlicedModalPropagator {
 
   /// Propagates y over `duration` [s] (>= 0) from the mesh phase `phase` [turns] at the signed mesh
   /// frequency f [Hz] with the drive force F_d [N] held, through every change of the contacts from
-  /// one linear regime to another (a flank lifting above the knee, landing again), each located on
-  /// the exact solution. Returns the time propagated [s], y and phase moved to it: `duration` when
-  /// the whole stretch was linear, less where the state entered no linear regime (a damper clipped
-  /// as a contact opens or closes) or a slice had no usable eigenbasis; the caller integrates on
+  /// one linear regime to another (a flank lifting above the knee, its damper clipping as it opens
+  /// or lands, landing again), each located on the exact solution. Returns the time propagated [s],
+  /// y and phase moved to it: `duration` when the whole stretch was linear, less where the state
+  /// entered no linear regime (both flanks unloaded at once: no mesh stiffness), a slice had no
+  /// usable eigenbasis or a call met more than kMaxChangesPerCall changes; the caller integrates on
   /// from there (dopri5) and calls again.
   double propagateLinear(State6& y, double& phase, double f, double duration, double drive_force) const;
   /// Returns 0, y and phase untouched, for a negative or NaN duration or a non-finite f, phase or
@@ -75,8 +78,9 @@ class SlicedModalPropagator {
   /// The same in the contact regime that y is in at mesh phase `phase` [turns]: both flanks below
   /// the anti-backlash knee, the drive flank alone above it, the back path alone past the reverse
   /// knee (an ordinary gear: its drive or its back flank), for the Floquet margin of the motion the
-  /// node follows. nullopt where y is in no linear regime (a contact opening or closing, a clipped
-  /// damper): no period-long linearisation describes it.
+  /// node follows. nullopt where y is in none of those (a flank just landed, its damper clipped at
+  /// twice the spring, or opening, its damper clipped at zero; no mesh contact): no period-long
+  /// linearisation describes it.
   std::optional<Matrix6> monodromy(double f, const State6& y, double phase) const;
   long decompositions() const { return decompositions_; }
   /// Of those, the ones Eigen's general eigensolver made (no seed, or the seeded solve refused).
@@ -89,14 +93,35 @@ class SlicedModalPropagator {
   using Complex = std::complex<double>;
   using CVector = Eigen::Matrix<Complex, 6, 1>;
   using CMatrix = Eigen::Matrix<Complex, 6, 6>;
-  /// Which flanks carry load. Anti-backlash gear: both (below the knee), the drive flank alone
-  /// (the back path lifted, above the knee) or the back path alone (past the reverse knee); an
-  /// ordinary gear: its drive or its back flank. Each is linear, with its own slices' modes.
-  enum class MeshRegime { kBothFlanks = 0, kDriveFlank = 1, kBackFlank = 2 };
+  /// One flank's contact (GearRotorModel::forces' rule for a compressive contact, the Modelica
+  /// ElastoBacklash one): unloaded (open, or closed with its damper clipped at zero force while
+  /// it opens: no force either way), loaded (spring and damper), or stiffened (closed with its
+  /// damper clipped at twice the spring force, as it does for a moment after every landing: a
+  /// spring of twice the stiffness and no damper). Each is linear.
+  enum class FlankState { kUnloaded = 0, kLoaded = 1, kStiffened = 2 };
+  /// The mesh's contacts: the drive flank's state and the back path's (an ordinary gear: its back
+  /// flank's), index 3 drive + back. Below the anti-backlash knee both flanks are loaded, above it
+  /// the back path is lifted (kDriveFlank), past the reverse knee the drive flank (kBackFlank); an
+  /// ordinary gear is on its drive or its back flank. The stiffened states last microseconds after
+  /// a flank lands. Each regime is linear with its own slices' modes, made as the motion first
+  /// needs them; both flanks unloaded has no mesh stiffness (a free mass, no eigenbasis) and is
+  /// not propagated here.
+  enum class MeshRegime {
+    kNoContact = 0, kBackFlank = 1, kBackStiffened = 2,
+    kDriveFlank = 3, kBothFlanks = 4, kDriveLoadedBackStiffened = 5,
+    kDriveStiffened = 6, kDriveStiffenedBackLoaded = 7, kBothStiffened = 8
+  };
+  static constexpr int kRegimes = 9;
+  static MeshRegime regimeOf(FlankState drive, FlankState back) {
+    return static_cast<MeshRegime>(3 * static_cast<int>(drive) + static_cast<int>(back));
+  }
+  static FlankState driveState(MeshRegime r) { return static_cast<FlankState>(static_cast<int>(r) / 3); }
+  static FlankState backState(MeshRegime r) { return static_cast<FlankState>(static_cast<int>(r) % 3); }
   /// The mesh force in a regime: stiffness * delta + damping * delta' + constant.
   struct MeshTerms {
     double stiffness, damping, constant;
   };
+  MeshTerms meshTerms(MeshRegime r, int j) const;
   struct Slice {
     CMatrix v, v_inv;
     CVector lambda, force_dir, drive_dir;  ///< eigenvalues, V^-1 e_F, V^-1 e_v
@@ -106,9 +131,17 @@ class SlicedModalPropagator {
     /// The three eigenvalues with positive imaginary part (when the spectrum is three complex
     /// pairs): the seeds of this slice's next decomposition and of its neighbours'.
     std::array<Complex, 3> upper{};
+    double fastest = 0.0;  ///< max |lambda| [1/s]
     bool ready = false, usable = false, has_upper = false;
   };
-  MeshTerms meshTerms(MeshRegime r, int j) const;
+  /// One flank's contact law in slice j: spring force s = c0 + alpha delta, spring and damper
+  /// t = s + beta delta'; `exists` false where the flank has no stiffness (no tooth pair, no back path).
+  struct FlankLaw {
+    double c0, alpha, beta;
+    bool exists;
+  };
+  /// flank 0: the drive flank, 1: the back path (an ordinary gear: the back flank).
+  FlankLaw flankLaw(int flank, int j) const;
   /// The anti-backlash drive flank's share of the mesh damping in slice j, c k1 / (k1 + k_c).
   double driveFlankDamping(int j) const;
   /// One contact rule: the force c0 + alpha delta + beta delta' must be > 0 (strict) or >= 0;
@@ -117,17 +150,29 @@ class SlicedModalPropagator {
     double c0, alpha, beta, abs_alpha, abs_beta, inverse_scale;
     bool strict;
   };
+  /// A rule of a regime: `first` holds, or (`either`) `first` or `second` (an unloaded flank is
+  /// open or its damper is clipped at zero).
+  struct Clause {
+    ContactCondition first{}, second{};
+    bool either = false;
+  };
   /// Regime r's contact rules in slice j (at most six); `possible` false where a contact the
-  /// regime loads has no stiffness in the slice.
+  /// regime loads has no stiffness in the slice, or the regime has no mesh stiffness at all.
   struct RegimeConditions {
-    std::array<ContactCondition, 6> c{};
+    std::array<Clause, 6> c{};
     int n = 0;
     bool possible = true;
+    MeshTerms terms{0.0, 0.0, 0.0};  ///< meshTerms(r, j), read at every step
   };
   RegimeConditions makeConditions(MeshRegime r, int j) const;
+  /// Regime r's tables are sized the first time the regime is met (the stiffened ones may never
+  /// be: a node below the knee keeps the three usual regimes' memory only).
   const RegimeConditions& conditions(MeshRegime r, int j) const {
-    return conditions_[static_cast<std::size_t>(r)][static_cast<std::size_t>(j)];
+    std::vector<RegimeConditions>& table = conditions_[static_cast<std::size_t>(r)];
+    if (table.empty()) allocateRegime(r);
+    return table[static_cast<std::size_t>(j)];
   }
+  void allocateRegime(MeshRegime r) const;
   const Slice& slice(MeshRegime r, int j) const;
   /// Slice j's modes by Newton on its characteristic polynomial from three seeds (the common case,
   /// a few hundred nanoseconds); false where that does not give a verified spectrum.
@@ -148,14 +193,17 @@ class SlicedModalPropagator {
                Piece& out) const;
   /// y over h from the prepared piece, given e^{i w h}.
   void advance(const Slice& s, const Piece& piece, double w, double h, Complex e_mu, State6& y) const;
-  /// Where, within a step of length h that starts in regime r (slice j, TE phasor e_theta) and
-  /// ends out of it, the state leaves r on the prepared piece's exact solution: the first length
-  /// found out of r (h itself where the change is at the end to the bisection's resolution), with
-  /// the TE phasor there in *e_hi (left as it was when that is h).
+  /// Where, within a step of length h that starts in regime r (slice j, TE phasor e_theta, state
+  /// `start`) and ends out of it (state `end`, TE phasor *e_hi), the state leaves r on the prepared
+  /// piece's exact solution: the first length found out of r (h itself where the change is at the
+  /// end to the resolution), with the TE phasor there in *e_hi (left as it was when that is h).
   double locateChange(const Slice& s, const Piece& piece, MeshRegime r, int j, Complex e_theta, double w, double h,
-                      Complex* e_hi) const;
-  /// The contacts at y are those of regime r, with no damper clipped, at the TE forcing's phase
-  /// theta, given e^{i theta}.
+                      const State6& start, const State6& end, Complex* e_hi) const;
+  /// inRegime's rules as one continuous number, >= 0 in regime r: the least rule's force over its
+  /// scale (an either-clause: the larger of its two), for locateChange's false position.
+  double regimeValue(MeshRegime r, int j, const State6& y, Complex e_theta, double w) const;
+  /// The contacts at y are those of regime r (each flank unloaded, loaded or stiffened as r says),
+  /// at the TE forcing's phase theta, given e^{i theta}.
   bool inRegime(MeshRegime r, int j, const State6& y, Complex e_theta, double w) const;
   /// A lower bound of regime r's contact conditions over a whole step of length h from y (scaled
   /// to the conditions' forces): > 0 proves the contacts keep their state through it.
@@ -167,12 +215,17 @@ class SlicedModalPropagator {
   GearRotorParameters p_;
   std::shared_ptr<const SlicedMesh> slices_;
   double te_amplitude_, backlash_, m_s_ = 0.0;
-  mutable std::array<std::vector<Slice>, 3> cache_;  ///< per MeshRegime, per slice
-  std::array<std::vector<RegimeConditions>, 3> conditions_;  ///< per MeshRegime, per slice (makeConditions)
+  mutable std::array<std::vector<Slice>, kRegimes> cache_;  ///< per MeshRegime, per slice
+  mutable std::array<std::vector<RegimeConditions>, kRegimes> conditions_;  ///< per MeshRegime, per slice (makeConditions)
   mutable Piece piece_;
   mutable long decompositions_ = 0, general_decompositions_ = 0, crossed_ = 0, substeps_ = 0, events_ = 0;
   double fastest_period_bound_ = 0.0;
   static constexpr int kEventHalvings = 40;
+  /// locateChange first samples the step at this many equal lengths for the earliest change.
+  static constexpr int kEventSamples = 8;
+  /// regimeValue at or below this is the rounding of the contact forces (their scale's 1e-16 times
+  /// the modal sums' cancellation), not a distance from the boundary: locateChange halves there.
+  static constexpr double kRoundingValue = 1e-10;
   static constexpr int kMaxChangesPerCall = 64;  ///< more in one call is chatter: handed back
 };
 
