@@ -286,9 +286,10 @@ void DynamicsEstimator::propagateTo(double t_rel) {
   }
   // full: the sliced model; linear_modal: the same with the period's mean stiffness (one slice).
   // Exact through every change of the contacts between linear regimes (located on the exact
-  // solution); where the state is in none (a damper clipped for a moment as a flank lifts or
-  // lands) dopri5 on the same sliced model along the same motion takes over for a stretch
-  // (propagateMeasured). With bearing clearance, dopri5 alone.
+  // solution; a flank lifting, landing or its damper clipping are each such a change); where the
+  // state is in none (both flanks unloaded at once: no mesh stiffness) dopri5 on the same sliced
+  // model along the same motion takes over for a stretch (propagateMeasured). With bearing
+  // clearance, dopri5 alone.
   const SlicedModalPropagator* exact = moving().exact.get();
   const auto dopri5 = [this](double t0, double t1, State6& y, double& phase) {
     t_state_ = t0;  // the motion input's anchor (movingModelAtState)

@@ -500,10 +500,14 @@ std::optional<SlicedModalPropagator::MeshRegime> SlicedModalPropagator::regimeAt
   FlankState states[2];
   for (int flank = 0; flank < 2; ++flank) {
     const FlankLaw f = flankLaw(flank, j);
+    // The rules' own expressions, as inRegime evaluates them (c0 + alpha delta + beta rate, left to
+    // right): 2 s - t >= 0 and t - 2 s > 0 are then exact negations of each other, where comparing
+    // t with 2 s would disagree with them within an ulp and refuse both regimes.
     const double spring = f.c0 + f.alpha * delta, total = spring + f.beta * rate;
+    const double spare = spring + (-f.beta) * rate;  // 2 s - t
     states[flank] = !f.exists || !(spring > 0.0) || total < 0.0 ? FlankState::kUnloaded
-                    : total > 2.0 * spring                       ? FlankState::kStiffened
-                                                                 : FlankState::kLoaded;
+                    : spare >= 0.0                               ? FlankState::kLoaded
+                                                                 : FlankState::kStiffened;
   }
   const MeshRegime r = regimeOf(states[0], states[1]);
   if (!inRegime(r, j, y, e_theta, w)) return std::nullopt;  // both unloaded: no linear propagation here
@@ -704,7 +708,7 @@ double SlicedModalPropagator::locateChange(const Slice& s, const Piece& piece, M
   // mode's period where the bound cannot clear it), the contacts tested as at the step's ends.
   // Trial lengths by the Illinois variant of false position on regimeValue along the exact solution
   // (Dowell and Jarratt, BIT 11 (1971) 168: superlinear, order 1.44, bracketing), about eight
-  // advances where bisection took forty, with halvings where it would not serve:
+  // advances after the samples where bisection took forty, with halvings where it would not serve:
   //  - while the value at lo is at the rounding of the contact forces (kRoundingValue): a step
   //    that starts right after a change starts on the boundary of its regime (regimeValue
   //    ~1e-15), where false position tries lengths of 1e-19 s, at which the forces have not
@@ -737,7 +741,7 @@ double SlicedModalPropagator::locateChange(const Slice& s, const Piece& piece, M
     lo = t;
     g_lo = std::max(g, 0.0);
   }
-  double checked = hi - lo;  // the bracket's width two trials ago
+  double checked = 2.0 * (hi - lo);  // the bracket's width two trials ago (the first trial may be false position)
   int kept = 0;  // +1: lo kept by the last trial, -1: hi kept (Illinois halves a value kept twice)
   for (int it = 0; it < 3 * kEventHalvings && hi - lo > tol; ++it) {
     bool halve = g_lo < kRoundingValue || !(g_lo - g_hi > 0.0);
@@ -746,7 +750,12 @@ double SlicedModalPropagator::locateChange(const Slice& s, const Piece& piece, M
       checked = hi - lo;
     }
     double t = 0.5 * (lo + hi);
-    if (!halve) t = std::clamp(lo + (hi - lo) * (g_lo / (g_lo - g_hi)), lo + 0.25 * tol, hi - 0.25 * tol);
+    if (!halve) {
+      const double guess = lo + (hi - lo) * (g_lo / (g_lo - g_hi));
+      // NaN where the values overflowed (a rule without constant or TE amplitude has a scale near
+      // 1e-300): halve then; std::clamp would pass the NaN on.
+      if (std::isfinite(guess)) t = std::clamp(guess, lo + 0.25 * tol, hi - 0.25 * tol);
+    }
     const Complex e_mu = std::polar(1.0, w * t);
     advance(s, piece, w, t, e_mu, z);
     const Complex e_t = e_theta * e_mu;

@@ -348,21 +348,41 @@ TEST(SlicedModalPropagator, FreeFlightInTheBacklashGoesToDopri5StretchesUntilAFl
   o.absolute_tolerance = 1e-20;
   o.max_step = 1e-6;
   long stretches = 0;
+  double stretched = 0.0;  // [s] of rig time
   GearRotorModel on = model;
   const auto dopri5 = [&](double t0, double t1, State6& z, double& phase) {
     on.setMotionInput(MeshMotion{t0, phase, f});
     z = integrate(on, IntegratorMethod::kDopri5, o, t0, z, t1, t1 - t0, nullptr);
     phase += f * (t1 - t0);
     ++stretches;
+    stretched += t1 - t0;
   };
+  // All or nothing: propagate refuses a start in free flight and leaves the state and phase.
+  State6 untouched = y0;
+  double p0 = 0.2;
+  EXPECT_FALSE(exact.propagate(untouched, p0, f, 1e-3, force));
+  EXPECT_EQ(untouched, y0);
+  EXPECT_EQ(p0, 0.2);
   State6 y = y0;
   double phase = 0.2;
   for (int k = 0; k < 4; ++k) propagateMeasured(exact, y, phase, f, k * 1e-3, (k + 1) * 1e-3, force, dopri5);
   model.setMotionInput(MeshMotion{0.0, 0.2, f});
   const State6 ref = integrate(model, IntegratorMethod::kDopri5, o, 0.0, y0, 4e-3, 4e-3, nullptr);
-  std::printf("dopri5 stretches: %ld, contact changes located: %ld\n", stretches, exact.regimeChanges());
+  std::printf("dopri5 stretches: %ld over %.3g us, contact changes located: %ld\n", stretches, stretched * 1e6,
+              exact.regimeChanges());
   EXPECT_GT(stretches, 0) << "the free flight should be handed to dopri5";
-  EXPECT_LT(stretches, 4 * kMaxNonlinearStretches) << "the exact propagation should resume after the landing";
+  // Independent: the free flight's length along the reference (both flanks open: 0.1 us samples),
+  // which the stretches must cover, doubling, by less than twice; the rest of the 4 ms is the
+  // exact propagation's.
+  double flight = 0.0;
+  model.setMotionInput(MeshMotion{0.0, 0.2, f});
+  integrate(model, IntegratorMethod::kDopri5, o, 0.0, y0, 4e-3, 1e-7, [&](double t, const State6& z) {
+    const GearRotorForces g = model.forces(t, z);
+    if (g.regime.code[0] == 0 && g.regime.code[1] == 0) flight += 1e-7;
+  });
+  std::printf("free flight along the reference: %.3g us\n", flight * 1e6);
+  EXPECT_GE(stretched, flight - 2e-7);
+  EXPECT_LT(stretched, 2.0 * flight + 2.0 * exact.fastestPeriodBound()) << "the exact propagation should resume after the landing";
   EXPECT_GT(exact.regimeChanges(), 0) << "the landing should be located on the exact solution";
   EXPECT_LT(relativeError(y, ref), 1e-7);
   // Independent: along the reference the mesh does fly free (both flanks open) for a while.
@@ -583,6 +603,28 @@ TEST(SlicedModalPropagator, MonodromyIsTheRegimeTheStateIsIn) {
   h.model.setMotionInput(MeshMotion{0.0, 0.1, f});
   ASSERT_EQ(h.model.forces(0.0, slamming).regime.code[1], 0);
   EXPECT_FALSE(h.exact.monodromy(f, slamming, 0.1).has_value());
+  // Nor a back path still closed whose damper is clipped at zero as it opens (no force, as if
+  // lifted, but not a lift that lasts a period): at 6 N*m, just below the knee, both flanks loaded
+  // at rest, then the mesh opening at a rate between s2 / c2 (the back path's damper would pull)
+  // and s1 / c1 (the drive flank's stays below twice its spring). GearRotorModel::forces decides
+  // the contacts: the back path closed with no force, the drive flank loaded unclipped.
+  Harness near(256, 6.0);
+  State6 opening = near.equilibrium(0.1);
+  ASSERT_TRUE(near.exact.monodromy(f, opening, 0.1).has_value()) << "both flanks loaded at rest";
+  near.model.setMotionInput(MeshMotion{0.0, 0.1, f});
+  const GearRotorForces at_rest = near.model.forces(0.0, opening);
+  MeshInstant m;
+  near.model.meshAt(0.0, m);
+  const double c1 = params().mesh_damping * m.k_drive / (m.k_drive + m.k_back), c2 = params().mesh_damping - c1;
+  const double s1 = mesh()->preloadForce() + m.k_drive * at_rest.delta, s2 = mesh()->preloadForce() - m.k_back * at_rest.delta;
+  ASSERT_LT(s2 / c2, s1 / c1) << "no opening rate clips the back path's damper alone";
+  opening[5] += 0.5 * (s2 / c2 + s1 / c1);  // delta' up by this much: the mesh opening
+  const GearRotorForces clipped = near.model.forces(0.0, opening);
+  ASSERT_EQ(clipped.regime.code[1], 1) << "the back path should still be closed";
+  ASSERT_EQ(clipped.back_flank, 0.0) << "its damper should be clipped at zero";
+  ASSERT_GT(clipped.drive_flank, 0.0);
+  ASSERT_LT(clipped.drive_flank, 2.0 * s1) << "the drive flank's damper should not be clipped";
+  EXPECT_FALSE(near.exact.monodromy(f, opening, 0.1).has_value());
 }
 
 TEST(SlicedModalPropagator, ABearingChangeIsReseededAndStaysExact) {

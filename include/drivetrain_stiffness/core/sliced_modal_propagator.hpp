@@ -238,8 +238,10 @@ class SlicedModalPropagator {
 /// kMaxNonlinearStretches stretches in one call the rest of the interval goes to `nonlinear` in one
 /// piece (whose own work bound then holds). A template, not a std::function: the estimator's
 /// per-input path allocates nothing. Returns the number of stretches.
-/// The first stretch, as a fraction of the fastest period. A damper clips for a small part of a
-/// period where a flank lifts or lands (docs/model.md, "Following the rig's motion"): on the 48 s
+/// The first stretch, as a fraction of the fastest period. Chosen when every clipped damper was a
+/// stretch (until 2026-11-26; now a linear regime, and the stretches serve only moments with both
+/// flanks unloaded): a damper clips for a small part of a period where a flank lifts or lands
+/// (docs/model.md, "Following the rig's motion"): on the 48 s
 /// load_sweep bag a first stretch of a whole period had dopri5 integrate 62.5 ms of rig time in
 /// 4,525 stretches, one of 1/16 of a period 7.6 ms in 8,273 (2.1 million right-hand sides against
 /// 0.5 million). The doubling search costs one refused propagateLinear per doubling, about a
@@ -251,7 +253,8 @@ inline constexpr double kFirstNonlinearStretch = 1.0 / 16.0;
 /// each stretch starts again at the first length, so a 1 ms call could take ~940 stretches at
 /// worst (a review's estimate for the seed rig's 17 us period), which the old 256 would have cut
 /// off to one dopri5 piece; measured at 0.8-1.2 x the knee torque, the most in one 1 ms call was 80
-/// (run_up; 38 with whole-period stretches) and 11 (MeasuredPropagationThroughChatterStaysFarBelowTheStretchCap).
+/// (run_up; 38 with whole-period stretches) and 11 (the chatter test of the time; none now,
+/// ChatterAroundTheKneeIsPropagatedExactly).
 inline constexpr long kMaxNonlinearStretches = static_cast<long>(256 / kFirstNonlinearStretch);
 template <typename Nonlinear>
 long propagateMeasured(const SlicedModalPropagator& exact, State6& y, double& phase, double f, double t, double t_end,
