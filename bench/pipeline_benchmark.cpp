@@ -5,7 +5,7 @@
 // deserialization and one publish per output on top. BM_TorqueStepResponse: what a torque input
 // stamped between two output samples adds at the nominal phase (rule 10: the exact response to a
 // unit step at its instant, PeriodicExponentialPropagator::torqueStepResponse), at the live 1 kHz
-// output grid of the seed rig at 1000 rpm.
+// output grid of the seed rig at 1000 rpm. BM_ExponentialSetUp: building those propagators.
 // Run: devel/lib/drivetrain_stiffness/pipeline_benchmark --benchmark_repetitions=3 --benchmark_report_aggregates_only=true
 #include <benchmark/benchmark.h>
 
@@ -54,5 +54,22 @@ static void BM_TorqueStepResponse(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_TorqueStepResponse);
+
+// The node's set-up of the exponential propagators at the nominal phase (at start-up and after a
+// rebuild): one mesh period of 4th-order Magnus steps (an 11x11 block-triangular exponential
+// each), the node products for torque steps and the settling table, seed rig at 1000 rpm, 1 kHz.
+static void BM_ExponentialSetUp(benchmark::State& state) {
+  const RigConfig rig = loadRigFile(DRIVETRAIN_SOURCE_DIR "/config/gearboxes/seed_servo.yaml");
+  DynamicsEstimator dynamics(rig, {1.2e8, 1.2e8}, 1000.0);
+  dynamics.reset(0.0, 0.1);
+  long steps = 0;
+  for (auto _ : state) {
+    const PeriodicExponentialPropagator propagator(dynamics.model(), 0.0, dynamics.outputInterval(), 1.0, true);
+    steps = propagator.magnusSteps();
+    benchmark::DoNotOptimize(propagator.monodromy());
+  }
+  state.counters["magnus_steps"] = static_cast<double>(steps);
+}
+BENCHMARK(BM_ExponentialSetUp)->Unit(benchmark::kMillisecond);
 
 BENCHMARK_MAIN();

@@ -4,9 +4,11 @@
 #include <cmath>
 #include <Eigen/Eigenvalues>
 #include <complex>
+#include <stdexcept>
 #include <unsupported/Eigen/MatrixFunctions>
 
 #include "drivetrain_stiffness/core/anti_backlash_mesh.hpp"
+#include "drivetrain_stiffness/core/block_triangular_exponential.hpp"
 #include "drivetrain_stiffness/core/constants.hpp"
 #include "drivetrain_stiffness/core/validation.hpp"
 
@@ -109,7 +111,8 @@ PeriodicExponentialPropagator::PeriodicExponentialPropagator(const GearRotorMode
   // so without this the O(1) forcing columns would pollute the 1e-7 m displacements.
   Eigen::Matrix<double, 11, 1> scale;
   scale << 1e-6, 1e-6, 1e-6, 1e-6 * w_max, 1e-6 * w_max, 1e-6 * w_max, 1.0, 1.0, 1.0, 1.0, 1.0 / output_interval;
-  const Matrix11 d = scale.asDiagonal(), d_inv = scale.cwiseInverse().asDiagonal();
+  // Balancing as an elementwise factor, (D^-1 X D)_rc = X_rc scale_c / scale_r: no dense product.
+  const Matrix11 to_balanced = scale.cwiseInverse() * scale.transpose();
 
   for (int i = 0; i < 6; ++i) scale7_[i] = scale[i];
   scale7_[6] = scale[kU];
@@ -125,8 +128,10 @@ PeriodicExponentialPropagator::PeriodicExponentialPropagator(const GearRotorMode
   // What torqueStepResponse needs (node products, per-piece operators) only where the torque can
   // step inside an interval: the model's own input (the node) or a step profile.
   torque_steps_ = held_ || spec.torque.kind == TorqueProfile::Kind::kSteps;
-  const double c_g = 0.5 - std::sqrt(3.0) / 6.0, c_g2 = 0.5 + std::sqrt(3.0) / 6.0;
-  std::vector<Matrix11> step_exps;  // one interval's Magnus steps, balanced units
+  // The augmented matrix is [[state 6x6, forcing 6x5], [0, generator 5x5]]: the generator rows
+  // (sin, cos, 1, u, u') never read the state, and so do Omega, its exponentials and their products.
+  using Blocks = BlockTriangular<6, 5>;
+  std::vector<Blocks> step_exps;  // one interval's Magnus steps, balanced units
   for (long j = 0; j < n; ++j) {
     const double a = t0 + j * output_interval, b = a + output_interval;
     MeshInstant mj;
@@ -140,7 +145,7 @@ PeriodicExponentialPropagator::PeriodicExponentialPropagator(const GearRotorMode
     }
     if (b - cuts.back() <= 1e-12 * output_interval) cuts.pop_back();
     cuts.push_back(b);
-    Matrix11 phi = Matrix11::Identity();
+    Blocks phi = Blocks::identity();
     step_exps.clear();
     for (std::size_t c = 0; c + 1 < cuts.size(); ++c) {
       const double len = cuts[c + 1] - cuts[c];
@@ -148,33 +153,50 @@ PeriodicExponentialPropagator::PeriodicExponentialPropagator(const GearRotorMode
       const double h = len / steps;
       pieces_.push_back({cuts[c], h, steps, static_cast<int>(step_exps.size())});
       if (torque_steps_) piece_operators_.push_back(pieceOperators(cuts[c], len));
+      // A(t) is linear in t inside a piece (it ends on every table node and switch), A0 + tau A1
+      // from two interior points (no switch at either end read on its wrong side), so the
+      // 4th-order Magnus step with Gauss points t1, t2 = tau + (1/2 -+ sqrt(3)/6) h (Blanes, Casas,
+      // Oteo & Ros 2009, eq. 4.4), Omega = h/2 (A(t1) + A(t2)) + sqrt(3) h^2/12 [A(t2), A(t1)], is
+      // h A(tau + h/2) + h^3/12 [A1, A0]: one commutator per piece, none per step.
+      const double ta = len / 3.0, tb = 2.0 * len / 3.0;
+      const Matrix11 aa = systemMatrix(cuts[c] + ta), ab = systemMatrix(cuts[c] + tb);
+      const Matrix11 a1 = (ab - aa) / (tb - ta), a0 = aa - ta * a1;
+      const Matrix11 commutator = a1.lazyProduct(a0) - a0.lazyProduct(a1);
+      if (!a0.bottomLeftCorner<5, 6>().isZero(0.0) || !a1.bottomLeftCorner<5, 6>().isZero(0.0) ||
+          !commutator.bottomLeftCorner<5, 6>().isZero(0.0)) {
+        throw std::logic_error("exponential set-up: the forcing generator's rows read the state");
+      }
       for (int s = 0; s < steps; ++s) {
-        const double t = cuts[c] + s * h;
-        const Matrix11 a1 = systemMatrix(t + c_g * h), a2 = systemMatrix(t + c_g2 * h);
-        // Omega = h/2 (A1 + A2) + sqrt(3) h^2 / 12 [A2, A1]  (4th-order Magnus, Gauss points).
-        const Matrix11 omega = 0.5 * h * (a1 + a2) + std::sqrt(3.0) / 12.0 * h * h * (a2 * a1 - a1 * a2);
-        step_exps.push_back((d_inv * omega * d).exp());  // in balanced units
+        const Matrix11 omega = h * (a0 + ((s + 0.5) * h) * a1) + (h * h * h / 12.0) * commutator;
+        step_exps.push_back(blockTriangularExp(Blocks::fromDense(omega.cwiseProduct(to_balanced))));  // balanced units
         phi = step_exps.back() * phi;
         ++magnus_steps_;
       }
     }
-    propagators_[j] = (d * phi * d_inv).topRows<9>();
+    propagators_[j] = phi.dense().cwiseQuotient(to_balanced).topRows<9>();  // back to physical units
     // Phi(b, node) backwards from the end, kept at the nodes stride, 2 stride, ... and the last.
     const int m = static_cast<int>(step_exps.size());
     const int kept = torque_steps_ ? (m + node_stride_ - 1) / node_stride_ : 0;
     tails_.resize(tails_.size() + kept);
     // Only the state rows: the torque response needs no TE or torque row.
     Eigen::Matrix<double, 6, 11> tail = Eigen::Matrix<double, 6, 11>::Identity();
-    for (int node = m; node >= 1 && torque_steps_; --node) {
-      if (node == m || node % node_stride_ == 0) {
-        Tail& out = tails_[tail_begin_.back() + (node + node_stride_ - 1) / node_stride_ - 1];
-        // Back to physical units: d (rows) tail d^-1 (columns).
-        for (int c = 0; c < 7; ++c) {
-          const int col = c < 6 ? c : static_cast<int>(kU);
-          for (int r = 0; r < 6; ++r) out(r, c) = scale[r] * tail(r, col) / scale[col];
+    if (torque_steps_) {
+      for (int node = m; node >= 1; --node) {
+        if (node == m || node % node_stride_ == 0) {
+          Tail& out = tails_[tail_begin_.back() + (node + node_stride_ - 1) / node_stride_ - 1];
+          // Back to physical units: d (rows) tail d^-1 (columns).
+          for (int c = 0; c < 7; ++c) {
+            const int col = c < 6 ? c : static_cast<int>(kU);
+            for (int r = 0; r < 6; ++r) out(r, c) = scale[r] * tail(r, col) / scale[col];
+          }
         }
+        // [T_x, T_y] [[E_x, E_y], [0, E_z]] = [T_x E_x, T_x E_y + T_y E_z]
+        const Blocks& e = step_exps[node - 1];
+        Eigen::Matrix<double, 6, 5> right = tail.leftCols<6>() * e.y;
+        right.noalias() += tail.rightCols<5>() * e.z;
+        tail.leftCols<6>() = (tail.leftCols<6>() * e.x).eval();
+        tail.rightCols<5>() = right;
       }
-      tail = tail * step_exps[node - 1];
     }
     node_count_[j] = m;
     piece_begin_.push_back(static_cast<int>(pieces_.size()));
@@ -238,14 +260,24 @@ void PeriodicExponentialPropagator::tabulateSettling(const RigExcitation& excita
     forces.push_back(-f);
   }
   std::sort(forces.begin(), forces.end());
+  // What does not depend on the force, once per phase (the same expressions as before, so the
+  // table is bit for bit the one of evaluating them per force, with two divisions fewer per force
+  // and phase): the stiffness sum and the thresholds F_p / k_c, F_p / k1.
+  bool stiff_everywhere = true;
+  std::vector<double> sum(n), back_threshold(n), drive_threshold(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    stiff_everywhere = stiff_everywhere && k1[i] > 0.0 && kc[i] > 0.0;
+    sum[i] = k1[i] + kc[i];
+    back_threshold[i] = fp / kc[i];
+    drive_threshold[i] = fp / k1[i];
+  }
   std::vector<double> delta(n), margin(n);
   for (double f : forces) {
-    bool ok = true;
+    bool ok = stiff_everywhere;
     for (std::size_t i = 0; i < n && ok; ++i) {
-      const double a = k1[i], c = kc[i];
-      ok = a > 0.0 && c > 0.0 && AntiBacklashMesh::flankContact(f, a, c, fp) == FlankContact::kBoth;
-      delta[i] = f / (a + c);
-      margin[i] = std::min(fp / c - delta[i], delta[i] + fp / a);
+      ok = AntiBacklashMesh::flankContact(f, k1[i], kc[i], fp) == FlankContact::kBoth;
+      delta[i] = f / sum[i];
+      margin[i] = std::min(back_threshold[i] - delta[i], delta[i] + drive_threshold[i]);
     }
     for (std::size_t i = 0; i < n && ok; ++i) {
       const double jump = std::abs(delta[i] - delta[i == 0 ? n - 1 : i - 1]);  // the period wraps

@@ -1,0 +1,151 @@
+// The matrix exponential of a block upper-triangular matrix M = [[X, Y], [0, Z]] (X: P x P,
+// Z: Q x Q), as Eigen's MatrixBase::exp() computes it, with every product and the solve done
+// block by block.
+//
+// Why: the exponential integrator's set-up takes one 11x11 exponential per Magnus step (about 1,800
+// per mesh period on the seed rig) of an augmented system matrix whose rows for the forcing
+// generator (sin, cos, 1, u, u') never read the state, so it is [[X (6x6), Y (6x5)], [0, Z (5x5)]].
+// Powers and products of such matrices keep the form, [[X1 X2, X1 Y2 + Y1 Z2], [0, Z1 Z2]]:
+// 671 multiply-adds per product instead of 1331 for the dense 11x11 one, and no packing for
+// Eigen's blocked product kernel (the dense exponential spent most of its time there).
+//
+// The method is the one of Eigen's unsupported/Eigen/src/MatrixFunctions/MatrixExponential.h
+// (Eigen 3.4), itself Higham's scaling and squaring: N. J. Higham, "The scaling and squaring
+// method for the matrix exponential revisited", SIAM J. Matrix Anal. Appl. 26(4) (2005) 1179-1193.
+// The Pade degree m in {3, 5, 7, 9, 13} is chosen from the 1-norm against theta_m (Higham's
+// Table 2.3, the thresholds Eigen uses for double), the matrix scaled by 2^-s for m = 13 so that
+// its norm is below theta_13; r_m = (V - U)^-1 (V + U) with U odd and V even in M (Higham eqs
+// 2.3-2.4, his coefficients b_j), then squared s times. The solve goes block by block too:
+// with D = V - U and N = V + U both block upper-triangular, the result R has
+//   Z-block: D_z R_z = N_z,  X-block: D_x R_x = N_x,  Y-block: D_x R_y = N_y - D_y R_z,
+// by partial-pivoting LU of D_x and D_z (a dense partial-pivoting LU of D would pick its pivots in
+// the same blocks: the rows below the X-block are zero in its columns).
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <initializer_list>
+#include <utility>
+
+#include <Eigen/Core>
+#include <Eigen/LU>
+
+namespace drivetrain_stiffness {
+
+template <int P, int Q>
+struct BlockTriangular {
+  Eigen::Matrix<double, P, P> x;
+  Eigen::Matrix<double, P, Q> y;
+  Eigen::Matrix<double, Q, Q> z;
+
+  static BlockTriangular identity() {
+    return {Eigen::Matrix<double, P, P>::Identity(), Eigen::Matrix<double, P, Q>::Zero(),
+            Eigen::Matrix<double, Q, Q>::Identity()};
+  }
+  /// The blocks of a dense matrix whose lower-left Q x P block is ignored (the caller knows it is zero).
+  static BlockTriangular fromDense(const Eigen::Matrix<double, P + Q, P + Q>& m) {
+    return {m.template topLeftCorner<P, P>(), m.template topRightCorner<P, Q>(), m.template bottomRightCorner<Q, Q>()};
+  }
+  Eigen::Matrix<double, P + Q, P + Q> dense() const {
+    Eigen::Matrix<double, P + Q, P + Q> m;
+    m << x, y, Eigen::Matrix<double, Q, P>::Zero(), z;
+    return m;
+  }
+  /// The 1-norm (largest absolute column sum), as Eigen's exp() measures it.
+  double l1Norm() const {
+    const double left = x.cwiseAbs().colwise().sum().maxCoeff();
+    const double right = (y.cwiseAbs().colwise().sum() + z.cwiseAbs().colwise().sum()).maxCoeff();
+    return std::max(left, right);
+  }
+};
+
+template <int P, int Q>
+BlockTriangular<P, Q> operator*(const BlockTriangular<P, Q>& a, const BlockTriangular<P, Q>& b) {
+  BlockTriangular<P, Q> c;
+  c.x.noalias() = a.x * b.x;
+  c.y.noalias() = a.x * b.y;
+  c.y.noalias() += a.y * b.z;
+  c.z.noalias() = a.z * b.z;
+  return c;
+}
+
+/// c0 I + c1 A + c2 B + ... as blocks (the even and odd polynomials of the Pade approximants).
+template <int P, int Q>
+BlockTriangular<P, Q> combine(double c0, std::initializer_list<std::pair<double, const BlockTriangular<P, Q>*>> terms) {
+  BlockTriangular<P, Q> r{c0 * Eigen::Matrix<double, P, P>::Identity(), Eigen::Matrix<double, P, Q>::Zero(),
+                          c0 * Eigen::Matrix<double, Q, Q>::Identity()};
+  for (const auto& t : terms) {
+    r.x += t.first * t.second->x;
+    r.y += t.first * t.second->y;
+    r.z += t.first * t.second->z;
+  }
+  return r;
+}
+
+/// exp(M) for M = [[X, Y], [0, Z]]: Eigen's scaling and squaring (see the file comment) block by block.
+template <int P, int Q>
+BlockTriangular<P, Q> blockTriangularExp(BlockTriangular<P, Q> a) {
+  using B = BlockTriangular<P, Q>;
+  const double l1 = a.l1Norm();
+  int squarings = 0;
+  B u, v;
+  if (l1 < 9.504178996162932e-001) {  // theta_3, theta_5, theta_7: degree 3, 5 or 7 (Higham Table 2.3)
+    const B a2 = a * a;
+    if (l1 < 1.495585217958292e-002) {
+      static constexpr double b[] = {120.0, 60.0, 12.0, 1.0};
+      const B tmp = combine<P, Q>(b[1], {{b[3], &a2}});
+      u = a * tmp;
+      v = combine<P, Q>(b[0], {{b[2], &a2}});
+    } else if (l1 < 2.539398330063230e-001) {
+      static constexpr double b[] = {30240.0, 15120.0, 3360.0, 420.0, 30.0, 1.0};
+      const B a4 = a2 * a2;
+      const B tmp = combine<P, Q>(b[1], {{b[5], &a4}, {b[3], &a2}});
+      u = a * tmp;
+      v = combine<P, Q>(b[0], {{b[4], &a4}, {b[2], &a2}});
+    } else {
+      static constexpr double b[] = {17297280.0, 8648640.0, 1995840.0, 277200.0, 25200.0, 1512.0, 56.0, 1.0};
+      const B a4 = a2 * a2, a6 = a4 * a2;
+      const B tmp = combine<P, Q>(b[1], {{b[7], &a6}, {b[5], &a4}, {b[3], &a2}});
+      u = a * tmp;
+      v = combine<P, Q>(b[0], {{b[6], &a6}, {b[4], &a4}, {b[2], &a2}});
+    }
+  } else if (l1 < 2.097847961257068e+000) {  // theta_9
+    static constexpr double b[] = {17643225600.0, 8821612800.0, 2075673600.0, 302702400.0, 30270240.0,
+                                   2162160.0,     110880.0,     3960.0,       90.0,        1.0};
+    const B a2 = a * a, a4 = a2 * a2, a6 = a4 * a2, a8 = a6 * a2;
+    const B tmp = combine<P, Q>(b[1], {{b[9], &a8}, {b[7], &a6}, {b[5], &a4}, {b[3], &a2}});
+    u = a * tmp;
+    v = combine<P, Q>(b[0], {{b[8], &a8}, {b[6], &a6}, {b[4], &a4}, {b[2], &a2}});
+  } else {  // degree 13 on M / 2^s with |M / 2^s|_1 below theta_13
+    static constexpr double b[] = {64764752532480000.0, 32382376266240000.0, 7771770303897600.0,
+                                   1187353796428800.0,  129060195264000.0,   10559470521600.0,
+                                   670442572800.0,      33522128640.0,       1323241920.0,
+                                   40840800.0,          960960.0,            16380.0,
+                                   182.0,               1.0};
+    std::frexp(l1 / 5.371920351148152, &squarings);
+    if (squarings < 0) squarings = 0;
+    const auto scaled = [squarings](double c) { return std::ldexp(c, -squarings); };
+    a.x = a.x.unaryExpr(scaled);
+    a.y = a.y.unaryExpr(scaled);
+    a.z = a.z.unaryExpr(scaled);
+    const B a2 = a * a, a4 = a2 * a2, a6 = a4 * a2;
+    B tmp = combine<P, Q>(0.0, {{b[13], &a6}, {b[11], &a4}, {b[9], &a2}});
+    tmp = a6 * tmp;
+    tmp = combine<P, Q>(b[1], {{1.0, &tmp}, {b[7], &a6}, {b[5], &a4}, {b[3], &a2}});
+    u = a * tmp;
+    tmp = combine<P, Q>(0.0, {{b[12], &a6}, {b[10], &a4}, {b[8], &a2}});
+    tmp = a6 * tmp;
+    v = combine<P, Q>(b[0], {{1.0, &tmp}, {b[6], &a6}, {b[4], &a4}, {b[2], &a2}});
+  }
+  // r = (V - U)^-1 (V + U), block by block.
+  const Eigen::PartialPivLU<Eigen::Matrix<double, P, P>> dx(v.x - u.x);
+  const Eigen::PartialPivLU<Eigen::Matrix<double, Q, Q>> dz(v.z - u.z);
+  B r;
+  r.z = dz.solve(v.z + u.z);
+  r.x = dx.solve(v.x + u.x);
+  r.y = dx.solve((v.y + u.y) - (v.y - u.y) * r.z);
+  for (int i = 0; i < squarings; ++i) r = r * r;
+  return r;
+}
+
+}  // namespace drivetrain_stiffness
