@@ -47,9 +47,11 @@ struct AutoChoice {
 
 /// The cost of one Magnus step of the exponential method's set-up (an 11x11 matrix exponential)
 /// in steps of dopri5 on the same model: `auto`'s exchange rate between the two. Measured with
-/// drivetrain_bench (2026-11-25, scenes nominal and near_rigid_bearings): 4.4-9.7 us per Magnus
-/// step against 0.44-1.0 us per dopri5 step.
-constexpr double kMagnusStepCost = 10.0;
+/// drivetrain_bench (docs/bench.jsonl of 2026-11-26, after the block-triangular set-up: setup_s
+/// over magnus_steps_per_period against wall_s over steps): 3.6-6.7 us per Magnus step on
+/// nominal, torque_steps, near_rigid_bearings and parametric_resonance, against 0.93-1.1 us per
+/// dopri5 step; 10 until then (4.4-9.7 us against 0.44-1.0 us on 2026-11-25).
+constexpr double kMagnusStepCost = 5.0;
 /// The smallest error bound for which the exponential method, its contacts closed through the
 /// pilot, serves as the reference (its err_rms_rel against dopri5 at rtol 1e-12 is at most 1.2e-8
 /// on the bench scenes: 40x below half this bound).
