@@ -125,6 +125,9 @@ class SlicedModalPropagator {
   struct Slice {
     CMatrix v, v_inv;
     CVector lambda, force_dir, drive_dir;  ///< eigenvalues, V^-1 e_F, V^-1 e_v
+    /// Per mode, weight_k g . u_k with g = (1, -1, 1): the mode's share of the mesh deflection,
+    /// which regimeMargin reads at every step; made once per decomposition.
+    std::array<Complex, 6> deflection{};
     /// y = sum_k weight_k Re(V_k eta_k): 2 for one member of a conjugate pair (the other, whose
     /// modal coordinate is its conjugate for a real state, gets 0), 1 for a real eigenvalue.
     std::array<double, 6> weight{};
