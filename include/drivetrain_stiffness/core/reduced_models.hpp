@@ -52,9 +52,15 @@ struct AutoChoice {
 /// nominal, torque_steps, near_rigid_bearings and parametric_resonance, against 0.93-1.1 us per
 /// dopri5 step; 10 until then (4.4-9.7 us against 0.44-1.0 us on 2026-11-25).
 constexpr double kMagnusStepCost = 5.0;
+/// The Magnus step `auto` builds the exponential method with, in units of 1/omega_max: the
+/// cheapest set-up whose error stays well inside the smallest bound it serves
+/// (kExponentialReferenceBound). On the bench scenes step 2 errs by 8.8e-8 at most (err_rms_rel
+/// against dopri5 at rtol 1e-12; 1.2e-8 at step 1, 1.4e-6 at step 4, docs/bench.jsonl) and sets up
+/// in about 0.65 of step 1's time (1,164 Magnus steps per mesh period on nominal against 1,809).
+constexpr double kAutoMagnusStepFactor = 2.0;
 /// The smallest error bound for which the exponential method, its contacts closed through the
-/// pilot, serves as the reference (its err_rms_rel against dopri5 at rtol 1e-12 is at most 1.2e-8
-/// on the bench scenes: 40x below half this bound).
+/// pilot, serves as the reference (at kAutoMagnusStepFactor its err_rms_rel against dopri5 at
+/// rtol 1e-12 is at most 8.8e-8 on the bench scenes: 5.7x below half this bound).
 constexpr double kExponentialReferenceBound = 1e-6;
 
 /// Picks the cheapest fidelity and method whose pilot error meets `error_bound` (relative RMS of
