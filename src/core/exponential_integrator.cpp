@@ -161,7 +161,15 @@ PeriodicExponentialPropagator::PeriodicExponentialPropagator(const GearRotorMode
       const double ta = len / 3.0, tb = 2.0 * len / 3.0;
       const Matrix11 aa = systemMatrix(cuts[c] + ta), ab = systemMatrix(cuts[c] + tb);
       const Matrix11 a1 = (ab - aa) / (tb - ta), a0 = aa - ta * a1;
+      // Parameters that pass validation can still overflow the system matrix (a mesh damping of
+      // 1e307 over a gram): refused by name here, where the blocks would otherwise turn NaN.
+      if (!aa.allFinite() || !ab.allFinite()) {
+        throwInvalid("system matrix", (aa.allFinite() ? ab : aa).cwiseAbs().maxCoeff(),
+                     "overflows at t = " + formatValue(cuts[c]) + " s: the parameters are beyond double range");
+      }
       const Matrix11 commutator = a1.lazyProduct(a0) - a0.lazyProduct(a1);
+      // The generator rows never read the state (systemMatrix), so A0, A1 and [A1, A0] have a zero
+      // lower-left block and blockTriangularExp may ignore it; checked once per piece.
       if (!a0.bottomLeftCorner<5, 6>().isZero(0.0) || !a1.bottomLeftCorner<5, 6>().isZero(0.0) ||
           !commutator.bottomLeftCorner<5, 6>().isZero(0.0)) {
         throw std::logic_error("exponential set-up: the forcing generator's rows read the state");

@@ -208,13 +208,13 @@ AutoChoice chooseAutomatically(const GearRotorModel& model, double t0, const Sta
   // The exponential propagation, where the model can be linear and its set-up is predicted cheaper
   // than dopri5's work over the run (both in dopri5 steps, from counts, not clocks: the same inputs
   // always give the same choice). Set-up: one Magnus step (an 11x11 exponential, about
-  // kMagnusStepCost dopri5 steps) per kAutoMagnusStepFactor / omega_max over a mesh period; then
-  // one 9x11 product per output sample. Built once, for the pilot and the run. Its contacts closed
-  // through the pilot, it is the model's solution to its Magnus discretisation (err_rms_rel <=
-  // 8.8e-8 against dopri5 at rtol 1e-12 on every bench scene at that step, docs/model.md), a better
-  // reference than dopri5 at bound / 100 (which on the stiff near_rigid_bearings scene errs by
-  // about the bound itself): for bounds >= kExponentialReferenceBound the reduced fidelities are
-  // measured against it, and it is chosen if neither meets the bound.
+  // kMagnusStepCost dopri5 steps) per 1/omega_max over a mesh period; then one 9x11 product per
+  // output sample. Built once, for the pilot and the run. Its contacts closed through the pilot,
+  // it is the model's solution to its Magnus discretisation (err_rms_rel <= 1.2e-8 against dopri5
+  // at rtol 1e-12 on every bench scene, docs/model.md), a better reference than dopri5 at bound /
+  // 100 (which on the stiff near_rigid_bearings scene errs by about the bound itself): for bounds
+  // >= kExponentialReferenceBound the reduced fidelities are measured against it, and it is chosen
+  // if neither meets the bound.
   const RigExcitation* rig = model.rigExcitation();
   const GearRotorParameters& p = model.parameters();
   bool exponential_closed = false;
@@ -223,11 +223,10 @@ AutoChoice chooseAutomatically(const GearRotorModel& model, double t0, const Sta
     const double run = run_duration > 0.0 ? run_duration : std::numeric_limits<double>::infinity();
     const double dopri_cost = static_cast<double>(std::max(1L, dopri_stats.steps)) * (run / choice.pilot_duration);
     try {
-      const double exponential_cost =
-          PeriodicExponentialPropagator::estimatedSetupSteps(model, *rig, t0, kAutoMagnusStepFactor) * kMagnusStepCost +
+      const double exponential_cost = PeriodicExponentialPropagator::estimatedSetupSteps(model, *rig, t0) * kMagnusStepCost +
                                       (std::isfinite(run) ? run / interval : 0.0);
       if (exponential_cost < dopri_cost) {
-        auto propagator = std::make_shared<const PeriodicExponentialPropagator>(model, t0, interval, kAutoMagnusStepFactor);
+        auto propagator = std::make_shared<const PeriodicExponentialPropagator>(model, t0, interval);
         IntegrationStats stats;
         exponential = deltas([&](const Observer& o) { propagator->run(y0, t_end, o, IntegratorOptions{}, &stats); });
         exponential_closed = stats.fallbacks == 0;

@@ -149,9 +149,7 @@ TEST(ReducedModels, AutoWeighsTheSetUpAgainstTheRunAndMeetsItsBound) {
     if (c.method == IntegratorMethod::kExponential) {
       ASSERT_TRUE(c.exponential) << name;
       std::vector<double> fresh;
-      IntegratorOptions as_auto;
-      as_auto.magnus_step_factor = kAutoMagnusStepFactor;  // the step auto builds with
-      integrate(*s.model, IntegratorMethod::kExponential, as_auto, 0.0, s.initial, s.duration, s.output_interval,
+      integrate(*s.model, IntegratorMethod::kExponential, IntegratorOptions{}, 0.0, s.initial, s.duration, s.output_interval,
                 [&](double t, const State6& y) {
                   if (t >= s.transient) fresh.push_back(s.model->forces(t, y).delta);
                 });

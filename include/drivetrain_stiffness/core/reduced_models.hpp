@@ -52,15 +52,12 @@ struct AutoChoice {
 /// nominal, torque_steps, near_rigid_bearings and parametric_resonance, against 0.93-1.1 us per
 /// dopri5 step; 10 until then (4.4-9.7 us against 0.44-1.0 us on 2026-11-25).
 constexpr double kMagnusStepCost = 5.0;
-/// The Magnus step `auto` builds the exponential method with, in units of 1/omega_max: the
-/// cheapest set-up whose error stays well inside the smallest bound it serves
-/// (kExponentialReferenceBound). On the bench scenes step 2 errs by 8.8e-8 at most (err_rms_rel
-/// against dopri5 at rtol 1e-12; 1.2e-8 at step 1, 1.4e-6 at step 4, docs/bench.jsonl) and sets up
-/// in about 0.65 of step 1's time (1,164 Magnus steps per mesh period on nominal against 1,809).
-constexpr double kAutoMagnusStepFactor = 2.0;
 /// The smallest error bound for which the exponential method, its contacts closed through the
-/// pilot, serves as the reference (at kAutoMagnusStepFactor its err_rms_rel against dopri5 at
-/// rtol 1e-12 is at most 8.8e-8 on the bench scenes: 5.7x below half this bound).
+/// pilot, serves as the reference (built at Magnus step 1/omega_max, its err_rms_rel against dopri5
+/// at rtol 1e-12 is at most 1.2e-8 on the bench scenes: 40x below half this bound). Not step
+/// 2/omega_max, although it sets up in 0.65 of the time: a review (2026-11-26) found it at 7.4e-7
+/// to 2.4e-6 on the seed rig at 2,490-2,505 rpm with mesh damping ratios 0.05-0.01, where each table
+/// piece just fits in one step (1.3e-7 at most at step 1), which would break the bound unseen.
 constexpr double kExponentialReferenceBound = 1e-6;
 
 /// Picks the cheapest fidelity and method whose pilot error meets `error_bound` (relative RMS of
