@@ -152,7 +152,6 @@ PeriodicExponentialPropagator::PeriodicExponentialPropagator(const GearRotorMode
       const int steps = std::max(1, static_cast<int>(std::ceil(len / h_max)));
       const double h = len / steps;
       pieces_.push_back({cuts[c], h, steps, static_cast<int>(step_exps.size())});
-      if (torque_steps_) piece_operators_.push_back(pieceOperators(cuts[c], len));
       // A(t) is linear in t inside a piece (it ends on every table node and switch), A0 + tau A1
       // from two interior points (no switch at either end read on its wrong side), so the
       // 4th-order Magnus step with Gauss points t1, t2 = tau + (1/2 -+ sqrt(3)/6) h (Blanes, Casas,
@@ -174,6 +173,7 @@ PeriodicExponentialPropagator::PeriodicExponentialPropagator(const GearRotorMode
           !commutator.bottomLeftCorner<5, 6>().isZero(0.0)) {
         throw std::logic_error("exponential set-up: the forcing generator's rows read the state");
       }
+      if (torque_steps_) piece_operators_.push_back(pieceOperators(aa, ab, len));
       for (int s = 0; s < steps; ++s) {
         const Matrix11 omega = h * (a0 + ((s + 0.5) * h) * a1) + (h * h * h / 12.0) * commutator;
         step_exps.push_back(blockTriangularExp(Blocks::fromDense(omega.cwiseProduct(to_balanced))));  // balanced units
@@ -308,21 +308,21 @@ bool PeriodicExponentialPropagator::contactsSettle(double torque) const {
   return settle_ok_[lo] && settle_ok_[hi];  // both neighbours on the grid
 }
 
-PeriodicExponentialPropagator::PieceOperators PeriodicExponentialPropagator::pieceOperators(double start,
-                                                                                            double length) const {
+PeriodicExponentialPropagator::PieceOperators PeriodicExponentialPropagator::pieceOperators(
+    const Matrix11& at_third, const Matrix11& at_two_thirds, double length) const {
   // The system matrix on the state and the torque slot, balanced, is linear in t inside a piece
-  // (the pieces end on every table node and switch): A(start + tau) = A0 + tau A1, read at two
-  // interior points so that no switch at either end is evaluated on its wrong side.
-  const auto restricted = [this](double t) {
+  // (the pieces end on every table node and switch): A(start + tau) = A0 + tau A1, from the
+  // constructor's two interior samples (at a third and two thirds of the piece, so that no switch
+  // at either end is evaluated on its wrong side).
+  const auto restricted = [this](const Matrix11& full) {
     static constexpr int kIndex[7] = {kXp, kXg, kX, kVp, kVg, kV, kU};
-    const Matrix11 full = systemMatrix(t);
     Matrix7 out;
     for (int r = 0; r < 7; ++r)
       for (int c = 0; c < 7; ++c) out(r, c) = full(kIndex[r], kIndex[c]) * scale7_[c] / scale7_[r];
     return out;
   };
   const double ta = length / 3.0, tb = 2.0 * length / 3.0;
-  const Matrix7 aa = restricted(start + ta), ab = restricted(start + tb);
+  const Matrix7 aa = restricted(at_third), ab = restricted(at_two_thirds);
   PieceOperators ops;
   ops.a1 = (ab - aa) / (tb - ta);
   ops.a0 = aa - ta * ops.a1;

@@ -104,7 +104,8 @@ class PeriodicExponentialPropagator {
   struct PieceOperators {
     Matrix7 a0, a1, commutator;
   };
-  PieceOperators pieceOperators(double start, double length) const;
+  /// From the full system matrix at a third and at two thirds of a piece of this length.
+  PieceOperators pieceOperators(const Matrix11& at_third, const Matrix11& at_two_thirds, double length) const;
   /// One 4th-order Magnus step over [tau, tau + h] of a piece (tau from its start) applied to v
   /// (physical units), on the state and torque slot alone (with u' = 0 they evolve by themselves).
   Vector7 magnusStepOnTorque(const PieceOperators& ops, double tau, double h, const Vector7& v) const;
