@@ -195,14 +195,30 @@ AutoChoice chooseAutomatically(const GearRotorModel& model, double t0, const Sta
     return err <= 0.5 * error_bound;
   };
 
-  // dopri5 at rtol = bound / 100 over the pilot: the last candidate, the count of steps that
-  // predicts its cost over the run, and the reference where the exponential method is not one.
+  // dopri5 at rtol = bound / 100: the last candidate, the reference where the exponential method
+  // is not one, and the count of steps that predicts its cost over the run. The count comes from
+  // the pilot's first kDopriCountSamples output samples alone: where the exponential method is then
+  // built and serves as the reference (the scenes it suits), dopri5 runs no further, and its pilot,
+  // until 2026-11-26 run over the whole pilot first, was about a third of auto's time on nominal.
+  // Only where dopri5 is still needed (the reference, or the candidate) does it run the whole
+  // pilot, from the start again, so that the reference is the one it always was.
   choice.relative_tolerance = std::max(error_bound / 100.0, 1e-11);
   const IntegratorOptions dopri = autoOptions(IntegratorMethod::kDopri5, choice.relative_tolerance);
+  const double count_duration = std::min(choice.pilot_duration, kDopriCountSamples * interval);
   IntegrationStats dopri_stats;
-  std::vector<double> reference = deltas([&](const Observer& o) {
-    integrate(model, IntegratorMethod::kDopri5, dopri, t0, y0, t_end, interval, o, &dopri_stats);
-  });
+  std::vector<double> reference;
+  const bool whole_pilot_counted = count_duration >= choice.pilot_duration;
+  const auto dopriPilot = [&] {
+    return deltas([&](const Observer& o) {
+      integrate(model, IntegratorMethod::kDopri5, dopri, t0, y0, t_end, interval, o, &dopri_stats);
+    });
+  };
+  if (whole_pilot_counted) {
+    reference = dopriPilot();
+  } else {
+    integrate(model, IntegratorMethod::kDopri5, dopri, t0, y0, t0 + count_duration, interval, nullptr, &dopri_stats);
+  }
+  choice.dopri_pilot_steps = dopri_stats.steps;
   std::string reference_name = "dopri5";
 
   // The exponential propagation, where the model can be linear and its set-up is predicted cheaper
@@ -221,7 +237,7 @@ AutoChoice chooseAutomatically(const GearRotorModel& model, double t0, const Sta
   std::vector<double> exponential;
   if (rig && p.bearing_clearance[0] <= 0.0 && p.bearing_clearance[1] <= 0.0) {
     const double run = run_duration > 0.0 ? run_duration : std::numeric_limits<double>::infinity();
-    const double dopri_cost = static_cast<double>(std::max(1L, dopri_stats.steps)) * (run / choice.pilot_duration);
+    const double dopri_cost = static_cast<double>(std::max(1L, dopri_stats.steps)) * (run / count_duration);
     try {
       const double exponential_cost = PeriodicExponentialPropagator::estimatedSetupSteps(model, *rig, t0) * kMagnusStepCost +
                                       (std::isfinite(run) ? run / interval : 0.0);
@@ -240,6 +256,9 @@ AutoChoice chooseAutomatically(const GearRotorModel& model, double t0, const Sta
   if (exponential_reference) {
     reference = exponential;
     reference_name = "exponential";
+  } else if (!whole_pilot_counted) {
+    reference = dopriPilot();  // the whole pilot from the start
+    choice.dopri_pilot_steps += dopri_stats.steps;
   }
   if (rig) {
     for (Fidelity f : {Fidelity::kQuasiStatic, Fidelity::kLinearModal}) {

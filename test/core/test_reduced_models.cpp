@@ -156,6 +156,25 @@ TEST(ReducedModels, AutoWeighsTheSetUpAgainstTheRunAndMeetsItsBound) {
       EXPECT_EQ(fresh, chosen) << name;
     }
   }
+  // dopri5 counts its steps over the pilot's first kDopriCountSamples samples and runs the whole
+  // pilot only where it is still needed: not on nominal, where the exponential method is chosen
+  // and is the reference; on low_preload, where a contact opens in the exponential method's pilot,
+  // it is the reference again, over the whole pilot from the start (counts, not clocks).
+  for (const char* name : {"nominal", "low_preload"}) {
+    const Scene s = makeScene(name, rig());
+    const double pilot = std::min(0.25 * s.duration, 40.0 * s.output_interval);
+    const AutoChoice c = chooseAutomatically(*s.model, 0.0, s.initial, s.output_interval, pilot, 1e-6, s.duration);
+    IntegratorOptions dopri;
+    dopri.relative_tolerance = c.relative_tolerance;
+    dopri.absolute_tolerance = c.relative_tolerance * 1e-6;
+    dopri.max_step = 1e-4;
+    IntegrationStats count, whole;
+    integrate(*s.model, IntegratorMethod::kDopri5, dopri, 0.0, s.initial, kDopriCountSamples * s.output_interval,
+              s.output_interval, nullptr, &count);
+    integrate(*s.model, IntegratorMethod::kDopri5, dopri, 0.0, s.initial, c.pilot_duration, s.output_interval, nullptr, &whole);
+    ASSERT_LT(count.steps, whole.steps) << name;
+    EXPECT_EQ(c.dopri_pilot_steps, std::string(name) == "nominal" ? count.steps : count.steps + whole.steps) << name << ": " << c.reason;
+  }
   const Scene stiff = makeScene("near_rigid_bearings", rig());
   const double pilot = 10 * stiff.output_interval;
   const AutoChoice short_run = chooseAutomatically(*stiff.model, 0.0, stiff.initial, stiff.output_interval, pilot, 1e-6, 3e-3);

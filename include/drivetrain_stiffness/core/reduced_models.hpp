@@ -39,6 +39,9 @@ struct AutoChoice {
   double relative_tolerance = 0.0;   ///< for dopri5
   double pilot_duration = 0.0;       ///< [s]
   std::vector<std::pair<std::string, double>> pilot_errors;  ///< candidate, relative RMS error of delta
+  /// dopri5 steps the choice itself took: the count over kDopriCountSamples, plus the whole pilot
+  /// where dopri5 was still needed (a count, not a clock, of what the choice cost in dopri5).
+  long dopri_pilot_steps = 0;
   std::string reason;
   /// The exponential method's propagators built for the pilot (time origin t0, the pilot's output
   /// interval): integrateChoice reuses them, so their setup is paid once.
@@ -52,6 +55,10 @@ struct AutoChoice {
 /// nominal, torque_steps, near_rigid_bearings and parametric_resonance, against 0.93-1.1 us per
 /// dopri5 step; 10 until then (4.4-9.7 us against 0.44-1.0 us on 2026-11-25).
 constexpr double kMagnusStepCost = 5.0;
+/// dopri5's cost over the run is predicted from its steps over this many output samples at the
+/// pilot's start (or the whole pilot, if shorter): dopri5 runs the rest of the pilot only where it
+/// is still needed (reduced_models.cpp).
+constexpr double kDopriCountSamples = 8.0;
 /// The smallest error bound for which the exponential method, its contacts closed through the
 /// pilot, serves as the reference (built at Magnus step 1/omega_max, its err_rms_rel against dopri5
 /// at rtol 1e-12 is at most 1.2e-8 on the bench scenes: 40x below half this bound). Not step
