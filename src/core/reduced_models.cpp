@@ -154,10 +154,9 @@ State6 integrateReduced(const GearRotorModel& model, Fidelity fidelity, double t
   throw InvalidInput("integrateReduced: use integrate() for the full model");
 }
 
-namespace {
-// The options auto runs a method with, in its pilot and in the run: dopri5 at the chosen rtol (the
-// absolute tolerance 1e-6 of it, in metres), every method with steps of at most 0.1 ms.
 IntegratorOptions autoOptions(IntegratorMethod method, double relative_tolerance) {
+  // dopri5 at the chosen rtol (the absolute tolerance 1e-6 of it, in metres), every method with
+  // steps of at most 0.1 ms.
   IntegratorOptions o;
   o.max_step = 1e-4;
   if (method == IntegratorMethod::kDopri5) {
@@ -166,7 +165,6 @@ IntegratorOptions autoOptions(IntegratorMethod method, double relative_tolerance
   }
   return o;
 }
-}  // namespace
 
 AutoChoice chooseAutomatically(const GearRotorModel& model, double t0, const State6& y0, double interval,
                                double pilot_duration, double error_bound, double run_duration) {
@@ -196,15 +194,25 @@ AutoChoice chooseAutomatically(const GearRotorModel& model, double t0, const Sta
   };
 
   // dopri5 at rtol = bound / 100: the last candidate, the reference where the exponential method
-  // is not one, and the count of steps that predicts its cost over the run. The count comes from
-  // the pilot's first kDopriCountSamples output samples alone: where the exponential method is then
-  // built and serves as the reference (the scenes it suits), dopri5 runs no further, and its pilot,
-  // until 2026-11-26 run over the whole pilot first, was about a third of auto's time on nominal.
-  // Only where dopri5 is still needed (the reference, or the candidate) does it run the whole
-  // pilot, from the start again, so that the reference is the one it always was.
+  // is not one, and the count of steps that predicts its cost over the run. Where the exponential
+  // method may become the reference (a rig excitation, no bearing clearance, a bound of at least
+  // kExponentialReferenceBound), the count comes from the pilot's first kDopriCountSamples output
+  // samples alone: if the exponential method is then built and serves as the reference (the scenes
+  // it suits), dopri5 runs no further (its whole pilot, run first until 2026-11-26, was about a
+  // third of auto's time on nominal). Only where the reference must be dopri5 after all does it run
+  // the whole pilot, from the start again, so that the reference is the one it always was. Where the
+  // exponential method cannot be the reference, dopri5 runs the whole pilot at once, as before.
+  // (The count over a quarter of a mesh period depends on the phase the pilot starts at, as tooth
+  // switches and flank changes fall in it or not: 0.75-1.25x the 40-sample rate on nominal,
+  // 0.6-1.5x on low_preload, by an independent review; it matters only near the break-even run.)
   choice.relative_tolerance = std::max(error_bound / 100.0, 1e-11);
   const IntegratorOptions dopri = autoOptions(IntegratorMethod::kDopri5, choice.relative_tolerance);
-  const double count_duration = std::min(choice.pilot_duration, kDopriCountSamples * interval);
+  const RigExcitation* rig = model.rigExcitation();
+  const GearRotorParameters& p = model.parameters();
+  const bool linear_possible = rig && p.bearing_clearance[0] <= 0.0 && p.bearing_clearance[1] <= 0.0;
+  const bool may_be_reference = linear_possible && error_bound >= kExponentialReferenceBound;
+  const double count_duration =
+      may_be_reference ? std::min(choice.pilot_duration, kDopriCountSamples * interval) : choice.pilot_duration;
   IntegrationStats dopri_stats;
   std::vector<double> reference;
   const bool whole_pilot_counted = count_duration >= choice.pilot_duration;
@@ -231,11 +239,9 @@ AutoChoice chooseAutomatically(const GearRotorModel& model, double t0, const Sta
   // 100 (which on the stiff near_rigid_bearings scene errs by about the bound itself): for bounds
   // >= kExponentialReferenceBound the reduced fidelities are measured against it, and it is chosen
   // if neither meets the bound.
-  const RigExcitation* rig = model.rigExcitation();
-  const GearRotorParameters& p = model.parameters();
   bool exponential_closed = false;
   std::vector<double> exponential;
-  if (rig && p.bearing_clearance[0] <= 0.0 && p.bearing_clearance[1] <= 0.0) {
+  if (linear_possible) {
     const double run = run_duration > 0.0 ? run_duration : std::numeric_limits<double>::infinity();
     const double dopri_cost = static_cast<double>(std::max(1L, dopri_stats.steps)) * (run / count_duration);
     try {

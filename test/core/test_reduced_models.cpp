@@ -159,21 +159,27 @@ TEST(ReducedModels, AutoWeighsTheSetUpAgainstTheRunAndMeetsItsBound) {
   // dopri5 counts its steps over the pilot's first kDopriCountSamples samples and runs the whole
   // pilot only where it is still needed: not on nominal, where the exponential method is chosen
   // and is the reference; on low_preload, where a contact opens in the exponential method's pilot,
-  // it is the reference again, over the whole pilot from the start (counts, not clocks).
-  for (const char* name : {"nominal", "low_preload"}) {
-    const Scene s = makeScene(name, rig());
+  // it is the reference again, over the whole pilot from the start; at a bound below
+  // kExponentialReferenceBound, where the exponential method cannot be the reference, the whole
+  // pilot at once, no count before it (counts, not clocks).
+  struct Case {
+    const char* scene;
+    double bound;
+    bool count, whole;
+  };
+  for (const Case& k : {Case{"nominal", 1e-6, true, false}, Case{"low_preload", 1e-6, true, true},
+                        Case{"nominal", 1e-7, false, true}}) {
+    const Scene s = makeScene(k.scene, rig());
     const double pilot = std::min(0.25 * s.duration, 40.0 * s.output_interval);
-    const AutoChoice c = chooseAutomatically(*s.model, 0.0, s.initial, s.output_interval, pilot, 1e-6, s.duration);
-    IntegratorOptions dopri;
-    dopri.relative_tolerance = c.relative_tolerance;
-    dopri.absolute_tolerance = c.relative_tolerance * 1e-6;
-    dopri.max_step = 1e-4;
+    const AutoChoice c = chooseAutomatically(*s.model, 0.0, s.initial, s.output_interval, pilot, k.bound, s.duration);
+    const IntegratorOptions dopri = autoOptions(IntegratorMethod::kDopri5, c.relative_tolerance);
     IntegrationStats count, whole;
     integrate(*s.model, IntegratorMethod::kDopri5, dopri, 0.0, s.initial, kDopriCountSamples * s.output_interval,
               s.output_interval, nullptr, &count);
     integrate(*s.model, IntegratorMethod::kDopri5, dopri, 0.0, s.initial, c.pilot_duration, s.output_interval, nullptr, &whole);
-    ASSERT_LT(count.steps, whole.steps) << name;
-    EXPECT_EQ(c.dopri_pilot_steps, std::string(name) == "nominal" ? count.steps : count.steps + whole.steps) << name << ": " << c.reason;
+    ASSERT_LT(count.steps, whole.steps) << k.scene;
+    EXPECT_EQ(c.dopri_pilot_steps, (k.count ? count.steps : 0) + (k.whole ? whole.steps : 0))
+        << k.scene << " at " << k.bound << ": " << c.reason;
   }
   const Scene stiff = makeScene("near_rigid_bearings", rig());
   const double pilot = 10 * stiff.output_interval;

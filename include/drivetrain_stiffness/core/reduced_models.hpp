@@ -40,7 +40,8 @@ struct AutoChoice {
   double pilot_duration = 0.0;       ///< [s]
   std::vector<std::pair<std::string, double>> pilot_errors;  ///< candidate, relative RMS error of delta
   /// dopri5 steps the choice itself took: the count over kDopriCountSamples, plus the whole pilot
-  /// where dopri5 was still needed (a count, not a clock, of what the choice cost in dopri5).
+  /// where dopri5 was the reference after all, or the whole pilot alone where the exponential method
+  /// could not be the reference (a count, not a clock, of what the choice cost in dopri5).
   long dopri_pilot_steps = 0;
   std::string reason;
   /// The exponential method's propagators built for the pilot (time origin t0, the pilot's output
@@ -55,10 +56,11 @@ struct AutoChoice {
 /// nominal, torque_steps, near_rigid_bearings and parametric_resonance, against 0.93-1.1 us per
 /// dopri5 step; 10 until then (4.4-9.7 us against 0.44-1.0 us on 2026-11-25).
 constexpr double kMagnusStepCost = 5.0;
-/// dopri5's cost over the run is predicted from its steps over this many output samples at the
-/// pilot's start (or the whole pilot, if shorter): dopri5 runs the rest of the pilot only where it
-/// is still needed (reduced_models.cpp).
-constexpr double kDopriCountSamples = 8.0;
+/// Where the exponential method may become auto's reference, dopri5's cost over the run is
+/// predicted from its steps over this many output samples at the pilot's start (or the whole
+/// pilot, if shorter), and dopri5 runs the whole pilot only where it is the reference after all
+/// (reduced_models.cpp).
+constexpr int kDopriCountSamples = 8;
 /// The smallest error bound for which the exponential method, its contacts closed through the
 /// pilot, serves as the reference (built at Magnus step 1/omega_max, its err_rms_rel against dopri5
 /// at rtol 1e-12 is at most 1.2e-8 on the bench scenes: 40x below half this bound). Not step
@@ -66,6 +68,9 @@ constexpr double kDopriCountSamples = 8.0;
 /// to 2.4e-6 on the seed rig at 2,490-2,505 rpm with mesh damping ratios 0.05-0.01, where each table
 /// piece just fits in one step (1.3e-7 at most at step 1), which would break the bound unseen.
 constexpr double kExponentialReferenceBound = 1e-6;
+
+/// The options auto runs `method` with, in its pilot and in the run (dopri5 at `relative_tolerance`).
+IntegratorOptions autoOptions(IntegratorMethod method, double relative_tolerance);
 
 /// Picks the cheapest fidelity and method whose pilot error meets `error_bound` (relative RMS of
 /// delta). The pilot covers `pilot_duration` from (t0, y0); `run_duration` [s] is the span the
