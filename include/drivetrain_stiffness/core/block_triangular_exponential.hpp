@@ -19,7 +19,7 @@
 // with D = V - U and N = V + U both block upper-triangular, the result R has
 //   Z-block: D_z R_z = N_z,  X-block: D_x R_x = N_x,  Y-block: D_x R_y = N_y - D_y R_z,
 // by partial-pivoting LU of D_x and D_z (a dense partial-pivoting LU of D would pick its pivots in
-// the same blocks: the rows below the X-block are zero in its columns).
+// the same blocks: the rows below the X-block are zero in its columns), solved by luSolve below.
 #pragma once
 
 #include <algorithm>
@@ -82,6 +82,62 @@ BlockTriangular<P, Q> combine(double c0, std::initializer_list<std::pair<double,
   return r;
 }
 
+/// The width of the triangular panels Eigen's solver takes: max(mr, nr) of its product kernel's
+/// register blocking (TriangularSolverMatrix.h, SmallPanelWidth): 4 with SSE2 alone.
+inline constexpr int kTriangularPanel =
+    Eigen::internal::gebp_traits<double, double>::mr > Eigen::internal::gebp_traits<double, double>::nr
+        ? Eigen::internal::gebp_traits<double, double>::mr
+        : Eigen::internal::gebp_traits<double, double>::nr;
+
+/// lu.solve(b) for a small fixed size, in the order of Eigen 3.4's own solve (PartialPivLU's
+/// _solve_impl, then triangular_solve_matrix in TriangularSolverMatrix.h): the rows permuted, then
+/// the unit-lower and the upper substitutions, each over panels of kTriangularPanel rows. Inside a
+/// panel each row, in the upper one first scaled by the reciprocal of its diagonal, is subtracted
+/// from the panel's rows still to come; the rows beyond the panel then lose the sum of the
+/// panel's products, accumulated from zero, as Eigen's product kernel adds them with alpha = -1.
+/// Written out because at the exponential's sizes (6x6, 6x5, 5x5) the blocked solver's packing and
+/// set-up were a quarter of the set-up's time (perf, near_rigid_bearings at 16/omega_max); the
+/// operations and their order are Eigen's, and so are the results, bit for bit where the kernels
+/// take no fused multiply-add (this package's build; checked against lu.solve in
+/// test_block_triangular_exponential.cpp, which fails with another panel width).
+template <int N, typename Rhs>
+Eigen::Matrix<double, N, Rhs::ColsAtCompileTime> luSolve(const Eigen::PartialPivLU<Eigen::Matrix<double, N, N>>& lu,
+                                                         const Eigen::MatrixBase<Rhs>& b) {
+  constexpr int C = Rhs::ColsAtCompileTime, W = kTriangularPanel;
+  using Row = Eigen::Matrix<double, 1, C>;
+  const Eigen::Matrix<double, N, C> rhs = b;  // evaluated once, as solve() evaluates it
+  // Row-major, so that each row operation below runs over the columns in packets.
+  Eigen::Matrix<double, N, C, Eigen::RowMajor> x = lu.permutationP() * rhs;
+  const Eigen::Matrix<double, N, N>& m = lu.matrixLU();
+  // L x = P b, L unit lower: panels of W rows from the top; in a panel row k is subtracted from
+  // the panel's rows below it, then the rows below the panel lose the panel's rows' sum.
+  for (int p0 = 0; p0 < N; p0 += W) {
+    const int p1 = std::min(N, p0 + W);
+    for (int k = p0; k < p1; ++k) {
+      for (int r = k + 1; r < p1; ++r) x.row(r) -= m(r, k) * x.row(k);
+    }
+    for (int r = p1; r < N; ++r) {
+      Row sum = Row::Zero();
+      for (int k = p0; k < p1; ++k) sum += m(r, k) * x.row(k);
+      x.row(r) += -sum;
+    }
+  }
+  // U x = y: panels of W rows from the bottom, row k first scaled by 1 / U(k, k).
+  for (int p1 = N; p1 > 0; p1 -= W) {
+    const int p0 = std::max(0, p1 - W);
+    for (int k = p1 - 1; k >= p0; --k) {
+      x.row(k) *= 1.0 / m(k, k);
+      for (int r = p0; r < k; ++r) x.row(r) -= m(r, k) * x.row(k);
+    }
+    for (int r = 0; r < p0; ++r) {
+      Row sum = Row::Zero();
+      for (int k = p0; k < p1; ++k) sum += m(r, k) * x.row(k);
+      x.row(r) += -sum;
+    }
+  }
+  return x;
+}
+
 /// exp(M) for M = [[X, Y], [0, Z]]: Eigen's scaling and squaring (see the file comment) block by block.
 template <int P, int Q>
 BlockTriangular<P, Q> blockTriangularExp(BlockTriangular<P, Q> a) {
@@ -124,10 +180,12 @@ BlockTriangular<P, Q> blockTriangularExp(BlockTriangular<P, Q> a) {
                                    182.0,               1.0};
     std::frexp(l1 / 5.371920351148152, &squarings);
     if (squarings < 0) squarings = 0;
-    const auto scaled = [squarings](double c) { return std::ldexp(c, -squarings); };
-    a.x = a.x.unaryExpr(scaled);
-    a.y = a.y.unaryExpr(scaled);
-    a.z = a.z.unaryExpr(scaled);
+    // M / 2^s as a product with 2^-s: the same correctly rounded x 2^-s as ldexp (which Eigen's
+    // exp() calls per coefficient), without a libm call per coefficient (9 % of the set-up).
+    const double scale = std::ldexp(1.0, -squarings);
+    a.x *= scale;
+    a.y *= scale;
+    a.z *= scale;
     const B a2 = a * a, a4 = a2 * a2, a6 = a4 * a2;
     B tmp = combine<P, Q>(0.0, {{b[13], &a6}, {b[11], &a4}, {b[9], &a2}});
     tmp = a6 * tmp;
@@ -141,9 +199,9 @@ BlockTriangular<P, Q> blockTriangularExp(BlockTriangular<P, Q> a) {
   const Eigen::PartialPivLU<Eigen::Matrix<double, P, P>> dx(v.x - u.x);
   const Eigen::PartialPivLU<Eigen::Matrix<double, Q, Q>> dz(v.z - u.z);
   B r;
-  r.z = dz.solve(v.z + u.z);
-  r.x = dx.solve(v.x + u.x);
-  r.y = dx.solve((v.y + u.y) - (v.y - u.y) * r.z);
+  r.z = luSolve(dz, v.z + u.z);
+  r.x = luSolve(dx, v.x + u.x);
+  r.y = luSolve(dx, (v.y + u.y) - (v.y - u.y) * r.z);
   for (int i = 0; i < squarings; ++i) r = r * r;
   return r;
 }
