@@ -585,14 +585,19 @@ void RigPipeline::updateResonance(Stamp stamp, const StiffnessEstimate& estimate
   try {
     const std::array<double, 2> kb = estimator_->shaftRadialStiffness();
     const std::array<double, 3> springs{kb[0], kb[1], estimate.mesh.mean};
-    // Skip the modal analysis when it cannot change the decision: K = sum k_i B_i with B_i >= 0,
-    // so springs within a factor (1 +- eps) of those at the last publication bound every
-    // eigenvalue omega^2 within the same factor (Courant-Fischer), and each frequency within
-    // sqrt(1 +- eps), i.e. closer than eps = ~resonance_threshold: no republication would follow.
+    // Skip the modal analysis when it cannot change the decision: K = sum k_i B_i with B_i >= 0
+    // and M fixed, so springs within factors [lo, hi] of those at the last publication bound every
+    // undamped eigenvalue omega^2 within the same factors (Courant-Fischer), and each natural
+    // frequency within [sqrt(lo), sqrt(hi)]. With hi = (1 + tau)^2 and lo = (1 - tau)^2 (tau =
+    // resonance_threshold) no frequency moves by more than tau, and no republication would follow.
+    // Until 2026-11-26 the factors were 1 +- tau, which ran the analysis about twice as often for
+    // the same publications. Both are shrunk by 1e-9 for the eigensolver's rounding (1e-15).
     if (last_resonance_) {
+      const double tau = options_.resonance_threshold, margin = 1e-9;
+      const double hi = (1.0 + tau) * (1.0 + tau) * (1.0 - margin), lo = (1.0 - tau) * (1.0 - tau) * (1.0 + margin);
       bool within = true;
       for (int i = 0; i < 3 && within; ++i) {
-        within = std::abs(springs[i] - springs_at_resonance_[i]) <= options_.resonance_threshold * springs_at_resonance_[i];
+        within = springs[i] <= hi * springs_at_resonance_[i] && springs[i] >= lo * springs_at_resonance_[i];
       }
       if (within) return;
     }
