@@ -11,27 +11,10 @@ set -euo pipefail
 src=$1 work=$2
 rm -rf "$work" && mkdir -p "$work"
 export PATH=/usr/bin:/bin:$PATH ROS_LOG_DIR=$work/log
-# The master's port: free now, and below the kernel's ephemeral range (net.ipv4.ip_local_port_range,
-# 32768-60999 on Debian), so that no outgoing connection or other node's server is handed it while
-# the master is down between the two starts. A random port in 30000-50000 (inside that range) once
-# met "Unable to start XML-RPC server, port 39834 is already in use" (a fresh clone, 2026-11-26).
-port=$(/usr/bin/python3 - <<'PY'
-import random, socket
-low = int(open("/proc/sys/net/ipv4/ip_local_port_range").read().split()[0])
-high = low if low > 20001 else 65536  # an ephemeral range below 20000 cannot be avoided
-for _ in range(1000):
-    candidate = random.randrange(20000, high)
-    with socket.socket() as s:
-        try:
-            s.bind(("", candidate))
-        except OSError:
-            continue
-    print(candidate)
-    break
-else:
-    raise SystemExit("check_fault_recovery: no free port in [20000, %d)" % high)
-PY
-)
+# The master's port: free now, and below the kernel's ephemeral range, so that no outgoing
+# connection or other node's server is handed it while the master is down between the two starts
+# (scripts/free_port says why).
+port=$("$src/scripts/free_port")
 export ROS_MASTER_URI=http://127.0.0.1:$port
 pids=()
 cleanup() { for p in "${pids[@]}"; do kill -INT -- "-$p" 2>/dev/null || true; done; sleep 1;
