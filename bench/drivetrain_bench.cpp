@@ -287,9 +287,7 @@ int main(int argc, char** argv) {
       try {
         ds::AutoChoice chosen;
         const Timed r = timed(expected, [&](Samples& s) {
-          // A pilot is a sample of the run: at most a quarter of it (a pilot as long as the run
-          // would be the run itself, paid twice).
-          const double pilot = std::min(0.25 * scene.duration, 40.0 * scene.output_interval);
+          const double pilot = ds::defaultPilotDuration(scene.duration, scene.output_interval);
           chosen = ds::chooseAutomatically(*scene.model, 0.0, scene.initial, scene.output_interval, pilot, bound,
                                             scene.duration);
           ds::IntegrationStats st;

@@ -1,5 +1,6 @@
 #include "drivetrain_stiffness/core/reduced_models.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <unsupported/Eigen/MatrixFunctions>
@@ -164,6 +165,10 @@ IntegratorOptions autoOptions(IntegratorMethod method, double relative_tolerance
     o.absolute_tolerance = relative_tolerance * 1e-6;
   }
   return o;
+}
+
+double defaultPilotDuration(double run_duration, double output_interval) {
+  return std::min(0.25 * run_duration, 40.0 * output_interval);
 }
 
 AutoChoice chooseAutomatically(const GearRotorModel& model, double t0, const State6& y0, double interval,

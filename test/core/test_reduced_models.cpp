@@ -124,7 +124,7 @@ TEST(ReducedModels, AutomaticChoiceIsTheCheapestThatMeetsTheBound) {
 TEST(ReducedModels, AutoWeighsTheSetUpAgainstTheRunAndMeetsItsBound) {
   for (const char* name : {"nominal", "near_rigid_bearings", "low_preload"}) {
     const Scene s = makeScene(name, rig());
-    const double pilot = std::min(0.25 * s.duration, 40.0 * s.output_interval), bound = 1e-6;
+    const double pilot = defaultPilotDuration(s.duration, s.output_interval), bound = 1e-6;
     const AutoChoice c = chooseAutomatically(*s.model, 0.0, s.initial, s.output_interval, pilot, bound, s.duration);
     // The error as the bench measures it (err_rms_rel: delta after the scene's start transient).
     std::vector<double> chosen, reference;
@@ -170,7 +170,7 @@ TEST(ReducedModels, AutoWeighsTheSetUpAgainstTheRunAndMeetsItsBound) {
   for (const Case& k : {Case{"nominal", 1e-6, true, false}, Case{"low_preload", 1e-6, true, true},
                         Case{"nominal", 1e-7, false, true}}) {
     const Scene s = makeScene(k.scene, rig());
-    const double pilot = std::min(0.25 * s.duration, 40.0 * s.output_interval);
+    const double pilot = defaultPilotDuration(s.duration, s.output_interval);
     const AutoChoice c = chooseAutomatically(*s.model, 0.0, s.initial, s.output_interval, pilot, k.bound, s.duration);
     const IntegratorOptions dopri = autoOptions(IntegratorMethod::kDopri5, c.relative_tolerance);
     IntegrationStats count, whole;

@@ -72,6 +72,11 @@ constexpr double kExponentialReferenceBound = 1e-6;
 /// The options auto runs `method` with, in its pilot and in the run (dopri5 at `relative_tolerance`).
 IntegratorOptions autoOptions(IntegratorMethod method, double relative_tolerance);
 
+/// The pilot auto is given by the CLI, the bench and the tests: a sample of the run, at most a
+/// quarter of it (a pilot as long as the run would be the run itself, paid twice) and at most 40
+/// output samples [s].
+double defaultPilotDuration(double run_duration, double output_interval);
+
 /// Picks the cheapest fidelity and method whose pilot error meets `error_bound` (relative RMS of
 /// delta). The pilot covers `pilot_duration` from (t0, y0); `run_duration` [s] is the span the
 /// choice will run (it weighs the exponential method's set-up against dopri5's work; 0: unknown,

@@ -86,9 +86,8 @@ int runSimulate(const SimulateArgs& args) {
     integrateReduced(*scene.model, parseFidelity("--method", args.method),
                      0.0, scene.initial, scene.duration, scene.output_interval, observe);
   } else if (automatic) {
-    // A pilot is a sample of the run (at most a quarter of it); the run's length weighs the
-    // exponential method's set-up against dopri5's work.
-    const double pilot = std::min(0.25 * scene.duration, 40.0 * scene.output_interval);
+    // The run's length weighs the exponential method's set-up against dopri5's work.
+    const double pilot = defaultPilotDuration(scene.duration, scene.output_interval);
     const AutoChoice c = chooseAutomatically(*scene.model, 0.0, scene.initial, scene.output_interval, pilot, args.error_bound,
                                              scene.duration);
     nlohmann::json pilots = nlohmann::json::object();
