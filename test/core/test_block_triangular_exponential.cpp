@@ -105,7 +105,8 @@ TEST(BlockTriangularExp, InverseIsTheExponentialOfMinusM) {
 // kernels take no fused multiply-add (this package's default build: SSE2, no -mfma), against
 // Eigen's own PartialPivLU::solve bit for bit, which is the point of writing it out: the same
 // operations in the same order, without the blocked solver's packing. Sizes and shapes of the
-// exponential's blocks (6x6, 6x5, 5x5) and random pivots.
+// exponential's blocks (6x6, 6x5, 5x5) and random pivots; more rows than a panel are compared bit
+// for bit only without AVX, whose kernel sums a leftover row with four accumulators.
 template <int N, int C>
 void checkLuSolve(std::mt19937& rng) {
   std::uniform_real_distribution<double> u(-1.0, 1.0);
@@ -118,8 +119,15 @@ void checkLuSolve(std::mt19937& rng) {
     const double scale = (a.cwiseAbs() * x.cwiseAbs() + b.cwiseAbs()).maxCoeff();
     EXPECT_LT((a * x - b).cwiseAbs().maxCoeff(), 1e-13 * scale) << N << "x" << C << " trial " << trial;
 #ifndef EIGEN_VECTORIZE_FMA
-    const Eigen::Matrix<double, N, C> eigen = lu.solve(b);
-    EXPECT_EQ(0, std::memcmp(x.data(), eigen.data(), sizeof(double) * N * C)) << N << "x" << C << " trial " << trial;
+#ifdef EIGEN_VECTORIZE_AVX
+    constexpr bool comparable = N <= kTriangularPanel;
+#else
+    constexpr bool comparable = true;
+#endif
+    if (comparable) {
+      const Eigen::Matrix<double, N, C> eigen = lu.solve(b);
+      EXPECT_EQ(0, std::memcmp(x.data(), eigen.data(), sizeof(double) * N * C)) << N << "x" << C << " trial " << trial;
+    }
 #endif
   }
 }

@@ -98,44 +98,51 @@ inline constexpr int kTriangularPanel =
 /// Written out because at the exponential's sizes (6x6, 6x5, 5x5) the blocked solver's packing and
 /// set-up were a quarter of the set-up's time (perf, near_rigid_bearings at 16/omega_max); the
 /// operations and their order are Eigen's, and so are the results, bit for bit where the kernels
-/// take no fused multiply-add (this package's build; checked against lu.solve in
-/// test_block_triangular_exponential.cpp, which fails with another panel width).
+/// take no fused multiply-add: for any size with SSE2 alone (this package's build), and with AVX
+/// up to a panel's rows (8, which covers these sizes); beyond a panel AVX's kernel sums a leftover
+/// row with four accumulators, which this does not copy. Checked against lu.solve in
+/// test_block_triangular_exponential.cpp (which fails with another panel width). A vector or a
+/// dynamic right-hand side goes to lu.solve itself (Eigen solves a vector by another path).
 template <int N, typename Rhs>
 Eigen::Matrix<double, N, Rhs::ColsAtCompileTime> luSolve(const Eigen::PartialPivLU<Eigen::Matrix<double, N, N>>& lu,
                                                          const Eigen::MatrixBase<Rhs>& b) {
   constexpr int C = Rhs::ColsAtCompileTime, W = kTriangularPanel;
-  using Row = Eigen::Matrix<double, 1, C>;
   const Eigen::Matrix<double, N, C> rhs = b;  // evaluated once, as solve() evaluates it
-  // Row-major, so that each row operation below runs over the columns in packets.
-  Eigen::Matrix<double, N, C, Eigen::RowMajor> x = lu.permutationP() * rhs;
-  const Eigen::Matrix<double, N, N>& m = lu.matrixLU();
-  // L x = P b, L unit lower: panels of W rows from the top; in a panel row k is subtracted from
-  // the panel's rows below it, then the rows below the panel lose the panel's rows' sum.
-  for (int p0 = 0; p0 < N; p0 += W) {
-    const int p1 = std::min(N, p0 + W);
-    for (int k = p0; k < p1; ++k) {
-      for (int r = k + 1; r < p1; ++r) x.row(r) -= m(r, k) * x.row(k);
+  if constexpr (C == 1 || C == Eigen::Dynamic) {
+    return lu.solve(rhs);  // a vector (Eigen solves it by another path) or a size unknown here
+  } else {
+    using Row = Eigen::Matrix<double, 1, C>;
+    // Row-major, so that each row operation below runs over the columns in packets.
+    Eigen::Matrix<double, N, C, Eigen::RowMajor> x = lu.permutationP() * rhs;
+    const Eigen::Matrix<double, N, N>& m = lu.matrixLU();
+    // L x = P b, L unit lower: panels of W rows from the top; in a panel row k is subtracted from
+    // the panel's rows below it, then the rows below the panel lose the panel's rows' sum.
+    for (int p0 = 0; p0 < N; p0 += W) {
+      const int p1 = std::min(N, p0 + W);
+      for (int k = p0; k < p1; ++k) {
+        for (int r = k + 1; r < p1; ++r) x.row(r) -= m(r, k) * x.row(k);
+      }
+      for (int r = p1; r < N; ++r) {
+        Row sum = Row::Zero();
+        for (int k = p0; k < p1; ++k) sum += m(r, k) * x.row(k);
+        x.row(r) += -sum;
+      }
     }
-    for (int r = p1; r < N; ++r) {
-      Row sum = Row::Zero();
-      for (int k = p0; k < p1; ++k) sum += m(r, k) * x.row(k);
-      x.row(r) += -sum;
+    // U x = y: panels of W rows from the bottom, row k first scaled by 1 / U(k, k).
+    for (int p1 = N; p1 > 0; p1 -= W) {
+      const int p0 = std::max(0, p1 - W);
+      for (int k = p1 - 1; k >= p0; --k) {
+        x.row(k) *= 1.0 / m(k, k);
+        for (int r = p0; r < k; ++r) x.row(r) -= m(r, k) * x.row(k);
+      }
+      for (int r = 0; r < p0; ++r) {
+        Row sum = Row::Zero();
+        for (int k = p0; k < p1; ++k) sum += m(r, k) * x.row(k);
+        x.row(r) += -sum;
+      }
     }
+    return x;
   }
-  // U x = y: panels of W rows from the bottom, row k first scaled by 1 / U(k, k).
-  for (int p1 = N; p1 > 0; p1 -= W) {
-    const int p0 = std::max(0, p1 - W);
-    for (int k = p1 - 1; k >= p0; --k) {
-      x.row(k) *= 1.0 / m(k, k);
-      for (int r = p0; r < k; ++r) x.row(r) -= m(r, k) * x.row(k);
-    }
-    for (int r = 0; r < p0; ++r) {
-      Row sum = Row::Zero();
-      for (int k = p0; k < p1; ++k) sum += m(r, k) * x.row(k);
-      x.row(r) += -sum;
-    }
-  }
-  return x;
 }
 
 /// exp(M) for M = [[X, Y], [0, Z]]: Eigen's scaling and squaring (see the file comment) block by block.
