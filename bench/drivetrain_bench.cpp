@@ -119,7 +119,7 @@ int main(int argc, char** argv) {
     const bool motion_scene = std::find(moving.begin(), moving.end(), name) != moving.end();
     const ds::Scene scene = ds::makeScene(name, rig, motion_scene ? (quick ? 0.05 : 0.5) : 0.0);
     const bool si = scene.units == "SI";
-    // Output samples of a run, with room for the first and the last (the recording reserves them).
+    // Output samples of a run: one per interval and the first, with one to spare.
     const std::size_t expected = static_cast<std::size_t>(std::ceil(scene.duration / scene.output_interval)) + 2;
     const double abs_per_rel = si ? 1e-6 : 1e-2;  // displacement scale: ~1 um (SI) or the unit gap
     auto record = [&](const Samples& s) {
