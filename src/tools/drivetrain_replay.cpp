@@ -19,6 +19,8 @@
 #include <yaml-cpp/yaml.h>
 
 #include "drivetrain_stiffness/Preload.h"
+#include "drivetrain_stiffness/core/dynamics_estimator.hpp"
+#include "drivetrain_stiffness/core/sliced_modal_propagator.hpp"
 #include "drivetrain_stiffness/config/yaml_config.hpp"
 #include "drivetrain_stiffness/ros/node_parameters.hpp"
 #include "python_script.hpp"  // NOLINT(build/include_subdir)
@@ -229,6 +231,22 @@ int run(int argc, char** argv) {
   summary["calibration"] = calibrationJson(pipeline);
   // The per-mesh-period statistics over the bag (a campaign's row): speed, torque, TE RMS, force.
   summary["mesh_periods"] = writer.meshPeriodTotals().json();
+  // Where the dynamics' time went, for the dynamics running at the bag's end (a restart begins them
+  // anew): deterministic counts, unlike the speed below. model_updates: the build at the start and
+  // one per bearing-stiffness or damping change; dopri5_intervals: intervals handed to dopri5; the
+  // sliced propagation's slice crossings, decompositions (general: by Eigen's eigensolver), contact
+  // changes located, and steps cut where the regime bound could not clear them (docs/model.md).
+  if (const DynamicsEstimator* d = pipeline.dynamics()) {
+    nlohmann::json work = {{"model_updates", d->rebuilds()}, {"dopri5_intervals", d->fallbackIntervals()}};
+    if (const SlicedModalPropagator* s = d->slicedPropagator()) {
+      work["slices_crossed"] = s->slicesCrossed();
+      work["slice_decompositions"] = s->decompositions();
+      work["general_decompositions"] = s->generalDecompositions();
+      work["contact_changes"] = s->regimeChanges();
+      work["checked_substeps"] = s->checkedSubsteps();
+    }
+    summary["dynamics_work"] = work;
+  }
   // --calibrate: written or refused (no window updated the calibration); the other outputs stand either way.
   std::string calibrate_error;
   if (!calibrate_out.empty()) {

@@ -656,6 +656,31 @@ TEST(SlicedModalPropagator, ABearingChangeIsReseededAndStaysExact) {
   }
 }
 
+TEST(SlicedModalPropagator, AMeshDampingChangeRemakesTheContactRules) {
+  // The contact rules and the mesh terms of every regime are tabulated per slice, and only a new
+  // mesh damping changes them (a bearing change keeps them: the test above). With the TE forcing's
+  // damper term (-c A w cos theta) and the rules' damper coefficients read from those tables, rules
+  // kept from the old damping put the forcing off by about 0.6 % of the mesh force here; the
+  // result must be dopri5's on the new model, above the knee (drive flank alone, damper c k1/(k1 +
+  // k_c)) and with both flanks loaded.
+  for (double torque : {0.1, 10.0}) {
+    Harness h(128, torque);
+    State6 y = h.equilibrium(0.2);
+    double phase = 0.2;
+    ASSERT_TRUE(h.exact.propagate(y, phase, meshHz(1000), 4e-3, h.drive_force));  // every slice decomposed
+    GearRotorParameters changed = params();
+    changed.mesh_damping *= 3.0;
+    h.exact.setParameters(changed);
+    GearRotorModel damper(changed, h.excitation);
+    damper.setTorqueInput(torque);
+    damper.setMotionInput(MeshMotion{0.0, 0.2, 0.0});
+    const State6 y0 = staticEquilibrium(damper, 0.0);
+    const std::vector<Piece> pieces(4, Piece{1e-3, meshHz(1500)});
+    const State6 got = h.propagated(y0, 0.2, pieces), ref = h.reference(damper, y0, 0.2, pieces);
+    EXPECT_LT(relativeError(got, ref), 1e-8) << "torque " << torque;
+  }
+}
+
 // Fuzz finding: a reversed motion standing exactly on a period boundary (phase 0, or a phase that
 // rounded to 1.0) looked for the slice below in the wrong period, so nextSwitch returned a time in
 // the past and dopri5 crawled one ulp per step for ever.

@@ -30,6 +30,7 @@
 
 #include <array>
 #include <complex>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <vector>
@@ -220,6 +221,9 @@ class SlicedModalPropagator {
   double te_amplitude_, backlash_, m_s_ = 0.0;
   mutable std::array<std::vector<Slice>, kRegimes> cache_;  ///< per MeshRegime, per slice
   mutable std::array<std::vector<RegimeConditions>, kRegimes> conditions_;  ///< per MeshRegime, per slice (makeConditions)
+  /// The mesh damping the tables of conditions_ were made with (NaN: not yet made). The rules read
+  /// nothing else that setParameters can change, so a bearing change keeps them.
+  double conditions_mesh_damping_ = std::numeric_limits<double>::quiet_NaN();
   mutable Piece piece_;
   mutable long decompositions_ = 0, general_decompositions_ = 0, crossed_ = 0, substeps_ = 0, events_ = 0;
   double fastest_period_bound_ = 0.0;
