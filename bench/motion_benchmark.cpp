@@ -55,14 +55,18 @@ static void BM_SlicedPropagation(benchmark::State& state) {
 BENCHMARK(BM_SlicedPropagation)->Arg(100)->Arg(1000)->Arg(6000);
 
 static void BM_SliceDecomposition(benchmark::State& state) {
-  const GearRotorParameters p = rigRotorParameters(rig(), *mesh(), {1.2e8, 1.2e8});
+  GearRotorParameters p = rigRotorParameters(rig(), *mesh(), {1.2e8, 1.2e8});
   auto slices = std::make_shared<const SlicedMesh>(mesh(), 256);
   SlicedModalPropagator prop(p, slices, 1e-6, 0.0);
   State6 y = State6::Zero();
   y[2] = 17.7 / 2e8;
   double phase = 0.0;
+  long k = 0;
   for (auto _ : state) {
-    prop.setParameters(p);  // every slice decomposed again on its next use
+    // A value not met before (a kept set would come back with no work): every slice decomposed
+    // again on its next use.
+    p.bearing_stiffness[0] = 1.2e8 * (1.0 + 1e-9 * static_cast<double>(++k));
+    prop.setParameters(p);
     // One mesh period at 1000 rpm crosses every slice once: one decomposition each.
     prop.propagate(y, phase, 333.33333333333331, 3e-3, 17.7);
   }
@@ -73,10 +77,12 @@ BENCHMARK(BM_SliceDecomposition)->Unit(benchmark::kMicrosecond);
 
 // The callback right after a bearing-stiffness change at 6000 rpm: one 1 ms advance crosses every
 // slice twice, so it makes all 259 decompositions itself (issue 12 §2: under 0.5 ms). The bearing
-// stiffness alternates by 1 % (a preload step), so each slice is seeded by the neighbour behind it
+// stiffness alternates by 1 % (a preload step) and drifts by 1e-9 at each change, so every value
+// is new (none of the kept parameter sets) and each slice is seeded by the neighbour behind it
 // under the new parameters, as in the pipeline; compare with BM_SlicedPropagation/6000, the same
-// advance without a change.
-static void BM_AdvanceAfterBearingChange(benchmark::State& state) {
+// advance without a change. BM_AdvanceAfterKeptBearingChange: the same two values exactly, as a
+// rippling load's stiffness comes back to its grid values: their slices are kept.
+static void advanceAfterBearingChange(benchmark::State& state, double drift) {
   const double rpm = static_cast<double>(state.range(0));
   GearRotorParameters p[2] = {rigRotorParameters(rig(), *mesh(), {1.2e8, 1.2e8}),
                               rigRotorParameters(rig(), *mesh(), {1.212e8, 1.212e8})};
@@ -89,7 +95,9 @@ static void BM_AdvanceAfterBearingChange(benchmark::State& state) {
   long k = 0;
   const long general0 = prop.generalDecompositions(), all0 = prop.decompositions();
   for (auto _ : state) {
-    prop.setParameters(p[++k % 2]);
+    GearRotorParameters next = p[++k % 2];
+    next.bearing_stiffness[0] *= 1.0 + drift * static_cast<double>(k);
+    prop.setParameters(next);
     if (!prop.propagate(y, phase, f, 1e-3, force)) state.SkipWithError("left the linear regime");
   }
   benchmark::DoNotOptimize(y);
@@ -97,7 +105,10 @@ static void BM_AdvanceAfterBearingChange(benchmark::State& state) {
   state.counters["decompositions_per_advance"] = static_cast<double>(prop.decompositions() - all0) / n;
   state.counters["general_per_advance"] = static_cast<double>(prop.generalDecompositions() - general0) / n;
 }
+static void BM_AdvanceAfterBearingChange(benchmark::State& state) { advanceAfterBearingChange(state, 1e-9); }
 BENCHMARK(BM_AdvanceAfterBearingChange)->Arg(2000)->Arg(6000)->Unit(benchmark::kMicrosecond);
+static void BM_AdvanceAfterKeptBearingChange(benchmark::State& state) { advanceAfterBearingChange(state, 0.0); }
+BENCHMARK(BM_AdvanceAfterKeptBearingChange)->Arg(6000)->Unit(benchmark::kMicrosecond);
 
 static void BM_PipelineEncoderRunUp(benchmark::State& state) {
   RigPipeline pipeline(rig(), PipelineOptions{});

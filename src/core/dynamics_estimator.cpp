@@ -137,13 +137,24 @@ void DynamicsEstimator::setBearingStiffness(const std::array<double, 2>& k, std:
   if (!changed) return;
   if (started_ && at) moveTo(*at);
   const std::array<double, 2> before = bearing_stiffness_;
-  bearing_stiffness_ = k;
+  bearing_stiffness_ = {bearingGridValue(k[0]), bearingGridValue(k[1])};
   try {
     parametersChanged();
   } catch (...) {
     bearing_stiffness_ = before;  // refused: the last model stays
     throw;
   }
+}
+
+double DynamicsEstimator::bearingGridValue(double k) {
+  // Grid points 1.01^n, n = round(ln k / ln 1.01): the nearest in ratio, within a factor 1.005 of
+  // k. The same k, or any k between the same two midpoints, gives the same bits (one exp of an
+  // integer times a constant), which is what lets the sliced propagation recognise a value met
+  // before. With the 1 % dead band above, the stiffness the model runs with stays within 1 % of
+  // the estimator's, as it did when a change took the estimator's value itself.
+  if (!(k >= 1.0) || !std::isfinite(k)) return k;
+  static const double kStep = std::log(1.01);
+  return std::exp(std::round(std::log(k) / kStep) * kStep);
 }
 
 void DynamicsEstimator::setDamping(double mesh_damping_ratio, double bearing_damping_ratio) {

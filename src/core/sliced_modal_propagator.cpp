@@ -99,12 +99,15 @@ SlicedModalPropagator::SlicedModalPropagator(const GearRotorParameters& p, std::
   if (!slices_) throw InvalidInput("sliced propagator: no sliced mesh");
   requireNonNegative("transmission_error_amplitude", te_amplitude);
   requireNonNegative("backlash", backlash);
-  // The three usual regimes now; the others (stiffened flanks, both unloaded) when first met.
+  // The three usual regimes' rules now; the others (stiffened flanks, both unloaded) when first
+  // met. The slices of each regime are sized when a parameter set first uses them.
   for (MeshRegime r : {MeshRegime::kBothFlanks, MeshRegime::kDriveFlank, MeshRegime::kBackFlank}) {
-    cache_[static_cast<std::size_t>(r)].resize(static_cast<std::size_t>(slices_->size()));
     conditions_[static_cast<std::size_t>(r)].resize(static_cast<std::size_t>(slices_->size()));
   }
   setParameters(p);
+  for (MeshRegime r : {MeshRegime::kBothFlanks, MeshRegime::kDriveFlank, MeshRegime::kBackFlank}) {
+    activeSlices(r).resize(static_cast<std::size_t>(slices_->size()));
+  }
 }
 
 void SlicedModalPropagator::setParameters(const GearRotorParameters& p) {
@@ -114,9 +117,39 @@ void SlicedModalPropagator::setParameters(const GearRotorParameters& p) {
   }
   p_ = p;
   m_s_ = p.equivalentMass();
-  for (auto& regime : cache_) {
-    for (Slice& s : regime) s.ready = false;
+  // The set of these parameters: a kept one as it was, or the longest unused one (never used
+  // first) emptied for them. Its slots keep their last modes as seeds.
+  DecompositionKey key;
+  key.bearing_stiffness = p.bearing_stiffness;
+  key.bearing_damping = p.bearing_damping;
+  key.mesh_damping = p.mesh_damping;
+  key.pinion_mass = p.pinion_mass;
+  key.gear_mass = p.gear_mass;
+  key.mesh_mass = m_s_;
+  std::size_t found = sets_.size(), victim = sets_.size();
+  for (std::size_t i = 0; i < sets_.size(); ++i) {
+    if (sets_[i].valid && sets_[i].key == key) found = i;
+    if (!sets_[i].valid) {
+      if (victim == sets_.size() || sets_[victim].valid) victim = i;  // the first never used
+    } else if (victim == sets_.size() || (sets_[victim].valid && sets_[i].last_used < sets_[victim].last_used)) {
+      victim = i;
+    }
   }
+  const std::size_t before = active_;
+  if (found < sets_.size()) {
+    active_ = found;
+    ++kept_sets_reused_;
+  } else {
+    KeptSet& set = sets_[victim];
+    for (auto& regime : set.slices) {
+      for (Slice& s : regime) s.ready = false;
+    }
+    set.key = key;
+    set.valid = true;
+    active_ = victim;
+  }
+  if (active_ != before) previous_ = static_cast<int>(before);
+  sets_[active_].last_used = ++use_clock_;
   // The contact rules depend on the mesh damping (flankLaw, meshTerms; the slices, the preload
   // force, the backlash and the TE amplitude are the propagator's own): tabulated here, read at
   // every step, no allocation (the tables keep their size). Remade only when that damping changed:
@@ -141,8 +174,8 @@ void SlicedModalPropagator::allocateRegime(MeshRegime r) const {
   // Once per regime and propagator (not in the steady state of a run): sized, its rules tabulated
   // for the parameters of now (setParameters keeps every allocated table up to date).
   const std::size_t n = static_cast<std::size_t>(slices_->size());
-  cache_[static_cast<std::size_t>(r)].resize(n);
   std::vector<RegimeConditions>& table = conditions_[static_cast<std::size_t>(r)];
+  if (!table.empty()) return;
   table.resize(n);
   for (std::size_t j = 0; j < n; ++j) table[j] = makeConditions(r, static_cast<int>(j));
 }
@@ -256,20 +289,30 @@ Matrix6 SlicedModalPropagator::systemMatrix(MeshRegime r, int j) const {
 }
 
 const SlicedModalPropagator::Slice& SlicedModalPropagator::slice(MeshRegime r, int j) const {
-  std::vector<Slice>& cache = cache_[static_cast<std::size_t>(r)];
-  if (cache.empty()) allocateRegime(r);
+  std::vector<Slice>& cache = activeSlices(r);
+  if (cache.empty()) {  // the first time this set meets the regime (bounded: sets times regimes)
+    allocateRegime(r);
+    cache.resize(static_cast<std::size_t>(slices_->size()));
+  }
   Slice& s = cache[static_cast<std::size_t>(j)];
   if (s.ready) return s;
   ++decompositions_;
   // Seeds for the three modes: a neighbouring slice already decomposed with these parameters (its
   // mesh stiffness differs by one slice's step), else this slice's modes under the parameters
-  // before the last change. Crossing order makes the neighbour behind the motion the usual seed.
+  // before the last change (the set active before it), else this slot's last modes under any.
+  // Crossing order makes the neighbour behind the motion the usual seed.
   const int n = static_cast<int>(cache.size());
   const Slice& below = cache[static_cast<std::size_t>(j == 0 ? n - 1 : j - 1)];
   const Slice& above = cache[static_cast<std::size_t>(j + 1 == n ? 0 : j + 1)];
   bool done = false;
   if (below.ready && below.has_upper) done = decomposeSeeded(r, j, s, below.upper);
   if (!done && above.ready && above.has_upper) done = decomposeSeeded(r, j, s, above.upper);
+  if (!done && previous_ >= 0) {
+    const std::vector<Slice>& before = sets_[static_cast<std::size_t>(previous_)].slices[static_cast<std::size_t>(r)];
+    if (!before.empty() && before[static_cast<std::size_t>(j)].has_upper) {
+      done = decomposeSeeded(r, j, s, before[static_cast<std::size_t>(j)].upper);
+    }
+  }
   if (!done && s.has_upper) done = decomposeSeeded(r, j, s, s.upper);
   if (!done) decomposeGeneral(r, j, s);
   s.fastest = largestMagnitude(s.lambda);

@@ -681,6 +681,42 @@ TEST(SlicedModalPropagator, AMeshDampingChangeRemakesTheContactRules) {
   }
 }
 
+TEST(SlicedModalPropagator, KeptParameterSetsAreTakenBackAsTheyWere) {
+  // Parameters A, then B, then A again: A's slices come back with no decomposition, and from the
+  // same state they propagate bit for bit as they did before B (they are the same numbers), and
+  // within 1e-8 of dopri5 on A's model. After kKeptParameterSets other sets, A's slices are gone
+  // (the longest unused set is emptied for a new one) and are decomposed again.
+  Harness h(128);
+  const GearRotorParameters a = params();
+  GearRotorParameters b = a;
+  b.bearing_stiffness = {1.3e8, 1.25e8};
+  const State6 y0 = h.equilibrium(0.2);
+  const std::vector<Piece> pieces(4, Piece{1e-3, meshHz(1500)});  // 4 ms: every slice crossed
+  const State6 first = h.propagated(y0, 0.2, pieces);
+  const long after_a = h.exact.decompositions();
+  EXPECT_EQ(after_a, h.slices->size());
+  h.exact.setParameters(b);
+  h.propagated(y0, 0.2, pieces);
+  EXPECT_EQ(h.exact.decompositions(), 2 * after_a);
+  h.exact.setParameters(a);
+  EXPECT_EQ(h.exact.keptSetsReused(), 1);
+  const State6 again = h.propagated(y0, 0.2, pieces);
+  EXPECT_EQ(h.exact.decompositions(), 2 * after_a) << "A's slices were decomposed again";
+  EXPECT_EQ(again, first);
+  EXPECT_LT(relativeError(again, h.reference(y0, 0.2, pieces)), 1e-8);
+  for (int i = 0; i < SlicedModalPropagator::kKeptParameterSets; ++i) {
+    GearRotorParameters other = a;
+    other.bearing_stiffness = {1.4e8 + 1e6 * i, 1.4e8};
+    h.exact.setParameters(other);
+    h.propagated(y0, 0.2, {Piece{1e-4, meshHz(1500)}});
+  }
+  h.exact.setParameters(a);
+  const long before = h.exact.decompositions();
+  const State6 evicted = h.propagated(y0, 0.2, pieces);
+  EXPECT_EQ(h.exact.decompositions() - before, h.slices->size()) << "A's set should have been emptied";
+  EXPECT_LT(relativeError(evicted, first), 1e-12);
+}
+
 // Fuzz finding: a reversed motion standing exactly on a period boundary (phase 0, or a phase that
 // rounded to 1.0) looked for the slice below in the wrong period, so nextSwitch returned a time in
 // the past and dopri5 crawled one ulp per step for ever.

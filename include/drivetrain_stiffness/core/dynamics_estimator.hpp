@@ -94,12 +94,19 @@ class DynamicsEstimator {
   /// The speed-independent propagator (null until the motion is followed or a rebuild is avoided).
   const SlicedModalPropagator* slicedPropagator() const { return full_.exact.get(); }
   /// A stiffness change by more than 1 % takes effect (see the class comment); smaller ones are
-  /// ignored. With `at` (absolute time >= time(), no output sample before it: advanceTo(at) first)
+  /// ignored. What takes effect is the value on a 1 % grid nearest to it (bearingGridValue: within
+  /// 0.5 % of it), so that a stiffness that swings under a rippling load comes back to the same
+  /// values and the sliced propagation takes their slices back instead of decomposing them again
+  /// (SlicedModalPropagator::kKeptParameterSets). The stiffness given at construction is taken as
+  /// it is. With `at` (absolute time >= time(), no output sample before it: advanceTo(at) first)
   /// the state is first propagated to `at` with the stiffness before, so the change takes effect at
   /// that instant rather than at the last output sample.
   void setBearingStiffness(const std::array<double, 2>& k, std::optional<double> at = std::nullopt);
+  /// The grid a changed bearing stiffness [N/m] moves on: 1.01^n for the n nearest in logarithm
+  /// (k itself below 1 N/m, where no rig's bearing is: 0 stays 0).
+  static double bearingGridValue(double k);
   /// The bearing stiffness per shaft [N/m] the model runs with now: the last one taken up (it can
-  /// lag the estimator's by up to the 1 % above).
+  /// differ from the estimator's by up to the 1 % above).
   const std::array<double, 2>& bearingStiffness() const { return bearing_stiffness_; }
   /// Damping ratios of the model (mesh, bearings) in place of the dynamics block's, each in [0, 1]
   /// (requireDampingRatio, InvalidInput naming the ratio otherwise); the model is rebuilt, the

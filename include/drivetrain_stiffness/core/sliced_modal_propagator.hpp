@@ -26,6 +26,12 @@
 // the work spreads over the next mesh period, about a microsecond per slice (Newton from the
 // neighbouring slice's modes), and the results do not depend on when it is done (deterministic
 // replay). Each regime has its own slices' modes, made as the motion first needs them.
+//
+// The decompositions of the last kKeptParameterSets parameter sets are kept: a set met again (the
+// same bearing stiffness, damping and masses, bit for bit) takes its slices back with no work.
+// The online estimator moves the bearing stiffness on a 1 % grid (DynamicsEstimator), so under a
+// rippling load, where the stiffness swings by a few per cent at the ripple's frequency and its
+// grid values come back hundreds of times a second, the slices are decomposed once per value.
 #pragma once
 
 #include <array>
@@ -47,8 +53,12 @@ class SlicedModalPropagator {
   /// Throws InvalidInput for bearing clearance (the model is then never linear) or bad parameters.
   SlicedModalPropagator(const GearRotorParameters& p, std::shared_ptr<const SlicedMesh> slices, double te_amplitude,
                         double backlash);
-  /// New parameters (bearing stiffness, damping): every slice is decomposed again on its next use.
+  /// New parameters (bearing stiffness, damping): every slice is decomposed again on its next use,
+  /// unless the set is one of the last kKeptParameterSets met, whose slices come back as they were.
   void setParameters(const GearRotorParameters& p);
+  /// Parameter sets whose decompositions are kept (about 1.3 MB each for the three usual regimes
+  /// of a 259-slice mesh, more where the stiffened regimes are met).
+  static constexpr int kKeptParameterSets = 6;
   const GearRotorParameters& parameters() const { return p_; }
 
   /// Propagates y over `duration` [s] (>= 0) from the mesh phase `phase` [turns] at the signed mesh
@@ -89,6 +99,8 @@ class SlicedModalPropagator {
   /// Steps cut short because the bound could not show the contacts keep their state through them.
   long checkedSubsteps() const { return substeps_; }
   long slicesCrossed() const { return crossed_; }
+  /// setParameters calls that found their set kept (its slices already decomposed).
+  long keptSetsReused() const { return kept_sets_reused_; }
 
  private:
   using Complex = std::complex<double>;
@@ -219,7 +231,29 @@ class SlicedModalPropagator {
   GearRotorParameters p_;
   std::shared_ptr<const SlicedMesh> slices_;
   double te_amplitude_, backlash_, m_s_ = 0.0;
-  mutable std::array<std::vector<Slice>, kRegimes> cache_;  ///< per MeshRegime, per slice
+  /// What a slice's decomposition reads of the parameters (decomposeSeeded, decomposeGeneral):
+  /// a kept set is taken back only where all of these are equal bit for bit.
+  struct DecompositionKey {
+    std::array<double, 2> bearing_stiffness{}, bearing_damping{};
+    double mesh_damping = 0.0, pinion_mass = 0.0, gear_mass = 0.0, mesh_mass = 0.0;
+    bool operator==(const DecompositionKey& o) const {
+      return bearing_stiffness == o.bearing_stiffness && bearing_damping == o.bearing_damping &&
+             mesh_damping == o.mesh_damping && pinion_mass == o.pinion_mass && gear_mass == o.gear_mass &&
+             mesh_mass == o.mesh_mass;
+    }
+  };
+  /// One parameter set's slices, per MeshRegime, per slice (sized when the regime is first met).
+  struct KeptSet {
+    DecompositionKey key;
+    bool valid = false;
+    long last_used = 0;
+    std::array<std::vector<Slice>, kRegimes> slices;
+  };
+  std::vector<Slice>& activeSlices(MeshRegime r) const { return sets_[active_].slices[static_cast<std::size_t>(r)]; }
+  mutable std::array<KeptSet, kKeptParameterSets> sets_;
+  std::size_t active_ = 0;  ///< the set of the parameters now
+  int previous_ = -1;       ///< the set before the last change (seeds for the new one), -1: none
+  long use_clock_ = 0, kept_sets_reused_ = 0;
   mutable std::array<std::vector<RegimeConditions>, kRegimes> conditions_;  ///< per MeshRegime, per slice (makeConditions)
   /// The mesh damping the tables of conditions_ were made with (NaN: not yet made). The rules read
   /// nothing else that setParameters can change, so a bearing change keeps them.
