@@ -286,7 +286,8 @@ LoadSweep makeLoadSweep(const RigConfig& rig, const LoadSweepSpec& s) {
   // with d = StaticTeModel::shaftDeflection (scale-1 secant deflections {-x_p, x_g}, signed with
   // the torque) divided by the true rig's scale of that shaft, and k_shaft the stiffness the
   // dynamics actually run with (DynamicsEstimator::bearingStiffness(): it takes up a change only
-  // beyond 1 %, so it can lag the estimator's shaftRadialStiffness() by that much; the estimator's
+  // beyond 1 %, as its 1 % grid value, so it can differ from the estimator's shaftRadialStiffness()
+  // by that much; the estimator's
   // would leave up to 1 % of the bearing deflection in x_enc). c is constant per hold; across a
   // step it jumps with the torque while x settles over the dynamics' transient (milliseconds).
   std::array<double, 2> shafts{};

@@ -23,7 +23,7 @@
 //
 // The decomposition of a slice is made the first time the slice is crossed after a parameter
 // change (setParameters), so a bearing-stiffness change costs nothing at the input that made it:
-// the work spreads over the next mesh period, about a microsecond per slice (Newton from the
+// the work spreads over the next mesh period, about 2 us per slice (Newton from the
 // neighbouring slice's modes), and the results do not depend on when it is done (deterministic
 // replay). Each regime has its own slices' modes, made as the motion first needs them.
 //
@@ -191,7 +191,7 @@ class SlicedModalPropagator {
   void allocateRegime(MeshRegime r) const;
   const Slice& slice(MeshRegime r, int j) const;
   /// Slice j's modes by Newton on its characteristic polynomial from three seeds (the common case,
-  /// a few hundred nanoseconds); false where that does not give a verified spectrum.
+  /// about 2 us with the eigenvectors and checks); false where that does not give a verified spectrum.
   bool decomposeSeeded(MeshRegime r, int j, Slice& s, std::array<Complex, 3> seeds) const;
   /// Slice j's modes by Eigen's EigenSolver and a complex LU inverse (about 5 us).
   void decomposeGeneral(MeshRegime r, int j, Slice& s) const;
