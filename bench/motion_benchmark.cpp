@@ -3,8 +3,10 @@
 //    cost per simulated second and per slice crossed (the work grows with speed x slices);
 //  - BM_SliceDecomposition: every slice decomposed again and crossed once (what a bearing-stiffness
 //    change costs, spread over the slices as they are crossed);
-//  - BM_AdvanceAfterBearingChange/<rpm>: the 1 ms advance right after a 1 % bearing change, which
-//    at 2000 rpm and more crosses (and so decomposes) every slice in one callback;
+//  - BM_AdvanceAfterBearingChange/<rpm>: the 1 ms advance right after a 1 % bearing change to a
+//    value never met before, which at 2000 rpm and more crosses (and so decomposes) every slice in
+//    one callback; BM_AdvanceAfterKeptBearingChange/<rpm>: the same back to a value whose slices
+//    are kept (none decomposed);
 //  - BM_PipelineEncoderRunUp: RigPipeline with torque and joint_states at 1 kHz each through a
 //    run-up 0 -> 6000 rpm in 10 s (model seconds per second of work = the real-time factor).
 // Run: devel/lib/drivetrain_stiffness/motion_benchmark --benchmark_repetitions=3 --benchmark_report_aggregates_only=true
@@ -77,7 +79,8 @@ BENCHMARK(BM_SliceDecomposition)->Unit(benchmark::kMicrosecond);
 
 // The callback right after a bearing-stiffness change at 6000 rpm: one 1 ms advance crosses every
 // slice twice, so it makes all 259 decompositions itself (issue 12 §2: under 0.5 ms). The bearing
-// stiffness alternates by 1 % (a preload step) and drifts by 1e-9 at each change, so every value
+// stiffness alternates by 1 % (a preload step) and drifts by a further 1e-9 at each change (k 1e-9
+// after k changes), so every value
 // is new (none of the kept parameter sets) and each slice is seeded by the neighbour behind it
 // under the new parameters, as in the pipeline; compare with BM_SlicedPropagation/6000, the same
 // advance without a change. BM_AdvanceAfterKeptBearingChange: the same two values exactly, as a

@@ -137,8 +137,8 @@ void SlicedModalPropagator::setParameters(const GearRotorParameters& p) {
   }
   const std::size_t before = active_;
   if (found < sets_.size()) {
+    if (found != active_) ++kept_sets_reused_;
     active_ = found;
-    ++kept_sets_reused_;
   } else {
     KeptSet& set = sets_[victim];
     for (auto& regime : set.slices) {

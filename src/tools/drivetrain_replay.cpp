@@ -231,14 +231,16 @@ int run(int argc, char** argv) {
   summary["calibration"] = calibrationJson(pipeline);
   // The per-mesh-period statistics over the bag (a campaign's row): speed, torque, TE RMS, force.
   summary["mesh_periods"] = writer.meshPeriodTotals().json();
-  // Where the dynamics' time went, for the dynamics running at the bag's end (a restart begins them
-  // anew): deterministic counts, unlike the speed below. model_updates: the build at the start and
-  // one per bearing-stiffness or damping change; dopri5_intervals: intervals handed to dopri5; the
-  // sliced propagation's slice crossings, decompositions (general: by Eigen's eigensolver), contact
-  // changes located, and steps cut where the regime bound could not clear them (docs/model.md).
+  // Where the dynamics' time went, over the whole bag (the pipeline keeps its dynamics through
+  // restarts): deterministic counts, unlike the speed below. model_updates: the builds (at the start,
+  // and at a restart after a change) and the bearing-stiffness or damping changes taken up while
+  // running; dopri5_intervals: intervals handed to dopri5; the sliced propagation's (at the fidelity
+  // of the bag's end: the full model's, or linear_modal's mean model's) slice crossings,
+  // decompositions (general: by Eigen's eigensolver), contact changes located, and steps cut where
+  // the regime bound could not clear them (docs/model.md).
   if (const DynamicsEstimator* d = pipeline.dynamics()) {
     nlohmann::json work = {{"model_updates", d->rebuilds()}, {"dopri5_intervals", d->fallbackIntervals()}};
-    if (const SlicedModalPropagator* s = d->slicedPropagator()) {
+    if (const SlicedModalPropagator* s = d->movingSlicedPropagator()) {
       work["slices_crossed"] = s->slicesCrossed();
       work["slice_decompositions"] = s->decompositions();
       work["general_decompositions"] = s->generalDecompositions();

@@ -9,6 +9,7 @@
 
 #include "drivetrain_stiffness/config/yaml_config.hpp"
 #include "counting_new.hpp"  // NOLINT(build/include_subdir)
+#include "drivetrain_stiffness/core/dynamics_estimator.hpp"
 #include "drivetrain_stiffness/pipeline/rig_pipeline.hpp"
 #include "ripple_torque_feed.hpp"  // NOLINT(build/include_subdir)
 #include "seed_rig.hpp"            // NOLINT(build/include_subdir)
@@ -109,13 +110,17 @@ TEST(NoAllocation, EncoderReadingsThroughCalibrationUpdates) {
 //    than 1 % while the dynamics run switches them, once, from the periodic propagators to the
 //    sliced propagation (DynamicsEstimator::parametersChanged: the sliced mesh, its propagator and
 //    the model over it are made then and kept until a restart); every later change stays on it.
-//    That switch is a one-time set-up, like the tables, so it belongs to the warm-up (measured:
-//    29 allocations in the warm-up cycle, 28 of them at its first input, none at the other five).
+//    That switch is a one-time set-up, like the tables, so it belongs to the warm-up (measured
+//    before the kept parameter sets of 2026-11-26: 29 allocations in the warm-up cycle, 28 of them
+//    at its first input, none at the other five; since then each new kept set also sizes its
+//    slices once, in the warm-up).
 // Counted: 1 s more of the cycle. It changes the geometry of the supports (axial preload and
 // interference: each support's Hertz model rebuilt and cold-started), the radial preload alone
 // (warm-started), steps that move the bearing stiffness past the dynamics' 1 % (sliced
-// propagator's parameters changed, every slice decomposed again as the mesh turns) and one that
-// does not, and the resonance estimate each time; never the number of balls in contact (the
+// propagator's parameters changed; the cycle's stiffnesses come back to the same values of the
+// dynamics' 1 % grid, whose slices are kept since 2026-11-26, so here they are taken back; the
+// decomposition of values never met before is BearingChangesToNewValuesInSteadyState below) and
+// one that does not, and the resonance estimate each time; never the number of balls in contact (the
 // per-ball storage is sized by the bearing's ball count, not by the balls in contact, but a step
 // that changes the count is not what this case claims). The preload vectors are the caller's (the
 // ROS message conversion builds them), made before counting. Before the fix this counted 1618
@@ -184,4 +189,44 @@ TEST(NoAllocation, PreloadInputsInSteadyState) {
   EXPECT_EQ(pipeline.dynamics()->rebuilds() - dynamics_changes_before, 14);
   EXPECT_TRUE(pipeline.dynamics()->followingMotion());
   EXPECT_GT(c.modal_updates, before_counters.modal_updates);
+}
+
+// Bearing changes to stiffnesses never met before, with the dynamics on the sliced propagation:
+// each empties the longest unused of the propagator's kept parameter sets
+// (SlicedModalPropagator::kKeptParameterSets) and decomposes its slices again as they are crossed,
+// in the slice storage that set already has. Warm-up: 2 s of torque, then eight new stiffnesses
+// (more than the six sets: every set sized, and eviction under way). Counted: twenty more, each a
+// grid value not met before (2 % apart), 2 ms of torque inputs at 10 kHz after each (a period at
+// 1000 rpm is 3 ms: about two thirds of the slices decomposed per change).
+TEST(NoAllocation, BearingChangesToNewValuesInSteadyState) {
+  DynamicsEstimator est(test::seedServo(), {1.2e8, 1.2e8}, 1000.0);
+  est.reset(0.0, 0.1);
+  double t = 0.0;
+  auto run = [&](double until) {
+    for (; t < until - 1e-12; t += 1e-4) {
+      est.advanceTo(t, nullptr);
+      est.setTorque(0.1 * (1.0 + 0.1 * std::sin(2.0 * M_PI * 100.0 * t)), t);
+    }
+  };
+  long change = 0;
+  auto newStiffness = [&] {
+    const double k = 1.2e8 * std::pow(1.02, static_cast<double>(++change % 40) - 20.0);  // 40 values, 2 % apart
+    est.advanceTo(t, nullptr);
+    est.setBearingStiffness({k, k}, t);
+  };
+  run(2.0);
+  for (int i = 0; i < 8; ++i) {
+    newStiffness();
+    run(t + 2e-3);
+  }
+  ASSERT_TRUE(est.followingMotion());
+  const SlicedModalPropagator& prop = *est.slicedPropagator();
+  const long decompositions_before = prop.decompositions(), before = allocationCount();
+  for (int i = 0; i < 20; ++i) {
+    newStiffness();
+    run(t + 2e-3);
+  }
+  const long n = allocationCount() - before;
+  EXPECT_EQ(n, 0) << n / 20.0 << " heap allocations per bearing change";
+  EXPECT_GT(prop.decompositions() - decompositions_before, 20 * 100) << "the changes did not decompose slices";
 }

@@ -684,8 +684,8 @@ TEST(SlicedModalPropagator, AMeshDampingChangeRemakesTheContactRules) {
 TEST(SlicedModalPropagator, KeptParameterSetsAreTakenBackAsTheyWere) {
   // Parameters A, then B, then A again: A's slices come back with no decomposition, and from the
   // same state they propagate bit for bit as they did before B (they are the same numbers), and
-  // within 1e-8 of dopri5 on A's model. After kKeptParameterSets other sets, A's slices are gone
-  // (the longest unused set is emptied for a new one) and are decomposed again.
+  // within 1e-8 of dopri5 on A's model. A new set takes a never-used one while there is one, then
+  // empties the longest unused.
   Harness h(128);
   const GearRotorParameters a = params();
   GearRotorParameters b = a;
@@ -700,18 +700,47 @@ TEST(SlicedModalPropagator, KeptParameterSetsAreTakenBackAsTheyWere) {
   EXPECT_EQ(h.exact.decompositions(), 2 * after_a);
   h.exact.setParameters(a);
   EXPECT_EQ(h.exact.keptSetsReused(), 1);
+  h.exact.setParameters(a);  // the parameters it has: not a set taken back
+  EXPECT_EQ(h.exact.keptSetsReused(), 1);
   const State6 again = h.propagated(y0, 0.2, pieces);
   EXPECT_EQ(h.exact.decompositions(), 2 * after_a) << "A's slices were decomposed again";
   EXPECT_EQ(again, first);
   EXPECT_LT(relativeError(again, h.reference(y0, 0.2, pieces)), 1e-8);
-  for (int i = 0; i < SlicedModalPropagator::kKeptParameterSets; ++i) {
-    GearRotorParameters other = a;
-    other.bearing_stiffness = {1.4e8 + 1e6 * i, 1.4e8};
-    h.exact.setParameters(other);
-    h.propagated(y0, 0.2, {Piece{1e-4, meshHz(1500)}});
+  // Which set makes room: a never-used one while there is one, then the longest unused. Four new
+  // sets fill the six (A and B still kept); A used again; a fifth new set must empty B (the
+  // longest unused), not A (the first made: what insertion order or a round robin would empty).
+  const auto other = [&](int i) {
+    GearRotorParameters o = a;
+    o.bearing_stiffness = {1.4e8 + 1e6 * i, 1.4e8};
+    return o;
+  };
+  const std::vector<Piece> short_piece{Piece{1e-4, meshHz(1500)}};
+  for (int i = 0; i < SlicedModalPropagator::kKeptParameterSets - 2; ++i) {
+    h.exact.setParameters(other(i));
+    h.propagated(y0, 0.2, short_piece);
+  }
+  long before = h.exact.decompositions();
+  h.exact.setParameters(a);
+  h.propagated(y0, 0.2, pieces);
+  EXPECT_EQ(h.exact.decompositions(), before) << "a new set emptied A while a set had never been used";
+  h.exact.setParameters(other(10));  // B, last used before the four, is the longest unused
+  h.propagated(y0, 0.2, short_piece);
+  h.exact.setParameters(a);
+  before = h.exact.decompositions();
+  EXPECT_EQ(h.propagated(y0, 0.2, pieces), first);
+  EXPECT_EQ(h.exact.decompositions(), before) << "A was emptied, not the longest unused set";
+  h.exact.setParameters(b);
+  h.propagated(y0, 0.2, pieces);
+  EXPECT_EQ(h.exact.decompositions() - before, h.slices->size()) << "B's set should have been emptied";
+  // Taken back as they were only where they are that set's: a set emptied and made again is
+  // decomposed afresh (other seeds: the same answer to rounding, not bit for bit).
+  h.exact.setParameters(a);
+  for (int i = 20; i < 20 + SlicedModalPropagator::kKeptParameterSets; ++i) {
+    h.exact.setParameters(other(i));
+    h.propagated(y0, 0.2, short_piece);
   }
   h.exact.setParameters(a);
-  const long before = h.exact.decompositions();
+  before = h.exact.decompositions();
   const State6 evicted = h.propagated(y0, 0.2, pieces);
   EXPECT_EQ(h.exact.decompositions() - before, h.slices->size()) << "A's set should have been emptied";
   EXPECT_LT(relativeError(evicted, first), 1e-12);

@@ -93,6 +93,10 @@ class DynamicsEstimator {
   void setMotionSlices(int slices);
   /// The speed-independent propagator (null until the motion is followed or a rebuild is avoided).
   const SlicedModalPropagator* slicedPropagator() const { return full_.exact.get(); }
+  /// The sliced propagation the motion goes through at the current fidelity: the full model's, or
+  /// under linear_modal the one-slice mean model's (null before either is made, or with bearing
+  /// clearance).
+  const SlicedModalPropagator* movingSlicedPropagator() const { return moving().exact.get(); }
   /// A stiffness change by more than 1 % takes effect (see the class comment); smaller ones are
   /// ignored. What takes effect is the value on a 1 % grid nearest to it (bearingGridValue: within
   /// 0.5 % of it), so that a stiffness that swings under a rippling load comes back to the same

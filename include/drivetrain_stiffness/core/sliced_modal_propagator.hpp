@@ -21,14 +21,15 @@
 // slice crossed: for each conjugate pair of modes one (the other is its conjugate for a real state),
 // so three rows of V^-1 y, three complex exponentials and three columns of V back.
 //
-// The decomposition of a slice is made the first time the slice is crossed after a parameter
-// change (setParameters), so a bearing-stiffness change costs nothing at the input that made it:
+// The decomposition of a slice is made the first time the slice is crossed after a change to
+// parameters whose slices are not kept (setParameters, below), so a bearing-stiffness change
+// costs nothing at the input that made it:
 // the work spreads over the next mesh period, about 2 us per slice (Newton from the
 // neighbouring slice's modes), and the results do not depend on when it is done (deterministic
 // replay). Each regime has its own slices' modes, made as the motion first needs them.
 //
 // The decompositions of the last kKeptParameterSets parameter sets are kept: a set met again (the
-// same bearing stiffness, damping and masses, bit for bit) takes its slices back with no work.
+// same bearing stiffness, damping and masses, equal as numbers) takes its slices back with no work.
 // The online estimator moves the bearing stiffness on a 1 % grid (DynamicsEstimator), so under a
 // rippling load, where the stiffness swings by a few per cent at the ripple's frequency and its
 // grid values come back hundreds of times a second, the slices are decomposed once per value.
@@ -99,7 +100,8 @@ class SlicedModalPropagator {
   /// Steps cut short because the bound could not show the contacts keep their state through them.
   long checkedSubsteps() const { return substeps_; }
   long slicesCrossed() const { return crossed_; }
-  /// setParameters calls that found their set kept (its slices already decomposed).
+  /// setParameters calls that switched to another kept set (whose slices decomposed before are
+  /// taken back as they were; the others are decomposed as they are crossed).
   long keptSetsReused() const { return kept_sets_reused_; }
 
  private:
@@ -231,8 +233,9 @@ class SlicedModalPropagator {
   GearRotorParameters p_;
   std::shared_ptr<const SlicedMesh> slices_;
   double te_amplitude_, backlash_, m_s_ = 0.0;
-  /// What a slice's decomposition reads of the parameters (decomposeSeeded, decomposeGeneral):
-  /// a kept set is taken back only where all of these are equal bit for bit.
+  /// What a slice's decomposition reads of the parameters (decomposeSeeded, decomposeGeneral; the
+  /// slices, the TE amplitude and the backlash are the propagator's own): a kept set is taken back
+  /// only where all of these are equal (as doubles: +0 and -0 alike, which give the same results).
   struct DecompositionKey {
     std::array<double, 2> bearing_stiffness{}, bearing_damping{};
     double mesh_damping = 0.0, pinion_mass = 0.0, gear_mass = 0.0, mesh_mass = 0.0;

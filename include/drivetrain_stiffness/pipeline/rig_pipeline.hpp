@@ -95,7 +95,8 @@ struct PipelineOptions {
   static EstimatorLimits onlineLimits() {
     EstimatorLimits l;
     // 1e-3 of the support load: the stiffness lags by ~3e-4, far inside the 1 % at which the
-    // dynamics rebuild and the resonance republishes; ripple no longer re-solves every bearing.
+    // dynamics take up a change (on a 1 % grid) and the resonance republishes; ripple no longer
+    // re-solves every bearing.
     l.load_tolerance = 1e-3;
     return l;
   }
