@@ -80,9 +80,9 @@ BENCHMARK(BM_SliceDecomposition)->Unit(benchmark::kMicrosecond);
 // The callback right after a bearing-stiffness change at 6000 rpm: one 1 ms advance crosses every
 // slice twice, so it makes all 259 decompositions itself (issue 12 §2: under 0.5 ms). The bearing
 // stiffness alternates by 1 % (a preload step) and drifts by a further 1e-9 at each change (k 1e-9
-// after k changes), so every value
-// is new (none of the kept parameter sets) and each slice is seeded by the neighbour behind it
-// under the new parameters, as in the pipeline; compare with BM_SlicedPropagation/6000, the same
+// after k changes), so every value is new (none of the kept parameter sets) and each slice is
+// seeded by the neighbour behind it under the new parameters, as in the pipeline; compare with
+// BM_SlicedPropagation/6000, the same
 // advance without a change. BM_AdvanceAfterKeptBearingChange: the same two values exactly, as a
 // rippling load's stiffness comes back to its grid values: their slices are kept.
 static void advanceAfterBearingChange(benchmark::State& state, double drift) {

@@ -57,18 +57,21 @@ Complex divide(Complex n, Complex d) {
   return divide(e_mu - e_lambda, d);
 }
 
-/// The infinity norm (largest row sum of magnitudes) of a complex matrix, each magnitude as
-/// sqrt(re^2 + im^2). Eigen's cwiseAbs() of a complex matrix calls hypot per coefficient, 72
-/// calls for the two 6x6 matrices of a decomposition's condition check: 26 % of the time of
-/// decomposing every slice again after a bearing change. The check compares with 1e8, so hypot's
-/// last-bit accuracy and overflow guard (the coefficients are scaled to about 1) buy nothing.
+/// The infinity norm (largest row sum of magnitudes) of diag(1 / row_divisor) m diag(column_factor)
+/// for a complex 6x6 m, each magnitude as sqrt(re^2 + im^2): the eigenbasis' condition check in
+/// balanced coordinates without forming the scaled matrix. Eigen's cwiseAbs() of a complex matrix
+/// calls hypot per coefficient, 72 calls for the two matrices of a decomposition's check: 26 % of
+/// the time of decomposing every slice again after a bearing change. The check compares with 1e8,
+/// so hypot's last-bit accuracy and overflow guard (the coefficients are scaled to about 1) buy
+/// nothing.
 template <typename Matrix>
-double infinityNorm(const Matrix& m) {
+double infinityNorm(const Matrix& m, const Eigen::Matrix<double, 6, 1>& row_divisor = Eigen::Matrix<double, 6, 1>::Ones(),
+                    const Eigen::Matrix<double, 6, 1>& column_factor = Eigen::Matrix<double, 6, 1>::Ones()) {
   double largest = 0.0;
-  for (Eigen::Index i = 0; i < m.rows(); ++i) {
+  for (int i = 0; i < 6; ++i) {
     double sum = 0.0;
-    for (Eigen::Index c = 0; c < m.cols(); ++c) sum += std::sqrt(norm2(m(i, c)));
-    largest = std::max(largest, sum);
+    for (int c = 0; c < 6; ++c) sum += std::sqrt(norm2(m(i, c))) * column_factor[c];
+    largest = std::max(largest, sum / row_divisor[i]);
   }
   return largest;
 }
@@ -126,14 +129,12 @@ void SlicedModalPropagator::setParameters(const GearRotorParameters& p) {
   key.pinion_mass = p.pinion_mass;
   key.gear_mass = p.gear_mass;
   key.mesh_mass = m_s_;
-  std::size_t found = sets_.size(), victim = sets_.size();
+  // A never-used set has last_used 0, every used one more, so the least last_used is the first
+  // never-used set while there is one.
+  std::size_t found = sets_.size(), victim = 0;
   for (std::size_t i = 0; i < sets_.size(); ++i) {
-    if (sets_[i].valid && sets_[i].key == key) found = i;
-    if (!sets_[i].valid) {
-      if (victim == sets_.size() || sets_[victim].valid) victim = i;  // the first never used
-    } else if (victim == sets_.size() || (sets_[victim].valid && sets_[i].last_used < sets_[victim].last_used)) {
-      victim = i;
-    }
+    if (sets_[i].last_used > 0 && sets_[i].key == key) found = i;
+    if (sets_[i].last_used < sets_[victim].last_used) victim = i;
   }
   const std::size_t before = active_;
   if (found < sets_.size()) {
@@ -145,7 +146,6 @@ void SlicedModalPropagator::setParameters(const GearRotorParameters& p) {
       for (Slice& s : regime) s.ready = false;
     }
     set.key = key;
-    set.valid = true;
     active_ = victim;
   }
   if (active_ != before) previous_ = static_cast<int>(before);
@@ -175,7 +175,6 @@ void SlicedModalPropagator::allocateRegime(MeshRegime r) const {
   // for the parameters of now (setParameters keeps every allocated table up to date).
   const std::size_t n = static_cast<std::size_t>(slices_->size());
   std::vector<RegimeConditions>& table = conditions_[static_cast<std::size_t>(r)];
-  if (!table.empty()) return;
   table.resize(n);
   for (std::size_t j = 0; j < n; ++j) table[j] = makeConditions(r, static_cast<int>(j));
 }
@@ -290,10 +289,8 @@ Matrix6 SlicedModalPropagator::systemMatrix(MeshRegime r, int j) const {
 
 const SlicedModalPropagator::Slice& SlicedModalPropagator::slice(MeshRegime r, int j) const {
   std::vector<Slice>& cache = activeSlices(r);
-  if (cache.empty()) {  // the first time this set meets the regime (bounded: sets times regimes)
-    allocateRegime(r);
-    cache.resize(static_cast<std::size_t>(slices_->size()));
-  }
+  // The first time this set meets the regime (bounded: sets times regimes).
+  if (cache.empty()) cache.resize(static_cast<std::size_t>(slices_->size()));
   Slice& s = cache[static_cast<std::size_t>(j)];
   if (s.ready) return s;
   ++decompositions_;
@@ -428,19 +425,8 @@ bool SlicedModalPropagator::decomposeSeeded(MeshRegime r, int j, Slice& s, std::
   // The same usability rule as the general path: the eigenbasis' condition in balanced coordinates.
   Eigen::Matrix<double, 6, 1> dscale;
   dscale << 1.0, 1.0, 1.0, w_ref, w_ref, w_ref;
-  // ||D^-1 V|| ||V^-1 D|| in the infinity norm, D = diag(1, 1, 1, w, w, w); the rows of D^-1 V
-  // are V's rows scaled by 1/d_i, the magnitudes of V^-1 D those of V^-1 times d_c.
-  double norm_v = 0.0, norm_v_inv = 0.0;
-  for (int i = 0; i < 6; ++i) {
-    double row_v = 0.0, row_v_inv = 0.0;
-    for (int c = 0; c < 6; ++c) {
-      row_v += std::sqrt(norm2(s.v(i, c)));
-      row_v_inv += std::sqrt(norm2(s.v_inv(i, c))) * dscale[c];
-    }
-    norm_v = std::max(norm_v, row_v / dscale[i]);
-    norm_v_inv = std::max(norm_v_inv, row_v_inv);
-  }
-  const double condition = norm_v * norm_v_inv;
+  // ||D^-1 V|| ||V^-1 D|| in the infinity norm, D = diag(1, 1, 1, w, w, w).
+  const double condition = infinityNorm(s.v, dscale) * infinityNorm(s.v_inv, Eigen::Matrix<double, 6, 1>::Ones(), dscale);
   s.usable = std::isfinite(condition) && condition < 1e8;
   Eigen::Matrix<double, 6, 1> e_f, e_v;
   e_f << 0.0, 0.0, 0.0, -1.0 / mass[0], 1.0 / mass[1], -1.0 / mass[2];

@@ -248,8 +248,7 @@ class SlicedModalPropagator {
   /// One parameter set's slices, per MeshRegime, per slice (sized when the regime is first met).
   struct KeptSet {
     DecompositionKey key;
-    bool valid = false;
-    long last_used = 0;
+    long last_used = 0;  ///< 0: never used (its key means nothing)
     std::array<std::vector<Slice>, kRegimes> slices;
   };
   std::vector<Slice>& activeSlices(MeshRegime r) const { return sets_[active_].slices[static_cast<std::size_t>(r)]; }
