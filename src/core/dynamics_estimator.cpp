@@ -426,10 +426,13 @@ DynamicsSample DynamicsEstimator::sampleOf(const GearRotorModel& model, double t
   s.dynamic_te = model.forces(t_rel, y).delta;  // from the state: continuous
   // On a tooth switch the force, static TE and flank flags jump: report the right limit.
   MeshInstant m;
-  const GearRotorForces f = model.forces(meshForSample(model, t_rel, interval_, m), y);
+  const double right_limit = meshForSample(model, t_rel, interval_, m);
+  const GearRotorForces f = model.forces(right_limit, y);
   s.mesh_force = f.mesh;
-  // The switch itself (a sample lands on it to rounding, either side), not 1e-6 of an interval after it.
-  s.phase = m.phase < 1e-6 || 1.0 - m.phase < 1e-6 ? 0.0 : m.phase;
+  // The switch itself (a sample lands on it to rounding, either side, where meshForSample looked
+  // past it), not 1e-6 of a period after it: a phase a few ulps above the switch looks 1e-6 plus
+  // those ulps ahead, which the test of the looked-at phase against 1e-6 alone let through.
+  s.phase = right_limit != t_rel || m.phase < 1e-6 || 1.0 - m.phase < 1e-6 ? 0.0 : m.phase;
   s.torque = torque_;
   const double ks = m.k_drive + m.k_back;
   s.static_te = ks > 0.0 ? m.drive_force / ks : 0.0;
