@@ -93,6 +93,7 @@ void DynamicsEstimator::reset(double t, double torque) {
     periodic_stale_ = false;
   }
   following_ = false;
+  measured_ = false;
   t_state_ = 0.0;
   origin_ = t;
   k_ = 0;
@@ -178,6 +179,7 @@ void DynamicsEstimator::parametersChanged() {
     build();
     return;
   }
+  if (interval_maps_) interval_maps_->invalidate();
   if (following_) {
     const GearRotorParameters p = currentParameters();
     full_.setParameters(p);
@@ -204,6 +206,7 @@ void DynamicsEstimator::setMotionSlices(int slices) {
   motion_slices_ = slices;
   full_ = SlicedDynamics{};
   mean_ = SlicedDynamics{};
+  interval_maps_.reset();
 }
 
 void DynamicsEstimator::SlicedDynamics::build(std::shared_ptr<const SlicedMesh> mesh_slices, const GearRotorParameters& p,
@@ -268,6 +271,7 @@ void DynamicsEstimator::followMotion(double t, double mesh_phase, double mesh_fr
   requireFinite("mesh_phase", mesh_phase);
   requireFinite("mesh_frequency", mesh_frequency);
   moveTo(t);
+  measured_ = true;
   phase_ = wrapTurns(mesh_phase);
   mesh_frequency_ = mesh_frequency;
 }
@@ -321,11 +325,83 @@ void DynamicsEstimator::advanceFollowing(double t_rel, const std::function<void(
   requireSliceBound(t_rel);
   const long k_end = static_cast<long>(std::floor(t_rel / interval_ + 1e-9));
   while (k_ < k_end) {
-    propagateTo((k_ + 1) * interval_);
+    if (!intervalByMaps()) propagateTo((k_ + 1) * interval_);
     ++k_;
     if (sink) sink(movingSample());
   }
-  propagateTo(t_rel);
+  if (!headByMaps(t_rel)) propagateTo(t_rel);
+}
+
+int DynamicsEstimator::mapsInterval() {
+  // The same trust as the periodic propagators' at the nominal phase: a torque whose contacts
+  // settle between samples (contactsSettle, tabulated with those propagators) and the loaded
+  // regime checked at the stretch's ends; elsewhere the slices are crossed one by one, each with
+  // its bound (propagateLinear).
+  if (!following_ || measured_ || fidelity_ != Fidelity::kFull || !full_.exact || !propagator_ ||
+      !full_.slices->antiBacklash() || !propagator_->contactsSettle(torque_)) {
+    return -1;
+  }
+  const double f = nominalMeshFrequency();
+  const double per_period = std::round(1.0 / (f * interval_));
+  if (!(f > 0.0) || !(per_period >= 1.0 && per_period <= 1e6)) return -1;
+  if (!interval_maps_ || interval_maps_->intervals() != static_cast<int>(per_period) || interval_maps_->meshFrequency() != f) {
+    interval_maps_ = std::make_unique<SlicedIntervalMaps>(*full_.slices, static_cast<int>(per_period), f);
+  }
+  return static_cast<int>(k_ % interval_maps_->intervals());
+}
+
+bool DynamicsEstimator::intervalByMaps() {
+  const int i = mapsInterval();
+  if (i < 0) return false;
+  const SlicedModalPropagator& exact = *full_.exact;
+  const double f = interval_maps_->meshFrequency(), t0 = k_ * interval_, t1 = (k_ + 1) * interval_;
+  const double drive_force = torque_ / mesh_->geometry().baseRadius(0);
+  if (!exact.inLoadedRegime(y_, phase_, f)) return false;
+  State6 y = y_;
+  double phase = phase_;
+  int m = 0;
+  const int end = interval_maps_->boundaries(i);
+  const double u = f * (t_state_ - t0);  // [turns] from the interval's start
+  if (u > 1e-9 * interval_maps_->offset(i, end)) {
+    // Off the grid (an input's stamp): exactly to the next slice boundary, then its tail map.
+    m = interval_maps_->boundaryAtOrBefore(i, u) + 1;
+    if (m > end) return false;
+    const double h = (interval_maps_->offset(i, m) - u) / f;
+    if (h > 0.0 && !exact.propagate(y, phase, f, h, drive_force)) return false;
+  }
+  if (!interval_maps_->toEnd(exact, i, m, y, drive_force)) return false;
+  phase = wrapTurns(f * t1);
+  if (!exact.inLoadedRegime(y, phase, f)) return false;
+  y_ = y;
+  phase_ = phase;
+  t_state_ = t1;
+  ++mapped_stretches_;
+  return true;
+}
+
+bool DynamicsEstimator::headByMaps(double t_rel) {
+  if (!(t_rel > t_state_)) return false;
+  const double t0 = k_ * interval_;
+  if (std::abs(t_state_ - t0) > 1e-9 * interval_) return false;  // off the grid: the slices one by one
+  const int i = mapsInterval();
+  if (i < 0) return false;
+  const SlicedModalPropagator& exact = *full_.exact;
+  const double f = interval_maps_->meshFrequency(), u = f * (t_rel - t0);
+  const int m = interval_maps_->boundaryAtOrBefore(i, u);
+  if (m == 0 || m == interval_maps_->boundaries(i)) return false;  // inside the first slice: nothing to gain
+  const double drive_force = torque_ / mesh_->geometry().baseRadius(0);
+  if (!exact.inLoadedRegime(y_, phase_, f)) return false;
+  State6 y = y_;
+  if (!interval_maps_->fromStart(exact, i, m, y, drive_force)) return false;
+  double phase = wrapTurns(f * t0 + interval_maps_->offset(i, m));
+  if (!exact.inLoadedRegime(y, phase, f)) return false;
+  const double h = t_rel - (t0 + interval_maps_->offset(i, m) / f);
+  if (h > 0.0 && !exact.propagate(y, phase, f, h, drive_force)) return false;
+  y_ = y;
+  phase_ = wrapTurns(phase);
+  t_state_ = t_rel;
+  ++mapped_stretches_;
+  return true;
 }
 
 void DynamicsEstimator::setFidelity(Fidelity fidelity) { fidelity_ = fidelity; }

@@ -861,8 +861,39 @@ double SlicedModalPropagator::locateChange(const Slice& s, const Piece& piece, M
   return hi;
 }
 
-Matrix6 SlicedModalPropagator::monodromy(double f) const {
-  return monodromyIn(slices_->antiBacklash() ? MeshRegime::kBothFlanks : MeshRegime::kDriveFlank, f);
+Matrix6 SlicedModalPropagator::monodromy(double f) const { return monodromyIn(loadedRegime(), f); }
+
+bool SlicedModalPropagator::loadedSliceMap(int j, double phase, double f, double h, AffineMap& out) const {
+  const MeshRegime r = loadedRegime();
+  const Slice& s = slice(r, j);
+  if (!s.usable) return false;
+  const double w = kTwoPi * f;
+  const Complex e_theta = std::polar(1.0, kTwoPi * phase), e_mu = std::polar(1.0, w * h);
+  // The forced part from rest without drive force, and the unit drive force's part as the same
+  // with F_d = 1 less that: the solution propagateLinear advances a state by (prepare, advance).
+  const State6 rest = State6::Zero();
+  prepare(s, r, j, rest, e_theta, w, 0.0, piece_);
+  advance(s, piece_, w, h, e_mu, out.forced);
+  prepare(s, r, j, rest, e_theta, w, 1.0, piece_);
+  advance(s, piece_, w, h, e_mu, out.drive);
+  out.drive -= out.forced;
+  // The homogeneous part, sum_k weight_k Re(v_k e^{lambda_k h} (V^-1)_k) (a conjugate pair's
+  // weight 2 on one member): V e^{Lambda h} V^-1, real for a real system.
+  out.phi.setZero();
+  for (int k = 0; k < 6; ++k) {
+    if (s.weight[k] == 0.0) continue;
+    const Complex e_l = std::exp(s.lambda[k] * h);
+    out.phi += s.weight[k] * ((s.v.col(k) * e_l) * s.v_inv.row(k)).real();
+  }
+  return out.phi.allFinite() && out.drive.allFinite() && out.forced.allFinite();
+}
+
+bool SlicedModalPropagator::inLoadedRegime(const State6& y, double phase, double f) const {
+  if (!std::isfinite(phase) || !std::isfinite(f)) return false;
+  double frac = phase - std::floor(phase);
+  if (frac >= 1.0) frac = 0.0;
+  const int j = slices_->sliceAt(frac, f < 0.0);
+  return inRegime(loadedRegime(), j, y, std::polar(1.0, kTwoPi * frac), kTwoPi * f);
 }
 
 std::optional<Matrix6> SlicedModalPropagator::monodromy(double f, const State6& y, double phase) const {

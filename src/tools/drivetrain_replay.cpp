@@ -237,9 +237,12 @@ int run(int argc, char** argv) {
   // running; dopri5_intervals: intervals handed to dopri5; the sliced propagation's (at the fidelity
   // of the bag's end: the full model's, or linear_modal's mean model's) slice crossings,
   // decompositions (general: by Eigen's eigensolver), contact changes located, and steps cut where
-  // the regime bound could not clear them (docs/model.md).
+  // the regime bound could not clear them; at the nominal phase after a change, the stretches the
+  // interval maps took and the intervals made (docs/model.md).
   if (const DynamicsEstimator* d = pipeline.dynamics()) {
-    nlohmann::json work = {{"model_updates", d->rebuilds()}, {"dopri5_intervals", d->fallbackIntervals()}};
+    nlohmann::json work = {{"model_updates", d->rebuilds()}, {"dopri5_intervals", d->fallbackIntervals()},
+                           {"mapped_stretches", d->mappedStretches()},
+                           {"interval_maps_made", d->intervalMaps() ? d->intervalMaps()->intervalsMade() : 0L}};
     if (const SlicedModalPropagator* s = d->movingSlicedPropagator()) {
       work["slices_crossed"] = s->slicesCrossed();
       work["slice_decompositions"] = s->decompositions();

@@ -496,6 +496,54 @@ TEST(DynamicsEstimator, BearingChangeWhileRunningBuildsNothingInTheCall) {
   EXPECT_NEAR(mean, 0.1 / 5.6382e-3, 0.3 * 17.7);
 }
 
+// After a bearing change at the nominal phase (no encoders) the dynamics run on the sliced model;
+// at the nominal speed every output interval spans the same phases, so its exact solution is one
+// affine map (SlicedIntervalMaps), and an input stamped inside an interval splits it into the head
+// and tail maps of the slice boundaries around it. The reference is the same estimator told the
+// same phase and speed as encoders would (followMotion), which crosses the slices one by one with
+// the regime bounded through each (propagateLinear, itself within 1e-8 of dopri5 at rtol 1e-12:
+// test_sliced_propagation.cpp): torque inputs at 1 kHz with stamps up to 0.4 ms off the grid, the
+// TE of every sample within 1e-10 of its largest value. At 5 N m, where the back flank can lift
+// and land between samples (contactsSettle false), the maps are not used.
+TEST(DynamicsEstimator, TheNominalPhaseAfterABearingChangeStreamsIntervalMaps) {
+  auto run = [](bool as_encoders, double torque, long* mapped, long* crossed) {
+    DynamicsEstimator est(rig(), {1.2e8, 1.2e8}, 1000.0);
+    est.reset(0.0, torque);
+    est.advanceTo(0.010, nullptr);
+    if (as_encoders) est.followMotion(0.010, est.meshPhase(), est.meshFrequency());
+    est.setBearingStiffness({1.5e8, 1.5e8}, 0.010);
+    std::vector<double> te;
+    const auto keep = [&](const DynamicsSample& s) { te.push_back(s.dynamic_te); };
+    for (int m = 1; m <= 60; ++m) {
+      const double at = 0.010 + 1e-3 * m + 4e-4 * std::sin(1.7 * m);  // off the grid, in order
+      est.advanceTo(at, keep);
+      est.setTorque(torque * (1.0 + 0.2 * std::sin(0.9 * m)), at);
+    }
+    est.advanceTo(0.080, keep);
+    *mapped = est.mappedStretches();
+    *crossed = est.slicedPropagator()->slicesCrossed();
+    return te;
+  };
+  long mapped = 0, crossed = 0, mapped_ref = 0, crossed_ref = 0;
+  const std::vector<double> maps = run(false, 0.1, &mapped, &crossed), ref = run(true, 0.1, &mapped_ref, &crossed_ref);
+  ASSERT_EQ(maps.size(), ref.size());
+  ASSERT_EQ(maps.size(), 70u);
+  double largest = 0.0, diff = 0.0;
+  for (std::size_t i = 0; i < ref.size(); ++i) {
+    largest = std::max(largest, std::abs(ref[i]));
+    diff = std::max(diff, std::abs(maps[i] - ref[i]));
+  }
+  EXPECT_LT(diff, 1e-10 * largest);
+  std::printf("maps: %ld mapped, %ld crossed; one by one: %ld crossed; largest TE difference %.3g of the largest TE\n", mapped,
+              crossed, crossed_ref, diff / largest);
+  EXPECT_EQ(mapped_ref, 0);
+  EXPECT_GE(mapped, 100);               // a tail and a head per input, whole intervals between
+  EXPECT_LT(crossed, crossed_ref / 5);  // the first period's, and the pieces from a stamp to the next boundary
+  // Near the knee the slices are crossed one by one, each with its bound.
+  run(false, 5.0, &mapped, &crossed);
+  EXPECT_EQ(mapped, 0);
+}
+
 // The dynamics take up a bearing-stiffness change on a 1 % grid (DynamicsEstimator::bearingGridValue):
 // the grid point nearest in ratio, so within a factor 1.005 either way; a grid point maps to
 // itself; two stiffnesses between the same two midpoints give the same bits.

@@ -15,6 +15,7 @@
 #include "drivetrain_stiffness/core/integrators.hpp"
 #include "drivetrain_stiffness/core/rig_excitation.hpp"
 #include "drivetrain_stiffness/core/scenes.hpp"
+#include "drivetrain_stiffness/core/sliced_interval_maps.hpp"
 #include "drivetrain_stiffness/core/sliced_modal_propagator.hpp"
 #include "drivetrain_stiffness/core/validation.hpp"
 #include "seed_rig.hpp"  // NOLINT(build/include_subdir)
@@ -144,6 +145,67 @@ TEST(SlicedModalPropagator, ConstantSpeedMatchesDopri5) {
   ASSERT_TRUE(h.exact.propagate(one, phase, meshHz(1000), 0.02, h.drive_force));
   EXPECT_LT(relativeError(one, ref), 1e-8);
   EXPECT_NEAR(phase, 0.1 + meshHz(1000) * 0.02, 1e-9);
+}
+
+// The interval maps of a constant speed (sliced_interval_maps.hpp) are the same exact solution as a
+// matrix: over each of the three 1 ms intervals of a mesh period at 1000 rpm (about 86 slices
+// each) the whole map gives the slice-by-slice propagation of a loaded state to 1e-12 and dopri5's
+// at rtol 1e-12 to 1e-8; a boundary's head followed by its tail is the whole map, and a stretch
+// from inside the interval (exactly to the next boundary, then its tail) is the slice-by-slice
+// one from there. Every piece of every interval is a slice of the sliced mesh, and the boundaries
+// run from 0 to the interval's 1/3 turn.
+TEST(SlicedIntervalMaps, AreTheSliceBySliceSolutionAsAMatrix) {
+  Harness h(256);
+  const double f = meshHz(1000);
+  SlicedIntervalMaps maps(*h.slices, 3, f);
+  ASSERT_EQ(maps.intervals(), 3);
+  for (int i = 0; i < 3; ++i) {  // the first call for an interval makes nothing (kUsesBeforeMaking)
+    State6 y = h.equilibrium(0.0);
+    EXPECT_FALSE(maps.toEnd(h.exact, i, 0, y, h.drive_force));
+    EXPECT_EQ(y, h.equilibrium(0.0));
+  }
+  EXPECT_EQ(maps.intervalsMade(), 0);
+  for (int i = 0; i < 3; ++i) {
+    const double q0 = i / 3.0;
+    const int end = maps.boundaries(i);
+    EXPECT_GT(end, 80) << i;
+    EXPECT_EQ(maps.offset(i, 0), 0.0);
+    EXPECT_NEAR(maps.offset(i, end), 1.0 / 3.0, 1e-15);
+    const State6 y0 = h.equilibrium(q0) + (State6() << 1e-8, -2e-8, 3e-9, 1e-5, 2e-5, -1e-5).finished();
+    State6 sliced = y0;
+    double phase = q0;
+    ASSERT_TRUE(h.exact.propagate(sliced, phase, f, 1e-3, h.drive_force));
+    State6 whole = y0;
+    ASSERT_TRUE(maps.toEnd(h.exact, i, 0, whole, h.drive_force));
+    EXPECT_LT(relativeError(whole, sliced), 1e-12) << i;
+    EXPECT_LT(relativeError(whole, h.reference(y0, q0, {Piece{1e-3, f}})), 1e-8) << i;
+    for (int m : {1, end / 2, end - 1}) {
+      State6 split = y0;
+      ASSERT_TRUE(maps.fromStart(h.exact, i, m, split, h.drive_force));
+      ASSERT_TRUE(maps.toEnd(h.exact, i, m, split, h.drive_force));
+      EXPECT_LT(relativeError(split, whole), 1e-12) << i << " " << m;
+    }
+    // From 0.4 of the way through: exactly to the next boundary, then that boundary's tail.
+    State6 inside = y0;
+    phase = q0;
+    ASSERT_TRUE(h.exact.propagate(inside, phase, f, 0.4e-3, h.drive_force));
+    State6 rest = inside;
+    ASSERT_TRUE(h.exact.propagate(rest, phase, f, 0.6e-3, h.drive_force));
+    const int m = maps.boundaryAtOrBefore(i, f * 0.4e-3) + 1;
+    double to = q0 + f * 0.4e-3;
+    ASSERT_TRUE(h.exact.propagate(inside, to, f, (q0 + maps.offset(i, m) - to) / f, h.drive_force));
+    ASSERT_TRUE(maps.toEnd(h.exact, i, m, inside, h.drive_force));
+    EXPECT_LT(relativeError(inside, rest), 1e-12) << i;
+  }
+  EXPECT_EQ(maps.intervalsMade(), 3);
+  // A parameter change: made again on the next use.
+  maps.invalidate();
+  State6 y = h.equilibrium(0.0);
+  ASSERT_FALSE(maps.toEnd(h.exact, 0, 0, y, h.drive_force));
+  ASSERT_TRUE(maps.toEnd(h.exact, 0, 0, y, h.drive_force));
+  EXPECT_EQ(maps.intervalsMade(), 4);
+  EXPECT_THROW(SlicedIntervalMaps(*h.slices, 0, f), InvalidInput);
+  EXPECT_THROW(SlicedIntervalMaps(*h.slices, 3, -f), InvalidInput);
 }
 
 TEST(SlicedModalPropagator, RunUpWithTheSpeedChangingEveryMillisecond) {

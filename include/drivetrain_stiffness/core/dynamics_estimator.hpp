@@ -30,6 +30,7 @@
 #include "drivetrain_stiffness/core/reduced_models.hpp"
 #include "drivetrain_stiffness/core/rig_config.hpp"
 #include "drivetrain_stiffness/core/rig_model.hpp"
+#include "drivetrain_stiffness/core/sliced_interval_maps.hpp"
 #include "drivetrain_stiffness/core/sliced_modal_propagator.hpp"
 
 namespace drivetrain_stiffness {
@@ -127,6 +128,11 @@ class DynamicsEstimator {
   double outputInterval() const { return interval_; }
   long rebuilds() const { return rebuilds_; }
   long fallbackIntervals() const { return fallback_intervals_; }
+  /// Stretches propagated by the interval maps of the nominal phase after a parameter change
+  /// (SlicedIntervalMaps: whole intervals, and the parts of intervals from or to an input's stamp).
+  long mappedStretches() const { return mapped_stretches_; }
+  /// The interval maps (null until the nominal phase first runs on the sliced model).
+  const SlicedIntervalMaps* intervalMaps() const { return interval_maps_.get(); }
   bool exact() const { return following_ ? full_.exact != nullptr : propagator_ != nullptr; }  ///< exact propagation available
   const RigConfig& rig() const { return *rig_; }
   const AntiBacklashMesh& mesh() const { return *mesh_; }
@@ -157,6 +163,18 @@ class DynamicsEstimator {
   /// A shaft on its bearing, m x'' + c x' + k x = force held, propagated exactly over h.
   static void shaftStep(double m, double c, double k, double force, double h, double& x, double& v);
   void advanceFollowing(double t_rel, const std::function<void(const DynamicsSample&)>& sink);
+  /// The nominal phase on the sliced model (after a parameter change, no encoders), full fidelity,
+  /// an anti-backlash mesh whose contacts settle at the held torque (contactsSettle, as for the
+  /// periodic propagators) and are loaded now: the interval maps' index of the interval after
+  /// sample k_, made ready for the parameters now; -1 where the maps do not apply.
+  int mapsInterval();
+  /// From the state (at or after sample k_) to sample k_ + 1 by the interval maps (the part up to
+  /// the next slice boundary exactly, where the state is off the grid); false, the state untouched,
+  /// where they do not apply or the contacts leave the loaded regime.
+  bool intervalByMaps();
+  /// From the state on sample k_ to t_rel inside the interval after it: the head map of the last
+  /// slice boundary before t_rel, then exactly; false, untouched, as above.
+  bool headByMaps(double t_rel);
   /// Nominal phase, full fidelity: the interval from sample k_ through the torque inputs inside it.
   void advanceIntervalWithTorqueChanges();
   GearRotorParameters currentParameters() const;
@@ -209,6 +227,9 @@ class DynamicsEstimator {
   SlicedDynamics mean_;  ///< linear_modal: one slice holding the period's mean stiffness
   // The state's own time, phase and mesh frequency.
   bool following_ = false;
+  bool measured_ = false;  ///< the phase comes from the encoders (followMotion since the last reset)
+  std::unique_ptr<SlicedIntervalMaps> interval_maps_;
+  long mapped_stretches_ = 0;
   bool periodic_stale_ = false;  ///< parameters changed while following: rebuild the periodic ones at reset
   double t_state_ = 0.0, phase_ = 0.0, mesh_frequency_ = 0.0;
   Fidelity fidelity_ = Fidelity::kFull;

@@ -100,6 +100,30 @@ class SlicedModalPropagator {
   /// Steps cut short because the bound could not show the contacts keep their state through them.
   long checkedSubsteps() const { return substeps_; }
   long slicesCrossed() const { return crossed_; }
+  /// An affine map of the state over a stretch at a constant speed, y -> phi y + drive F_d + forced
+  /// (forced: the TE forcing and the regime's constant, from rest), for products over fixed phase
+  /// spans (SlicedIntervalMaps). Exact where the contacts keep the loaded regime throughout.
+  struct AffineMap {
+    Matrix6 phi = Matrix6::Identity();
+    State6 drive = State6::Zero(), forced = State6::Zero();
+    void apply(State6& y, double drive_force) const { y = phi * y + drive * drive_force + forced; }
+    /// This map after `first` (y -> this(first(y))), into out.
+    void after(const AffineMap& first, AffineMap& out) const {
+      out.phi.noalias() = phi * first.phi;
+      out.drive.noalias() = phi * first.drive;
+      out.drive += drive;
+      out.forced.noalias() = phi * first.forced;
+      out.forced += forced;
+    }
+  };
+  /// The exact map of the loaded regime (both anti-backlash flanks loaded; an ordinary gear's drive
+  /// flank: monodromy()'s) over h >= 0 [s] inside slice j, from mesh phase `phase` [turns, within
+  /// the slice] at mesh frequency f [Hz]: the same solution propagateLinear steps along (prepare,
+  /// advance), as a matrix. false where the slice has no usable eigenbasis in that regime.
+  bool loadedSliceMap(int j, double phase, double f, double h, AffineMap& out) const;
+  /// y at mesh phase `phase` [turns] is in that loaded regime (the contacts' rules at one instant).
+  bool inLoadedRegime(const State6& y, double phase, double f) const;
+  const SlicedMesh& slices() const { return *slices_; }
   /// setParameters calls that switched to another kept set (whose slices decomposed before are
   /// taken back as they were; the others are decomposed as they are crossed).
   long keptSetsReused() const { return kept_sets_reused_; }
@@ -137,6 +161,8 @@ class SlicedModalPropagator {
     double stiffness, damping, constant;
   };
   MeshTerms meshTerms(MeshRegime r, int j) const;
+  /// Every contact of the mesh loaded: both anti-backlash flanks, an ordinary gear's drive flank.
+  MeshRegime loadedRegime() const { return slices_->antiBacklash() ? MeshRegime::kBothFlanks : MeshRegime::kDriveFlank; }
   struct Slice {
     CMatrix v, v_inv;
     CVector lambda, force_dir, drive_dir;  ///< eigenvalues, V^-1 e_F, V^-1 e_v
