@@ -94,6 +94,7 @@ void DynamicsEstimator::reset(double t, double torque) {
   }
   following_ = false;
   measured_ = false;
+  maps_settle_ = -1;  // the periodic propagators (and their settling table) may be new
   t_state_ = 0.0;
   origin_ = t;
   k_ = 0;
@@ -180,6 +181,7 @@ void DynamicsEstimator::parametersChanged() {
     return;
   }
   if (interval_maps_) interval_maps_->invalidate();
+  maps_settle_ = -1;
   if (following_) {
     const GearRotorParameters p = currentParameters();
     full_.setParameters(p);
@@ -236,6 +238,10 @@ void DynamicsEstimator::startFollowing() {
     full_.setParameters(p);
     mean_.setParameters(p);
   }
+  // The parameters may have changed while stopped (parametersChanged rebuilds only the periodic
+  // propagators then): the interval maps are made again for these.
+  if (interval_maps_) interval_maps_->invalidate();
+  maps_settle_ = -1;
   // The state sits on grid sample k_; the nominal phase there (RigExcitation: turns = f t).
   t_state_ = k_ * interval_;
   mesh_frequency_ = nominalMeshFrequency();
@@ -343,10 +349,19 @@ int DynamicsEstimator::mapsInterval() {
   }
   const double f = nominalMeshFrequency();
   const double per_period = std::round(1.0 / (f * interval_));
-  if (!(f > 0.0) || !(per_period >= 1.0 && per_period <= 1e6)) return -1;
+  if (!(f > 0.0) || !(per_period >= 1.0 && per_period <= PeriodicExponentialPropagator::kMaxIntervalsPerPeriod)) return -1;
   if (!interval_maps_ || interval_maps_->intervals() != static_cast<int>(per_period) || interval_maps_->meshFrequency() != f) {
     interval_maps_ = std::make_unique<SlicedIntervalMaps>(*full_.slices, static_cast<int>(per_period), f);
+    maps_settle_ = -1;
   }
+  // The settling table was made with the parameters of the last build; its answers hold for the
+  // parameters now while their swing gain is not larger (the rule compares each margin with 1.5
+  // gain J). The gain now comes from the slices' modes at the table's 16 phases: each slice holds
+  // the table's mean over 1/256 of a period where the table read its value at the phase, so 5 % is
+  // allowed for that, inside the rule's 1.5. A softer damping or a bearing change that lets the
+  // mesh swing further leaves the maps unused (every slice crossed with its own regime bound).
+  if (maps_settle_ < 0) maps_settle_ = full_.exact->loadedSwingGain() <= 1.05 * propagator_->settleGain() ? 1 : 0;
+  if (maps_settle_ == 0) return -1;
   return static_cast<int>(k_ % interval_maps_->intervals());
 }
 
@@ -354,23 +369,28 @@ bool DynamicsEstimator::intervalByMaps() {
   const int i = mapsInterval();
   if (i < 0) return false;
   const SlicedModalPropagator& exact = *full_.exact;
+  const int n = interval_maps_->intervals();
   const double f = interval_maps_->meshFrequency(), t0 = k_ * interval_, t1 = (k_ + 1) * interval_;
   const double drive_force = torque_ / mesh_->geometry().baseRadius(0);
   if (!exact.inLoadedRegime(y_, phase_, f)) return false;
+  if (!interval_maps_->available(exact, i)) return false;  // before any work: the first use crosses
   State6 y = y_;
   double phase = phase_;
   int m = 0;
   const int end = interval_maps_->boundaries(i);
   const double u = f * (t_state_ - t0);  // [turns] from the interval's start
   if (u > 1e-9 * interval_maps_->offset(i, end)) {
-    // Off the grid (an input's stamp): exactly to the next slice boundary, then its tail map.
+    // Off the grid (an input's stamp): exactly to the next slice boundary, then its tail map, from
+    // the loaded regime there (the exact part goes through any change of the contacts).
     m = interval_maps_->boundaryAtOrBefore(i, u) + 1;
     if (m > end) return false;
     const double h = (interval_maps_->offset(i, m) - u) / f;
     if (h > 0.0 && !exact.propagate(y, phase, f, h, drive_force)) return false;
+    if (!exact.inLoadedRegime(y, static_cast<double>(i) / n + interval_maps_->offset(i, m), f)) return false;
   }
   if (!interval_maps_->toEnd(exact, i, m, y, drive_force)) return false;
-  phase = wrapTurns(f * t1);
+  // The grid's own phase at the interval's end: the period's tooth switch is 0, the slice entered.
+  phase = i + 1 == n ? 0.0 : static_cast<double>(i + 1) / n;
   if (!exact.inLoadedRegime(y, phase, f)) return false;
   y_ = y;
   phase_ = phase;
@@ -393,7 +413,7 @@ bool DynamicsEstimator::headByMaps(double t_rel) {
   if (!exact.inLoadedRegime(y_, phase_, f)) return false;
   State6 y = y_;
   if (!interval_maps_->fromStart(exact, i, m, y, drive_force)) return false;
-  double phase = wrapTurns(f * t0 + interval_maps_->offset(i, m));
+  double phase = static_cast<double>(i) / interval_maps_->intervals() + interval_maps_->offset(i, m);
   if (!exact.inLoadedRegime(y, phase, f)) return false;
   const double h = t_rel - (t0 + interval_maps_->offset(i, m) / f);
   if (h > 0.0 && !exact.propagate(y, phase, f, h, drive_force)) return false;

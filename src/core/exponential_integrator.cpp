@@ -252,6 +252,7 @@ void PeriodicExponentialPropagator::tabulateSettling(const RigExcitation& excita
     for (int k = 0; k < 6; ++k) g += std::abs(v(2, k) + v(0, k) - v(1, k)) * std::abs(w(k, 2));
     gain = std::isfinite(g) ? std::max(gain, g) : INFINITY;
   }
+  settle_gain_ = gain;
   // Held mesh force F with both flanks loaded at every phase: the static deflection
   // delta = F / (k1 + k_c) and its distance to the thresholds (the back path lifts at
   // delta = F_p / k_c, the drive flank at delta = -F_p / k1; AntiBacklashMesh::flankContact). Where

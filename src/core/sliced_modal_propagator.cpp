@@ -888,6 +888,19 @@ bool SlicedModalPropagator::loadedSliceMap(int j, double phase, double f, double
   return out.phi.allFinite() && out.drive.allFinite() && out.forced.allFinite();
 }
 
+double SlicedModalPropagator::loadedSwingGain() const {
+  // deflection[k] = weight_k (c v_k): a conjugate pair's two equal terms as twice one of them.
+  double gain = 0.0;
+  for (int i = 0; i < 16; ++i) {
+    const Slice& s = slice(loadedRegime(), slices_->sliceAt((i + 0.5) / 16.0, false));
+    if (!s.usable) return std::numeric_limits<double>::infinity();
+    double g = 0.0;
+    for (int k = 0; k < 6; ++k) g += std::abs(s.deflection[k]) * std::abs(s.v_inv(k, 2));
+    gain = std::max(gain, g);
+  }
+  return gain;
+}
+
 bool SlicedModalPropagator::inLoadedRegime(const State6& y, double phase, double f) const {
   if (!std::isfinite(phase) || !std::isfinite(f)) return false;
   double frac = phase - std::floor(phase);

@@ -165,8 +165,9 @@ class DynamicsEstimator {
   void advanceFollowing(double t_rel, const std::function<void(const DynamicsSample&)>& sink);
   /// The nominal phase on the sliced model (after a parameter change, no encoders), full fidelity,
   /// an anti-backlash mesh whose contacts settle at the held torque (contactsSettle, as for the
-  /// periodic propagators) and are loaded now: the interval maps' index of the interval after
-  /// sample k_, made ready for the parameters now; -1 where the maps do not apply.
+  /// periodic propagators, whose table holds while the swing gain now is not above the one it was
+  /// made with): the interval maps' index of the interval after sample k_; -1 where the maps do not
+  /// apply. The callers check the loaded regime at each stretch's ends.
   int mapsInterval();
   /// From the state (at or after sample k_) to sample k_ + 1 by the interval maps (the part up to
   /// the next slice boundary exactly, where the state is off the grid); false, the state untouched,
@@ -229,6 +230,7 @@ class DynamicsEstimator {
   bool following_ = false;
   bool measured_ = false;  ///< the phase comes from the encoders (followMotion since the last reset)
   std::unique_ptr<SlicedIntervalMaps> interval_maps_;
+  int maps_settle_ = -1;  ///< the settling table holds for the parameters now: 1 yes, 0 no, -1 not yet asked
   long mapped_stretches_ = 0;
   bool periodic_stale_ = false;  ///< parameters changed while following: rebuild the periodic ones at reset
   double t_state_ = 0.0, phase_ = 0.0, mesh_frequency_ = 0.0;

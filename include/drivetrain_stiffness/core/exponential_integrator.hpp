@@ -80,6 +80,10 @@ class PeriodicExponentialPropagator {
   /// integrates those intervals otherwise (DynamicsEstimator: dopri5, which locates every contact
   /// change). Always true unless the constructor tabulated it.
   bool contactsSettle(double torque) const;
+  /// The swing gain the settling table was made with (max over 16 phases of sum_k |c v_k| |w_k e_x|,
+  /// both flanks loaded; 0 where not tabulated): contactsSettle's answer holds for any parameters
+  /// whose gain is not larger, since the rule compares margins with kSettleMargin gain J.
+  double settleGain() const { return settle_gain_; }
   static constexpr double kSettleMargin = 1.5;
   /// Homogeneous propagator over one mesh period (the monodromy matrix of the linear regime).
   Matrix6 monodromy() const;
@@ -98,6 +102,7 @@ class PeriodicExponentialPropagator {
   void tabulateSettling(const RigExcitation& excitation, const std::vector<double>& kinks, double period);
   std::vector<double> settle_force_;  ///< mesh forces [N], ascending, for contactsSettle
   std::vector<char> settle_ok_;
+  double settle_gain_ = 0.0;
   using Matrix7 = Eigen::Matrix<double, 7, 7>;
   using Vector7 = Eigen::Matrix<double, 7, 1>;  ///< the state and the torque slot
   /// A piece's system matrix on the state and torque slot (balanced), A0 + tau A1, and [A1, A0].

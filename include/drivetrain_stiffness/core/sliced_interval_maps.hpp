@@ -54,6 +54,9 @@ class SlicedIntervalMaps {
   /// interval is met for the first time since the last invalidate() (its maps are made on the
   /// kUsesBeforeMaking-th call for it: the caller crosses the slices one by one until then).
   bool toEnd(const SlicedModalPropagator& exact, int i, int m, State6& y, double drive_force);
+  /// Interval i's maps ready for use: made now if this is its kUsesBeforeMaking-th call (toEnd and
+  /// fromStart call it; a caller that has work to do before applying a map asks first).
+  bool available(const SlicedModalPropagator& exact, int i);
   /// y from interval i's start to its boundary m.
   bool fromStart(const SlicedModalPropagator& exact, int i, int m, State6& y, double drive_force);
   /// Intervals made since construction (each made again after every invalidate() when used).
@@ -70,8 +73,7 @@ class SlicedIntervalMaps {
     int uses = 0;  ///< calls since the last invalidate(), until made
     bool ready = false, usable = false;
   };
-  /// Interval i's maps ready for use: made now if this is its kUsesBeforeMaking-th call.
-  bool available(const SlicedModalPropagator& exact, int i);
+
   /// Makes interval i's maps from the slices' exact maps (each slice decomposed as it is needed).
   bool make(const SlicedModalPropagator& exact, int i);
   std::vector<Interval> intervals_;

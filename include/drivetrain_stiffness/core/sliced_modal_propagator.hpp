@@ -121,6 +121,10 @@ class SlicedModalPropagator {
   /// the slice] at mesh frequency f [Hz]: the same solution propagateLinear steps along (prepare,
   /// advance), as a matrix. false where the slice has no usable eigenbasis in that regime.
   bool loadedSliceMap(int j, double phase, double f, double h, AffineMap& out) const;
+  /// The loaded regime's swing gain at the phases PeriodicExponentialPropagator::settleGain reads
+  /// ((i + 1/2) / 16 of a period), from the slices' modes there: max of sum_k |c v_k| |w_k e_x|.
+  /// +inf where one of those slices has no usable eigenbasis.
+  double loadedSwingGain() const;
   /// y at mesh phase `phase` [turns] is in that loaded regime (the contacts' rules at one instant).
   bool inLoadedRegime(const State6& y, double phase, double f) const;
   const SlicedMesh& slices() const { return *slices_; }
