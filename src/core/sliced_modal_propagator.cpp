@@ -57,21 +57,18 @@ Complex divide(Complex n, Complex d) {
   return divide(e_mu - e_lambda, d);
 }
 
-/// The infinity norm (largest row sum of magnitudes) of diag(1 / row_divisor) m diag(column_factor)
-/// for a complex 6x6 m, each magnitude as sqrt(re^2 + im^2): the eigenbasis' condition check in
-/// balanced coordinates without forming the scaled matrix. Eigen's cwiseAbs() of a complex matrix
-/// calls hypot per coefficient, 72 calls for the two matrices of a decomposition's check: 26 % of
-/// the time of decomposing every slice again after a bearing change. The check compares with 1e8,
-/// so hypot's last-bit accuracy and overflow guard (the coefficients are scaled to about 1) buy
-/// nothing.
+/// The infinity norm (largest row sum of magnitudes) of a complex 6x6 m, each magnitude as
+/// sqrt(re^2 + im^2): the general decomposition's condition check. Eigen's cwiseAbs() of a complex
+/// matrix calls hypot per coefficient; the check compares with 1e8, so hypot's last-bit accuracy
+/// and overflow guard (the coefficients are scaled to about 1) buy nothing. (The seeded path writes
+/// its own, with the balancing scales and the conjugate pairs: decomposeSeeded.)
 template <typename Matrix>
-double infinityNorm(const Matrix& m, const Eigen::Matrix<double, 6, 1>& row_divisor = Eigen::Matrix<double, 6, 1>::Ones(),
-                    const Eigen::Matrix<double, 6, 1>& column_factor = Eigen::Matrix<double, 6, 1>::Ones()) {
+double infinityNorm(const Matrix& m) {
   double largest = 0.0;
   for (int i = 0; i < 6; ++i) {
     double sum = 0.0;
-    for (int c = 0; c < 6; ++c) sum += std::sqrt(norm2(m(i, c))) * column_factor[c];
-    largest = std::max(largest, sum / row_divisor[i]);
+    for (int c = 0; c < 6; ++c) sum += std::sqrt(norm2(m(i, c)));
+    largest = std::max(largest, sum);
   }
   return largest;
 }
@@ -422,11 +419,24 @@ bool SlicedModalPropagator::decomposeSeeded(MeshRegime r, int j, Slice& s, std::
     s.weight[k + 3] = 0.0;
     s.upper[k] = l;
   }
-  // The same usability rule as the general path: the eigenbasis' condition in balanced coordinates.
-  Eigen::Matrix<double, 6, 1> dscale;
-  dscale << 1.0, 1.0, 1.0, w_ref, w_ref, w_ref;
-  // ||D^-1 V|| ||V^-1 D|| in the infinity norm, D = diag(1, 1, 1, w, w, w).
-  const double condition = infinityNorm(s.v, dscale) * infinityNorm(s.v_inv, Eigen::Matrix<double, 6, 1>::Ones(), dscale);
+  // The same usability rule as the general path: the eigenbasis' condition in balanced coordinates,
+  // ||D^-1 V|| ||V^-1 D|| in the infinity norm, D = diag(1, 1, 1, w, w, w). Here column k + 3 of V
+  // and row k + 3 of V^-1 are the conjugates of column and row k, whose magnitudes are the same
+  // bits: each magnitude is taken once and the sums run in infinityNorm's order, so the condition
+  // is infinityNorm's to the bit with half its square roots.
+  double v_norm = 0.0, v_inv_norm = 0.0;
+  for (int i = 0; i < 6; ++i) {
+    double a[3];
+    for (int c = 0; c < 3; ++c) a[c] = std::sqrt(norm2(s.v(i, c)));
+    const double sum = a[0] * 1.0 + a[1] * 1.0 + a[2] * 1.0 + a[0] * 1.0 + a[1] * 1.0 + a[2] * 1.0;
+    v_norm = std::max(v_norm, sum / (i < 3 ? 1.0 : w_ref));
+  }
+  for (int i = 0; i < 3; ++i) {
+    double sum = 0.0;
+    for (int c = 0; c < 6; ++c) sum += std::sqrt(norm2(s.v_inv(i, c))) * (c < 3 ? 1.0 : w_ref);
+    v_inv_norm = std::max(v_inv_norm, sum / 1.0);
+  }
+  const double condition = v_norm * v_inv_norm;
   s.usable = std::isfinite(condition) && condition < 1e8;
   Eigen::Matrix<double, 6, 1> e_f, e_v;
   e_f << 0.0, 0.0, 0.0, -1.0 / mass[0], 1.0 / mass[1], -1.0 / mass[2];

@@ -37,7 +37,7 @@ TEST(DynamicsEstimator, GridAndSteadyState) {
   // Samples 1 ms apart at a 3 ms mesh period step the phase by 1/3 each.
   EXPECT_NEAR(std::fmod(out[10].phase - out[9].phase + 1.0, 1.0), 1.0 / 3.0, 1e-6);
   // Every third sample lands on the period's tooth switch: its phase is the switch, 0 exactly, from
-  // either side of it to rounding (until 2026-11-27 a phase a few ulps past it was published as
+  // either side of it to rounding (until the night of 2026-11-26 a phase a few ulps past it was published as
   // 1e-6, the point meshForSample looks at for the right limit, which jittered the mesh-period
   // statistics' mesh frequency by 2.5e-7 of itself).
   for (std::size_t i = 2; i < out.size(); i += 3) EXPECT_EQ(out[i].phase, 0.0) << i;
