@@ -358,8 +358,10 @@ int DynamicsEstimator::mapsInterval() {
   // parameters now while their swing gain is not larger (the rule compares each margin with 1.5
   // gain J). The gain now comes from the slices' modes at the table's 16 phases: each slice holds
   // the table's mean over 1/256 of a period where the table read its value at the phase, so 5 % is
-  // allowed for that, inside the rule's 1.5. A softer damping or a bearing change that lets the
-  // mesh swing further leaves the maps unused (every slice crossed with its own regime bound).
+  // allowed for that, inside the rule's 1.5. Parameters whose modes let the mesh swing further (a
+  // larger gain) leave the maps unused: every slice is then crossed with its own regime bound. (The
+  // gain bounds the free swing without its decay, so the damping moves it little: a tenth of the
+  // mesh damping stayed within the 5 % on the seed servo.)
   if (maps_settle_ < 0) maps_settle_ = full_.exact->loadedSwingGain() <= 1.05 * propagator_->settleGain() ? 1 : 0;
   if (maps_settle_ == 0) return -1;
   return static_cast<int>(k_ % interval_maps_->intervals());
