@@ -209,22 +209,37 @@ TEST(DynamicsEstimator, TorqueStampsSurviveTheMoveOntoTheSlicedPropagation) {
 // tooth switch (the mesh rings about its new static deflection), while the samples on both sides
 // find both flanks loaded. Checking the regime at the samples alone, the exponential step missed
 // that and was off by 3.4e-4 of the TE at 4 N m and 1.6e-2 at 5 N m (10 kHz grid, against dopri5
-// at rtol 1e-12; measured 2026-11-26 before contactsSettle). Those torques now go to dopri5, which
-// locates every contact change; below the knee the exact step stays (no fallback at 1 and 3 N m).
-// At -1 N m (past the reverse knee, the drive flank lifted) the step also took states that started
-// lifted and ended inside the closed regime: 0.68 of the TE off (10 kHz); see the next test.
+// at rtol 1e-12; measured 2026-11-26 before contactsSettle). Those torques went to dopri5 on the
+// phase table (rtol 1e-8) until the night of 2026-11-26, which ran near real time (1.7x at 3 N m
+// under torque_ripple's ripple); they now move the dynamics onto the sliced propagation at the
+// nominal phase, which locates every contact change on its exact solution: compared here with
+// dopri5 at rtol 1e-12 on the same sliced model along the same nominal motion. Below the knee the
+// periodic step stays (1 and 3 N m, against dopri5 on the phase table). At -1 N m (past the reverse
+// knee, the drive flank lifted) the step also took states that started lifted and ended inside the
+// closed regime: 0.68 of the TE off (10 kHz); see the next test.
 TEST(DynamicsEstimator, NearTheKneeEveryFlankChangeIsIntegrated) {
   IntegratorOptions o;
   o.relative_tolerance = 1e-12;
   o.absolute_tolerance = 1e-19;
   o.max_step = 1e-5;
+  const auto table = std::make_shared<const AntiBacklashMesh>(rig());
+  const auto slices = std::make_shared<const SlicedMesh>(table, 256);
   for (double torque : {1.0, 3.0, 4.0, 5.0, -1.0}) {
     DynamicsEstimator est(rig(), {1.2e8, 1.2e8}, 10000.0);
     est.reset(0.0, torque);
     const State6 start = est.state();
+    const double f = est.meshFrequency();
     std::vector<double> online, reference;
     est.advanceTo(0.02, [&](const DynamicsSample& s) { online.push_back(s.dynamic_te); });
-    const GearRotorModel& model = est.model();
+    const bool moved = torque < 0.0 || torque > 3.0;
+    EXPECT_EQ(est.followingMotion(), moved) << torque << " N m";
+    EXPECT_EQ(est.fallbackIntervals(), 0) << torque << " N m";
+    const GearRotorParameters p = rigRotorParameters(rig(), *table, {1.2e8, 1.2e8});
+    GearRotorModel sliced(p, std::make_shared<const SlicedExcitation>(slices, rig().dynamics.transmission_error_amplitude,
+                                                                      rig().dynamics.backlash, 1.0 / p.pinion_base_radius, 0.0));
+    sliced.setMotionInput(MeshMotion{0.0, 0.0, f});
+    sliced.setTorqueInput(torque);
+    const GearRotorModel& model = moved ? sliced : est.model();
     integrate(model, IntegratorMethod::kDopri5, o, 0.0, start, 0.02, est.outputInterval(),
               [&](double t, const State6& y) { if (t > 0.0) reference.push_back(model.forces(t, y).delta); });
     ASSERT_EQ(online.size(), reference.size());
@@ -233,11 +248,13 @@ TEST(DynamicsEstimator, NearTheKneeEveryFlankChangeIsIntegrated) {
       e += (online[i] - reference[i]) * (online[i] - reference[i]);
       r += reference[i] * reference[i];
     }
-    EXPECT_LT(std::sqrt(e / r), 1e-7) << torque << " N m";
-    if (torque > 0.0 && torque <= 3.0) {
-      EXPECT_EQ(est.fallbackIntervals(), 0) << torque << " N m";
-    } else {
-      EXPECT_GT(est.fallbackIntervals(), 0) << torque << " N m";
+    // At 4 N m the back path barely lifts after some switches (21 changes in 20 ms): at such grazing
+    // contacts the motion follows the last digits, and the two solutions differ by 1.05e-7 (the
+    // same with the reference at rtol 1e-13 and 2 us steps); 1.8e-11 at 5 N m (157 changes) and
+    // 8.8e-12 at -1 N m. A missed change is 3.4e-4 and more (above).
+    EXPECT_LT(std::sqrt(e / r), moved ? 1e-6 : 1e-7) << torque << " N m";
+    if (moved && torque > 0.0) {
+      EXPECT_GT(est.slicedPropagator()->regimeChanges(), 0) << torque << " N m";  // the back path's lifts and landings
     }
   }
 }

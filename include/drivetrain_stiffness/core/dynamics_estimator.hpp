@@ -4,9 +4,10 @@
 // samples fits one mesh period). advanceTo(t) integrates from the last sample to the last grid
 // point <= t with the measured torque held (zero-order hold from each input's own stamp: setTorque
 // with `at`) and the load following it quasi-statically (drive force T / r_p), using
-// the exact-exponential propagators while the contacts stay closed and dopri5 for any interval in
-// which they do not, or in which they might open and close again unseen at the samples (a torque
-// near an anti-backlash knee: PeriodicExponentialPropagator::contactsSettle). Times are absolute seconds of the caller's clock; internally they are taken
+// the exact-exponential propagators while the contacts stay closed; at the first interval in which
+// they do not, or might open and close again unseen at the samples (a torque near an anti-backlash
+// knee: PeriodicExponentialPropagator::contactsSettle), the dynamics move onto the sliced
+// propagation below at the nominal phase (with bearing clearance: dopri5 for that interval). Times are absolute seconds of the caller's clock; internally they are taken
 // relative to the reset time so that 1e9-second epochs keep full phase resolution.
 //
 // Two ways to drive the mesh phase (docs/model.md "Following the rig's motion"):
@@ -176,8 +177,12 @@ class DynamicsEstimator {
   /// From the state on sample k_ to t_rel inside the interval after it: the head map of the last
   /// slice boundary before t_rel, then exactly; false, untouched, as above.
   bool headByMaps(double t_rel);
-  /// Nominal phase, full fidelity: the interval from sample k_ through the torque inputs inside it.
-  void advanceIntervalWithTorqueChanges();
+  /// Nominal phase, full fidelity: the interval from sample k_ through the torque inputs inside it;
+  /// false, nothing done, where the contacts may change in it and slicedInsteadOfDopri5().
+  bool advanceIntervalWithTorqueChanges();
+  /// At the nominal phase an interval whose contacts may change goes onto the sliced propagation
+  /// (startFollowing) rather than to dopri5 on the phase table: full fidelity, no bearing clearance.
+  bool slicedInsteadOfDopri5() const;
   GearRotorParameters currentParameters() const;
   /// After a bearing-stiffness or damping change (see the class comment).
   void parametersChanged();
