@@ -76,7 +76,7 @@ void DynamicsEstimator::buildModel() {
   if (!(interval > 0.0 && std::isfinite(interval))) throwInvalid("mesh period", period, "gives no usable output grid");
   std::unique_ptr<PeriodicExponentialPropagator> propagator;
   if (d.bearing_clearance[0] == 0.0 && d.bearing_clearance[1] == 0.0) {
-    // With the settling bound: near a knee the intervals go to dopri5 (advanceTo).
+    // With the settling bound: near a knee advanceTo moves onto the sliced propagation.
     propagator = std::make_unique<PeriodicExponentialPropagator>(*model, 0.0, interval, 1.0, true);
   }
   // Kept only now, all together: a refused rebuild leaves the last model, grid and propagators.
@@ -247,14 +247,16 @@ void DynamicsEstimator::startFollowing() {
   mesh_frequency_ = nominalMeshFrequency();
   phase_ = wrapTurns(mesh_frequency_ * t_state_);
   following_ = true;
-  // Torque inputs already taken inside the interval that follows: each from its own stamp.
+  // Torque inputs already taken inside the interval that follows: each from its own stamp. The
+  // torque held after them is the newest one given (setTorque without a stamp may have come last).
   if (torque_changes_ > 0) {
-    const double start = t_state_;
+    const double start = t_state_, newest = torque_;
     torque_ = interval_torque_;
     for (int i = 0; i < torque_changes_; ++i) {
       propagateTo(start + torque_change_[i].offset);
       torque_ = torque_change_[i].torque;
     }
+    torque_ = newest;
     torque_changes_ = 0;
   }
 }
@@ -540,10 +542,14 @@ DynamicsSample DynamicsEstimator::sampleOf(const GearRotorModel& model, double t
 }
 
 bool DynamicsEstimator::slicedInsteadOfDopri5() const {
-  // Full fidelity without bearing clearance: the sliced propagation is exact through every change
-  // of the contacts (located on the exact solution), where dopri5 on the phase table at rtol 1e-8
-  // ran near real time (1.7x at 3 N m under torque_ripple's ripple, 2026-11-26 22:30 UTC).
-  return fidelity_ == Fidelity::kFull && rig_->dynamics.bearing_clearance[0] == 0.0 &&
+  // Full fidelity, an anti-backlash mesh, no bearing clearance: the sliced propagation is exact
+  // through every change of the contacts (located on the exact solution), where dopri5 on the
+  // phase table at rtol 1e-8 ran near real time (3.4x at 3 N m under torque_ripple's ripple,
+  // 1.6x at -0.5 N m, 2026-11-26 22:47 UTC). An ordinary gear's open backlash is no linear regime
+  // (dopri5 either way) and its interval maps do not exist: it stays on the periodic propagators
+  // with dopri5 for the interval, which costs it nothing after the backlash closes.
+  const bool anti_backlash = mesh_->spec().spring_stiffness > 0.0 || mesh_->preloadForce() > 0.0;  // SlicedMesh's rule
+  return fidelity_ == Fidelity::kFull && anti_backlash && rig_->dynamics.bearing_clearance[0] == 0.0 &&
          rig_->dynamics.bearing_clearance[1] == 0.0;
 }
 
@@ -633,7 +639,7 @@ void DynamicsEstimator::advanceTo(double t, const std::function<void(const Dynam
   while (k_ < k_end) {
     const double t_k = k_ * interval_, t_next = (k_ + 1) * interval_;
     bool done = false;
-    // Near a knee a flank may lift and land again between two samples (contactsSettle): dopri5.
+    // Near a knee a flank may lift and land again between two samples (contactsSettle): not here.
     if (settles) {
       PeriodicExponentialPropagator::Augmented z = propagator_->augment(t_k, y_);
       if (propagator_->step(k_, z, torque, torque)) {

@@ -347,6 +347,13 @@ TEST(DynamicsEstimator, OrdinaryGearWithBacklash) {
   const DynamicsSample& off_switch = out[out.size() - 2];
   EXPECT_GT(off_switch.phase, 0.1);
   EXPECT_NEAR(off_switch.dynamic_te - 5e-6, off_switch.static_te, 0.3 * off_switch.static_te);
+  // The torque reversed: the backlash opens (no linear regime), and those intervals go to dopri5 on
+  // the periodic propagators' model, which stay for the rest: an ordinary gear does not move onto
+  // the sliced propagation (no interval maps for it, and dopri5 there too while the backlash is open).
+  est.setTorque(-0.1);
+  est.advanceTo(0.08, [&](const DynamicsSample& s) { EXPECT_TRUE(s.state.allFinite()); });
+  EXPECT_GT(est.fallbackIntervals(), 0);
+  EXPECT_FALSE(est.followingMotion());
 }
 
 // A slow mesh on a fine output grid (node parameters ~pinion_speed_rpm, ~output_rate) used to set up

@@ -91,9 +91,12 @@ class DynamicsEstimator {
   /// Mesh phase [turns, not wrapped] and mesh frequency [Hz] at time(), whichever drives them.
   double meshPhase() const;
   double meshFrequency() const;
-  /// Slices per mesh period of the measured-motion propagation (before its first use; default 256).
+  /// Slices per mesh period of the measured-motion propagation (default 256): before its first use
+  /// (InvalidInput while it runs: the encoders, or at the nominal phase after a parameter change or
+  /// a torque near a knee moved the dynamics onto it, until the next reset).
   void setMotionSlices(int slices);
-  /// The speed-independent propagator (null until the motion is followed or a rebuild is avoided).
+  /// The speed-independent propagator (null until the dynamics first move onto it: the encoders, a
+  /// parameter change while running, or at the nominal phase a torque near a knee).
   const SlicedModalPropagator* slicedPropagator() const { return full_.exact.get(); }
   /// The sliced propagation the motion goes through at the current fidelity: the full model's, or
   /// under linear_modal the one-slice mean model's (null before either is made, or with bearing
@@ -129,8 +132,9 @@ class DynamicsEstimator {
   double outputInterval() const { return interval_; }
   long rebuilds() const { return rebuilds_; }
   long fallbackIntervals() const { return fallback_intervals_; }
-  /// Stretches propagated by the interval maps of the nominal phase after a parameter change
-  /// (SlicedIntervalMaps: whole intervals, and the parts of intervals from or to an input's stamp).
+  /// Stretches propagated by the interval maps of the nominal phase on the sliced model (after a
+  /// parameter change or a torque near a knee; SlicedIntervalMaps: whole intervals, and the parts of
+  /// intervals from or to an input's stamp).
   long mappedStretches() const { return mapped_stretches_; }
   /// The interval maps (null until the nominal phase first runs on the sliced model).
   const SlicedIntervalMaps* intervalMaps() const { return interval_maps_.get(); }
@@ -141,7 +145,8 @@ class DynamicsEstimator {
   /// 1 - max |Floquet multiplier| of the current model over one mesh period, from the exact
   /// propagators (a few 6x6 products); false if there is no linear regime (bearing clearance).
   /// Following the measured motion: at the measured speed held, in the contact regime the state is
-  /// in (false in none, and standing still); at the nominal speed: the both-flank regime.
+  /// in (false in none, and standing still); at the nominal speed on the periodic propagators: the
+  /// both-flank regime (once moved onto the sliced model, as along the measured motion).
   bool floquetMargin(double* margin) const;
   const State6& state() const { return y_; }
 
@@ -164,7 +169,8 @@ class DynamicsEstimator {
   /// A shaft on its bearing, m x'' + c x' + k x = force held, propagated exactly over h.
   static void shaftStep(double m, double c, double k, double force, double h, double& x, double& v);
   void advanceFollowing(double t_rel, const std::function<void(const DynamicsSample&)>& sink);
-  /// The nominal phase on the sliced model (after a parameter change, no encoders), full fidelity,
+  /// The nominal phase on the sliced model (after a parameter change or a torque near a knee, no
+  /// encoders), full fidelity,
   /// an anti-backlash mesh whose contacts settle at the held torque (contactsSettle, as for the
   /// periodic propagators, whose table holds while the swing gain now is not above the one it was
   /// made with): the interval maps' index of the interval after sample k_; -1 where the maps do not
