@@ -180,8 +180,7 @@ void DynamicsEstimator::parametersChanged() {
     build();
     return;
   }
-  if (interval_maps_) interval_maps_->invalidate();
-  maps_settle_ = -1;
+  intervalMapsStale();
   if (following_) {
     const GearRotorParameters p = currentParameters();
     full_.setParameters(p);
@@ -195,6 +194,13 @@ void DynamicsEstimator::parametersChanged() {
 
 GearRotorParameters DynamicsEstimator::currentParameters() const {
   return rigRotorParameters(*rig_, *mesh_, bearing_stiffness_, damping_);
+}
+
+double DynamicsEstimator::driveForce() const { return torque_ / mesh_->geometry().baseRadius(0); }
+
+void DynamicsEstimator::intervalMapsStale() {
+  if (interval_maps_) interval_maps_->invalidate();
+  maps_settle_ = -1;
 }
 
 double DynamicsEstimator::nominalMeshFrequency() const {
@@ -240,8 +246,7 @@ void DynamicsEstimator::startFollowing() {
   }
   // The parameters may have changed while stopped (parametersChanged rebuilds only the periodic
   // propagators then): the interval maps are made again for these.
-  if (interval_maps_) interval_maps_->invalidate();
-  maps_settle_ = -1;
+  intervalMapsStale();
   // The state sits on grid sample k_; the nominal phase there (RigExcitation: turns = f t).
   t_state_ = k_ * interval_;
   mesh_frequency_ = nominalMeshFrequency();
@@ -301,7 +306,7 @@ void DynamicsEstimator::propagateTo(double t_rel) {
   const double h = t_rel - t_state_;
   if (!(h > 0.0)) return;
   requireSliceBound(t_rel);
-  const double drive_force = torque_ / mesh_->geometry().baseRadius(0);
+  const double drive_force = driveForce();
   if (fidelity_ == Fidelity::kQuasiStatic) {
     propagateQuasiStatic(h, drive_force);
     t_state_ = t_rel;
@@ -375,7 +380,7 @@ bool DynamicsEstimator::intervalByMaps() {
   const SlicedModalPropagator& exact = *full_.exact;
   const int n = interval_maps_->intervals();
   const double f = interval_maps_->meshFrequency(), t0 = k_ * interval_, t1 = (k_ + 1) * interval_;
-  const double drive_force = torque_ / mesh_->geometry().baseRadius(0);
+  const double drive_force = driveForce();
   if (!exact.inLoadedRegime(y_, phase_, f)) return false;
   if (!interval_maps_->available(exact, i)) return false;  // before any work: the first use crosses
   State6 y = y_;
@@ -413,7 +418,7 @@ bool DynamicsEstimator::headByMaps(double t_rel) {
   const double f = interval_maps_->meshFrequency(), u = f * (t_rel - t0);
   const int m = interval_maps_->boundaryAtOrBefore(i, u);
   if (m == 0 || m == interval_maps_->boundaries(i)) return false;  // inside the first slice: nothing to gain
-  const double drive_force = torque_ / mesh_->geometry().baseRadius(0);
+  const double drive_force = driveForce();
   if (!exact.inLoadedRegime(y_, phase_, f)) return false;
   State6 y = y_;
   if (!interval_maps_->fromStart(exact, i, m, y, drive_force)) return false;
@@ -548,8 +553,7 @@ bool DynamicsEstimator::slicedInsteadOfDopri5() const {
   // 1.6x at -0.5 N m, 2026-11-26 22:47 UTC). An ordinary gear's open backlash is no linear regime
   // (dopri5 either way) and its interval maps do not exist: it stays on the periodic propagators
   // with dopri5 for the interval, which costs it nothing after the backlash closes.
-  const bool anti_backlash = mesh_->spec().spring_stiffness > 0.0 || mesh_->preloadForce() > 0.0;  // SlicedMesh's rule
-  return fidelity_ == Fidelity::kFull && anti_backlash && rig_->dynamics.bearing_clearance[0] == 0.0 &&
+  return fidelity_ == Fidelity::kFull && mesh_->antiBacklash() && rig_->dynamics.bearing_clearance[0] == 0.0 &&
          rig_->dynamics.bearing_clearance[1] == 0.0;
 }
 

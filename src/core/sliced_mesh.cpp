@@ -43,7 +43,7 @@ SlicedMesh::SlicedMesh(std::shared_ptr<const AntiBacklashMesh> mesh, int slices)
     k1_[j] = s1 / 16.0;
     kc_[j] = mesh_->spec().spring_stiffness > 0.0 ? sc / 16.0 : 0.0;
   }
-  anti_backlash_ = mesh_->spec().spring_stiffness > 0.0 || mesh_->preloadForce() > 0.0;
+  anti_backlash_ = mesh_->antiBacklash();
   phasors_.resize(bounds_.size());
   for (std::size_t k = 0; k < bounds_.size(); ++k) phasors_[k] = std::polar(1.0, kTwoPi * bounds_[k]);
   phasors_.front() = phasors_.back() = 1.0;  // phase 0 and 1 turn: sin(2 pi) would round to -2.4e-16
@@ -57,7 +57,7 @@ std::shared_ptr<const SlicedMesh> SlicedMesh::periodMean(std::shared_ptr<const A
   // (AntiBacklashMesh::periodMeans); k_c only with a scissor spring, as the slices above hold it.
   const AntiBacklashMesh::PeriodMeans& m = mean->mesh_->periodMeans();
   const bool spring = mean->mesh_->spec().spring_stiffness > 0.0;
-  mean->anti_backlash_ = spring || mean->mesh_->preloadForce() > 0.0;
+  mean->anti_backlash_ = mean->mesh_->antiBacklash();
   mean->bounds_ = {0.0, 1.0};
   mean->k1_ = {m.k1};
   mean->kc_ = {spring ? m.k_chain : 0.0};

@@ -57,7 +57,7 @@ Complex divide(Complex n, Complex d) {
   return divide(e_mu - e_lambda, d);
 }
 
-/// The infinity norm (largest row sum of magnitudes) of a complex 6x6 m, each magnitude as
+/// The infinity norm (largest row sum of magnitudes) of a complex matrix, each magnitude as
 /// sqrt(re^2 + im^2): the general decomposition's condition check. Eigen's cwiseAbs() of a complex
 /// matrix calls hypot per coefficient; the check compares with 1e8, so hypot's last-bit accuracy
 /// and overflow guard (the coefficients are scaled to about 1) buy nothing. (The seeded path writes
@@ -65,9 +65,9 @@ Complex divide(Complex n, Complex d) {
 template <typename Matrix>
 double infinityNorm(const Matrix& m) {
   double largest = 0.0;
-  for (int i = 0; i < 6; ++i) {
+  for (Eigen::Index i = 0; i < m.rows(); ++i) {
     double sum = 0.0;
-    for (int c = 0; c < 6; ++c) sum += std::sqrt(norm2(m(i, c)));
+    for (Eigen::Index c = 0; c < m.cols(); ++c) sum += std::sqrt(norm2(m(i, c)));
     largest = std::max(largest, sum);
   }
   return largest;
@@ -428,13 +428,13 @@ bool SlicedModalPropagator::decomposeSeeded(MeshRegime r, int j, Slice& s, std::
   for (int i = 0; i < 6; ++i) {
     double a[3];
     for (int c = 0; c < 3; ++c) a[c] = std::sqrt(norm2(s.v(i, c)));
-    const double sum = a[0] * 1.0 + a[1] * 1.0 + a[2] * 1.0 + a[0] * 1.0 + a[1] * 1.0 + a[2] * 1.0;
+    const double sum = a[0] + a[1] + a[2] + a[0] + a[1] + a[2];  // left to right, as infinityNorm sums
     v_norm = std::max(v_norm, sum / (i < 3 ? 1.0 : w_ref));
   }
   for (int i = 0; i < 3; ++i) {
     double sum = 0.0;
     for (int c = 0; c < 6; ++c) sum += std::sqrt(norm2(s.v_inv(i, c))) * (c < 3 ? 1.0 : w_ref);
-    v_inv_norm = std::max(v_inv_norm, sum / 1.0);
+    v_inv_norm = std::max(v_inv_norm, sum);
   }
   const double condition = v_norm * v_inv_norm;
   s.usable = std::isfinite(condition) && condition < 1e8;

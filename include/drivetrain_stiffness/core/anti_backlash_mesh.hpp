@@ -60,6 +60,10 @@ class AntiBacklashMesh {
   MeshStiffnessModel model() const { return model_; }
   bool verified() const { return verified_; }
   double preloadForce() const { return preload_force_; }  ///< F_p = T_p / r_b,gear [N]
+  /// Both flanks modelled (a scissor spring k_c > 0 or a preload F_p > 0): the mesh force is
+  /// k_s delta + c delta' where both are loaded, F_p cancelling; else an ordinary gear's one flank
+  /// at a time across its backlash.
+  bool antiBacklash() const { return spec_.spring_stiffness > 0.0 || preload_force_ > 0.0; }
 
   /// Flank state for mesh force F_m [N] along the LOA (positive: pinion drives) at given k1, k_c.
   FlankContact flankContact(double mesh_force, double k1, double k_chain) const {

@@ -195,6 +195,11 @@ class DynamicsEstimator {
   /// Onto the measured-motion propagation, the state at absolute time t (>= time(), no sample before).
   void moveTo(double t);
   double nominalMeshFrequency() const;  ///< [Hz]
+  /// The drive force of the held torque, F_d = T / r_b,p [N] (the live load follows the input).
+  double driveForce() const;
+  /// The sliced model takes other parameters: the interval maps are made again, and whether the
+  /// settling table holds for them is asked again (mapsInterval).
+  void intervalMapsStale();
 
   std::shared_ptr<const RigConfig> rig_;
   DampingRatios damping_;  ///< the rig's until setDamping
