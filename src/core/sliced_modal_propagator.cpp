@@ -922,7 +922,10 @@ bool SlicedModalPropagator::inLoadedRegime(const State6& y, double phase, double
 std::optional<Matrix6> SlicedModalPropagator::monodromy(double f, const State6& y, double phase) const {
   requireFinite("mesh frequency", f);
   requireFinite("mesh phase", phase);
-  const double frac = phase - std::floor(phase);
+  // As inLoadedRegime: phase - floor(phase) rounds to 1.0 for a phase just below an integer
+  // (-1e-17), which sliceAt clamps to the last slice where the period's first one is meant.
+  double frac = phase - std::floor(phase);
+  if (frac >= 1.0) frac = 0.0;
   const int j = slices_->sliceAt(frac, f < 0.0);
   const Complex e_theta = std::polar(1.0, kTwoPi * frac);
   const std::optional<MeshRegime> r = regimeAt(j, y, e_theta, kTwoPi * f);

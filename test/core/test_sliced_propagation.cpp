@@ -689,6 +689,35 @@ TEST(SlicedModalPropagator, MonodromyIsTheRegimeTheStateIsIn) {
   EXPECT_FALSE(near.exact.monodromy(f, opening, 0.1).has_value());
 }
 
+TEST(SlicedModalPropagator, APhaseJustBelowAWholeTurnIsThePeriodsFirstSlice) {
+  // phase - floor(phase) rounds to 1.0 for a phase of -1e-17; the regime of the state must then be
+  // judged on the period's first slice, where the mesh is (phase 0), not on its last (sliceAt clamps
+  // 1.0 to it). Across the tooth switch the drive flank's stiffness jumps and with it the share of
+  // the mesh damping each path carries (c1 = c_m k_drive / (k_drive + k_back)), so a mesh opening
+  // at a rate between the two slices' clipping rates is in a linear regime on one and in none on the
+  // other (the damper rule of MonodromyIsTheRegimeTheStateIsIn above): the answer at -1e-17
+  // must be the one at phase 0, matrix for matrix.
+  const double f = meshHz(1000);
+  ASSERT_EQ(-1e-17 - std::floor(-1e-17), 1.0) << "the rounding this test is about";
+  Harness h(256, 3.0);
+  const State6 rest = h.equilibrium(0.0);
+  int differing = 0;
+  for (double rate = 1e-4; rate < 1e3; rate *= 1.02) {  // [m/s] the mesh deflection's rate
+    State6 y = rest;
+    y[5] += rate;
+    const std::optional<Matrix6> at_zero = h.exact.monodromy(f, y, 0.0);
+    const std::optional<Matrix6> just_below = h.exact.monodromy(f, y, -1e-17);
+    ASSERT_EQ(at_zero.has_value(), just_below.has_value()) << "at " << rate << " m/s";
+    if (at_zero) {
+      EXPECT_EQ(*at_zero, *just_below) << "at " << rate << " m/s";
+    }
+    // Where the last slice judges the state apart from the first, the two answers differ.
+    const std::optional<Matrix6> last = h.exact.monodromy(f, y, 1.0 - 1e-9);
+    differing += last.has_value() != at_zero.has_value() || (last && *last != *at_zero);
+  }
+  EXPECT_GT(differing, 0) << "no rate at which the first and the last slice judge the state apart";
+}
+
 TEST(SlicedModalPropagator, ABearingChangeIsReseededAndStaysExact) {
   // After a bearing-stiffness change every slice is decomposed again as it is crossed, seeded by
   // the slice behind it: no general eigensolver at all, and still dopri5's answer. A change by a
