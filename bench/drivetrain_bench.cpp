@@ -118,10 +118,10 @@ int main(int argc, char** argv) {
     const std::vector<std::string> moving = ds::motionSceneNames();
     const bool motion_scene = std::find(moving.begin(), moving.end(), name) != moving.end();
     const ds::Scene scene = ds::makeScene(name, rig, motion_scene ? (quick ? 0.05 : 0.5) : 0.0);
-    const bool si = scene.units == "SI";
     // Output samples of a run: one per interval and the first, with one to spare.
     const std::size_t expected = static_cast<std::size_t>(std::ceil(scene.duration / scene.output_interval)) + 2;
-    const double abs_per_rel = si ? 1e-6 : 1e-2;  // displacement scale: ~1 um (SI) or the unit gap
+    const ds::IntegratorScale scale = scene.scale();
+    const double abs_per_rel = scale.displacement;  // ~1 um (SI) or a hundredth of the unit gap
     auto record = [&](const Samples& s) {
       return [&s](double t, const ds::State6& y) {
         const_cast<Samples&>(s).t.push_back(t);
@@ -131,8 +131,8 @@ int main(int argc, char** argv) {
     ds::IntegratorOptions ref_opt;
     ref_opt.relative_tolerance = 1e-12;
     ref_opt.absolute_tolerance = 1e-12 * abs_per_rel;
-    ref_opt.max_step = si ? 1e-4 : 0.1;
-    if (!si) ref_opt.divergence_limit = 1e3;
+    ref_opt.max_step = scale.max_step;
+    ref_opt.divergence_limit = scale.divergence_limit;
     Samples ref_samples;
     ds::integrate(*scene.model, ds::IntegratorMethod::kDopri5, ref_opt, 0.0, scene.initial, scene.duration,
                   scene.output_interval, record(ref_samples));
@@ -289,7 +289,7 @@ int main(int argc, char** argv) {
         const Timed r = timed(expected, [&](Samples& s) {
           const double pilot = ds::defaultPilotDuration(scene.duration, scene.output_interval);
           chosen = ds::chooseAutomatically(*scene.model, 0.0, scene.initial, scene.output_interval, pilot, bound,
-                                            scene.duration);
+                                            scene.duration, scale);
           ds::IntegrationStats st;
           ds::integrateChoice(*scene.model, chosen, 0.0, scene.initial, scene.duration, scene.output_interval, record(s), &st);
           return st.steps;

@@ -155,14 +155,15 @@ State6 integrateReduced(const GearRotorModel& model, Fidelity fidelity, double t
   throw InvalidInput("integrateReduced: use integrate() for the full model");
 }
 
-IntegratorOptions autoOptions(IntegratorMethod method, double relative_tolerance) {
-  // dopri5 at the chosen rtol (the absolute tolerance 1e-6 of it, in metres), every method with
-  // steps of at most 0.1 ms.
+IntegratorOptions autoOptions(IntegratorMethod method, double relative_tolerance, const IntegratorScale& scale) {
+  // dopri5 at the chosen rtol (in SI the absolute tolerance 1e-6 of it, in metres), every method
+  // with steps of at most 0.1 ms (SI), and the divergence limit of the model's units.
   IntegratorOptions o;
-  o.max_step = 1e-4;
+  o.max_step = scale.max_step;
+  o.divergence_limit = scale.divergence_limit;
   if (method == IntegratorMethod::kDopri5) {
     o.relative_tolerance = relative_tolerance;
-    o.absolute_tolerance = relative_tolerance * 1e-6;
+    o.absolute_tolerance = relative_tolerance * scale.displacement;
   }
   return o;
 }
@@ -172,11 +173,16 @@ double defaultPilotDuration(double run_duration, double output_interval) {
 }
 
 AutoChoice chooseAutomatically(const GearRotorModel& model, double t0, const State6& y0, double interval,
-                               double pilot_duration, double error_bound, double run_duration) {
+                               double pilot_duration, double error_bound, double run_duration,
+                               const IntegratorScale& scale) {
   requirePositive("error_bound", error_bound);
   requirePositive("pilot_duration", pilot_duration);
   requireNonNegative("run_duration", run_duration);
+  requirePositive("scale.displacement", scale.displacement);
+  requirePositive("scale.max_step", scale.max_step);
+  requirePositive("scale.divergence_limit", scale.divergence_limit);
   AutoChoice choice;
+  choice.scale = scale;
   // At least four output samples, or the comparison would be on the start state alone.
   choice.pilot_duration = std::max(4.0, std::round(pilot_duration / interval)) * interval;
   const double t_end = t0 + choice.pilot_duration;
@@ -211,7 +217,7 @@ AutoChoice chooseAutomatically(const GearRotorModel& model, double t0, const Sta
   // switches and flank changes fall in it or not: 0.75-1.25x the 40-sample rate on nominal,
   // 0.6-1.5x on low_preload, by an independent review; it matters only near the break-even run.)
   choice.relative_tolerance = std::max(error_bound / 100.0, 1e-11);
-  const IntegratorOptions dopri = autoOptions(IntegratorMethod::kDopri5, choice.relative_tolerance);
+  const IntegratorOptions dopri = autoOptions(IntegratorMethod::kDopri5, choice.relative_tolerance, scale);
   const RigExcitation* rig = model.rigExcitation();
   const GearRotorParameters& p = model.parameters();
   const bool linear_possible = rig && p.bearing_clearance[0] <= 0.0 && p.bearing_clearance[1] <= 0.0;
@@ -307,7 +313,7 @@ AutoChoice chooseAutomatically(const GearRotorModel& model, double t0, const Sta
 State6 integrateChoice(const GearRotorModel& model, const AutoChoice& choice, double t0, const State6& y0, double t_end,
                        double interval, const Observer& observe, IntegrationStats* stats) {
   if (choice.fidelity != Fidelity::kFull) return integrateReduced(model, choice.fidelity, t0, y0, t_end, interval, observe);
-  const IntegratorOptions o = autoOptions(choice.method, choice.relative_tolerance);
+  const IntegratorOptions o = autoOptions(choice.method, choice.relative_tolerance, choice.scale);
   if (choice.method == IntegratorMethod::kExponential && choice.exponential) {
     return choice.exponential->run(y0, t_end, observe, o, stats);  // the pilot's propagators, built once
   }

@@ -215,6 +215,15 @@ def case_simulate_auto():
         # The reduced fidelities were tried first and missed the bound on the pilot.
         check(f"simulate auto, {duration} s: quasi_static and linear_modal missed half the bound on the pilot",
               sim["auto"]["pilot_errors"]["quasi_static"] > 5e-7 and sim["auto"]["pilot_errors"]["linear_modal"] > 5e-7)
+    # On the dimensionless oscillator auto runs in the scene's units (its state of O(1) is 100 times
+    # the SI divergence limit: with SI options it stopped at its first step), and keeps its promise
+    # against dopri5 at rtol 1e-12 in the same units.
+    sim = run("simulate", "--config", GEARBOX, "--scene", "kahraman_singh", "--method", "auto", "--error-bound", "1e-6")
+    check("simulate auto, kahraman_singh: dopri5 on the full model",
+          sim["auto"]["method"] == "dopri5" and sim["auto"]["fidelity"] == "full", str(sim["auto"]))
+    ref = run("simulate", "--config", GEARBOX, "--scene", "kahraman_singh", "--rtol", "1e-12")
+    close("simulate auto, kahraman_singh: delta RMS within the error bound of dopri5 at rtol 1e-12",
+          sim["delta"]["rms"], ref["delta"]["rms"], 1e-6)
 
 
 def case_simulate_quasi_static():

@@ -234,3 +234,40 @@ TEST(ReducedModels, ParseFidelityRoundTripsAndNamesTheField) {
     EXPECT_NE(std::string(e.what()).find("--fidelity = 'modal'"), std::string::npos) << e.what();
   }
 }
+
+// auto on the dimensionless oscillators (gear.md section 3) runs in their units: a state of O(1)
+// (the unit gap) is 100x past the SI divergence limit (0.01 m) and a step of 1e-4 would take 25
+// million steps over kahraman_singh's 2513 time units, so with SI options dopri5 "diverged" at
+// its first step (drivetrain_bench's auto rows of 2026-11-26 for kahraman_singh and chaotic).
+// With the scene's scale it meets its bound against dopri5 at rtol 1e-12 in the same units, as the
+// bench measures it (delta after the transient), and it refuses nothing.
+TEST(ReducedModels, AutoOnTheDimensionlessOscillatorRunsInItsUnits) {
+  const Scene s = makeScene("kahraman_singh", rig());
+  ASSERT_EQ(s.units, "dimensionless");
+  const double pilot = defaultPilotDuration(s.duration, s.output_interval), bound = 1e-6;
+  EXPECT_THROW(
+      {
+        const AutoChoice si = chooseAutomatically(*s.model, 0.0, s.initial, s.output_interval, pilot, bound, s.duration);
+        integrateChoice(*s.model, si, 0.0, s.initial, s.duration, s.output_interval, nullptr);
+      },
+      UnstableIntegration)
+      << "the SI defaults should not fit this scene (else this test shows nothing)";
+  const AutoChoice c = chooseAutomatically(*s.model, 0.0, s.initial, s.output_interval, pilot, bound, s.duration, s.scale());
+  EXPECT_EQ(c.fidelity, Fidelity::kFull);
+  EXPECT_EQ(c.method, IntegratorMethod::kDopri5) << "no rig excitation: neither reduced nor exponential applies";
+  EXPECT_EQ(c.scale.divergence_limit, IntegratorScale::dimensionless().divergence_limit);
+  const std::vector<double> chosen = deltas(*s.model, s, [&](const Observer& o) {
+    integrateChoice(*s.model, c, 0.0, s.initial, s.duration, s.output_interval, o);
+  });
+  IntegratorOptions tight;
+  tight.relative_tolerance = 1e-12;
+  tight.absolute_tolerance = 1e-12 * s.scale().displacement;
+  tight.max_step = s.scale().max_step;
+  tight.divergence_limit = s.scale().divergence_limit;
+  const std::vector<double> reference = deltas(*s.model, s, [&](const Observer& o) {
+    integrate(*s.model, IntegratorMethod::kDopri5, tight, 0.0, s.initial, s.duration, s.output_interval, o);
+  });
+  ASSERT_EQ(chosen.size(), reference.size());
+  ASSERT_GT(reference.size(), 100u);
+  EXPECT_LE(relErr(chosen, reference), bound) << c.reason;
+}

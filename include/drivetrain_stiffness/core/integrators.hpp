@@ -44,6 +44,19 @@ struct IntegratorOptions {
   long max_steps = 0;
 };
 
+/// The units a model's state is in, as the integrators' tolerances and limits need them: SI (the
+/// rig: metres and seconds) or the dimensionless oscillators (kahraman_singh, chaotic: the unit
+/// gap, time in units of 1/omega_n). The library's defaults are SI; a dimensionless state of O(1)
+/// is 100 times past the SI divergence limit at its first step.
+struct IntegratorScale {
+  double displacement = 1e-6;      ///< absolute tolerance per unit relative tolerance: ~1 um [m]
+  double max_step = 1e-4;          ///< dopri5's longest step [s]
+  double divergence_limit = 1e-2;  ///< |displacement| beyond this counts as blow-up [m]
+  /// The dimensionless oscillators: a hundredth of the unit gap, a tenth of the natural period's
+  /// 1/2pi, a thousand gaps.
+  static IntegratorScale dimensionless() { return {1e-2, 0.1, 1e3}; }
+};
+
 struct IntegrationStats {
   long steps = 0, rejected = 0, rhs_evaluations = 0, events = 0, newton_iterations = 0;
   long fallbacks = 0;              ///< exponential: runs handed to dopri5 when a contact opened

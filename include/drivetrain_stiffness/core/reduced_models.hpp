@@ -44,6 +44,8 @@ struct AutoChoice {
   /// could not be the reference (a count, not a clock, of what the choice cost in dopri5).
   long dopri_pilot_steps = 0;
   std::string reason;
+  /// The units the choice was made in (chooseAutomatically's `scale`): integrateChoice runs in them.
+  IntegratorScale scale;
   /// The exponential method's propagators built for the pilot (time origin t0, the pilot's output
   /// interval): integrateChoice reuses them, so their setup is paid once.
   std::shared_ptr<const PeriodicExponentialPropagator> exponential;
@@ -69,8 +71,9 @@ constexpr int kDopriCountSamples = 8;
 /// piece just fits in one step (1.3e-7 at most at step 1), which would break the bound unseen.
 constexpr double kExponentialReferenceBound = 1e-6;
 
-/// The options auto runs `method` with, in its pilot and in the run (dopri5 at `relative_tolerance`).
-IntegratorOptions autoOptions(IntegratorMethod method, double relative_tolerance);
+/// The options auto runs `method` with, in its pilot and in the run (dopri5 at `relative_tolerance`),
+/// in the model's units (`scale`: SI by default).
+IntegratorOptions autoOptions(IntegratorMethod method, double relative_tolerance, const IntegratorScale& scale = {});
 
 /// The pilot auto is given by the CLI, the bench and the tests: a sample of the run, at most a
 /// quarter of it (a pilot as long as the run would be the run itself, paid twice) and at most 40
@@ -80,9 +83,11 @@ double defaultPilotDuration(double run_duration, double output_interval);
 /// Picks the cheapest fidelity and method whose pilot error meets `error_bound` (relative RMS of
 /// delta). The pilot covers `pilot_duration` from (t0, y0); `run_duration` [s] is the span the
 /// choice will run (it weighs the exponential method's set-up against dopri5's work; 0: unknown,
-/// taken as long, so the set-up is worth paying).
+/// taken as long, so the set-up is worth paying). `scale`: the units of the model's state (SI by
+/// default; Scene::scale() gives a scene's), kept in the choice for integrateChoice.
 AutoChoice chooseAutomatically(const GearRotorModel& model, double t0, const State6& y0, double output_interval,
-                               double pilot_duration, double error_bound, double run_duration = 0.0);
+                               double pilot_duration, double error_bound, double run_duration = 0.0,
+                               const IntegratorScale& scale = {});
 
 /// Runs `choice` (from chooseAutomatically) over the whole span.
 State6 integrateChoice(const GearRotorModel& model, const AutoChoice& choice, double t0, const State6& y0, double t_end,

@@ -65,6 +65,8 @@ struct Scene {
   double transient = 0.0;         ///< discarded before statistics
   double suggested_step = 0.0;    ///< a step that resolves the stiffest mode for explicit methods
   std::string units = "SI";       ///< "SI" or "dimensionless"
+  /// The integrators' tolerances and limits in these units.
+  IntegratorScale scale() const { return units == "SI" ? IntegratorScale{} : IntegratorScale::dimensionless(); }
   /// The measured motion of the scenes whose speed changes (run_up, speed_steps, reverse); null for
   /// the scenes at a constant speed.
   std::shared_ptr<const SceneMotion> motion;

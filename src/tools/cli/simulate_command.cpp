@@ -52,9 +52,10 @@ int runSimulate(const SimulateArgs& args) {
   }
   o.relative_tolerance = args.rtol;
   requirePositive("--rtol", args.rtol);
-  o.absolute_tolerance = scene.units == "SI" ? 1e-6 * args.rtol : 1e-2 * args.rtol;
-  o.max_step = scene.units == "SI" ? 1e-4 : 0.1;
-  if (scene.units != "SI") o.divergence_limit = 1e3;
+  const IntegratorScale scale = scene.scale();
+  o.absolute_tolerance = scale.displacement * args.rtol;
+  o.max_step = scale.max_step;
+  o.divergence_limit = scale.divergence_limit;
   std::ofstream csv;
   if (args.out) {
     csv.open(*args.out);
@@ -89,7 +90,7 @@ int runSimulate(const SimulateArgs& args) {
     // The run's length weighs the exponential method's set-up against dopri5's work.
     const double pilot = defaultPilotDuration(scene.duration, scene.output_interval);
     const AutoChoice c = chooseAutomatically(*scene.model, 0.0, scene.initial, scene.output_interval, pilot, args.error_bound,
-                                             scene.duration);
+                                             scene.duration, scale);
     nlohmann::json pilots = nlohmann::json::object();
     for (const auto& e : c.pilot_errors) pilots[e.first] = std::isfinite(e.second) ? nlohmann::json(e.second) : nlohmann::json(nullptr);
     chosen = {{"fidelity", toString(c.fidelity)}, {"method", toString(c.method)},
