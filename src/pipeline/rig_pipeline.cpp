@@ -204,6 +204,13 @@ double RigPipeline::pinionAngle(Stamp stamp) const {
   return angle_origin_ ? pinion_speed_ * secondsBetween(stamp, *angle_origin_) : 0.0;
 }
 
+double RigPipeline::encoderPinionAngle(Stamp stamp) const {
+  // The anchor (a reading, or its time-out continuing it) holds the encoder angle plus the offset
+  // that puts the mesh phase where a drive pair enters contact (rule 9); before any reading the
+  // nominal angle carries none.
+  return anchor_ ? pinionAngle(stamp) - options_.mesh_phase_offset * kTwoPi / teeth(0) : pinionAngle(stamp);
+}
+
 const char* RigPipeline::phaseSource() const {
   if (encoders_) return "encoders";
   return anchor_ ? "nominal (encoders timed out)" : "nominal";
@@ -528,7 +535,7 @@ void RigPipeline::emitUpTo(double t, PipelineSink& sink) {
     const Stamp sample_stamp{dynamics_epoch_.ns + std::llround(relative.t * 1e9)};
     s.t = sample_stamp.toSec();
     SampleContext context;
-    context.pinion_angle = pinionAngle(sample_stamp);
+    context.pinion_angle = encoderPinionAngle(sample_stamp);
     context.resonance = last_resonance_ ? &*last_resonance_ : nullptr;
     sink.transmissionError(sample_stamp, s, context);
     ++counters_.te_out;

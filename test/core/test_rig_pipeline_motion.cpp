@@ -20,10 +20,12 @@ constexpr int kZp = 20, kZg = 40;  // seed 000 Table 1
 
 struct Recorder : PipelineSink {
   std::vector<DynamicsSample> te;
-  void transmissionError(Stamp stamp, const DynamicsSample& s, const SampleContext&) override {
+  std::vector<double> drawn_angle;  ///< [rad] SampleContext::pinion_angle, what the tf frames draw
+  void transmissionError(Stamp stamp, const DynamicsSample& s, const SampleContext& context) override {
     EXPECT_EQ(s.t, stamp.toSec());
     EXPECT_TRUE(s.state.allFinite() && std::isfinite(s.dynamic_te) && std::isfinite(s.mesh_force));
     te.push_back(s);
+    drawn_angle.push_back(context.pinion_angle);
   }
 };
 
@@ -87,6 +89,12 @@ TEST(RigPipelineMotion, PhaseFollowsTheEncoderThroughARunUp) {
   EXPECT_EQ(p.dynamics()->fallbackIntervals(), 0);
   // The stiffness estimate's mesh phase follows the same angle.
   EXPECT_LT(phaseDistance(p.estimator().current().mesh.phase, phaseOf(extrapolated(m, 0.199), 0.125)), 1e-6);
+  // The angle the tf frames draw is the encoders' (extrapolated, as the phase), not the offset one
+  // the mesh phase is computed from: 0.125 of a mesh period is 2.2 degrees of the pinion.
+  ASSERT_EQ(r.drawn_angle.size(), r.te.size());
+  for (std::size_t i = 1; i < r.te.size(); ++i) {
+    EXPECT_LT(std::abs(std::remainder(r.drawn_angle[i] - extrapolated(m, sampleTime(i)), kTwoPi)), 1e-9) << "sample " << i;
+  }
 }
 
 TEST(RigPipelineMotion, VelocityDifferentiatedWhenAbsent) {

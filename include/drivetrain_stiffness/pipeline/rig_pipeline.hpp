@@ -177,7 +177,9 @@ struct MeshPeriodStatistics {
 /// What the tf frames and markers of a transmission-error sample need besides the sample: plain
 /// values of that moment, so that a sink never asks the pipeline back in the middle of an advance.
 struct SampleContext {
-  double pinion_angle = 0.0;  ///< [rad] at the sample's stamp (RigPipeline::pinionAngle)
+  /// [rad] at the sample's stamp, as the encoders count it (RigPipeline::encoderPinionAngle: without
+  /// the ~mesh_phase_offset that the mesh phase carries), or the nominal angle without encoders.
+  double pinion_angle = 0.0;
   /// The last published resonance estimate, null when there is none since the last reset; points
   /// at the pipeline's copy, valid during the call only.
   const ResonanceEstimate* resonance = nullptr;
@@ -311,6 +313,9 @@ class RigPipeline {
   /// Pinion angle at `stamp` [rad]: the last encoder reading extrapolated at its speed, or the
   /// nominal speed's angle since the dynamics origin (plus ~mesh_phase_offset as an angle).
   double pinionAngle(Stamp stamp) const;
+  /// pinionAngle less the ~mesh_phase_offset it carries once encoders anchored it: the angle the
+  /// encoders count, extrapolated (what the tf frames draw).
+  double encoderPinionAngle(Stamp stamp) const;
 
  private:
   InputOutcome reject(InputOutcome why, const std::string& topic, const std::string& reason, std::uint64_t& rejected);
