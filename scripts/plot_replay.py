@@ -54,14 +54,29 @@ def finish(fig, axes, ylabels, title, path):
     plt.close(fig)
 
 
-def replay_status(report):
-    """drivetrain_replay's status ("ok" or "incomplete: ...") from REPORT_DIR/summary.json; None
-    without one (e.g. a report of a live run's `rosbag record`)."""
+def replay_summary(report):
+    """drivetrain_replay's REPORT_DIR/summary.json; {} without one (e.g. a report of a live run's
+    `rosbag record`)."""
     try:
         with open(os.path.join(report, "summary.json")) as f:
-            return json.load(f).get("status")
+            return json.load(f)
     except (OSError, ValueError):
-        return None
+        return {}
+
+
+def replay_status(report):
+    """drivetrain_replay's status ("ok" or "incomplete: ...") from REPORT_DIR/summary.json; None
+    without one."""
+    return replay_summary(report).get("status")
+
+
+def encoder_settings(report):
+    """The encoders' topic, the pinion's joint name and the pinion's tooth count the replay took
+    (summary.json's "encoders"); the node's defaults (/joint_states, pinion, seed 000's z_p = 20)
+    for a report without a replay's summary."""
+    e = replay_summary(report).get("encoders") or {}
+    topic = e.get("topic", "joint_states")
+    return ("/" + topic.lstrip("/"), e.get("pinion_joint", "pinion"), int(e.get("pinion_teeth", 20)))
 
 
 def write_header(f, status, source, out_bag):
@@ -151,7 +166,7 @@ def main():
         ax.legend(loc="best")
     finish(fig, [ax], ["natural frequency [kHz]"], "Resonance estimates", os.path.join(report, "resonance.png"))
 
-    motion_figures = plot_motion(source, te, res, t0, report) if source != out_bag and te else []
+    motion_figures = plot_motion(source, te, res, t0, report, *encoder_settings(report)) if source != out_bag and te else []
 
     with open(os.path.join(report, "report.md"), "w") as f:
         write_header(f, status, source, out_bag)
@@ -194,12 +209,14 @@ def save(fig, report, name, caption):
     return name, caption
 
 
-def plot_motion(input_bag, te, res, t0, report, z_p=20):
-    """With the rig's encoders in the input bag: the Campbell diagram (TE short-time spectra against
-    the measured speed, mesh orders 1-4 and the natural frequencies as lines) and the TE order
-    spectrum (angle-domain resampling). Returns the (file, caption) pairs written."""
+def plot_motion(input_bag, te, res, t0, report, topic="/joint_states", joint="pinion", z_p=20):
+    """With the rig's encoders in the input bag (`topic`, the pinion's `joint`): the Campbell
+    diagram (TE short-time spectra against the measured speed, mesh orders 1-4 of the pinion's z_p
+    teeth as lines, and the natural frequencies of each resonance estimate against the speed while
+    it held) and the TE order spectrum (angle-domain resampling). Returns the (file, caption) pairs
+    written."""
     try:
-        enc_t, enc_angle, enc_speed = motion_analysis.read_encoder(input_bag)
+        enc_t, enc_angle, enc_speed = motion_analysis.read_encoder(input_bag, joint, topic)
     except Exception:  # not a bag rosbag reads (a damaged input): no motion figures
         return []
     if len(enc_t) < 10:
@@ -229,16 +246,33 @@ def plot_motion(input_bag, te, res, t0, report, z_p=20):
             # Colour from the median (the broadband floor) to the strongest line.
             ax.pcolormesh(speeds[order], freqs, level, shading="nearest", cmap="viridis",
                           vmin=np.percentile(level, 50), vmax=level.max())
-            n = np.linspace(max(0.0, rpm.min()), rpm.max(), 50)
+            n = np.linspace(rpm.min(), rpm.max(), 50)
             for k in range(1, 5):
                 ax.plot(n, k * z_p * np.abs(n) / 60.0, "w--", lw=0.8)
-            for r in res[-1:]:
+            # Each resonance estimate from its stamp to the next one's (the last to the end of the
+            # TE), at the encoders' speed over that time: the natural frequencies against speed.
+            t_end = te_t[-1]
+            for j, r in enumerate(res):
+                t_next = res[j + 1][0] if j + 1 < len(res) else t_end
+                if t_next < r[0]:
+                    continue
+                ts = np.linspace(r[0], t_next, 20)
+                n_held = np.interp(ts, enc_t, enc_speed) * 60.0 / (2 * np.pi)
                 for fr in r[1]:
-                    ax.axhline(fr, color="r", lw=0.8)
-            ax.set_ylim(0, freqs[-1])
+                    ax.plot(n_held, np.full_like(n_held, fr), "r-", lw=1.0)
+            # Up to the 4th mesh order at the top speed, where the orders cross the natural
+            # frequencies below it (the diagram's purpose); above the TE output's Nyquist frequency
+            # (output_rate / 2) there is no spectrum: shaded.
+            top = max(freqs[-1], 1.1 * 4 * z_p * np.abs(rpm).max() / 60.0)
+            if top > freqs[-1]:
+                ax.axhspan(freqs[-1], top, color="0.25", zorder=0)
+                ax.text(0.01, 0.99, "no TE spectrum above %.0f Hz (output_rate / 2)" % freqs[-1], color="w",
+                        transform=ax.transAxes, va="top", fontsize=8)
+            ax.set_ylim(0, top)
             ax.set_xlabel("pinion speed [rpm] (encoders)")
             ax.set_ylabel("frequency [Hz]")
-            ax.set_title("Campbell diagram: TE spectra (colour, log), mesh orders 1-4 (dashed), natural frequencies (red)")
+            ax.set_title("Campbell diagram: TE spectra (colour, log), mesh orders 1-4 (dashed),\n"
+                         "natural frequencies of the resonance estimates against speed (red)")
             out.append(save(fig, report, "campbell.png", "Campbell diagram"))
     return out
 

@@ -227,6 +227,13 @@ int run(int argc, char** argv) {
   // [s since the epoch] the first and last stamp read (null for a bag without one): a campaign sorts by start.
   summary["start"] = first ? nlohmann::json(first->toSec()) : nlohmann::json(nullptr);
   summary["end"] = last ? nlohmann::json(last->toSec()) : nlohmann::json(nullptr);
+  // What the report's motion figures read the input bag with (plot_replay.py): the encoders' topic
+  // and joint names as this replay took them, and the tooth counts for the mesh orders.
+  summary["encoders"] = {{"topic", joint_states_topic},
+                         {"pinion_joint", joints.pinion},
+                         {"gear_joint", joints.gear},
+                         {"pinion_teeth", rig.gears.teeth[0]},
+                         {"gear_teeth", rig.gears.teeth[1]}};
   summary["counters"] = countersJson(pipeline.counters());
   summary["calibration"] = calibrationJson(pipeline);
   // The per-mesh-period statistics over the bag (a campaign's row): speed, torque, TE RMS, force.

@@ -5,7 +5,10 @@
 #  1. Campbell: in every 0.1 s window above 300 rpm the strongest line of the predicted TE is the
 #     mesh frequency z_p n / 60 (z_p = 20, n the encoders' mean speed in the window) within 1 %;
 #  2. order spectrum (the TE resampled on the pinion angle): the strongest order is 20, the mesh;
-#  3. the report has campbell.png and te_order_spectrum.png.
+#  3. the report has campbell.png and te_order_spectrum.png;
+#  4. so has the report of a 5 s run-up whose encoders are named otherwise (joints motor and output
+#     on /encoders, ~pinion_joint and ~gear_joint to match): the plots read the topic, the joint
+#     and the tooth count the replay took (summary.json "encoders"), not the defaults.
 # usage: check_run_up_spectrum.sh BIN_DIR SOURCE_DIR WORK_DIR
 set -euo pipefail
 bin=$1 src=$2 work=$3
@@ -37,4 +40,26 @@ top = orders[1:][np.argmax(amp[1:])]
 print("order spectrum: strongest order %.3f" % top)
 if sel.sum() < 300 or err.max() > 0.01 or abs(top - 20.0) > 1e-9:
     sys.exit("check_run_up_spectrum: the TE does not follow the mesh order")
+PY
+sed -e 's/^pinion_joint: .*/pinion_joint: motor/' -e 's/^gear_joint: .*/gear_joint: output/' "$work/params.yaml" \
+  > "$work/params_named.yaml"
+"$bin/drivetrain_rig_sim" --scenario run_up --config "$src/config/gearboxes/seed_servo.yaml" --duration 5 \
+  --pinion-joint motor --gear-joint output --joint-topic /encoders --out "$work/run_up_named.bag" > /dev/null
+"$bin/drivetrain_replay" --bag "$work/run_up_named.bag" --config "$src/config/gearboxes/seed_servo.yaml" \
+  --params "$work/params_named.yaml" --joint-states-topic encoders --report "$work/report_named" \
+  --plot-script "$src/scripts/plot_replay.py" > "$work/summary_named.json"
+/usr/bin/python3 - "$work" <<'PY'
+import json, os, sys
+work = sys.argv[1]
+s = json.load(open(work + "/summary_named.json"))
+enc = s["encoders"]
+want = {"topic": "encoders", "pinion_joint": "motor", "gear_joint": "output", "pinion_teeth": 20, "gear_teeth": 40}
+if enc != want:
+    sys.exit("check_run_up_spectrum: summary encoders %s, expected %s" % (enc, want))
+if s["counters"]["accepted_joint_states"] < 4000:
+    sys.exit("check_run_up_spectrum: the named encoders were not taken (%d readings)" % s["counters"]["accepted_joint_states"])
+for name in ("campbell.png", "te_order_spectrum.png"):
+    if not os.path.getsize(os.path.join(work, "report_named", name)):
+        sys.exit("check_run_up_spectrum: %s missing with named encoders" % name)
+print("named encoders: %d readings, campbell.png and te_order_spectrum.png written" % s["counters"]["accepted_joint_states"])
 PY
