@@ -211,6 +211,11 @@ double RigPipeline::encoderPinionAngle(Stamp stamp) const {
   return anchor_ ? pinionAngle(stamp) - options_.mesh_phase_offset * kTwoPi / teeth(0) : pinionAngle(stamp);
 }
 
+std::optional<double> RigPipeline::encoderSilence(Stamp now) const {
+  if (!encoders_ || !reading_) return std::nullopt;
+  return secondsBetween(now, reading_->stamp);
+}
+
 const char* RigPipeline::phaseSource() const {
   if (encoders_) return "encoders";
   return anchor_ ? "nominal (encoders timed out)" : "nominal";

@@ -329,6 +329,17 @@ void StiffnessEstimatorRos::diagnose(diagnostic_updater::DiagnosticStatusWrapper
   for (const auto& [key, count] : namedCounters(c)) status.add(key, count);
   status.add("last_event", c.last_event);
   status.add("phase_source", pipeline_->phaseSource());
+  // The time-out is taken on the next input's stamp (rule 9): with every input stopped, the age of
+  // the last reading on the node's clock says that the phase source above is stale.
+  if (const std::optional<double> silence = pipeline_->encoderSilence(fromRosTime(ros::Time::now()))) {
+    status.add("encoder_silence [s]", *silence);
+    if (*silence > pipeline_->options().motion_timeout) {
+      status.mergeSummaryf(diagnostic_msgs::DiagnosticStatus::WARN,
+                           "no joint_states for %.3g s (more than ~motion_timeout) and no input since: the phase "
+                           "falls back to ~pinion_speed_rpm at the next one",
+                           *silence);
+    }
+  }
   status.add("process_restarts", starts_ - 1);
   status.add("unnumbered_publishers", pipeline_->unnumberedPublishers());
   status.add("missed_deadlines", missed_deadlines_);

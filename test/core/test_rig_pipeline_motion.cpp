@@ -130,6 +130,7 @@ TEST(RigPipelineMotion, EveryRuleCounted) {
   const double nan = std::numeric_limits<double>::quiet_NaN();
   ASSERT_EQ(p.torque(at(0.0), 0.1, r), InputOutcome::kAccepted);
   EXPECT_STREQ(p.phaseSource(), "nominal");
+  EXPECT_FALSE(p.encoderSilence(at(0.0)).has_value()) << "no encoders yet";
   MotionInput good;
   good.pinion_angle = 0.0;
   good.pinion_velocity = 10.0;
@@ -158,9 +159,15 @@ TEST(RigPipelineMotion, EveryRuleCounted) {
   good.pinion_angle = 0.06;
   good.gear_angle = -0.5 * 0.06 + 0.05;
   ASSERT_EQ(p.motion(at(0.007), good, r, {"/rig", 11, ""}), InputOutcome::kAccepted);
+  // With every input stopped the time-out waits for the next input's stamp: the source still says
+  // encoders, and the age of the last reading (at 0.007 s) on a clock says how stale that is.
+  EXPECT_STREQ(p.phaseSource(), "encoders");
+  ASSERT_TRUE(p.encoderSilence(at(0.09)).has_value());
+  EXPECT_NEAR(*p.encoderSilence(at(0.09)), 0.083, 1e-12);
   // Encoders silent for more than 0.05 s: back to the nominal speed, counted.
   ASSERT_EQ(p.torque(at(0.1), 0.1, r), InputOutcome::kAccepted);
   EXPECT_STREQ(p.phaseSource(), "nominal (encoders timed out)");
+  EXPECT_FALSE(p.encoderSilence(at(0.1)).has_value()) << "the encoders no longer drive the phase";
   EXPECT_NEAR(p.dynamics()->meshFrequency(), 1000.0 / 60.0 * kZp, 1e-9);  // seed_servo.yaml: 1000 rpm
   const PipelineCounters& c = p.counters();
   EXPECT_EQ(c.accepted_motion, 4u);

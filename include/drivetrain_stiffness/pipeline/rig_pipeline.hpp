@@ -286,6 +286,10 @@ class RigPipeline {
   InputOutcome motionRefused(const std::string& reason, const InputOrigin& origin = {});
   /// "nominal", "encoders" or "nominal (encoders timed out)": what drives the mesh phase now.
   const char* phaseSource() const;
+  /// [s] from the last accepted encoder reading to `now` while the encoders drive the phase
+  /// (nullopt otherwise). The time-out (rule 9) is taken on the stamps of inputs, so with every
+  /// input stopped the phase source stays "encoders": /diagnostics shows this age on the clock.
+  std::optional<double> encoderSilence(Stamp now) const;
   /// Publishers whose drops cannot be seen (they leave header.seq constant), over both streams.
   std::size_t unnumberedPublishers() const {
     return torque_seq_.unnumberedPublishers() + preload_seq_.unnumberedPublishers() + motion_seq_.unnumberedPublishers();
