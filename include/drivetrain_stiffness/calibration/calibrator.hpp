@@ -46,7 +46,7 @@ struct CalibrationEstimate {
   CalibrationVector prior_std = CalibrationVector::Zero();
   std::array<bool, kCalibrationSize> identified{};  ///< posterior std below half the prior's
   WindowOutcome outcome = WindowOutcome::kNone;
-  bool excited = false;      ///< the last window was usable (baseline or update)
+  bool excited = false;      ///< the last window's excitation sufficed (Calibrator::excitation, a conditioned fit); `outcome` says whether it updated
   bool baseline = false;     ///< a baseline exists
   double nis = 0.0;          ///< normalised innovation squared of the last loaded window (3 dof)
   /// Per feature (mean TE, |C_1|, |C_2|): the model-error variance the windows show, as a multiple
