@@ -424,6 +424,96 @@ TEST(Calibrator, BandsWidenOnlyWhereTheWindowsShowMoreModelErrorThanAllowed) {
   }
 }
 
+/// After runSweep: one window's readings (a gear turn and 2 % more) of the same rig at a steady
+/// `torque` [N·m], from a fresh stretch (the calibrator interrupted first, as a reset does), at
+/// `speed` [rad/s] and `rate` [Hz] readings, 2^20-count encoders, with `te_error` [m] added to
+/// every reading's TE (a stretch of bad data). Stops at the reading that closes the window; returns
+/// the readings' result flags together.
+int feedWindow(const SyntheticRig& s, Calibrator& calibrator, StiffnessEstimator& supports, double t0, double torque,
+               double speed, double rate, double te_error) {
+  StaticTeModel physics(s.rig);
+  const AntiBacklashMesh unit(s.rig.gears, s.rig.anti_backlash, s.rig.mesh_model, s.rig.mesh_samples, 1.0);
+  const double rbp = physics.baseRadius()[0], rbg = physics.baseRadius()[1];
+  std::array<double, 2> d{};
+  physics.shaftDeflection(torque, supports, d);
+  const double bearings = d[0] / s.truth[kPinionBearingScale] + d[1] / s.truth[kGearBearingScale];
+  const double force = torque / rbp, fp = s.truth[kPreloadTorque] / rbg;
+  const double count = kTwoPi / 1048576.0;
+  const double gear_turn = kTwoPi * s.rig.gears.teeth[1] / s.rig.gears.teeth[0];  // [rad] of the pinion
+  const long n = static_cast<long>(std::ceil(1.02 * gear_turn / (speed / rate)));
+  calibrator.interrupt();
+  MeasuredTeSample sample;
+  int flags = 0;
+  for (long j = 0; j <= n; ++j) {
+    const double t = t0 + j / rate, theta_p = speed * (j / rate);
+    const double phase = 20.0 * theta_p / kTwoPi - std::floor(20.0 * theta_p / kTwoPi);
+    const CompositeMesh c = unit.at(phase, 0.0);
+    const double k1 = s.truth[kMeshScale] * c.k1, k2 = s.truth[kMeshScale] * c.k2;
+    const double kte = s.rig.anti_backlash.spring_stiffness, kc = kte * k2 / (kte + k2);
+    double delta = force / (k1 + kc);
+    if (force * kc > fp * (k1 + kc)) delta = (force - fp) / k1;
+    else if (force * k1 < -fp * (k1 + kc)) delta = (force + fp) / kc;
+    const double x = delta + bearings + 1e-6 * std::sin(kTwoPi * phase) + 3e-5 + te_error;
+    const double theta_g = (x - rbp * theta_p) / rbg;
+    flags |= calibrator.reading(t, std::round(theta_p / count) * count, std::round(theta_g / count) * count, phase, speed,
+                                torque, supports, sample);
+    if (flags & Calibrator::kWindow) break;  // the window closed: nothing after it
+  }
+  return flags;
+}
+
+TEST(Calibrator, BadStretchesAfterConvergenceLeaveTheEstimate) {
+  // Issue 13: gate outliers, freeze updates when the excitation is too poor, and never let a bad
+  // stretch of data drive the estimate. After a converged sweep, each window below closes
+  // (kWindow) and leaves every parameter and its std exactly as they were, counted as gated or
+  // not excited with its reason; a good window afterwards still updates.
+  SyntheticRig s{seedRig(), {}, 3};
+  s.truth << 1.12, 0.85, 0.85, 1.15 * s.rig.anti_backlash.preload_torque, 0.0;
+  StiffnessEstimator supports(s.rig);
+  Calibrator calibrator(s.rig);
+  runSweep(s, calibrator, supports);
+  const CalibrationEstimate converged = calibrator.estimate();
+  ASSERT_TRUE(converged.identified[kMeshScale] && converged.identified[kPreloadTorque]);
+  const double rpm = kTwoPi / 60.0;  // [rad/s] per rpm
+  struct Case {
+    const char* what;
+    double speed, rate, te_error;
+    WindowOutcome outcome;
+  };
+  // The seed servo's lowest mode is about 7.9 kHz (docs/resonance.md): quasi-static up to a mesh
+  // frequency of 790 Hz (max_mesh_to_natural 0.1), 2370 rpm with z_p = 20.
+  const Case cases[] = {
+      {"a 20 um step in the measured TE (10x the load's TE at 3 N m)", 120.0 * rpm, 5000.0, 2e-5, WindowOutcome::kGated},
+      {"2 rpm, below min_speed_rpm = 5", 2.0 * rpm, 1000.0, 0.0, WindowOutcome::kTooSlow},
+      {"3000 rpm: mesh at 1 kHz, above 0.1 of the lowest mode", 3000.0 * rpm, 50000.0, 0.0, WindowOutcome::kNotQuasiStatic},
+      {"500 rpm read at 500 Hz: the second mesh harmonic (333 Hz) above 0.45 of it", 500.0 * rpm, 500.0, 0.0,
+       WindowOutcome::kTooSparse},
+  };
+  double t0 = 1000.0;
+  std::uint64_t gated = converged.gated, not_excited = converged.not_excited;
+  for (const Case& c : cases) {
+    const int flags = feedWindow(s, calibrator, supports, t0, 3.0, c.speed, c.rate, c.te_error);
+    t0 += 200.0;
+    const CalibrationEstimate& e = calibrator.estimate();
+    EXPECT_TRUE(flags & Calibrator::kWindow) << c.what << ": no window closed";
+    EXPECT_EQ(e.outcome, c.outcome) << c.what << ": " << toString(e.outcome);
+    EXPECT_EQ(e.value, converged.value) << c.what;
+    EXPECT_EQ(e.std, converged.std) << c.what;
+    EXPECT_EQ(e.updates, converged.updates) << c.what;
+    if (c.outcome == WindowOutcome::kGated) {
+      EXPECT_EQ(e.gated, ++gated) << c.what;
+      EXPECT_GT(e.nis, s.rig.calibration.gate) << c.what;
+      EXPECT_TRUE(e.excited) << c.what << ": the excitation sufficed; the data did not";
+    } else {
+      EXPECT_EQ(e.not_excited, ++not_excited) << c.what;
+      EXPECT_FALSE(e.excited) << c.what;
+    }
+  }
+  EXPECT_EQ(feedWindow(s, calibrator, supports, t0, 3.0, 120.0 * rpm, 5000.0, 0.0) & Calibrator::kWindow, Calibrator::kWindow);
+  EXPECT_EQ(calibrator.estimate().outcome, WindowOutcome::kUpdated) << toString(calibrator.estimate().outcome);
+  EXPECT_EQ(calibrator.estimate().updates, converged.updates + 1);
+}
+
 TEST(Calibrator, NoDriftOverTenMinutesAtConstantLoad) {
   // The issue's stability target: after the sweep, 10 min at one steady load move no parameter by
   // more than one (final) standard deviation. The readings keep their noise (encoder counts).
