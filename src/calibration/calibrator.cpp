@@ -65,13 +65,21 @@ Calibrator::Calibrator(std::shared_ptr<const RigConfig> shared_rig, std::shared_
       c.te_offset.mean;
   estimate_.prior_std << c.mesh_stiffness_scale.std, c.pinion_bearing_scale.std, c.gear_bearing_scale.std,
       c.preload_torque.std, c.te_offset.std;
-  if (!(rig.anti_backlash.spring_stiffness > 0.0)) estimate_.prior_std[kPreloadTorque] = 0.0;  // no scissor spring
+  CalibrationVector reference;
+  reference << c.mesh_stiffness_scale.reference(), c.pinion_bearing_scale.reference(), c.gear_bearing_scale.reference(),
+      c.preload_torque.reference(), c.te_offset.reference();
+  if (!(rig.anti_backlash.spring_stiffness > 0.0)) {  // no scissor spring
+    estimate_.prior_std[kPreloadTorque] = 0.0;
+    reference[kPreloadTorque] = 0.0;
+  }
   // The prior in the state's coordinates: c = 1/s, std(c) = std(s) / s^2 (first order).
   state_ = mean;
   state_prior_std_ = estimate_.prior_std;
+  state_reference_std_ = reference;
   for (int i : {kPinionBearingScale, kGearBearingScale}) {
     state_[i] = 1.0 / mean[i];
     state_prior_std_[i] = estimate_.prior_std[i] / (mean[i] * mean[i]);
+    state_reference_std_[i] = reference[i] / (mean[i] * mean[i]);
   }
   state_covariance_ = state_prior_std_.cwiseAbs2().asDiagonal();
   model_error_.reset(state_covariance_);
@@ -251,10 +259,13 @@ FeatureVector Calibrator::predict(const CalibrationVector& state, double torque)
 }
 
 void Calibrator::update(const FeatureVector& z, const FeatureVector& z_std, double torque) {
-  // Random walk since the last update (a preload that relaxes, wear): relative to the prior spread.
+  // Random walk since the last update (a preload that relaxes, wear): relative to the drawing's
+  // spread (the prior's, unless a calibrated gearbox keeps the drawing's as reference_std). Held
+  // parameters (prior std 0) do not walk.
   const double t = window_.t1;
   const double dt = has_update_t_ ? std::max(0.0, t - last_update_t_) : 0.0;
-  const CalibrationMatrix Q = ((config_.drift * config_.drift * dt) * state_prior_std_.cwiseAbs2()).asDiagonal();
+  const CalibrationVector walk = (state_prior_std_.array() > 0.0).select(state_reference_std_, 0.0);
+  const CalibrationMatrix Q = ((config_.drift * config_.drift * dt) * walk.cwiseAbs2()).asDiagonal();
   const CalibrationMatrix prior = state_covariance_ + Q;
 
   auto jacobian = [&](const CalibrationVector& p, Eigen::Matrix<double, kFeatureSize, kCalibrationSize>& H) {
@@ -440,13 +451,14 @@ void Calibrator::outputs(double torque, const StiffnessEstimator& supports) {
   covariance_ = J * P * J.transpose();
   e.value = theta;
   e.std = covariance_.diagonal().cwiseMax(0.0).cwiseSqrt();
-  // Identified: the data have at least tripled the prior's information (std below half the prior's),
-  // judged in the state's coordinates, where the measurement is linear in the bearing factors: the
+  // Identified: the data have at least tripled the drawing's information (std below half the
+  // drawing's spread: the prior's, or a calibrated gearbox's reference_std), judged in the state's
+  // coordinates, where the measurement is linear in the bearing factors: the
   // scale's std also shrinks as s^2 when the estimate falls, which is not information. On the
   // reported covariance: information the windows seem to give but their model error takes back
   // (c > 1) does not count.
   for (int i = 0; i < kCalibrationSize; ++i) {
-    e.identified[i] = state_prior_std_[i] > 0.0 && std::sqrt(std::max(0.0, P(i, i))) < 0.5 * state_prior_std_[i];
+    e.identified[i] = state_prior_std_[i] > 0.0 && std::sqrt(std::max(0.0, P(i, i))) < 0.5 * state_reference_std_[i];
   }
   // Series compliance at the reference torque: mean TE above zero torque over the mesh force.
   const double tr = config_.reference_torque;

@@ -288,9 +288,14 @@ static CalibrationPrior readPrior(const YAML::Node& c, const std::string& w, con
     const YAML::Node p = c[name];
     const std::string where = key(w, name);
     if (!p.IsMap()) throw InvalidInput(where + ": must be a mapping {mean: ..., std: ...}");
-    rejectUnknownKeys(p, where, {"mean", "std"});
+    rejectUnknownKeys(p, where, {"mean", "std", "reference_std"});
     prior.mean = readDouble(p, where, "mean", prior.mean);
     prior.std = readDouble(p, where, "std", prior.std);
+    if (p["reference_std"]) {
+      prior.reference_std = readDouble(p, where, "reference_std", prior.std);
+      requireNonNegative(where + ".reference_std", prior.reference_std);
+      requireAtMost(where + ".reference_std", prior.reference_std, upper - lower);
+    }
   }
   requireInHalfOpenRange(key(w, name) + ".mean", prior.mean, lower, upper);
   requireNonNegative(key(w, name) + ".std", prior.std);

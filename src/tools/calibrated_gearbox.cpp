@@ -95,13 +95,24 @@ std::string calibratedGearboxYaml(const std::string& config_path, const Calibrat
   if (rig.anti_backlash.spring_stiffness > 0.0 && root["anti_backlash"]) {
     root["anti_backlash"]["preload_torque"] = number(estimate.value[kPreloadTorque]);
   }
-  // The posterior becomes the next run's prior.
+  // The posterior becomes the next run's prior; the drawing's spread (this file's reference, its
+  // std unless it was calibrated before) stays the one `identified` and the drift are judged against.
+  // A parameter the data did not identify keeps the drawing's spread as its std: the file holds no
+  // covariance, and the bearing scales' posterior stds (each about half the prior's, the two
+  // strongly anti-correlated because only their compliances' sum is seen) would, as independent
+  // priors, claim to know their difference, and the next run would flag them identified.
   YAML::Node calibration = root["calibration"];
   if (!calibration.IsMap()) calibration = YAML::Node(YAML::NodeType::Map);  // `calibration: {}` or `calibration:`
+  const CalibrationConfig& c = rig.calibration;
+  const CalibrationPrior* drawing[kCalibrationSize] = {&c.mesh_stiffness_scale, &c.pinion_bearing_scale,
+                                                       &c.gear_bearing_scale, &c.preload_torque, &c.te_offset};
   for (int i = 0; i < kCalibrationSize; ++i) {
     YAML::Node prior(YAML::NodeType::Map);
+    const bool held = !(estimate.prior_std[i] > 0.0);
+    const bool identified = estimate.identified[static_cast<std::size_t>(i)];
     prior["mean"] = number(estimate.value[i]);
-    prior["std"] = number(estimate.std[i]);
+    prior["std"] = number(held ? 0.0 : identified ? estimate.std[i] : drawing[i]->reference());
+    prior["reference_std"] = number(drawing[i]->reference());
     prior.SetStyle(YAML::EmitterStyle::Flow);
     calibration[calibrationName(i)] = prior;
   }
@@ -126,8 +137,10 @@ std::string calibratedGearboxYaml(const std::string& config_path, const Calibrat
             std::to_string(estimate.not_excited) + " not excited.\n";
   header += "# Set from the posterior: mesh.stiffness_scale, bearings[].stiffness_scale (by shaft)";
   header += rig.anti_backlash.spring_stiffness > 0.0 ? ", anti_backlash.preload_torque" : "";
-  header += ", and calibration.<parameter>: {mean, std} (the next run's priors).\n";
-  header += "# Not identified (posterior std not below half the prior's; the value stays near its prior): " +
+  header += ", and calibration.<parameter>: {mean, std} (the next run's priors: the posterior std where\n"
+            "# identified, the drawing's spread where not; reference_std: the drawing's spread, which\n"
+            "# 'identified' and the drift are judged against).\n";
+  header += "# Not identified (posterior std not below half the drawing's spread; the value stays near its prior): " +
             (not_identified.empty() ? std::string("none") : not_identified) + "\n";
   if (!held.empty()) header += "# Held (prior std 0, not estimated): " + held + "\n";
   header += "# The original file's comments are not kept (re-written by yaml-cpp).\n";

@@ -92,6 +92,16 @@ TEST(CalibrationConfig, RefusesBadValuesNamingTheField) {
   EXPECT_NE(message("calibration:\n  gate: 0").find("calibration.gate"), std::string::npos);
   EXPECT_NE(message("calibration:\n  typo: 1").find("calibration.typo: unknown key"), std::string::npos);
   EXPECT_NE(message("calibration:\n  te_offset: 3").find("calibration.te_offset: must be a mapping"), std::string::npos);
+  EXPECT_NE(message("calibration:\n  mesh_stiffness_scale: {mean: 1.0, std: 0.01, reference_std: -0.2}")
+                .find("calibration.mesh_stiffness_scale.reference_std"),
+            std::string::npos);
+  EXPECT_NE(message("calibration:\n  mesh_stiffness_scale: {mean: 1.0, std: 0.01, reference_std: .inf}")
+                .find("calibration.mesh_stiffness_scale.reference_std"),
+            std::string::npos);
+  // Given, it is kept; absent, the prior's std is the reference.
+  const RigConfig kept = seedWith("calibration:\n  mesh_stiffness_scale: {mean: 0.9, std: 0.01, reference_std: 0.2}");
+  EXPECT_EQ(kept.calibration.mesh_stiffness_scale.reference(), 0.2);
+  EXPECT_EQ(kept.calibration.gear_bearing_scale.reference(), kept.calibration.gear_bearing_scale.std);
 }
 
 TEST(StaticTeModel, MeanTeMatchesTheFlankStateClosedForms) {
@@ -512,6 +522,48 @@ TEST(Calibrator, BadStretchesAfterConvergenceLeaveTheEstimate) {
   EXPECT_EQ(feedWindow(s, calibrator, supports, t0, 3.0, 120.0 * rpm, 5000.0, 0.0) & Calibrator::kWindow, Calibrator::kWindow);
   EXPECT_EQ(calibrator.estimate().outcome, WindowOutcome::kUpdated) << toString(calibrator.estimate().outcome);
   EXPECT_EQ(calibrator.estimate().updates, converged.updates + 1);
+}
+
+TEST(Calibrator, ACalibratedGearboxStillSaysWhatTheDataDetermine) {
+  // drivetrain_replay --calibrate (calibrated_gearbox.cpp) writes the posterior as the next run's
+  // prior (its std where identified, the drawing's spread where not) and keeps the drawing's spread
+  // as reference_std. A second run over the same rig then flags the mesh scale and T_p identified
+  // again, and the bearing scales still not: `identified` is judged against the drawing's spread.
+  // Without reference_std the same run would call the mesh scale and T_p not identified, because
+  // nothing halves a std the first run already shrank.
+  SyntheticRig s{seedRig(), {}, 3};
+  s.truth << 1.12, 0.85, 0.85, 1.15 * s.rig.anti_backlash.preload_torque, 0.0;
+  StiffnessEstimator supports(s.rig);
+  Calibrator first(s.rig);
+  runSweep(s, first, supports);
+  const CalibrationEstimate& e1 = first.estimate();
+  ASSERT_TRUE(e1.identified[kMeshScale] && e1.identified[kPreloadTorque]);
+  const auto calibrated = [&](bool keep_reference) {
+    RigConfig rig = s.rig;
+    CalibrationConfig& c = rig.calibration;
+    CalibrationPrior* p[kCalibrationSize] = {&c.mesh_stiffness_scale, &c.pinion_bearing_scale, &c.gear_bearing_scale,
+                                             &c.preload_torque, &c.te_offset};
+    for (int i = 0; i < kCalibrationSize; ++i) {
+      const double drawing = p[i]->reference();
+      *p[i] = CalibrationPrior{e1.value[i], e1.identified[i] ? e1.std[i] : drawing, keep_reference ? drawing : -1.0};
+    }
+    return rig;
+  };
+  s.seed = 5;  // new encoder errors
+  for (const bool keep : {true, false}) {
+    const RigConfig rig = calibrated(keep);
+    Calibrator second(rig);
+    runSweep(s, second, supports);
+    const CalibrationEstimate& e2 = second.estimate();
+    ASSERT_GT(e2.updates, 8u);
+    EXPECT_NEAR(e2.value[kMeshScale] / s.truth[kMeshScale], 1.0, 0.05);
+    EXPECT_NEAR(e2.value[kPreloadTorque] / s.truth[kPreloadTorque], 1.0, 0.05);
+    EXPECT_LE(e2.std[kMeshScale], e1.std[kMeshScale]) << "the second run adds information";
+    EXPECT_EQ(e2.identified[kMeshScale], keep) << (keep ? "with" : "without") << " reference_std";
+    EXPECT_EQ(e2.identified[kPreloadTorque], keep) << (keep ? "with" : "without") << " reference_std";
+    EXPECT_FALSE(e2.identified[kPinionBearingScale]);
+    EXPECT_FALSE(e2.identified[kGearBearingScale]);
+  }
 }
 
 TEST(Calibrator, NoDriftOverTenMinutesAtConstantLoad) {

@@ -139,8 +139,10 @@ with rosbag.Bag(os.path.join(work, "a.bag")) as b:
 
 # 4. --calibrate. On the kinematic bag (no TE): the loaded windows are expected to be gated, and
 # then --calibrate refuses; should one update, the file is checked as below.
-def check_calibrated(path, last, bag, tag):
-    """The gearbox --calibrate wrote holds the last calibration row's values."""
+def check_calibrated(path, last, first, bag, tag):
+    """The gearbox --calibrate wrote holds the last calibration row's values: each prior's mean, its
+    std where identified and the drawing's spread (the first row's std, before any update) where
+    not, and the drawing's spread as reference_std."""
     text = open(path).read()
     check(bag in text, tag + ": the calibrated gearbox does not name the bag")
     not_identified = [p for p in PARAMETERS if last[p + "_identified"] != "1"]
@@ -157,7 +159,9 @@ def check_calibrated(path, last, bag, tag):
     check(float(g["anti_backlash"]["preload_torque"]) == value("preload_torque"), tag + ": anti_backlash.preload_torque")
     for p in PARAMETERS:
         prior = g["calibration"][p]
-        check(float(prior["mean"]) == value(p) and float(prior["std"]) == value(p + "_std"),
+        drawing = float(first[p + "_std"])
+        std = value(p + "_std") if last[p + "_identified"] == "1" else drawing
+        check(float(prior["mean"]) == value(p) and float(prior["std"]) == std and float(prior["reference_std"]) == drawing,
               "%s: calibration.%s = %s" % (tag, p, prior))
     check(g["calibration"]["baseline_torque"] == 0.06, tag + ": calibration.baseline_torque not kept")
     # The node's loader takes it: the replay runs with it as its gearbox.
@@ -172,7 +176,7 @@ if int(float(last["updates"])) > 0:
     strip = lambda t: [l for l in t.splitlines() if not l.startswith("# written ")]
     check(strip(open(calibrated["a"]).read()) == strip(open(calibrated["b"]).read()),
           "the calibrated gearboxes differ beyond their 'written' line")
-    check_calibrated(calibrated["a"], last, bag, "kinematic")
+    check_calibrated(calibrated["a"], last, dict(zip(cal_header, cal_rows[0])), bag, "kinematic")
 else:
     for run in "ab":
         check(results[run].returncode == 1 and "no window of the bag updated the calibration" in results[run].stderr,
@@ -217,7 +221,7 @@ if s_te:
     if check(int(float(last_te["updates"])) > 0 and os.path.exists(te_calibrated),
              "the model's own TE did not update the calibration (last: %s): %s" % (last_te["outcome"], r.stderr.strip())):
         check(s_te["calibrated_gearbox"] == te_calibrated, "summary.json: calibrated_gearbox")
-        not_identified = check_calibrated(te_calibrated, last_te, te_bag, "te")
+        not_identified = check_calibrated(te_calibrated, last_te, dict(zip(header, body[0])), te_bag, "te")
         print("--calibrate on the TE bag: written; not identified: %s" % (", ".join(not_identified) or "none"))
         # The stiffness and resonance outputs carry the calibration's 95 % bounds once it updated:
         # low <= calibrated <= high, a band of nonzero width; the calibrated mesh stiffness is the

@@ -53,9 +53,13 @@ std::string read(const fs::path& p) {
   return s.str();
 }
 
-void expectPrior(const CalibrationPrior& prior, const CalibrationEstimate& e, int i) {
+void expectPrior(const CalibrationPrior& prior, const CalibrationEstimate& e, int i, const CalibrationPrior& drawing) {
   EXPECT_EQ(prior.mean, e.value[i]) << calibrationName(i);
-  EXPECT_EQ(prior.std, e.std[i]) << calibrationName(i);
+  // Identified: the posterior std; not: the drawing's spread (the file holds no covariance).
+  EXPECT_EQ(prior.std, e.identified[static_cast<std::size_t>(i)] ? e.std[i] : drawing.reference()) << calibrationName(i);
+  // The drawing's spread stays what `identified` and the drift are judged against.
+  EXPECT_EQ(prior.reference(), drawing.reference()) << calibrationName(i);
+  EXPECT_EQ(prior.reference_std, drawing.reference()) << calibrationName(i) << ": written out";
 }
 
 TEST(CalibratedGearbox, RoundTripsThroughLoadRigFile) {
@@ -73,11 +77,13 @@ TEST(CalibratedGearbox, RoundTripsThroughLoadRigFile) {
   }
   EXPECT_EQ(after.anti_backlash.preload_torque, e.value[kPreloadTorque]);
   ASSERT_TRUE(after.calibration.present);
-  expectPrior(after.calibration.mesh_stiffness_scale, e, kMeshScale);
-  expectPrior(after.calibration.pinion_bearing_scale, e, kPinionBearingScale);
-  expectPrior(after.calibration.gear_bearing_scale, e, kGearBearingScale);
-  expectPrior(after.calibration.preload_torque, e, kPreloadTorque);
-  expectPrior(after.calibration.te_offset, e, kTeOffset);
+  const CalibrationConfig& c = before.calibration;
+  expectPrior(after.calibration.mesh_stiffness_scale, e, kMeshScale, c.mesh_stiffness_scale);
+  expectPrior(after.calibration.pinion_bearing_scale, e, kPinionBearingScale, c.pinion_bearing_scale);
+  expectPrior(after.calibration.gear_bearing_scale, e, kGearBearingScale, c.gear_bearing_scale);
+  expectPrior(after.calibration.preload_torque, e, kPreloadTorque, c.preload_torque);
+  expectPrior(after.calibration.te_offset, e, kTeOffset, c.te_offset);
+  EXPECT_LT(c.mesh_stiffness_scale.reference_std, 0.0) << "the source file should not set reference_std (else this shows nothing)";
 
   // Everything else as before: gears, spring, dynamics, the bearings (from their files), the data rules.
   EXPECT_EQ(after.gears.teeth, before.gears.teeth);
@@ -105,7 +111,7 @@ TEST(CalibratedGearbox, RoundTripsThroughLoadRigFile) {
   const std::string text = read(out);
   EXPECT_NE(text.find("/data/rig_run.bag"), std::string::npos) << text;
   EXPECT_NE(text.find("recorded 2026-01-01T00:00:00Z"), std::string::npos) << text;
-  EXPECT_NE(text.find("Not identified (posterior std not below half the prior's; the value stays near its prior): "
+  EXPECT_NE(text.find("Not identified (posterior std not below half the drawing's spread; the value stays near its prior): "
                       "gear_bearing_scale\n"),
             std::string::npos)
       << text;
@@ -116,7 +122,11 @@ TEST(CalibratedGearbox, RoundTripsThroughLoadRigFile) {
   // And it calibrates again: the written file is a valid --config for the next run.
   const fs::path again = out.parent_path() / "again.yaml";
   writeCalibratedGearbox(out.string(), e, again.string(), provenance());
-  EXPECT_EQ(loadRigFile(again.string()).mesh_stiffness_scale, e.value[kMeshScale]);
+  const RigConfig twice = loadRigFile(again.string());
+  EXPECT_EQ(twice.mesh_stiffness_scale, e.value[kMeshScale]);
+  // A second calibration keeps the drawing's spread, not the first one's posterior std.
+  EXPECT_EQ(twice.calibration.mesh_stiffness_scale.reference_std, c.mesh_stiffness_scale.std);
+  EXPECT_EQ(twice.calibration.preload_torque.reference_std, c.preload_torque.reference());
 }
 
 TEST(CalibratedGearbox, KeepsRelativeFilesInTheSameDirectory) {

@@ -142,6 +142,9 @@ class Calibrator {
   // linearisation at s_p != s_g leaks into it and the two scales drift apart (measured: 0.65 and
   // 0.93 for a truth of 0.74 and 0.85).
   CalibrationVector state_ = CalibrationVector::Zero(), state_prior_std_ = CalibrationVector::Zero();
+  /// The drawing's spread (CalibrationPrior::reference) in the state's coordinates: what
+  /// `identified` and the drift are judged against.
+  CalibrationVector state_reference_std_ = CalibrationVector::Zero();
   CalibrationMatrix state_covariance_ = CalibrationMatrix::Zero();
   CalibrationMatrix covariance_ = CalibrationMatrix::Zero();  ///< of the parameters (scales), by linearisation
   /// The estimate's covariance under the model error the windows show (state coordinates); the

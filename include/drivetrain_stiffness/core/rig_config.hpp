@@ -46,6 +46,13 @@ struct DynamicsConfig {
 struct CalibrationPrior {
   double mean = 0.0;
   double std = 0.0;  ///< 0: the parameter is held at `mean` (not estimated)
+  /// The drawing's spread, which `identified` (the posterior std below half of it) and the drift
+  /// are judged against; negative: `std`. A calibrated gearbox (drivetrain_replay --calibrate)
+  /// starts from the last posterior as `std` and keeps the drawing's spread here, so a parameter
+  /// determined before is not reported "not identified" because the new data did not halve a std
+  /// that is already small, nor does a known preload drift more slowly for being known.
+  double reference_std = -1.0;
+  double reference() const { return reference_std >= 0.0 ? reference_std : std; }
 };
 
 /// The gearbox's `calibration:` block: the live calibration's priors and its data rules
