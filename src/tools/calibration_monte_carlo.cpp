@@ -13,6 +13,7 @@
 #include <iostream>
 #include <random>
 #include <string>
+#include <vector>
 
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
@@ -73,6 +74,16 @@ struct WindowLog : PipelineSink {
   }
 };
 
+/// The median of the values (the mean of the two middle ones for an even count; 0 for none).
+double median(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  const std::size_t mid = v.size() / 2;
+  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(mid), v.end());
+  const double upper = v[mid];
+  if (v.size() % 2 == 1) return upper;
+  return 0.5 * (upper + *std::max_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(mid)));
+}
+
 }  // namespace
 }  // namespace drivetrain_stiffness
 
@@ -100,6 +111,7 @@ int main(int argc, char** argv) {
     int covered_mesh = 0, covered_tp = 0, covered_compliance = 0, flags_right = 0;
     double worst_mesh = 0.0, worst_tp = 0.0, worst_compliance = 0.0;
     double z2_mesh = 0.0, z2_tp = 0.0, z2_compliance = 0.0;  // sums of (error / std)^2: 1 per run on average if the stds are right
+    std::vector<double> errors_mesh, errors_tp, errors_compliance;  // |relative error| per run, for the medians
     double worst_drift = 0.0;  // [sigmas at the dwell's start] the largest move over the dwell
     int drifted = 0;           // runs with a move beyond 1 sigma
     for (int run = 0; run < runs; ++run) {
@@ -139,6 +151,9 @@ int main(int argc, char** argv) {
       worst_mesh = std::max(worst_mesh, std::abs(em));
       worst_tp = std::max(worst_tp, std::abs(et));
       worst_compliance = std::max(worst_compliance, std::abs(ec));
+      errors_mesh.push_back(std::abs(em));
+      errors_tp.push_back(std::abs(et));
+      errors_compliance.push_back(std::abs(ec));
       const bool cm = std::abs(e.value[kMeshScale] - p[kMeshScale]) <= k95 * e.std[kMeshScale];
       const bool ct = std::abs(e.value[kPreloadTorque] - p[kPreloadTorque]) <= k95 * e.std[kPreloadTorque];
       const bool cc = std::abs(e.series_compliance - compliance) <= k95 * e.series_compliance_std;
@@ -192,6 +207,9 @@ int main(int argc, char** argv) {
     nlohmann::json summary;
     summary["runs"] = runs;
     summary["worst_error"] = {{"mesh_stiffness_scale", worst_mesh}, {"preload_torque", worst_tp}, {"series_compliance", worst_compliance}};
+    summary["median_error"] = {{"mesh_stiffness_scale", median(errors_mesh)},
+                               {"preload_torque", median(errors_tp)},
+                               {"series_compliance", median(errors_compliance)}};
     summary["covered"] = {{"mesh_stiffness_scale", covered_mesh}, {"preload_torque", covered_tp}, {"series_compliance", covered_compliance}};
     summary["identification_flags_right"] = flags_right;
     const double n = std::max(1, runs);

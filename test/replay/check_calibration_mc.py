@@ -34,6 +34,16 @@ for r in runs:
     for name in ("mesh_stiffness_scale", "preload_torque", "series_compliance", "te_offset"):
         if not d[name]["sigmas_start"] < 1.0: failures.append(f"run {r['run']}: {name} drifted {d[name]['sigmas_start']:.2f} std in the dwell")
 if len(runs) != 2: failures.append(f"{len(runs)} runs reported")
+# The summary's worst and median errors are those of the runs' lines (median of two: their mean).
+summary = [json.loads(line)["summary"] for line in out if '"summary"' in line]
+if len(summary) != 1:
+    failures.append("no summary line")
+else:
+    for name in ("mesh_stiffness_scale", "preload_torque", "series_compliance"):
+        errors = sorted(abs(r["error"][name]) for r in runs)
+        if summary[0]["worst_error"][name] != errors[-1]: failures.append(f"summary worst_error.{name}")
+        if abs(summary[0]["median_error"][name] - 0.5 * (errors[0] + errors[1])) > 1e-15 * errors[1]:
+            failures.append(f"summary median_error.{name} = {summary[0]['median_error'][name]}, runs {errors}")
 for f in failures: print("FAIL:", f)
 print(json.dumps([r["error"] for r in runs]))
 sys.exit(1 if failures else 0)
