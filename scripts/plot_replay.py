@@ -197,16 +197,18 @@ def main():
         f.write("\n![transmission error](transmission_error.png)\n\n![per mesh period](mesh_period_stats.png)\n\n"
                 "![stiffness](stiffness.png)\n\n"
                 "![resonance](resonance.png)\n")
-        for name, caption in motion_figures:
+        for name, caption, note in motion_figures:
             f.write("\n![%s](%s)\n" % (caption, name))
+            if note:
+                f.write("\n%s\n" % note)
 
 
-def save(fig, report, name, caption):
-    """Writes the figure as REPORT/name; returns (name, caption) for report.md."""
+def save(fig, report, name, caption, note=""):
+    """Writes the figure as REPORT/name; returns (name, caption, note) for report.md."""
     fig.tight_layout()
     fig.savefig(os.path.join(report, name), dpi=110)
     plt.close(fig)
-    return name, caption
+    return name, caption, note
 
 
 def plot_motion(input_bag, te, res, t0, report, topic="/joint_states", joint="pinion", z_p=20):
@@ -273,7 +275,18 @@ def plot_motion(input_bag, te, res, t0, report, topic="/joint_states", joint="pi
             ax.set_ylabel("frequency [Hz]")
             ax.set_title("Campbell diagram: TE spectra (colour, log), mesh orders 1-4 (dashed),\n"
                          "natural frequencies of the resonance estimates against speed (red)")
-            out.append(save(fig, report, "campbell.png", "Campbell diagram"))
+            # The TE is sampled at the output rate: a mesh order above its Nyquist frequency folds
+            # back into the diagram as a line falling with the speed (an alias, not a mode).
+            nyquist = freqs[-1]
+            note = ""
+            if z_p * np.abs(rpm).max() / 60.0 > nyquist:
+                folds = 60.0 * nyquist / z_p
+                note = ("**Aliasing:** the mesh frequency reaches %.0f Hz, above the Nyquist frequency of the TE "
+                        "output (%.0f Hz, output_rate / 2): above %.0f rpm the mesh line and its orders fold back "
+                        "into the diagram. For orders 1-4 unfolded up to the top speed, replay with "
+                        "output_rate >= %.0f Hz (--params)." % (z_p * np.abs(rpm).max() / 60.0, nyquist, folds,
+                                                                 math.ceil(2 * 4 * z_p * np.abs(rpm).max() / 60.0)))
+            out.append(save(fig, report, "campbell.png", "Campbell diagram", note))
     return out
 
 
