@@ -30,7 +30,7 @@ namespace {
 
 const std::uint32_t kT0 = 1767225600;  // the stamps' epoch [s]
 constexpr double kRate = 5000.0;       // [Hz] joint_states: the second mesh harmonic (667 Hz) needs more than 1 kHz
-constexpr double kSpeed = 1000.0 * kTwoPi / 60.0;  // [rad/s] pinion
+constexpr double kSpeed = 1000.0 * kTwoPi / 60.0;  // [rad/s] pinion, the middle of the run-up
 constexpr double kSegment = 0.37;      // [s] per torque step: three gear turns (0.12 s each)
 
 bool waitWall(const std::function<bool()>& done, double seconds) {
@@ -129,8 +129,9 @@ TEST_F(CalibrationTopicsTest, NodePublishesWhatThePipelineGivesInProcess) {
   const double ratio = static_cast<double>(rig.gears.teeth[0]) / rig.gears.teeth[1];
 
   // Torque steps: the baseline (at most calibration.baseline_torque), then two loads; the encoders
-  // turn at 1000 rpm throughout, the gear at the tooth ratio (no TE: the loaded windows are gated,
-  // which is as good a test of the plumbing as an update).
+  // run up from 700 to 1300 rpm through the three steps (a speed that changes at every reading, as
+  // a rig's run-up: the dynamics follow it on the sliced propagation), the gear at the tooth ratio
+  // (no TE: the loaded windows are gated, which is as good a test of the plumbing as an update).
   const double steps[] = {0.05, 0.1, 0.2};
   std::vector<std::vector<Input>> segments;
   std::int64_t k = 0;
@@ -147,8 +148,11 @@ TEST_F(CalibrationTopicsTest, NodePublishesWhatThePipelineGivesInProcess) {
       const double time = static_cast<double>(k) / kRate;
       j.joints.header.stamp = ros::Time(kT0, 0) + ros::Duration(time);
       j.joints.name = {joints.pinion, joints.gear};
-      j.joints.position = {kSpeed * time, -ratio * kSpeed * time};
-      j.joints.velocity = {kSpeed, -ratio * kSpeed};
+      // omega = kSpeed (0.7 + 0.6 t / T), T the three segments; the angle its integral.
+      const double span = 3.0 * kSegment;
+      const double angle = kSpeed * (0.7 * time + 0.3 * time * time / span), speed = kSpeed * (0.7 + 0.6 * time / span);
+      j.joints.position = {angle, -ratio * angle};
+      j.joints.velocity = {speed, -ratio * speed};
       inputs.push_back(j);
     }
     segments.push_back(inputs);
