@@ -205,6 +205,83 @@ TEST(DynamicsEstimator, TorqueStampsSurviveTheMoveOntoTheSlicedPropagation) {
   EXPECT_EQ(pending, moved);
 }
 
+// Rule 10 for a bearing-stiffness input: stamped 0.4 ms into an output interval at the nominal
+// phase, it takes effect at its stamp. The dynamics move onto the sliced propagation at the
+// interval's start (sample 30), with the old stiffness up to the stamp and the new one after it.
+// Reference: dopri5 at rtol 1e-12 on the phase table up to sample 30 (the periodic propagators'
+// model), then on the sliced model with the old and the new stiffness switching at the stamp. The
+// same reference switching at the sample instead, or at the next one, is far off (so the check can
+// fail).
+TEST(DynamicsEstimator, BearingStiffnessTakesEffectAtItsStamp) {
+  const double k0 = 1.2e8, k1 = DynamicsEstimator::bearingGridValue(1.5e8), stamp = 0.0304;
+  DynamicsEstimator est(rig(), {k0, k0}, 1000.0);
+  est.reset(0.0, 0.1);
+  const State6 start = est.state();
+  const double f = est.meshFrequency();
+  std::vector<double> online;
+  auto keep = [&](const DynamicsSample& s) { online.push_back(s.dynamic_te); };
+  est.advanceTo(stamp, keep);
+  est.setBearingStiffness({1.5e8, 1.5e8}, stamp);
+  est.advanceTo(0.06, keep);
+  ASSERT_TRUE(est.followingMotion());
+  ASSERT_EQ(online.size(), 60u);
+
+  IntegratorOptions o;
+  o.relative_tolerance = 1e-12;
+  o.absolute_tolerance = 1e-19;
+  o.max_step = 1e-5;
+  const auto table = std::make_shared<const AntiBacklashMesh>(rig());
+  const auto slices = std::make_shared<const SlicedMesh>(table, 256);
+  const auto sliced = [&](double k) {
+    const GearRotorParameters p = rigRotorParameters(rig(), *table, {k, k});
+    GearRotorModel m(p, std::make_shared<const SlicedExcitation>(slices, rig().dynamics.transmission_error_amplitude,
+                                                                 rig().dynamics.backlash, 1.0 / p.pinion_base_radius, 0.0));
+    m.setMotionInput(MeshMotion{0.0, 0.0, f});
+    m.setTorqueInput(0.1);
+    return m;
+  };
+  const GearRotorModel before = sliced(k0), after = sliced(k1);
+  // Samples every 1 ms; the model switches at `change` (on or off the grid).
+  auto reference = [&](double change) {
+    std::vector<double> out;
+    State6 y = start;
+    integrate(est.model(), IntegratorMethod::kDopri5, o, 0.0, y, 0.030, 1e-3, [&](double t, const State6& s) {
+      if (t > 0.0) out.push_back(est.model().forces(t, s).delta);
+      y = s;
+    });
+    double t = 0.030;
+    for (int k = 31; k <= 60; ++k) {
+      const double grid = 1e-3 * k;
+      if (change > t && change < grid) {
+        y = integrate(before, IntegratorMethod::kDopri5, o, t, y, change, change - t, nullptr);
+        t = change;
+      }
+      const GearRotorModel& m = t < change ? before : after;
+      y = integrate(m, IntegratorMethod::kDopri5, o, t, y, grid, grid - t, nullptr);
+      t = grid;
+      out.push_back((t < change ? before : after).forces(t, y).delta);
+    }
+    return out;
+  };
+  auto rms = [](const std::vector<double>& a, const std::vector<double>& b) {
+    double e = 0.0, r = 0.0;
+    for (std::size_t i = 0; i < b.size(); ++i) {
+      e += (a[i] - b[i]) * (a[i] - b[i]);
+      r += b[i] * b[i];
+    }
+    return std::sqrt(e / r);
+  };
+  const std::vector<double> at_stamp = reference(stamp);
+  ASSERT_EQ(at_stamp.size(), online.size());
+  const double off = rms(online, at_stamp);
+  const double at_sample = rms(reference(0.030), at_stamp), at_next = rms(reference(0.031), at_stamp);
+  std::printf("TE against dopri5 switching the bearings at the stamp: %.3g; at the sample before: %.3g; after: %.3g\n", off,
+              at_sample, at_next);
+  EXPECT_LT(off, 1e-7);
+  EXPECT_GT(at_sample, 100.0 * off);
+  EXPECT_GT(at_next, 100.0 * off);
+}
+
 // Near the anti-backlash knee the back flank lifts and lands several times within ~50 us of every
 // tooth switch (the mesh rings about its new static deflection), while the samples on both sides
 // find both flanks loaded. Checking the regime at the samples alone, the exponential step missed
