@@ -322,6 +322,27 @@ struct SyntheticRig {
   double level_error = 0.0;
 };
 
+/// The synthetic rig's mesh deflection at `phase` under the drive force `force` [N] with the
+/// scissor preload force `fp` [N]: its truth's mesh scale on the unit-scale mesh table, in the flank
+/// state the force puts it in (both flanks, the back path lifted, the drive flank lifted).
+double trueMeshDeflection(const SyntheticRig& s, const AntiBacklashMesh& unit, double force, double fp, double phase) {
+  const CompositeMesh c = unit.at(phase, 0.0);
+  const double k1 = s.truth[kMeshScale] * c.k1, k2 = s.truth[kMeshScale] * c.k2;
+  const double kte = s.rig.anti_backlash.spring_stiffness, kc = kte * k2 / (kte + k2);
+  double delta = force / (k1 + kc);
+  if (force * kc > fp * (k1 + kc)) delta = (force - fp) / k1;
+  else if (force * k1 < -fp * (k1 + kc)) delta = (force + fp) / kc;
+  return delta;
+}
+
+/// The known rig of the recovery tests: mesh scale 1.12, both bearing scales 0.85, T_p 1.15 x the
+/// drawing's, no TE offset.
+SyntheticRig knownRig() {
+  SyntheticRig s{seedRig(), {}, 3};
+  s.truth << 1.12, 0.85, 0.85, 1.15 * s.rig.anti_backlash.preload_torque, 0.0;
+  return s;
+}
+
 void runSweep(const SyntheticRig& s, Calibrator& calibrator, StiffnessEstimator& supports) {
   StaticTeModel physics(s.rig);
   const AntiBacklashMesh unit(s.rig.gears, s.rig.anti_backlash, s.rig.mesh_model, s.rig.mesh_samples, 1.0);
@@ -357,12 +378,7 @@ void runSweep(const SyntheticRig& s, Calibrator& calibrator, StiffnessEstimator&
     for (int j = 0; j < static_cast<int>(hold * rate); ++j, ++i) {
       const double t = i / rate, theta_p = speed * t;
       const double phase = 20.0 * theta_p / kTwoPi - std::floor(20.0 * theta_p / kTwoPi);
-      const CompositeMesh c = unit.at(phase, 0.0);
-      const double k1 = s.truth[kMeshScale] * c.k1, k2 = s.truth[kMeshScale] * c.k2;
-      const double kte = s.rig.anti_backlash.spring_stiffness, kc = kte * k2 / (kte + k2);
-      double delta = force / (k1 + kc);
-      if (force * kc > fp * (k1 + kc)) delta = (force - fp) / k1;
-      else if (force * k1 < -fp * (k1 + kc)) delta = (force + fp) / kc;
+      double delta = trueMeshDeflection(s, unit, force, fp, phase);
       delta *= 1.0 + (level % 2 == 1 ? s.level_error : -s.level_error);
       const double x = delta + bearings + 1e-6 * std::sin(kTwoPi * phase) + 3e-5;  // manufacturing TE, encoder zero
       const double theta_g = (x - rbp * theta_p) / rbg;
@@ -374,8 +390,7 @@ void runSweep(const SyntheticRig& s, Calibrator& calibrator, StiffnessEstimator&
 }
 
 TEST(Calibrator, RecoversAKnownRigAndFlagsWhatEncodersCannotSeparate) {
-  SyntheticRig s{seedRig(), {}, 3};
-  s.truth << 1.12, 0.85, 0.85, 1.15 * s.rig.anti_backlash.preload_torque, 0.0;
+  SyntheticRig s = knownRig();
   StiffnessEstimator supports(s.rig);
   Calibrator calibrator(s.rig);
   runSweep(s, calibrator, supports);
@@ -411,8 +426,7 @@ TEST(Calibrator, BandsWidenOnlyWhereTheWindowsShowMoreModelErrorThanAllowed) {
   // covariance is reported. With the mesh deflection off by +-2 % on alternate torque levels,
   // twice the allowance and nothing a parameter can absorb, the windows show it (c > 1) and the
   // bands widen.
-  SyntheticRig s{seedRig(), {}, 3};
-  s.truth << 1.12, 0.85, 0.85, 1.15 * s.rig.anti_backlash.preload_torque, 0.0;
+  SyntheticRig s = knownRig();
   for (double level_error : {0.0, 0.02}) {
     s.level_error = level_error;
     StiffnessEstimator supports(s.rig);
@@ -457,13 +471,7 @@ int feedWindow(const SyntheticRig& s, Calibrator& calibrator, StiffnessEstimator
   for (long j = 0; j <= n; ++j) {
     const double t = t0 + j / rate, theta_p = speed * (j / rate);
     const double phase = 20.0 * theta_p / kTwoPi - std::floor(20.0 * theta_p / kTwoPi);
-    const CompositeMesh c = unit.at(phase, 0.0);
-    const double k1 = s.truth[kMeshScale] * c.k1, k2 = s.truth[kMeshScale] * c.k2;
-    const double kte = s.rig.anti_backlash.spring_stiffness, kc = kte * k2 / (kte + k2);
-    double delta = force / (k1 + kc);
-    if (force * kc > fp * (k1 + kc)) delta = (force - fp) / k1;
-    else if (force * k1 < -fp * (k1 + kc)) delta = (force + fp) / kc;
-    const double x = delta + bearings + 1e-6 * std::sin(kTwoPi * phase) + 3e-5 + te_error;
+    const double x = trueMeshDeflection(s, unit, force, fp, phase) + bearings + 1e-6 * std::sin(kTwoPi * phase) + 3e-5 + te_error;
     const double theta_g = (x - rbp * theta_p) / rbg;
     flags |= calibrator.reading(t, std::round(theta_p / count) * count, std::round(theta_g / count) * count, phase, speed,
                                 torque, supports, sample);
@@ -477,8 +485,7 @@ TEST(Calibrator, BadStretchesAfterConvergenceLeaveTheEstimate) {
   // stretch of data drive the estimate. After a converged sweep, each window below closes
   // (kWindow) and leaves every parameter and its std exactly as they were, counted as gated or
   // not excited with its reason; a good window afterwards still updates.
-  SyntheticRig s{seedRig(), {}, 3};
-  s.truth << 1.12, 0.85, 0.85, 1.15 * s.rig.anti_backlash.preload_torque, 0.0;
+  SyntheticRig s = knownRig();
   StiffnessEstimator supports(s.rig);
   Calibrator calibrator(s.rig);
   runSweep(s, calibrator, supports);
@@ -531,8 +538,7 @@ TEST(Calibrator, ACalibratedGearboxStillSaysWhatTheDataDetermine) {
   // again, and the bearing scales still not: `identified` is judged against the drawing's spread.
   // Without reference_std the same run would call the mesh scale and T_p not identified, because
   // nothing halves a std the first run already shrank.
-  SyntheticRig s{seedRig(), {}, 3};
-  s.truth << 1.12, 0.85, 0.85, 1.15 * s.rig.anti_backlash.preload_torque, 0.0;
+  SyntheticRig s = knownRig();
   StiffnessEstimator supports(s.rig);
   Calibrator first(s.rig);
   runSweep(s, first, supports);

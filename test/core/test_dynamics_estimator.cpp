@@ -21,6 +21,39 @@ using namespace drivetrain_stiffness;
 
 namespace {
 const RigConfig& rig() { return test::seedServo(); }
+
+/// The RMS of a - b over the RMS of b (err_rms_rel, as the bench measures it).
+double rmsRelative(const std::vector<double>& a, const std::vector<double>& b) {
+  double e = 0.0, r = 0.0;
+  for (std::size_t i = 0; i < b.size(); ++i) {
+    e += (a[i] - b[i]) * (a[i] - b[i]);
+    r += b[i] * b[i];
+  }
+  return std::sqrt(e / r);
+}
+
+/// dopri5 at rtol 1e-12 with steps of at most 10 us: the reference of the exactness tests.
+IntegratorOptions referenceOptions() {
+  IntegratorOptions o;
+  o.relative_tolerance = 1e-12;
+  o.absolute_tolerance = 1e-19;
+  o.max_step = 1e-5;
+  return o;
+}
+
+/// The seed rig on the node's 256-slice mesh (the sliced propagation's model) with bearing
+/// stiffness k [N/m] on both shafts, the mesh turning at f [Hz] from phase 0 at t = 0, holding
+/// `torque` [N m].
+GearRotorModel slicedModel(double k, double f, double torque) {
+  static const auto table = std::make_shared<const AntiBacklashMesh>(rig());
+  static const auto slices = std::make_shared<const SlicedMesh>(table, 256);
+  const GearRotorParameters p = rigRotorParameters(rig(), *table, {k, k});
+  GearRotorModel m(p, std::make_shared<const SlicedExcitation>(slices, rig().dynamics.transmission_error_amplitude,
+                                                               rig().dynamics.backlash, 1.0 / p.pinion_base_radius, 0.0));
+  m.setMotionInput(MeshMotion{0.0, 0.0, f});
+  m.setTorqueInput(torque);
+  return m;
+}
 }  // namespace
 
 TEST(DynamicsEstimator, GridAndSteadyState) {
@@ -140,21 +173,13 @@ TEST(DynamicsEstimator, TorqueTakesEffectAtItsStampInsideAnInterval) {
     }
     return out;
   };
-  auto rms = [](const std::vector<double>& a, const std::vector<double>& b) {
-    double e = 0.0, r = 0.0;
-    for (std::size_t i = 0; i < b.size(); ++i) {
-      e += (a[i] - b[i]) * (a[i] - b[i]);
-      r += b[i] * b[i];
-    }
-    return std::sqrt(e / r);
-  };
   const std::vector<double> at_stamps = reference({{0.0304, 0.4}, {0.0307, 0.25}});
   const std::vector<double> at_sample = reference({{0.030, 0.25}});
   ASSERT_EQ(at_stamps.size(), online.size());
   std::printf("TE against dopri5 switching at the stamps: %.3g (RMS, relative); held from the sample: %.3g\n",
-              rms(online, at_stamps), rms(at_sample, at_stamps));
-  EXPECT_LT(rms(online, at_stamps), 1e-7);
-  EXPECT_GT(rms(at_sample, at_stamps), 1e-4);  // holding from the sample would be this far off
+              rmsRelative(online, at_stamps), rmsRelative(at_sample, at_stamps));
+  EXPECT_LT(rmsRelative(online, at_stamps), 1e-7);
+  EXPECT_GT(rmsRelative(at_sample, at_stamps), 1e-4);  // holding from the sample would be this far off
 }
 
 // More torque inputs inside one output interval than it keeps stamps for: the last kept input
@@ -226,21 +251,8 @@ TEST(DynamicsEstimator, BearingStiffnessTakesEffectAtItsStamp) {
   ASSERT_TRUE(est.followingMotion());
   ASSERT_EQ(online.size(), 60u);
 
-  IntegratorOptions o;
-  o.relative_tolerance = 1e-12;
-  o.absolute_tolerance = 1e-19;
-  o.max_step = 1e-5;
-  const auto table = std::make_shared<const AntiBacklashMesh>(rig());
-  const auto slices = std::make_shared<const SlicedMesh>(table, 256);
-  const auto sliced = [&](double k) {
-    const GearRotorParameters p = rigRotorParameters(rig(), *table, {k, k});
-    GearRotorModel m(p, std::make_shared<const SlicedExcitation>(slices, rig().dynamics.transmission_error_amplitude,
-                                                                 rig().dynamics.backlash, 1.0 / p.pinion_base_radius, 0.0));
-    m.setMotionInput(MeshMotion{0.0, 0.0, f});
-    m.setTorqueInput(0.1);
-    return m;
-  };
-  const GearRotorModel before = sliced(k0), after = sliced(k1);
+  const IntegratorOptions o = referenceOptions();
+  const GearRotorModel before = slicedModel(k0, f, 0.1), after = slicedModel(k1, f, 0.1);
   // Samples every 1 ms; the model switches at `change` (on or off the grid).
   auto reference = [&](double change) {
     std::vector<double> out;
@@ -263,18 +275,10 @@ TEST(DynamicsEstimator, BearingStiffnessTakesEffectAtItsStamp) {
     }
     return out;
   };
-  auto rms = [](const std::vector<double>& a, const std::vector<double>& b) {
-    double e = 0.0, r = 0.0;
-    for (std::size_t i = 0; i < b.size(); ++i) {
-      e += (a[i] - b[i]) * (a[i] - b[i]);
-      r += b[i] * b[i];
-    }
-    return std::sqrt(e / r);
-  };
   const std::vector<double> at_stamp = reference(stamp);
   ASSERT_EQ(at_stamp.size(), online.size());
-  const double off = rms(online, at_stamp);
-  const double at_sample = rms(reference(0.030), at_stamp), at_next = rms(reference(0.031), at_stamp);
+  const double off = rmsRelative(online, at_stamp);
+  const double at_sample = rmsRelative(reference(0.030), at_stamp), at_next = rmsRelative(reference(0.031), at_stamp);
   std::printf("TE against dopri5 switching the bearings at the stamp: %.3g; at the sample before: %.3g; after: %.3g\n", off,
               at_sample, at_next);
   EXPECT_LT(off, 1e-7);
@@ -295,12 +299,7 @@ TEST(DynamicsEstimator, BearingStiffnessTakesEffectAtItsStamp) {
 // knee, the drive flank lifted) the step also took states that started lifted and ended inside the
 // closed regime: 0.68 of the TE off (10 kHz); see the next test.
 TEST(DynamicsEstimator, NearTheKneeEveryFlankChangeIsIntegrated) {
-  IntegratorOptions o;
-  o.relative_tolerance = 1e-12;
-  o.absolute_tolerance = 1e-19;
-  o.max_step = 1e-5;
-  const auto table = std::make_shared<const AntiBacklashMesh>(rig());
-  const auto slices = std::make_shared<const SlicedMesh>(table, 256);
+  const IntegratorOptions o = referenceOptions();
   for (double torque : {1.0, 3.0, 4.0, 5.0, -1.0}) {
     DynamicsEstimator est(rig(), {1.2e8, 1.2e8}, 10000.0);
     est.reset(0.0, torque);
@@ -311,11 +310,7 @@ TEST(DynamicsEstimator, NearTheKneeEveryFlankChangeIsIntegrated) {
     const bool moved = torque < 0.0 || torque > 3.0;
     EXPECT_EQ(est.followingMotion(), moved) << torque << " N m";
     EXPECT_EQ(est.fallbackIntervals(), 0) << torque << " N m";
-    const GearRotorParameters p = rigRotorParameters(rig(), *table, {1.2e8, 1.2e8});
-    GearRotorModel sliced(p, std::make_shared<const SlicedExcitation>(slices, rig().dynamics.transmission_error_amplitude,
-                                                                      rig().dynamics.backlash, 1.0 / p.pinion_base_radius, 0.0));
-    sliced.setMotionInput(MeshMotion{0.0, 0.0, f});
-    sliced.setTorqueInput(torque);
+    const GearRotorModel sliced = slicedModel(1.2e8, f, torque);
     const GearRotorModel& model = moved ? sliced : est.model();
     integrate(model, IntegratorMethod::kDopri5, o, 0.0, start, 0.02, est.outputInterval(),
               [&](double t, const State6& y) { if (t > 0.0) reference.push_back(model.forces(t, y).delta); });
