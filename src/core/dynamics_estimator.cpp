@@ -302,6 +302,17 @@ void DynamicsEstimator::requireSliceBound(double t_rel) const {
   }
 }
 
+void DynamicsEstimator::countSlicesCrossed(double t_rel, double& crossed) const {
+  crossed += std::abs(mesh_frequency_) * interval_ * full_.slices->size();
+  if (crossed > kMaxSlicesPerAdvance) {
+    throw InvalidInput("t = " + formatValue(origin_ + t_rel) + ": at the nominal phase, where the interval maps do not " +
+                       "apply, this advance crossed more than " + formatValue(kMaxSlicesPerAdvance) +
+                       " phase slices one by one (a mesh frequency of " + formatValue(mesh_frequency_) +
+                       " Hz); the dynamics up to " + formatValue(origin_ + t_state_) +
+                       " s are kept, reset at the new time for the rest");
+  }
+}
+
 void DynamicsEstimator::propagateTo(double t_rel) {
   const double h = t_rel - t_state_;
   if (!(h > 0.0)) return;
@@ -335,10 +346,19 @@ void DynamicsEstimator::propagateTo(double t_rel) {
 }
 
 void DynamicsEstimator::advanceFollowing(double t_rel, const std::function<void(const DynamicsSample&)>& sink) {
-  requireSliceBound(t_rel);
+  // Along the encoders every interval crosses its slices one by one: the whole advance is bounded
+  // before any work. At the nominal phase an interval the maps take costs one product whatever the
+  // speed, so only the intervals crossed slice by slice count against the bound, as they come: a
+  // gap the periodic propagators took before the move (up to ~max_gap) is taken again where the
+  // maps apply, and elsewhere the work stays bounded (the samples before the refusal are kept).
+  if (measured_) requireSliceBound(t_rel);
+  double crossed = 0.0;
   const long k_end = static_cast<long>(std::floor(t_rel / interval_ + 1e-9));
   while (k_ < k_end) {
-    if (!intervalByMaps()) propagateTo((k_ + 1) * interval_);
+    if (!intervalByMaps()) {
+      if (!measured_) countSlicesCrossed((k_ + 1) * interval_, crossed);
+      propagateTo((k_ + 1) * interval_);
+    }
     ++k_;
     if (sink) sink(movingSample());
   }

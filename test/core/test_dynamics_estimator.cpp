@@ -815,3 +815,56 @@ TEST(DynamicsEstimator, LinearModalFollowsTheMeasuredMotion) {
   const double force = 0.1 / est.model().parameters().pinion_base_radius;
   EXPECT_NEAR(fit[2], force / k_mean, 1e-6 * force / k_mean);
 }
+
+// At the nominal phase on the sliced propagation (after a bearing change, no encoders) a gap the
+// periodic propagators took before the move is taken again where the interval maps apply: at 6000
+// rpm, 0.6 s crosses 311,000 slices, past the bound of an advance along the encoders (2e5), yet
+// one interval map per sample crosses none; the same bits as 600 advances of 1 ms. Where the maps
+// do not apply (-0.5 N m, by the reverse knee: the contacts change between samples) the slices
+// crossed one by one count against the bound as they come: refused after 2e5, the samples before
+// the refusal delivered, and the same bits as the 1 ms advances up to there.
+TEST(DynamicsEstimator, AGapAtTheNominalPhaseCountsOnlyTheSlicesCrossedOneByOne) {
+  RigConfig fast = rig();
+  fast.dynamics.speed_rpm = 6000.0;
+  auto run = [&](double torque, bool one_call, bool* refused) {
+    DynamicsEstimator est(fast, {1.2e8, 1.2e8}, 1000.0);
+    // Every time on the output grid (0.5 ms: one sample per mesh period), as the estimator counts
+    // it, so that no call ends a rounding past a sample (the next would then start off the grid).
+    const double dt = est.outputInterval();
+    est.reset(0.0, torque);
+    est.advanceTo(20 * dt, nullptr);
+    est.setBearingStiffness({1.5e8, 1.5e8}, 20 * dt);  // onto the sliced propagation
+    est.advanceTo(40 * dt, nullptr);                   // the maps made where they apply
+    std::vector<double> te;
+    auto keep = [&](const DynamicsSample& s) { te.push_back(s.dynamic_te); };
+    *refused = false;
+    try {
+      if (one_call) {
+        est.advanceTo(1240 * dt, keep);  // 0.6 s
+      } else {
+        for (int k = 1; k <= 600; ++k) est.advanceTo((40 + 2 * k) * dt, keep);
+      }
+    } catch (const InvalidInput& e) {
+      *refused = true;
+      EXPECT_NE(std::string(e.what()).find("one by one"), std::string::npos) << e.what();
+    }
+    EXPECT_TRUE(est.followingMotion());
+    return std::make_pair(te, est.mappedStretches());
+  };
+  bool refused = false;
+  const auto [mapped_once, maps_once] = run(0.1, true, &refused);
+  EXPECT_FALSE(refused) << "0.1 N m: the maps take the gap";
+  const auto [mapped_steps, maps_steps] = run(0.1, false, &refused);
+  ASSERT_EQ(mapped_once.size(), 1200u);  // 2 kHz samples (one per mesh period at 6000 rpm)
+  EXPECT_EQ(mapped_once, mapped_steps);
+  EXPECT_GT(maps_once, 1190);
+  const auto [crossed_once, unused] = run(-0.5, true, &refused);
+  EXPECT_TRUE(refused) << "-0.5 N m: 0.6 s of slices one by one is past the bound";
+  const auto [crossed_steps, no_maps] = run(-0.5, false, &refused);
+  EXPECT_FALSE(refused);
+  EXPECT_EQ(no_maps, 0) << "the contacts change between samples there: no maps";
+  // 2e5 slices are 772 intervals of 259: the samples up to there delivered, the same bits.
+  ASSERT_EQ(crossed_once.size(), 772u);
+  EXPECT_TRUE(std::equal(crossed_once.begin(), crossed_once.end(), crossed_steps.begin()));
+  (void)unused;
+}

@@ -68,7 +68,9 @@ class DynamicsEstimator {
   /// the contacts located inside a step, and the dopri5 stretches through moments in no linear
   /// regime: at most kMaxNonlinearStretches per interval, then dopri5 under its step bound): an
   /// advance that would cross more than this many slices (~0.1 s of work: 0.38 s at 6000 rpm with
-  /// 256 slices) is refused the same way, so that no input stalls the caller.
+  /// 256 slices) is refused the same way, so that no input stalls the caller. At the nominal phase
+  /// (no encoders) on the sliced propagation only the intervals crossed slice by slice count, as
+  /// they come (an interval map crosses none): the samples before a refusal are given to the sink.
   static constexpr double kMaxSlicesPerAdvance = 2e5;
   void advanceTo(double t, const std::function<void(const DynamicsSample&)>& sink);
   /// Forget the state: started() is false until the next reset() (the model is kept).
@@ -239,6 +241,10 @@ class DynamicsEstimator {
   /// Refuses (InvalidInput, the caller resets) an advance to t_rel that would cross more than
   /// kMaxSlicesPerAdvance slices at the present mesh frequency.
   void requireSliceBound(double t_rel) const;
+  /// At the nominal phase: adds one output interval's slices to `crossed` (an advance's count of
+  /// slices crossed one by one) and refuses, as requireSliceBound, once it passes the bound; t_rel
+  /// is the interval's end, for the message.
+  void countSlicesCrossed(double t_rel, double& crossed) const;
   int motion_slices_ = 256;
   SlicedDynamics full_;  ///< the fine slices (full fidelity, quasi_static's slice lookup)
   SlicedDynamics mean_;  ///< linear_modal: one slice holding the period's mean stiffness
