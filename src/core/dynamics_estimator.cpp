@@ -345,6 +345,11 @@ void DynamicsEstimator::propagateTo(double t_rel) {
   t_state_ = t_rel;
 }
 
+void DynamicsEstimator::followFromHere(double t_rel, const std::function<void(const DynamicsSample&)>& sink) {
+  startFollowing();
+  advanceFollowing(t_rel, sink);
+}
+
 void DynamicsEstimator::advanceFollowing(double t_rel, const std::function<void(const DynamicsSample&)>& sink) {
   // Along the encoders every interval crosses its slices one by one: the whole advance is bounded
   // before any work. At the nominal phase an interval the maps take costs one product whatever the
@@ -641,8 +646,7 @@ void DynamicsEstimator::advanceTo(double t, const std::function<void(const Dynam
     if (!advanceIntervalWithTorqueChanges()) {
       // The contacts may change inside the interval: onto the sliced propagation at the nominal
       // phase (the torque inputs taken at their stamps there), as after a parameter change.
-      startFollowing();
-      advanceFollowing(t - origin_, sink);
+      followFromHere(t - origin_, sink);
       return;
     }
     if (sink) sink(sample(k_ * interval_, y_));
@@ -675,8 +679,7 @@ void DynamicsEstimator::advanceTo(double t, const std::function<void(const Dynam
       // Near a knee, or a flank lifted: onto the sliced propagation at the nominal phase, which
       // locates every change of the contacts on the exact solution (until the next reset; where
       // the contacts settle again, one interval map per sample: SlicedIntervalMaps).
-      startFollowing();
-      advanceFollowing(t - origin_, sink);
+      followFromHere(t - origin_, sink);
       return;
     }
     if (!done) {

@@ -167,7 +167,7 @@ void SlicedModalPropagator::setParameters(const GearRotorParameters& p) {
   fastest_period_bound_ = trace > 0.0 ? kTwoPi / std::sqrt(trace) : std::numeric_limits<double>::infinity();
 }
 
-void SlicedModalPropagator::allocateRegime(MeshRegime r) const {
+void SlicedModalPropagator::tabulateRegimeConditions(MeshRegime r) const {
   // Once per regime and propagator (not in the steady state of a run): sized, its rules tabulated
   // for the parameters of now (setParameters keeps every allocated table up to date).
   const std::size_t n = static_cast<std::size_t>(slices_->size());

@@ -171,6 +171,9 @@ class DynamicsEstimator {
   /// A shaft on its bearing, m x'' + c x' + k x = force held, propagated exactly over h.
   static void shaftStep(double m, double c, double k, double force, double h, double& x, double& v);
   void advanceFollowing(double t_rel, const std::function<void(const DynamicsSample&)>& sink);
+  /// At the nominal phase: onto the sliced propagation from the state's sample (startFollowing),
+  /// then on to t_rel there.
+  void followFromHere(double t_rel, const std::function<void(const DynamicsSample&)>& sink);
   /// The nominal phase on the sliced model (after a parameter change or a torque near a knee, no
   /// encoders), full fidelity,
   /// an anti-backlash mesh whose contacts settle at the held torque (contactsSettle, as for the

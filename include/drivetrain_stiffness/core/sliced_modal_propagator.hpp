@@ -217,10 +217,10 @@ class SlicedModalPropagator {
   /// be: a node below the knee keeps the three usual regimes' memory only).
   const RegimeConditions& conditions(MeshRegime r, int j) const {
     std::vector<RegimeConditions>& table = conditions_[static_cast<std::size_t>(r)];
-    if (table.empty()) allocateRegime(r);
+    if (table.empty()) tabulateRegimeConditions(r);
     return table[static_cast<std::size_t>(j)];
   }
-  void allocateRegime(MeshRegime r) const;
+  void tabulateRegimeConditions(MeshRegime r) const;
   const Slice& slice(MeshRegime r, int j) const;
   /// Slice j's modes by Newton on its characteristic polynomial from three seeds (the common case,
   /// about 2 us with the eigenvectors and checks); false where that does not give a verified spectrum.
