@@ -223,6 +223,8 @@ const StaticTeModel::BothFlankMean& StaticTeModel::bothFlankMean(const Calibrati
   c.fp = p[kPreloadTorque] / base_radius_[1];  // as flanks() forms F_p
   c.force_low = -std::numeric_limits<double>::infinity();
   c.force_high = std::numeric_limits<double>::infinity();
+  c.held_low = 1.0;
+  c.held_high = -1.0;
   bool never_both = false;
   for (std::size_t j = 0; j < grid_.size(); ++j) {
     const GridPoint& g = grid_[j];
@@ -249,15 +251,35 @@ double StaticTeModel::meanMeshStiffness(const CalibrationVector& p, double torqu
   const double force = meshForce(torque);
   const BothFlankMean& both = bothFlankMean(p);
   if (force >= both.force_low && force <= both.force_high) return both.mean;
+  // Above or near a knee the sum depends on the force only through the points' flank states: the
+  // last sum holds wherever none of them changes (the stiffness bands ask at every torque input,
+  // a noisy torque about one level, at parameters that change once a window).
+  if (force >= both.held_low && force <= both.held_high) return both.held_mean;
   // Each point's flank state from the entry's k1, k_c and F_p: flanks() at this force, without
-  // its divisions.
+  // its divisions. Around it, the nearest force at which a point's state changes on either side:
+  // AntiBacklashMesh::flankContact's bounds F_p (1 + k1/k_c) and -F_p (1 + k_c/k1), taken 1e-12
+  // towards this force, far beyond the rounding of its products (as force_low and force_high).
   double k = 0.0;
+  double low = -std::numeric_limits<double>::infinity(), high = std::numeric_limits<double>::infinity();
   for (std::size_t j = 0; j < grid_.size(); ++j) {
     const FlankPoint& f = both.points[j];
     const FlankContact contact = AntiBacklashMesh::flankContact(force, f.k1, f.kc, both.fp);
     const double ks = contact == FlankContact::kBoth ? f.k1 + f.kc : (contact == FlankContact::kDriveOnly ? f.k1 : f.kc);
     k += grid_[j].weight * ks;
+    // No loaded half (an ordinary gear): the drive flank alone at any force, no bound. No drive
+    // pair in contact: the back half carries the force up to F_p.
+    if (!(f.kc > 0.0)) continue;
+    const double bounds[2] = {f.k1 > 0.0 ? both.fp * (f.k1 + f.kc) / f.kc : both.fp,
+                              f.k1 > 0.0 ? -both.fp * (f.k1 + f.kc) / f.k1 : -std::numeric_limits<double>::infinity()};
+    for (const double bound : bounds) {
+      if (bound > force) high = std::min(high, bound - 1e-12 * std::abs(bound));
+      if (bound < force) low = std::max(low, bound + 1e-12 * std::abs(bound));
+      if (bound == force) low = high = force;  // on a bound: this force only
+    }
   }
+  both.held_low = low;
+  both.held_high = high;
+  both.held_mean = k;
   return k;
 }
 

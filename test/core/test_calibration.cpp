@@ -6,6 +6,7 @@
 #include <iostream>
 #include <memory>
 #include <random>
+#include <set>
 
 #include <gtest/gtest.h>
 
@@ -208,6 +209,33 @@ TEST(StaticTeModel, KeptBothFlankMeanIsInvisible) {
   const double back = periodMean(mesh, [](double, double kc) { return kc; });
   EXPECT_NEAR(warm.meanMeshStiffness(p, 3.0 * knee) / drive, 1.0, 2e-4);
   EXPECT_NEAR(warm.meanMeshStiffness(p, -20.0) / back, 1.0, 2e-4);
+}
+
+// Above and near the knees the period mean depends on the force only through the grid points'
+// flank states; the model keeps the last sum with the range of forces in which none of them
+// changes state. That must be invisible too: a fine sweep through both knee regions, up, down and
+// jumping, gives bit for bit what a fresh model gives at every torque, and it does cross many
+// changes of the states (distinct sums).
+TEST(StaticTeModel, HeldFlankSumIsInvisible) {
+  const RigConfig rig = seedRig();
+  const StaticTeModel warm(rig);
+  const CalibrationVector p = nominal(rig);
+  const double knee = warm.kneeTorque(p);
+  std::vector<double> torques;
+  for (int i = 0; i <= 300; ++i) torques.push_back(knee * (0.6 + 1.0 * i / 300.0));   // up through the knee
+  for (int i = 300; i >= 0; --i) torques.push_back(knee * (0.6 + 1.0 * i / 300.0));   // and down
+  for (int i = 0; i <= 200; ++i) torques.push_back(-0.2 - 1.0 * i / 200.0);           // the reverse knee, -0.55 N m
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> any(-1.5, 1.6 * knee);
+  for (int i = 0; i < 200; ++i) torques.push_back(any(rng));
+  std::set<double> sums;
+  for (double torque : torques) {
+    const StaticTeModel fresh(rig);
+    const double k = warm.meanMeshStiffness(p, torque);
+    ASSERT_EQ(k, fresh.meanMeshStiffness(p, torque)) << torque << " N m";
+    sums.insert(k);
+  }
+  EXPECT_GT(sums.size(), 20u) << "the sweep should cross many points' changes of state";
 }
 
 TEST(StaticTeModel, BearingDeflectionIsTheSecantNotTheTangent) {

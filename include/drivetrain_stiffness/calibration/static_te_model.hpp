@@ -189,6 +189,9 @@ class StaticTeModel {
     /// The grid's flank stiffnesses at this entry's parameters: meanMeshStiffness at a force
     /// outside [force_low, force_high] (above or near the knee) reads its flank states from them.
     std::vector<FlankPoint> points;
+    /// The last such force's sum and the range of forces around it in which no point changes its
+    /// flank state (so the sum is the same bits): [held_low, held_high], empty until then.
+    mutable double held_low = 1.0, held_high = -1.0, held_mean = 0.0;
   };
   const BothFlankMean& bothFlankMean(const CalibrationVector& p) const;
   mutable std::array<BothFlankMean, 16> both_flank_means_{};
