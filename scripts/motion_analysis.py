@@ -88,7 +88,9 @@ def campbell(te_t, te, enc_t, enc_speed, window=0.1, hop=0.05, pad=8):
     times): per window the mean pinion speed [rpm], the frequency of the strongest line [Hz]
     (parabolic interpolation of the log amplitude), and the map (speeds, freqs, amplitude)."""
     te_t, te = np.asarray(te_t), np.asarray(te)
-    dt = np.median(np.diff(te_t))
+    # The mean spacing of the output grid: absolute stamps (~1.8e9 s) hold 0.24 us in a double, so a
+    # median of single differences is off by up to that (5005 Hz for a 10 kHz grid's Nyquist).
+    dt = (te_t[-1] - te_t[0]) / (len(te_t) - 1)
     n = int(round(window / dt))
     step = max(1, int(round(hop / dt)))
     rows, rpm, peak = [], [], []

@@ -278,14 +278,15 @@ def plot_motion(input_bag, te, res, t0, report, topic="/joint_states", joint="pi
             # The TE is sampled at the output rate: a mesh order above its Nyquist frequency folds
             # back into the diagram as a line falling with the speed (an alias, not a mode).
             nyquist = freqs[-1]
+            top_rpm = np.abs(rpm).max()
+            folded = [(k, 60.0 * nyquist / (k * z_p)) for k in (4, 3, 2, 1) if k * z_p * top_rpm / 60.0 > nyquist]
             note = ""
-            if z_p * np.abs(rpm).max() / 60.0 > nyquist:
-                folds = 60.0 * nyquist / z_p
-                note = ("**Aliasing:** the mesh frequency reaches %.0f Hz, above the Nyquist frequency of the TE "
-                        "output (%.0f Hz, output_rate / 2): above %.0f rpm the mesh line and its orders fold back "
-                        "into the diagram. For orders 1-4 unfolded up to the top speed, replay with "
-                        "output_rate >= %.0f Hz (--params)." % (z_p * np.abs(rpm).max() / 60.0, nyquist, folds,
-                                                                 math.ceil(2 * 4 * z_p * np.abs(rpm).max() / 60.0)))
+            if folded:
+                note = ("**Aliasing:** above the Nyquist frequency of the TE output (%.0f Hz, output_rate / 2) the "
+                        "mesh lines fold back into the diagram: %s. For orders 1-4 unfolded up to the top speed "
+                        "(%.0f rpm), replay with output_rate >= %.0f Hz (--params)."
+                        % (nyquist, ", ".join("mesh order %d above %.0f rpm" % (k, n) for k, n in folded), top_rpm,
+                           math.ceil(2 * 4 * z_p * top_rpm / 60.0)))
             out.append(save(fig, report, "campbell.png", "Campbell diagram", note))
     return out
 

@@ -277,6 +277,11 @@ double StaticTeModel::meanMeshStiffness(const CalibrationVector& p, double torqu
       if (bound == force) low = high = force;  // on a bound: this force only
     }
   }
+  // The divided bounds and flankContact's products disagree within a few ulps of a bound: a force
+  // there can be past a divided bound in the state of the side below it, and its range would then
+  // not contain it (nor the states it was summed in). Such a force, and a NaN, hold for itself only
+  // (a NaN for none: no comparison with it is true).
+  if (!(low <= force && force <= high)) low = high = force;
   both.held_low = low;
   both.held_high = high;
   both.held_mean = k;

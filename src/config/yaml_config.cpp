@@ -300,6 +300,11 @@ static CalibrationPrior readPrior(const YAML::Node& c, const std::string& w, con
   requireInHalfOpenRange(key(w, name) + ".mean", prior.mean, lower, upper);
   requireNonNegative(key(w, name) + ".std", prior.std);
   requireAtMost(key(w, name) + ".std", prior.std, upper - lower);
+  if (prior.std > 0.0 && prior.reference_std == 0.0) {
+    // Estimated, but judged against no spread: never identified, never drifting.
+    throwInvalid(key(w, name) + ".reference_std", prior.reference_std,
+                 "must be positive for an estimated parameter (std > 0); leave it out to judge against std");
+  }
   return prior;
 }
 

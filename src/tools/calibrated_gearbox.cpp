@@ -1,5 +1,6 @@
 #include "calibrated_gearbox.hpp"  // NOLINT(build/include_subdir)
 
+#include <algorithm>
 #include <cerrno>
 #include <charconv>
 #include <cmath>
@@ -39,6 +40,10 @@ std::string oneLine(std::string s) {
 }
 
 YAML::Node number(double value) { return YAML::Node(yamlNumber(value)); }
+
+/// The widest spread the loader takes for a scale's prior: its range [0.05, 20) (yaml_config.cpp,
+/// readPrior of the calibration block's scales).
+constexpr double kScaleRange = 20.0 - 0.05;
 
 }  // namespace
 
@@ -110,9 +115,18 @@ std::string calibratedGearboxYaml(const std::string& config_path, const Calibrat
     YAML::Node prior(YAML::NodeType::Map);
     const bool held = !(estimate.prior_std[i] > 0.0);
     const bool identified = estimate.identified[static_cast<std::size_t>(i)];
+    // The filter runs the bearing scales as compliances c = 1/s (calibrator.cpp), and converts a
+    // spread at the file's mean, std(c) = std(s) / s^2: the drawing's spread, kept in compliance,
+    // reads std(s) (s' / s)^2 at the calibrated mean s' (else a calibrated 0.7 would let the
+    // bearings spread twice as far in compliance as the drawing did). At most the loader's range.
+    double reference = drawing[i]->reference();
+    if (i == kPinionBearingScale || i == kGearBearingScale) {
+      const double ratio = estimate.value[i] / drawing[i]->mean;
+      reference = std::min(reference * ratio * ratio, kScaleRange);
+    }
     prior["mean"] = number(estimate.value[i]);
-    prior["std"] = number(held ? 0.0 : identified ? estimate.std[i] : drawing[i]->reference());
-    prior["reference_std"] = number(drawing[i]->reference());
+    prior["std"] = number(held ? 0.0 : identified ? estimate.std[i] : reference);
+    prior["reference_std"] = number(reference);
     prior.SetStyle(YAML::EmitterStyle::Flow);
     calibration[calibrationName(i)] = prior;
   }

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <fstream>
 #include <iostream>
+#include <limits>
 #include <memory>
 #include <random>
 #include <set>
@@ -99,6 +100,11 @@ TEST(CalibrationConfig, RefusesBadValuesNamingTheField) {
   EXPECT_NE(message("calibration:\n  mesh_stiffness_scale: {mean: 1.0, std: 0.01, reference_std: .inf}")
                 .find("calibration.mesh_stiffness_scale.reference_std"),
             std::string::npos);
+  // Zero for an estimated parameter: refused (it could never be identified nor drift).
+  EXPECT_NE(message("calibration:\n  mesh_stiffness_scale: {mean: 1.0, std: 0.01, reference_std: 0.0}")
+                .find("calibration.mesh_stiffness_scale.reference_std"),
+            std::string::npos);
+  EXPECT_EQ(message("calibration:\n  mesh_stiffness_scale: {mean: 1.0, std: 0.0, reference_std: 0.0}"), "accepted");
   // Given, it is kept; absent, the prior's std is the reference.
   const RigConfig kept = seedWith("calibration:\n  mesh_stiffness_scale: {mean: 0.9, std: 0.01, reference_std: 0.2}");
   EXPECT_EQ(kept.calibration.mesh_stiffness_scale.reference(), 0.2);
@@ -236,6 +242,29 @@ TEST(StaticTeModel, HeldFlankSumIsInvisible) {
     sums.insert(k);
   }
   EXPECT_GT(sums.size(), 20u) << "the sweep should cross many points' changes of state";
+}
+
+// The held range comes from the divided bounds F_p (1 + k1/k_c), while flankContact decides by the
+// multiplied-out products: within a few ulps of a bound the two disagree. A force there, still
+// both-flank by the products but past the divided bound, must not leave a range that covers the
+// forces just above it, where that point carries the drive flank alone (found by an independent
+// review: 5.0e-4 of the mean off at these two torques, mesh scale 0.8 and T_p 0.7 of the drawing's);
+// nor may a NaN force leave a range at all.
+TEST(StaticTeModel, HeldFlankSumNearABoundsRounding) {
+  const RigConfig rig = seedRig();
+  CalibrationVector p = nominal(rig);
+  p[kMeshScale] = 0.8;
+  p[kPreloadTorque] *= 0.7;
+  const StaticTeModel warm(rig);
+  for (double torque : {2.818598152387636, 2.8185981523960915}) {
+    const StaticTeModel fresh(rig);
+    EXPECT_EQ(warm.meanMeshStiffness(p, torque), fresh.meanMeshStiffness(p, torque)) << torque << " N m";
+  }
+  const StaticTeModel after_nan(rig);
+  after_nan.meanMeshStiffness(p, std::numeric_limits<double>::quiet_NaN());
+  const double knee = after_nan.kneeTorque(p);
+  const StaticTeModel fresh(rig);
+  EXPECT_EQ(after_nan.meanMeshStiffness(p, 3.0 * knee), fresh.meanMeshStiffness(p, 3.0 * knee));
 }
 
 TEST(StaticTeModel, BearingDeflectionIsTheSecantNotTheTangent) {
@@ -578,7 +607,10 @@ TEST(Calibrator, ACalibratedGearboxStillSaysWhatTheDataDetermine) {
     CalibrationPrior* p[kCalibrationSize] = {&c.mesh_stiffness_scale, &c.pinion_bearing_scale, &c.gear_bearing_scale,
                                              &c.preload_torque, &c.te_offset};
     for (int i = 0; i < kCalibrationSize; ++i) {
-      const double drawing = p[i]->reference();
+      double drawing = p[i]->reference();
+      if (i == kPinionBearingScale || i == kGearBearingScale) {  // kept in compliance, as the writer does
+        drawing *= (e1.value[i] / p[i]->mean) * (e1.value[i] / p[i]->mean);
+      }
       *p[i] = CalibrationPrior{e1.value[i], e1.identified[i] ? e1.std[i] : drawing, keep_reference ? drawing : -1.0};
     }
     return rig;

@@ -141,8 +141,8 @@ with rosbag.Bag(os.path.join(work, "a.bag")) as b:
 # then --calibrate refuses; should one update, the file is checked as below.
 def check_calibrated(path, last, first, bag, tag):
     """The gearbox --calibrate wrote holds the last calibration row's values: each prior's mean, its
-    std where identified and the drawing's spread (the first row's std, before any update) where
-    not, and the drawing's spread as reference_std."""
+    std where identified and the drawing's spread (the first row's std, before any update; for a
+    bearing scale at the calibrated mean) where not, and the drawing's spread as reference_std."""
     text = open(path).read()
     check(bag in text, tag + ": the calibrated gearbox does not name the bag")
     not_identified = [p for p in PARAMETERS if last[p + "_identified"] != "1"]
@@ -160,6 +160,10 @@ def check_calibrated(path, last, first, bag, tag):
     for p in PARAMETERS:
         prior = g["calibration"][p]
         drawing = float(first[p + "_std"])
+        if p in ("pinion_bearing_scale", "gear_bearing_scale"):
+            # Kept in compliance (the filter's 1/s): read at the calibrated mean, x (s' / s)^2.
+            ratio = value(p) / float(first[p])
+            drawing = drawing * ratio * ratio  # in the writer's order: the same bits
         std = value(p + "_std") if last[p + "_identified"] == "1" else drawing
         check(float(prior["mean"]) == value(p) and float(prior["std"]) == std and float(prior["reference_std"]) == drawing,
               "%s: calibration.%s = %s" % (tag, p, prior))

@@ -9,8 +9,9 @@
 #  4. so has the report of a 5 s run-up whose encoders are named otherwise (joints motor and output
 #     on /encoders, ~pinion_joint and ~gear_joint to match): the plots read the topic, the joint
 #     and the tooth count the replay took (summary.json "encoders"), not the defaults. That one runs
-#     at the default 1 kHz output, whose Nyquist frequency the mesh passes at 1500 rpm: its
-#     report.md warns of the folded lines, the 10 kHz one does not.
+#     at the default 1 kHz output, whose Nyquist frequency the mesh itself passes at 1500 rpm: its
+#     report.md names mesh order 1 among the folded lines; at 10 kHz only orders 3 and 4 fold
+#     (above 5000 and 3750 rpm), and the note says so without order 1 or 2.
 # usage: check_run_up_spectrum.sh BIN_DIR SOURCE_DIR WORK_DIR
 set -euo pipefail
 bin=$1 src=$2 work=$3
@@ -63,9 +64,12 @@ if s["counters"]["accepted_joint_states"] < 4000:
 for name in ("campbell.png", "te_order_spectrum.png"):
     if not os.path.getsize(os.path.join(work, "report_named", name)):
         sys.exit("check_run_up_spectrum: %s missing with named encoders" % name)
-aliasing = lambda d: "**Aliasing:**" in open(os.path.join(work, d, "report.md")).read()
-if not aliasing("report_named") or aliasing("report"):
-    sys.exit("check_run_up_spectrum: the aliasing note should be in the 1 kHz report only")
+note = lambda d: [l for l in open(os.path.join(work, d, "report.md")).read().splitlines() if l.startswith("**Aliasing:**")]
+slow, fast = note("report_named"), note("report")
+if not slow or "mesh order 1 above 1500 rpm" not in slow[0]:
+    sys.exit("check_run_up_spectrum: the 1 kHz report should name mesh order 1 folding above 1500 rpm: %s" % slow)
+if not fast or "mesh order 4 above 3750 rpm" not in fast[0] or "mesh order 2" in fast[0] or "mesh order 1" in fast[0]:
+    sys.exit("check_run_up_spectrum: the 10 kHz report should name orders 4 and 3 only: %s" % fast)
 print("named encoders: %d readings, campbell.png and te_order_spectrum.png written; 1 kHz output: aliasing noted"
       % s["counters"]["accepted_joint_states"])
 PY

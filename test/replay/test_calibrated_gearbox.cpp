@@ -55,11 +55,19 @@ std::string read(const fs::path& p) {
 
 void expectPrior(const CalibrationPrior& prior, const CalibrationEstimate& e, int i, const CalibrationPrior& drawing) {
   EXPECT_EQ(prior.mean, e.value[i]) << calibrationName(i);
+  // The drawing's spread, for a bearing scale kept in compliance (the filter's c = 1/s: std(c) =
+  // std(s) / s^2), so read at the calibrated mean s' as std(s) (s' / s)^2.
+  const bool bearing = i == kPinionBearingScale || i == kGearBearingScale;
+  const double ratio = e.value[i] / drawing.mean;
+  const double reference = bearing ? drawing.reference() * ratio * ratio : drawing.reference();
+  if (bearing) {
+    const double in_compliance = drawing.reference() / (drawing.mean * drawing.mean);
+    EXPECT_NEAR(reference / (e.value[i] * e.value[i]) / in_compliance, 1.0, 1e-14) << calibrationName(i) << ": the same spread in compliance";
+  }
   // Identified: the posterior std; not: the drawing's spread (the file holds no covariance).
-  EXPECT_EQ(prior.std, e.identified[static_cast<std::size_t>(i)] ? e.std[i] : drawing.reference()) << calibrationName(i);
+  EXPECT_EQ(prior.std, e.identified[static_cast<std::size_t>(i)] ? e.std[i] : reference) << calibrationName(i);
   // The drawing's spread stays what `identified` and the drift are judged against.
-  EXPECT_EQ(prior.reference(), drawing.reference()) << calibrationName(i);
-  EXPECT_EQ(prior.reference_std, drawing.reference()) << calibrationName(i) << ": written out";
+  EXPECT_EQ(prior.reference_std, reference) << calibrationName(i) << ": written out";
 }
 
 TEST(CalibratedGearbox, RoundTripsThroughLoadRigFile) {
@@ -127,6 +135,8 @@ TEST(CalibratedGearbox, RoundTripsThroughLoadRigFile) {
   // A second calibration keeps the drawing's spread, not the first one's posterior std.
   EXPECT_EQ(twice.calibration.mesh_stiffness_scale.reference_std, c.mesh_stiffness_scale.std);
   EXPECT_EQ(twice.calibration.preload_torque.reference_std, c.preload_torque.reference());
+  // The bearing scale not identified, as the first file (the same mean): the same converted spread.
+  EXPECT_EQ(twice.calibration.gear_bearing_scale.reference_std, after.calibration.gear_bearing_scale.reference_std);
 }
 
 TEST(CalibratedGearbox, KeepsRelativeFilesInTheSameDirectory) {
