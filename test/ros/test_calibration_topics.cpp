@@ -78,8 +78,10 @@ class CalibrationTopicsTest : public testing::Test {
         [this](const diagnostic_msgs::DiagnosticArray::ConstPtr& a) {
           std::lock_guard<std::mutex> l(m_);
           for (const auto& s : a->status)
-            if (s.name.find("stiffness_estimator") != std::string::npos)
+            if (s.name.find("stiffness_estimator") != std::string::npos) {
               for (const auto& kv : s.values) diagnostics_[kv.key] = kv.value;
+              status_message_ = s.message;
+            }
         });
     spinner_.start();
     ASSERT_TRUE(waitWall([this] {
@@ -109,6 +111,7 @@ class CalibrationTopicsTest : public testing::Test {
   std::vector<drivetrain_stiffness::TransmissionError> te_;
   std::vector<drivetrain_stiffness::MeshPeriodStats> periods_;
   std::map<std::string, std::string> diagnostics_;
+  std::string status_message_;  ///< the last /diagnostics status line of the node
 };
 
 TEST_F(CalibrationTopicsTest, NodePublishesWhatThePipelineGivesInProcess) {
@@ -249,6 +252,19 @@ TEST_F(CalibrationTopicsTest, NodePublishesWhatThePipelineGivesInProcess) {
   EXPECT_EQ(diagnostic("calibration_identified"), identifiedParameters(e));
   EXPECT_NE(diagnostic("calibration.mesh_stiffness_scale [-]"), "");
   EXPECT_NE(diagnostic("calibration.te_offset [m]"), "");
+  // Every input has stopped with the encoders driving the phase: the time-out waits for the next
+  // input's stamp, and /diagnostics says how old the last reading is on the node's clock. The
+  // readings are stamped from kT0 (2026-01-01), so on this wall clock that is far beyond
+  // ~motion_timeout: the key and the WARN both show.
+  EXPECT_EQ(diagnostic("phase_source"), "encoders");
+  const double silence = std::stod(diagnostic("encoder_silence [s]").empty() ? "nan" : diagnostic("encoder_silence [s]"));
+  const double expected = (ros::Time::now() - (ros::Time(kT0, 0) + ros::Duration(3.0 * kSegment))).toSec();
+  // (diagnostic_updater prints about six significant digits: some 50 s at this age)
+  EXPECT_NEAR(silence / expected, 1.0, 1e-5) << "the age of the last reading, 3 segments after kT0";
+  EXPECT_TRUE(waitWall([&] {
+    std::lock_guard<std::mutex> l(m_);
+    return status_message_.find("no joint_states for") != std::string::npos;
+  }, 5.0)) << status_message_;
 }
 
 }  // namespace
