@@ -7,16 +7,10 @@
 
 #include "drivetrain_stiffness/core/constants.hpp"
 #include "drivetrain_stiffness/core/rig_model.hpp"
+#include "drivetrain_stiffness/core/turns.hpp"
 #include "drivetrain_stiffness/core/validation.hpp"
 
 namespace drivetrain_stiffness {
-namespace {
-/// x modulo 1 in [0, 1): x - floor(x) rounds to 1.0 for x just below an integer (-1e-17 + 1).
-double wrapTurns(double x) {
-  const double w = x - std::floor(x);
-  return w < 1.0 ? w : 0.0;
-}
-}  // namespace
 
 DynamicsEstimator::DynamicsEstimator(const RigConfig& rig, const std::array<double, 2>& bearing_stiffness,
                                      double output_rate)

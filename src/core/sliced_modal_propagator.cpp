@@ -7,6 +7,7 @@
 #include <limits>
 
 #include "drivetrain_stiffness/core/constants.hpp"
+#include "drivetrain_stiffness/core/turns.hpp"
 #include "drivetrain_stiffness/core/validation.hpp"
 
 namespace drivetrain_stiffness {
@@ -913,8 +914,7 @@ double SlicedModalPropagator::loadedSwingGain() const {
 
 bool SlicedModalPropagator::inLoadedRegime(const State6& y, double phase, double f) const {
   if (!std::isfinite(phase) || !std::isfinite(f)) return false;
-  double frac = phase - std::floor(phase);
-  if (frac >= 1.0) frac = 0.0;
+  const double frac = wrapTurns(phase);
   const int j = slices_->sliceAt(frac, f < 0.0);
   return inRegime(loadedRegime(), j, y, std::polar(1.0, kTwoPi * frac), kTwoPi * f);
 }
@@ -922,10 +922,9 @@ bool SlicedModalPropagator::inLoadedRegime(const State6& y, double phase, double
 std::optional<Matrix6> SlicedModalPropagator::monodromy(double f, const State6& y, double phase) const {
   requireFinite("mesh frequency", f);
   requireFinite("mesh phase", phase);
-  // As inLoadedRegime: phase - floor(phase) rounds to 1.0 for a phase just below an integer
-  // (-1e-17), which sliceAt clamps to the last slice where the period's first one is meant.
-  double frac = phase - std::floor(phase);
-  if (frac >= 1.0) frac = 0.0;
+  // wrapTurns, as inLoadedRegime: phase - floor(phase) rounds to 1.0 for a phase just below an
+  // integer (-1e-17), which sliceAt would clamp to the last slice where the period's first is meant.
+  const double frac = wrapTurns(phase);
   const int j = slices_->sliceAt(frac, f < 0.0);
   const Complex e_theta = std::polar(1.0, kTwoPi * frac);
   const std::optional<MeshRegime> r = regimeAt(j, y, e_theta, kTwoPi * f);
