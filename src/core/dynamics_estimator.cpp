@@ -287,8 +287,10 @@ double DynamicsEstimator::meshPhase() const { return following_ ? phase_ : nomin
 
 double DynamicsEstimator::meshFrequency() const { return following_ ? mesh_frequency_ : nominalMeshFrequency(); }
 
+double DynamicsEstimator::slicesIn(double h) const { return std::abs(mesh_frequency_) * h * full_.slices->size(); }
+
 void DynamicsEstimator::requireSliceBound(double t_rel) const {
-  const double h = t_rel - t_state_, crossings = std::abs(mesh_frequency_) * h * full_.slices->size();
+  const double h = t_rel - t_state_, crossings = slicesIn(h);
   if (crossings > kMaxSlicesPerAdvance) {
     throw InvalidInput("t = " + formatValue(origin_ + t_rel) + ": " + formatValue(h) + " s at a mesh frequency of " +
                        formatValue(mesh_frequency_) + " Hz crosses " + formatValue(crossings) + " phase slices (more than " +
@@ -297,7 +299,7 @@ void DynamicsEstimator::requireSliceBound(double t_rel) const {
 }
 
 void DynamicsEstimator::countSlicesCrossed(double t_rel, double& crossed) const {
-  crossed += std::abs(mesh_frequency_) * interval_ * full_.slices->size();
+  crossed += slicesIn(interval_);
   if (crossed > kMaxSlicesPerAdvance) {
     throw InvalidInput("t = " + formatValue(origin_ + t_rel) + ": at the nominal phase, where the interval maps do not " +
                        "apply, this advance crossed more than " + formatValue(kMaxSlicesPerAdvance) +

@@ -244,6 +244,8 @@ class DynamicsEstimator {
   /// Refuses (InvalidInput, the caller resets) an advance to t_rel that would cross more than
   /// kMaxSlicesPerAdvance slices at the present mesh frequency.
   void requireSliceBound(double t_rel) const;
+  /// The phase slices h [s] crosses at the present mesh frequency (the bound's measure of work).
+  double slicesIn(double h) const;
   /// At the nominal phase: adds one output interval's slices to `crossed` (an advance's count of
   /// slices crossed one by one) and refuses, as requireSliceBound, once it passes the bound; t_rel
   /// is the interval's end, for the message.
