@@ -257,7 +257,7 @@ void parseGears(const YAML::Node& root, const std::string& file, RigConfig& rig)
     if (mesh["samples"]) rig.mesh_samples = readInt(mesh, w, "samples");
     if (rig.mesh_samples < 16 || rig.mesh_samples > 100000) throwInvalid(key(w, "samples"), rig.mesh_samples, "must be in [16, 100000]");
     rig.mesh_stiffness_scale = readDouble(mesh, w, "stiffness_scale", 1.0);
-    requireInHalfOpenRange(key(w, "stiffness_scale"), rig.mesh_stiffness_scale, 0.05, 20.0);
+    requireInHalfOpenRange(key(w, "stiffness_scale"), rig.mesh_stiffness_scale, kScaleLowest, kScaleBound);
   }
 }
 
@@ -331,9 +331,9 @@ static void parseCalibration(const YAML::Node& root, const std::string& file, Ri
     for (const BearingSupportConfig& b : rig.bearings) if (b.shaft == shaft) return b.stiffness_scale;
     return 1.0;
   };
-  k.mesh_stiffness_scale = readPrior(c, w, "mesh_stiffness_scale", {rig.mesh_stiffness_scale, 0.2}, 0.05, 20.0);
-  k.pinion_bearing_scale = readPrior(c, w, "pinion_bearing_scale", {shaftScale(0), 0.3}, 0.05, 20.0);
-  k.gear_bearing_scale = readPrior(c, w, "gear_bearing_scale", {shaftScale(1), 0.3}, 0.05, 20.0);
+  k.mesh_stiffness_scale = readPrior(c, w, "mesh_stiffness_scale", {rig.mesh_stiffness_scale, 0.2}, kScaleLowest, kScaleBound);
+  k.pinion_bearing_scale = readPrior(c, w, "pinion_bearing_scale", {shaftScale(0), 0.3}, kScaleLowest, kScaleBound);
+  k.gear_bearing_scale = readPrior(c, w, "gear_bearing_scale", {shaftScale(1), 0.3}, kScaleLowest, kScaleBound);
   const double tp = rig.anti_backlash.preload_torque;
   k.preload_torque = readPrior(c, w, "preload_torque", {tp, 0.2 * tp}, 0.0, 1e6);
   k.te_offset = readPrior(c, w, "te_offset", {0.0, 1e-6}, -1e-3, 1e-3);
@@ -448,7 +448,7 @@ RigConfig loadRigFile(const std::string& path) {
     cfg.mesh_load_share = readDouble(node, entry, "mesh_load_share", 1.0);
     requireInHalfOpenRange(entry + ".mesh_load_share", cfg.mesh_load_share, 0.0, 1.0 + 1e-12);
     cfg.stiffness_scale = readDouble(node, entry, "stiffness_scale", 1.0);
-    requireInHalfOpenRange(entry + ".stiffness_scale", cfg.stiffness_scale, 0.05, 20.0);
+    requireInHalfOpenRange(entry + ".stiffness_scale", cfg.stiffness_scale, kScaleLowest, kScaleBound);
     rig.bearings.push_back(cfg);
   }
   parseCalibration(root, where, rig);

@@ -41,10 +41,6 @@ std::string oneLine(std::string s) {
 
 YAML::Node number(double value) { return YAML::Node(yamlNumber(value)); }
 
-/// The widest spread the loader takes for a scale's prior: its range [0.05, 20) (yaml_config.cpp,
-/// readPrior of the calibration block's scales).
-constexpr double kScaleRange = 20.0 - 0.05;
-
 }  // namespace
 
 std::string yamlNumber(double value) {
@@ -122,7 +118,7 @@ std::string calibratedGearboxYaml(const std::string& config_path, const Calibrat
     double reference = drawing[i]->reference();
     if (i == kPinionBearingScale || i == kGearBearingScale) {
       const double ratio = estimate.value[i] / drawing[i]->mean;
-      reference = std::min(reference * ratio * ratio, kScaleRange);
+      reference = std::min(reference * ratio * ratio, kScaleBound - kScaleLowest);  // the loader's widest
     }
     prior["mean"] = number(estimate.value[i]);
     prior["std"] = number(held ? 0.0 : identified ? estimate.std[i] : reference);

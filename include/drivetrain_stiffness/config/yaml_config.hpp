@@ -13,6 +13,10 @@
 
 namespace drivetrain_stiffness {
 
+/// The range [kScaleLowest, kScaleBound) the loader takes for every stiffness scale (the mesh's,
+/// each bearing's, and their calibration priors' means); a prior's std is at most its width.
+inline constexpr double kScaleLowest = 0.05, kScaleBound = 20.0;
+
 /// Parses a `bearing:` mapping (keys in the README); `where` prefixes error messages.
 BearingSupportConfig parseBearing(const YAML::Node& node, const std::string& where);
 /// Loads a file with a top-level `bearing:` block (config/bearings/*.yaml).
