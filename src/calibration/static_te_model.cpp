@@ -229,16 +229,23 @@ const StaticTeModel::BothFlankMean& StaticTeModel::bothFlankMean(const Calibrati
   for (std::size_t j = 0; j < grid_.size(); ++j) {
     const GridPoint& g = grid_[j];
     const Flanks f = flanks(p, 0.0, g.k1, g.k2);
-    c.points[j] = {f.k1, f.kc};
+    FlankPoint& point = c.points[j];
+    point = {f.k1, f.kc};
     c.mean += g.weight * (f.k1 + f.kc);  // as meanMeshStiffness sums it: the same bits
-    // AntiBacklashMesh::flankContact keeps both flanks for -F_p (1 + k_c/k1) <= F <= F_p (1 + k1/k_c);
-    // the range is taken 1e-12 inside those bounds, far beyond the rounding of its products.
+    // AntiBacklashMesh::flankContact keeps both flanks for -F_p (1 + k_c/k1) <= F <= F_p (1 + k1/k_c).
+    // No loaded half (an ordinary gear): the drive flank alone at any force, no bound. No drive
+    // pair in contact: the back half carries the force up to F_p.
+    if (f.kc > 0.0) {
+      point.above = f.k1 > 0.0 ? f.fp * (f.k1 + f.kc) / f.kc : f.fp;
+      if (f.k1 > 0.0) point.below = -f.fp * (f.k1 + f.kc) / f.k1;
+    }
     if (!(f.kc > 0.0) || !(f.k1 > 0.0)) {
       never_both = true;  // an ordinary gear (or no tooth): never both flanks
       continue;  // the other points' flank stiffnesses are still wanted
     }
-    c.force_high = std::min(c.force_high, f.fp * (f.k1 + f.kc) / f.kc * (1.0 - 1e-12));
-    c.force_low = std::max(c.force_low, -f.fp * (f.k1 + f.kc) / f.k1 * (1.0 - 1e-12));
+    // The range is taken 1e-12 inside those bounds, far beyond the rounding of its products.
+    c.force_high = std::min(c.force_high, point.above * (1.0 - 1e-12));
+    c.force_low = std::max(c.force_low, point.below * (1.0 - 1e-12));
   }
   if (never_both) {
     c.force_low = 1.0;
@@ -256,9 +263,9 @@ double StaticTeModel::meanMeshStiffness(const CalibrationVector& p, double torqu
   // a noisy torque about one level, at parameters that change once a window).
   if (force >= both.held_low && force <= both.held_high) return both.held_mean;
   // Each point's flank state from the entry's k1, k_c and F_p: flanks() at this force, without
-  // its divisions. Around it, the nearest force at which a point's state changes on either side:
-  // AntiBacklashMesh::flankContact's bounds F_p (1 + k1/k_c) and -F_p (1 + k_c/k1), taken 1e-12
-  // towards this force, far beyond the rounding of its products (as force_low and force_high).
+  // its divisions. Around it, the nearest force at which a point's state changes on either side
+  // (its bounds, kept with the entry), taken 1e-12 towards this force, far beyond the rounding of
+  // flankContact's products (as force_low and force_high).
   double k = 0.0;
   double low = -std::numeric_limits<double>::infinity(), high = std::numeric_limits<double>::infinity();
   for (std::size_t j = 0; j < grid_.size(); ++j) {
@@ -266,12 +273,8 @@ double StaticTeModel::meanMeshStiffness(const CalibrationVector& p, double torqu
     const FlankContact contact = AntiBacklashMesh::flankContact(force, f.k1, f.kc, both.fp);
     const double ks = contact == FlankContact::kBoth ? f.k1 + f.kc : (contact == FlankContact::kDriveOnly ? f.k1 : f.kc);
     k += grid_[j].weight * ks;
-    // No loaded half (an ordinary gear): the drive flank alone at any force, no bound. No drive
-    // pair in contact: the back half carries the force up to F_p.
-    if (!(f.kc > 0.0)) continue;
-    const double bounds[2] = {f.k1 > 0.0 ? both.fp * (f.k1 + f.kc) / f.kc : both.fp,
-                              f.k1 > 0.0 ? -both.fp * (f.k1 + f.kc) / f.k1 : -std::numeric_limits<double>::infinity()};
-    for (const double bound : bounds) {
+    for (const double bound : {f.above, f.below}) {
+      if (!std::isfinite(bound)) continue;  // no change of state on that side
       if (bound > force) high = std::min(high, bound - 1e-12 * std::abs(bound));
       if (bound < force) low = std::max(low, bound + 1e-12 * std::abs(bound));
       if (bound == force) low = high = force;  // on a bound: this force only

@@ -178,9 +178,13 @@ class StaticTeModel {
   /// the force, and the calibration's bands ask for it at every stiffness message (1 kHz) with a
   /// handful of parameter vectors that change only when the estimate does. A few entries, reused
   /// in turn; not for concurrent use (one Calibrator owns one model).
-  /// Per grid point for one (mesh scale, preload torque): k1 and k_c [N/m].
+  /// Per grid point for one (mesh scale, preload torque): k1 and k_c [N/m], and the mesh forces
+  /// [N] beyond which it leaves both flanks (AntiBacklashMesh::flankContact's bounds, divided
+  /// out): above, the drive flank alone, F_p (1 + k1/k_c); below, the back half alone,
+  /// -F_p (1 + k_c/k1). Infinite where the point never changes state on that side.
   struct FlankPoint {
     double k1 = 0.0, kc = 0.0;
+    double above = std::numeric_limits<double>::infinity(), below = -std::numeric_limits<double>::infinity();
   };
   struct BothFlankMean {
     double scale = std::numeric_limits<double>::quiet_NaN(), preload = 0.0, mean = 0.0, force_low = 0.0,
