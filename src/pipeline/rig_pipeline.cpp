@@ -169,9 +169,10 @@ bool RigPipeline::observeClock(Stamp now, PipelineSink& /*sink*/) {
   return back;
 }
 
-InputOutcome RigPipeline::reject(InputOutcome why, const std::string& topic, const std::string& reason,
-                                 std::uint64_t& rejected) {
+InputOutcome RigPipeline::reject(InputOutcome why, InputStream stream, Stamp stamp, const std::string& reason,
+                                 std::uint64_t& rejected, std::string_view found) {
   ++rejected;
+  refusals_.record(stream, why, stamp, reason, found);
   switch (why) {
     case InputOutcome::kZeroStamp: ++counters_.zero_stamps; break;
     case InputOutcome::kOutOfOrder: ++counters_.out_of_order; break;
@@ -181,11 +182,11 @@ InputOutcome RigPipeline::reject(InputOutcome why, const std::string& topic, con
     case InputOutcome::kStampRange: ++counters_.stamps_out_of_range; break;
     case InputOutcome::kAccepted: break;
   }
-  counters_.last_event = topic + " rejected (" + toString(why) + "): " + reason;
+  counters_.last_event = std::string(toString(stream)) + " rejected (" + toString(why) + "): " + reason;
   return why;
 }
 
-InputOutcome RigPipeline::checkStamp(Stamp stamp, std::optional<Stamp>& last, const std::string& topic,
+InputOutcome RigPipeline::checkStamp(Stamp stamp, std::optional<Stamp>& last, InputStream stream,
                                      PipelineSink& /*sink*/) {
   if (stamp.isZero()) return InputOutcome::kZeroStamp;
   if (!stamp.inRosRange()) return InputOutcome::kStampRange;  // rule 7
@@ -194,7 +195,7 @@ InputOutcome RigPipeline::checkStamp(Stamp stamp, std::optional<Stamp>& last, co
     if (back <= options_.stamp_jump_back) return InputOutcome::kOutOfOrder;
     ++counters_.stamp_resets;
     stamps_restarted_ = true;
-    reset(topic + " stamp went back by " + formatValue(back) + " s (more than ~stamp_jump_back): source restarted");
+    reset(std::string(toString(stream)) + " stamp went back by " + formatValue(back) + " s (more than ~stamp_jump_back): source restarted");
   }
   return InputOutcome::kAccepted;
 }
@@ -226,26 +227,26 @@ double RigPipeline::meshTurns(double pinion_angle) const {
 }
 
 template <typename Validate, typename Update>
-InputOutcome RigPipeline::apply(const char* topic, Stamp stamp, std::optional<Stamp>& last, std::uint64_t& accepted,
+InputOutcome RigPipeline::apply(InputStream stream, Stamp stamp, std::optional<Stamp>& last, std::uint64_t& accepted,
                                 std::uint64_t& rejected, PipelineSink& sink, Validate validate, Update update) {
   // Values first: a bad value must not trigger a stamp-rule reset before it is refused.
   try {
     validate();
   } catch (const InvalidInput& e) {
-    return reject(InputOutcome::kInvalidValue, topic, e.what(), rejected);
+    return reject(InputOutcome::kInvalidValue, stream, stamp, e.what(), rejected);
   }
-  const InputOutcome time_ok = checkStamp(stamp, last, topic, sink);
+  const InputOutcome time_ok = checkStamp(stamp, last, stream, sink);
   if (time_ok != InputOutcome::kAccepted) {
-    return reject(time_ok, topic, "stamp " + formatValue(stamp.toSec()) + " s", rejected);
+    return reject(time_ok, stream, stamp, "stamp " + formatValue(stamp.toSec()) + " s", rejected);
   }
   const StiffnessEstimate* estimate = nullptr;
   try {
     // Transactional: throws without changing the state. No estimate: a shed input (no stiffness update).
     estimate = update();
   } catch (const InvalidInput& e) {
-    return reject(InputOutcome::kInvalidValue, topic, e.what(), rejected);
+    return reject(InputOutcome::kInvalidValue, stream, stamp, e.what(), rejected);
   } catch (const UnreachableLoad& e) {
-    return reject(InputOutcome::kUnreachableLoad, topic, e.what(), rejected);
+    return reject(InputOutcome::kUnreachableLoad, stream, stamp, e.what(), rejected);
   }
   // Taken: whatever becomes of its outputs (each guarded and counted on its own) the input is
   // counted accepted once and never also rejected.
@@ -263,14 +264,14 @@ InputOutcome RigPipeline::torque(Stamp stamp, double torque, PipelineSink& sink,
     const std::string_view frame = !origin.frame_id.empty() && origin.frame_id.front() == '/' ? origin.frame_id.substr(1)
                                                                                                : origin.frame_id;
     if (frame != options_.torque_frame) {
-      return reject(InputOutcome::kWrongFrame, "torque",
-                    "header.frame_id = '" + std::string(origin.frame_id) + "', expected ~torque_frame = '" +
+      return reject(InputOutcome::kWrongFrame, InputStream::kTorque, stamp,
+                    "header.frame_id = '" + printableText(origin.frame_id) + "', expected ~torque_frame = '" +
                         options_.torque_frame + "' (the sign of torque.z selects the loaded flank)",
-                    counters_.rejected_torque);
+                    counters_.rejected_torque, origin.frame_id);
     }
   }
   const InputOutcome outcome = apply(
-      "torque", stamp, last_torque_, counters_.accepted_torque, counters_.rejected_torque, sink,
+      InputStream::kTorque, stamp, last_torque_, counters_.accepted_torque, counters_.rejected_torque, sink,
       [&] { estimator_->validateTorque(torque); },
       [&]() -> const StiffnessEstimate* {
         // The mesh phase counts from the first torque input after a (re)start, as the dynamics do;
@@ -302,7 +303,7 @@ InputOutcome RigPipeline::torque(Stamp stamp, double torque, PipelineSink& sink,
 InputOutcome RigPipeline::preload(Stamp stamp, const std::vector<PreloadSetting>& settings, PipelineSink& sink,
                                   const InputOrigin& origin) {
   counters_.dropped_preload += preload_seq_.observe(origin.publisher, origin.seq);
-  return apply("preload", stamp, last_preload_, counters_.accepted_preload, counters_.rejected_preload, sink,
+  return apply(InputStream::kPreload, stamp, last_preload_, counters_.accepted_preload, counters_.rejected_preload, sink,
                [&] { estimator_->validatePreloads(settings); },
                [&]() -> const StiffnessEstimate* { return &estimator_->setPreloads(settings); });
 }
@@ -310,7 +311,7 @@ InputOutcome RigPipeline::preload(Stamp stamp, const std::vector<PreloadSetting>
 InputOutcome RigPipeline::motion(Stamp stamp, const MotionInput& reading, PipelineSink& sink, const InputOrigin& origin) {
   counters_.dropped_motion += motion_seq_.observe(origin.publisher, origin.seq);
   return apply(
-      "joint_states", stamp, last_motion_, counters_.accepted_motion, counters_.rejected_motion, sink,
+      InputStream::kJointStates, stamp, last_motion_, counters_.accepted_motion, counters_.rejected_motion, sink,
       [&] {
         requireFinite("joint_states: pinion position", reading.pinion_angle);
         if (reading.pinion_velocity) {
@@ -328,9 +329,10 @@ InputOutcome RigPipeline::motion(Stamp stamp, const MotionInput& reading, Pipeli
       });
 }
 
-InputOutcome RigPipeline::motionRefused(const std::string& reason, const InputOrigin& origin) {
+InputOutcome RigPipeline::motionRefused(Stamp stamp, const std::string& reason, const InputOrigin& origin,
+                                        std::string_view found) {
   counters_.dropped_motion += motion_seq_.observe(origin.publisher, origin.seq);
-  return reject(InputOutcome::kInvalidValue, "joint_states", reason, counters_.rejected_motion);
+  return reject(InputOutcome::kInvalidValue, InputStream::kJointStates, stamp, reason, counters_.rejected_motion, found);
 }
 
 void RigPipeline::acceptMotion(Stamp stamp, const MotionInput& m, PipelineSink& sink) {
@@ -357,7 +359,9 @@ void RigPipeline::acceptMotion(Stamp stamp, const MotionInput& m, PipelineSink& 
       accepted.gear_reference = residual;  // one report per slip; a wrong mapping keeps reporting
     }
   }
-  // Rule 10: the dynamics run up to this reading with the motion before it.
+  // Rule 10: the dynamics run up to this reading with the motion before it (after a gap, rule 4:
+  // they stop, and the next torque input restarts them at the measured phase).
+  if (dynamics_) stopAfterGap(stamp);
   advanceDynamicsTo(stamp, sink);
   // The first reading moves the mesh phase from the nominal count to the measured one (a jump):
   // the running block of mesh periods would count a period that never was.
@@ -481,6 +485,9 @@ void RigPipeline::pushStiffness(Stamp stamp, const StiffnessEstimate& estimate, 
   if (!dynamics_) return;
   // Every accepted input hands the new bearing stiffness to the dynamics (taken up only when it
   // moved by more than 1 %) at its own stamp (rule 10), then the resonance estimate is refreshed.
+  // After a gap (rule 4) the dynamics stop first and restart at the next torque input with it:
+  // the stiffness belongs after the gap, not at the last input before it.
+  stopAfterGap(stamp);
   const bool advanced = advanceDynamicsTo(stamp, sink);
   try {
     std::optional<double> at;
@@ -490,6 +497,16 @@ void RigPipeline::pushStiffness(Stamp stamp, const StiffnessEstimate& estimate, 
     dynamicsError("dynamics", e);
   }
   updateResonance(stamp, estimate, sink);
+}
+
+void RigPipeline::stopAfterGap(Stamp stamp) {
+  if (!dynamics_->started()) return;
+  const double gap = secondsBetween(stamp, dynamics_epoch_) - dynamics_->time();
+  if (!(gap > options_.max_gap)) return;
+  ++counters_.gap_restarts;
+  counters_.last_event = "input gap of " + formatValue(gap) + " s (more than ~max_gap): dynamics restarted";
+  dynamics_->stop();
+  mesh_block_ = MeshPeriodAccumulator{};
 }
 
 void RigPipeline::dynamicsError(const std::string& where, const Error& e) {
@@ -561,17 +578,13 @@ void RigPipeline::emitUpTo(double t, PipelineSink& sink) {
 void RigPipeline::advanceDynamics(Stamp stamp, double torque, PipelineSink& sink) {
   std::optional<double> at;  // the stamp on the dynamics' clock, once the dynamics run up to it
   try {
-    const double t = dynamics_->started() ? secondsBetween(stamp, dynamics_epoch_) : 0.0;
-    const bool gap = dynamics_->started() && t - dynamics_->time() > options_.max_gap;
-    if (!dynamics_->started() || gap) {
-      // Rule 4: a paused rig restarts the model at this input instead of integrating the gap.
-      if (gap) {
-        ++counters_.gap_restarts;
-        counters_.last_event = "input gap of " + formatValue(t - dynamics_->time()) + " s (more than ~max_gap): dynamics restarted";
-      }
+    // Rule 4: a paused rig restarts the model at this input instead of integrating the gap.
+    stopAfterGap(stamp);
+    if (!dynamics_->started()) {
       restartDynamics(stamp, torque);
       return;
     }
+    const double t = secondsBetween(stamp, dynamics_epoch_);
     // Else another stream took the dynamics past this stamp: the torque applies from there.
     if (t > dynamics_->time()) emitUpTo(t, sink);
     at = t;

@@ -287,6 +287,16 @@ std::string identifiedParameters(const CalibrationEstimate& estimate) {
 
 namespace drivetrain_stiffness {
 
+std::string jointNamesOf(const sensor_msgs::JointState& msg) {
+  if (msg.name.empty()) return "no joint names";
+  std::string names = "joints ";
+  for (std::size_t i = 0; i < msg.name.size(); ++i) {
+    if (i == 4 && msg.name.size() > 5) return names + ", ... (" + std::to_string(msg.name.size()) + " in all)";
+    names += (i ? ", '" : "'") + printableText(msg.name[i]) + "'";
+  }
+  return names;
+}
+
 std::optional<MotionInput> toMotionInput(const sensor_msgs::JointState& msg, const JointNames& names, std::string& why) {
   // sensor_msgs/JointState: name[i] goes with position[i], velocity[i], effort[i]; velocity and
   // effort may be empty (not measured).
@@ -298,7 +308,7 @@ std::optional<MotionInput> toMotionInput(const sensor_msgs::JointState& msg, con
   };
   const long p = index(names.pinion);
   if (p < 0 || static_cast<std::size_t>(p) >= msg.position.size()) {
-    why = p < 0 ? "no joint named '" + names.pinion + "' (~pinion_joint)"
+    why = p < 0 ? "no joint named '" + names.pinion + "' (~pinion_joint); the message has " + jointNamesOf(msg)
                 : "joint '" + names.pinion + "' has no position (" + std::to_string(msg.position.size()) + " positions for " +
                       std::to_string(msg.name.size()) + " names)";
     return std::nullopt;

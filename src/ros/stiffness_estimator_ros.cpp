@@ -238,7 +238,8 @@ void StiffnessEstimatorRos::onJointStates(const ros::MessageEvent<const sensor_m
   const InputOrigin origin{event.getPublisherName(), msg.header.seq, msg.header.frame_id};
   const std::optional<MotionInput> reading = toMotionInput(msg, joints_, joint_refusal_);
   const InputOutcome outcome = reading ? pipeline_->motion(fromRosTime(msg.header.stamp), *reading, *publishers_, origin)
-                                       : pipeline_->motionRefused(joint_refusal_, origin);
+                                       : pipeline_->motionRefused(fromRosTime(msg.header.stamp), joint_refusal_, origin,
+                                                                   jointNamesOf(msg));
   if (outcome != InputOutcome::kAccepted) {
     ROS_WARN_THROTTLE(1.0, "stiffness_estimator: %s", pipeline_->counters().last_event.c_str());
   }

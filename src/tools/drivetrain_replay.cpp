@@ -196,7 +196,7 @@ int run(int argc, char** argv) {
         if (reading) {
           pipeline.motion(fromRosTime(j->header.stamp), *reading, writer, origin);
         } else {
-          pipeline.motionRefused(joint_refusal, origin);
+          pipeline.motionRefused(fromRosTime(j->header.stamp), joint_refusal, origin, jointNamesOf(*j));
         }
         continue;
       }

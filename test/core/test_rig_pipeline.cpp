@@ -145,6 +145,77 @@ TEST(RigPipeline, LongGapRestartsTheDynamics) {
   EXPECT_EQ(r.te.size(), before + 3);
 }
 
+// Rule 4 before rule 10: after a gap the dynamics restart before a stiffness stamped after it is
+// taken up. The last torque before the gap lies off the 1 ms output grid (the dynamics stand on the
+// sample before it, its torque change pending), and the first after it moves a bearing stiffness by more than the 1 %
+// at which the dynamics take a change up: applied at the time before the gap, that change reached
+// the dynamics as "before the current time" (a dynamics error) and the restart kept the old
+// stiffness. Each input is also tried as a preload, which takes the same path without a torque.
+TEST(RigPipeline, AStiffnessChangeAfterAGapRestartsWithTheNewStiffness) {
+  for (const bool by_preload : {false, true}) {
+    RigPipeline p(rig(), PipelineOptions{});
+    Recorder r;
+    // A light preload, so that the mesh force moves the bearings' stiffness.
+    const std::vector<PreloadSetting> light = {{"pinion_bearing", 100.0, 0.0, 0.0, 0.0}, {"gear_bearing", 100.0, 0.0, 0.0, 0.0}};
+    ASSERT_EQ(p.preload(at(0.0), light, r), InputOutcome::kAccepted);
+    ASSERT_EQ(p.torque(at(0.0), 0.1, r), InputOutcome::kAccepted);
+    ASSERT_EQ(p.torque(at(0.50041192), 0.1, r), InputOutcome::kAccepted);  // off the grid
+    ASSERT_EQ(p.dynamics()->time(), 0.5);  // on the sample before the stamp, the torque change pending
+    const std::array<double, 2> before = p.dynamics()->bearingStiffness();
+    // 1.5 s later (more than ~max_gap = 1 s), a load that moves the bearings by more than 1 %.
+    const InputOutcome outcome = by_preload ? p.preload(at(2.0), preloads(3000.0), r) : p.torque(at(2.0), 8.0, r);
+    ASSERT_EQ(outcome, InputOutcome::kAccepted);
+    if (by_preload) {
+      ASSERT_EQ(p.torque(at(2.001), 0.1, r), InputOutcome::kAccepted);
+    }
+    const std::array<double, 2> k = p.estimator().shaftRadialStiffness();
+    ASSERT_GT(std::max(std::abs(k[0] / before[0] - 1.0), std::abs(k[1] / before[1] - 1.0)), 0.01)
+        << "the case needs a change the dynamics take up: " << k[0] / before[0] << ", " << k[1] / before[1];
+    EXPECT_EQ(p.counters().dynamics_errors, 0u) << p.counters().last_event;
+    EXPECT_EQ(p.counters().gap_restarts, 1u);
+    // The restarted dynamics run on the new stiffness (on the dynamics' 1 % grid).
+    for (int i = 0; i < 2; ++i) EXPECT_NEAR(p.dynamics()->bearingStiffness()[i] / k[i], 1.0, 0.006) << i;
+    ASSERT_EQ(p.torque(at(2.010), 0.1, r), InputOutcome::kAccepted);
+    EXPECT_EQ(p.counters().dynamics_errors, 0u) << p.counters().last_event;
+  }
+}
+
+// Every refusal is kept by stream and reason with the first one's stamp and reason and the values
+// found, not only the last event.
+TEST(RigPipeline, RefusalsAreTalliedByStreamAndReason) {
+  PipelineOptions o;
+  o.torque_frame = "pinion";
+  RigPipeline p(rig(), o);
+  Recorder r;
+  const std::string bad_utf8 = "base\x85link";
+  for (int i = 0; i < 5; ++i) p.torque(at(0.001 * (i + 1)), 0.1, r, {"/rig", 0, "base_link"});
+  p.torque(at(0.010), 0.1, r, {"/rig", 0, bad_utf8});
+  p.torque(at(0.011), std::numeric_limits<double>::quiet_NaN(), r, {"/rig", 0, "pinion"});
+  p.motionRefused(at(0.012), "no joint named 'pinion' (~pinion_joint)", {}, "joints 'motor', 'output'");
+  const RefusalTally& t = p.refusals();
+  const RefusalTally::Entry& frame = t.entry(InputStream::kTorque, InputOutcome::kWrongFrame);
+  EXPECT_EQ(frame.count, 6u);
+  EXPECT_EQ(frame.first_stamp, at(0.001));
+  EXPECT_NE(frame.first_reason.find("'base_link', expected ~torque_frame = 'pinion'"), std::string::npos) << frame.first_reason;
+  ASSERT_EQ(frame.found.size(), 2u);
+  EXPECT_EQ(frame.found[0].value, "base_link");
+  EXPECT_EQ(frame.found[0].count, 5u);
+  EXPECT_EQ(frame.found[1].value, "base\\x85link");  // printable: the byte escaped
+  EXPECT_EQ(t.entry(InputStream::kTorque, InputOutcome::kInvalidValue).count, 1u);
+  EXPECT_EQ(t.total(InputStream::kTorque), 7u);
+  EXPECT_EQ(t.total(InputStream::kTorque), p.counters().rejected_torque);
+  const RefusalTally::Entry& joints = t.entry(InputStream::kJointStates, InputOutcome::kInvalidValue);
+  EXPECT_EQ(joints.count, 1u);
+  ASSERT_EQ(joints.found.size(), 1u);
+  EXPECT_EQ(joints.found[0].value, "joints 'motor', 'output'");
+  // Past kMaxFound distinct values the rest are counted together.
+  for (std::size_t i = 0; i < RefusalTally::kMaxFound + 3; ++i) {
+    p.torque(at(0.1 + 0.001 * i), 0.1, r, {"/rig", 0, "frame" + std::to_string(i)});
+  }
+  EXPECT_EQ(t.entry(InputStream::kTorque, InputOutcome::kWrongFrame).found.size(), RefusalTally::kMaxFound);
+  EXPECT_EQ(t.entry(InputStream::kTorque, InputOutcome::kWrongFrame).found_other, 5u);
+}
+
 // Rule 5: the caller's clock going back (a looping bag) resets estimator and dynamics: the
 // configured preloads return, and the replayed inputs are accepted again; a clock that only
 // repeats itself does not reset.

@@ -148,7 +148,7 @@ TEST(RigPipelineMotion, EveryRuleCounted) {
   // Out of order, zero stamp, missing joint (the caller's refusal), and two numbered messages lost.
   EXPECT_EQ(p.motion(at(0.0005), good, r, {"/rig", 4, ""}), InputOutcome::kOutOfOrder);
   EXPECT_EQ(p.motion(Stamp{0}, good, r, {"/rig", 5, ""}), InputOutcome::kZeroStamp);
-  EXPECT_EQ(p.motionRefused("no joint named 'pinion' (~pinion_joint)", {"/rig", 6, ""}), InputOutcome::kInvalidValue);
+  EXPECT_EQ(p.motionRefused(at(0.004), "no joint named 'pinion' (~pinion_joint)", {"/rig", 6, ""}), InputOutcome::kInvalidValue);
   good.pinion_angle = 0.04;
   good.gear_angle = -0.5 * 0.04;
   ASSERT_EQ(p.motion(at(0.005), good, r, {"/rig", 9, ""}), InputOutcome::kAccepted);

@@ -15,7 +15,7 @@ inline InputOutcome feedTorque(RigPipeline& pipeline, Stamp stamp, double torque
 
 inline InputOutcome feedMotion(RigPipeline& pipeline, Stamp stamp, const MotionInput& reading, bool missing_pinion,
                                PipelineSink& sink, const InputOrigin& origin) {
-  return missing_pinion ? pipeline.motionRefused("no joint named 'pinion' (~pinion_joint)", origin)
+  return missing_pinion ? pipeline.motionRefused(stamp, "no joint named 'pinion' (~pinion_joint)", origin)
                         : pipeline.motion(stamp, reading, sink, origin);
 }
 

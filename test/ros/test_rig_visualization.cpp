@@ -117,9 +117,15 @@ TEST(MessageConversion, JointStatesAreReadByTheConfiguredNames) {
   in = toMotionInput(m, names, why);
   ASSERT_TRUE(in.has_value());
   EXPECT_FALSE(in->gear_angle.has_value());
-  // The default names do not match this rig's joints: refused, naming the parameter.
+  // The default names do not match this rig's joints: refused, naming the parameter and the
+  // joints the message has (printable whatever their bytes).
   EXPECT_FALSE(toMotionInput(m, JointNames{}, why).has_value());
-  EXPECT_EQ(why, "no joint named 'pinion' (~pinion_joint)");
+  EXPECT_EQ(why, "no joint named 'pinion' (~pinion_joint); the message has joints 'motor'");
+  EXPECT_EQ(jointNamesOf(m), "joints 'motor'");
+  sensor_msgs::JointState odd;
+  odd.name = {"a\xff", "b", "c", "d", "e", "f"};
+  EXPECT_EQ(jointNamesOf(odd), "joints 'a\\xff', 'b', 'c', 'd', ... (6 in all)");
+  EXPECT_EQ(jointNamesOf(sensor_msgs::JointState{}), "no joint names");
   m.position.clear();  // a name without a position
   EXPECT_FALSE(toMotionInput(m, names, why).has_value());
   EXPECT_EQ(why, "joint 'motor' has no position (0 positions for 1 names)");

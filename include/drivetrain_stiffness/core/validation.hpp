@@ -14,6 +14,11 @@ namespace drivetrain_stiffness {
 /// Formats a double with enough digits to reproduce it (used in every error message).
 std::string formatValue(double value);
 
+/// Text from outside (a frame id, a joint or topic name read from a message or a bag) made safe for
+/// messages, the console, JSON and CSV: printable ASCII kept, every other byte as \xNN, a
+/// backslash as \\. Valid UTF-8 output whatever bytes came in.
+std::string printableText(std::string_view text);
+
 /// Throws InvalidInput("<field> = <value>: <why>").
 [[noreturn]] void throwInvalid(const std::string& field, double value, const std::string& why);
 

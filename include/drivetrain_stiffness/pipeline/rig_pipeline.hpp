@@ -13,7 +13,9 @@
 //     (a looping or re-recorded bag): full reset, then the input is accepted. Values are checked
 //     before stamps, so a bad value never causes a reset.
 //  3. Equal stamps (a burst) are accepted: no time passes; the last torque is the one held.
-//  4. A forward gap longer than ~max_gap restarts the dynamics at the new input.
+//  4. A forward gap longer than ~max_gap restarts the dynamics: the first input after it stops
+//     them before anything it carries is applied (a bearing stiffness, a motion), and the next
+//     torque input restarts them with it.
 //  5. The caller's clock (ROS time, or the bag's record time in the replay) going back by more
 //     than ~clock_jump_back resets everything (tf2's and robot_localization's rule for looped bags),
 //     unless the accepted stamps already restarted in the new timeline (rule 2 came first).
@@ -65,29 +67,13 @@
 #include "drivetrain_stiffness/core/motion.hpp"
 #include "drivetrain_stiffness/core/reduced_models.hpp"
 #include "drivetrain_stiffness/core/stiffness_estimator.hpp"
+#include "drivetrain_stiffness/pipeline/input_types.hpp"
+#include "drivetrain_stiffness/pipeline/refusal_tally.hpp"
 #include "drivetrain_stiffness/pipeline/runtime_settings.hpp"
 #include "drivetrain_stiffness/pipeline/sequence_gaps.hpp"
 #include "drivetrain_stiffness/spectral/sliding_spectrum.hpp"
 
 namespace drivetrain_stiffness {
-
-/// A time stamp as integer nanoseconds since the epoch of the caller's clock. Differences are
-/// exact (a double at 1.7e9 s only resolves 2.4e-7 s); toSec() equals ros::Time::toSec().
-struct Stamp {
-  std::int64_t ns = 0;
-  static Stamp fromSecNsec(std::int64_t sec, std::int64_t nsec) { return {sec * 1000000000LL + nsec}; }
-  std::int64_t sec() const { return ns / 1000000000LL; }
-  std::int64_t nsec() const { return ns % 1000000000LL; }
-  double toSec() const { return static_cast<double>(sec()) + 1e-9 * static_cast<double>(nsec()); }
-  bool isZero() const { return ns == 0; }
-  /// ros::Time's range: uint32 seconds and nanoseconds (1970 to 2106-02-07).
-  static constexpr std::int64_t kMaxRosNs = 4294967295LL * 1000000000LL + 999999999LL;
-  bool inRosRange() const { return ns >= 0 && ns <= kMaxRosNs; }
-};
-inline bool operator<(Stamp a, Stamp b) { return a.ns < b.ns; }
-inline bool operator==(Stamp a, Stamp b) { return a.ns == b.ns; }
-/// Exact difference a - b [s].
-inline double secondsBetween(Stamp a, Stamp b) { return Stamp{a.ns - b.ns}.toSec(); }
 
 /// Settings of the pipeline (the node's private parameters). validate() names the field and value.
 struct PipelineOptions {
@@ -224,20 +210,6 @@ class PipelineSink {
   virtual void meshPeriod(Stamp /*stamp*/, const MeshPeriodStatistics& /*stats*/) {}
 };
 
-/// Why an input was not accepted (kAccepted otherwise).
-enum class InputOutcome { kAccepted, kZeroStamp, kOutOfOrder, kInvalidValue, kUnreachableLoad, kWrongFrame, kStampRange };
-const char* toString(InputOutcome outcome);
-
-/// Where an input came from (its message header and publisher): for the drop count and the frame rule.
-struct InputOrigin {
-  std::string_view publisher;  ///< the publisher's caller id; messages are numbered per publisher
-  std::uint32_t seq = 0;       ///< header.seq (0 throughout when the publisher does not number)
-  std::string_view frame_id;   ///< header.frame_id
-};
-
-/// Whether the caller's subscriber queue holds a backlog at this input (see the transport rules).
-enum class Backlog { kNone, kShed };
-
 /// Counters of everything the pipeline saw; nothing is dropped without being counted here.
 struct PipelineCounters {
   std::uint64_t accepted_torque = 0, rejected_torque = 0;
@@ -281,9 +253,11 @@ class RigPipeline {
   /// One encoder reading (rule 9). Refusals name the field: a non-finite angle, a speed beyond
   /// +-1e5 rpm.
   InputOutcome motion(Stamp stamp, const MotionInput& reading, PipelineSink& sink, const InputOrigin& origin = {});
-  /// A joint_states message the caller could not convert (no pinion joint): counted as a rejected
-  /// reading with an invalid value, `reason` in last_event.
-  InputOutcome motionRefused(const std::string& reason, const InputOrigin& origin = {});
+  /// A joint_states message stamped `stamp` that the caller could not convert (no pinion joint):
+  /// counted as a rejected reading with an invalid value, `reason` in last_event, `found` (the
+  /// message's joint names) in the tally.
+  InputOutcome motionRefused(Stamp stamp, const std::string& reason, const InputOrigin& origin = {},
+                             std::string_view found = {});
   /// "nominal", "encoders" or "nominal (encoders timed out)": what drives the mesh phase now.
   const char* phaseSource() const;
   /// [s] from the last accepted encoder reading to `now` while the encoders drive the phase
@@ -304,6 +278,8 @@ class RigPipeline {
   const RuntimeSettings& settings() const { return settings_; }
 
   const PipelineCounters& counters() const { return counters_; }
+  /// Every refused input by stream and reason (the counters count them; this says what and why).
+  const RefusalTally& refusals() const { return refusals_; }
   const PipelineOptions& options() const { return options_; }
   const StiffnessEstimator& estimator() const { return *estimator_; }
   const DynamicsEstimator* dynamics() const { return dynamics_.get(); }
@@ -322,14 +298,17 @@ class RigPipeline {
   double encoderPinionAngle(Stamp stamp) const;
 
  private:
-  InputOutcome reject(InputOutcome why, const std::string& topic, const std::string& reason, std::uint64_t& rejected);
+  /// Counts a refused input (its stream's counter `rejected`, the reason's, the tally) and says why
+  /// in last_event; `found` is the offending value for the tally (a frame id, the joint names).
+  InputOutcome reject(InputOutcome why, InputStream stream, Stamp stamp, const std::string& reason,
+                      std::uint64_t& rejected, std::string_view found = {});
   /// Rules 1, 2 and 5 for one stream; returns kAccepted or the rejection (counted by the caller).
-  InputOutcome checkStamp(Stamp stamp, std::optional<Stamp>& last, const std::string& topic, PipelineSink& sink);
+  InputOutcome checkStamp(Stamp stamp, std::optional<Stamp>& last, InputStream stream, PipelineSink& sink);
   /// `validate` (the value checks), the stamp rules, then `update` (a StiffnessEstimator call that
   /// returns the new estimate, or nullptr for a shed input);
   /// counts and reports the outcome.
   template <typename Validate, typename Update>
-  InputOutcome apply(const char* topic, Stamp stamp, std::optional<Stamp>& last, std::uint64_t& accepted,
+  InputOutcome apply(InputStream stream, Stamp stamp, std::optional<Stamp>& last, std::uint64_t& accepted,
                      std::uint64_t& rejected, PipelineSink& sink, Validate validate, Update update);
   void afterUpdate(Stamp stamp, const StiffnessEstimate& estimate, PipelineSink& sink);
   void advanceDynamics(Stamp stamp, double torque, PipelineSink& sink);
@@ -348,6 +327,9 @@ class RigPipeline {
   /// The dynamics follow the pinion angle model (anchor) from `stamp` on.
   void followAnchor(Stamp stamp);
   double meshTurns(double pinion_angle) const;
+  /// Rule 4: an input more than ~max_gap after the dynamics' time stops them (counted); the next
+  /// torque input restarts them.
+  void stopAfterGap(Stamp stamp);
   /// Dynamics at static equilibrium under `torque` from `stamp` on (new epoch, empty spectrum).
   void restartDynamics(Stamp stamp, double torque);
   void updateResonance(Stamp stamp, const StiffnessEstimate& estimate, PipelineSink& sink);
@@ -391,6 +373,7 @@ class RigPipeline {
   std::unique_ptr<Calibrator> calibrator_;
   MeasuredTeSample measured_te_;  ///< the calibrator's per-reading output (reused: no allocation)
   PipelineCounters counters_;
+  RefusalTally refusals_;
   SequenceGaps torque_seq_, preload_seq_, motion_seq_;
   std::optional<Stamp> last_motion_;
   /// The pinion angle model: angle(stamp) = angle + speed (stamp - stamp) [rad, rad/s], offset included.

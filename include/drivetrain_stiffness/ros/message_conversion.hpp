@@ -35,6 +35,8 @@ struct JointNames {
 /// gear's position when present. Without a pinion position: nullopt and `why` says what is missing
 /// (the pipeline counts it, RigPipeline::motionRefused).
 std::optional<MotionInput> toMotionInput(const sensor_msgs::JointState& msg, const JointNames& names, std::string& why);
+/// The message's joint names for a refusal ("joints 'motor', 'output'"; printable, the first few).
+std::string jointNamesOf(const sensor_msgs::JointState& msg);
 
 /// A torque message as RigPipeline::torque takes it: its stamp, the torque about the shaft axis
 /// (wrench.torque.z; the other components are not read) and its origin (the publisher's caller id,

@@ -1,0 +1,50 @@
+// RefusalTally: every input the pipeline refused, per stream and reason, so that a run's summary
+// says what was not used and why (a frame or joint-name mismatch with what was found against what
+// was expected), not only the last reason.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "drivetrain_stiffness/pipeline/input_types.hpp"
+
+namespace drivetrain_stiffness {
+
+/// The pipeline's input streams.
+enum class InputStream { kTorque, kPreload, kJointStates };
+constexpr std::size_t kInputStreams = 3;
+/// "torque", "preload", "joint_states": the topic names the pipeline's messages use.
+const char* toString(InputStream stream);
+
+class RefusalTally {
+ public:
+  /// Distinct found values kept per stream and reason; later distinct ones are counted together.
+  static constexpr std::size_t kMaxFound = 8;
+  struct Found {
+    std::string value;  ///< printable (printableText)
+    std::uint64_t count = 0;
+  };
+  /// The refusals of one stream for one reason.
+  struct Entry {
+    std::uint64_t count = 0;
+    Stamp first_stamp;         ///< the first refused input's stamp
+    std::string first_reason;  ///< and why it was refused
+    std::vector<Found> found;  ///< what was found, by first appearance (frame ids, joint names)
+    std::uint64_t found_other = 0;  ///< refusals whose found value is beyond the first kMaxFound
+  };
+
+  /// Counts one refusal; `found` (may be empty) is the offending value for the summary.
+  void record(InputStream stream, InputOutcome why, Stamp stamp, std::string_view reason, std::string_view found = {});
+  const Entry& entry(InputStream stream, InputOutcome why) const;
+  /// Refusals of `stream` for every reason.
+  std::uint64_t total(InputStream stream) const;
+
+ private:
+  static constexpr std::size_t kOutcomes = static_cast<std::size_t>(InputOutcome::kStampRange) + 1;
+  std::array<std::array<Entry, kOutcomes>, kInputStreams> entries_{};
+};
+
+}  // namespace drivetrain_stiffness
