@@ -29,6 +29,8 @@
 
 #include <ros/time.h>
 
+#include "bag_records.hpp"  // NOLINT(build/include_subdir)
+
 namespace drivetrain_stiffness {
 
 /// Where and why reading stopped before the end of a bag.
@@ -44,6 +46,7 @@ struct BagConnection {
   std::string topic;
   std::map<std::string, std::string> header;  ///< type, md5sum, message_definition, callerid, ...
   std::string field(const std::string& name) const;  ///< empty if absent
+  std::uint64_t messages = 0;  ///< message records read on it so far
 };
 
 /// One message record, as read.
@@ -68,9 +71,11 @@ class SequentialBagReader {
   const std::optional<BagDamage>& damage() const { return damage_; }
   /// Where the chunks end and the index begins, from the bag header; 0 if not read or never written.
   std::uint64_t indexPosition() const { return index_position_; }
+  /// The connections read so far, by id, with the messages read on each.
+  const std::map<std::uint32_t, BagConnection>& connections() const { return connections_; }
 
  private:
-  struct Record;
+  using Record = bag::TopRecord;
   bool readFileHeader();
   bool loadNextChunk();
   bool loadChunk(const Record& chunk);
@@ -80,12 +85,10 @@ class SequentialBagReader {
   bool atEndOfFile();
   bool readRecord(std::uint64_t offset, Record& record);
   std::unique_ptr<std::uint8_t[]> readData(std::uint64_t offset, std::size_t n);
-  bool readAt(std::uint64_t offset, void* out, std::size_t n);
   bool fail(std::uint64_t offset, const std::string& what);
   bool failInChunk(std::size_t at, const std::string& what);
 
-  std::unique_ptr<std::FILE, int (*)(std::FILE*)> file_{nullptr, &std::fclose};
-  std::uint64_t file_size_ = 0;
+  bag::BagFile file_;
   std::uint64_t position_ = 0;  ///< next top-level record
   std::uint64_t index_position_ = 0;
   std::uint32_t chunk_count_ = 0, chunk_infos_read_ = 0;

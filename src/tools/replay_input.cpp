@@ -3,6 +3,7 @@
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <string_view>
 
@@ -14,18 +15,26 @@
 namespace drivetrain_stiffness {
 namespace {
 
-/// The connection header's callerid, by reference into the header (which outlives the messages).
-const std::string& callerIdOf(const std::map<std::string, std::string>* header) {
+/// A connection header's field, by reference into the header (which outlives the messages); "" if absent.
+const std::string& headerField(const std::map<std::string, std::string>* header, const char* name) {
   static const std::string kNone;
   if (!header) return kNone;
-  const auto it = header->find("callerid");
+  const auto it = header->find(name);
   return it == header->end() ? kNone : it->second;
 }
 
-/// The file's first line (at most 32 characters); throws InvalidInput naming the file if it cannot be read.
+/// The file's first line (at most 32 characters). Throws InvalidInput naming the path if it is not
+/// a readable regular file, saying what it is instead.
 std::string firstLine(const std::string& path) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  const fs::file_status status = fs::status(path, ec);
+  const std::string option = "--bag = '" + path + "': ";
+  if (!fs::exists(status)) throw InvalidInput(option + "no such file" + (ec ? " (" + ec.message() + ")" : ""));
+  if (fs::is_directory(status)) throw InvalidInput(option + "a directory, not a bag file");
+  if (!fs::is_regular_file(status)) throw InvalidInput(option + "not a regular file (a device, pipe or socket)");
   std::ifstream in(path, std::ios::binary);
-  if (!in) throw InvalidInput("--bag = '" + path + "': cannot be read: " + std::strerror(errno));
+  if (!in) throw InvalidInput(option + "cannot be read: " + std::strerror(errno));
   std::string line(32, '\0');
   in.read(line.data(), static_cast<std::streamsize>(line.size()));
   line.resize(static_cast<std::size_t>(in.gcount()));
@@ -38,14 +47,31 @@ std::string recordTime(const ros::Time& t) {
   return s;
 }
 
+template <class T>
+constexpr MessageLayout layoutOf();
+template <>
+constexpr MessageLayout layoutOf<geometry_msgs::WrenchStamped>() { return MessageLayout::kWrenchStamped; }
+template <>
+constexpr MessageLayout layoutOf<drivetrain_stiffness::Preload>() { return MessageLayout::kPreload; }
+template <>
+constexpr MessageLayout layoutOf<sensor_msgs::JointState>() { return MessageLayout::kJointState; }
+
+template <class T>
+bool hasTypeOf(const BagConnection& connection) {
+  const std::string md5sum = ros::message_traits::MD5Sum<T>::value();
+  return md5sum == "*" || md5sum == connection.field("md5sum");
+}
+
 /// The recorded message as T, as MessageInstance::instantiate does it: null if the MD5 sums differ.
+/// Throws InvalidInput if its bytes do not hold a T (checked before deserializing).
 template <class T>
 boost::shared_ptr<T> deserialize(const BagRecordMessage& raw) {
-  const std::string md5sum = ros::message_traits::MD5Sum<T>::value();
-  if (md5sum != "*" && md5sum != raw.connection->field("md5sum")) return {};
+  if (!hasTypeOf<T>(*raw.connection)) return {};
+  const std::string bad = checkSerializedMessage(layoutOf<T>(), raw.data, raw.size);
+  if (!bad.empty()) throw InvalidInput(bad);
   auto message = boost::make_shared<T>();
   ros::serialization::IStream stream(const_cast<std::uint8_t*>(raw.data), raw.size);
-  ros::serialization::deserialize(stream, *message);  // throws on a length running past the data
+  ros::serialization::deserialize(stream, *message);
   return message;
 }
 
@@ -63,21 +89,48 @@ ReplayInput::ReplayInput(const std::string& path, const std::string& torque_topi
     : path_(path), torque_topic_(torque_topic), preload_topic_(preload_topic), joint_states_topic_(joint_states_topic) {
   const std::string version = firstLine(path);
   if (version.rfind("#ROSBAG V", 0) != 0) throw InvalidInput("--bag = '" + path + "': not a ROS bag (it does not start with '#ROSBAG V')");
-  try {
-    bag_ = std::make_unique<rosbag::Bag>();
-    bag_->open(path, rosbag::bagmode::Read);
-    view_ = std::make_unique<rosbag::View>(*bag_, [this](const rosbag::ConnectionInfo* c) { return isWanted(c->topic); });
-    return;
-  } catch (const std::exception& e) {  // rosbag::BagException; std::bad_alloc for a damaged length
-    rosbag_open_error_ = e.what();
-    view_.reset();
-    bag_.reset();
-  }
   if (version != "#ROSBAG V2.0") {
-    throw InvalidInput("--bag = '" + path + "': rosbag cannot open it (" + rosbag_open_error_ + "), and a bag of format " +
-                       version.substr(9) + " cannot be read without its index (only format 2.0 can)");
+    throw InvalidInput("--bag = '" + path + "': a bag of format " + version.substr(9) +
+                       "; only format 2.0 is read (`rosbag filter OLD.bag NEW.bag True` writes a copy in 2.0)");
+  }
+  check_ = checkBagIndex(path, [this](const BagConnection& c) { return readRule(c); });
+  if (check_.usable) {
+    try {
+      bag_ = std::make_unique<rosbag::Bag>();
+      bag_->open(path, rosbag::bagmode::Read);
+      view_ = std::make_unique<rosbag::View>(*bag_, [this](const rosbag::ConnectionInfo* c) { return isWanted(c->topic); });
+      return;
+    } catch (const std::exception& e) {  // rosbag::BagException: a bag the check passed and rosbag refuses
+      index_unusable_ = std::string("rosbag::Bag cannot open it: ") + e.what();
+      view_.reset();
+      bag_.reset();
+    }
+  } else {
+    index_unusable_ = check_.index_damage->describe(path);
   }
   sequential_ = std::make_unique<SequentialBagReader>(path);
+}
+
+ReadRule ReplayInput::readRule(const BagConnection& connection) const {
+  ReadRule rule;
+  rule.read = isWanted(connection.topic);
+  if (!rule.read) return rule;
+  // The type follows the topic as in drivetrain_replay's loop: torque first.
+  if (isTorque(connection.topic)) {
+    if (hasTypeOf<geometry_msgs::WrenchStamped>(connection)) rule.layout = MessageLayout::kWrenchStamped;
+  } else if (isJointStates(connection.topic)) {
+    if (hasTypeOf<sensor_msgs::JointState>(connection)) rule.layout = MessageLayout::kJointState;
+  } else if (hasTypeOf<drivetrain_stiffness::Preload>(connection)) {
+    rule.layout = MessageLayout::kPreload;
+  }
+  return rule;
+}
+
+std::vector<BagTopic> ReplayInput::topics() const {
+  if (!sequential_) return check_.topics;
+  std::vector<BagTopic> topics;
+  for (const auto& [id, c] : sequential_->connections()) topics.push_back({c.topic, c.field("type"), c.field("md5sum"), c.messages});
+  return topics;
 }
 
 ReplayInput::Iterator ReplayInput::begin() {
@@ -111,9 +164,14 @@ bool ReplayInput::nextIndexed() {
     }
     if (view_next_ == view_end_) return false;
     const rosbag::MessageInstance& m = *view_next_;
+    if (check_.stop && m.getTime() >= *check_.stop) {  // the first message the check found damaged
+      damage_ = check_.damage;
+      return false;
+    }
     message_.time_ = m.getTime();
     message_.topic_ = &m.getTopic();
-    message_.caller_id_ = &callerIdOf(m.getConnectionHeader().get());
+    message_.caller_id_ = &headerField(m.getConnectionHeader().get(), "callerid");
+    message_.data_type_ = &m.getDataType();
     // The type follows the topic as in drivetrain_replay's loop: torque first.
     const bool torque = isTorque(m.getTopic()), joints = !torque && isJointStates(m.getTopic());
     message_.torque_ = torque ? m.instantiate<geometry_msgs::WrenchStamped>() : nullptr;
@@ -143,14 +201,13 @@ bool ReplayInput::nextSequential() {
   return false;
 }
 
-std::string ReplayInput::withoutIndex() const {
-  return "read without the index, as rosbag::Bag cannot open the bag (" + rosbag_open_error_ + ")";
-}
+std::string ReplayInput::withoutIndex() const { return "read without the index (" + index_unusable_ + ")"; }
 
 void ReplayInput::decode(const BagRecordMessage& raw, ReplayMessage& message) const {
   message.time_ = raw.time;
   message.topic_ = &raw.connection->topic;
-  message.caller_id_ = &callerIdOf(&raw.connection->header);
+  message.caller_id_ = &headerField(&raw.connection->header, "callerid");
+  message.data_type_ = &headerField(&raw.connection->header, "type");
   const bool torque = isTorque(raw.connection->topic), joints = !torque && isJointStates(raw.connection->topic);
   message.torque_ = torque ? deserialize<geometry_msgs::WrenchStamped>(raw) : nullptr;
   message.joint_states_ = joints ? deserialize<sensor_msgs::JointState>(raw) : nullptr;

@@ -11,10 +11,20 @@ gives every message's chunk and offset, its own record reader the record's end, 
 counts when its record (uncompressed) or its whole chunk (compressed) lies before the damage.
 A text file is refused with exit 1 naming it; the intact bag gives exit 0 and status "ok".
 
+Damage that crashed librosbag or made roscpp_serialization allocate gigabytes, each read up to the
+damage instead (exit 4, file and offset named): an index entry pointing past its chunk, a
+JointState whose name[] claims 4294967280 strings (read through the index, and without it), and
+60 seeded 16-byte flips over a rig-sim bag with encoders and an LZ4 copy of it: no signal, an exit
+code of the table, summary.json valid JSON, the file named on exit 4, and the largest resident
+size of any replay under 1 GiB.
+
 usage: check_damaged_bags.py BIN_DIR SOURCE_DIR WORK_DIR   (with the devel space's env.sh)"""
 import json
 import os
+import random
+import resource
 import shutil
+import struct
 import subprocess
 import sys
 
@@ -131,6 +141,95 @@ def check_damaged(name, bag, offset, torque, plots=False):
         failures.append(name)
 
 
+def index_entries(path, chunk_end, topic):
+    """(file offset of each index entry's 4-byte chunk offset, record time) for `topic` in the index
+    data records that follow the chunk ending at chunk_end."""
+    bag = rosbag.Bag(path)
+    conns = [c.id for c in bag._connections.values() if c.topic == topic]
+    f = bag._file
+    f.seek(chunk_end)
+    out = []
+    while True:
+        pos = f.tell()
+        try:
+            header = rb._read_header(f)
+        except Exception:  # noqa: BLE001 - past the index data records
+            break
+        if header.get("op") != b"\x04":
+            break
+        conn, count = struct.unpack("<I", header["conn"])[0], struct.unpack("<I", header["count"])[0]
+        data_len = struct.unpack("<I", f.read(4))[0]
+        start = f.tell()
+        if conn in conns:
+            for i in range(count):
+                sec, nsec = struct.unpack_from("<II", open(path, "rb").read()[start + 12 * i:start + 12 * i + 8])
+                out.append((start + 12 * i + 8, (sec, nsec)))
+        f.seek(start + data_len)
+        del pos
+    bag.close()
+    return out
+
+
+def joint_state_bomb(source, name):
+    """A copy of `source` whose 1001st /joint_states message's name[] length is 0xFFFFFFF0 (uncompressed
+    chunks): returns its path and that message's record offset."""
+    _, _, msgs = layout(source)
+    victim = [m for m in msgs if m["topic"] == "/joint_states"][1000]
+    path = copy(source, name)
+    with open(path, "rb") as f:
+        f.seek(victim["start"])
+        header_len = struct.unpack("<I", f.read(4))[0]
+        f.seek(victim["start"] + 4 + header_len + 4 + 12)  # the message: seq, stamp, then frame_id
+        frame_len = struct.unpack("<I", f.read(4))[0]
+        names_at = f.tell() + frame_len
+    patch(path, names_at, struct.pack("<I", 0xFFFFFFF0))
+    return path, victim
+
+
+def check_bomb(name, bag, offset, torque):
+    p, report = run(bag, name)
+    ok = p.returncode == 4 and ("'%s' at byte %d:" % (bag, offset)) in p.stderr and "claims 4294967280 elements" in p.stderr
+    s = json.load(open(os.path.join(report, "summary.json")))
+    ok = ok and s["counters"]["accepted_torque"] == torque
+    print("%-26s exit %d: %s" % (name, p.returncode, "ok" if ok else p.stderr.strip()[-600:]))
+    if not ok:
+        failures.append(name)
+
+
+def seeded_flips(bags, cases):
+    """`cases` replays of copies of `bags` with 16 bytes overwritten at a seeded offset each."""
+    rng = random.Random(20261127)
+    bad = []
+    for n in range(cases):
+        source = bags[n % len(bags)]
+        size = os.path.getsize(source)
+        offset = rng.randrange(0, size - 16)
+        path = copy(source, "flip_%02d.bag" % n)
+        patch(path, offset, bytes(rng.randrange(256) for _ in range(16)))
+        p, report = run(path, "flip_%02d" % n)
+        why = []
+        if p.returncode not in (0, 1, 3, 4, 5):
+            why.append("exit %d" % p.returncode)
+        if p.returncode == 4 and "'%s' at byte " % path not in p.stderr:
+            why.append("exit 4 without the file and offset")
+        if p.returncode != 1:
+            try:
+                json.load(open(os.path.join(report, "summary.json")))
+            except Exception as e:  # noqa: BLE001
+                why.append("summary.json: %s" % e)
+        elif "'%s'" % path not in p.stderr:
+            why.append("refused without naming the file: %s" % p.stderr.strip()[-200:])
+        if why:
+            bad.append("flip %d at byte %d of %s: %s" % (n, offset, os.path.basename(source), ", ".join(why)))
+        else:
+            os.remove(path)
+    peak = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss * 1024
+    print("%-26s %d cases, largest resident size %.0f MiB: %s"
+          % ("seeded_byte_flips", cases, peak / 2**20, "; ".join(bad) or "ok"))
+    if bad or peak > 2**30:
+        failures.append("seeded_byte_flips")
+
+
 def main():
     shutil.rmtree(work, ignore_errors=True)
     os.makedirs(work)
@@ -178,6 +277,35 @@ def main():
     corrupt = copy(lz4, "lz4_corrupt.bag")
     patch(corrupt, (victim[1] + victim[2]) // 2, b"GARBAGE!GARBAGE!")
     check_damaged("lz4_corrupt_chunk", corrupt, victim[0], torque_before(lz4_msgs, victim[0]))
+
+    # An index entry of the uncompressed bag pointing past its chunk: rosbag::View parsed a record
+    # header there (SIGSEGV in Bag::readHeaderFromBuffer); the view now stops before that message.
+    entries = index_entries(original, chunks[0][2], "/torque")
+    pointer, _ = entries[1200]
+    wild = copy(original, "wild_index_entry.bag")
+    patch(wild, pointer, struct.pack("<I", 0xFFFFFF00))
+    check_damaged("wild_index_entry", wild, chunks[0][0], 1200)
+
+    # A JointState's name[] length damaged to 0xFFFFFFF0 in a rig-sim bag with encoders, read
+    # through the index and as a recording cut short there (no index): roscpp_serialization resized
+    # the array before checking the bytes. Now refused before it deserializes, at the record.
+    sim = os.path.join(work, "sim.bag")
+    subprocess.run([os.path.join(bin_dir, "drivetrain_rig_sim"), "--scenario", "torque_ripple", "--config", config,
+                    "--out", sim, "--duration", "2"], check=True, capture_output=True)
+    _, sim_chunks, sim_msgs = layout(sim)
+    bomb, victim = joint_state_bomb(sim, "joint_state_bomb.bag")
+    before = sum(1 for m in sim_msgs if m["topic"] == "/torque" and m["time"] < victim["time"])
+    check_bomb("joint_state_bomb", bomb, victim["start"], before)
+    cut = prefix(bomb, victim["end"] + 100, "joint_state_bomb_cut.bag")
+    check_bomb("joint_state_bomb_unindexed", cut, victim["start"],
+               sum(1 for m in sim_msgs if m["topic"] == "/torque" and m["end"] <= victim["start"]))
+
+    # Seeded byte flips over the rig-sim bag and an LZ4 copy with 16 KiB chunks.
+    sim_lz4 = os.path.join(work, "sim_lz4.bag")
+    with rosbag.Bag(sim) as i, rosbag.Bag(sim_lz4, "w", compression="lz4", chunk_threshold=16 * 1024) as o:
+        for topic, raw, t, conn in i.read_messages(raw=True, return_connection_header=True):
+            o.write(topic, raw, t, raw=True, connection_header=conn)
+    seeded_flips([sim, sim_lz4], 60)
 
     # Not a bag at all: refused, naming the file.
     text = os.path.join(work, "notes.txt")
