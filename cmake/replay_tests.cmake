@@ -49,9 +49,16 @@ add_dependencies(scenario_bag_tests ${PROJECT_NAME}_generate_messages_cpp)
 add_test(NAME replay_damaged_bags_read_up_to_the_damage
   COMMAND ${CATKIN_DEVEL_PREFIX}/env.sh /usr/bin/python3 ${CMAKE_CURRENT_SOURCE_DIR}/test/replay/check_damaged_bags.py
           ${DEVEL_BIN} ${CMAKE_CURRENT_SOURCE_DIR} ${CMAKE_CURRENT_BINARY_DIR}/damaged_bags_test)
-# --help documents the exit codes, 4 (incomplete) included.
+# Bags another lab would hand the replay, written at test time: a torque in another frame, two kinds
+# of refusal, only unrelated topics, a wrong type, one topic for two inputs, a directory or a pipe
+# as --bag, gaps with load changes, a frame id that is not UTF-8, encoders that barely turn: the
+# exit code, the run summary on stderr, summary.json's inputs and report.md say what happened.
+add_test(NAME replay_says_what_it_used_of_a_foreign_bag
+  COMMAND ${CATKIN_DEVEL_PREFIX}/env.sh /usr/bin/python3 ${CMAKE_CURRENT_SOURCE_DIR}/test/replay/check_foreign_bags.py
+          ${DEVEL_BIN} ${CMAKE_CURRENT_SOURCE_DIR} ${CMAKE_CURRENT_BINARY_DIR}/foreign_bags_test)
+# --help documents the exit codes, 4 (incomplete) and 5 (nothing accepted) included.
 add_test(NAME replay_help_lists_exit_codes COMMAND ${DEVEL_BIN}/drivetrain_replay --help)
-set_tests_properties(replay_help_lists_exit_codes PROPERTIES PASS_REGULAR_EXPRESSION "Exit codes.*\n  4  incomplete")
+set_tests_properties(replay_help_lists_exit_codes PROPERTIES PASS_REGULAR_EXPRESSION "Exit codes.*\n  4  incomplete.*\n  5  nothing accepted")
 
 # The report: summary, markdown and the four plots (matplotlib from Debian's python3).
 add_test(NAME replay_report

@@ -5,19 +5,24 @@ resonance against time, as PNG plots plus report.md with the key figures.
 
 usage: plot_replay.py OUTPUT_BAG REPORT_DIR [INPUT_BAG]
 Times are seconds since the first output stamp; SI units (TE in m shown in um).
-drivetrain_replay writes REPORT_DIR/summary.json before it runs this script: when its status says
-the replay is incomplete (a truncated or damaged bag), report.md says so at the top, and a run with
-no outputs before the damage gets a report.md without plots instead of an error."""
+drivetrain_replay writes REPORT_DIR/summary.json and the top of REPORT_DIR/report.md (status, inputs,
+calibration, output counts) before it runs this script, which then appends its figures. Without a
+replay's summary (a live run's `rosbag record`) it writes the whole report.md. A run without
+outputs (nothing accepted, or damage before the first) gets a note instead of figures."""
 import json
 import math
 import os
 import sys
 
-import matplotlib
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-import rosbag  # noqa: E402
+try:
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt  # noqa: E402
+    import numpy as np  # noqa: E402
+    import rosbag  # noqa: E402
+except ImportError as e:
+    sys.exit("plot_replay.py: %s: install python3-matplotlib, python3-numpy and python3-rosbag, or skip the plots "
+             "(drivetrain_replay --no-plots)" % e)
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import motion_analysis  # noqa: E402
@@ -104,15 +109,17 @@ def main():
     source = sys.argv[3] if len(sys.argv) > 3 else out_bag
     os.makedirs(report, exist_ok=True)
     status = replay_status(report)
+    # A replay wrote the top of report.md: the figures are appended to it.
+    appending = bool(replay_summary(report)) and os.path.exists(os.path.join(report, "report.md"))
     te, st, res, mp = read(out_bag)
     starts = [s[0][0] for s in (te, st, res) if s]
-    if not starts and status and status != "ok":
-        with open(os.path.join(report, "report.md"), "w") as f:
-            write_header(f, status, source, out_bag)
-            f.write("No outputs: the damage comes before the first of them.\n")
-        return
     if not starts:
-        sys.exit("plot_replay.py: no /transmission_error, /stiffness or /resonance in " + out_bag)
+        with open(os.path.join(report, "report.md"), "a" if appending else "w") as f:
+            if not appending:
+                write_header(f, status, source, out_bag)
+            f.write("## Figures\n\nNo figures: there are no outputs (no /transmission_error, /stiffness or /resonance "
+                    "in `%s`)%s.\n" % (out_bag, "; the inputs above say why" if appending else ""))
+        return
     t0 = min(starts)
 
     fig, ax = plt.subplots(2, 1, figsize=(9, 6), sharex=True)
@@ -167,9 +174,15 @@ def main():
     finish(fig, [ax], ["natural frequency [kHz]"], "Resonance estimates", os.path.join(report, "resonance.png"))
 
     motion_figures = plot_motion(source, te, res, t0, report, *encoder_settings(report)) if source != out_bag and te else []
+    if source != out_bag and not te:
+        motion_figures = [(None, "", "No Campbell diagram or TE order spectrum: the replay made no transmission error "
+                                     "samples (no dynamics).")]
 
-    with open(os.path.join(report, "report.md"), "w") as f:
-        write_header(f, status, source, out_bag)
+    with open(os.path.join(report, "report.md"), "a" if appending else "w") as f:
+        if appending:
+            f.write("\n## Figures\n\n")
+        else:
+            write_header(f, status, source, out_bag)
         f.write("| quantity | value |\n|---|---|\n")
         f.write("| span of outputs | %.3f s |\n" % (max(r[0] for r in te + st) - t0 if te or st else 0.0))
         f.write("| transmission_error samples | %d |\n| stiffness messages | %d |\n| resonance updates | %d |\n"
@@ -198,7 +211,8 @@ def main():
                 "![stiffness](stiffness.png)\n\n"
                 "![resonance](resonance.png)\n")
         for name, caption, note in motion_figures:
-            f.write("\n![%s](%s)\n" % (caption, name))
+            if name:
+                f.write("\n![%s](%s)\n" % (caption, name))
             if note:
                 f.write("\n%s\n" % note)
 
@@ -216,13 +230,15 @@ def plot_motion(input_bag, te, res, t0, report, topic="/joint_states", joint="pi
     diagram (TE short-time spectra against the measured speed, mesh orders 1-4 of the pinion's z_p
     teeth as lines, and the natural frequencies of each resonance estimate against the speed while
     it held) and the TE order spectrum (angle-domain resampling). Returns the (file, caption) pairs
-    written."""
+    written, and (None, "", note) for a figure left out, saying why."""
+    def left_out(why):
+        return [(None, "", "No Campbell diagram or TE order spectrum: %s." % why)]
     try:
         enc_t, enc_angle, enc_speed = motion_analysis.read_encoder(input_bag, joint, topic)
-    except Exception:  # not a bag rosbag reads (a damaged input): no motion figures
-        return []
+    except Exception as e:  # noqa: BLE001 - not a bag rosbag reads (a damaged input)
+        return left_out("the encoders could not be read from the input bag (%s: %s)" % (type(e).__name__, e))
     if len(enc_t) < 10:
-        return []
+        return left_out("%d readings of joint '%s' on %s in the input bag (10 needed)" % (len(enc_t), joint, topic))
     te_t = np.array([r[0] for r in te])
     dyn = np.array([r[1] for r in te])
     out = []
@@ -238,10 +254,21 @@ def plot_motion(input_bag, te, res, t0, report, topic="/joint_states", joint="pi
         ax.set_ylabel("dynamic TE amplitude [um]")
         ax.set_title("Transmission error order spectrum (angle-domain resampling)")
         out.append(save(fig, report, "te_order_spectrum.png", "TE order spectrum"))
+    else:
+        turns = abs(enc_angle[-1] - enc_angle[0]) / (2 * np.pi)
+        out.append((None, "", "No TE order spectrum: the pinion turns %.2f revolutions over the encoder readings; "
+                              "the angle-domain resampling needs 4 revolutions in one direction." % turns))
     dt = np.median(np.diff(te_t)) if len(te_t) > 1 else 0.0
-    if dt > 0 and te_t[-1] - te_t[0] > 0.5:
+    if not (dt > 0 and te_t[-1] - te_t[0] > 0.5):
+        out.append((None, "", "No Campbell diagram: the transmission error spans %.3f s (more than 0.5 s needed)."
+                              % (te_t[-1] - te_t[0] if len(te_t) else 0.0)))
+    else:
         rpm, _, (speeds, freqs, rows) = motion_analysis.campbell(te_t, dyn, enc_t, enc_speed)
-        if rows.shape[1] > 2 and np.ptp(rpm) > 1.0:
+        if not (rows.shape[1] > 2 and np.ptp(rpm) > 1.0):
+            out.append((None, "", "No Campbell diagram: the encoders' speed spans %.2f rpm over %d short-time spectra "
+                                  "(it needs more than 1 rpm and 3 spectra: a diagram against speed needs the speed "
+                                  "to change)." % (np.ptp(rpm) if len(rpm) else 0.0, rows.shape[1])))
+        else:
             order = np.argsort(rpm)
             fig, ax = plt.subplots(figsize=(9, 5))
             level = np.log10(rows[:, order] + 1e-30)

@@ -21,11 +21,13 @@
 #include "drivetrain_stiffness/Preload.h"
 #include "drivetrain_stiffness/core/dynamics_estimator.hpp"
 #include "drivetrain_stiffness/core/sliced_modal_propagator.hpp"
+#include "drivetrain_stiffness/core/validation.hpp"
 #include "drivetrain_stiffness/config/yaml_config.hpp"
 #include "drivetrain_stiffness/ros/node_parameters.hpp"
 #include "python_script.hpp"  // NOLINT(build/include_subdir)
 #include "replay_input.hpp"   // NOLINT(build/include_subdir)
 #include "drivetrain_stiffness/config/yaml_parameters.hpp"
+#include "replay_summary.hpp"  // NOLINT(build/include_subdir)
 #include "replay_writer.hpp"  // NOLINT(build/include_subdir)
 #include "calibrated_gearbox.hpp"  // NOLINT(build/include_subdir)
 
@@ -46,18 +48,33 @@ YamlParameters readParameterFile(const std::string& path) {
   return YamlParameters(root);
 }
 
-// Exit codes (docs/replay_exit_codes.md); 2 is left unused, as before.
-constexpr int kExitOk = 0, kExitRefused = 1, kExitWrongType = 3, kExitIncomplete = 4;
+// Exit codes (docs/replay_exit_codes.md); 2 is left unused (CLI11's own codes are mapped to 1).
+constexpr int kExitOk = 0, kExitRefused = 1, kExitWrongType = 3, kExitIncomplete = 4, kExitNothingAccepted = 5;
 constexpr char kExitCodesHelp[] =
     "Exit codes (docs/replay_exit_codes.md):\n"
     "  0  ok: the whole bag was read\n"
     "  1  refused or failed: bad options, an unreadable config or parameter file, a file that is not a\n"
     "     bag (nothing replayed); an output or the report that cannot be written; --calibrate without a\n"
     "     calibration, or after a bag in which no window updated it (the other outputs are written)\n"
-    "  3  messages of the wrong type on the torque, preload or joint_states topic (counted as wrong_type)\n"
+    "  3  messages of the wrong type on the torque, preload or joint_states topic (counted as wrong_type;\n"
+    "     stderr names the topic, the type found and the type expected)\n"
     "  4  incomplete: the bag is truncated or damaged; the outputs up to the damage are written and\n"
     "     closed, and the summary's status says \"incomplete: 'FILE' at byte OFFSET: ...\" (takes\n"
-    "     precedence over 3)";
+    "     precedence over 3 and 5)\n"
+    "  5  nothing accepted: no message on a named topic was accepted (none there, or every one refused);\n"
+    "     stderr's run summary says why, and lists the bag's topics when a named one is absent";
+
+/// The exit code's line in the run summary.
+std::string exitMeaning(int code) {
+  switch (code) {
+    case kExitOk: return "ok";
+    case kExitRefused: return "refused (--calibrate)";
+    case kExitWrongType: return "messages of the wrong type";
+    case kExitIncomplete: return "incomplete: the bag is damaged";
+    case kExitNothingAccepted: return "nothing accepted";
+  }
+  return "?";
+}
 
 void ensureDirectory(const std::string& option, const std::string& dir) {
   std::error_code ec;
@@ -105,6 +122,73 @@ nlohmann::json countersJson(const PipelineCounters& c) {
   return j;
 }
 
+/// JSON text whatever bytes its strings hold (bag strings are escaped at the source; this also
+/// covers a path or a config value given in another encoding).
+std::string jsonText(const nlohmann::json& j) { return j.dump(2, ' ', false, nlohmann::json::error_handler_t::replace); }
+
+/// Where the dynamics' time went, over the whole bag (the pipeline keeps its dynamics through
+/// restarts): deterministic counts, unlike the speed. model_updates: the builds (at the start, and
+/// at a restart after a change) and the bearing-stiffness or damping changes taken up while running;
+/// dopri5_intervals: intervals handed to dopri5; the sliced propagation's (at the fidelity of the
+/// bag's end: the full model's, or linear_modal's mean model's) slice crossings, decompositions
+/// (general: by Eigen's eigensolver), contact changes located, and steps cut where the regime bound
+/// could not clear them; at the nominal phase after a change, the stretches the interval maps took
+/// and the intervals made (docs/model.md).
+nlohmann::json dynamicsWorkJson(const DynamicsEstimator& d) {
+  nlohmann::json work = {{"model_updates", d.rebuilds()}, {"dopri5_intervals", d.fallbackIntervals()},
+                         {"mapped_stretches", d.mappedStretches()},
+                         {"interval_maps_made", d.intervalMaps() ? d.intervalMaps()->intervalsMade() : 0L}};
+  if (const SlicedModalPropagator* s = d.movingSlicedPropagator()) {
+    work["slices_crossed"] = s->slicesCrossed();
+    work["slice_decompositions"] = s->decompositions();
+    work["general_decompositions"] = s->generalDecompositions();
+    work["contact_changes"] = s->regimeChanges();
+    work["checked_substeps"] = s->checkedSubsteps();
+  }
+  return work;
+}
+
+/// What the run did, for stderr: the status, the inputs, the calibration, the exit code's meaning.
+std::string runSummaryText(const std::string& bag_path, std::uint64_t messages, const nlohmann::json& summary,
+                           const ReplaySummary& inputs, const RigPipeline& pipeline,
+                           const std::vector<BagTopic>& bag_topics, int code) {
+  std::string text = "drivetrain_replay: '" + printableText(bag_path) + "': " + std::to_string(messages) +
+                     " messages read on the named topics, " + std::to_string(ReplaySummary::accepted(pipeline.counters())) +
+                     " inputs accepted\n";
+  text += inputs.text(pipeline, bag_topics);
+  text += "  calibration: " + summary["calibration"]["status"].get<std::string>() + "\n";
+  const std::string status = summary["status"].get<std::string>();
+  if (status != "ok") text += "  status: " + status + "\n";
+  text += inputs.wrongTypeText().empty() ? "" : "  wrong type: " + inputs.wrongTypeText();
+  text += "  exit code " + std::to_string(code) + ": " + exitMeaning(code) + "\n";
+  return text;
+}
+
+/// report.md: the status and the run summary; plot_replay.py appends the figures when plots are on.
+void writeReport(const std::string& path, const nlohmann::json& summary, const std::string& inputs_markdown,
+                 const RigPipeline& pipeline, const std::string& out_bag) {
+  std::ofstream f(path);
+  const std::string status = summary["status"].get<std::string>();
+  f << "# Stiffness estimator report\n\n";
+  if (status.rfind("incomplete", 0) == 0) {
+    f << "**Incomplete replay**: the bag could not be read to its end; the outputs and the figures below cover the "
+         "messages before the damage only.\n\n`" << status << "`\n\n";
+  } else if (status != "ok") {
+    f << "**Nothing accepted**: no message on a named topic was used, so there are no estimates; the inputs below "
+         "say why.\n\n";
+  }
+  f << "Source: `" << summary["bag"].get<std::string>() << "`; outputs: `" << printableText(out_bag) << "`.\n\n";
+  f << "## Inputs\n\n" << inputs_markdown << "\n";
+  f << "## Calibration\n\n" << summary["calibration"]["status"].get<std::string>() << "\n\n";
+  const PipelineCounters& c = pipeline.counters();
+  f << "## Outputs\n\n| output | count |\n|---|---|\n";
+  for (const auto& [key, count] : namedCounters(c)) {
+    if (key.size() > 10 && key.compare(key.size() - 10, 10, "_published") == 0) f << "| " << key << " | " << count << " |\n";
+  }
+  f << "| dynamics restarted after a gap / on an error | " << c.gap_restarts << " / " << c.dynamics_errors << " |\n";
+  f << "| model time integrated | " << c.simulated_s << " s |\n";
+}
+
 int run(int argc, char** argv) {
   CLI::App app{"Replays a recorded bag through the stiffness estimator's pipeline (no master needed)"};
   app.footer(kExitCodesHelp);
@@ -143,7 +227,10 @@ int run(int argc, char** argv) {
     return app.exit(e) == 0 ? kExitOk : kExitRefused;
   }
 
-  // Refused before anything is read: an unknown name, or a report whose plots would miss their topics.
+  // Refused before anything is read: one topic for two inputs, an unknown name, or a report whose
+  // plots would miss their topics.
+  ReplaySummary inputs(torque_topic, preload_topic, joint_states_topic);
+  inputs.requireDistinctTopics();
   const OutputTopics topics = OutputTopics::parse("--topics", topics_option);
   const OutputTopics csv_topics = csv_topics_option.empty() ? topics : OutputTopics::parse("--csv-topics", csv_topics_option);
   const OutputTopics plotted = OutputTopics::parse("", "transmission_error,stiffness,resonance,mesh_period_stats");
@@ -173,7 +260,7 @@ int run(int argc, char** argv) {
   std::vector<PreloadSetting> preload_settings;  // each preload message's, converted in place
   ReplayWriter writer(pipeline, readOutputSettings(get), out_bag,
                       compression == "none" ? BagCompression::None : BagCompression::Lz4, csv_dir, topics, csv_topics);
-  std::uint64_t messages = 0, wrong_type = 0;
+  std::uint64_t messages = 0;
   std::optional<ros::Time> first, last;
   const auto start = std::chrono::steady_clock::now();  // only for the printed speed
   for (const ReplayMessage& m : input) {
@@ -184,43 +271,56 @@ int run(int argc, char** argv) {
     // The recording publisher's caller id: its header.seq numbers what rosbag record received.
     const std::string& publisher = m.getCallerId();
     if (topicMatches(m.getTopic(), torque_topic)) {
-      if (auto w = m.instantiate<geometry_msgs::WrenchStamped>()) {
+      const auto w = m.instantiate<geometry_msgs::WrenchStamped>();
+      inputs.read(InputStream::kTorque, w ? std::string() : m.getDataType());
+      if (w) {
         const TorqueInput in = toTorqueInput(*w, publisher);
         pipeline.torque(in.stamp, in.torque, writer, in.origin);
-        continue;
       }
     } else if (topicMatches(m.getTopic(), joint_states_topic)) {
-      if (auto j = m.instantiate<sensor_msgs::JointState>()) {
+      const auto j = m.instantiate<sensor_msgs::JointState>();
+      inputs.read(InputStream::kJointStates, j ? std::string() : m.getDataType());
+      if (j) {
         const InputOrigin origin{publisher, j->header.seq, j->header.frame_id};
+        const Stamp stamp = fromRosTime(j->header.stamp);
         const std::optional<MotionInput> reading = toMotionInput(*j, joints, joint_refusal);
         if (reading) {
-          pipeline.motion(fromRosTime(j->header.stamp), *reading, writer, origin);
+          pipeline.motion(stamp, *reading, writer, origin);
         } else {
-          pipeline.motionRefused(fromRosTime(j->header.stamp), joint_refusal, origin, jointNamesOf(*j));
+          pipeline.motionRefused(stamp, joint_refusal, origin, jointNamesOf(*j));
         }
-        continue;
       }
-    } else if (auto p = m.instantiate<drivetrain_stiffness::Preload>()) {
-      toPreloadSettings(*p, preload_settings);
-      pipeline.preload(fromRosTime(p->header.stamp), preload_settings, writer, {publisher, p->header.seq, p->header.frame_id});
-      continue;
+    } else {
+      const auto p = m.instantiate<drivetrain_stiffness::Preload>();
+      inputs.read(InputStream::kPreload, p ? std::string() : m.getDataType());
+      if (p) {
+        toPreloadSettings(*p, preload_settings);
+        pipeline.preload(fromRosTime(p->header.stamp), preload_settings, writer,
+                         {publisher, p->header.seq, p->header.frame_id});
+      }
     }
-    ++wrong_type;  // counted and reported, never silently skipped
   }
   writer.close();
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   const double span = first ? (*last - *first).toSec() : 0.0;
+  const std::vector<BagTopic> bag_topics = input.topics();
+  const bool nothing_accepted = ReplaySummary::accepted(pipeline.counters()) == 0;
 
   nlohmann::json summary;
-  summary["bag"] = bag_path;
+  summary["bag"] = printableText(bag_path);
   summary["status"] = "ok";
   if (const auto& damage = input.damage()) {
-    summary["status"] = "incomplete: " + damage->describe(bag_path) + "; " + std::to_string(messages) + " messages read before it";
-    summary["damage"] = {{"file", bag_path}, {"offset", damage->offset}, {"what", damage->what}, {"messages_before", messages}};
-    std::cerr << "drivetrain_replay: " << summary["status"].get<std::string>() << "\n";
+    summary["status"] = "incomplete: " + printableText(damage->describe(bag_path)) + "; " + std::to_string(messages) +
+                        " messages read before it";
+    summary["damage"] = {{"file", printableText(bag_path)}, {"offset", damage->offset},
+                         {"what", printableText(damage->what)}, {"messages_before", messages}};
+  } else if (nothing_accepted) {
+    summary["status"] = "nothing accepted: no message on a named topic was accepted (" + std::to_string(messages) +
+                        " read); see \"inputs\"";
   }
   summary["messages"] = messages;
-  summary["wrong_type"] = wrong_type;
+  summary["wrong_type"] = inputs.wrongType();
+  summary["inputs"] = inputs.json(pipeline, bag_topics);
   summary["span_s"] = span;
   summary["topics"] = topics.describe();  // what --out holds
   summary["csv_topics"] = csv_topics.describe();  // what the CSV files hold
@@ -238,27 +338,7 @@ int run(int argc, char** argv) {
   summary["calibration"] = calibrationJson(pipeline);
   // The per-mesh-period statistics over the bag (a campaign's row): speed, torque, TE RMS, force.
   summary["mesh_periods"] = writer.meshPeriodTotals().json();
-  // Where the dynamics' time went, over the whole bag (the pipeline keeps its dynamics through
-  // restarts): deterministic counts, unlike the speed below. model_updates: the builds (at the start,
-  // and at a restart after a change) and the bearing-stiffness or damping changes taken up while
-  // running; dopri5_intervals: intervals handed to dopri5; the sliced propagation's (at the fidelity
-  // of the bag's end: the full model's, or linear_modal's mean model's) slice crossings,
-  // decompositions (general: by Eigen's eigensolver), contact changes located, and steps cut where
-  // the regime bound could not clear them; at the nominal phase after a change, the stretches the
-  // interval maps took and the intervals made (docs/model.md).
-  if (const DynamicsEstimator* d = pipeline.dynamics()) {
-    nlohmann::json work = {{"model_updates", d->rebuilds()}, {"dopri5_intervals", d->fallbackIntervals()},
-                           {"mapped_stretches", d->mappedStretches()},
-                           {"interval_maps_made", d->intervalMaps() ? d->intervalMaps()->intervalsMade() : 0L}};
-    if (const SlicedModalPropagator* s = d->movingSlicedPropagator()) {
-      work["slices_crossed"] = s->slicesCrossed();
-      work["slice_decompositions"] = s->decompositions();
-      work["general_decompositions"] = s->generalDecompositions();
-      work["contact_changes"] = s->regimeChanges();
-      work["checked_substeps"] = s->checkedSubsteps();
-    }
-    summary["dynamics_work"] = work;
-  }
+  if (const DynamicsEstimator* d = pipeline.dynamics()) summary["dynamics_work"] = dynamicsWorkJson(*d);
   // --calibrate: written or refused (no window updated the calibration); the other outputs stand either way.
   std::string calibrate_error;
   if (!calibrate_out.empty()) {
@@ -283,20 +363,29 @@ int run(int argc, char** argv) {
   for (const SupportEstimate& s : pipeline.estimator().current().supports) {
     summary["final_radial_stiffness"][s.name] = s.solution.radialStiffness();
   }
-  // Speed: separate from the outputs above, which must stay identical between runs.
-  nlohmann::json speed = {{"wall_s", wall}, {"realtime_factor", wall > 0.0 ? span / wall : 0.0}};
+  const int code = !calibrate_error.empty() ? kExitRefused
+                   : input.damage()         ? kExitIncomplete
+                   : inputs.wrongType() > 0 ? kExitWrongType
+                   : nothing_accepted       ? kExitNothingAccepted
+                                            : kExitOk;
+  // The run summary, on stderr at the end of every run; in report.md when asked for.
+  const std::string what_happened = runSummaryText(bag_path, messages, summary, inputs, pipeline, bag_topics, code);
   if (!report_dir.empty()) {
-    std::ofstream(report_dir + "/summary.json") << summary.dump(2) << "\n";
-    if (plots) runPythonScript("--plot-script", findScript(plot_script, "plot_replay.py"), {out_bag, report_dir, bag_path});
+    std::ofstream(report_dir + "/summary.json") << jsonText(summary) << "\n";
+    writeReport(report_dir + "/report.md", summary, inputs.markdown(pipeline, bag_topics), pipeline, out_bag);
   }
-  summary["speed"] = speed;
-  std::cout << summary.dump(2) << std::endl;
-  if (!calibrate_error.empty()) {
-    std::cerr << "drivetrain_replay: " << calibrate_error << "\n";
-    return kExitRefused;
+  // Speed: separate from the outputs above, which must stay identical between runs. With no input
+  // accepted nothing was estimated or simulated: no speed to speak of.
+  summary["speed"] = {{"wall_s", wall},
+                      {"realtime_factor", nothing_accepted || !(wall > 0.0) ? nlohmann::json(nullptr) : nlohmann::json(span / wall)}};
+  std::cout << jsonText(summary) << std::endl;
+  std::cerr << what_happened;
+  if (!calibrate_error.empty()) std::cerr << "drivetrain_replay: " << calibrate_error << "\n";
+  // The plots last: a failing plot script (exit 1) leaves every other output written and said.
+  if (!report_dir.empty() && plots) {
+    runPythonScript("--plot-script", findScript(plot_script, "plot_replay.py"), {out_bag, report_dir, bag_path});
   }
-  if (input.damage()) return kExitIncomplete;
-  return wrong_type > 0 ? kExitWrongType : kExitOk;
+  return code;
 }
 
 }  // namespace

@@ -1,0 +1,243 @@
+#!/usr/bin/python3
+"""drivetrain_replay on bags another lab would hand it, written here with python rosbag: a torque
+in another frame, two kinds of refusal in one bag, only unrelated topics, a topic of the wrong
+type, one topic named for two inputs, a directory or a pipe as --bag, gaps with load changes, a
+frame id that is not UTF-8, encoders that barely turn. For each: the exit code
+(docs/replay_exit_codes.md), the run summary on stderr, summary.json's "inputs", and report.md
+with and without plots say what was used, what was not, and why.
+
+usage: check_foreign_bags.py BIN_DIR SOURCE_DIR WORK_DIR   (with the devel space's env.sh)"""
+import json
+import os
+import shutil
+import struct
+import subprocess
+import sys
+
+import rosbag
+import rospy
+from geometry_msgs.msg import Twist, WrenchStamped
+from sensor_msgs.msg import JointState
+from std_msgs.msg import String
+
+bin_dir, src, work = sys.argv[1:4]
+replay = os.path.join(bin_dir, "drivetrain_replay")
+config = os.path.join(src, "config/gearboxes/seed_servo.yaml")
+params = os.path.join(src, "config/stiffness_estimator.yaml")  # torque_frame: pinion
+T0 = rospy.Time(1767225600, 0)
+failures = []
+
+
+def at(seconds):
+    return T0 + rospy.Duration.from_sec(seconds)
+
+
+def wrench(t, torque, frame="pinion", seq=0):
+    m = WrenchStamped()
+    m.header.stamp, m.header.frame_id, m.header.seq = t, frame, seq
+    m.wrench.torque.z = torque
+    return m
+
+
+def bag_of(name, messages):
+    """messages: (topic, message, time) or (topic, (type, raw bytes, md5sum), time) for raw ones."""
+    path = os.path.join(work, name + ".bag")
+    with rosbag.Bag(path, "w") as bag:
+        for topic, m, t in messages:
+            if isinstance(m, tuple):
+                bag.write(topic, m + (None,), t, raw=True)
+            else:
+                bag.write(topic, m, t)
+    return path
+
+
+def run(name, bag, *extra, plots=False, params_file=params):
+    report = os.path.join(work, name + ".report")
+    cmd = [replay, "--bag", bag, "--config", config, "--report", report] + list(extra)
+    if params_file:
+        cmd += ["--params", params_file]
+    if not plots:
+        cmd.append("--no-plots")
+    p = subprocess.run(cmd, capture_output=True, text=True)
+    summary = None
+    if os.path.exists(os.path.join(report, "summary.json")):
+        with open(os.path.join(report, "summary.json")) as f:
+            summary = json.load(f)
+    md = ""
+    if os.path.exists(os.path.join(report, "report.md")):
+        with open(os.path.join(report, "report.md")) as f:
+            md = f.read()
+    stdout = json.loads(p.stdout) if p.stdout.strip().startswith("{") else None
+    return p, summary, md, stdout
+
+
+def check(name, conditions):
+    bad = [what for ok, what in conditions if not ok]
+    print("%-28s %s" % (name, "; ".join(bad) or "ok"))
+    if bad:
+        failures.append(name)
+
+
+def wrong_frame():
+    bag = bag_of("wrong_frame", [("/torque", wrench(at(0.001 * i), 0.1, "base_link"), at(0.001 * i)) for i in range(1, 201)])
+    for plots in (False, True):
+        name = "wrong_frame" + ("_plots" if plots else "")
+        p, s, md, out = run(name, bag, plots=plots)
+        refused = ((s or {}).get("inputs", {}).get("torque", {}).get("refused_by_reason", {}).get("wrong frame", {}))
+        check(name, [
+            (p.returncode == 5, "exit %d, expected 5 (nothing accepted): %s" % (p.returncode, p.stderr[-400:])),
+            ("200 refused (wrong frame), found 'base_link' (200)" in p.stderr, "stderr lacks the count and the frame found"),
+            ("expected ~torque_frame = 'pinion'" in p.stderr, "stderr lacks the frame expected"),
+            ("matplotlib" not in p.stderr, "stderr blames matplotlib"),
+            (s is not None and s["status"].startswith("nothing accepted"), "status %r" % (s or {}).get("status")),
+            (refused.get("count") == 200 and refused.get("found", {}).get("base_link") == 200, "inputs: %r" % refused),
+            (out is not None and out["speed"]["realtime_factor"] is None, "a realtime_factor with nothing accepted"),
+            ("**Nothing accepted**" in md and "base_link" in md, "report.md does not say why"),
+            (not plots or "No figures" in md, "report.md with plots does not say there are no figures"),
+        ])
+
+
+def two_refusals():
+    msgs = [("/torque", wrench(at(0.001 * i), 0.1, "base_link"), at(0.001 * i)) for i in range(1, 101)]
+    msgs += [("/torque", wrench(at(0.1 + 0.001 * i), float("nan")), at(0.1 + 0.001 * i)) for i in range(1, 51)]
+    msgs += [("/torque", wrench(at(0.2 + 0.001 * i), 0.1), at(0.2 + 0.001 * i)) for i in range(1, 101)]
+    p, s, md, _ = run("two_refusals", bag_of("two_refusals", msgs))
+    reasons = (s or {}).get("inputs", {}).get("torque", {}).get("refused_by_reason", {})
+    check("two_refusals", [
+        (p.returncode == 0, "exit %d, expected 0 (some refused among many accepted)" % p.returncode),
+        (reasons.get("wrong frame", {}).get("count") == 100, "wrong frame: %r" % reasons.get("wrong frame")),
+        (reasons.get("invalid value", {}).get("count") == 50, "invalid value: %r" % reasons.get("invalid value")),
+        ("100 refused (wrong frame)" in p.stderr and "50 refused (invalid value)" in p.stderr, "stderr lacks a reason"),
+        ("## Inputs" in md and "50 refused (invalid value)" in md, "report.md without --no-plots' inputs"),
+    ])
+
+
+def unrelated_topics():
+    msgs = []
+    for i in range(1, 101):
+        msgs.append(("/chatter", String(data="hello %d" % i), at(0.001 * i)))
+        msgs.append(("/ft_sensor/wrench", wrench(at(0.001 * i), 0.1), at(0.001 * i)))
+    bag = bag_of("unrelated", msgs)
+    p, s, md, _ = run("unrelated_topics", bag)
+    listed = [t["topic"] for t in (s or {}).get("inputs", {}).get("bag_topics", [])]
+    check("unrelated_topics", [
+        (p.returncode == 5, "exit %d, expected 5" % p.returncode),
+        ("'/chatter' std_msgs/String, 100 messages" in p.stderr, "stderr does not list the bag's topics"),
+        ("'/ft_sensor/wrench' holds 100 geometry_msgs/WrenchStamped messages: --torque-topic /ft_sensor/wrench reads them"
+         in p.stderr, "stderr does not point at the topic of the wanted type"),
+        (sorted(listed) == ["/chatter", "/ft_sensor/wrench"], "bag_topics %r" % listed),
+        ("not in the bag" in md, "report.md does not say the topic is absent"),
+    ])
+    p, s, _, _ = run("unrelated_topics_named", bag, "--torque-topic", "/ft_sensor/wrench")
+    check("unrelated_topics_named", [(p.returncode == 0 and (s or {}).get("counters", {}).get("accepted_torque") == 100,
+                                      "exit %d, %r" % (p.returncode, (s or {}).get("counters", {}).get("accepted_torque")))])
+
+
+def wrong_type():
+    p, s, _, _ = run("wrong_type", bag_of("wrong_type", [("/torque", Twist(), at(0.001 * i)) for i in range(1, 358)]))
+    check("wrong_type", [
+        (p.returncode == 3, "exit %d, expected 3" % p.returncode),
+        ("torque topic 'torque' (--torque-topic): 357 messages of type geometry_msgs/Twist, expected "
+         "geometry_msgs/WrenchStamped" in p.stderr, "stderr does not name topic, found and expected type: " + p.stderr[-300:]),
+        ((s or {}).get("inputs", {}).get("torque", {}).get("wrong_type") == {"geometry_msgs/Twist": 357}, "summary wrong_type"),
+    ])
+
+
+def bad_arguments():
+    bag = os.path.join(src, "test/data/torque_steps.bag")
+    report = os.path.join(work, "one_topic_twice.report")
+    p = subprocess.run([replay, "--bag", bag, "--config", config, "--torque-topic", "/x", "--joint-states-topic", "x",
+                        "--report", report], capture_output=True, text=True)
+    check("one_topic_for_two_inputs", [
+        (p.returncode == 1, "exit %d, expected 1" % p.returncode),
+        ("--torque-topic = '/x' and --joint-states-topic = 'x' name one topic for two inputs" in p.stderr, p.stderr.strip()),
+        (not os.path.exists(report), "refused after it began writing"),
+    ])
+    fifo = os.path.join(work, "pipe.bag")
+    os.mkfifo(fifo)
+    for name, path, said in (("bag_is_a_directory", work, "a directory, not a bag file"),
+                             ("bag_does_not_exist", os.path.join(work, "no_such.bag"), "no such file"),
+                             ("bag_is_a_pipe", fifo, "not a regular file")):
+        try:
+            p = subprocess.run([replay, "--bag", path, "--config", config], capture_output=True, text=True, timeout=20)
+        except subprocess.TimeoutExpired:
+            check(name, [(False, "still reading after 20 s")])
+            continue
+        check(name, [(p.returncode == 1 and ("--bag = '%s': %s" % (path, said)) in p.stderr,
+                      "exit %d: %s" % (p.returncode, p.stderr.strip()))])
+
+
+def gaps_and_load_changes():
+    """Torques off the 1 ms output grid; three pauses of 1.5 s (more than ~max_gap), each followed
+    by a load that moves the bearing stiffness by more than the 1 % the dynamics take up (a light
+    preload of 100 N, so that the mesh force counts)."""
+    from drivetrain_stiffness.msg import BearingPreload, Preload
+    light = Preload()
+    light.header.stamp = at(0.0001)
+    light.bearings = [BearingPreload(name=n, axial_preload=100.0) for n in ("pinion_bearing", "gear_bearing")]
+    msgs, t = [("/preload", light, at(0.0001))], 0.0
+    for load in (0.1, 8.0, 0.1, 8.0):
+        for i in range(200):
+            t += 0.00100041
+            msgs.append(("/torque", wrench(at(t), load), at(t)))
+        t += 1.5
+    p, s, _, _ = run("gaps_and_load_changes", bag_of("gaps", msgs))
+    c = (s or {}).get("counters", {})
+    check("gaps_and_load_changes", [
+        (p.returncode == 0, "exit %d" % p.returncode),
+        (c.get("gap_restarts") == 3 and c.get("dynamics_errors") == 0,
+         "gap_restarts %r, dynamics_errors %r: %s" % (c.get("gap_restarts"), c.get("dynamics_errors"), c.get("last_event"))),
+    ])
+
+
+def non_utf8_frame():
+    """A frame id with the byte 0x85 (not UTF-8), written raw: the JSON summary and the console escape it."""
+    frame = b"base\x85link"
+    msgs = []
+    for i in range(1, 51):
+        t = at(0.001 * i)
+        data = struct.pack("<III", i, t.secs, t.nsecs) + struct.pack("<I", len(frame)) + frame + struct.pack("<6d", 0, 0, 0, 0, 0, 0.1)
+        msgs.append(("/torque", ("geometry_msgs/WrenchStamped", data, WrenchStamped._md5sum), t))
+    p, s, _, out = run("non_utf8_frame", bag_of("non_utf8", msgs))
+    check("non_utf8_frame", [
+        (p.returncode == 5, "exit %d: %s" % (p.returncode, p.stderr[-300:])),
+        (s is not None and out is not None, "summary.json or stdout is not valid JSON"),
+        ("found 'base\\x85link' (50)" in p.stderr, "stderr does not escape the byte"),
+    ])
+
+
+def encoders_barely_turn():
+    msgs = []
+    for i in range(1, 2001):
+        t = at(0.001 * i)
+        msgs.append(("/torque", wrench(t, 0.1), t))
+        j = JointState()
+        j.header.stamp = t
+        j.name, j.position, j.velocity = ["pinion", "gear"], [1e-4 * i * 1e-3, -0.5e-4 * i * 1e-3], [1e-4, -0.5e-4]
+        msgs.append(("/joint_states", j, t))
+    p, s, md, _ = run("encoders_barely_turn", bag_of("standstill", msgs), plots=True)
+    check("encoders_barely_turn", [
+        (p.returncode == 0, "exit %d: %s" % (p.returncode, p.stderr[-300:])),
+        ("No TE order spectrum: the pinion turns" in md, "report.md drops the order spectrum without a note"),
+        ("No Campbell diagram: the encoders' speed spans" in md, "report.md drops the Campbell diagram without a note"),
+    ])
+
+
+def main():
+    shutil.rmtree(work, ignore_errors=True)
+    os.makedirs(work)
+    wrong_frame()
+    two_refusals()
+    unrelated_topics()
+    wrong_type()
+    bad_arguments()
+    gaps_and_load_changes()
+    non_utf8_frame()
+    encoders_barely_turn()
+    if failures:
+        sys.exit("check_foreign_bags: failed: %s" % ", ".join(failures))
+    print("check_foreign_bags: every foreign bag's replay says what it used, what it did not, and why")
+
+
+if __name__ == "__main__":
+    main()
