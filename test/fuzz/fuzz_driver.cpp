@@ -21,8 +21,6 @@ using Clock = std::chrono::steady_clock;
 
 namespace {
 
-constexpr std::size_t kMaxTextSize = 8192;   // room for the mutator's deep nesting (3000 brackets)
-constexpr std::size_t kMaxBinarySize = 1024;  // more than kMaxOperations operations
 constexpr std::size_t kPoolSize = 256;
 
 void writeFile(const std::string& path, const Bytes& bytes) {
@@ -120,7 +118,7 @@ RunStats runTarget(const FuzzTarget& target, const RunOptions& options) {
   std::vector<Bytes> corpus;
   for (SeedFile& seed : loadCorpusFiles(target)) corpus.push_back(std::move(seed.bytes));
   if (corpus.empty()) throw std::runtime_error(std::string("no seed corpus for ") + target.name);
-  const std::size_t max_size = target.text ? kMaxTextSize : kMaxBinarySize;
+  const std::size_t max_size = target.max_size;
   const std::string running_file =
       options.findings_dir.empty() ? "" : options.findings_dir + "/last-" + target.name + ".bin";
   Mutator mutator(options.seed, target.text ? fuzzDictionary() : std::vector<std::string>{});

@@ -38,6 +38,7 @@ struct FuzzTarget {
   const char* corpus;  ///< directory under test/data/fuzz/ with the seed inputs
   bool text;           ///< YAML text (the mutator edits lines and tokens) or a binary program
   CaseStats (*fuzzOne)(const std::uint8_t* data, std::size_t size);
+  std::size_t max_size;  ///< mutated cases are cut to this many bytes
 };
 
 CaseStats fuzzBearingFile(const std::uint8_t* data, std::size_t size);
@@ -45,6 +46,8 @@ CaseStats fuzzGearFile(const std::uint8_t* data, std::size_t size);
 CaseStats fuzzRigFile(const std::uint8_t* data, std::size_t size);
 CaseStats fuzzNodeParameters(const std::uint8_t* data, std::size_t size);
 CaseStats fuzzPipeline(const std::uint8_t* data, std::size_t size);
+/// drivetrain_replay's bag reader on a bag file's bytes (ReplayInput).
+CaseStats fuzzBag(const std::uint8_t* data, std::size_t size);
 
 const std::vector<FuzzTarget>& fuzzTargets();
 /// nullptr if there is no target of that name.
