@@ -20,6 +20,7 @@ import dask
 _BY_VALUE = False
 WORKER_WAIT_S = 60.0  # [s] for the first worker of a --scheduler
 START_TIMEOUT_S = 180.0  # [s] for the cluster and the client to come up
+LOOPBACK_HTTP = "127.0.0.1:0"  # the embedded cluster's HTTP servers: loopback, any free port
 
 
 def _start_timed_out(what):
@@ -108,8 +109,19 @@ class DaskEngine:
             # hands this configuration to the worker processes it starts.
             self._stack.enter_context(dask.config.set({"distributed.worker.profile.enabled": False,
                                                        "distributed.worker.profile.interval": "1000ms"}))
+            # dask 2022.12 starts an HTTP server in the scheduler and in every worker whatever the
+            # dashboard options say, and binds it to every interface unless given an address
+            # (dashboard_address=None means the scheduler's default, 0.0.0.0:8787 and [::]:8787): it
+            # serves the scheduler's logs, call stacks and every worker's address and directory.
+            # It cannot be turned off, so each is bound to the loopback, on a port of the kernel's
+            # choosing (two campaigns on one machine never contend for 8787). The scheduler's goes
+            # through scheduler_kwargs so that it stays a plain HTTP server (LocalCluster's
+            # dashboard_address would also ask for the bokeh dashboard); worker_dashboard_address
+            # asks for the workers' too, which without bokeh (Debian) is a debug log line.
             cluster = self._stack.enter_context(LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
                                                              host="127.0.0.1", dashboard_address=None,
+                                                             scheduler_kwargs={"dashboard_address": LOOPBACK_HTTP},
+                                                             worker_dashboard_address=LOOPBACK_HTTP,
                                                              silence_logs=40, local_directory=space))
             self.client = self._stack.enter_context(Client(cluster))
         self.workers = len(self.client.scheduler_info()["workers"])
