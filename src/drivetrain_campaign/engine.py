@@ -107,17 +107,22 @@ class DaskEngine:
             # beside it by 15 %: a 60 s load_sweep bag took 6.8-7.4 s in a worker, 5.8-6.0 s with the
             # profiler off, 5.9-6.3 s alone. Nobody reads the profile here (no dashboard). The nanny
             # hands this configuration to the worker processes it starts.
-            self._stack.enter_context(dask.config.set({"distributed.worker.profile.enabled": False,
-                                                       "distributed.worker.profile.interval": "1000ms"}))
             # dask 2022.12 starts an HTTP server in the scheduler and in every worker whatever the
-            # dashboard options say, and binds it to every interface unless given an address
-            # (dashboard_address=None means the scheduler's default, 0.0.0.0:8787 and [::]:8787): it
-            # serves the scheduler's logs, call stacks and every worker's address and directory.
-            # It cannot be turned off, so each is bound to the loopback, on a port of the kernel's
-            # choosing (two campaigns on one machine never contend for 8787). The scheduler's goes
-            # through scheduler_kwargs so that it stays a plain HTTP server (LocalCluster's
-            # dashboard_address would also ask for the bokeh dashboard); worker_dashboard_address
-            # asks for the workers' too, which without bokeh (Debian) is a debug log line.
+            # dashboard options say (Node.start_http_server runs unconditionally), bound to every
+            # interface unless given an address: with dashboard_address=None the scheduler's is on
+            # 0.0.0.0:8787 and [::]:8787 and shows the network its logs, call stacks and every
+            # worker's address and directory; each worker's, /health and /metrics. They cannot be
+            # turned off, so they get no routes (the campaign reads no page of theirs, and the
+            # loopback is every local user's) and are bound to the loopback (LocalCluster, below).
+            self._stack.enter_context(dask.config.set({"distributed.worker.profile.enabled": False,
+                                                       "distributed.worker.profile.interval": "1000ms",
+                                                       "distributed.scheduler.http.routes": [],
+                                                       "distributed.worker.http.routes": []}))
+            # The HTTP servers on a port of the kernel's choosing: two campaigns on one machine never
+            # contend for 8787. The scheduler's address goes through scheduler_kwargs so that it
+            # stays a plain HTTP server (LocalCluster's dashboard_address would also ask for the
+            # bokeh dashboard); worker_dashboard_address asks for the workers' too, which without
+            # bokeh (Debian has none) is a debug log line.
             cluster = self._stack.enter_context(LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
                                                              host="127.0.0.1", dashboard_address=None,
                                                              scheduler_kwargs={"dashboard_address": LOOPBACK_HTTP},

@@ -5,7 +5,7 @@ mid-campaign leaves every bag with exactly one row, equal to the serial one; a s
 replays nothing, a grown campaign replays only the new bag; a truncated bag and a file that is
 not a bag get their rows with reasons; the change detector raises on a 10 % loss of mesh
 stiffness and stays quiet on a constant campaign; every socket the campaign's processes listen on
-is on 127.0.0.1.
+is on 127.0.0.1, and the embedded cluster's HTTP servers serve no page.
 
 Environment: DRIVETRAIN_RIG_SIM and DRIVETRAIN_REPLAY (the built programs; CMakeLists.txt sets them).
 """
@@ -308,6 +308,42 @@ class Campaign(unittest.TestCase):
         self.assertEqual(sorted(r["bag"] for r in got), sorted(r["bag"] for r in rows(reference)))
         self.assertEqual(table_bytes(out), table_bytes(reference))
         self.assertEqual(os.listdir(os.path.join(out, "bags")).__len__(), 4)  # no scratch left behind
+
+
+class EmbeddedCluster(unittest.TestCase):
+    """The engine's LocalCluster itself, in this process (no bags, no replay)."""
+
+    def test_its_http_servers_serve_nothing(self):
+        # dask starts an HTTP server in the scheduler and in each worker that cannot be turned off;
+        # bound to the loopback, they are still every local user's: they must serve no page (the
+        # scheduler's logs, call stacks, workers' addresses and directories; /health, /metrics).
+        import http.client
+        import json
+
+        sys.path.insert(0, os.path.join(ROOT, "src"))
+        from drivetrain_campaign.engine import DaskEngine
+        engine = DaskEngine(workers=1)
+        self.addCleanup(engine.close)
+        info = engine.client.scheduler_info()
+        servers = {"scheduler": info["services"]["dashboard"]}
+        servers.update({worker: w["services"]["dashboard"] for worker, w in info["workers"].items()})
+        self.assertEqual(len(servers), 2)
+
+        def get(port, path):  # http.client, not urllib: no proxy from the environment, the loopback only
+            connection = http.client.HTTPConnection("127.0.0.1", port, timeout=20)
+            try:
+                connection.request("GET", path)
+                response = connection.getresponse()
+                return response.status, response.read()
+            finally:
+                connection.close()
+
+        for who, port in servers.items():
+            for path in ("/json/identity.json", "/info/main/logs.html", "/info/main/workers.html", "/health", "/metrics"):
+                self.assertEqual(get(port, path)[0], 404, (who, path))
+            # tornado's routing table as the server lists it: nothing but the list itself
+            status, body = get(port, "/sitemap.json")
+            self.assertEqual((status, json.loads(body)["paths"]), (200, ["/sitemap.json"]), who)
 
 
 def stop(proc):
