@@ -9,7 +9,8 @@ add_test(NAME campaign_bag_list
 
 if(DRIVETRAIN_WITH_ROS)  # drivetrain_rig_sim and drivetrain_replay write and read bags
 # End to end on short simulated bags and a local cluster on the loopback (~2-3 min on 2 cores):
-# cluster table = serial table, a killed worker, the cache, damaged bags, the alarm.
+# cluster table = serial table, a killed worker, the cache, damaged bags, the alarm, and every
+# listening socket of a 2-worker campaign on 127.0.0.1, the cluster's HTTP servers serving no page.
 add_test(NAME campaign_end_to_end
   COMMAND /usr/bin/python3 ${CMAKE_CURRENT_SOURCE_DIR}/test/campaign/test_campaign.py)
 set_tests_properties(campaign_end_to_end PROPERTIES TIMEOUT 1500

@@ -20,6 +20,7 @@ import dask
 _BY_VALUE = False
 WORKER_WAIT_S = 60.0  # [s] for the first worker of a --scheduler
 START_TIMEOUT_S = 180.0  # [s] for the cluster and the client to come up
+LOOPBACK_HTTP = "127.0.0.1:0"  # the embedded cluster's HTTP servers: loopback, any free port
 
 
 def _start_timed_out(what):
@@ -106,10 +107,26 @@ class DaskEngine:
             # beside it by 15 %: a 60 s load_sweep bag took 6.8-7.4 s in a worker, 5.8-6.0 s with the
             # profiler off, 5.9-6.3 s alone. Nobody reads the profile here (no dashboard). The nanny
             # hands this configuration to the worker processes it starts.
+            # dask 2022.12 starts an HTTP server in the scheduler and in every worker whatever the
+            # dashboard options say (Node.start_http_server runs unconditionally), bound to every
+            # interface unless given an address: with dashboard_address=None the scheduler's is on
+            # 0.0.0.0:8787 and [::]:8787 and shows the network its logs, call stacks and every
+            # worker's address and directory; each worker's, /health and /metrics. They cannot be
+            # turned off, so they get no routes (the campaign reads no page of theirs, and the
+            # loopback is every local user's) and are bound to the loopback (LocalCluster, below).
             self._stack.enter_context(dask.config.set({"distributed.worker.profile.enabled": False,
-                                                       "distributed.worker.profile.interval": "1000ms"}))
+                                                       "distributed.worker.profile.interval": "1000ms",
+                                                       "distributed.scheduler.http.routes": [],
+                                                       "distributed.worker.http.routes": []}))
+            # The HTTP servers on a port of the kernel's choosing: two campaigns on one machine never
+            # contend for 8787. The scheduler's address goes through scheduler_kwargs so that it
+            # stays a plain HTTP server (LocalCluster's dashboard_address would also ask for the
+            # bokeh dashboard); worker_dashboard_address asks for the workers' too, which without
+            # bokeh (Debian has none) is a debug log line.
             cluster = self._stack.enter_context(LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
                                                              host="127.0.0.1", dashboard_address=None,
+                                                             scheduler_kwargs={"dashboard_address": LOOPBACK_HTTP},
+                                                             worker_dashboard_address=LOOPBACK_HTTP,
                                                              silence_logs=40, local_directory=space))
             self.client = self._stack.enter_context(Client(cluster))
         self.workers = len(self.client.scheduler_info()["workers"])

@@ -4,7 +4,8 @@ a local cluster on the loopback gives the serial run's table byte for byte; a wo
 mid-campaign leaves every bag with exactly one row, equal to the serial one; a second run
 replays nothing, a grown campaign replays only the new bag; a truncated bag and a file that is
 not a bag get their rows with reasons; the change detector raises on a 10 % loss of mesh
-stiffness and stays quiet on a constant campaign.
+stiffness and stays quiet on a constant campaign; every socket the campaign's processes listen on
+is on 127.0.0.1, and the embedded cluster's HTTP servers serve no page.
 
 Environment: DRIVETRAIN_RIG_SIM and DRIVETRAIN_REPLAY (the built programs; CMakeLists.txt sets them).
 """
@@ -13,6 +14,7 @@ import csv
 import os
 import shutil
 import signal
+import socket
 import subprocess
 import sys
 import tempfile
@@ -86,6 +88,64 @@ def command(pid):
             return f.read().replace(b"\0", b" ").decode(errors="replace")
     except OSError:
         return ""
+
+
+def descendants(pid):
+    """pid and every process below it, from /proc."""
+    parents = {}
+    for entry in os.listdir("/proc"):
+        if entry.isdigit():
+            try:
+                with open(f"/proc/{entry}/stat") as f:
+                    parents[int(entry)] = int(f.read().rsplit(")", 1)[1].split()[1])
+            except OSError:  # gone meanwhile
+                pass
+    tree = {pid}
+    grown = True
+    while grown:
+        below = {child for child, parent in parents.items() if parent in tree} - tree
+        tree |= below
+        grown = bool(below)
+    return tree
+
+
+def socket_address(field):
+    """/proc/net/{tcp,udp}[6]'s HOST:PORT (hex, the host in 32-bit words of the kernel's byte
+    order) as '127.0.0.1:8786' or '[::]:8787'."""
+    host, port = field.split(":")
+    raw = b"".join(bytes.fromhex(host[i:i + 8])[::-1] for i in range(0, len(host), 8))
+    if len(raw) == 4:
+        return f"{socket.inet_ntop(socket.AF_INET, raw)}:{int(port, 16)}"
+    return f"[{socket.inet_ntop(socket.AF_INET6, raw)}]:{int(port, 16)}"
+
+
+def listening_sockets(pids):
+    """{(pid, 'tcp'|'tcp6'|'udp'|'udp6', address)}: the sockets these processes hold open that
+    anyone may connect or send to, from /proc alone (no ss or lsof on a bare CI machine): TCP
+    sockets in LISTEN, UDP sockets not connected to a peer."""
+    found = set()
+    for pid in pids:
+        try:
+            inodes = set()
+            for fd in os.listdir(f"/proc/{pid}/fd"):
+                try:
+                    target = os.readlink(f"/proc/{pid}/fd/{fd}")
+                except OSError:  # closed meanwhile
+                    continue
+                if target.startswith("socket:["):
+                    inodes.add(target[len("socket:["):-1])
+            for proto in ("tcp", "tcp6", "udp", "udp6"):
+                with open(f"/proc/{pid}/net/{proto}") as f:  # the process's own network namespace
+                    next(f)
+                    for line in f:
+                        fields = line.split()
+                        state, inode = fields[3], fields[9]
+                        # 0A: TCP_LISTEN; 07 (TCP_CLOSE) on a UDP socket: bound, no peer
+                        if inode in inodes and state == ("0A" if proto.startswith("tcp") else "07"):
+                            found.add((pid, proto, socket_address(fields[1])))
+        except OSError:  # the process ended meanwhile
+            pass
+    return found
 
 
 class Campaign(unittest.TestCase):
@@ -200,6 +260,31 @@ class Campaign(unittest.TestCase):
         self.assertEqual(run_info(out)["hashed"], 1)
         self.assertEqual(len(rows(out)), 9)
 
+    def test_every_socket_of_a_two_worker_campaign_listens_on_the_loopback_only(self):
+        # A dask scheduler runs whatever a client sends it, and its HTTP servers tell the cluster's
+        # addresses, directories and logs: nothing of the embedded cluster may be reachable from
+        # the network. The campaign's process tree is sampled while it runs (the scheduler and
+        # the nannies live in the campaign's process, each worker in a process of its own).
+        out = os.path.join(self.tmp, "loopback")
+        proc = subprocess.Popen([CAMPAIGN, os.path.join(self.constant, "bag_000.bag"), "--config", CONFIG, "--out", out,
+                                 "--replay", REPLAY, "--no-plots", "--workers", "2"],
+                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        seen, names = set(), {}
+        deadline = time.monotonic() + 300
+        while proc.poll() is None and time.monotonic() < deadline:
+            found = listening_sockets(descendants(proc.pid))
+            names.update({pid: command(pid)[:70] for pid, _, _ in found if pid not in names})
+            seen |= found
+            time.sleep(0.1)
+        _, stderr = proc.communicate(timeout=600)
+        self.assertEqual(proc.returncode, 0, stderr)
+        listed = "\n".join(f"{pid} {proto} {address}  {names[pid]}" for pid, proto, address in sorted(seen))
+        # Seen while the cluster was up: the scheduler in the campaign's process, and both workers.
+        self.assertIn(proc.pid, {pid for pid, _, _ in seen}, listed)
+        self.assertGreaterEqual(len({pid for pid, _, _ in seen} - {proc.pid}), 2, listed)
+        beyond = sorted(x for x in seen if not x[2].startswith("127.0.0.1:"))
+        self.assertEqual(beyond, [], "listening beyond the loopback:\n" + listed)
+
     def test_a_killed_worker_leaves_every_bag_with_one_row(self):
         reference = os.path.join(self.tmp, "constant_serial")
         campaign(reference, [self.constant], "--serial")
@@ -223,6 +308,42 @@ class Campaign(unittest.TestCase):
         self.assertEqual(sorted(r["bag"] for r in got), sorted(r["bag"] for r in rows(reference)))
         self.assertEqual(table_bytes(out), table_bytes(reference))
         self.assertEqual(os.listdir(os.path.join(out, "bags")).__len__(), 4)  # no scratch left behind
+
+
+class EmbeddedCluster(unittest.TestCase):
+    """The engine's LocalCluster itself, in this process (no bags, no replay)."""
+
+    def test_its_http_servers_serve_nothing(self):
+        # dask starts an HTTP server in the scheduler and in each worker that cannot be turned off;
+        # bound to the loopback, they are still every local user's: they must serve no page (the
+        # scheduler's logs, call stacks, workers' addresses and directories; /health, /metrics).
+        import http.client
+        import json
+
+        sys.path.insert(0, os.path.join(ROOT, "src"))
+        from drivetrain_campaign.engine import DaskEngine
+        engine = DaskEngine(workers=1)
+        self.addCleanup(engine.close)
+        info = engine.client.scheduler_info()
+        servers = {"scheduler": info["services"]["dashboard"]}
+        servers.update({worker: w["services"]["dashboard"] for worker, w in info["workers"].items()})
+        self.assertEqual(len(servers), 2)
+
+        def get(port, path):  # http.client, not urllib: no proxy from the environment, the loopback only
+            connection = http.client.HTTPConnection("127.0.0.1", port, timeout=20)
+            try:
+                connection.request("GET", path)
+                response = connection.getresponse()
+                return response.status, response.read()
+            finally:
+                connection.close()
+
+        for who, port in servers.items():
+            for path in ("/json/identity.json", "/info/main/logs.html", "/info/main/workers.html", "/health", "/metrics"):
+                self.assertEqual(get(port, path)[0], 404, (who, path))
+            # tornado's routing table as the server lists it: nothing but the list itself
+            status, body = get(port, "/sitemap.json")
+            self.assertEqual((status, json.loads(body)["paths"]), (200, ["/sitemap.json"]), who)
 
 
 def stop(proc):
