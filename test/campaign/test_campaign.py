@@ -390,10 +390,10 @@ class LabScheduler(unittest.TestCase):
         tls = ["--tls-ca-file", ca, "--tls-cert", cert, "--tls-key", key]
         port = free_port()
         procs = [subprocess.Popen(["dask-scheduler", "--host", "127.0.0.1", "--port", str(port), "--protocol", "tls",
-                                   "--no-dashboard", *tls], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)]
+                                   "--no-dashboard", "--dashboard-address", "127.0.0.1:0", *tls], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)]
         self.addCleanup(lambda: [stop(p) for p in reversed(procs)])
         address = f"tls://127.0.0.1:{port}"
-        procs.append(subprocess.Popen(["dask-worker", address, "--nworkers", "1", "--nthreads", "1", "--no-dashboard",
+        procs.append(subprocess.Popen(["dask-worker", address, "--nworkers", "1", "--nthreads", "1", "--no-dashboard", "--dashboard-address", "127.0.0.1:0",
                                        "--host", "127.0.0.1", *tls], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL))
         serial = os.path.join(tmp, "serial")
         campaign(serial, [bags], "--serial")
@@ -418,11 +418,11 @@ class LabScheduler(unittest.TestCase):
         self.addCleanup(shutil.rmtree, space, True)
         port = free_port()
         address = f"tcp://127.0.0.1:{port}"
-        procs = [subprocess.Popen(["dask-scheduler", "--host", "127.0.0.1", "--port", str(port), "--no-dashboard"],
+        procs = [subprocess.Popen(["dask-scheduler", "--host", "127.0.0.1", "--port", str(port), "--no-dashboard", "--dashboard-address", "127.0.0.1:0"],
                                   stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)]
         self.addCleanup(lambda: [stop(p) for p in reversed(procs)])
         procs.append(subprocess.Popen(["setpriv", "--reuid=65534", "--regid=65534", "--clear-groups", "dask-worker", address,
-                                       "--nworkers", "1", "--nthreads", "1", "--no-dashboard", "--host", "127.0.0.1",
+                                       "--nworkers", "1", "--nthreads", "1", "--no-dashboard", "--dashboard-address", "127.0.0.1:0", "--host", "127.0.0.1",
                                        "--local-directory", space], env={"PATH": "/usr/bin:/bin", "HOME": space},
                                       # in its own directory: `nobody` may not enter the checkout's
                                       # (a clone under a 0700 mktemp directory), and a worker that
