@@ -366,6 +366,78 @@ TEST(OrderRegression, RefusesAnUnderdeterminedWindow) {
   EXPECT_FALSE(still.solve(fit));
 }
 
+// Why a window spans a whole gear turn (docs/calibration.md section 5, "Windows shorter than a gear
+// turn"). Over N readings uniform in angle across exactly one gear turn of the 20/40 pair (4 pi rad
+// of pinion angle), every integer gear order is a whole number of periods, so the regressors (the
+// mean, the shaft orders, the mesh harmonics) are orthogonal to any gear order the fit leaves out
+// (discrete Fourier orthogonality): an unmodelled order moves no feature, and the mean's variance
+// is sigma^2 / N as for the mean alone. Over a part of a turn the orthogonality is gone: an
+// unmodelled gear 3x (pinion order 1.5), 2.5 or pinion 3x, 4x leaks into the mean and the mesh
+// harmonics, and the shaft orders' regressors approach the mean's, so its variance grows. The table
+// printed is the one in the docs (10000 readings per turn: 60 rpm at 5 kHz).
+TEST(OrderRegression, OnlyWholeGearTurnsAreBlindToUnmodelledOrders) {
+  // One fit over the fraction f of a gear turn of cos(order theta + phi) at pinion `order` (0: none),
+  // or of cos(2 pi k phase + phi) at mesh harmonic `mesh` (0: none), or of uniform noise.
+  auto fit = [](double f, double order, int mesh, double phi, bool noise) {
+    OrderRegression reg(20, 40);
+    const long n = std::lround(10000 * f);
+    std::mt19937_64 rng(3);
+    std::uniform_real_distribution<double> uniform(-0.5, 0.5);
+    for (long j = 0; j < n; ++j) {
+      const double theta = 2.0 * kTwoPi * j / 10000.0 + 0.37, turns = 20.0 * theta / kTwoPi, phase = turns - std::floor(turns);
+      double y = 0.0;
+      if (order > 0.0) y += std::cos(order * theta + phi);
+      if (mesh > 0) y += std::cos(kTwoPi * mesh * phase + phi);
+      if (noise) y += uniform(rng);
+      reg.add(theta, phase, y);
+    }
+    OrderRegression::Fit out;
+    EXPECT_TRUE(reg.solve(out)) << f;
+    return std::make_pair(out, static_cast<double>(n));
+  };
+  struct Leak {
+    double mean = 0.0, c1 = 0.0, c2 = 0.0;
+  };
+  // The largest leak over the unmodelled signal's phase: a leak is linear in (cos phi, sin phi).
+  auto leak = [&](double f, double order, int mesh) {
+    const OrderRegression::Fit a = fit(f, order, mesh, 0.0, false).first, b = fit(f, order, mesh, 0.5 * kPi, false).first;
+    return Leak{std::hypot(a.mean, b.mean), std::hypot(std::abs(a.harmonics[0]), std::abs(b.harmonics[0])),
+                std::hypot(std::abs(a.harmonics[1]), std::abs(b.harmonics[1]))};
+  };
+  const int terms = OrderRegression(20, 40).terms();
+  std::cout << "fraction of a gear turn | mean std x sqrt(N) / sigma | leak per unit amplitude into the mean (and |C_1|) of "
+               "pinion order 1.5, 2.5, 3, 4 and mesh harmonic 5\n";
+  for (const double f : {1.0, 0.98, 0.95, 0.9, 0.75, 0.5}) {
+    const auto [noisy, n] = fit(f, 0.0, 0, 0.0, true);
+    const double sigma = noisy.residual_rms * std::sqrt(n / (n - terms));  // the fit's own sigma estimate
+    const double inflation = noisy.mean_std * std::sqrt(n) / sigma;
+    std::cout << f << " | " << inflation << " |";
+    double worst_mean = 0.0;
+    for (const double order : {1.5, 2.5, 3.0, 4.0}) {
+      const Leak l = leak(f, order, 0);
+      std::cout << " " << l.mean << " (" << l.c1 << ")";
+      worst_mean = std::max(worst_mean, l.mean);
+      if (f == 1.0) {
+        EXPECT_LT(l.mean, 1e-12) << order;
+        EXPECT_LT(l.c1, 1e-12) << order;
+        EXPECT_LT(l.c2, 1e-12) << order;
+      }
+    }
+    const Leak l5 = leak(f, 0.0, 5);
+    std::cout << " " << l5.mean << " (" << l5.c1 << ")\n";
+    if (f == 1.0) {
+      EXPECT_NEAR(inflation, 1.0, 1e-3);
+      EXPECT_LT(l5.mean, 1e-12);
+      EXPECT_LT(l5.c1, 1e-12);
+    } else {
+      EXPECT_GT(worst_mean, 1e-2) << f << ": a partial turn is not blind to an order the fit leaves out";
+    }
+    if (f == 0.5) {
+      EXPECT_GT(inflation, 10.0) << "half a gear turn: pinion order 0.5 is half a period, near the mean's regressor";
+    }
+  }
+}
+
 /// Synthetic encoder readings of a rig with parameters `truth` (the static model's physics built
 /// here from the mesh table and the supports): 120 rpm, 5 kHz, a torque staircase through the knee
 /// and a reversal, 2^20-count encoders with 15 arcsec eccentricity each, 1 um manufacturing TE.
