@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <numeric>
 #include <stdexcept>
 #include <utility>
@@ -59,6 +60,7 @@ Calibrator::Calibrator(std::shared_ptr<const RigConfig> shared_rig, std::shared_
   // these form the lattice 2 pi r_b,p gcd(z_p, z_g) / z_p.
   lattice_ = kTwoPi * model_.baseRadius()[0] * std::gcd(teeth_[0], teeth_[1]) / teeth_[0];
   gear_turn_ = kTwoPi * std::max(1.0, static_cast<double>(teeth_[1]) / teeth_[0]);
+  progress_.window_angle = gear_turn_;
   const CalibrationConfig& c = config_;
   CalibrationVector mean;
   mean << c.mesh_stiffness_scale.mean, c.pinion_bearing_scale.mean, c.gear_bearing_scale.mean, c.preload_torque.mean,
@@ -107,12 +109,14 @@ CalibrationMatrix Calibrator::filterCovariance() const {
 }
 
 void Calibrator::interrupt() {
+  if (window_.open) noteStretch();
   window_.open = false;
   filtered_torque_.reset();
 }
 
 int Calibrator::reading(double t, double pinion, double gear, double phase, double speed, double torque,
                         const StiffnessEstimator& supports, MeasuredTeSample& sample) {
+  ++progress_.readings;
   // 1. The measured TE, reduced onto the lattice around the first one.
   const double raw = model_.baseRadius()[0] * pinion + model_.baseRadius()[1] * gear;
   if (!te_reference_) te_reference_ = raw;
@@ -128,7 +132,10 @@ int Calibrator::reading(double t, double pinion, double gear, double phase, doub
   last_t_ = t;
   const double watched = *filtered_torque_;
   int result = kNothing;
-  if (window_.open && !inBand(watched)) window_.open = false;
+  if (window_.open && !inBand(watched)) {
+    noteStretch();
+    window_.open = false;
+  }
   if (!window_.open) {
     regression_.clear();
     window_ = Window{};
@@ -185,16 +192,29 @@ bool Calibrator::inBand(double torque) const {
   return std::abs(torque - window_.torque0) <= config_.torque_band + 0.01 * std::abs(window_.torque0);
 }
 
-WindowOutcome Calibrator::excitation(double speed, double duration) const {
+WindowOutcome Calibrator::excitation(double speed, double duration, double& value, double& limit) const {
   const double rpm = std::abs(speed) * 60.0 / kTwoPi;
+  value = rpm;
+  limit = config_.min_speed_rpm;
   if (rpm < config_.min_speed_rpm) return WindowOutcome::kTooSlow;
   const double mesh_hz = std::abs(speed) * teeth_[0] / kTwoPi;
   const double lowest = estimate_.natural_frequency[0];
+  value = mesh_hz;
+  limit = config_.max_mesh_to_natural * lowest;
   if (lowest > 0.0 && mesh_hz > config_.max_mesh_to_natural * lowest) return WindowOutcome::kNotQuasiStatic;
   // The second mesh harmonic below 0.45 of the reading rate (Nyquist with a margin).
   const double rate = duration > 0.0 ? static_cast<double>(window_.n - 1) / duration : 0.0;
+  value = rate;
+  limit = 2.0 * mesh_hz / 0.45;
   if (!(2.0 * mesh_hz < 0.45 * rate)) return WindowOutcome::kTooSparse;
   return WindowOutcome::kUpdated;
+}
+
+void Calibrator::noteOutcome(WindowOutcome outcome, double value, double limit) {
+  const auto i = static_cast<std::size_t>(outcome);
+  ++progress_.closed[i];
+  progress_.value[i] = value;
+  progress_.limit[i] = limit;
 }
 
 void Calibrator::closeWindow(const StiffnessEstimator& supports) {
@@ -204,14 +224,22 @@ void Calibrator::closeWindow(const StiffnessEstimator& supports) {
   const double speed = window_.speed_sum / n;
   estimate_.window_torque = torque;
   estimate_.window_speed = speed;
+  progress_.smallest_torque = std::min(progress_.smallest_torque, std::abs(torque));
+  if (std::abs(torque) > config_.baseline_torque) ++progress_.loaded_windows;
   if (estimate_.natural_frequency[0] == 0.0) outputs(torque, supports);  // the modes, for the first check
   OrderRegression::Fit fit;
-  WindowOutcome outcome = excitation(speed, window_.t1 - window_.t0);
-  if (outcome == WindowOutcome::kUpdated && !regression_.solve(fit)) outcome = WindowOutcome::kIllConditioned;
+  double value = 0.0, limit = 0.0;
+  WindowOutcome outcome = excitation(speed, window_.t1 - window_.t0, value, limit);
+  if (outcome == WindowOutcome::kUpdated && !regression_.solve(fit)) {
+    outcome = WindowOutcome::kIllConditioned;
+    value = static_cast<double>(regression_.count());
+    limit = 4.0 * regression_.terms();  // OrderRegression::solve's fewest readings
+  }
   if (outcome != WindowOutcome::kUpdated) {
     ++estimate_.not_excited;
     estimate_.outcome = outcome;
     estimate_.excited = false;
+    noteOutcome(outcome, value, limit);
     return;
   }
   last_fit_ = fit;
@@ -231,11 +259,13 @@ void Calibrator::closeWindow(const StiffnessEstimator& supports) {
     ++estimate_.baseline_windows;
     estimate_.baseline = true;
     estimate_.outcome = WindowOutcome::kBaseline;
+    noteOutcome(WindowOutcome::kBaseline, std::abs(torque), config_.baseline_torque);
     return;
   }
   if (base_count_ == 0) {
     ++estimate_.not_excited;
     estimate_.outcome = WindowOutcome::kNoBaseline;
+    noteOutcome(WindowOutcome::kNoBaseline, std::abs(torque), config_.baseline_torque);
     return;
   }
   // 4. The features above the baseline, with their standard deviations: the fit's, the baseline's,
@@ -315,6 +345,7 @@ void Calibrator::update(const FeatureVector& z, const FeatureVector& z_std, doub
     ++estimate_.gated;
     estimate_.outcome = WindowOutcome::kGated;
     estimate_.predicted = h0;
+    noteOutcome(WindowOutcome::kGated, nis, config_.gate);
     return;
   }
   model_error_.predict(Q);
@@ -346,6 +377,7 @@ void Calibrator::update(const FeatureVector& z, const FeatureVector& z_std, doub
   has_update_t_ = true;
   ++estimate_.updates;
   estimate_.outcome = WindowOutcome::kUpdated;
+  noteOutcome(WindowOutcome::kUpdated, nis, config_.gate);
   estimate_.predicted = predict(state_, torque);
 }
 
@@ -480,6 +512,129 @@ void Calibrator::outputs(double torque, const StiffnessEstimator& supports) {
   e.natural_frequency_low = b.natural_frequency_low;
   e.natural_frequency_high = b.natural_frequency_high;
   e.knee_torque = model_.kneeTorque(theta);
+}
+
+// ---- Progress: why no window has updated the estimate ----
+
+double CalibrationProgress::windowSeconds(double speed) const {
+  // The window rule closes a window once its readings span window_angle of pinion angle.
+  return std::abs(speed) > 0.0 ? window_angle / std::abs(speed) : std::numeric_limits<double>::infinity();
+}
+
+namespace {
+
+/// The stretch that came nearer to closing a window: the larger angle (the window rule's measure),
+/// then the longer time (a rig at rest spans no angle).
+bool nearer(const SteadyStretch& a, const SteadyStretch& b) {
+  if (a.readings == 0) return false;
+  if (b.readings == 0) return true;
+  return a.angle > b.angle || (a.angle == b.angle && a.duration > b.duration);
+}
+
+void keep(CalibrationProgress& p, const SteadyStretch& s, double baseline_torque) {
+  if (s.readings == 0) return;
+  p.smallest_torque = std::min(p.smallest_torque, std::abs(s.torque));
+  // Unloaded or loaded by the rule a closed window is judged by (closeWindow: |T| <= ~baseline_torque).
+  SteadyStretch& kept = std::abs(s.torque) <= baseline_torque ? p.unloaded : p.loaded;
+  if (nearer(s, kept)) kept = s;
+}
+
+/// printf into a string, for the sentences below (never on the per-reading path).
+template <typename... Args>
+std::string format(const char* spec, Args... args) {
+  char buffer[256];
+  std::snprintf(buffer, sizeof buffer, spec, args...);
+  return buffer;
+}
+
+std::string windowsCount(std::uint64_t n) { return format(n == 1 ? "%llu window" : "%llu windows", static_cast<unsigned long long>(n)); }
+
+}  // namespace
+
+SteadyStretch Calibrator::openStretch() const {
+  SteadyStretch s;
+  if (!window_.open || window_.n == 0) return s;
+  const double n = static_cast<double>(window_.n);
+  s.readings = window_.n;
+  s.duration = window_.t1 - window_.t0;
+  s.angle = window_.angle_max - window_.angle_min;
+  s.torque = window_.torque_sum / n;
+  s.speed = window_.speed_sum / n;
+  return s;
+}
+
+void Calibrator::noteStretch() { keep(progress_, openStretch(), config_.baseline_torque); }
+
+CalibrationProgress Calibrator::progress() const {
+  CalibrationProgress p = progress_;
+  keep(p, openStretch(), config_.baseline_torque);
+  return p;
+}
+
+std::string Calibrator::waitingReason() const {
+  if (estimate_.updates > 0) return {};
+  const CalibrationProgress p = progress();
+  if (p.readings == 0) return "no encoder reading with the gear angle has reached the calibration";
+  const double tb = config_.baseline_torque;
+  // A stretch against the window it fell short of: one gear turn of pinion angle, in seconds at
+  // the stretch's own mean speed.
+  auto shortOf = [&](const SteadyStretch& s, const char* which) {
+    std::string out = format("the longest steady %storque (%.3g N*m) lasted %.2f s, %.2f of a gear turn, and a window needs one gear turn",
+                             which, s.torque, s.duration, s.angle / p.window_angle);
+    const double rpm = std::abs(s.speed) * 60.0 / kTwoPi;
+    out += rpm > 0.0 ? format(", %.2f s at %.4g rpm", p.windowSeconds(s.speed), rpm) : std::string(", and the pinion stood still");
+    return out;
+  };
+  const std::string no_unloaded =
+      format("no torque was held at |T| <= ~baseline_torque = %g N*m for the unloaded baseline (the smallest: %.3g N*m)", tb,
+             p.smallest_torque);
+  if (estimate_.windows == 0) {
+    std::string out = "no window closed: " + shortOf(nearer(p.unloaded, p.loaded) ? p.unloaded : p.loaded, "");
+    if (p.unloaded.readings == 0) out += "; " + no_unloaded;
+    return out;
+  }
+  // Windows closed, none updated: what closed, then why each kind fell short.
+  static const char* const kShort[kWindowOutcomes] = {"none", "baseline", "updated", "gated", "before any baseline",
+                                                       "too slow", "not quasi-static", "too sparse", "ill-conditioned"};
+  std::string counts;
+  for (int i = 0; i < kWindowOutcomes; ++i) {
+    if (p.closed[i] == 0) continue;
+    counts += format("%s%llu %s", counts.empty() ? "" : ", ", static_cast<unsigned long long>(p.closed[i]), kShort[i]);
+  }
+  std::string out = "no window updated the calibration (" + windowsCount(estimate_.windows) + " closed: " + counts + ")";
+  auto clause = [&out](const std::string& text) { out += "; " + text; };
+  const std::uint64_t unloaded_windows = estimate_.windows - p.loaded_windows;
+  if (estimate_.baseline_windows == 0 && unloaded_windows == 0) {
+    clause(p.unloaded.readings > 0 ? "no unloaded baseline window: " + shortOf(p.unloaded, "unloaded ") : no_unloaded);
+  }
+  if (p.loaded_windows == 0) {
+    clause(p.loaded.readings > 0 ? "no loaded window closed: " + shortOf(p.loaded, "loaded ")
+                                 : format("no torque above ~baseline_torque = %g N*m was held", tb));
+  }
+  auto last = [&p](WindowOutcome o, std::size_t& i) {
+    i = static_cast<std::size_t>(o);
+    return p.closed[i];
+  };
+  std::size_t i = 0;
+  if (const std::uint64_t n = last(WindowOutcome::kTooSlow, i)) {
+    clause(windowsCount(n) + format(" too slow: the last at %.3g rpm, below ~min_speed_rpm = %g", p.value[i], p.limit[i]));
+  }
+  if (const std::uint64_t n = last(WindowOutcome::kNotQuasiStatic, i)) {
+    clause(windowsCount(n) + format(" not quasi-static: the last at a mesh frequency of %.4g Hz, above ~max_mesh_to_natural x "
+                                    "the lowest natural frequency = %.4g Hz",
+                                    p.value[i], p.limit[i]));
+  }
+  if (const std::uint64_t n = last(WindowOutcome::kTooSparse, i)) {
+    clause(windowsCount(n) + format(" too sparse: the last read at %.4g Hz, and its second mesh harmonic needs more than %.4g Hz",
+                                    p.value[i], p.limit[i]));
+  }
+  if (const std::uint64_t n = last(WindowOutcome::kIllConditioned, i)) {
+    clause(windowsCount(n) + format(" ill-conditioned: the last one's %.0f readings do not determine the shaft orders", p.value[i]));
+  }
+  if (const std::uint64_t n = last(WindowOutcome::kGated, i)) {
+    clause(windowsCount(n) + format(" gated: the last one's normalised innovation squared %.3g, above ~gate = %g", p.value[i], p.limit[i]));
+  }
+  return out;
 }
 
 }  // namespace drivetrain_stiffness

@@ -4,12 +4,15 @@
 // inputs between them (supports rebuilt and re-solved, the dynamics' bearing stiffness changed).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <vector>
 
 #include "drivetrain_stiffness/config/yaml_config.hpp"
 #include "counting_new.hpp"  // NOLINT(build/include_subdir)
+#include "drivetrain_stiffness/calibration/calibrator.hpp"
 #include "drivetrain_stiffness/core/dynamics_estimator.hpp"
+#include "drivetrain_stiffness/core/stiffness_estimator.hpp"
 #include "drivetrain_stiffness/pipeline/rig_pipeline.hpp"
 #include "ripple_torque_feed.hpp"  // NOLINT(build/include_subdir)
 #include "seed_rig.hpp"            // NOLINT(build/include_subdir)
@@ -100,6 +103,39 @@ TEST(NoAllocation, EncoderReadingsThroughCalibrationUpdates) {
   EXPECT_EQ(n, 0) << n / 1e4 << " heap allocations per reading";
   EXPECT_GE(pipeline.calibrator()->estimate().updates, updates_before + 2);
   EXPECT_EQ(pipeline.calibrator()->estimate().gated, 0u);
+}
+
+// The calibration's record of its progress (Calibrator::progress, what waitingReason explains) is
+// kept on the per-reading path too: windows dropped at torque steps and at breaks in the readings,
+// and the progress read back, allocate nothing. The Calibrator alone, 60 rpm at 5 kHz, steps of
+// 1.5 s (short of the 2 s gear turn) between 0 and 2 N m, a break every 0.7 s; warmed up by the
+// same cycle once, then a second cycle counted.
+TEST(NoAllocation, CalibrationProgressThroughDroppedWindows) {
+  RigConfig rig = test::seedServo();
+  rig.calibration.present = true;
+  Calibrator calibrator(rig);
+  StiffnessEstimator supports(rig);
+  const test::StaticTeEncoder encoder(rig, 2.0);
+  const double w = 2.0 * M_PI;  // 60 rpm
+  MeasuredTeSample sample;
+  double longest = 0.0;
+  auto cycle = [&](long first) {
+    for (long k = first; k < first + 30000; ++k) {  // 6 s
+      const double t = 2e-4 * k, theta = w * t;
+      const double torque = static_cast<long>(t / 1.5) % 2 == 0 ? 0.0 : 2.0;
+      if (k % 3500 == 0) calibrator.interrupt();
+      calibrator.reading(t, theta, encoder.gearAngle(theta, torque), encoder.phase(theta), w, torque, supports, sample);
+      longest = std::max(longest, calibrator.progress().loaded.duration);
+    }
+  };
+  cycle(0);
+  const long before = allocationCount();
+  cycle(30000);
+  const long n = allocationCount() - before;
+  EXPECT_EQ(n, 0) << n / 3e4 << " heap allocations per reading";
+  EXPECT_EQ(calibrator.estimate().windows, 0u);
+  EXPECT_GT(longest, 0.5);
+  EXPECT_LT(longest, 1.5);
 }
 
 // Preload inputs (issue 15 section 3): new axial and radial preloads and interferences for both

@@ -10,6 +10,7 @@
 
 #include <cmath>
 #include <functional>
+#include <iostream>
 #include <map>
 #include <mutex>
 #include <vector>
@@ -177,6 +178,14 @@ TEST_F(CalibrationTopicsTest, NodePublishesWhatThePipelineGivesInProcess) {
   ASSERT_GT(sink.tes.size(), 1000u);  // 1.1 s at the 1 kHz output rate
   ASSERT_GT(sink.periods.size(), 10u);
 
+  // Before any input the calibration says it waits for its first reading, with a WARN.
+  const std::string no_reading = "no encoder reading with the gear angle has reached the calibration";
+  EXPECT_TRUE(waitWall([&] { return diagnostic("calibration_waiting") == no_reading; }, 5.0)) << diagnostic("calibration_waiting");
+  EXPECT_TRUE(waitWall([&] {
+    std::lock_guard<std::mutex> l(m_);
+    return status_message_.find("calibration waiting: " + no_reading) != std::string::npos;
+  }, 5.0)) << status_message_;
+
   // On the graph: each torque step, then its readings in chunks the subscriber queue holds, each
   // waited for on /diagnostics, so the node sees exactly this order.
   std::size_t torques = 0, readings = 0;
@@ -251,6 +260,17 @@ TEST_F(CalibrationTopicsTest, NodePublishesWhatThePipelineGivesInProcess) {
   EXPECT_EQ(diagnostic("calibration_gated"), std::to_string(e.gated));
   EXPECT_EQ(diagnostic("calibration_identified"), identifiedParameters(e));
   EXPECT_NE(diagnostic("calibration.mesh_stiffness_scale [-]"), "");
+  // No window updated (the loaded ones are gated: no TE), so /diagnostics says why, the sentence
+  // the in-process calibrator gives for the same inputs, with a WARN.
+  ASSERT_EQ(e.updates, 0u);
+  const std::string waiting = pipeline.calibrator()->waitingReason();
+  std::cout << "calibration_waiting: " << waiting << "\n";
+  EXPECT_NE(waiting.find("gated"), std::string::npos) << waiting;
+  EXPECT_EQ(diagnostic("calibration_waiting"), waiting);
+  EXPECT_TRUE(waitWall([&] {
+    std::lock_guard<std::mutex> l(m_);
+    return status_message_.find("calibration waiting: " + waiting) != std::string::npos;
+  }, 5.0)) << status_message_;
   EXPECT_NE(diagnostic("calibration.te_offset [m]"), "");
   // Every input has stopped with the encoders driving the phase: the time-out waits for the next
   // input's stamp, and /diagnostics says how old the last reading is on the node's clock. The

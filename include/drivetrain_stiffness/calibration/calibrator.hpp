@@ -23,8 +23,10 @@
 
 #include <array>
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <optional>
+#include <string>
 
 #include "drivetrain_stiffness/calibration/model_error_scale.hpp"
 #include "drivetrain_stiffness/calibration/order_regression.hpp"
@@ -37,6 +39,7 @@ class StiffnessEstimator;
 
 /// Why the last window did or did not update the estimate.
 enum class WindowOutcome { kNone, kBaseline, kUpdated, kGated, kNoBaseline, kTooSlow, kNotQuasiStatic, kTooSparse, kIllConditioned };
+constexpr int kWindowOutcomes = static_cast<int>(WindowOutcome::kIllConditioned) + 1;
 const char* toString(WindowOutcome outcome);
 
 /// The calibration's state after a window (every field SI; see the Calibration message).
@@ -61,6 +64,40 @@ struct CalibrationEstimate {
   std::array<double, 2> bearing_stiffness{}, bearing_stiffness_low{}, bearing_stiffness_high{};  ///< [N/m] per shaft
   std::array<double, 3> natural_frequency{}, natural_frequency_low{}, natural_frequency_high{};  ///< [Hz]
   double knee_torque = 0.0;  ///< [N·m] pinion torque where the back half lifts, at the estimate
+};
+
+/// A stretch of readings at a steady torque (the window rule's) that did not become a window: it
+/// was dropped when the filtered torque left its band or the readings broke off, or it is still open.
+struct SteadyStretch {
+  long readings = 0;
+  double duration = 0.0;  ///< [s] from its first reading to its last
+  double angle = 0.0;     ///< [rad] of pinion angle spanned (a window needs CalibrationProgress::window_angle)
+  double torque = 0.0;    ///< [N·m] mean held torque
+  double speed = 0.0;     ///< [rad/s] mean pinion speed
+};
+
+/// What the calibration has seen, for saying why no window has updated it
+/// (Calibrator::waitingReason). Fixed size: kept on the per-reading path without allocation.
+struct CalibrationProgress {
+  std::uint64_t readings = 0;   ///< encoder readings with the gear angle given to the calibration
+  double window_angle = 0.0;    ///< [rad] of pinion angle a window spans: one gear turn
+  /// The longest stretch (by angle, then by time) that did not become a window, at a mean
+  /// |torque| <= ~baseline_torque (unloaded) and above it (loaded). readings == 0: none seen.
+  SteadyStretch unloaded, loaded;
+  /// [N·m] the smallest mean |torque| of any stretch or closed window (infinite before the first).
+  double smallest_torque = std::numeric_limits<double>::infinity();
+  std::uint64_t loaded_windows = 0;  ///< closed windows at a mean |torque| above ~baseline_torque
+  std::array<std::uint64_t, kWindowOutcomes> closed{};  ///< closed windows per WindowOutcome
+  /// Per WindowOutcome, the number that decided its last window and the limit it was held against:
+  /// kTooSlow: speed and ~min_speed_rpm [rpm]; kNotQuasiStatic: mesh frequency and
+  /// ~max_mesh_to_natural x the lowest natural frequency [Hz]; kTooSparse: reading rate and the
+  /// rate the second mesh harmonic needs [Hz]; kIllConditioned: readings in the fit and the fewest
+  /// it takes; kGated, kUpdated: NIS and ~gate; kBaseline, kNoBaseline: mean |torque| and
+  /// ~baseline_torque [N·m].
+  std::array<double, kWindowOutcomes> value{}, limit{};
+  std::uint64_t count(WindowOutcome o) const { return closed[static_cast<std::size_t>(o)]; }
+  /// [s] one window (window_angle) at pinion speed `speed` [rad/s]; infinite at rest.
+  double windowSeconds(double speed) const;
 };
 
 /// The calibrated stiffness and natural frequencies at an operating point with their 95 % bounds
@@ -101,6 +138,14 @@ class Calibrator {
   /// The readings broke off (encoder time-out, a reset, a jump): the open window is dropped.
   void interrupt();
   const CalibrationEstimate& estimate() const { return estimate_; }
+  /// What the calibration has seen so far, the open window counted as a stretch. Allocation-free.
+  CalibrationProgress progress() const;
+  /// Why no window has updated the estimate, as one sentence with the numbers, e.g. "no window
+  /// closed: the longest steady torque (1.5 N*m) lasted 1.93 s, 0.96 of a gear turn, and a window
+  /// needs one gear turn, 2.00 s at 60 rpm" (docs/calibration.md, "When no window updates");
+  /// empty once a window has updated it. Allocates (the string): for /diagnostics and run
+  /// summaries, not the per-reading path.
+  std::string waitingReason() const;
   const RigConfig& rig() const { return *rig_; }
   const StaticTeModel& model() const { return model_; }
   /// The parameter values (same as estimate().value) and their covariance.
@@ -115,7 +160,14 @@ class Calibrator {
 
  private:
   void closeWindow(const StiffnessEstimator& supports);
-  WindowOutcome excitation(double speed, double duration) const;
+  /// The excitation rule; `value` and `limit` get the number that decided it and its limit
+  /// (CalibrationProgress::value).
+  WindowOutcome excitation(double speed, double duration, double& value, double& limit) const;
+  /// A closed window's outcome into progress_.
+  void noteOutcome(WindowOutcome outcome, double value, double limit);
+  /// The open window, about to be dropped without closing, into progress_ as a stretch.
+  void noteStretch();
+  SteadyStretch openStretch() const;
   void update(const FeatureVector& z, const FeatureVector& z_std, double torque);
   /// The window's torque rule: within ~torque_band plus 1 % of the torque it started at.
   bool inBand(double torque) const;
@@ -154,6 +206,7 @@ class Calibrator {
   static CalibrationVector toParameters(const CalibrationVector& state);
   static CalibrationMatrix parameterJacobian(const CalibrationVector& state);
   CalibrationEstimate estimate_;
+  CalibrationProgress progress_;
   /// Accepted windows per operating point (torque bins 2 ~torque_band wide), so the model error,
   /// which repeats at one operating point, counts once however long the rig dwells there: window n
   /// of a bin carries n times the per-window model-error variance. Fixed storage (no allocation);
