@@ -103,6 +103,9 @@ nlohmann::json calibrationJson(const RigPipeline& pipeline) {
     j[std::string(calibrationName(i)) + "_std"] = e.std[i];
     j[std::string(calibrationName(i)) + "_identified"] = static_cast<bool>(e.identified[static_cast<std::size_t>(i)]);
   }
+  // Why no window has updated the estimate yet, with the numbers (null once one has).
+  const std::string waiting = c->waitingReason();
+  j["waiting"] = waiting.empty() ? nlohmann::json(nullptr) : nlohmann::json(waiting);
   j["windows"] = e.windows;
   j["baseline_windows"] = e.baseline_windows;
   j["updates"] = e.updates;
@@ -148,6 +151,13 @@ nlohmann::json dynamicsWorkJson(const DynamicsEstimator& d) {
   return work;
 }
 
+/// The calibration's status, and while no window has updated it, why (Calibrator::waitingReason).
+std::string calibrationLine(const nlohmann::json& calibration) {
+  std::string line = calibration["status"].get<std::string>();
+  if (calibration.contains("waiting") && calibration["waiting"].is_string()) line += "; " + calibration["waiting"].get<std::string>();
+  return line;
+}
+
 /// What the run did, for stderr: the status, the inputs, the calibration, the exit code's meaning.
 std::string runSummaryText(const std::string& bag_path, std::uint64_t messages, const nlohmann::json& summary,
                            const ReplaySummary& inputs, const RigPipeline& pipeline,
@@ -156,7 +166,7 @@ std::string runSummaryText(const std::string& bag_path, std::uint64_t messages, 
                      " messages read on the named topics, " + std::to_string(ReplaySummary::accepted(pipeline.counters())) +
                      " inputs accepted\n";
   text += inputs.text(pipeline, bag_topics);
-  text += "  calibration: " + summary["calibration"]["status"].get<std::string>() + "\n";
+  text += "  calibration: " + calibrationLine(summary["calibration"]) + "\n";
   const std::string status = summary["status"].get<std::string>();
   if (status != "ok") text += "  status: " + status + "\n";
   text += inputs.wrongTypeText().empty() ? "" : "  wrong type: " + inputs.wrongTypeText();
@@ -179,7 +189,7 @@ void writeReport(const std::string& path, const nlohmann::json& summary, const s
   }
   f << "Source: `" << summary["bag"].get<std::string>() << "`; outputs: `" << printableText(out_bag) << "`.\n\n";
   f << "## Inputs\n\n" << inputs_markdown << "\n";
-  f << "## Calibration\n\n" << summary["calibration"]["status"].get<std::string>() << "\n\n";
+  f << "## Calibration\n\n" << calibrationLine(summary["calibration"]) << "\n\n";
   const PipelineCounters& c = pipeline.counters();
   f << "## Outputs\n\n| output | count |\n|---|---|\n";
   for (const auto& [key, count] : namedCounters(c)) {

@@ -2,7 +2,8 @@
 """drivetrain_replay on bags another lab would hand it, written here with python rosbag: a torque
 in another frame, two kinds of refusal in one bag, only unrelated topics, a topic of the wrong
 type, one topic named for two inputs, a directory or a pipe as --bag, gaps with load changes, a
-frame id that is not UTF-8, encoders that barely turn. For each: the exit code
+frame id that is not UTF-8, encoders that barely turn, a calibration recording whose torque steps
+are too short for a window. For each: the exit code
 (docs/replay_exit_codes.md), the run summary on stderr, summary.json's "inputs", and report.md
 with and without plots say what was used, what was not, and why.
 
@@ -223,6 +224,24 @@ def encoders_barely_turn():
     ])
 
 
+def calibration_without_a_window():
+    """A load sweep at 60 rpm whose torque steps last 2 s, one gear turn of the 20/40 pair: no loaded
+    window can close, and the replay says so with the numbers."""
+    bag = os.path.join(work, "sweep_60rpm.bag")
+    subprocess.run([os.path.join(bin_dir, "drivetrain_rig_sim"), "--scenario", "load_sweep", "--config",
+                    os.path.join(src, "test/data/perturbed_servo.yaml"), "--out", bag, "--speed-rpm", "60",
+                    "--duration", "38.4", "--seed", "3"], check=True, capture_output=True)
+    p, s, md, _ = run("calibration_without_a_window", bag)
+    waiting = ((s or {}).get("calibration") or {}).get("waiting") or ""
+    said = "a window needs one gear turn, 2.00 s at 60 rpm"
+    check("calibration_without_a_window", [
+        (p.returncode == 0, "exit %d: %s" % (p.returncode, p.stderr[-300:])),
+        (said in waiting, "summary.json calibration.waiting: %r" % waiting),
+        (said in p.stderr, "stderr does not say why no window closed"),
+        (said in md, "report.md does not say why no window closed"),
+    ])
+
+
 def main():
     shutil.rmtree(work, ignore_errors=True)
     os.makedirs(work)
@@ -234,6 +253,7 @@ def main():
     gaps_and_load_changes()
     non_utf8_frame()
     encoders_barely_turn()
+    calibration_without_a_window()
     if failures:
         sys.exit("check_foreign_bags: failed: %s" % ", ".join(failures))
     print("check_foreign_bags: every foreign bag's replay says what it used, what it did not, and why")
