@@ -371,11 +371,14 @@ void StiffnessEstimatorRos::diagnose(diagnostic_updater::DiagnosticStatusWrapper
     status.add("calibration_not_excited", e.not_excited);
     status.add("calibration_nis", e.nis);
     status.add("calibration_identified", identifiedParameters(e));
-    // Until a window updates the calibration, why not, with the numbers (a WARN: a calibration
-    // that never starts is otherwise silent).
+    // Until a window updates the calibration, why not, with the numbers. A WARN once readings with
+    // the gear angle arrive and still no window updates (a calibration that never starts is
+    // otherwise silent); a rig without the gear encoder is told, not warned, every second.
     const std::string waiting = calibrator->waitingReason();
     status.add("calibration_waiting", waiting.empty() ? "no" : waiting);
-    if (!waiting.empty()) status.mergeSummaryf(diagnostic_msgs::DiagnosticStatus::WARN, "calibration waiting: %s", waiting.c_str());
+    if (!waiting.empty() && calibrator->progress().readings > 0) {
+      status.mergeSummaryf(diagnostic_msgs::DiagnosticStatus::WARN, "calibration waiting: %s", waiting.c_str());
+    }
     static const char* const units[kCalibrationSize] = {"[-]", "[-]", "[-]", "[N*m]", "[m]"};  // CalibrationIndex order
     for (int i = 0; i < kCalibrationSize; ++i) {
       status.addf(std::string("calibration.") + calibrationName(i) + " " + units[i], "%.6g +- %.2g", e.value[i], e.std[i]);
