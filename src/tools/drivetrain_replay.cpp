@@ -199,95 +199,81 @@ void writeReport(const std::string& path, const nlohmann::json& summary, const s
   f << "| model time integrated | " << c.simulated_s << " s |\n";
 }
 
-int run(int argc, char** argv) {
-  CLI::App app{"Replays a recorded bag through the stiffness estimator's pipeline (no master needed)"};
-  app.footer(kExitCodesHelp);
-  std::string bag_path, config, params, out_bag, csv_dir, report_dir, calibrate_out, torque_topic = "torque", preload_topic = "preload",
-              joint_states_topic = "joint_states";
+/// drivetrain_replay's command line.
+struct ReplayOptions {
+  std::string bag_path, config, params, out_bag, csv_dir, report_dir, calibrate_out;
+  std::string torque_topic = "torque", preload_topic = "preload", joint_states_topic = "joint_states";
   std::string plot_script = DRIVETRAIN_PLOT_REPLAY_SCRIPT;
   std::string compression = "lz4";
   std::string topics_option = "all", csv_topics_option;
   bool plots = true;
-  app.add_option("--bag", bag_path, "Recorded bag with the rig's torque and preload")->required();
-  app.add_option("--config", config, "Gearbox YAML, as the node's ~gearbox_config")->required();
-  app.add_option("--params", params, "The node's parameter YAML (e.g. config/stiffness_estimator.yaml)");
-  app.add_option("--out", out_bag, "Bag to write with the node's output topics");
-  app.add_option("--compression", compression, "Chunk compression of --out: lz4 (as rosbag record --lz4) or none")
+};
+
+/// Parses the command line into `o`; returns an exit code when the run ends here (--help, bad options).
+std::optional<int> parseOptions(int argc, char** argv, ReplayOptions& o) {
+  CLI::App app{"Replays a recorded bag through the stiffness estimator's pipeline (no master needed)"};
+  app.footer(kExitCodesHelp);
+  app.add_option("--bag", o.bag_path, "Recorded bag with the rig's torque and preload")->required();
+  app.add_option("--config", o.config, "Gearbox YAML, as the node's ~gearbox_config")->required();
+  app.add_option("--params", o.params, "The node's parameter YAML (e.g. config/stiffness_estimator.yaml)");
+  app.add_option("--out", o.out_bag, "Bag to write with the node's output topics");
+  app.add_option("--compression", o.compression, "Chunk compression of --out: lz4 (as rosbag record --lz4) or none")
       ->check(CLI::IsMember({"lz4", "none"}));
-  app.add_option("--csv", csv_dir, "Directory for one CSV file per output topic");
-  app.add_option("--topics", topics_option,
+  app.add_option("--csv", o.csv_dir, "Directory for one CSV file per output topic");
+  app.add_option("--topics", o.topics_option,
                  "Output topics written to --out and --csv (and the report's): all, or a comma-separated list of "
                  "stiffness, transmission_error, te_spectrum, resonance, measured_te, calibration, mesh_period_stats, "
                  "tf, rig_markers")
       ->capture_default_str();
-  app.add_option("--csv-topics", csv_topics_option, "Output topics written to --csv alone (default: --topics)");
-  app.add_option("--calibrate", calibrate_out,
+  app.add_option("--csv-topics", o.csv_topics_option, "Output topics written to --csv alone (default: --topics)");
+  app.add_option("--calibrate", o.calibrate_out,
                  "Gearbox YAML to write with the calibrated values (needs a calibration: block in --config and a window "
                  "that updated the calibration)");
-  app.add_option("--report", report_dir, "Directory for summary.json, report.md and PNG plots (CSV in DIR/csv, outputs in DIR/outputs.bag unless --csv, --out)");
-  app.add_option("--torque-topic", torque_topic, "geometry_msgs/WrenchStamped, torque.z [N*m]");
-  app.add_option("--preload-topic", preload_topic, "drivetrain_stiffness/Preload");
-  app.add_option("--joint-states-topic", joint_states_topic,
+  app.add_option("--report", o.report_dir,
+                 "Directory for summary.json, report.md and PNG plots (CSV in DIR/csv, outputs in DIR/outputs.bag unless "
+                 "--csv, --out)");
+  app.add_option("--torque-topic", o.torque_topic, "geometry_msgs/WrenchStamped, torque.z [N*m]");
+  app.add_option("--preload-topic", o.preload_topic, "drivetrain_stiffness/Preload");
+  app.add_option("--joint-states-topic", o.joint_states_topic,
                  "sensor_msgs/JointState, the rig's encoders (~pinion_joint, ~gear_joint from --params)");
-  app.add_option("--plot-script", plot_script, "matplotlib script: OUTPUT_BAG REPORT_DIR INPUT_BAG");
-  app.add_flag("!--no-plots", plots, "Write the report without PNG plots");
+  app.add_option("--plot-script", o.plot_script, "matplotlib script: OUTPUT_BAG REPORT_DIR INPUT_BAG");
+  app.add_flag("!--no-plots", o.plots, "Write the report without PNG plots");
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {  // --help is one too (exit code 0); CLI11's own codes are 100+
     return app.exit(e) == 0 ? kExitOk : kExitRefused;
   }
+  return std::nullopt;
+}
 
-  // Refused before anything is read: one topic for two inputs, an unknown name, or a report whose
-  // plots would miss their topics.
-  ReplaySummary inputs(torque_topic, preload_topic, joint_states_topic);
-  inputs.requireDistinctTopics();
-  const OutputTopics topics = OutputTopics::parse("--topics", topics_option);
-  const OutputTopics csv_topics = csv_topics_option.empty() ? topics : OutputTopics::parse("--csv-topics", csv_topics_option);
-  const OutputTopics plotted = OutputTopics::parse("", "transmission_error,stiffness,resonance,mesh_period_stats");
-  if (!report_dir.empty() && plots && !topics.includes(plotted)) {
-    throw InvalidInput("--topics = '" + topics_option + "': the report's plots read " + plotted.describe() +
-                       " from its outputs.bag; add them, or pass --no-plots");
-  }
-  const RigConfig rig = loadRigFile(config);
-  const YamlParameters get = readParameterFile(params);
-  RigPipeline pipeline(rig, readPipelineOptions(get, rig), readRuntimeSettings(get, rig));
-  if (!calibrate_out.empty() && !pipeline.calibrator()) {  // refused before anything is read
-    throw InvalidInput("--calibrate = '" + calibrate_out + "': no calibration runs with --config '" + config +
-                       "' (" + calibrationStatus(pipeline) + ")");
-  }
-  if (!report_dir.empty()) {
-    ensureDirectory("--report", report_dir);
-    if (csv_dir.empty()) csv_dir = report_dir + "/csv";
-    if (out_bag.empty()) out_bag = report_dir + "/outputs.bag";  // what the report's plots read
-  }
-  if (!csv_dir.empty()) ensureDirectory("--csv", csv_dir);
-
-  // Reads each message before the loop gets it: damage ends the input (input.damage()), it is
-  // never thrown out of the loop, so the outputs below are always closed.
-  ReplayInput input(bag_path, torque_topic, preload_topic, joint_states_topic);
-  const JointNames joints = readJointNames(get);
-  std::string joint_refusal;
-  std::vector<PreloadSetting> preload_settings;  // each preload message's, converted in place
-  ReplayWriter writer(pipeline, readOutputSettings(get), out_bag,
-                      compression == "none" ? BagCompression::None : BagCompression::Lz4, csv_dir, topics, csv_topics);
+/// What the message loop read: the messages on the named topics and their first and last record time.
+struct ReadSpan {
   std::uint64_t messages = 0;
   std::optional<ros::Time> first, last;
-  const auto start = std::chrono::steady_clock::now();  // only for the printed speed
+  double seconds() const { return first ? (*last - *first).toSec() : 0.0; }
+};
+
+/// Feeds every message of `input` to the pipeline in record order, counting each on its topic.
+ReadSpan replayMessages(ReplayInput& input, const ReplayOptions& o, const JointNames& joints, RigPipeline& pipeline,
+                        ReplayWriter& writer, ReplaySummary& inputs) {
+  ReadSpan span;
+  std::string joint_refusal;
+  std::vector<PreloadSetting> preload_settings;  // each preload message's, converted in place
   for (const ReplayMessage& m : input) {
-    ++messages;
-    if (!first) first = m.getTime();
-    last = m.getTime();
+    ++span.messages;
+    if (!span.first) span.first = m.getTime();
+    span.last = m.getTime();
     pipeline.observeClock(fromRosTime(m.getTime()), writer);
     // The recording publisher's caller id: its header.seq numbers what rosbag record received.
     const std::string& publisher = m.getCallerId();
-    if (topicMatches(m.getTopic(), torque_topic)) {
+    if (topicMatches(m.getTopic(), o.torque_topic)) {
       const auto w = m.instantiate<geometry_msgs::WrenchStamped>();
       inputs.read(InputStream::kTorque, w ? std::string() : m.getDataType());
       if (w) {
         const TorqueInput in = toTorqueInput(*w, publisher);
         pipeline.torque(in.stamp, in.torque, writer, in.origin);
       }
-    } else if (topicMatches(m.getTopic(), joint_states_topic)) {
+    } else if (topicMatches(m.getTopic(), o.joint_states_topic)) {
       const auto j = m.instantiate<sensor_msgs::JointState>();
       inputs.read(InputStream::kJointStates, j ? std::string() : m.getDataType());
       if (j) {
@@ -310,36 +296,37 @@ int run(int argc, char** argv) {
       }
     }
   }
-  writer.close();
-  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  const double span = first ? (*last - *first).toSec() : 0.0;
-  const std::vector<BagTopic> bag_topics = input.topics();
-  const bool nothing_accepted = ReplaySummary::accepted(pipeline.counters()) == 0;
+  return span;
+}
 
+/// summary.json (without `speed`): status, inputs, counters, calibration, final estimates.
+nlohmann::json summaryJson(const ReplayOptions& o, const RigConfig& rig, const JointNames& joints, const ReplayInput& input,
+                           const ReadSpan& span, const ReplaySummary& inputs, const RigPipeline& pipeline,
+                           const ReplayWriter& writer, const std::vector<BagTopic>& bag_topics) {
   nlohmann::json summary;
-  summary["bag"] = printableText(bag_path);
+  summary["bag"] = printableText(o.bag_path);
   summary["status"] = "ok";
   if (const auto& damage = input.damage()) {
-    summary["status"] = "incomplete: " + printableText(damage->describe(bag_path)) + "; " + std::to_string(messages) +
-                        " messages read before it";
-    summary["damage"] = {{"file", printableText(bag_path)}, {"offset", damage->offset},
-                         {"what", printableText(damage->what)}, {"messages_before", messages}};
-  } else if (nothing_accepted) {
-    summary["status"] = "nothing accepted: no message on a named topic was accepted (" + std::to_string(messages) +
+    summary["status"] = "incomplete: " + printableText(damage->describe(o.bag_path)) + "; " +
+                        std::to_string(span.messages) + " messages read before it";
+    summary["damage"] = {{"file", printableText(o.bag_path)}, {"offset", damage->offset},
+                         {"what", printableText(damage->what)}, {"messages_before", span.messages}};
+  } else if (ReplaySummary::accepted(pipeline.counters()) == 0) {
+    summary["status"] = "nothing accepted: no message on a named topic was accepted (" + std::to_string(span.messages) +
                         " read); see \"inputs\"";
   }
-  summary["messages"] = messages;
+  summary["messages"] = span.messages;
   summary["wrong_type"] = inputs.wrongType();
   summary["inputs"] = inputs.json(pipeline, bag_topics);
-  summary["span_s"] = span;
-  summary["topics"] = topics.describe();  // what --out holds
-  summary["csv_topics"] = csv_topics.describe();  // what the CSV files hold
+  summary["span_s"] = span.seconds();
+  summary["topics"] = writer.topics().describe();  // what --out holds
+  summary["csv_topics"] = writer.csvTopics().describe();  // what the CSV files hold
   // [s since the epoch] the first and last stamp read (null for a bag without one): a campaign sorts by start.
-  summary["start"] = first ? nlohmann::json(first->toSec()) : nlohmann::json(nullptr);
-  summary["end"] = last ? nlohmann::json(last->toSec()) : nlohmann::json(nullptr);
+  summary["start"] = span.first ? nlohmann::json(span.first->toSec()) : nlohmann::json(nullptr);
+  summary["end"] = span.last ? nlohmann::json(span.last->toSec()) : nlohmann::json(nullptr);
   // What the report's motion figures read the input bag with (plot_replay.py): the encoders' topic
   // and joint names as this replay took them, and the tooth counts for the mesh orders.
-  summary["encoders"] = {{"topic", joint_states_topic},
+  summary["encoders"] = {{"topic", o.joint_states_topic},
                          {"pinion_joint", joints.pinion},
                          {"gear_joint", joints.gear},
                          {"pinion_teeth", rig.gears.teeth[0]},
@@ -349,23 +336,6 @@ int run(int argc, char** argv) {
   // The per-mesh-period statistics over the bag (a campaign's row): speed, torque, TE RMS, force.
   summary["mesh_periods"] = writer.meshPeriodTotals().json();
   if (const DynamicsEstimator* d = pipeline.dynamics()) summary["dynamics_work"] = dynamicsWorkJson(*d);
-  // --calibrate: written or refused (no window updated the calibration); the other outputs stand either way.
-  std::string calibrate_error;
-  if (!calibrate_out.empty()) {
-    CalibrationProvenance provenance;
-    provenance.bag = std::filesystem::absolute(bag_path).string();
-    if (first) provenance.recorded = utc(static_cast<std::time_t>(first->sec)) + " to " + utc(static_cast<std::time_t>(last->sec));
-    provenance.written = utc(std::time(nullptr));
-    provenance.status = summary["status"].get<std::string>();
-    try {
-      writeCalibratedGearbox(config, pipeline.calibrator()->estimate(), calibrate_out, provenance);
-      summary["calibrated_gearbox"] = calibrate_out;
-    } catch (const std::exception& e) {
-      calibrate_error = e.what();
-      summary["calibrated_gearbox"] = nullptr;
-      summary["calibrate_error"] = calibrate_error;
-    }
-  }
   if (const auto& r = pipeline.lastResonance()) {
     for (const Mode& mode : r->modes) summary["final_resonance_hz"].push_back(mode.natural_frequency);
     summary["final_floquet_margin"] = r->floquet_valid ? nlohmann::json(r->floquet_margin) : nlohmann::json(nullptr);
@@ -373,27 +343,98 @@ int run(int argc, char** argv) {
   for (const SupportEstimate& s : pipeline.estimator().current().supports) {
     summary["final_radial_stiffness"][s.name] = s.solution.radialStiffness();
   }
+  return summary;
+}
+
+/// --calibrate: writes the calibrated gearbox, or says in `summary` why not; returns the refusal ("" if written).
+std::string writeCalibration(const ReplayOptions& o, const ReadSpan& span, const RigPipeline& pipeline,
+                             nlohmann::json& summary) {
+  CalibrationProvenance provenance;
+  provenance.bag = std::filesystem::absolute(o.bag_path).string();
+  if (span.first) {
+    provenance.recorded = utc(static_cast<std::time_t>(span.first->sec)) + " to " + utc(static_cast<std::time_t>(span.last->sec));
+  }
+  provenance.written = utc(std::time(nullptr));
+  provenance.status = summary["status"].get<std::string>();
+  try {
+    writeCalibratedGearbox(o.config, pipeline.calibrator()->estimate(), o.calibrate_out, provenance);
+    summary["calibrated_gearbox"] = o.calibrate_out;
+    return "";
+  } catch (const std::exception& e) {
+    summary["calibrated_gearbox"] = nullptr;
+    summary["calibrate_error"] = e.what();
+    return e.what();
+  }
+}
+
+int run(int argc, char** argv) {
+  ReplayOptions o;
+  if (const std::optional<int> code = parseOptions(argc, argv, o)) return *code;
+
+  // Refused before anything is read: one topic for two inputs, an unknown name, or a report whose
+  // plots would miss their topics.
+  ReplaySummary inputs(o.torque_topic, o.preload_topic, o.joint_states_topic);
+  inputs.requireDistinctTopics();
+  const OutputTopics topics = OutputTopics::parse("--topics", o.topics_option);
+  const OutputTopics csv_topics =
+      o.csv_topics_option.empty() ? topics : OutputTopics::parse("--csv-topics", o.csv_topics_option);
+  const OutputTopics plotted = OutputTopics::parse("", "transmission_error,stiffness,resonance,mesh_period_stats");
+  if (!o.report_dir.empty() && o.plots && !topics.includes(plotted)) {
+    throw InvalidInput("--topics = '" + o.topics_option + "': the report's plots read " + plotted.describe() +
+                       " from its outputs.bag; add them, or pass --no-plots");
+  }
+  const RigConfig rig = loadRigFile(o.config);
+  const YamlParameters get = readParameterFile(o.params);
+  RigPipeline pipeline(rig, readPipelineOptions(get, rig), readRuntimeSettings(get, rig));
+  if (!o.calibrate_out.empty() && !pipeline.calibrator()) {  // refused before anything is read
+    throw InvalidInput("--calibrate = '" + o.calibrate_out + "': no calibration runs with --config '" + o.config +
+                       "' (" + calibrationStatus(pipeline) + ")");
+  }
+  if (!o.report_dir.empty()) {
+    ensureDirectory("--report", o.report_dir);
+    if (o.csv_dir.empty()) o.csv_dir = o.report_dir + "/csv";
+    if (o.out_bag.empty()) o.out_bag = o.report_dir + "/outputs.bag";  // what the report's plots read
+  }
+  if (!o.csv_dir.empty()) ensureDirectory("--csv", o.csv_dir);
+
+  // Reads each message before the loop gets it: damage ends the input (input.damage()), it is
+  // never thrown out of the loop, so the outputs below are always closed.
+  ReplayInput input(o.bag_path, o.torque_topic, o.preload_topic, o.joint_states_topic);
+  const JointNames joints = readJointNames(get);
+  ReplayWriter writer(pipeline, readOutputSettings(get), o.out_bag,
+                      o.compression == "none" ? BagCompression::None : BagCompression::Lz4, o.csv_dir, topics, csv_topics);
+  const auto start = std::chrono::steady_clock::now();  // only for the printed speed
+  const ReadSpan span = replayMessages(input, o, joints, pipeline, writer, inputs);
+  writer.close();
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+
+  const std::vector<BagTopic> bag_topics = input.topics();
+  const bool nothing_accepted = ReplaySummary::accepted(pipeline.counters()) == 0;
+  nlohmann::json summary = summaryJson(o, rig, joints, input, span, inputs, pipeline, writer, bag_topics);
+  // --calibrate: written or refused (no window updated the calibration); the other outputs stand either way.
+  const std::string calibrate_error = o.calibrate_out.empty() ? "" : writeCalibration(o, span, pipeline, summary);
   const int code = !calibrate_error.empty() ? kExitRefused
                    : input.damage()         ? kExitIncomplete
                    : inputs.wrongType() > 0 ? kExitWrongType
                    : nothing_accepted       ? kExitNothingAccepted
                                             : kExitOk;
   // The run summary, on stderr at the end of every run; in report.md when asked for.
-  const std::string what_happened = runSummaryText(bag_path, messages, summary, inputs, pipeline, bag_topics, code);
-  if (!report_dir.empty()) {
-    std::ofstream(report_dir + "/summary.json") << jsonText(summary) << "\n";
-    writeReport(report_dir + "/report.md", summary, inputs.markdown(pipeline, bag_topics), pipeline, out_bag);
+  const std::string what_happened = runSummaryText(o.bag_path, span.messages, summary, inputs, pipeline, bag_topics, code);
+  if (!o.report_dir.empty()) {
+    std::ofstream(o.report_dir + "/summary.json") << jsonText(summary) << "\n";
+    writeReport(o.report_dir + "/report.md", summary, inputs.markdown(pipeline, bag_topics), pipeline, o.out_bag);
   }
   // Speed: separate from the outputs above, which must stay identical between runs. With no input
   // accepted nothing was estimated or simulated: no speed to speak of.
   summary["speed"] = {{"wall_s", wall},
-                      {"realtime_factor", nothing_accepted || !(wall > 0.0) ? nlohmann::json(nullptr) : nlohmann::json(span / wall)}};
+                      {"realtime_factor", nothing_accepted || !(wall > 0.0) ? nlohmann::json(nullptr)
+                                                                            : nlohmann::json(span.seconds() / wall)}};
   std::cout << jsonText(summary) << std::endl;
   std::cerr << what_happened;
   if (!calibrate_error.empty()) std::cerr << "drivetrain_replay: " << calibrate_error << "\n";
   // The plots last: a failing plot script (exit 1) leaves every other output written and said.
-  if (!report_dir.empty() && plots) {
-    runPythonScript("--plot-script", findScript(plot_script, "plot_replay.py"), {out_bag, report_dir, bag_path});
+  if (!o.report_dir.empty() && o.plots) {
+    runPythonScript("--plot-script", findScript(o.plot_script, "plot_replay.py"), {o.out_bag, o.report_dir, o.bag_path});
   }
   return code;
 }

@@ -88,6 +88,8 @@ class ReplayWriter : public MessageSink {
   void close();
   /// Every mesh_period_stats block so far, summed (whether or not --topics writes the topic).
   const MeshPeriodTotals& meshPeriodTotals() const { return mesh_period_totals_; }
+  const OutputTopics& topics() const { return bag_topics_; }     ///< what the bag holds
+  const OutputTopics& csvTopics() const { return csv_topics_; }  ///< what the CSV files hold
 
  protected:
   void emitStiffness(const drivetrain_stiffness::Stiffness& m) override;
