@@ -61,10 +61,11 @@ std::vector<std::string> sentences(const std::array<ReplayInputTopic, kInputStre
                              in.expected_type + ", " + in.option + "): ";
     if (in.read == 0) {
       // Torque drives everything; the preload (the gearbox's until one arrives) and the encoders
-      // (the nominal speed without them) are optional, but a topic of their type is worth a word.
+      // (the nominal speed without them) are optional. A topic of the type it wants is pointed
+      // out, and the bag's topics are listed below.
       const bool required = in.stream == InputStream::kTorque;
       out.push_back(head + "not in the bag" + (required ? "" : " (optional)"));
-      list_topics = list_topics || required;
+      list_topics = true;
       for (const BagTopic& t : bag_topics) {
         if (typeWanted(t, in)) {
           out.push_back(bullet + "'" + printableText(t.topic) + "' holds " + std::to_string(t.messages) + " " +
