@@ -56,9 +56,9 @@ add_test(NAME replay_damaged_bags_read_up_to_the_damage
 add_test(NAME replay_says_what_it_used_of_a_foreign_bag
   COMMAND ${CATKIN_DEVEL_PREFIX}/env.sh /usr/bin/python3 ${CMAKE_CURRENT_SOURCE_DIR}/test/replay/check_foreign_bags.py
           ${DEVEL_BIN} ${CMAKE_CURRENT_SOURCE_DIR} ${CMAKE_CURRENT_BINARY_DIR}/foreign_bags_test)
-# --help documents the exit codes, 4 (incomplete) and 5 (nothing accepted) included.
+# --help documents the exit codes, 4 (incomplete) and 5 (no torque accepted) included.
 add_test(NAME replay_help_lists_exit_codes COMMAND ${DEVEL_BIN}/drivetrain_replay --help)
-set_tests_properties(replay_help_lists_exit_codes PROPERTIES PASS_REGULAR_EXPRESSION "Exit codes.*\n  4  incomplete.*\n  5  nothing accepted")
+set_tests_properties(replay_help_lists_exit_codes PROPERTIES PASS_REGULAR_EXPRESSION "Exit codes.*\n  4  incomplete.*\n  5  no torque accepted")
 
 # The report: summary, markdown and the four plots (matplotlib from Debian's python3).
 add_test(NAME replay_report

@@ -8,7 +8,7 @@ Times are seconds since the first output stamp; SI units (TE in m shown in um).
 drivetrain_replay writes REPORT_DIR/summary.json and the top of REPORT_DIR/report.md (status, inputs,
 calibration, output counts) before it runs this script, which then appends its figures. Without a
 replay's summary (a live run's `rosbag record`) it writes the whole report.md. A run without
-outputs (nothing accepted, or damage before the first) gets a note instead of figures."""
+outputs (no torque accepted, or damage before the first) gets a note instead of figures."""
 import json
 import math
 import os

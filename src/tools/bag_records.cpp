@@ -1,5 +1,6 @@
 #include "bag_records.hpp"  // NOLINT(build/include_subdir)
 
+#include <algorithm>
 #include <cerrno>
 #include <cstdio>
 #include <new>
@@ -49,30 +50,76 @@ std::string parseChunkRecord(const std::uint8_t* p, std::size_t n, ChunkRecord& 
   return "";
 }
 
-std::string decompressChunk(const std::string& compression, const std::uint8_t* in, std::size_t in_size,
-                            std::uint8_t* out, std::uint32_t size) {
-  if (compression != "lz4" && compression != "bz2") return "chunk compression '" + compression + "' unknown";
-  if (in_size > 0xffffffffu) return "compressed chunk of " + str(in_size) + " bytes (more than 4 GiB)";
+namespace {
+
+/// LZ4 into a buffer of the claimed size, which the ratio bound keeps in proportion to the chunk.
+std::string decompressLz4(const std::uint8_t* in, std::size_t in_size, std::uint32_t size,
+                          std::unique_ptr<std::uint8_t[]>& out) {
+  if (size > 255 * std::uint64_t{in_size} + 64) {
+    return "this lz4 chunk of " + str(in_size) + " bytes claims " + str(size) +
+           " uncompressed bytes, more than lz4 can expand to (a damaged size)";
+  }
+  out = allocateBytes(size);
+  if (!out) return "cannot allocate the " + str(size) + " bytes its size field asks for";
   unsigned int written = size;
-  auto* source = const_cast<char*>(reinterpret_cast<const char*>(in));
-  auto* dest = reinterpret_cast<char*>(out);
-  const bool lz4 = compression == "lz4";
-  const auto n = static_cast<unsigned int>(in_size);
-  const int rc = lz4 ? roslz4_buffToBuffDecompress(source, n, dest, &written)
-                     : BZ2_bzBuffToBuffDecompress(dest, &written, source, n, 0, 0);
-  if (rc != (lz4 ? ROSLZ4_OK : BZ_OK)) {
-    return "this " + compression + " chunk does not decompress (" + (lz4 ? "roslz4" : "libbz2") + " code " +
-           std::to_string(rc) + ")";
-  }
-  if (written != size) {
-    return "this " + compression + " chunk decompresses to " + str(written) + " bytes, its header says " + str(size);
-  }
+  const int rc = roslz4_buffToBuffDecompress(const_cast<char*>(reinterpret_cast<const char*>(in)),
+                                             static_cast<unsigned int>(in_size), reinterpret_cast<char*>(out.get()), &written);
+  if (rc != ROSLZ4_OK) return "this lz4 chunk does not decompress (roslz4 code " + std::to_string(rc) + ")";
+  if (written != size) return "this lz4 chunk decompresses to " + str(written) + " bytes, its header says " + str(size);
   return "";
 }
 
-std::uint64_t maxUncompressedSize(const std::string& compression, std::uint64_t compressed) {
-  constexpr std::uint64_t kMiB = 1u << 20;
-  return compression == "bz2" ? 255 * compressed + kMiB : 255 * compressed + 64;
+/// bz2 in steps, the buffer doubling with the output up to the claimed size.
+std::string decompressBz2(const std::uint8_t* in, std::size_t in_size, std::uint32_t size,
+                          std::unique_ptr<std::uint8_t[]>& out) {
+  bz_stream z{};
+  if (BZ2_bzDecompressInit(&z, 0, 0) != BZ_OK) return "libbz2 cannot start";
+  z.next_in = const_cast<char*>(reinterpret_cast<const char*>(in));
+  z.avail_in = static_cast<unsigned int>(in_size);
+  std::size_t capacity = 0, written = 0;
+  int rc = BZ_OK;
+  std::string error;
+  while (rc == BZ_OK && error.empty()) {
+    if (written == capacity) {
+      if (capacity == size + std::size_t{1}) {  // one byte past the claim: more data than it says
+        error = "this bz2 chunk decompresses to more than the " + str(size) + " bytes its header says";
+        break;
+      }
+      const std::size_t grown = std::min<std::size_t>(std::max<std::size_t>(2 * capacity, 1u << 16), size + std::size_t{1});
+      std::unique_ptr<std::uint8_t[]> bigger = allocateBytes(grown);
+      if (!bigger) {
+        error = "cannot allocate " + str(grown) + " bytes";
+        break;
+      }
+      if (written) std::memcpy(bigger.get(), out.get(), written);
+      out = std::move(bigger);
+      capacity = grown;
+    }
+    z.next_out = reinterpret_cast<char*>(out.get() + written);
+    z.avail_out = static_cast<unsigned int>(capacity - written);
+    const unsigned int in_before = z.avail_in;
+    const std::size_t out_before = written;
+    rc = BZ2_bzDecompress(&z);
+    written = capacity - z.avail_out;
+    // Input ended mid-stream, or no progress with room for both: damaged data, never a spin.
+    const bool stalled = z.avail_in == in_before && written == out_before;
+    if (rc == BZ_OK && ((z.avail_in == 0 && z.avail_out > 0) || stalled)) rc = BZ_UNEXPECTED_EOF;
+  }
+  BZ2_bzDecompressEnd(&z);
+  if (!error.empty()) return error;
+  if (rc != BZ_STREAM_END) return "this bz2 chunk does not decompress (libbz2 code " + std::to_string(rc) + ")";
+  if (written != size) return "this bz2 chunk decompresses to " + str(written) + " bytes, its header says " + str(size);
+  return "";
+}
+
+}  // namespace
+
+std::string decompressChunk(const std::string& compression, const std::uint8_t* in, std::size_t in_size,
+                            std::uint32_t size, std::unique_ptr<std::uint8_t[]>& out) {
+  if (in_size > 0xffffffffu) return "compressed chunk of " + str(in_size) + " bytes (more than 4 GiB)";
+  if (compression == "lz4") return decompressLz4(in, in_size, size, out);
+  if (compression == "bz2") return decompressBz2(in, in_size, size, out);
+  return "chunk compression '" + compression + "' unknown";
 }
 
 std::unique_ptr<std::uint8_t[]> allocateBytes(std::size_t n) {

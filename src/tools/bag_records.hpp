@@ -89,15 +89,14 @@ struct ChunkRecord {
 /// record needs bytes beyond n (the end of a truncated chunk, or a damaged length).
 std::string parseChunkRecord(const std::uint8_t* p, std::size_t n, ChunkRecord& r, bool& cut_off);
 
-/// Decompresses a chunk ("lz4" or "bz2") of `in_size` bytes into `out`, which holds `size` bytes.
-/// Returns what is wrong (unknown compression, corrupt data, another size than `size`), or "".
+/// Decompresses a chunk ("lz4" or "bz2") of `in_size` bytes whose header claims `size`
+/// uncompressed bytes into `out` (allocated here). Returns what is wrong (unknown compression,
+/// corrupt data, another size than `size`), or "". Memory follows the data, not the claim: an LZ4
+/// chunk may claim at most what LZ4 can expand to (a run length grows by one byte per 255), and a
+/// bz2 chunk, which can expand a million-fold on repetitive data, is decompressed in steps into a
+/// buffer that grows with its output, so a damaged size field never allocates what it asks for.
 std::string decompressChunk(const std::string& compression, const std::uint8_t* in, std::size_t in_size,
-                            std::uint8_t* out, std::uint32_t size);
-
-/// The uncompressed size a chunk may claim: rosbag allocates what the header says, so a damaged
-/// size field would ask for up to 4 GiB. LZ4 expands at most 255-fold (its format: a run length
-/// grows by one byte per 255); bz2 chunks get the same bound plus 1 MiB.
-std::uint64_t maxUncompressedSize(const std::string& compression, std::uint64_t compressed);
+                            std::uint32_t size, std::unique_ptr<std::uint8_t[]>& out);
 
 /// A top-level record: its header, and where its data is (read separately, only when needed).
 struct TopRecord {

@@ -145,16 +145,9 @@ bool SequentialBagReader::loadChunk(const Record& chunk) {
 }
 
 bool SequentialBagReader::decompress(const std::string& compression, const Record& chunk, std::uint32_t size) {
-  if (compression != "lz4" && compression != "bz2") return fail(chunk.offset, "chunk compression '" + compression + "' unknown");
-  if (size > maxUncompressedSize(compression, chunk.data_length)) {
-    return fail(chunk.offset, "this " + compression + " chunk of " + str(chunk.data_length) + " bytes claims " + str(size) +
-                                  " uncompressed bytes, more than " + compression + " can expand to (a damaged size)");
-  }
   const std::unique_ptr<std::uint8_t[]> in = readData(chunk.data_offset, chunk.data_length);
   if (!in) return false;
-  chunk_ = allocateBytes(size);
-  if (!chunk_) return fail(chunk.offset, "cannot allocate the " + str(size) + " bytes its size field asks for (damaged?)");
-  const std::string error = decompressChunk(compression, in.get(), chunk.data_length, chunk_.get(), size);
+  const std::string error = decompressChunk(compression, in.get(), chunk.data_length, size, chunk_);
   if (!error.empty()) return fail(chunk.offset, error);
   chunk_size_ = size;
   return true;

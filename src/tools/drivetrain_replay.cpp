@@ -8,11 +8,14 @@
 // written and closed, the summary's status says "incomplete: ..." and the exit code is 4.
 //   drivetrain_replay --bag rig.bag --config config/gearboxes/seed_servo.yaml --out out.bag --report report/
 #include <CLI/CLI.hpp>
+#include <cerrno>
 #include <chrono>
+#include <cstring>
 #include <ctime>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <sstream>
 #include <nlohmann/json.hpp>
 
 #include <geometry_msgs/WrenchStamped.h>
@@ -49,7 +52,7 @@ YamlParameters readParameterFile(const std::string& path) {
 }
 
 // Exit codes (docs/replay_exit_codes.md); 2 is left unused (CLI11's own codes are mapped to 1).
-constexpr int kExitOk = 0, kExitRefused = 1, kExitWrongType = 3, kExitIncomplete = 4, kExitNothingAccepted = 5;
+constexpr int kExitOk = 0, kExitRefused = 1, kExitWrongType = 3, kExitIncomplete = 4, kExitNoTorque = 5;
 constexpr char kExitCodesHelp[] =
     "Exit codes (docs/replay_exit_codes.md):\n"
     "  0  ok: the whole bag was read\n"
@@ -61,8 +64,9 @@ constexpr char kExitCodesHelp[] =
     "  4  incomplete: the bag is truncated or damaged; the outputs up to the damage are written and\n"
     "     closed, and the summary's status says \"incomplete: 'FILE' at byte OFFSET: ...\" (takes\n"
     "     precedence over 3 and 5)\n"
-    "  5  nothing accepted: no message on a named topic was accepted (none there, or every one refused);\n"
-    "     stderr's run summary says why, and lists the bag's topics when a named one is absent";
+    "  5  no torque accepted: no message on the torque topic was accepted (none there, or every one\n"
+    "     refused), so nothing was estimated; stderr's run summary says why, and lists the bag's topics\n"
+    "     when a named one is absent";
 
 /// The exit code's line in the run summary.
 std::string exitMeaning(int code) {
@@ -71,7 +75,7 @@ std::string exitMeaning(int code) {
     case kExitRefused: return "refused (--calibrate)";
     case kExitWrongType: return "messages of the wrong type";
     case kExitIncomplete: return "incomplete: the bag is damaged";
-    case kExitNothingAccepted: return "nothing accepted";
+    case kExitNoTorque: return "no torque accepted";
   }
   return "?";
 }
@@ -174,18 +178,26 @@ std::string runSummaryText(const std::string& bag_path, std::uint64_t messages, 
   return text;
 }
 
+/// Writes `text` to `path`; throws InvalidInput naming `option` and the file if it cannot.
+void writeTextFile(const std::string& option, const std::string& path, const std::string& text) {
+  std::ofstream f(path, std::ios::binary | std::ios::trunc);
+  f << text;
+  f.close();
+  if (!f) throw InvalidInput(option + ": cannot write '" + path + "': " + std::strerror(errno));
+}
+
 /// report.md: the status and the run summary; plot_replay.py appends the figures when plots are on.
-void writeReport(const std::string& path, const nlohmann::json& summary, const std::string& inputs_markdown,
-                 const RigPipeline& pipeline, const std::string& out_bag) {
-  std::ofstream f(path);
+std::string reportMarkdown(const nlohmann::json& summary, const std::string& inputs_markdown, const RigPipeline& pipeline,
+                           const std::string& out_bag) {
+  std::ostringstream f;
   const std::string status = summary["status"].get<std::string>();
   f << "# Stiffness estimator report\n\n";
   if (status.rfind("incomplete", 0) == 0) {
     f << "**Incomplete replay**: the bag could not be read to its end; the outputs and the figures below cover the "
          "messages before the damage only.\n\n`" << status << "`\n\n";
   } else if (status != "ok") {
-    f << "**Nothing accepted**: no message on a named topic was used, so there are no estimates; the inputs below "
-         "say why.\n\n";
+    f << "**No torque accepted**: no message on the torque topic was used, so there are no estimates; the inputs "
+         "below say why.\n\n";
   }
   f << "Source: `" << summary["bag"].get<std::string>() << "`; outputs: `" << printableText(out_bag) << "`.\n\n";
   f << "## Inputs\n\n" << inputs_markdown << "\n";
@@ -197,6 +209,7 @@ void writeReport(const std::string& path, const nlohmann::json& summary, const s
   }
   f << "| dynamics restarted after a gap / on an error | " << c.gap_restarts << " / " << c.dynamics_errors << " |\n";
   f << "| model time integrated | " << c.simulated_s << " s |\n";
+  return f.str();
 }
 
 /// drivetrain_replay's command line.
@@ -311,9 +324,10 @@ nlohmann::json summaryJson(const ReplayOptions& o, const RigConfig& rig, const J
                         std::to_string(span.messages) + " messages read before it";
     summary["damage"] = {{"file", printableText(o.bag_path)}, {"offset", damage->offset},
                          {"what", printableText(damage->what)}, {"messages_before", span.messages}};
-  } else if (ReplaySummary::accepted(pipeline.counters()) == 0) {
-    summary["status"] = "nothing accepted: no message on a named topic was accepted (" + std::to_string(span.messages) +
-                        " read); see \"inputs\"";
+  } else if (pipeline.counters().accepted_torque == 0) {
+    summary["status"] = "no torque accepted: no message on the torque topic '" + printableText(o.torque_topic) +
+                        "' was accepted (" + std::to_string(ReplaySummary::accepted(pipeline.counters())) +
+                        " inputs accepted on the other topics); see \"inputs\"";
   }
   summary["messages"] = span.messages;
   summary["wrong_type"] = inputs.wrongType();
@@ -409,33 +423,39 @@ int run(int argc, char** argv) {
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
   const std::vector<BagTopic> bag_topics = input.topics();
-  const bool nothing_accepted = ReplaySummary::accepted(pipeline.counters()) == 0;
+  if (input.damage()) inputs.markDamaged();
+  // The torque drives every estimate: without one accepted nothing was estimated or simulated.
+  const bool no_torque = pipeline.counters().accepted_torque == 0;
   nlohmann::json summary = summaryJson(o, rig, joints, input, span, inputs, pipeline, writer, bag_topics);
   // --calibrate: written or refused (no window updated the calibration); the other outputs stand either way.
   const std::string calibrate_error = o.calibrate_out.empty() ? "" : writeCalibration(o, span, pipeline, summary);
-  const int code = !calibrate_error.empty() ? kExitRefused
+  std::string failure = calibrate_error;  // the refusal that makes the exit code 1
+  if (!o.report_dir.empty()) {
+    writeTextFile("--report", o.report_dir + "/summary.json", jsonText(summary) + "\n");
+    writeTextFile("--report", o.report_dir + "/report.md",
+                  reportMarkdown(summary, inputs.markdown(pipeline, bag_topics), pipeline, o.out_bag));
+    if (o.plots) {  // a failing plot script leaves every other output written
+      try {
+        runPythonScript("--plot-script", findScript(o.plot_script, "plot_replay.py"), {o.out_bag, o.report_dir, o.bag_path});
+      } catch (const InvalidInput& e) {
+        if (failure.empty()) failure = e.what();
+      }
+    }
+  }
+  const int code = !failure.empty()         ? kExitRefused
                    : input.damage()         ? kExitIncomplete
                    : inputs.wrongType() > 0 ? kExitWrongType
-                   : nothing_accepted       ? kExitNothingAccepted
+                   : no_torque              ? kExitNoTorque
                                             : kExitOk;
-  // The run summary, on stderr at the end of every run; in report.md when asked for.
-  const std::string what_happened = runSummaryText(o.bag_path, span.messages, summary, inputs, pipeline, bag_topics, code);
-  if (!o.report_dir.empty()) {
-    std::ofstream(o.report_dir + "/summary.json") << jsonText(summary) << "\n";
-    writeReport(o.report_dir + "/report.md", summary, inputs.markdown(pipeline, bag_topics), pipeline, o.out_bag);
-  }
-  // Speed: separate from the outputs above, which must stay identical between runs. With no input
-  // accepted nothing was estimated or simulated: no speed to speak of.
+  // Speed: separate from the outputs above, which must stay identical between runs. Without a
+  // torque nothing was estimated or simulated: no speed to speak of.
   summary["speed"] = {{"wall_s", wall},
-                      {"realtime_factor", nothing_accepted || !(wall > 0.0) ? nlohmann::json(nullptr)
-                                                                            : nlohmann::json(span.seconds() / wall)}};
+                      {"realtime_factor", no_torque || !(wall > 0.0) ? nlohmann::json(nullptr)
+                                                                     : nlohmann::json(span.seconds() / wall)}};
   std::cout << jsonText(summary) << std::endl;
-  std::cerr << what_happened;
-  if (!calibrate_error.empty()) std::cerr << "drivetrain_replay: " << calibrate_error << "\n";
-  // The plots last: a failing plot script (exit 1) leaves every other output written and said.
-  if (!o.report_dir.empty() && o.plots) {
-    runPythonScript("--plot-script", findScript(o.plot_script, "plot_replay.py"), {o.out_bag, o.report_dir, o.bag_path});
-  }
+  // The run summary, on stderr at the end of every run (in report.md above).
+  std::cerr << runSummaryText(o.bag_path, span.messages, summary, inputs, pipeline, bag_topics, code);
+  if (!failure.empty()) std::cerr << "drivetrain_replay: " << failure << "\n";
   return code;
 }
 

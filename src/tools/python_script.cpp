@@ -33,8 +33,14 @@ void runPythonScript(const std::string& option, const std::string& script, const
   do {
     waited = waitpid(pid, &status, 0);
   } while (waited < 0 && errno == EINTR);
-  if (waited < 0 || !WIFEXITED(status) || WEXITSTATUS(status) != 0) {
-    throw InvalidInput(option + " = '" + script + "' failed (the CSV is written; install python3-matplotlib or skip the plots)");
+  if (waited < 0) throw InvalidInput(option + " = '" + script + "': cannot wait for it: " + std::strerror(errno));
+  if (!WIFEXITED(status)) {
+    throw InvalidInput(option + " = '" + script + "' ended by signal " + std::to_string(WTERMSIG(status)) +
+                       " (the other outputs are written)");
+  }
+  if (WEXITSTATUS(status) != 0) {
+    throw InvalidInput(option + " = '" + script + "' failed with exit code " + std::to_string(WEXITSTATUS(status)) +
+                       ": its message is above (the other outputs are written)");
   }
 }
 

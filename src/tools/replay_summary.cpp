@@ -1,6 +1,7 @@
 #include "replay_summary.hpp"  // NOLINT(build/include_subdir)
 
 #include <cstdio>
+#include <optional>
 
 #include "drivetrain_stiffness/core/validation.hpp"
 #include "replay_input.hpp"  // NOLINT(build/include_subdir): topicMatches
@@ -51,14 +52,28 @@ std::string foundText(const RefusalTally::Entry& e) {
 bool typeWanted(const BagTopic& t, const ReplayInputTopic& input) { return t.type == input.expected_type; }
 
 /// The sentences of the summary, one per line; `bullet` starts each detail line.
+/// The bag's message count on `topic` (as named, with or without the leading '/'); nullopt if absent.
+std::optional<std::uint64_t> inBag(const std::string& topic, const std::vector<BagTopic>& bag_topics) {
+  std::optional<std::uint64_t> n;
+  for (const BagTopic& t : bag_topics) {
+    if (topicMatches(t.topic, topic)) n = n.value_or(0) + t.messages;
+  }
+  return n;
+}
+
 std::vector<std::string> sentences(const std::array<ReplayInputTopic, kInputStreams>& inputs, const RigPipeline& pipeline,
-                                   const std::vector<BagTopic>& bag_topics, const std::string& bullet) {
+                                   const std::vector<BagTopic>& bag_topics, const std::string& bullet, bool damaged) {
   std::vector<std::string> out;
   const PipelineCounters& c = pipeline.counters();
   bool list_topics = false;
   for (const ReplayInputTopic& in : inputs) {
     const std::string head = std::string(toString(in.stream)) + " on '" + printableText(in.topic) + "' (" +
                              in.expected_type + ", " + in.option + "): ";
+    const std::optional<std::uint64_t> held = inBag(in.topic, bag_topics);
+    if (in.read == 0 && held) {
+      out.push_back(head + std::to_string(*held) + " in the bag, none read" + (damaged ? " before the damage" : ""));
+      continue;
+    }
     if (in.read == 0) {
       // Torque drives everything; the preload (the gearbox's until one arrives) and the encoders
       // (the nominal speed without them) are optional. A topic of the type it wants is pointed
@@ -154,7 +169,7 @@ nlohmann::json ReplaySummary::json(const RigPipeline& pipeline, const std::vecto
   const PipelineCounters& c = pipeline.counters();
   for (const ReplayInputTopic& in : inputs_) {
     nlohmann::json t = {{"topic", printableText(in.topic)}, {"type", in.expected_type},
-                        {"in_bag", in.read > 0},          {"read", in.read},
+                        {"in_bag", in.read > 0 || inBag(in.topic, bag_topics).has_value()}, {"read", in.read},
                         {"accepted", acceptedOn(in.stream, c)}, {"refused", pipeline.refusals().total(in.stream)},
                         {"dropped", droppedOn(in.stream, c)}};
     t["refused_by_reason"] = nlohmann::json::object();
@@ -180,13 +195,13 @@ nlohmann::json ReplaySummary::json(const RigPipeline& pipeline, const std::vecto
 
 std::string ReplaySummary::text(const RigPipeline& pipeline, const std::vector<BagTopic>& bag_topics) const {
   std::string text;
-  for (const std::string& line : sentences(inputs_, pipeline, bag_topics, "    ")) text += "  " + line + "\n";
+  for (const std::string& line : sentences(inputs_, pipeline, bag_topics, "    ", damaged_)) text += "  " + line + "\n";
   return text;
 }
 
 std::string ReplaySummary::markdown(const RigPipeline& pipeline, const std::vector<BagTopic>& bag_topics) const {
   std::string md;
-  for (const std::string& line : sentences(inputs_, pipeline, bag_topics, "  - ")) {
+  for (const std::string& line : sentences(inputs_, pipeline, bag_topics, "  - ", damaged_)) {
     md += (line.rfind("  - ", 0) == 0 ? line : "- " + line) + "\n";
   }
   return md;

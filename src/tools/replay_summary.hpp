@@ -42,6 +42,9 @@ class ReplaySummary {
 
   /// Accepted inputs on every topic (the pipeline's counters).
   static std::uint64_t accepted(const PipelineCounters& c);
+  /// The bag was read up to damage: a named topic the bag holds but nothing was read of is said
+  /// to be cut off, not absent.
+  void markDamaged() { damaged_ = true; }
   nlohmann::json json(const RigPipeline& pipeline, const std::vector<BagTopic>& bag_topics) const;
   /// The plain-text summary for stderr, one screen.
   std::string text(const RigPipeline& pipeline, const std::vector<BagTopic>& bag_topics) const;
@@ -52,6 +55,7 @@ class ReplaySummary {
 
  private:
   std::array<ReplayInputTopic, kInputStreams> inputs_;
+  bool damaged_ = false;
 };
 
 }  // namespace drivetrain_stiffness

@@ -230,6 +230,69 @@ def seeded_flips(bags, cases):
         failures.append("seeded_byte_flips")
 
 
+def raw_record(fields, data):
+    header = b"".join(struct.pack("<I", len(k) + 1 + len(v)) + k + b"=" + v for k, v in fields)
+    return struct.pack("<I", len(header)) + header + struct.pack("<I", len(data)) + data
+
+
+def duplicate_connection_bag(path):
+    """Bag format 2.0 written byte by byte: five JointStates on connection 0 in one chunk, the third
+    index entry pointing far past the chunk, and an index that defines connection 0 twice, first as
+    /joint_states (librosbag keeps the first) and then as /other. A check that took the last
+    definition skipped /joint_states' entries and let librosbag parse a header at the wild offset."""
+    from sensor_msgs.msg import JointState
+    from std_msgs.msg import String
+    import io
+
+    def connection(cid, topic, cls):
+        header = [(b"topic", topic), (b"type", cls._type.encode()), (b"md5sum", cls._md5sum.encode()),
+                  (b"message_definition", cls._full_text.encode())]
+        data = b"".join(struct.pack("<I", len(k) + 1 + len(v)) + k + b"=" + v for k, v in header)
+        return raw_record([(b"op", b"\x07"), (b"conn", struct.pack("<I", cid)), (b"topic", topic)], data)
+    chunk, entries = connection(0, b"/joint_states", JointState), []
+    for i in range(1, 6):
+        m = JointState(name=["pinion", "gear"], position=[0.0, 0.0])
+        m.header.stamp.secs, m.header.stamp.nsecs = 1767225600, i * 1000000
+        buf = io.BytesIO()
+        m.serialize(buf)
+        entries.append((1767225600, i * 1000000, 0x7FF00000 if i == 3 else len(chunk)))
+        chunk += raw_record([(b"op", b"\x02"), (b"conn", struct.pack("<I", 0)),
+                             (b"time", struct.pack("<II", 1767225600, i * 1000000))], buf.getvalue())
+
+    def bag_header(index_pos):
+        return raw_record([(b"op", b"\x03"), (b"index_pos", struct.pack("<Q", index_pos)), (b"conn_count", struct.pack("<I", 2)),
+                           (b"chunk_count", struct.pack("<I", 1))], b"")
+    out = b"#ROSBAG V2.0\n" + bag_header(0)
+    chunk_pos = len(out)
+    out += raw_record([(b"op", b"\x05"), (b"compression", b"none"), (b"size", struct.pack("<I", len(chunk)))], chunk)
+    out += raw_record([(b"op", b"\x04"), (b"ver", struct.pack("<I", 1)), (b"conn", struct.pack("<I", 0)),
+                       (b"count", struct.pack("<I", len(entries)))], b"".join(struct.pack("<III", *e) for e in entries))
+    index_pos = len(out)
+    out += connection(0, b"/joint_states", JointState) + connection(0, b"/other", String)
+    out += raw_record([(b"op", b"\x06"), (b"ver", struct.pack("<I", 1)), (b"chunk_pos", struct.pack("<Q", chunk_pos)),
+                       (b"start_time", struct.pack("<II", 1767225600, 1000000)),
+                       (b"end_time", struct.pack("<II", 1767225600, 5000000)), (b"count", struct.pack("<I", 1))],
+                      struct.pack("<II", 0, len(entries)))
+    out = b"#ROSBAG V2.0\n" + bag_header(index_pos) + out[len(b"#ROSBAG V2.0\n") + len(bag_header(0)):]
+    with open(path, "wb") as f:
+        f.write(out)
+    return chunk_pos
+
+
+def check_intact(name, bag, torque, joint_states=0):
+    p, report = run(bag, name)
+    ok = p.returncode == 0
+    try:
+        s = json.load(open(os.path.join(report, "summary.json")))
+        c = s["counters"]
+        ok = ok and s["status"] == "ok" and c["accepted_torque"] == torque and c["accepted_joint_states"] == joint_states
+    except Exception:  # noqa: BLE001
+        ok = False
+    print("%-26s exit %d: %s" % (name, p.returncode, "ok" if ok else p.stderr.strip()[-400:]))
+    if not ok:
+        failures.append(name)
+
+
 def main():
     shutil.rmtree(work, ignore_errors=True)
     os.makedirs(work)
@@ -306,6 +369,43 @@ def main():
         for topic, raw, t, conn in i.read_messages(raw=True, return_connection_header=True):
             o.write(topic, raw, t, raw=True, connection_header=conn)
     seeded_flips([sim, sim_lz4], 60)
+
+    # A connection defined twice in the index (librosbag keeps the first): the check reads the
+    # topic the view will visit, so the wild entry behind it stops the replay instead of a SIGSEGV.
+    dup = os.path.join(work, "duplicate_connection.bag")
+    dup_chunk = duplicate_connection_bag(dup)
+    p, report = run(dup, "duplicate_connection")
+    ok = p.returncode == 4 and ("'%s' at byte %d:" % (dup, dup_chunk)) in p.stderr
+    print("%-26s exit %d: %s" % ("duplicate_connection", p.returncode, "ok" if ok else p.stderr.strip()[-400:]))
+    if not ok:
+        failures.append("duplicate_connection")
+
+    # The first torque record damaged: the summary says the topic is in the bag and was cut off.
+    first_bad = copy(original, "first_torque_damaged.bag")
+    patch(first_bad, torque[0]["start"], b"GARBAGE!GARBAGE!")
+    p, report = run(first_bad, "first_torque_damaged")
+    ok = p.returncode == 4 and "2000 in the bag, none read before the damage" in p.stderr
+    print("%-26s exit %d: %s" % ("first_torque_damaged", p.returncode, "ok" if ok else p.stderr.strip()[-400:]))
+    if not ok:
+        failures.append("first_torque_damaged")
+
+    # Valid bags the check must pass whole: the rig-sim bag with LZ4 and with bz2 chunks of 16 KiB,
+    # and a bz2 bag holding an 8 MiB message of zeros (bz2 expands it more than a million-fold).
+    from std_msgs.msg import UInt8MultiArray
+    sim_bz2 = os.path.join(work, "sim_bz2.bag")
+    zeros = os.path.join(work, "zeros_bz2.bag")
+    with rosbag.Bag(sim) as i, rosbag.Bag(sim_bz2, "w", compression="bz2", chunk_threshold=16 * 1024) as o, \
+            rosbag.Bag(zeros, "w", compression="bz2") as z:
+        for n, (topic, raw, t, conn) in enumerate(i.read_messages(raw=True, return_connection_header=True)):
+            o.write(topic, raw, t, raw=True, connection_header=conn)
+            z.write(topic, raw, t, raw=True, connection_header=conn)
+            if n == 100:
+                z.write("/map", UInt8MultiArray(data=bytes(8 << 20)), t)
+    sim_torque = sum(1 for m in sim_msgs if m["topic"] == "/torque")
+    sim_joints = sum(1 for m in sim_msgs if m["topic"] == "/joint_states")
+    check_intact("intact_lz4_chunks", sim_lz4, sim_torque, sim_joints)
+    check_intact("intact_bz2_chunks", sim_bz2, sim_torque, sim_joints)
+    check_intact("intact_bz2_8_mib_of_zeros", zeros, sim_torque, sim_joints)
 
     # Not a bag at all: refused, naming the file.
     text = os.path.join(work, "notes.txt")

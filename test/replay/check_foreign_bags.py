@@ -86,16 +86,58 @@ def wrong_frame():
         p, s, md, out = run(name, bag, plots=plots)
         refused = ((s or {}).get("inputs", {}).get("torque", {}).get("refused_by_reason", {}).get("wrong frame", {}))
         check(name, [
-            (p.returncode == 5, "exit %d, expected 5 (nothing accepted): %s" % (p.returncode, p.stderr[-400:])),
+            (p.returncode == 5, "exit %d, expected 5 (no torque accepted): %s" % (p.returncode, p.stderr[-400:])),
             ("200 refused (wrong frame), found 'base_link' (200)" in p.stderr, "stderr lacks the count and the frame found"),
             ("expected ~torque_frame = 'pinion'" in p.stderr, "stderr lacks the frame expected"),
             ("matplotlib" not in p.stderr, "stderr blames matplotlib"),
-            (s is not None and s["status"].startswith("nothing accepted"), "status %r" % (s or {}).get("status")),
+            (s is not None and s["status"].startswith("no torque accepted"), "status %r" % (s or {}).get("status")),
             (refused.get("count") == 200 and refused.get("found", {}).get("base_link") == 200, "inputs: %r" % refused),
-            (out is not None and out["speed"]["realtime_factor"] is None, "a realtime_factor with nothing accepted"),
-            ("**Nothing accepted**" in md and "base_link" in md, "report.md does not say why"),
+            (out is not None and out["speed"]["realtime_factor"] is None, "a realtime_factor with no torque accepted"),
+            ("**No torque accepted**" in md and "base_link" in md, "report.md does not say why"),
             (not plots or "No figures" in md, "report.md with plots does not say there are no figures"),
         ])
+
+
+def torque_refused_among_other_inputs():
+    """Encoders and a preload accepted, every torque refused (another frame): still nothing estimated."""
+    msgs = [("/preload", light_preload(), at(0.0001))]
+    for i in range(1, 201):
+        t = at(0.001 * i)
+        msgs.append(("/torque", wrench(t, 0.1, "base_link"), t))
+        msgs.append(("/joint_states", joint_state(t, 0.1047 * 0.001 * i), t))
+    p, s, _, _ = run("torque_refused_among_others", bag_of("torque_refused_among_others", msgs))
+    c = (s or {}).get("counters", {})
+    check("torque_refused_among_others", [
+        (p.returncode == 5, "exit %d, expected 5 (no torque accepted)" % p.returncode),
+        (c.get("accepted_joint_states") == 200 and c.get("accepted_preload") == 1, "the other inputs: %r" % c),
+        ("no torque accepted" in (s or {}).get("status", ""), "status %r" % (s or {}).get("status")),
+    ])
+
+
+def plot_script_fails():
+    """A plot script that fails: exit 1, its own message, every other output written, and the run
+    summary says exit code 1."""
+    script = os.path.join(work, "failing_plot.py")
+    with open(script, "w") as f:
+        f.write("import sys\nsys.exit('failing_plot.py: no plots today')\n")
+    p, s, md, out = run("plot_script_fails", os.path.join(src, "test/data/torque_steps.bag"), "--plot-script", script,
+                        plots=True)
+    check("plot_script_fails", [
+        (p.returncode == 1, "exit %d, expected 1" % p.returncode),
+        ("no plots today" in p.stderr and "failed with exit code 1" in p.stderr, "stderr: %s" % p.stderr[-300:]),
+        ("matplotlib" not in p.stderr, "stderr blames matplotlib"),
+        ("exit code 1: refused" in p.stderr, "the run summary's exit code is not the process's"),
+        (s is not None and out is not None and "## Inputs" in md, "the other outputs are not written"),
+    ])
+
+
+def report_cannot_be_written():
+    report = os.path.join(work, "unwritable.report")
+    os.makedirs(os.path.join(report, "summary.json"))  # a directory where the file goes
+    p = subprocess.run([replay, "--bag", os.path.join(src, "test/data/torque_steps.bag"), "--config", config,
+                        "--report", report, "--no-plots"], capture_output=True, text=True)
+    check("report_cannot_be_written", [(p.returncode == 1 and "cannot write '%s/summary.json'" % report in p.stderr,
+                                        "exit %d: %s" % (p.returncode, p.stderr[-300:]))])
 
 
 def two_refusals():
@@ -168,15 +210,26 @@ def bad_arguments():
                       "exit %d: %s" % (p.returncode, p.stderr.strip()))])
 
 
-def gaps_and_load_changes():
-    """Torques off the 1 ms output grid; three pauses of 1.5 s (more than ~max_gap), each followed
-    by a load that moves the bearing stiffness by more than the 1 % the dynamics take up (a light
-    preload of 100 N, so that the mesh force counts)."""
+def light_preload():
     from drivetrain_stiffness.msg import BearingPreload, Preload
     light = Preload()
     light.header.stamp = at(0.0001)
     light.bearings = [BearingPreload(name=n, axial_preload=100.0) for n in ("pinion_bearing", "gear_bearing")]
-    msgs, t = [("/preload", light, at(0.0001))], 0.0
+    return light
+
+
+def joint_state(t, pinion):
+    j = JointState()
+    j.header.stamp = t
+    j.name, j.position = ["pinion", "gear"], [pinion, -0.5 * pinion]
+    return j
+
+
+def gaps_and_load_changes():
+    """Torques off the 1 ms output grid; three pauses of 1.5 s (more than ~max_gap), each followed
+    by a load that moves the bearing stiffness by more than the 1 % the dynamics take up (a light
+    preload of 100 N, so that the mesh force counts)."""
+    msgs, t = [("/preload", light_preload(), at(0.0001))], 0.0
     for load in (0.1, 8.0, 0.1, 8.0):
         for i in range(200):
             t += 0.00100041
@@ -246,6 +299,9 @@ def main():
     shutil.rmtree(work, ignore_errors=True)
     os.makedirs(work)
     wrong_frame()
+    torque_refused_among_other_inputs()
+    plot_script_fails()
+    report_cannot_be_written()
     two_refusals()
     unrelated_topics()
     wrong_type()
