@@ -21,66 +21,6 @@ const char* toString(InputOutcome outcome) {
   return "?";
 }
 
-std::vector<std::pair<std::string, std::uint64_t>> namedCounters(const PipelineCounters& c) {
-  return {{"accepted_torque", c.accepted_torque},         {"rejected_torque", c.rejected_torque},
-          {"accepted_preload", c.accepted_preload},       {"rejected_preload", c.rejected_preload},
-          {"rejected_zero_stamp", c.zero_stamps},         {"rejected_out_of_order", c.out_of_order},
-          {"rejected_invalid_value", c.invalid_values},   {"unreachable_loads", c.unreachable_loads},
-          {"rejected_wrong_frame", c.wrong_frames},       {"rejected_stamp_range", c.stamps_out_of_range},
-          {"dropped_torque", c.dropped_torque},           {"dropped_preload", c.dropped_preload},
-          {"accepted_joint_states", c.accepted_motion},   {"rejected_joint_states", c.rejected_motion},
-          {"dropped_joint_states", c.dropped_motion},     {"motion_timeouts", c.motion_timeouts},
-          {"gear_ratio_mismatches", c.gear_ratio_mismatches},
-          {"stiffness_shed", c.stiffness_shed},
-          {"clock_jump_resets", c.clock_resets},          {"stamp_jump_resets", c.stamp_resets},
-          {"gap_restarts", c.gap_restarts},               {"dynamics_errors", c.dynamics_errors},
-          {"stiffness_published", c.stiffness_out},       {"stiffness_coalesced", c.stiffness_coalesced},
-          {"stiffness_refused", c.stiffness_refused},
-          {"transmission_error_published", c.te_out},     {"te_spectra_published", c.spectra_out},
-          {"resonance_published", c.resonance_out},       {"modal_updates", c.modal_updates},
-          {"measured_te_published", c.measured_te_out},   {"calibration_published", c.calibration_out},
-          {"calibration_errors", c.calibration_errors},   {"mesh_period_stats_published", c.mesh_period_stats_out}};
-}
-
-void PipelineOptions::validate() const {
-  limits.validate("bearing_load_tolerance");  // StiffnessEstimator's rules, under the parameter's name
-  requirePositive("output_rate", output_rate);
-  if (output_rate > 1e6) throw InvalidInput("output_rate = " + formatValue(output_rate) + ": must be <= 1e6 Hz");
-  requirePositive("max_gap", max_gap);
-  if (max_gap * output_rate > DynamicsEstimator::kMaxSamplesPerAdvance) {
-    throw InvalidInput("max_gap = " + formatValue(max_gap) + ": max_gap * output_rate must be <= 1e7 samples");
-  }
-  requireNonNegative("stamp_jump_back", stamp_jump_back);
-  requireNonNegative("clock_jump_back", clock_jump_back);
-  requirePositive("resonance_threshold", resonance_threshold);
-  if (resonance_threshold >= 1.0) {
-    throw InvalidInput("resonance_threshold = " + formatValue(resonance_threshold) + ": must be < 1 (relative)");
-  }
-  if (spectrum_window < 8 || spectrum_window > (1 << 20)) {
-    throw InvalidInput("spectrum_window = " + std::to_string(spectrum_window) + ": must be in [8, 1048576] samples");
-  }
-  if (spectrum_hop < 1 || spectrum_hop > spectrum_window) {
-    throw InvalidInput("spectrum_hop = " + std::to_string(spectrum_hop) + ": must be in [1, spectrum_window]");
-  }
-  requireFinite("pinion_speed_rpm", pinion_speed_rpm);
-  if (std::abs(pinion_speed_rpm) > 1e5) {
-    throw InvalidInput("pinion_speed_rpm = " + formatValue(pinion_speed_rpm) + ": must be within +-1e5 rpm");
-  }
-  requireFinite("mesh_phase_offset", mesh_phase_offset);
-  if (!(mesh_phase_offset >= 0.0 && mesh_phase_offset < 1.0)) {
-    throw InvalidInput("mesh_phase_offset = " + formatValue(mesh_phase_offset) + ": must be in [0, 1) (a fraction of a mesh period)");
-  }
-  requirePositive("motion_timeout", motion_timeout);
-  if (motion_timeout > 3600.0) throw InvalidInput("motion_timeout = " + formatValue(motion_timeout) + ": must be <= 3600 s");
-  requirePositive("gear_ratio_tolerance", gear_ratio_tolerance);
-  if (motion_slices < 4 || motion_slices > 65536) {
-    throw InvalidInput("motion_slices = " + std::to_string(motion_slices) + ": must be in [4, 65536] per mesh period");
-  }
-  if (!torque_frame.empty() && torque_frame.front() == '/') {
-    throw InvalidInput("torque_frame = '" + torque_frame + "': a frame id without a leading '/' (or empty: any frame)");
-  }
-}
-
 RigPipeline::RigPipeline(const RigConfig& rig, const PipelineOptions& options)
     : RigPipeline(rig, options, RuntimeSettings::forRig(rig)) {}
 
@@ -122,6 +62,7 @@ RigPipeline::RigPipeline(const RigConfig& rig, const PipelineOptions& options, c
     dynamics_->setMotionSlices(options_.motion_slices);
     te_spectrum_ = std::make_unique<SlidingSpectrum>(options_.spectrum_window, options_.spectrum_hop,
                                                      dynamics_->outputInterval(), SpectrumPeaks::kMaxPeaks);
+    mesh_periods_ = std::make_unique<MeshPeriodStage>(*dynamics_, estimator_->mesh().geometry().baseRadius(0), counters_);
   }
 }
 
@@ -147,7 +88,7 @@ void RigPipeline::reset(const std::string& reason) {
   reading_.reset();
   if (calibrator_) calibrator_->interrupt();
   encoders_ = false;
-  mesh_block_ = MeshPeriodAccumulator{};
+  if (mesh_periods_) mesh_periods_->restart();
   last_resonance_.reset();  // the next accepted input republishes the resonance
   counters_.last_event = "reset: " + reason;
 }
@@ -365,7 +306,7 @@ void RigPipeline::acceptMotion(Stamp stamp, const MotionInput& m, PipelineSink& 
   advanceDynamicsTo(stamp, sink);
   // The first reading moves the mesh phase from the nominal count to the measured one (a jump):
   // the running block of mesh periods would count a period that never was.
-  if (!encoders_) mesh_block_ = MeshPeriodAccumulator{};
+  if (!encoders_ && mesh_periods_) mesh_periods_->restart();
   reading_ = accepted;
   calibrate(stamp, accepted, last != nullptr, sink);
   anchor_ = AngleAnchor{stamp, next.pinion + options_.mesh_phase_offset * kTwoPi / teeth(0), next.speed};
@@ -506,7 +447,7 @@ void RigPipeline::stopAfterGap(Stamp stamp) {
   ++counters_.gap_restarts;
   counters_.last_event = "input gap of " + formatValue(gap) + " s (more than ~max_gap): dynamics restarted";
   dynamics_->stop();
-  mesh_block_ = MeshPeriodAccumulator{};
+  mesh_periods_->restart();
 }
 
 void RigPipeline::dynamicsError(const std::string& where, const Error& e) {
@@ -518,7 +459,7 @@ void RigPipeline::restartDynamics(Stamp stamp, double torque) {
   dynamics_epoch_ = stamp;
   dynamics_->reset(0.0, torque);
   te_spectrum_->reset();  // a new window: no samples from before the restart
-  mesh_block_ = MeshPeriodAccumulator{};  // and no mesh periods
+  mesh_periods_->restart();  // and no mesh periods
   angle_origin_ = stamp;  // the stiffness message's mesh phase restarts with the dynamics
   followAnchor(stamp);    // measured motion: the dynamics start at the measured phase
 }
@@ -533,7 +474,7 @@ bool RigPipeline::advanceDynamicsTo(Stamp stamp, PipelineSink& sink) {
   } catch (const Error& e) {
     dynamicsError("dynamics (restarted at the next torque input)", e);
     dynamics_->stop();
-    mesh_block_ = MeshPeriodAccumulator{};
+    mesh_periods_->restart();
     return false;
   }
   return true;
@@ -571,7 +512,7 @@ void RigPipeline::emitUpTo(double t, PipelineSink& sink) {
       sink.spectrum(sample_stamp, out);
       ++counters_.spectra_out;
     }
-    meshPeriodSample(sample_stamp, s, advance_mesh_frequency_, sink);
+    mesh_periods_->sample(sample_stamp, s, advance_mesh_frequency_, sink);
   });
 }
 
@@ -683,105 +624,9 @@ void RigPipeline::apply(const RuntimeSettings& settings) {
   }
   if (dynamics_) {
     // The mesh-force estimator depends on the fidelity (MeshPeriodStatistics): a block spans one.
-    if (dynamics_->fidelity() != settings.fidelity) mesh_block_ = MeshPeriodAccumulator{};
+    if (dynamics_->fidelity() != settings.fidelity) mesh_periods_->restart();
     dynamics_->setFidelity(settings.fidelity);
   }
-}
-
-void RigPipeline::startMeshBlock(Stamp stamp, const DynamicsSample& s, double turns, double boundary,
-                                 double mesh_frequency) {
-  MeshPeriodAccumulator& a = mesh_block_;
-  a.in_block = true;
-  a.boundary = boundary;
-  // Whole periods spanning >= ~10 output samples at this speed (one at least).
-  const double n = std::ceil(10.0 * dynamics_->outputInterval() * std::abs(mesh_frequency) - 1e-9);
-  a.periods = static_cast<std::uint32_t>(std::clamp(n, 1.0, 1e6));
-  a.samples = 0;
-  a.start = stamp;
-  a.start_turns = turns;
-  a.start_velocity = s.state[5];
-  a.te_ref = s.dynamic_te;
-  a.force_ref = s.mesh_force;
-  a.te_sum = a.te_sq = a.force_sum = a.force_sq = a.torque_sum = 0.0;
-  a.te_min = a.te_max = s.dynamic_te;
-  a.force_min = a.force_max = s.mesh_force;
-}
-
-void RigPipeline::meshPeriodSample(Stamp stamp, const DynamicsSample& s, double mesh_frequency, PipelineSink& sink) {
-  MeshPeriodAccumulator& a = mesh_block_;
-  // The unwrapped phase is kept as an integer count plus the sample's phase in [0, 1), so that the
-  // count is exact on a switch (phase 0): floor(turns) is the count, not a rounding of it.
-  if (!a.have_last) {
-    a.have_last = true;
-    a.last_turns = s.phase;
-    if (s.phase == 0.0) startMeshBlock(stamp, s, s.phase, 0.0, mesh_frequency);  // a restart on a switch
-  } else {
-    const double dt = secondsBetween(stamp, a.last_stamp);
-    if (!(dt > 0.0)) return;  // the grid only moves forward
-    const double last_count = std::floor(a.last_turns);
-    const double last_phase = a.last_turns - last_count;
-    // Whole periods between the samples: those the speed implies, corrected by the phases.
-    const double count = last_count + std::round(mesh_frequency * dt - (s.phase - last_phase));
-    const double turns = count + s.phase;
-    if (a.in_block) {
-      const double half = 0.5 * dt;
-      const double te0 = a.last_te - a.te_ref, te1 = s.dynamic_te - a.te_ref;
-      const double f0 = a.last_force - a.force_ref, f1 = s.mesh_force - a.force_ref;
-      a.te_sum += half * (te0 + te1);
-      a.te_sq += half * (te0 * te0 + te1 * te1);
-      a.force_sum += half * (f0 + f1);
-      a.force_sq += half * (f0 * f0 + f1 * f1);
-      a.torque_sum += half * (a.last_torque + s.torque);
-      ++a.samples;
-      a.te_min = std::min(a.te_min, s.dynamic_te);
-      a.te_max = std::max(a.te_max, s.dynamic_te);
-      a.force_min = std::min(a.force_min, s.mesh_force);
-      a.force_max = std::max(a.force_max, s.mesh_force);
-      const bool forward = count >= a.boundary + a.periods;
-      const bool backward = count < a.boundary - a.periods;
-      if (forward || backward) {
-        MeshPeriodStatistics out;
-        out.start = a.start;
-        out.end = stamp;
-        out.duration = secondsBetween(stamp, a.start);
-        const double d = out.duration;
-        out.periods = static_cast<std::uint32_t>(forward ? count - a.boundary : a.boundary - (count + 1.0));
-        out.samples = a.samples;
-        const double te_dev = a.te_sum / d, force_dev = a.force_sum / d;
-        out.te_mean = a.te_ref + te_dev;
-        out.te_rms = std::sqrt(std::max(0.0, a.te_sq / d - te_dev * te_dev));
-        out.te_peak_to_peak = a.te_max - a.te_min;
-        out.torque = a.torque_sum / d;
-        const double drive = out.torque / estimator_->mesh().geometry().baseRadius(0);
-        const double inertia = dynamics_->fidelity() == Fidelity::kQuasiStatic
-                                   ? 0.0
-                                   : dynamics_->model().equivalentMass() * (s.state[5] - a.start_velocity) / d;
-        out.mesh_force_mean = drive - inertia;
-        out.mesh_force_rms = std::sqrt(std::max(0.0, a.force_sq / d - force_dev * force_dev));
-        out.mesh_force_peak_to_peak = a.force_max - a.force_min;
-        out.mesh_frequency = (turns - a.start_turns) / d;
-        bool finite = true;
-        for (double v : {out.te_mean, out.te_rms, out.te_peak_to_peak, out.mesh_force_mean, out.mesh_force_rms,
-                         out.mesh_force_peak_to_peak, out.mesh_frequency, out.torque}) {
-          finite = finite && std::isfinite(v);
-        }
-        if (finite) {  // never NaN on a topic (the sink's conversion would refuse it inside the advance)
-          ++counters_.mesh_period_stats_out;
-          sink.meshPeriod(stamp, out);
-        } else {
-          counters_.last_event = "mesh_period_stats: a statistic is not finite (not published)";
-        }
-        startMeshBlock(stamp, s, turns, forward ? count : count + 1.0, mesh_frequency);
-      }
-    } else if (count != last_count) {
-      startMeshBlock(stamp, s, turns, count > last_count ? count : count + 1.0, mesh_frequency);
-    }
-    a.last_turns = turns;
-  }
-  a.last_stamp = stamp;
-  a.last_te = s.dynamic_te;
-  a.last_force = s.mesh_force;
-  a.last_torque = s.torque;
 }
 
 }  // namespace drivetrain_stiffness

@@ -68,173 +68,15 @@
 #include "drivetrain_stiffness/core/reduced_models.hpp"
 #include "drivetrain_stiffness/core/stiffness_estimator.hpp"
 #include "drivetrain_stiffness/pipeline/input_types.hpp"
+#include "drivetrain_stiffness/pipeline/mesh_period_stage.hpp"
+#include "drivetrain_stiffness/pipeline/pipeline_options.hpp"
+#include "drivetrain_stiffness/pipeline/pipeline_outputs.hpp"
 #include "drivetrain_stiffness/pipeline/refusal_tally.hpp"
 #include "drivetrain_stiffness/pipeline/runtime_settings.hpp"
 #include "drivetrain_stiffness/pipeline/sequence_gaps.hpp"
 #include "drivetrain_stiffness/spectral/sliding_spectrum.hpp"
 
 namespace drivetrain_stiffness {
-
-/// Settings of the pipeline (the node's private parameters). validate() names the field and value.
-struct PipelineOptions {
-  EstimatorLimits limits = onlineLimits();  ///< limits.load_tolerance: ~bearing_load_tolerance
-  static EstimatorLimits onlineLimits() {
-    EstimatorLimits l;
-    // 1e-3 of the support load: the stiffness lags by ~3e-4, far inside the 1 % at which the
-    // dynamics take up a change (on a 1 % grid) and the resonance republishes; ripple no longer
-    // re-solves every bearing.
-    l.load_tolerance = 1e-3;
-    return l;
-  }
-  bool dynamics = true;              ///< integrate the 3-DOF model (needs the gearbox's dynamics block)
-  double output_rate = 1000.0;       ///< [Hz] transmission_error rate, rounded to divide the mesh period
-  double max_gap = 1.0;              ///< [s] a longer forward input gap restarts the dynamics
-  double stamp_jump_back = 1.0;      ///< [s] a stamp further back than this restarts everything
-  /// [s] the clock going back by more than this resets everything. 1 s tells a looping bag (it
-  /// jumps back by its length, seconds to hours) from a clock correction on a live rig: ntpd steps
-  /// offsets over 0.128 s (its default step threshold) and slews smaller ones; chrony's usual
-  /// `makestep 1.0 3` steps only by more than 1 s and only in its first three updates. A smaller
-  /// step back keeps the state; inputs stamped before the last accepted one are then rejected as
-  /// out of order (rule 2, counted) until the clock has caught up.
-  double clock_jump_back = 1.0;
-  double resonance_threshold = 0.01; ///< [-] relative frequency change that republishes resonance
-  int spectrum_window = 1024;        ///< [samples] TE spectrum window
-  int spectrum_hop = 256;            ///< [samples] between spectra
-  double pinion_speed_rpm = 1000.0;  ///< [rpm] nominal speed for the mesh phase
-  std::string torque_frame;          ///< required header.frame_id of torque inputs; empty = any
-  double mesh_phase_offset = 0.0;    ///< [-] mesh phase at measured pinion angle 0 (where a drive pair enters contact)
-  double motion_timeout = 0.1;       ///< [s] no joint_states for this long: back to ~pinion_speed_rpm
-  double gear_ratio_tolerance = 0.01;  ///< [rad] gear angle off -(z_p/z_g) pinion angle by more: reported
-  int motion_slices = 256;           ///< slices per mesh period of the measured-motion dynamics
-  /// Calibrate against the encoders' TE when the gearbox has a calibration block (rule 11).
-  bool calibrate = true;
-  void validate() const;
-};
-
-/// The resonance estimate at an operating point.
-struct ResonanceEstimate {
-  std::array<Mode, 3> modes;
-  bool floquet_valid = false;
-  double floquet_margin = 0.0;  ///< 1 - max |Floquet multiplier| (0 when not valid)
-};
-
-/// Statistics of the dynamic TE and the mesh force over a block of whole mesh periods (issue 12):
-/// what the mesh does, not what the output grid happens to see (at 1000 rpm with 20 teeth the
-/// 1 kHz grid samples the 333 Hz mesh at three phases, one of them on the tooth switch). A block
-/// runs from the first output sample at or after a mesh-period boundary (the mesh phase passing an
-/// integer, forward or backward) to the first sample at or after the boundary `periods` whole
-/// periods further on, net (a reversal inside the block lengthens it). periods = max(1,
-/// ceil(10 x output interval x |mesh frequency|)) at the block's start, so that a block spans at
-/// least ~10 output samples at any speed. (Named apart from the message drivetrain_stiffness/
-/// MeshPeriodStats, which shares the namespace.) Estimators (RigPipeline::MeshPeriodAccumulator):
-///  - te_mean: the trapezoidal (time-weighted) mean of the samples over [start, end]. The dynamic
-///    TE is continuous in time (it is a function of the state), so the trapezoid is a quadrature
-///    of a continuous periodic function and converges with the samples per period; but it settles
-///    within a fraction of an output interval after each tooth switch, a near-jump that a few
-///    phases per period cannot place: on the seed at 1000 rpm it is off by 14 % of the true mean
-///    at 1 kHz (3 samples per period), 0.5 % at 10 kHz (test_mesh_period_stats.cpp). No exact
-///    balance gives it (the torsional coordinate has no restoring force but the mesh's); an exact
-///    one would need the integral of the state from the propagators (not done).
-///  - mesh_force_mean: NOT the samples' mean. The mesh force jumps at every tooth switch (the mesh
-///    stiffness does) and a sample on the switch reports its right limit, so any quadrature of a
-///    few samples per period is biased (+19 % at 1000 rpm / 1 kHz on the seed). It is the exact
-///    momentum balance of the relative mesh coordinate, m_s x'' = F_drive - F_mesh, integrated over
-///    the block: mean F_mesh = mean F_drive - m_s (v(end) - v(start)) / duration, with F_drive =
-///    T / r_b,p (the dynamics' quasi-static load) averaged by the trapezoid of the held torque
-///    (exact for a torque constant over the block; a step inside it is off by at most
-///    |dT| / r_b,p x output interval / (2 duration)). With the quasi_static fidelity (m_s -> 0)
-///    the term in v is left out.
-///  - *_rms: the samples' own spread about their trapezoidal mean, sqrt(mean(x^2) - mean(x)^2)
-///    (time-weighted); *_peak_to_peak: max - min over the samples in [start, end]. Both see only
-///    the sampled phases.
-///  - mesh_frequency: net mesh turns / duration [Hz] (signed: negative in reverse); torque: the
-///    trapezoidal mean of the held torque [N*m].
-struct MeshPeriodStatistics {
-  Stamp start, end;               ///< the block's first and last output samples
-  double duration = 0.0;          ///< end - start [s]
-  std::uint32_t periods = 0;      ///< whole mesh periods in the block (net)
-  std::uint32_t samples = 0;      ///< output samples in [start, end) (the end sample starts the next block)
-  double te_mean = 0.0, te_rms = 0.0, te_peak_to_peak = 0.0;                          ///< [m]
-  double mesh_force_mean = 0.0, mesh_force_rms = 0.0, mesh_force_peak_to_peak = 0.0;  ///< [N]
-  double mesh_frequency = 0.0;    ///< [Hz]
-  double torque = 0.0;            ///< [N*m]
-};
-
-/// What the tf frames and markers of a transmission-error sample need besides the sample: plain
-/// values of that moment, so that a sink never asks the pipeline back in the middle of an advance.
-struct SampleContext {
-  /// [rad] at the sample's stamp, as the encoders count it (RigPipeline::encoderPinionAngle: without
-  /// the ~mesh_phase_offset that the mesh phase carries), or the nominal angle without encoders.
-  double pinion_angle = 0.0;
-  /// The last published resonance estimate, null when there is none since the last reset; points
-  /// at the pipeline's copy, valid during the call only.
-  const ResonanceEstimate* resonance = nullptr;
-};
-
-/// The TE spectrum's strongest lines over the sliding window, copied out of it (fixed storage: no
-/// allocation per spectrum).
-struct SpectrumPeaks {
-  static constexpr std::size_t kMaxPeaks = 3;  ///< the lines the pipeline keeps (te_spectrum)
-  std::array<SpectralPeak, kMaxPeaks> peaks{};  ///< the first `count`, strongest first
-  std::size_t count = 0;
-  double resolution = 0.0;      ///< [Hz] bin spacing, 1 / window_seconds
-  double window_seconds = 0.0;  ///< [s]
-};
-
-/// Receives the pipeline's outputs as plain values; every method is optional. A sink may throw the
-/// library's own Error (a message it refuses, e.g. a non-finite number): the pipeline counts it.
-class PipelineSink {
- public:
-  virtual ~PipelineSink() = default;
-  /// After an accepted input (throttled to ~stiffness_rate); stamp = the input's. `bands`: the
-  /// calibrated stiffness at the estimate's torque with its 95 % bounds, or without a calibration
-  /// the drawing's model (mesh: estimate.mesh.mean; bearings: the shafts' radial stiffness) with
-  /// bounds of zero width; the natural frequencies are not filled.
-  virtual void stiffness(Stamp /*stamp*/, const StiffnessEstimate& /*estimate*/, const CalibrationBands& /*bands*/) {}
-  /// One transmission-error sample on the output grid, at `stamp` (exact; sample.t = stamp.toSec()).
-  virtual void transmissionError(Stamp /*stamp*/, const DynamicsSample& /*sample*/, const SampleContext& /*context*/) {}
-  /// New TE spectrum peaks; stamp of the newest sample in the window.
-  virtual void spectrum(Stamp /*stamp*/, const SpectrumPeaks& /*peaks*/) {}
-  /// The resonance estimate moved by more than the threshold (or after a reset); stamp = the
-  /// input's. `bands`: the calibrated stiffness and natural frequencies at the current torque with
-  /// their 95 % bounds, or without a calibration the estimate's frequencies with bounds of zero
-  /// width (the stiffness entries then unfilled).
-  virtual void resonance(Stamp /*stamp*/, const ResonanceEstimate& /*estimate*/, const CalibrationBands& /*bands*/) {}
-  /// One encoder reading's measured TE (baseline and shaft orders removed) beside the calibrated
-  /// model's; stamp = the reading's (rule 11).
-  virtual void measuredTe(Stamp /*stamp*/, const MeasuredTeSample& /*sample*/) {}
-  /// The calibration after a closed window (every window, whatever its outcome); stamp = the
-  /// reading that closed it.
-  virtual void calibration(Stamp /*stamp*/, const CalibrationEstimate& /*estimate*/) {}
-  /// One block of whole mesh periods closed (MeshPeriodStatistics); stamp = its end sample's.
-  virtual void meshPeriod(Stamp /*stamp*/, const MeshPeriodStatistics& /*stats*/) {}
-};
-
-/// Counters of everything the pipeline saw; nothing is dropped without being counted here.
-struct PipelineCounters {
-  std::uint64_t accepted_torque = 0, rejected_torque = 0;
-  std::uint64_t accepted_preload = 0, rejected_preload = 0;
-  std::uint64_t zero_stamps = 0, out_of_order = 0, invalid_values = 0, unreachable_loads = 0;
-  std::uint64_t wrong_frames = 0, stamps_out_of_range = 0;
-  std::uint64_t dropped_torque = 0, dropped_preload = 0;  ///< numbered messages that never arrived
-  std::uint64_t accepted_motion = 0, rejected_motion = 0, dropped_motion = 0;  ///< joint_states
-  std::uint64_t motion_timeouts = 0, gear_ratio_mismatches = 0;
-  std::uint64_t stiffness_shed = 0;  ///< backlogged torque inputs: dynamics only, no stiffness update
-  std::uint64_t clock_resets = 0, stamp_resets = 0, gap_restarts = 0;
-  std::uint64_t dynamics_errors = 0;
-  std::uint64_t stiffness_out = 0, stiffness_coalesced = 0;  ///< published, and skipped by ~stiffness_rate
-  std::uint64_t stiffness_refused = 0;  ///< stiffness messages the sink refused (its reason in last_event)
-  std::uint64_t te_out = 0, spectra_out = 0, resonance_out = 0;
-  std::uint64_t modal_updates = 0;  ///< modal analyses actually run (see RigPipeline::updateResonance)
-  std::uint64_t measured_te_out = 0, calibration_out = 0;  ///< published (rule 11)
-  std::uint64_t mesh_period_stats_out = 0;  ///< blocks of whole mesh periods published (MeshPeriodStatistics)
-  std::uint64_t calibration_errors = 0;  ///< windows the calibration could not evaluate (last_event says why)
-  double simulated_s = 0.0;         ///< model time integrated
-  std::string last_event;           ///< last rejection or reset, with its reason
-};
-
-/// The counters by the names /diagnostics and drivetrain_replay's summary use (one list for both).
-std::vector<std::pair<std::string, std::uint64_t>> namedCounters(const PipelineCounters& c);
 
 class RigPipeline {
  public:
@@ -343,25 +185,6 @@ class RigPipeline {
   /// programming error leaves the pipeline.
   void dynamicsError(const std::string& where, const Error& e);
 
-  /// The running block of MeshPeriodStatistics (plain values: no allocation per sample).
-  struct MeshPeriodAccumulator {
-    bool have_last = false, in_block = false;
-    Stamp last_stamp;
-    double last_turns = 0.0;        ///< unwrapped mesh phase of the last sample [turns]
-    double last_te = 0.0, last_force = 0.0, last_torque = 0.0;
-    double boundary = 0.0;          ///< the integer mesh phase the block started at
-    std::uint32_t periods = 0, samples = 0;
-    Stamp start;
-    double start_turns = 0.0, start_velocity = 0.0;
-    double te_ref = 0.0, force_ref = 0.0;  ///< the start values: sums of x - ref (no cancellation)
-    double te_sum = 0.0, te_sq = 0.0, force_sum = 0.0, force_sq = 0.0, torque_sum = 0.0;  ///< trapezoid x dt
-    double te_min = 0.0, te_max = 0.0, force_min = 0.0, force_max = 0.0;
-  };
-  /// One output sample into the running block; publishes a closed block. `mesh_frequency` [Hz]:
-  /// the dynamics' during this advance (unwraps the phase at any speed).
-  void meshPeriodSample(Stamp stamp, const DynamicsSample& s, double mesh_frequency, PipelineSink& sink);
-  void startMeshBlock(Stamp stamp, const DynamicsSample& s, double turns, double boundary, double mesh_frequency);
-  MeshPeriodAccumulator mesh_block_;
   double advance_mesh_frequency_ = 0.0;  ///< [Hz] the dynamics' during the current emitUpTo
 
   std::shared_ptr<const RigConfig> rig_;  ///< first: the members below share it
@@ -370,6 +193,7 @@ class RigPipeline {
   std::unique_ptr<StiffnessEstimator> estimator_;
   std::unique_ptr<DynamicsEstimator> dynamics_;
   std::unique_ptr<SlidingSpectrum> te_spectrum_;
+  std::unique_ptr<MeshPeriodStage> mesh_periods_;  ///< with dynamics only
   std::unique_ptr<Calibrator> calibrator_;
   MeasuredTeSample measured_te_;  ///< the calibrator's per-reading output (reused: no allocation)
   PipelineCounters counters_;
