@@ -51,24 +51,23 @@ RigPipeline::RigPipeline(const RigConfig& rig, const PipelineOptions& options, c
   estimator_ = std::make_unique<StiffnessEstimator>(rig_, options_.limits);
   // One mesh table for the rig: the stiffness estimator's, shared read only with the dynamics and
   // the calibration.
-  if (options_.calibrate && rig_->calibration.present && rig_->dynamics.present) {
-    calibrator_ = std::make_unique<Calibrator>(rig_, estimator_->sharedMesh());
-  }
+  calibration_ = std::make_unique<CalibrationStage>(rig_, *estimator_, options_.calibrate, counters_);
+  resonance_ = std::make_unique<ResonanceTracker>(*rig_, *estimator_, *calibration_, options_.resonance_threshold, counters_);
   pinion_speed_ = options_.pinion_speed_rpm * kTwoPi / 60.0;
   if (options_.dynamics) {
     dynamics_ = std::make_unique<DynamicsEstimator>(rig_, estimator_->shaftRadialStiffness(), options_.output_rate,
                                                     estimator_->sharedMesh());
     dynamics_->setFidelity(settings_.fidelity);
     dynamics_->setMotionSlices(options_.motion_slices);
-    te_spectrum_ = std::make_unique<SlidingSpectrum>(options_.spectrum_window, options_.spectrum_hop,
-                                                     dynamics_->outputInterval(), SpectrumPeaks::kMaxPeaks);
+    te_spectrum_ = std::make_unique<TeSpectrumStage>(options_.spectrum_window, options_.spectrum_hop,
+                                                     dynamics_->outputInterval(), counters_);
     mesh_periods_ = std::make_unique<MeshPeriodStage>(*dynamics_, estimator_->mesh().geometry().baseRadius(0), counters_);
   }
 }
 
 void RigPipeline::reset(const std::string& reason) {
   estimator_->reset();
-  if (te_spectrum_) te_spectrum_->reset();
+  if (te_spectrum_) te_spectrum_->restart();
   if (dynamics_) {
     // The dynamics restart at the next torque input (their reset needs its time), with the bearing
     // stiffness of the configured preloads: rebuilt only if it moved by more than 1 %, as always.
@@ -86,10 +85,10 @@ void RigPipeline::reset(const std::string& reason) {
   angle_origin_.reset();
   anchor_.reset();
   reading_.reset();
-  if (calibrator_) calibrator_->interrupt();
+  calibration_->interrupt();
   encoders_ = false;
   if (mesh_periods_) mesh_periods_->restart();
-  last_resonance_.reset();  // the next accepted input republishes the resonance
+  resonance_->forget();  // the next accepted input republishes the resonance
   counters_.last_event = "reset: " + reason;
 }
 
@@ -315,31 +314,10 @@ void RigPipeline::acceptMotion(Stamp stamp, const MotionInput& m, PipelineSink& 
 }
 
 void RigPipeline::calibrate(Stamp stamp, const Reading& reading, bool continuous, PipelineSink& sink) {
-  if (!calibrator_ || !reading.gear) return;
-  if (!continuous) calibrator_->interrupt();
+  if (!calibration_->calibrator() || !reading.gear) return;
   const double turns = meshTurns(reading.pinion) + options_.mesh_phase_offset;
   const double phase = turns - std::floor(turns);
-  try {
-    const int out = calibrator_->reading(stamp.toSec(), reading.pinion, *reading.gear, phase, reading.speed, held_torque_,
-                                         *estimator_, measured_te_);
-    // Counted once the sink took it: a message the sink refuses (non-finite) is an error, not both.
-    if (out & Calibrator::kSample) {
-      sink.measuredTe(stamp, measured_te_);
-      ++counters_.measured_te_out;
-    }
-    if (out & Calibrator::kWindow) {
-      sink.calibration(stamp, calibrator_->estimate());
-      ++counters_.calibration_out;
-    }
-  } catch (const Error& e) {
-    calibrationError(e);
-  }
-}
-
-void RigPipeline::calibrationError(const Error& e) {
-  ++counters_.calibration_errors;
-  counters_.last_event = std::string("calibration: ") + e.what();
-  calibrator_->interrupt();
+  calibration_->reading(stamp, reading.pinion, *reading.gear, phase, reading.speed, held_torque_, continuous, sink);
 }
 
 double RigPipeline::ratio() const { return static_cast<double>(teeth(0)) / teeth(1); }
@@ -407,7 +385,7 @@ void RigPipeline::afterUpdate(Stamp stamp, const StiffnessEstimate& estimate, Pi
                    secondsBetween(stamp, *last_stiffness_out_) >= 1.0 / settings_.stiffness_rate;
   if (due) {
     try {
-      sink.stiffness(stamp, estimate, stiffnessBands(estimate));
+      sink.stiffness(stamp, estimate, calibration_->stiffnessBands(estimate));
       last_stiffness_out_ = stamp;
       ++counters_.stiffness_out;
     } catch (const Error& e) {
@@ -437,7 +415,7 @@ void RigPipeline::pushStiffness(Stamp stamp, const StiffnessEstimate& estimate, 
   } catch (const Error& e) {
     dynamicsError("dynamics", e);
   }
-  updateResonance(stamp, estimate, sink);
+  resonance_->update(stamp, estimate, {settings_.mesh_damping_ratio, settings_.bearing_damping_ratio}, *dynamics_, sink);
 }
 
 void RigPipeline::stopAfterGap(Stamp stamp) {
@@ -458,7 +436,7 @@ void RigPipeline::dynamicsError(const std::string& where, const Error& e) {
 void RigPipeline::restartDynamics(Stamp stamp, double torque) {
   dynamics_epoch_ = stamp;
   dynamics_->reset(0.0, torque);
-  te_spectrum_->reset();  // a new window: no samples from before the restart
+  te_spectrum_->restart();  // a new window: no samples from before the restart
   mesh_periods_->restart();  // and no mesh periods
   angle_origin_ = stamp;  // the stiffness message's mesh phase restarts with the dynamics
   followAnchor(stamp);    // measured motion: the dynamics start at the measured phase
@@ -499,19 +477,10 @@ void RigPipeline::emitUpTo(double t, PipelineSink& sink) {
     s.t = sample_stamp.toSec();
     SampleContext context;
     context.pinion_angle = encoderPinionAngle(sample_stamp);
-    context.resonance = last_resonance_ ? &*last_resonance_ : nullptr;
+    context.resonance = resonance_->last() ? &*resonance_->last() : nullptr;
     sink.transmissionError(sample_stamp, s, context);
     ++counters_.te_out;
-    if (te_spectrum_->push(s.dynamic_te)) {
-      const std::vector<SpectralPeak>& peaks = te_spectrum_->peaks();
-      SpectrumPeaks& out = spectrum_peaks_;
-      out.count = std::min(peaks.size(), SpectrumPeaks::kMaxPeaks);
-      std::copy_n(peaks.begin(), out.count, out.peaks.begin());
-      out.resolution = te_spectrum_->resolution();
-      out.window_seconds = te_spectrum_->windowSeconds();
-      sink.spectrum(sample_stamp, out);
-      ++counters_.spectra_out;
-    }
+    te_spectrum_->sample(sample_stamp, s, advance_mesh_frequency_, sink);
     mesh_periods_->sample(sample_stamp, s, advance_mesh_frequency_, sink);
   });
 }
@@ -547,72 +516,6 @@ void RigPipeline::advanceDynamics(Stamp stamp, double torque, PipelineSink& sink
   }
 }
 
-void RigPipeline::updateResonance(Stamp stamp, const StiffnessEstimate& estimate, PipelineSink& sink) {
-  try {
-    const std::array<double, 2> kb = estimator_->shaftRadialStiffness();
-    const std::array<double, 3> springs{kb[0], kb[1], estimate.mesh.mean};
-    // Skip the modal analysis when it cannot change the decision: K = sum k_i B_i with B_i >= 0
-    // and M fixed, so springs within factors [lo, hi] of those at the last publication bound every
-    // undamped eigenvalue omega^2 within the same factors (Courant-Fischer), and each natural
-    // frequency within [sqrt(lo), sqrt(hi)]. With hi = (1 + tau)^2 and lo = (1 - tau)^2 (tau =
-    // resonance_threshold) no frequency moves by more than tau, and no republication would follow.
-    // Until 2026-11-26 the factors were 1 +- tau, which ran the analysis about twice as often for
-    // the same publications. Both are shrunk by 1e-9 for the eigensolver's rounding (1e-15).
-    if (last_resonance_) {
-      const double tau = options_.resonance_threshold, margin = 1e-9;
-      const double hi = (1.0 + tau) * (1.0 + tau) * (1.0 - margin), lo = (1.0 - tau) * (1.0 - tau) * (1.0 + margin);
-      bool within = true;
-      for (int i = 0; i < 3 && within; ++i) {
-        within = springs[i] <= hi * springs_at_resonance_[i] && springs[i] >= lo * springs_at_resonance_[i];
-      }
-      if (within) return;
-    }
-    // The run-time settings' damping (the shared rig keeps the start-up one).
-    const DampingRatios damping{settings_.mesh_damping_ratio, settings_.bearing_damping_ratio};
-    const GearRotorParameters p = rigRotorParameters(*rig_, estimator_->mesh(), kb, damping);
-    ResonanceEstimate r;
-    r.modes = modalAnalysis(p, estimate.mesh.mean);
-    ++counters_.modal_updates;
-    bool moved = !last_resonance_;
-    for (std::size_t i = 0; !moved && i < r.modes.size(); ++i) {
-      const double last = last_resonance_->modes[i].natural_frequency;
-      moved = std::abs(r.modes[i].natural_frequency - last) > options_.resonance_threshold * last;
-    }
-    if (!moved) return;
-    for (const Mode& m : r.modes) {
-      if (!std::isfinite(m.natural_frequency) || !std::isfinite(m.damping_ratio) || !std::isfinite(m.damped_frequency)) {
-        throw InvalidInput("resonance: a modal result is not finite (not published)");  // never NaN on a topic
-      }
-    }
-    double margin = 0.0;
-    r.floquet_valid = dynamics_->floquetMargin(&margin) && std::isfinite(margin);
-    r.floquet_margin = r.floquet_valid ? margin : 0.0;
-    last_resonance_ = r;
-    springs_at_resonance_ = springs;
-    sink.resonance(stamp, r, resonanceBands(r));
-    ++counters_.resonance_out;
-  } catch (const Error& e) {
-    dynamicsError("resonance", e);
-  }
-}
-
-CalibrationBands RigPipeline::stiffnessBands(const StiffnessEstimate& estimate) const {
-  if (calibrator_) return calibrator_->bands(estimate.torque, *estimator_, false);
-  CalibrationBands b;  // no calibration: the drawing's model, bounds of zero width
-  b.mesh_stiffness = b.mesh_stiffness_low = b.mesh_stiffness_high = estimate.mesh.mean;
-  b.bearing_stiffness = b.bearing_stiffness_low = b.bearing_stiffness_high = estimator_->shaftRadialStiffness();
-  return b;
-}
-
-CalibrationBands RigPipeline::resonanceBands(const ResonanceEstimate& estimate) const {
-  if (calibrator_) return calibrator_->bands(estimator_->current().torque, *estimator_, true);
-  CalibrationBands b;  // no calibration: the drawing's frequencies, bounds of zero width
-  for (std::size_t i = 0; i < estimate.modes.size(); ++i) {
-    b.natural_frequency[i] = b.natural_frequency_low[i] = b.natural_frequency_high[i] = estimate.modes[i].natural_frequency;
-  }
-  return b;
-}
-
 void RigPipeline::apply(const RuntimeSettings& settings) {
   settings.validate();  // all or nothing: nothing below throws for valid settings
   const bool damping_changed = settings.mesh_damping_ratio != settings_.mesh_damping_ratio ||
@@ -620,7 +523,7 @@ void RigPipeline::apply(const RuntimeSettings& settings) {
   settings_ = settings;
   if (damping_changed) {
     if (dynamics_) dynamics_->setDamping(settings.mesh_damping_ratio, settings.bearing_damping_ratio);
-    last_resonance_.reset();  // damped frequencies and ratios changed: republish at the next input
+    resonance_->forget();  // damped frequencies and ratios changed: republish at the next input
   }
   if (dynamics_) {
     // The mesh-force estimator depends on the fidelity (MeshPeriodStatistics): a block spans one.

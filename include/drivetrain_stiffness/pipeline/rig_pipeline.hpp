@@ -68,12 +68,15 @@
 #include "drivetrain_stiffness/core/reduced_models.hpp"
 #include "drivetrain_stiffness/core/stiffness_estimator.hpp"
 #include "drivetrain_stiffness/pipeline/input_types.hpp"
+#include "drivetrain_stiffness/pipeline/calibration_stage.hpp"
 #include "drivetrain_stiffness/pipeline/mesh_period_stage.hpp"
 #include "drivetrain_stiffness/pipeline/pipeline_options.hpp"
 #include "drivetrain_stiffness/pipeline/pipeline_outputs.hpp"
 #include "drivetrain_stiffness/pipeline/refusal_tally.hpp"
+#include "drivetrain_stiffness/pipeline/resonance_tracker.hpp"
 #include "drivetrain_stiffness/pipeline/runtime_settings.hpp"
 #include "drivetrain_stiffness/pipeline/sequence_gaps.hpp"
+#include "drivetrain_stiffness/pipeline/te_spectrum_stage.hpp"
 #include "drivetrain_stiffness/spectral/sliding_spectrum.hpp"
 
 namespace drivetrain_stiffness {
@@ -126,12 +129,12 @@ class RigPipeline {
   const StiffnessEstimator& estimator() const { return *estimator_; }
   const DynamicsEstimator* dynamics() const { return dynamics_.get(); }
   /// The live calibration (rule 11), or null without a calibration block or with ~calibrate off.
-  const Calibrator* calibrator() const { return calibrator_.get(); }
+  const Calibrator* calibrator() const { return calibration_->calibrator(); }
   /// The rig as the pipeline runs it (shared read only with the estimator, the dynamics and the
   /// calibration): the gearbox with the nominal speed and the start-up damping; the current damping
   /// is settings()'.
   const RigConfig& rig() const { return *rig_; }
-  const std::optional<ResonanceEstimate>& lastResonance() const { return last_resonance_; }
+  const std::optional<ResonanceEstimate>& lastResonance() const { return resonance_->last(); }
   /// Pinion angle at `stamp` [rad]: the last encoder reading extrapolated at its speed, or the
   /// nominal speed's angle since the dynamics origin (plus ~mesh_phase_offset as an angle).
   double pinionAngle(Stamp stamp) const;
@@ -174,12 +177,6 @@ class RigPipeline {
   void stopAfterGap(Stamp stamp);
   /// Dynamics at static equilibrium under `torque` from `stamp` on (new epoch, empty spectrum).
   void restartDynamics(Stamp stamp, double torque);
-  void updateResonance(Stamp stamp, const StiffnessEstimate& estimate, PipelineSink& sink);
-  /// The sinks' bands (PipelineSink::stiffness, ::resonance): the calibration's, or the drawing's
-  /// model with bounds of zero width.
-  CalibrationBands stiffnessBands(const StiffnessEstimate& estimate) const;
-  CalibrationBands resonanceBands(const ResonanceEstimate& estimate) const;
-  SpectrumPeaks spectrum_peaks_;  ///< the sink's copy of the spectrum (reused)
   /// A failure of the dynamics or the resonance on the library's own error (errors.hpp): counted
   /// in dynamics_errors with `where` and the reason in last_event. Nothing wider is caught: a
   /// programming error leaves the pipeline.
@@ -192,10 +189,10 @@ class RigPipeline {
   RuntimeSettings settings_;
   std::unique_ptr<StiffnessEstimator> estimator_;
   std::unique_ptr<DynamicsEstimator> dynamics_;
-  std::unique_ptr<SlidingSpectrum> te_spectrum_;
+  std::unique_ptr<TeSpectrumStage> te_spectrum_;  ///< with dynamics only
   std::unique_ptr<MeshPeriodStage> mesh_periods_;  ///< with dynamics only
-  std::unique_ptr<Calibrator> calibrator_;
-  MeasuredTeSample measured_te_;  ///< the calibrator's per-reading output (reused: no allocation)
+  std::unique_ptr<CalibrationStage> calibration_;
+  std::unique_ptr<ResonanceTracker> resonance_;
   PipelineCounters counters_;
   RefusalTally refusals_;
   SequenceGaps torque_seq_, preload_seq_, motion_seq_;
@@ -216,9 +213,6 @@ class RigPipeline {
   std::optional<Reading> reading_;
   /// Rule 11 for an accepted reading; `continuous`: it follows the last one without a break.
   void calibrate(Stamp stamp, const Reading& reading, bool continuous, PipelineSink& sink);
-  /// A window the calibration could not evaluate (the library's own errors only): counted, reason
-  /// in last_event, the window dropped.
-  void calibrationError(const Error& e);
   /// The reading unwrapped against `last` (null: none recent), its speed measured or differentiated.
   Reading unwrapReading(Stamp stamp, const MotionInput& reading, const Reading* last) const;
   double held_torque_ = 0.0;
@@ -229,9 +223,6 @@ class RigPipeline {
   /// resolves only 2.4e-7 s, enough to put an input exactly on a grid point one sample short.
   Stamp dynamics_epoch_;
   double pinion_speed_ = 0.0;  ///< [rad/s]
-  std::optional<ResonanceEstimate> last_resonance_;
-  /// Spring stiffnesses (bearing per shaft, mean mesh) at the last published resonance.
-  std::array<double, 3> springs_at_resonance_{};
 };
 
 }  // namespace drivetrain_stiffness
