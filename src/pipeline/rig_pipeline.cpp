@@ -53,7 +53,8 @@ RigPipeline::RigPipeline(const RigConfig& rig, const PipelineOptions& options, c
   // the calibration.
   calibration_ = std::make_unique<CalibrationStage>(rig_, *estimator_, options_.calibrate, counters_);
   resonance_ = std::make_unique<ResonanceTracker>(*rig_, *estimator_, *calibration_, options_.resonance_threshold, counters_);
-  pinion_speed_ = options_.pinion_speed_rpm * kTwoPi / 60.0;
+  const auto& teeth = estimator_->mesh().geometry().spec().teeth;
+  phase_ = std::make_unique<PhaseSource>(options_, teeth[0], teeth[1], counters_);
   if (options_.dynamics) {
     dynamics_ = std::make_unique<DynamicsEstimator>(rig_, estimator_->shaftRadialStiffness(), options_.output_rate,
                                                     estimator_->sharedMesh());
@@ -82,11 +83,8 @@ void RigPipeline::reset(const std::string& reason) {
   last_preload_.reset();
   last_motion_.reset();
   last_stiffness_out_.reset();
-  angle_origin_.reset();
-  anchor_.reset();
-  reading_.reset();
+  phase_->reset();
   calibration_->interrupt();
-  encoders_ = false;
   if (mesh_periods_) mesh_periods_->restart();
   resonance_->forget();  // the next accepted input republishes the resonance
   counters_.last_event = "reset: " + reason;
@@ -140,31 +138,13 @@ InputOutcome RigPipeline::checkStamp(Stamp stamp, std::optional<Stamp>& last, In
   return InputOutcome::kAccepted;
 }
 
-double RigPipeline::pinionAngle(Stamp stamp) const {
-  if (anchor_) return anchor_->angle + anchor_->speed * secondsBetween(stamp, anchor_->stamp);
-  return angle_origin_ ? pinion_speed_ * secondsBetween(stamp, *angle_origin_) : 0.0;
-}
+double RigPipeline::pinionAngle(Stamp stamp) const { return phase_->pinionAngle(stamp); }
 
-double RigPipeline::encoderPinionAngle(Stamp stamp) const {
-  // The anchor (a reading, or its time-out continuing it) holds the encoder angle plus the offset
-  // that puts the mesh phase where a drive pair enters contact (rule 9); before any reading the
-  // nominal angle carries none.
-  return anchor_ ? pinionAngle(stamp) - options_.mesh_phase_offset * kTwoPi / teeth(0) : pinionAngle(stamp);
-}
+double RigPipeline::encoderPinionAngle(Stamp stamp) const { return phase_->encoderPinionAngle(stamp); }
 
-std::optional<double> RigPipeline::encoderSilence(Stamp now) const {
-  if (!encoders_ || !reading_) return std::nullopt;
-  return secondsBetween(now, reading_->stamp);
-}
+std::optional<double> RigPipeline::encoderSilence(Stamp now) const { return phase_->encoderSilence(now); }
 
-const char* RigPipeline::phaseSource() const {
-  if (encoders_) return "encoders";
-  return anchor_ ? "nominal (encoders timed out)" : "nominal";
-}
-
-double RigPipeline::meshTurns(double pinion_angle) const {
-  return pinion_angle * estimator_->mesh().geometry().spec().teeth[0] / kTwoPi;
-}
+const char* RigPipeline::phaseSource() const { return phase_->name(); }
 
 template <typename Validate, typename Update>
 InputOutcome RigPipeline::apply(InputStream stream, Stamp stamp, std::optional<Stamp>& last, std::uint64_t& accepted,
@@ -217,17 +197,17 @@ InputOutcome RigPipeline::torque(Stamp stamp, double torque, PipelineSink& sink,
         // The mesh phase counts from the first torque input after a (re)start, as the dynamics do;
         // the origin is kept only if the input is accepted.
         checkMotionTimeout(stamp, sink);
-        const Stamp origin_stamp = angle_origin_.value_or(stamp);
+        const Stamp origin_stamp = phase_->origin().value_or(stamp);
         if (backlog == Backlog::kShed) {
           // Shed: the rules and the dynamics, no stiffness update or message (its estimate would be
           // replaced by the newest input's before anyone could read it).
-          angle_origin_ = origin_stamp;
+          phase_->setOrigin(origin_stamp);
           ++counters_.stiffness_shed;
           return nullptr;
         }
-        const double angle = anchor_ ? pinionAngle(stamp) : pinion_speed_ * secondsBetween(stamp, origin_stamp);
+        const double angle = phase_->stiffnessAngle(stamp, origin_stamp);
         const StiffnessEstimate& e = estimator_->setTorque(torque, angle);
-        angle_origin_ = origin_stamp;
+        phase_->setOrigin(origin_stamp);
         return &e;
       });
   if (outcome == InputOutcome::kAccepted) {
@@ -277,103 +257,40 @@ InputOutcome RigPipeline::motionRefused(Stamp stamp, const std::string& reason, 
 
 void RigPipeline::acceptMotion(Stamp stamp, const MotionInput& m, PipelineSink& sink) {
   // Transactional: the reading is checked against the last one before anything changes.
-  const Reading* last =
-      reading_ && secondsBetween(stamp, reading_->stamp) <= options_.motion_timeout ? &*reading_ : nullptr;
-  const Reading next = unwrapReading(stamp, m, last);
-  const double max_speed = 1e5 * kTwoPi / 60.0;  // the bound of ~pinion_speed_rpm and of a measured velocity
-  if (!(std::abs(next.speed) <= max_speed)) {
-    throwInvalid("joint_states: pinion position", m.pinion_angle,
-                 "implies " + formatValue(next.speed) + " rad/s since the last reading (beyond +-1e5 rpm): an encoder "
-                 "jump, or readings too far apart to unwrap");
-  }
+  bool continuous = false;
+  PhaseSource::Reading accepted = phase_->unwrap(stamp, m, continuous);
   checkMotionTimeout(stamp, sink);
-  Reading accepted = next;
-  if (accepted.gear) {
-    const double residual = *accepted.gear + ratio() * accepted.pinion;
-    const double off = residual - *accepted.gear_reference;
-    if (std::abs(off) > options_.gear_ratio_tolerance) {
-      ++counters_.gear_ratio_mismatches;
-      counters_.last_event = "joint_states: the gear angle moved " + formatValue(off) +
-                             " rad off -(z_p/z_g) x the pinion angle (more than ~gear_ratio_tolerance): a slip, or a "
-                             "wrong ~pinion_joint/~gear_joint mapping";
-      accepted.gear_reference = residual;  // one report per slip; a wrong mapping keeps reporting
-    }
-  }
+  phase_->checkGearRatio(accepted);
   // Rule 10: the dynamics run up to this reading with the motion before it (after a gap, rule 4:
   // they stop, and the next torque input restarts them at the measured phase).
   if (dynamics_) stopAfterGap(stamp);
   advanceDynamicsTo(stamp, sink);
   // The first reading moves the mesh phase from the nominal count to the measured one (a jump):
   // the running block of mesh periods would count a period that never was.
-  if (!encoders_ && mesh_periods_) mesh_periods_->restart();
-  reading_ = accepted;
-  calibrate(stamp, accepted, last != nullptr, sink);
-  anchor_ = AngleAnchor{stamp, next.pinion + options_.mesh_phase_offset * kTwoPi / teeth(0), next.speed};
-  encoders_ = true;
+  if (!phase_->encodersDrive() && mesh_periods_) mesh_periods_->restart();
+  if (calibration_->calibrator() && accepted.gear) {
+    calibration_->reading(stamp, accepted.pinion, *accepted.gear, phase_->meshPhase(accepted.pinion), accepted.speed,
+                          held_torque_, continuous, sink);
+  }
+  phase_->anchorTo(accepted);
   followAnchor(stamp);
 }
 
-void RigPipeline::calibrate(Stamp stamp, const Reading& reading, bool continuous, PipelineSink& sink) {
-  if (!calibration_->calibrator() || !reading.gear) return;
-  const double turns = meshTurns(reading.pinion) + options_.mesh_phase_offset;
-  const double phase = turns - std::floor(turns);
-  calibration_->reading(stamp, reading.pinion, *reading.gear, phase, reading.speed, held_torque_, continuous, sink);
-}
-
-double RigPipeline::ratio() const { return static_cast<double>(teeth(0)) / teeth(1); }
-
-int RigPipeline::teeth(int shaft) const { return estimator_->mesh().geometry().spec().teeth[shaft]; }
-
-RigPipeline::Reading RigPipeline::unwrapReading(Stamp stamp, const MotionInput& m, const Reading* last) const {
-  // An angle is used modulo a turn only (exact for any finite double: std::remainder), so an
-  // encoder count of any size neither overflows the phase (z_p theta) nor loses the unwrapping.
-  // Unwrapped against the prediction from the last reading (an encoder may wrap at +-pi or 2 pi):
-  // exact while the shaft turns by less than pi beyond the prediction between two readings.
-  const double pinion_in = std::remainder(m.pinion_angle, kTwoPi);
-  Reading next;
-  next.stamp = stamp;
-  const double dt = last ? secondsBetween(stamp, last->stamp) : 0.0;
-  next.pinion = pinion_in;
-  if (last) next.pinion += kTwoPi * std::round((last->pinion + last->speed * dt - pinion_in) / kTwoPi);
-  if (m.pinion_velocity) {
-    next.speed = *m.pinion_velocity;
-  } else if (last && dt > 0.0) {
-    next.speed = (next.pinion - last->pinion) / dt;  // backward difference of the encoder angle
-  } else {
-    next.speed = last ? last->speed : 0.0;  // first reading without velocity: standing until the next
-  }
-  if (m.gear_angle) {
-    // Meshing gears: theta_g = -(z_p / z_g) theta_p + const (+ TE / r_b,g, micro-radians).
-    const double gear_in = std::remainder(*m.gear_angle, kTwoPi);
-    next.gear = gear_in;
-    if (last && last->gear) {
-      *next.gear += kTwoPi * std::round((*last->gear - ratio() * (next.pinion - last->pinion) - gear_in) / kTwoPi);
-    }
-    next.gear_reference = last && last->gear_reference ? last->gear_reference : std::optional<double>(*next.gear + ratio() * next.pinion);
-  }
-  return next;
-}
-
 void RigPipeline::checkMotionTimeout(Stamp stamp, PipelineSink& sink) {
-  if (!encoders_ || !reading_ || secondsBetween(stamp, reading_->stamp) <= options_.motion_timeout) return;
-  const Stamp at{reading_->stamp.ns + std::llround(options_.motion_timeout * 1e9)};
-  ++counters_.motion_timeouts;
-  counters_.last_event = "joint_states: none for ~motion_timeout = " + formatValue(options_.motion_timeout) +
-                         " s: the mesh phase runs at ~pinion_speed_rpm from there";
-  advanceDynamicsTo(at, sink);
-  anchor_ = AngleAnchor{at, pinionAngle(at), pinion_speed_};
-  encoders_ = false;
-  reading_.reset();  // a stale reading would unwrap the next one wrongly
-  followAnchor(at);
+  const std::optional<Stamp> at = phase_->encodersTimedOut(stamp);
+  if (!at) return;
+  advanceDynamicsTo(*at, sink);
+  phase_->fallBackToNominal(*at);
+  followAnchor(*at);
 }
 
 void RigPipeline::followAnchor(Stamp stamp) {
-  if (!dynamics_ || !dynamics_->started() || !anchor_) return;
+  if (!dynamics_ || !dynamics_->started() || !phase_->anchor()) return;
   try {
     // Another stream may have taken the dynamics past this stamp: the motion applies from there.
     const double t = std::max(secondsBetween(stamp, dynamics_epoch_), dynamics_->time());
     const Stamp at{dynamics_epoch_.ns + std::llround(t * 1e9)};
-    dynamics_->followMotion(t, meshTurns(pinionAngle(at)), meshTurns(anchor_->speed));
+    dynamics_->followMotion(t, phase_->meshTurns(phase_->pinionAngle(at)), phase_->meshTurns(phase_->anchor()->speed));
   } catch (const Error& e) {
     dynamicsError("dynamics", e);
   }
@@ -438,7 +355,7 @@ void RigPipeline::restartDynamics(Stamp stamp, double torque) {
   dynamics_->reset(0.0, torque);
   te_spectrum_->restart();  // a new window: no samples from before the restart
   mesh_periods_->restart();  // and no mesh periods
-  angle_origin_ = stamp;  // the stiffness message's mesh phase restarts with the dynamics
+  phase_->setOrigin(stamp);  // the stiffness message's mesh phase restarts with the dynamics
   followAnchor(stamp);    // measured motion: the dynamics start at the measured phase
 }
 

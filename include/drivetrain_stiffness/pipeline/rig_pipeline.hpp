@@ -71,6 +71,7 @@
 #include "drivetrain_stiffness/pipeline/calibration_stage.hpp"
 #include "drivetrain_stiffness/pipeline/mesh_period_stage.hpp"
 #include "drivetrain_stiffness/pipeline/pipeline_options.hpp"
+#include "drivetrain_stiffness/pipeline/phase_source.hpp"
 #include "drivetrain_stiffness/pipeline/pipeline_outputs.hpp"
 #include "drivetrain_stiffness/pipeline/refusal_tally.hpp"
 #include "drivetrain_stiffness/pipeline/resonance_tracker.hpp"
@@ -165,13 +166,10 @@ class RigPipeline {
   /// The new bearing stiffness from `stamp` on, then the resonance estimate.
   void pushStiffness(Stamp stamp, const StiffnessEstimate& estimate, PipelineSink& sink);
   void acceptMotion(Stamp stamp, const MotionInput& reading, PipelineSink& sink);
-  double ratio() const;          ///< z_p / z_g
-  int teeth(int shaft) const;
   /// Rule 9's fall-back when the last reading is older than ~motion_timeout at `stamp`.
   void checkMotionTimeout(Stamp stamp, PipelineSink& sink);
   /// The dynamics follow the pinion angle model (anchor) from `stamp` on.
   void followAnchor(Stamp stamp);
-  double meshTurns(double pinion_angle) const;
   /// Rule 4: an input more than ~max_gap after the dynamics' time stops them (counted); the next
   /// torque input restarts them.
   void stopAfterGap(Stamp stamp);
@@ -193,36 +191,17 @@ class RigPipeline {
   std::unique_ptr<MeshPeriodStage> mesh_periods_;  ///< with dynamics only
   std::unique_ptr<CalibrationStage> calibration_;
   std::unique_ptr<ResonanceTracker> resonance_;
+  std::unique_ptr<PhaseSource> phase_;
   PipelineCounters counters_;
   RefusalTally refusals_;
   SequenceGaps torque_seq_, preload_seq_, motion_seq_;
   std::optional<Stamp> last_motion_;
-  /// The pinion angle model: angle(stamp) = angle + speed (stamp - stamp) [rad, rad/s], offset included.
-  struct AngleAnchor {
-    Stamp stamp;
-    double angle = 0.0, speed = 0.0;
-  };
-  std::optional<AngleAnchor> anchor_;  ///< set by encoder readings (and their time-out); empty: nominal
-  bool encoders_ = false;              ///< the anchor comes from a reading (not a time-out)
-  /// The last reading, unwrapped, for the next one's unwrapping, differentiation and ratio check.
-  struct Reading {
-    Stamp stamp;
-    double pinion = 0.0, speed = 0.0;
-    std::optional<double> gear, gear_reference;
-  };
-  std::optional<Reading> reading_;
-  /// Rule 11 for an accepted reading; `continuous`: it follows the last one without a break.
-  void calibrate(Stamp stamp, const Reading& reading, bool continuous, PipelineSink& sink);
-  /// The reading unwrapped against `last` (null: none recent), its speed measured or differentiated.
-  Reading unwrapReading(Stamp stamp, const MotionInput& reading, const Reading* last) const;
   double held_torque_ = 0.0;
   std::optional<Stamp> last_torque_, last_preload_, last_clock_, last_stiffness_out_;
-  std::optional<Stamp> angle_origin_;
   bool stamps_restarted_ = false;  ///< rule 2 reset since the last clock jump (rule 5 then skips one)
   /// The dynamics run on seconds since this stamp (the last restart): at a 1.7e9 s epoch a double
   /// resolves only 2.4e-7 s, enough to put an input exactly on a grid point one sample short.
   Stamp dynamics_epoch_;
-  double pinion_speed_ = 0.0;  ///< [rad/s]
 };
 
 }  // namespace drivetrain_stiffness
