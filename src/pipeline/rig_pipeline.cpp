@@ -56,36 +56,28 @@ RigPipeline::RigPipeline(const RigConfig& rig, const PipelineOptions& options, c
   const auto& teeth = estimator_->mesh().geometry().spec().teeth;
   phase_ = std::make_unique<PhaseSource>(options_, teeth[0], teeth[1], counters_);
   if (options_.dynamics) {
-    dynamics_ = std::make_unique<DynamicsEstimator>(rig_, estimator_->shaftRadialStiffness(), options_.output_rate,
-                                                    estimator_->sharedMesh());
-    dynamics_->setFidelity(settings_.fidelity);
-    dynamics_->setMotionSlices(options_.motion_slices);
+    // The sample consumers, in the order each sample reaches them.
+    dynamics_ = std::make_unique<DynamicsStage>(rig_, *estimator_, options_, settings_.fidelity, *phase_, counters_);
+    te_output_ = std::make_unique<TeOutput>(*phase_, resonance_->last(), counters_);
     te_spectrum_ = std::make_unique<TeSpectrumStage>(options_.spectrum_window, options_.spectrum_hop,
-                                                     dynamics_->outputInterval(), counters_);
-    mesh_periods_ = std::make_unique<MeshPeriodStage>(*dynamics_, estimator_->mesh().geometry().baseRadius(0), counters_);
+                                                     dynamics_->model().outputInterval(), counters_);
+    mesh_periods_ = std::make_unique<MeshPeriodStage>(dynamics_->model(), estimator_->mesh().geometry().baseRadius(0),
+                                                      counters_);
+    dynamics_->addConsumer(*te_output_);
+    dynamics_->addConsumer(*te_spectrum_);
+    dynamics_->addConsumer(*mesh_periods_);
   }
 }
 
 void RigPipeline::reset(const std::string& reason) {
   estimator_->reset();
-  if (te_spectrum_) te_spectrum_->restart();
-  if (dynamics_) {
-    // The dynamics restart at the next torque input (their reset needs its time), with the bearing
-    // stiffness of the configured preloads: rebuilt only if it moved by more than 1 %, as always.
-    dynamics_->stop();
-    try {
-      dynamics_->setBearingStiffness(estimator_->shaftRadialStiffness());
-    } catch (const Error& e) {
-      dynamicsError("dynamics", e);
-    }
-  }
+  if (dynamics_) dynamics_->reset();
   last_torque_.reset();
   last_preload_.reset();
   last_motion_.reset();
   last_stiffness_out_.reset();
   phase_->reset();
   calibration_->interrupt();
-  if (mesh_periods_) mesh_periods_->restart();
   resonance_->forget();  // the next accepted input republishes the resonance
   counters_.last_event = "reset: " + reason;
 }
@@ -211,11 +203,8 @@ InputOutcome RigPipeline::torque(Stamp stamp, double torque, PipelineSink& sink,
         return &e;
       });
   if (outcome == InputOutcome::kAccepted) {
-    if (dynamics_) {
-      advanceDynamics(stamp, torque, sink);  // holds the torque once the dynamics reached its stamp
-    } else {
-      held_torque_ = torque;  // what the calibration (rule 11) pairs with the next readings
-    }
+    // What the calibration (rule 11) pairs with the next readings (kept when the torque restarted the dynamics).
+    if (!dynamics_ || dynamics_->takeTorque(stamp, torque, sink)) held_torque_ = torque;
   }
   return outcome;
 }
@@ -263,8 +252,10 @@ void RigPipeline::acceptMotion(Stamp stamp, const MotionInput& m, PipelineSink& 
   phase_->checkGearRatio(accepted);
   // Rule 10: the dynamics run up to this reading with the motion before it (after a gap, rule 4:
   // they stop, and the next torque input restarts them at the measured phase).
-  if (dynamics_) stopAfterGap(stamp);
-  advanceDynamicsTo(stamp, sink);
+  if (dynamics_) {
+    dynamics_->stopAfterGap(stamp);
+    dynamics_->advanceTo(stamp, sink);
+  }
   // The first reading moves the mesh phase from the nominal count to the measured one (a jump):
   // the running block of mesh periods would count a period that never was.
   if (!phase_->encodersDrive() && mesh_periods_) mesh_periods_->restart();
@@ -273,27 +264,15 @@ void RigPipeline::acceptMotion(Stamp stamp, const MotionInput& m, PipelineSink& 
                           held_torque_, continuous, sink);
   }
   phase_->anchorTo(accepted);
-  followAnchor(stamp);
+  if (dynamics_) dynamics_->followAnchor(stamp);
 }
 
 void RigPipeline::checkMotionTimeout(Stamp stamp, PipelineSink& sink) {
   const std::optional<Stamp> at = phase_->encodersTimedOut(stamp);
   if (!at) return;
-  advanceDynamicsTo(*at, sink);
+  if (dynamics_) dynamics_->advanceTo(*at, sink);
   phase_->fallBackToNominal(*at);
-  followAnchor(*at);
-}
-
-void RigPipeline::followAnchor(Stamp stamp) {
-  if (!dynamics_ || !dynamics_->started() || !phase_->anchor()) return;
-  try {
-    // Another stream may have taken the dynamics past this stamp: the motion applies from there.
-    const double t = std::max(secondsBetween(stamp, dynamics_epoch_), dynamics_->time());
-    const Stamp at{dynamics_epoch_.ns + std::llround(t * 1e9)};
-    dynamics_->followMotion(t, phase_->meshTurns(phase_->pinionAngle(at)), phase_->meshTurns(phase_->anchor()->speed));
-  } catch (const Error& e) {
-    dynamicsError("dynamics", e);
-  }
+  if (dynamics_) dynamics_->followAnchor(*at);
 }
 
 void RigPipeline::afterUpdate(Stamp stamp, const StiffnessEstimate& estimate, PipelineSink& sink) {
@@ -319,118 +298,11 @@ void RigPipeline::afterUpdate(Stamp stamp, const StiffnessEstimate& estimate, Pi
 
 void RigPipeline::pushStiffness(Stamp stamp, const StiffnessEstimate& estimate, PipelineSink& sink) {
   if (!dynamics_) return;
-  // Every accepted input hands the new bearing stiffness to the dynamics (taken up only when it
-  // moved by more than 1 %) at its own stamp (rule 10), then the resonance estimate is refreshed.
-  // After a gap (rule 4) the dynamics stop first and restart at the next torque input with it:
-  // the stiffness belongs after the gap, not at the last input before it.
-  stopAfterGap(stamp);
-  const bool advanced = advanceDynamicsTo(stamp, sink);
-  try {
-    std::optional<double> at;
-    if (dynamics_->started()) at = advanced ? secondsBetween(stamp, dynamics_epoch_) : dynamics_->time();
-    dynamics_->setBearingStiffness(estimator_->shaftRadialStiffness(), at);
-  } catch (const Error& e) {
-    dynamicsError("dynamics", e);
-  }
-  resonance_->update(stamp, estimate, {settings_.mesh_damping_ratio, settings_.bearing_damping_ratio}, *dynamics_, sink);
-}
-
-void RigPipeline::stopAfterGap(Stamp stamp) {
-  if (!dynamics_->started()) return;
-  const double gap = secondsBetween(stamp, dynamics_epoch_) - dynamics_->time();
-  if (!(gap > options_.max_gap)) return;
-  ++counters_.gap_restarts;
-  counters_.last_event = "input gap of " + formatValue(gap) + " s (more than ~max_gap): dynamics restarted";
-  dynamics_->stop();
-  mesh_periods_->restart();
-}
-
-void RigPipeline::dynamicsError(const std::string& where, const Error& e) {
-  ++counters_.dynamics_errors;
-  counters_.last_event = where + ": " + e.what();
-}
-
-void RigPipeline::restartDynamics(Stamp stamp, double torque) {
-  dynamics_epoch_ = stamp;
-  dynamics_->reset(0.0, torque);
-  te_spectrum_->restart();  // a new window: no samples from before the restart
-  mesh_periods_->restart();  // and no mesh periods
-  phase_->setOrigin(stamp);  // the stiffness message's mesh phase restarts with the dynamics
-  followAnchor(stamp);    // measured motion: the dynamics start at the measured phase
-}
-
-bool RigPipeline::advanceDynamicsTo(Stamp stamp, PipelineSink& sink) {
-  if (!dynamics_ || !dynamics_->started()) return false;
-  const double t = secondsBetween(stamp, dynamics_epoch_);
-  // Past it already (another stream), or a gap that rule 4 restarts at the next torque input.
-  if (t <= dynamics_->time() || t - dynamics_->time() > options_.max_gap) return false;
-  try {
-    emitUpTo(t, sink);
-  } catch (const Error& e) {
-    dynamicsError("dynamics (restarted at the next torque input)", e);
-    dynamics_->stop();
-    mesh_periods_->restart();
-    return false;
-  }
-  return true;
-}
-
-void RigPipeline::emitUpTo(double t, PipelineSink& sink) {
-  const double from = dynamics_->time();
-  // The motion is held over one advance: its mesh frequency unwraps the phase between samples.
-  // A member, not a capture: the lambda must stay within std::function's small buffer (two
-  // pointers), or every advance allocates (allocation_tests).
-  advance_mesh_frequency_ = dynamics_->meshFrequency();
-  // The time integrated counts whether the advance ends or throws (a throw passes on untouched).
-  struct CountSimulated {
-    const DynamicsEstimator& dynamics;
-    double from;
-    double& simulated;
-    ~CountSimulated() { simulated += dynamics.time() - from; }
-  } count{*dynamics_, from, counters_.simulated_s};
-  dynamics_->advanceTo(t, [&](const DynamicsSample& relative) {
-    DynamicsSample s = relative;
-    const Stamp sample_stamp{dynamics_epoch_.ns + std::llround(relative.t * 1e9)};
-    s.t = sample_stamp.toSec();
-    SampleContext context;
-    context.pinion_angle = encoderPinionAngle(sample_stamp);
-    context.resonance = resonance_->last() ? &*resonance_->last() : nullptr;
-    sink.transmissionError(sample_stamp, s, context);
-    ++counters_.te_out;
-    te_spectrum_->sample(sample_stamp, s, advance_mesh_frequency_, sink);
-    mesh_periods_->sample(sample_stamp, s, advance_mesh_frequency_, sink);
-  });
-}
-
-void RigPipeline::advanceDynamics(Stamp stamp, double torque, PipelineSink& sink) {
-  std::optional<double> at;  // the stamp on the dynamics' clock, once the dynamics run up to it
-  try {
-    // Rule 4: a paused rig restarts the model at this input instead of integrating the gap.
-    stopAfterGap(stamp);
-    if (!dynamics_->started()) {
-      restartDynamics(stamp, torque);
-      return;
-    }
-    const double t = secondsBetween(stamp, dynamics_epoch_);
-    // Else another stream took the dynamics past this stamp: the torque applies from there.
-    if (t > dynamics_->time()) emitUpTo(t, sink);
-    at = t;
-  } catch (const Error& e) {
-    // The state stays at its last good sample and every later input would fail the same way:
-    // restart the model here (counted), as after a gap.
-    dynamicsError("dynamics (restarted at this input)", e);
-    try {
-      restartDynamics(stamp, torque);
-    } catch (const Error& again) {
-      dynamicsError("dynamics", again);
-    }
-  }
-  held_torque_ = torque;
-  try {
-    dynamics_->setTorque(torque, at);  // the new torque holds from its stamp on, whatever happened above
-  } catch (const Error& e) {
-    dynamicsError("dynamics", e);
-  }
+  // Every accepted input hands the new bearing stiffness to the dynamics at its own stamp (rule
+  // 10; after a gap, rule 4, they stop first), then the resonance estimate is refreshed.
+  dynamics_->takeBearingStiffness(stamp, sink);
+  const DampingRatios damping{settings_.mesh_damping_ratio, settings_.bearing_damping_ratio};
+  resonance_->update(stamp, estimate, damping, dynamics_->model(), sink);
 }
 
 void RigPipeline::apply(const RuntimeSettings& settings) {
@@ -439,13 +311,13 @@ void RigPipeline::apply(const RuntimeSettings& settings) {
                                settings.bearing_damping_ratio != settings_.bearing_damping_ratio;
   settings_ = settings;
   if (damping_changed) {
-    if (dynamics_) dynamics_->setDamping(settings.mesh_damping_ratio, settings.bearing_damping_ratio);
+    if (dynamics_) dynamics_->model().setDamping(settings.mesh_damping_ratio, settings.bearing_damping_ratio);
     resonance_->forget();  // damped frequencies and ratios changed: republish at the next input
   }
   if (dynamics_) {
     // The mesh-force estimator depends on the fidelity (MeshPeriodStatistics): a block spans one.
-    if (dynamics_->fidelity() != settings.fidelity) mesh_periods_->restart();
-    dynamics_->setFidelity(settings.fidelity);
+    if (dynamics_->model().fidelity() != settings.fidelity) mesh_periods_->restart();
+    dynamics_->model().setFidelity(settings.fidelity);
   }
 }
 

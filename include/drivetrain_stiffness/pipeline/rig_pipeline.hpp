@@ -69,6 +69,7 @@
 #include "drivetrain_stiffness/core/stiffness_estimator.hpp"
 #include "drivetrain_stiffness/pipeline/input_types.hpp"
 #include "drivetrain_stiffness/pipeline/calibration_stage.hpp"
+#include "drivetrain_stiffness/pipeline/dynamics_stage.hpp"
 #include "drivetrain_stiffness/pipeline/mesh_period_stage.hpp"
 #include "drivetrain_stiffness/pipeline/pipeline_options.hpp"
 #include "drivetrain_stiffness/pipeline/phase_source.hpp"
@@ -77,6 +78,7 @@
 #include "drivetrain_stiffness/pipeline/resonance_tracker.hpp"
 #include "drivetrain_stiffness/pipeline/runtime_settings.hpp"
 #include "drivetrain_stiffness/pipeline/sequence_gaps.hpp"
+#include "drivetrain_stiffness/pipeline/te_output.hpp"
 #include "drivetrain_stiffness/pipeline/te_spectrum_stage.hpp"
 #include "drivetrain_stiffness/spectral/sliding_spectrum.hpp"
 
@@ -128,7 +130,7 @@ class RigPipeline {
   const RefusalTally& refusals() const { return refusals_; }
   const PipelineOptions& options() const { return options_; }
   const StiffnessEstimator& estimator() const { return *estimator_; }
-  const DynamicsEstimator* dynamics() const { return dynamics_.get(); }
+  const DynamicsEstimator* dynamics() const { return dynamics_ ? &dynamics_->model() : nullptr; }
   /// The live calibration (rule 11), or null without a calibration block or with ~calibrate off.
   const Calibrator* calibrator() const { return calibration_->calibrator(); }
   /// The rig as the pipeline runs it (shared read only with the estimator, the dynamics and the
@@ -157,41 +159,23 @@ class RigPipeline {
   InputOutcome apply(InputStream stream, Stamp stamp, std::optional<Stamp>& last, std::uint64_t& accepted,
                      std::uint64_t& rejected, PipelineSink& sink, Validate validate, Update update);
   void afterUpdate(Stamp stamp, const StiffnessEstimate& estimate, PipelineSink& sink);
-  void advanceDynamics(Stamp stamp, double torque, PipelineSink& sink);
-  /// Integrates the dynamics up to `stamp` (rule 10) with what is held; false if not running or
-  /// already past it.
-  bool advanceDynamicsTo(Stamp stamp, PipelineSink& sink);
-  /// advanceTo(t) handing each sample to the sink and the TE spectrum (throws what advanceTo throws).
-  void emitUpTo(double t, PipelineSink& sink);
   /// The new bearing stiffness from `stamp` on, then the resonance estimate.
   void pushStiffness(Stamp stamp, const StiffnessEstimate& estimate, PipelineSink& sink);
   void acceptMotion(Stamp stamp, const MotionInput& reading, PipelineSink& sink);
   /// Rule 9's fall-back when the last reading is older than ~motion_timeout at `stamp`.
   void checkMotionTimeout(Stamp stamp, PipelineSink& sink);
-  /// The dynamics follow the pinion angle model (anchor) from `stamp` on.
-  void followAnchor(Stamp stamp);
-  /// Rule 4: an input more than ~max_gap after the dynamics' time stops them (counted); the next
-  /// torque input restarts them.
-  void stopAfterGap(Stamp stamp);
-  /// Dynamics at static equilibrium under `torque` from `stamp` on (new epoch, empty spectrum).
-  void restartDynamics(Stamp stamp, double torque);
-  /// A failure of the dynamics or the resonance on the library's own error (errors.hpp): counted
-  /// in dynamics_errors with `where` and the reason in last_event. Nothing wider is caught: a
-  /// programming error leaves the pipeline.
-  void dynamicsError(const std::string& where, const Error& e);
-
-  double advance_mesh_frequency_ = 0.0;  ///< [Hz] the dynamics' during the current emitUpTo
 
   std::shared_ptr<const RigConfig> rig_;  ///< first: the members below share it
   PipelineOptions options_;
   RuntimeSettings settings_;
   std::unique_ptr<StiffnessEstimator> estimator_;
-  std::unique_ptr<DynamicsEstimator> dynamics_;
-  std::unique_ptr<TeSpectrumStage> te_spectrum_;  ///< with dynamics only
-  std::unique_ptr<MeshPeriodStage> mesh_periods_;  ///< with dynamics only
   std::unique_ptr<CalibrationStage> calibration_;
   std::unique_ptr<ResonanceTracker> resonance_;
   std::unique_ptr<PhaseSource> phase_;
+  std::unique_ptr<DynamicsStage> dynamics_;  ///< null without ~dynamics, as the three consumers below
+  std::unique_ptr<TeOutput> te_output_;
+  std::unique_ptr<TeSpectrumStage> te_spectrum_;
+  std::unique_ptr<MeshPeriodStage> mesh_periods_;
   PipelineCounters counters_;
   RefusalTally refusals_;
   SequenceGaps torque_seq_, preload_seq_, motion_seq_;
@@ -199,9 +183,6 @@ class RigPipeline {
   double held_torque_ = 0.0;
   std::optional<Stamp> last_torque_, last_preload_, last_clock_, last_stiffness_out_;
   bool stamps_restarted_ = false;  ///< rule 2 reset since the last clock jump (rule 5 then skips one)
-  /// The dynamics run on seconds since this stamp (the last restart): at a 1.7e9 s epoch a double
-  /// resolves only 2.4e-7 s, enough to put an input exactly on a grid point one sample short.
-  Stamp dynamics_epoch_;
 };
 
 }  // namespace drivetrain_stiffness
