@@ -1,28 +1,9 @@
 #include "drivetrain_stiffness/pipeline/rig_pipeline.hpp"
 
-#include <algorithm>
-#include <cmath>
-
-#include "drivetrain_stiffness/core/constants.hpp"
 #include "drivetrain_stiffness/core/rig_model.hpp"
 #include "drivetrain_stiffness/core/validation.hpp"
 
 namespace drivetrain_stiffness {
-const char* toString(InputOutcome outcome) {
-  switch (outcome) {
-    case InputOutcome::kAccepted: return "accepted";
-    case InputOutcome::kZeroStamp: return "zero stamp";
-    case InputOutcome::kOutOfOrder: return "out of order";
-    case InputOutcome::kInvalidValue: return "invalid value";
-    case InputOutcome::kUnreachableLoad: return "unreachable load";
-    case InputOutcome::kWrongFrame: return "wrong frame";
-    case InputOutcome::kStampRange: return "stamp outside ROS time";
-  }
-  return "?";
-}
-
-RigPipeline::RigPipeline(const RigConfig& rig, const PipelineOptions& options)
-    : RigPipeline(rig, options, RuntimeSettings::forRig(rig)) {}
 
 namespace {
 /// The rig as the pipeline runs it, built once and shared read only by the stiffness estimator, the
@@ -46,23 +27,27 @@ std::shared_ptr<const RigConfig> runningRig(const RigConfig& gearbox, const Pipe
 }
 }  // namespace
 
+RigPipeline::RigPipeline(const RigConfig& rig, const PipelineOptions& options)
+    : RigPipeline(rig, options, RuntimeSettings::forRig(rig)) {}
+
 RigPipeline::RigPipeline(const RigConfig& rig, const PipelineOptions& options, const RuntimeSettings& settings)
     : rig_(runningRig(rig, options, settings)), options_(options), settings_(settings) {
-  estimator_ = std::make_unique<StiffnessEstimator>(rig_, options_.limits);
+  gate_ = std::make_unique<InputGate>(options_, counters_);
   // One mesh table for the rig: the stiffness estimator's, shared read only with the dynamics and
   // the calibration.
+  estimator_ = std::make_unique<StiffnessEstimator>(rig_, options_.limits);
   calibration_ = std::make_unique<CalibrationStage>(rig_, *estimator_, options_.calibrate, counters_);
   resonance_ = std::make_unique<ResonanceTracker>(*rig_, *estimator_, *calibration_, options_.resonance_threshold, counters_);
   const auto& teeth = estimator_->mesh().geometry().spec().teeth;
   phase_ = std::make_unique<PhaseSource>(options_, teeth[0], teeth[1], counters_);
   if (options_.dynamics) {
-    // The sample consumers, in the order each sample reaches them.
     dynamics_ = std::make_unique<DynamicsStage>(rig_, *estimator_, options_, settings_.fidelity, *phase_, counters_);
     te_output_ = std::make_unique<TeOutput>(*phase_, resonance_->last(), counters_);
     te_spectrum_ = std::make_unique<TeSpectrumStage>(options_.spectrum_window, options_.spectrum_hop,
                                                      dynamics_->model().outputInterval(), counters_);
     mesh_periods_ = std::make_unique<MeshPeriodStage>(dynamics_->model(), estimator_->mesh().geometry().baseRadius(0),
                                                       counters_);
+    // The order in which each sample reaches them (and so the sink's calls).
     dynamics_->addConsumer(*te_output_);
     dynamics_->addConsumer(*te_spectrum_);
     dynamics_->addConsumer(*mesh_periods_);
@@ -72,9 +57,7 @@ RigPipeline::RigPipeline(const RigConfig& rig, const PipelineOptions& options, c
 void RigPipeline::reset(const std::string& reason) {
   estimator_->reset();
   if (dynamics_) dynamics_->reset();
-  last_torque_.reset();
-  last_preload_.reset();
-  last_motion_.reset();
+  gate_->forgetStamps();
   last_stiffness_out_.reset();
   phase_->reset();
   calibration_->interrupt();
@@ -83,51 +66,9 @@ void RigPipeline::reset(const std::string& reason) {
 }
 
 bool RigPipeline::observeClock(Stamp now, PipelineSink& /*sink*/) {
-  // A looping bag's first messages can arrive before its /clock jump (separate connections, and
-  // /clock lags by up to its period): if the stamps already restarted (rule 2) since the last jump,
-  // that jump is the same restart; it is not reset a second time.
-  bool back = last_clock_ && secondsBetween(*last_clock_, now) > options_.clock_jump_back;
-  if (back && stamps_restarted_) {
-    stamps_restarted_ = false;
-    back = false;
-  }
-  if (back) {
-    ++counters_.clock_resets;
-    reset("clock went back from " + formatValue(last_clock_->toSec()) + " s to " + formatValue(now.toSec()) + " s");
-  }
-  last_clock_ = now;
-  return back;
-}
-
-InputOutcome RigPipeline::reject(InputOutcome why, InputStream stream, Stamp stamp, const std::string& reason,
-                                 std::uint64_t& rejected, std::string_view found) {
-  ++rejected;
-  refusals_.record(stream, why, stamp, reason, found);
-  switch (why) {
-    case InputOutcome::kZeroStamp: ++counters_.zero_stamps; break;
-    case InputOutcome::kOutOfOrder: ++counters_.out_of_order; break;
-    case InputOutcome::kInvalidValue: ++counters_.invalid_values; break;
-    case InputOutcome::kUnreachableLoad: ++counters_.unreachable_loads; break;
-    case InputOutcome::kWrongFrame: ++counters_.wrong_frames; break;
-    case InputOutcome::kStampRange: ++counters_.stamps_out_of_range; break;
-    case InputOutcome::kAccepted: break;
-  }
-  counters_.last_event = std::string(toString(stream)) + " rejected (" + toString(why) + "): " + reason;
-  return why;
-}
-
-InputOutcome RigPipeline::checkStamp(Stamp stamp, std::optional<Stamp>& last, InputStream stream,
-                                     PipelineSink& /*sink*/) {
-  if (stamp.isZero()) return InputOutcome::kZeroStamp;
-  if (!stamp.inRosRange()) return InputOutcome::kStampRange;  // rule 7
-  if (last && stamp < *last) {
-    const double back = secondsBetween(*last, stamp);
-    if (back <= options_.stamp_jump_back) return InputOutcome::kOutOfOrder;
-    ++counters_.stamp_resets;
-    stamps_restarted_ = true;
-    reset(std::string(toString(stream)) + " stamp went back by " + formatValue(back) + " s (more than ~stamp_jump_back): source restarted");
-  }
-  return InputOutcome::kAccepted;
+  const std::optional<std::string> jumped = gate_->observeClock(now);  // the clock-jump rule
+  if (jumped) reset(*jumped);
+  return jumped.has_value();
 }
 
 double RigPipeline::pinionAngle(Stamp stamp) const { return phase_->pinionAngle(stamp); }
@@ -139,52 +80,40 @@ std::optional<double> RigPipeline::encoderSilence(Stamp now) const { return phas
 const char* RigPipeline::phaseSource() const { return phase_->name(); }
 
 template <typename Validate, typename Update>
-InputOutcome RigPipeline::apply(InputStream stream, Stamp stamp, std::optional<Stamp>& last, std::uint64_t& accepted,
-                                std::uint64_t& rejected, PipelineSink& sink, Validate validate, Update update) {
-  // Values first: a bad value must not trigger a stamp-rule reset before it is refused.
+InputOutcome RigPipeline::take(InputStream stream, Stamp stamp, PipelineSink& sink, Validate validate, Update update) {
+  // Values first: a bad value must not trigger a source-restart reset before it is refused.
   try {
     validate();
   } catch (const InvalidInput& e) {
-    return reject(InputOutcome::kInvalidValue, stream, stamp, e.what(), rejected);
+    return gate_->reject(InputOutcome::kInvalidValue, stream, stamp, e.what());
   }
-  const InputOutcome time_ok = checkStamp(stamp, last, stream, sink);
+  const InputOutcome time_ok = gate_->checkStamp(stream, stamp);
   if (time_ok != InputOutcome::kAccepted) {
-    return reject(time_ok, stream, stamp, "stamp " + formatValue(stamp.toSec()) + " s", rejected);
+    return gate_->reject(time_ok, stream, stamp, "stamp " + formatValue(stamp.toSec()) + " s");
   }
+  if (const std::optional<std::string> restarted = gate_->noteSourceRestart(stream, stamp)) reset(*restarted);
   const StiffnessEstimate* estimate = nullptr;
   try {
     // Transactional: throws without changing the state. No estimate: a shed input (no stiffness update).
     estimate = update();
   } catch (const InvalidInput& e) {
-    return reject(InputOutcome::kInvalidValue, stream, stamp, e.what(), rejected);
+    return gate_->reject(InputOutcome::kInvalidValue, stream, stamp, e.what());
   } catch (const UnreachableLoad& e) {
-    return reject(InputOutcome::kUnreachableLoad, stream, stamp, e.what(), rejected);
+    return gate_->reject(InputOutcome::kUnreachableLoad, stream, stamp, e.what());
   }
   // Taken: whatever becomes of its outputs (each guarded and counted on its own) the input is
   // counted accepted once and never also rejected.
-  ++accepted;
-  last = stamp;
+  gate_->accept(stream, stamp);
   if (estimate) afterUpdate(stamp, *estimate, sink);
   return InputOutcome::kAccepted;
 }
 
 InputOutcome RigPipeline::torque(Stamp stamp, double torque, PipelineSink& sink, const InputOrigin& origin,
                                  Backlog backlog) {
-  counters_.dropped_torque += torque_seq_.observe(origin.publisher, origin.seq);
-  if (!options_.torque_frame.empty()) {
-    // tf2 strips a leading '/' (ROS 1 frame ids may still carry one).
-    const std::string_view frame = !origin.frame_id.empty() && origin.frame_id.front() == '/' ? origin.frame_id.substr(1)
-                                                                                               : origin.frame_id;
-    if (frame != options_.torque_frame) {
-      return reject(InputOutcome::kWrongFrame, InputStream::kTorque, stamp,
-                    "header.frame_id = '" + printableText(origin.frame_id) + "', expected ~torque_frame = '" +
-                        options_.torque_frame + "' (the sign of torque.z selects the loaded flank)",
-                    counters_.rejected_torque, origin.frame_id);
-    }
-  }
-  const InputOutcome outcome = apply(
-      InputStream::kTorque, stamp, last_torque_, counters_.accepted_torque, counters_.rejected_torque, sink,
-      [&] { estimator_->validateTorque(torque); },
+  gate_->countDrops(InputStream::kTorque, origin);
+  if (gate_->checkFrame(stamp, origin) != InputOutcome::kAccepted) return InputOutcome::kWrongFrame;
+  const InputOutcome outcome = take(
+      InputStream::kTorque, stamp, sink, [&] { estimator_->validateTorque(torque); },
       [&]() -> const StiffnessEstimate* {
         // The mesh phase counts from the first torque input after a (re)start, as the dynamics do;
         // the origin is kept only if the input is accepted.
@@ -197,51 +126,38 @@ InputOutcome RigPipeline::torque(Stamp stamp, double torque, PipelineSink& sink,
           ++counters_.stiffness_shed;
           return nullptr;
         }
-        const double angle = phase_->stiffnessAngle(stamp, origin_stamp);
-        const StiffnessEstimate& e = estimator_->setTorque(torque, angle);
+        const StiffnessEstimate& e = estimator_->setTorque(torque, phase_->stiffnessAngle(stamp, origin_stamp));
         phase_->setOrigin(origin_stamp);
         return &e;
       });
-  if (outcome == InputOutcome::kAccepted) {
-    // What the calibration (rule 11) pairs with the next readings (kept when the torque restarted the dynamics).
-    if (!dynamics_ || dynamics_->takeTorque(stamp, torque, sink)) held_torque_ = torque;
+  // The torque the calibration pairs the next readings with (kept as it was when this one restarted
+  // the dynamics: what the pipeline has always done).
+  if (outcome == InputOutcome::kAccepted && (!dynamics_ || dynamics_->takeTorque(stamp, torque, sink))) {
+    held_torque_ = torque;
   }
   return outcome;
 }
 
 InputOutcome RigPipeline::preload(Stamp stamp, const std::vector<PreloadSetting>& settings, PipelineSink& sink,
                                   const InputOrigin& origin) {
-  counters_.dropped_preload += preload_seq_.observe(origin.publisher, origin.seq);
-  return apply(InputStream::kPreload, stamp, last_preload_, counters_.accepted_preload, counters_.rejected_preload, sink,
-               [&] { estimator_->validatePreloads(settings); },
-               [&]() -> const StiffnessEstimate* { return &estimator_->setPreloads(settings); });
+  gate_->countDrops(InputStream::kPreload, origin);
+  return take(InputStream::kPreload, stamp, sink, [&] { estimator_->validatePreloads(settings); },
+              [&]() -> const StiffnessEstimate* { return &estimator_->setPreloads(settings); });
 }
 
 InputOutcome RigPipeline::motion(Stamp stamp, const MotionInput& reading, PipelineSink& sink, const InputOrigin& origin) {
-  counters_.dropped_motion += motion_seq_.observe(origin.publisher, origin.seq);
-  return apply(
-      InputStream::kJointStates, stamp, last_motion_, counters_.accepted_motion, counters_.rejected_motion, sink,
-      [&] {
-        requireFinite("joint_states: pinion position", reading.pinion_angle);
-        if (reading.pinion_velocity) {
-          requireFinite("joint_states: pinion velocity", *reading.pinion_velocity);
-          // The same bound as ~pinion_speed_rpm: +-1e5 rpm.
-          if (std::abs(*reading.pinion_velocity) > 1e5 * kTwoPi / 60.0) {
-            throwInvalid("joint_states: pinion velocity", *reading.pinion_velocity, "beyond +-1e5 rpm (10472 rad/s)");
-          }
-        }
-        if (reading.gear_angle) requireFinite("joint_states: gear position", *reading.gear_angle);
-      },
-      [&]() -> const StiffnessEstimate* {
-        acceptMotion(stamp, reading, sink);
-        return nullptr;  // no stiffness message: the estimate has not changed
-      });
+  gate_->countDrops(InputStream::kJointStates, origin);
+  return take(InputStream::kJointStates, stamp, sink, [&] { InputGate::validateReading(reading); },
+              [&]() -> const StiffnessEstimate* {
+                acceptMotion(stamp, reading, sink);
+                return nullptr;  // no stiffness message: the estimate has not changed
+              });
 }
 
 InputOutcome RigPipeline::motionRefused(Stamp stamp, const std::string& reason, const InputOrigin& origin,
                                         std::string_view found) {
-  counters_.dropped_motion += motion_seq_.observe(origin.publisher, origin.seq);
-  return reject(InputOutcome::kInvalidValue, InputStream::kJointStates, stamp, reason, counters_.rejected_motion, found);
+  gate_->countDrops(InputStream::kJointStates, origin);
+  return gate_->reject(InputOutcome::kInvalidValue, InputStream::kJointStates, stamp, reason, found);
 }
 
 void RigPipeline::acceptMotion(Stamp stamp, const MotionInput& m, PipelineSink& sink) {
@@ -250,8 +166,8 @@ void RigPipeline::acceptMotion(Stamp stamp, const MotionInput& m, PipelineSink& 
   PhaseSource::Reading accepted = phase_->unwrap(stamp, m, continuous);
   checkMotionTimeout(stamp, sink);
   phase_->checkGearRatio(accepted);
-  // Rule 10: the dynamics run up to this reading with the motion before it (after a gap, rule 4:
-  // they stop, and the next torque input restarts them at the measured phase).
+  // The own-stamp rule: the dynamics run up to this reading with the motion before it (the gap
+  // rule: they stop, and the next torque input restarts them at the measured phase).
   if (dynamics_) {
     dynamics_->stopAfterGap(stamp);
     dynamics_->advanceTo(stamp, sink);
@@ -259,7 +175,7 @@ void RigPipeline::acceptMotion(Stamp stamp, const MotionInput& m, PipelineSink& 
   // The first reading moves the mesh phase from the nominal count to the measured one (a jump):
   // the running block of mesh periods would count a period that never was.
   if (!phase_->encodersDrive() && mesh_periods_) mesh_periods_->restart();
-  if (calibration_->calibrator() && accepted.gear) {
+  if (calibration_->calibrator() && accepted.gear) {  // the calibration rule
     calibration_->reading(stamp, accepted.pinion, *accepted.gear, phase_->meshPhase(accepted.pinion), accepted.speed,
                           held_torque_, continuous, sink);
   }
@@ -298,8 +214,8 @@ void RigPipeline::afterUpdate(Stamp stamp, const StiffnessEstimate& estimate, Pi
 
 void RigPipeline::pushStiffness(Stamp stamp, const StiffnessEstimate& estimate, PipelineSink& sink) {
   if (!dynamics_) return;
-  // Every accepted input hands the new bearing stiffness to the dynamics at its own stamp (rule
-  // 10; after a gap, rule 4, they stop first), then the resonance estimate is refreshed.
+  // Every accepted input hands the new bearing stiffness to the dynamics at its own stamp (after a
+  // gap they stop first), then the resonance estimate is refreshed.
   dynamics_->takeBearingStiffness(stamp, sink);
   const DampingRatios damping{settings_.mesh_damping_ratio, settings_.bearing_damping_ratio};
   resonance_->update(stamp, estimate, damping, dynamics_->model(), sink);
