@@ -1,88 +1,9 @@
 #include "drivetrain_stiffness/pipeline/rig_pipeline.hpp"
 
-#include <algorithm>
-#include <cmath>
-
-#include "drivetrain_stiffness/core/constants.hpp"
 #include "drivetrain_stiffness/core/rig_model.hpp"
 #include "drivetrain_stiffness/core/validation.hpp"
 
 namespace drivetrain_stiffness {
-const char* toString(InputOutcome outcome) {
-  switch (outcome) {
-    case InputOutcome::kAccepted: return "accepted";
-    case InputOutcome::kZeroStamp: return "zero stamp";
-    case InputOutcome::kOutOfOrder: return "out of order";
-    case InputOutcome::kInvalidValue: return "invalid value";
-    case InputOutcome::kUnreachableLoad: return "unreachable load";
-    case InputOutcome::kWrongFrame: return "wrong frame";
-    case InputOutcome::kStampRange: return "stamp outside ROS time";
-  }
-  return "?";
-}
-
-std::vector<std::pair<std::string, std::uint64_t>> namedCounters(const PipelineCounters& c) {
-  return {{"accepted_torque", c.accepted_torque},         {"rejected_torque", c.rejected_torque},
-          {"accepted_preload", c.accepted_preload},       {"rejected_preload", c.rejected_preload},
-          {"rejected_zero_stamp", c.zero_stamps},         {"rejected_out_of_order", c.out_of_order},
-          {"rejected_invalid_value", c.invalid_values},   {"unreachable_loads", c.unreachable_loads},
-          {"rejected_wrong_frame", c.wrong_frames},       {"rejected_stamp_range", c.stamps_out_of_range},
-          {"dropped_torque", c.dropped_torque},           {"dropped_preload", c.dropped_preload},
-          {"accepted_joint_states", c.accepted_motion},   {"rejected_joint_states", c.rejected_motion},
-          {"dropped_joint_states", c.dropped_motion},     {"motion_timeouts", c.motion_timeouts},
-          {"gear_ratio_mismatches", c.gear_ratio_mismatches},
-          {"stiffness_shed", c.stiffness_shed},
-          {"clock_jump_resets", c.clock_resets},          {"stamp_jump_resets", c.stamp_resets},
-          {"gap_restarts", c.gap_restarts},               {"dynamics_errors", c.dynamics_errors},
-          {"stiffness_published", c.stiffness_out},       {"stiffness_coalesced", c.stiffness_coalesced},
-          {"stiffness_refused", c.stiffness_refused},
-          {"transmission_error_published", c.te_out},     {"te_spectra_published", c.spectra_out},
-          {"resonance_published", c.resonance_out},       {"modal_updates", c.modal_updates},
-          {"measured_te_published", c.measured_te_out},   {"calibration_published", c.calibration_out},
-          {"calibration_errors", c.calibration_errors},   {"mesh_period_stats_published", c.mesh_period_stats_out}};
-}
-
-void PipelineOptions::validate() const {
-  limits.validate("bearing_load_tolerance");  // StiffnessEstimator's rules, under the parameter's name
-  requirePositive("output_rate", output_rate);
-  if (output_rate > 1e6) throw InvalidInput("output_rate = " + formatValue(output_rate) + ": must be <= 1e6 Hz");
-  requirePositive("max_gap", max_gap);
-  if (max_gap * output_rate > DynamicsEstimator::kMaxSamplesPerAdvance) {
-    throw InvalidInput("max_gap = " + formatValue(max_gap) + ": max_gap * output_rate must be <= 1e7 samples");
-  }
-  requireNonNegative("stamp_jump_back", stamp_jump_back);
-  requireNonNegative("clock_jump_back", clock_jump_back);
-  requirePositive("resonance_threshold", resonance_threshold);
-  if (resonance_threshold >= 1.0) {
-    throw InvalidInput("resonance_threshold = " + formatValue(resonance_threshold) + ": must be < 1 (relative)");
-  }
-  if (spectrum_window < 8 || spectrum_window > (1 << 20)) {
-    throw InvalidInput("spectrum_window = " + std::to_string(spectrum_window) + ": must be in [8, 1048576] samples");
-  }
-  if (spectrum_hop < 1 || spectrum_hop > spectrum_window) {
-    throw InvalidInput("spectrum_hop = " + std::to_string(spectrum_hop) + ": must be in [1, spectrum_window]");
-  }
-  requireFinite("pinion_speed_rpm", pinion_speed_rpm);
-  if (std::abs(pinion_speed_rpm) > 1e5) {
-    throw InvalidInput("pinion_speed_rpm = " + formatValue(pinion_speed_rpm) + ": must be within +-1e5 rpm");
-  }
-  requireFinite("mesh_phase_offset", mesh_phase_offset);
-  if (!(mesh_phase_offset >= 0.0 && mesh_phase_offset < 1.0)) {
-    throw InvalidInput("mesh_phase_offset = " + formatValue(mesh_phase_offset) + ": must be in [0, 1) (a fraction of a mesh period)");
-  }
-  requirePositive("motion_timeout", motion_timeout);
-  if (motion_timeout > 3600.0) throw InvalidInput("motion_timeout = " + formatValue(motion_timeout) + ": must be <= 3600 s");
-  requirePositive("gear_ratio_tolerance", gear_ratio_tolerance);
-  if (motion_slices < 4 || motion_slices > 65536) {
-    throw InvalidInput("motion_slices = " + std::to_string(motion_slices) + ": must be in [4, 65536] per mesh period");
-  }
-  if (!torque_frame.empty() && torque_frame.front() == '/') {
-    throw InvalidInput("torque_frame = '" + torque_frame + "': a frame id without a leading '/' (or empty: any frame)");
-  }
-}
-
-RigPipeline::RigPipeline(const RigConfig& rig, const PipelineOptions& options)
-    : RigPipeline(rig, options, RuntimeSettings::forRig(rig)) {}
 
 namespace {
 /// The rig as the pipeline runs it, built once and shared read only by the stiffness estimator, the
@@ -106,358 +27,168 @@ std::shared_ptr<const RigConfig> runningRig(const RigConfig& gearbox, const Pipe
 }
 }  // namespace
 
+RigPipeline::RigPipeline(const RigConfig& rig, const PipelineOptions& options)
+    : RigPipeline(rig, options, RuntimeSettings::forRig(rig)) {}
+
 RigPipeline::RigPipeline(const RigConfig& rig, const PipelineOptions& options, const RuntimeSettings& settings)
     : rig_(runningRig(rig, options, settings)), options_(options), settings_(settings) {
-  estimator_ = std::make_unique<StiffnessEstimator>(rig_, options_.limits);
+  gate_ = std::make_unique<InputGate>(options_, counters_);
   // One mesh table for the rig: the stiffness estimator's, shared read only with the dynamics and
   // the calibration.
-  if (options_.calibrate && rig_->calibration.present && rig_->dynamics.present) {
-    calibrator_ = std::make_unique<Calibrator>(rig_, estimator_->sharedMesh());
-  }
-  pinion_speed_ = options_.pinion_speed_rpm * kTwoPi / 60.0;
+  estimator_ = std::make_unique<StiffnessEstimator>(rig_, options_.limits);
+  calibration_ = std::make_unique<CalibrationStage>(rig_, *estimator_, options_.calibrate, counters_);
+  resonance_ = std::make_unique<ResonanceTracker>(*rig_, *estimator_, *calibration_, options_.resonance_threshold, counters_);
+  const auto& teeth = estimator_->mesh().geometry().spec().teeth;
+  phase_ = std::make_unique<PhaseSource>(options_, teeth[0], teeth[1], counters_);
   if (options_.dynamics) {
-    dynamics_ = std::make_unique<DynamicsEstimator>(rig_, estimator_->shaftRadialStiffness(), options_.output_rate,
-                                                    estimator_->sharedMesh());
-    dynamics_->setFidelity(settings_.fidelity);
-    dynamics_->setMotionSlices(options_.motion_slices);
-    te_spectrum_ = std::make_unique<SlidingSpectrum>(options_.spectrum_window, options_.spectrum_hop,
-                                                     dynamics_->outputInterval(), SpectrumPeaks::kMaxPeaks);
+    dynamics_ = std::make_unique<DynamicsStage>(rig_, *estimator_, options_, settings_.fidelity, *phase_, counters_);
+    te_output_ = std::make_unique<TeOutput>(*phase_, resonance_->last(), counters_);
+    te_spectrum_ = std::make_unique<TeSpectrumStage>(options_.spectrum_window, options_.spectrum_hop,
+                                                     dynamics_->model().outputInterval(), counters_);
+    mesh_periods_ = std::make_unique<MeshPeriodStage>(dynamics_->model(), estimator_->mesh().geometry().baseRadius(0),
+                                                      counters_);
+    // The order in which each sample reaches them (and so the sink's calls).
+    dynamics_->addConsumer(*te_output_);
+    dynamics_->addConsumer(*te_spectrum_);
+    dynamics_->addConsumer(*mesh_periods_);
   }
 }
 
 void RigPipeline::reset(const std::string& reason) {
   estimator_->reset();
-  if (te_spectrum_) te_spectrum_->reset();
-  if (dynamics_) {
-    // The dynamics restart at the next torque input (their reset needs its time), with the bearing
-    // stiffness of the configured preloads: rebuilt only if it moved by more than 1 %, as always.
-    dynamics_->stop();
-    try {
-      dynamics_->setBearingStiffness(estimator_->shaftRadialStiffness());
-    } catch (const Error& e) {
-      dynamicsError("dynamics", e);
-    }
-  }
-  last_torque_.reset();
-  last_preload_.reset();
-  last_motion_.reset();
+  if (dynamics_) dynamics_->reset();
+  gate_->forgetStamps();
   last_stiffness_out_.reset();
-  angle_origin_.reset();
-  anchor_.reset();
-  reading_.reset();
-  if (calibrator_) calibrator_->interrupt();
-  encoders_ = false;
-  mesh_block_ = MeshPeriodAccumulator{};
-  last_resonance_.reset();  // the next accepted input republishes the resonance
+  phase_->reset();
+  calibration_->interrupt();
+  resonance_->forget();  // the next accepted input republishes the resonance
   counters_.last_event = "reset: " + reason;
 }
 
 bool RigPipeline::observeClock(Stamp now, PipelineSink& /*sink*/) {
-  // A looping bag's first messages can arrive before its /clock jump (separate connections, and
-  // /clock lags by up to its period): if the stamps already restarted (rule 2) since the last jump,
-  // that jump is the same restart; it is not reset a second time.
-  bool back = last_clock_ && secondsBetween(*last_clock_, now) > options_.clock_jump_back;
-  if (back && stamps_restarted_) {
-    stamps_restarted_ = false;
-    back = false;
-  }
-  if (back) {
-    ++counters_.clock_resets;
-    reset("clock went back from " + formatValue(last_clock_->toSec()) + " s to " + formatValue(now.toSec()) + " s");
-  }
-  last_clock_ = now;
-  return back;
+  const std::optional<std::string> jumped = gate_->observeClock(now);  // the clock-jump rule
+  if (jumped) reset(*jumped);
+  return jumped.has_value();
 }
 
-InputOutcome RigPipeline::reject(InputOutcome why, InputStream stream, Stamp stamp, const std::string& reason,
-                                 std::uint64_t& rejected, std::string_view found) {
-  ++rejected;
-  refusals_.record(stream, why, stamp, reason, found);
-  switch (why) {
-    case InputOutcome::kZeroStamp: ++counters_.zero_stamps; break;
-    case InputOutcome::kOutOfOrder: ++counters_.out_of_order; break;
-    case InputOutcome::kInvalidValue: ++counters_.invalid_values; break;
-    case InputOutcome::kUnreachableLoad: ++counters_.unreachable_loads; break;
-    case InputOutcome::kWrongFrame: ++counters_.wrong_frames; break;
-    case InputOutcome::kStampRange: ++counters_.stamps_out_of_range; break;
-    case InputOutcome::kAccepted: break;
-  }
-  counters_.last_event = std::string(toString(stream)) + " rejected (" + toString(why) + "): " + reason;
-  return why;
-}
+double RigPipeline::pinionAngle(Stamp stamp) const { return phase_->pinionAngle(stamp); }
 
-InputOutcome RigPipeline::checkStamp(Stamp stamp, std::optional<Stamp>& last, InputStream stream,
-                                     PipelineSink& /*sink*/) {
-  if (stamp.isZero()) return InputOutcome::kZeroStamp;
-  if (!stamp.inRosRange()) return InputOutcome::kStampRange;  // rule 7
-  if (last && stamp < *last) {
-    const double back = secondsBetween(*last, stamp);
-    if (back <= options_.stamp_jump_back) return InputOutcome::kOutOfOrder;
-    ++counters_.stamp_resets;
-    stamps_restarted_ = true;
-    reset(std::string(toString(stream)) + " stamp went back by " + formatValue(back) + " s (more than ~stamp_jump_back): source restarted");
-  }
-  return InputOutcome::kAccepted;
-}
+double RigPipeline::encoderPinionAngle(Stamp stamp) const { return phase_->encoderPinionAngle(stamp); }
 
-double RigPipeline::pinionAngle(Stamp stamp) const {
-  if (anchor_) return anchor_->angle + anchor_->speed * secondsBetween(stamp, anchor_->stamp);
-  return angle_origin_ ? pinion_speed_ * secondsBetween(stamp, *angle_origin_) : 0.0;
-}
+std::optional<double> RigPipeline::encoderSilence(Stamp now) const { return phase_->encoderSilence(now); }
 
-double RigPipeline::encoderPinionAngle(Stamp stamp) const {
-  // The anchor (a reading, or its time-out continuing it) holds the encoder angle plus the offset
-  // that puts the mesh phase where a drive pair enters contact (rule 9); before any reading the
-  // nominal angle carries none.
-  return anchor_ ? pinionAngle(stamp) - options_.mesh_phase_offset * kTwoPi / teeth(0) : pinionAngle(stamp);
-}
-
-std::optional<double> RigPipeline::encoderSilence(Stamp now) const {
-  if (!encoders_ || !reading_) return std::nullopt;
-  return secondsBetween(now, reading_->stamp);
-}
-
-const char* RigPipeline::phaseSource() const {
-  if (encoders_) return "encoders";
-  return anchor_ ? "nominal (encoders timed out)" : "nominal";
-}
-
-double RigPipeline::meshTurns(double pinion_angle) const {
-  return pinion_angle * estimator_->mesh().geometry().spec().teeth[0] / kTwoPi;
-}
+const char* RigPipeline::phaseSource() const { return phase_->name(); }
 
 template <typename Validate, typename Update>
-InputOutcome RigPipeline::apply(InputStream stream, Stamp stamp, std::optional<Stamp>& last, std::uint64_t& accepted,
-                                std::uint64_t& rejected, PipelineSink& sink, Validate validate, Update update) {
-  // Values first: a bad value must not trigger a stamp-rule reset before it is refused.
+InputOutcome RigPipeline::take(InputStream stream, Stamp stamp, PipelineSink& sink, Validate validate, Update update) {
+  // Values first: a bad value must not trigger a source-restart reset before it is refused.
   try {
     validate();
   } catch (const InvalidInput& e) {
-    return reject(InputOutcome::kInvalidValue, stream, stamp, e.what(), rejected);
+    return gate_->reject(InputOutcome::kInvalidValue, stream, stamp, e.what());
   }
-  const InputOutcome time_ok = checkStamp(stamp, last, stream, sink);
+  const InputOutcome time_ok = gate_->checkStamp(stream, stamp);
   if (time_ok != InputOutcome::kAccepted) {
-    return reject(time_ok, stream, stamp, "stamp " + formatValue(stamp.toSec()) + " s", rejected);
+    return gate_->reject(time_ok, stream, stamp, "stamp " + formatValue(stamp.toSec()) + " s");
   }
+  if (const std::optional<std::string> restarted = gate_->noteSourceRestart(stream, stamp)) reset(*restarted);
   const StiffnessEstimate* estimate = nullptr;
   try {
     // Transactional: throws without changing the state. No estimate: a shed input (no stiffness update).
     estimate = update();
   } catch (const InvalidInput& e) {
-    return reject(InputOutcome::kInvalidValue, stream, stamp, e.what(), rejected);
+    return gate_->reject(InputOutcome::kInvalidValue, stream, stamp, e.what());
   } catch (const UnreachableLoad& e) {
-    return reject(InputOutcome::kUnreachableLoad, stream, stamp, e.what(), rejected);
+    return gate_->reject(InputOutcome::kUnreachableLoad, stream, stamp, e.what());
   }
   // Taken: whatever becomes of its outputs (each guarded and counted on its own) the input is
   // counted accepted once and never also rejected.
-  ++accepted;
-  last = stamp;
+  gate_->accept(stream, stamp);
   if (estimate) afterUpdate(stamp, *estimate, sink);
   return InputOutcome::kAccepted;
 }
 
 InputOutcome RigPipeline::torque(Stamp stamp, double torque, PipelineSink& sink, const InputOrigin& origin,
                                  Backlog backlog) {
-  counters_.dropped_torque += torque_seq_.observe(origin.publisher, origin.seq);
-  if (!options_.torque_frame.empty()) {
-    // tf2 strips a leading '/' (ROS 1 frame ids may still carry one).
-    const std::string_view frame = !origin.frame_id.empty() && origin.frame_id.front() == '/' ? origin.frame_id.substr(1)
-                                                                                               : origin.frame_id;
-    if (frame != options_.torque_frame) {
-      return reject(InputOutcome::kWrongFrame, InputStream::kTorque, stamp,
-                    "header.frame_id = '" + printableText(origin.frame_id) + "', expected ~torque_frame = '" +
-                        options_.torque_frame + "' (the sign of torque.z selects the loaded flank)",
-                    counters_.rejected_torque, origin.frame_id);
-    }
-  }
-  const InputOutcome outcome = apply(
-      InputStream::kTorque, stamp, last_torque_, counters_.accepted_torque, counters_.rejected_torque, sink,
-      [&] { estimator_->validateTorque(torque); },
+  gate_->countDrops(InputStream::kTorque, origin);
+  if (gate_->checkFrame(stamp, origin) != InputOutcome::kAccepted) return InputOutcome::kWrongFrame;
+  const InputOutcome outcome = take(
+      InputStream::kTorque, stamp, sink, [&] { estimator_->validateTorque(torque); },
       [&]() -> const StiffnessEstimate* {
         // The mesh phase counts from the first torque input after a (re)start, as the dynamics do;
         // the origin is kept only if the input is accepted.
         checkMotionTimeout(stamp, sink);
-        const Stamp origin_stamp = angle_origin_.value_or(stamp);
+        const Stamp origin_stamp = phase_->origin().value_or(stamp);
         if (backlog == Backlog::kShed) {
           // Shed: the rules and the dynamics, no stiffness update or message (its estimate would be
           // replaced by the newest input's before anyone could read it).
-          angle_origin_ = origin_stamp;
+          phase_->setOrigin(origin_stamp);
           ++counters_.stiffness_shed;
           return nullptr;
         }
-        const double angle = anchor_ ? pinionAngle(stamp) : pinion_speed_ * secondsBetween(stamp, origin_stamp);
-        const StiffnessEstimate& e = estimator_->setTorque(torque, angle);
-        angle_origin_ = origin_stamp;
+        const StiffnessEstimate& e = estimator_->setTorque(torque, phase_->stiffnessAngle(stamp, origin_stamp));
+        phase_->setOrigin(origin_stamp);
         return &e;
       });
-  if (outcome == InputOutcome::kAccepted) {
-    if (dynamics_) {
-      advanceDynamics(stamp, torque, sink);  // holds the torque once the dynamics reached its stamp
-    } else {
-      held_torque_ = torque;  // what the calibration (rule 11) pairs with the next readings
-    }
+  // The torque the calibration pairs the next readings with (kept as it was when this one restarted
+  // the dynamics: what the pipeline has always done).
+  if (outcome == InputOutcome::kAccepted && (!dynamics_ || dynamics_->takeTorque(stamp, torque, sink))) {
+    held_torque_ = torque;
   }
   return outcome;
 }
 
 InputOutcome RigPipeline::preload(Stamp stamp, const std::vector<PreloadSetting>& settings, PipelineSink& sink,
                                   const InputOrigin& origin) {
-  counters_.dropped_preload += preload_seq_.observe(origin.publisher, origin.seq);
-  return apply(InputStream::kPreload, stamp, last_preload_, counters_.accepted_preload, counters_.rejected_preload, sink,
-               [&] { estimator_->validatePreloads(settings); },
-               [&]() -> const StiffnessEstimate* { return &estimator_->setPreloads(settings); });
+  gate_->countDrops(InputStream::kPreload, origin);
+  return take(InputStream::kPreload, stamp, sink, [&] { estimator_->validatePreloads(settings); },
+              [&]() -> const StiffnessEstimate* { return &estimator_->setPreloads(settings); });
 }
 
 InputOutcome RigPipeline::motion(Stamp stamp, const MotionInput& reading, PipelineSink& sink, const InputOrigin& origin) {
-  counters_.dropped_motion += motion_seq_.observe(origin.publisher, origin.seq);
-  return apply(
-      InputStream::kJointStates, stamp, last_motion_, counters_.accepted_motion, counters_.rejected_motion, sink,
-      [&] {
-        requireFinite("joint_states: pinion position", reading.pinion_angle);
-        if (reading.pinion_velocity) {
-          requireFinite("joint_states: pinion velocity", *reading.pinion_velocity);
-          // The same bound as ~pinion_speed_rpm: +-1e5 rpm.
-          if (std::abs(*reading.pinion_velocity) > 1e5 * kTwoPi / 60.0) {
-            throwInvalid("joint_states: pinion velocity", *reading.pinion_velocity, "beyond +-1e5 rpm (10472 rad/s)");
-          }
-        }
-        if (reading.gear_angle) requireFinite("joint_states: gear position", *reading.gear_angle);
-      },
-      [&]() -> const StiffnessEstimate* {
-        acceptMotion(stamp, reading, sink);
-        return nullptr;  // no stiffness message: the estimate has not changed
-      });
+  gate_->countDrops(InputStream::kJointStates, origin);
+  return take(InputStream::kJointStates, stamp, sink, [&] { InputGate::validateReading(reading); },
+              [&]() -> const StiffnessEstimate* {
+                acceptMotion(stamp, reading, sink);
+                return nullptr;  // no stiffness message: the estimate has not changed
+              });
 }
 
 InputOutcome RigPipeline::motionRefused(Stamp stamp, const std::string& reason, const InputOrigin& origin,
                                         std::string_view found) {
-  counters_.dropped_motion += motion_seq_.observe(origin.publisher, origin.seq);
-  return reject(InputOutcome::kInvalidValue, InputStream::kJointStates, stamp, reason, counters_.rejected_motion, found);
+  gate_->countDrops(InputStream::kJointStates, origin);
+  return gate_->reject(InputOutcome::kInvalidValue, InputStream::kJointStates, stamp, reason, found);
 }
 
 void RigPipeline::acceptMotion(Stamp stamp, const MotionInput& m, PipelineSink& sink) {
   // Transactional: the reading is checked against the last one before anything changes.
-  const Reading* last =
-      reading_ && secondsBetween(stamp, reading_->stamp) <= options_.motion_timeout ? &*reading_ : nullptr;
-  const Reading next = unwrapReading(stamp, m, last);
-  const double max_speed = 1e5 * kTwoPi / 60.0;  // the bound of ~pinion_speed_rpm and of a measured velocity
-  if (!(std::abs(next.speed) <= max_speed)) {
-    throwInvalid("joint_states: pinion position", m.pinion_angle,
-                 "implies " + formatValue(next.speed) + " rad/s since the last reading (beyond +-1e5 rpm): an encoder "
-                 "jump, or readings too far apart to unwrap");
-  }
+  bool continuous = false;
+  PhaseSource::Reading accepted = phase_->unwrap(stamp, m, continuous);
   checkMotionTimeout(stamp, sink);
-  Reading accepted = next;
-  if (accepted.gear) {
-    const double residual = *accepted.gear + ratio() * accepted.pinion;
-    const double off = residual - *accepted.gear_reference;
-    if (std::abs(off) > options_.gear_ratio_tolerance) {
-      ++counters_.gear_ratio_mismatches;
-      counters_.last_event = "joint_states: the gear angle moved " + formatValue(off) +
-                             " rad off -(z_p/z_g) x the pinion angle (more than ~gear_ratio_tolerance): a slip, or a "
-                             "wrong ~pinion_joint/~gear_joint mapping";
-      accepted.gear_reference = residual;  // one report per slip; a wrong mapping keeps reporting
-    }
+  phase_->checkGearRatio(accepted);
+  // The own-stamp rule: the dynamics run up to this reading with the motion before it (the gap
+  // rule: they stop, and the next torque input restarts them at the measured phase).
+  if (dynamics_) {
+    dynamics_->stopAfterGap(stamp);
+    dynamics_->advanceTo(stamp, sink);
   }
-  // Rule 10: the dynamics run up to this reading with the motion before it (after a gap, rule 4:
-  // they stop, and the next torque input restarts them at the measured phase).
-  if (dynamics_) stopAfterGap(stamp);
-  advanceDynamicsTo(stamp, sink);
   // The first reading moves the mesh phase from the nominal count to the measured one (a jump):
   // the running block of mesh periods would count a period that never was.
-  if (!encoders_) mesh_block_ = MeshPeriodAccumulator{};
-  reading_ = accepted;
-  calibrate(stamp, accepted, last != nullptr, sink);
-  anchor_ = AngleAnchor{stamp, next.pinion + options_.mesh_phase_offset * kTwoPi / teeth(0), next.speed};
-  encoders_ = true;
-  followAnchor(stamp);
-}
-
-void RigPipeline::calibrate(Stamp stamp, const Reading& reading, bool continuous, PipelineSink& sink) {
-  if (!calibrator_ || !reading.gear) return;
-  if (!continuous) calibrator_->interrupt();
-  const double turns = meshTurns(reading.pinion) + options_.mesh_phase_offset;
-  const double phase = turns - std::floor(turns);
-  try {
-    const int out = calibrator_->reading(stamp.toSec(), reading.pinion, *reading.gear, phase, reading.speed, held_torque_,
-                                         *estimator_, measured_te_);
-    // Counted once the sink took it: a message the sink refuses (non-finite) is an error, not both.
-    if (out & Calibrator::kSample) {
-      sink.measuredTe(stamp, measured_te_);
-      ++counters_.measured_te_out;
-    }
-    if (out & Calibrator::kWindow) {
-      sink.calibration(stamp, calibrator_->estimate());
-      ++counters_.calibration_out;
-    }
-  } catch (const Error& e) {
-    calibrationError(e);
+  if (!phase_->encodersDrive() && mesh_periods_) mesh_periods_->restart();
+  if (calibration_->calibrator() && accepted.gear) {  // the calibration rule
+    calibration_->reading(stamp, accepted.pinion, *accepted.gear, phase_->meshPhase(accepted.pinion), accepted.speed,
+                          held_torque_, continuous, sink);
   }
-}
-
-void RigPipeline::calibrationError(const Error& e) {
-  ++counters_.calibration_errors;
-  counters_.last_event = std::string("calibration: ") + e.what();
-  calibrator_->interrupt();
-}
-
-double RigPipeline::ratio() const { return static_cast<double>(teeth(0)) / teeth(1); }
-
-int RigPipeline::teeth(int shaft) const { return estimator_->mesh().geometry().spec().teeth[shaft]; }
-
-RigPipeline::Reading RigPipeline::unwrapReading(Stamp stamp, const MotionInput& m, const Reading* last) const {
-  // An angle is used modulo a turn only (exact for any finite double: std::remainder), so an
-  // encoder count of any size neither overflows the phase (z_p theta) nor loses the unwrapping.
-  // Unwrapped against the prediction from the last reading (an encoder may wrap at +-pi or 2 pi):
-  // exact while the shaft turns by less than pi beyond the prediction between two readings.
-  const double pinion_in = std::remainder(m.pinion_angle, kTwoPi);
-  Reading next;
-  next.stamp = stamp;
-  const double dt = last ? secondsBetween(stamp, last->stamp) : 0.0;
-  next.pinion = pinion_in;
-  if (last) next.pinion += kTwoPi * std::round((last->pinion + last->speed * dt - pinion_in) / kTwoPi);
-  if (m.pinion_velocity) {
-    next.speed = *m.pinion_velocity;
-  } else if (last && dt > 0.0) {
-    next.speed = (next.pinion - last->pinion) / dt;  // backward difference of the encoder angle
-  } else {
-    next.speed = last ? last->speed : 0.0;  // first reading without velocity: standing until the next
-  }
-  if (m.gear_angle) {
-    // Meshing gears: theta_g = -(z_p / z_g) theta_p + const (+ TE / r_b,g, micro-radians).
-    const double gear_in = std::remainder(*m.gear_angle, kTwoPi);
-    next.gear = gear_in;
-    if (last && last->gear) {
-      *next.gear += kTwoPi * std::round((*last->gear - ratio() * (next.pinion - last->pinion) - gear_in) / kTwoPi);
-    }
-    next.gear_reference = last && last->gear_reference ? last->gear_reference : std::optional<double>(*next.gear + ratio() * next.pinion);
-  }
-  return next;
+  phase_->anchorTo(accepted);
+  if (dynamics_) dynamics_->followAnchor(stamp);
 }
 
 void RigPipeline::checkMotionTimeout(Stamp stamp, PipelineSink& sink) {
-  if (!encoders_ || !reading_ || secondsBetween(stamp, reading_->stamp) <= options_.motion_timeout) return;
-  const Stamp at{reading_->stamp.ns + std::llround(options_.motion_timeout * 1e9)};
-  ++counters_.motion_timeouts;
-  counters_.last_event = "joint_states: none for ~motion_timeout = " + formatValue(options_.motion_timeout) +
-                         " s: the mesh phase runs at ~pinion_speed_rpm from there";
-  advanceDynamicsTo(at, sink);
-  anchor_ = AngleAnchor{at, pinionAngle(at), pinion_speed_};
-  encoders_ = false;
-  reading_.reset();  // a stale reading would unwrap the next one wrongly
-  followAnchor(at);
-}
-
-void RigPipeline::followAnchor(Stamp stamp) {
-  if (!dynamics_ || !dynamics_->started() || !anchor_) return;
-  try {
-    // Another stream may have taken the dynamics past this stamp: the motion applies from there.
-    const double t = std::max(secondsBetween(stamp, dynamics_epoch_), dynamics_->time());
-    const Stamp at{dynamics_epoch_.ns + std::llround(t * 1e9)};
-    dynamics_->followMotion(t, meshTurns(pinionAngle(at)), meshTurns(anchor_->speed));
-  } catch (const Error& e) {
-    dynamicsError("dynamics", e);
-  }
+  const std::optional<Stamp> at = phase_->encodersTimedOut(stamp);
+  if (!at) return;
+  if (dynamics_) dynamics_->advanceTo(*at, sink);
+  phase_->fallBackToNominal(*at);
+  if (dynamics_) dynamics_->followAnchor(*at);
 }
 
 void RigPipeline::afterUpdate(Stamp stamp, const StiffnessEstimate& estimate, PipelineSink& sink) {
@@ -466,7 +197,7 @@ void RigPipeline::afterUpdate(Stamp stamp, const StiffnessEstimate& estimate, Pi
                    secondsBetween(stamp, *last_stiffness_out_) >= 1.0 / settings_.stiffness_rate;
   if (due) {
     try {
-      sink.stiffness(stamp, estimate, stiffnessBands(estimate));
+      sink.stiffness(stamp, estimate, calibration_->stiffnessBands(estimate));
       last_stiffness_out_ = stamp;
       ++counters_.stiffness_out;
     } catch (const Error& e) {
@@ -483,193 +214,11 @@ void RigPipeline::afterUpdate(Stamp stamp, const StiffnessEstimate& estimate, Pi
 
 void RigPipeline::pushStiffness(Stamp stamp, const StiffnessEstimate& estimate, PipelineSink& sink) {
   if (!dynamics_) return;
-  // Every accepted input hands the new bearing stiffness to the dynamics (taken up only when it
-  // moved by more than 1 %) at its own stamp (rule 10), then the resonance estimate is refreshed.
-  // After a gap (rule 4) the dynamics stop first and restart at the next torque input with it:
-  // the stiffness belongs after the gap, not at the last input before it.
-  stopAfterGap(stamp);
-  const bool advanced = advanceDynamicsTo(stamp, sink);
-  try {
-    std::optional<double> at;
-    if (dynamics_->started()) at = advanced ? secondsBetween(stamp, dynamics_epoch_) : dynamics_->time();
-    dynamics_->setBearingStiffness(estimator_->shaftRadialStiffness(), at);
-  } catch (const Error& e) {
-    dynamicsError("dynamics", e);
-  }
-  updateResonance(stamp, estimate, sink);
-}
-
-void RigPipeline::stopAfterGap(Stamp stamp) {
-  if (!dynamics_->started()) return;
-  const double gap = secondsBetween(stamp, dynamics_epoch_) - dynamics_->time();
-  if (!(gap > options_.max_gap)) return;
-  ++counters_.gap_restarts;
-  counters_.last_event = "input gap of " + formatValue(gap) + " s (more than ~max_gap): dynamics restarted";
-  dynamics_->stop();
-  mesh_block_ = MeshPeriodAccumulator{};
-}
-
-void RigPipeline::dynamicsError(const std::string& where, const Error& e) {
-  ++counters_.dynamics_errors;
-  counters_.last_event = where + ": " + e.what();
-}
-
-void RigPipeline::restartDynamics(Stamp stamp, double torque) {
-  dynamics_epoch_ = stamp;
-  dynamics_->reset(0.0, torque);
-  te_spectrum_->reset();  // a new window: no samples from before the restart
-  mesh_block_ = MeshPeriodAccumulator{};  // and no mesh periods
-  angle_origin_ = stamp;  // the stiffness message's mesh phase restarts with the dynamics
-  followAnchor(stamp);    // measured motion: the dynamics start at the measured phase
-}
-
-bool RigPipeline::advanceDynamicsTo(Stamp stamp, PipelineSink& sink) {
-  if (!dynamics_ || !dynamics_->started()) return false;
-  const double t = secondsBetween(stamp, dynamics_epoch_);
-  // Past it already (another stream), or a gap that rule 4 restarts at the next torque input.
-  if (t <= dynamics_->time() || t - dynamics_->time() > options_.max_gap) return false;
-  try {
-    emitUpTo(t, sink);
-  } catch (const Error& e) {
-    dynamicsError("dynamics (restarted at the next torque input)", e);
-    dynamics_->stop();
-    mesh_block_ = MeshPeriodAccumulator{};
-    return false;
-  }
-  return true;
-}
-
-void RigPipeline::emitUpTo(double t, PipelineSink& sink) {
-  const double from = dynamics_->time();
-  // The motion is held over one advance: its mesh frequency unwraps the phase between samples.
-  // A member, not a capture: the lambda must stay within std::function's small buffer (two
-  // pointers), or every advance allocates (allocation_tests).
-  advance_mesh_frequency_ = dynamics_->meshFrequency();
-  // The time integrated counts whether the advance ends or throws (a throw passes on untouched).
-  struct CountSimulated {
-    const DynamicsEstimator& dynamics;
-    double from;
-    double& simulated;
-    ~CountSimulated() { simulated += dynamics.time() - from; }
-  } count{*dynamics_, from, counters_.simulated_s};
-  dynamics_->advanceTo(t, [&](const DynamicsSample& relative) {
-    DynamicsSample s = relative;
-    const Stamp sample_stamp{dynamics_epoch_.ns + std::llround(relative.t * 1e9)};
-    s.t = sample_stamp.toSec();
-    SampleContext context;
-    context.pinion_angle = encoderPinionAngle(sample_stamp);
-    context.resonance = last_resonance_ ? &*last_resonance_ : nullptr;
-    sink.transmissionError(sample_stamp, s, context);
-    ++counters_.te_out;
-    if (te_spectrum_->push(s.dynamic_te)) {
-      const std::vector<SpectralPeak>& peaks = te_spectrum_->peaks();
-      SpectrumPeaks& out = spectrum_peaks_;
-      out.count = std::min(peaks.size(), SpectrumPeaks::kMaxPeaks);
-      std::copy_n(peaks.begin(), out.count, out.peaks.begin());
-      out.resolution = te_spectrum_->resolution();
-      out.window_seconds = te_spectrum_->windowSeconds();
-      sink.spectrum(sample_stamp, out);
-      ++counters_.spectra_out;
-    }
-    meshPeriodSample(sample_stamp, s, advance_mesh_frequency_, sink);
-  });
-}
-
-void RigPipeline::advanceDynamics(Stamp stamp, double torque, PipelineSink& sink) {
-  std::optional<double> at;  // the stamp on the dynamics' clock, once the dynamics run up to it
-  try {
-    // Rule 4: a paused rig restarts the model at this input instead of integrating the gap.
-    stopAfterGap(stamp);
-    if (!dynamics_->started()) {
-      restartDynamics(stamp, torque);
-      return;
-    }
-    const double t = secondsBetween(stamp, dynamics_epoch_);
-    // Else another stream took the dynamics past this stamp: the torque applies from there.
-    if (t > dynamics_->time()) emitUpTo(t, sink);
-    at = t;
-  } catch (const Error& e) {
-    // The state stays at its last good sample and every later input would fail the same way:
-    // restart the model here (counted), as after a gap.
-    dynamicsError("dynamics (restarted at this input)", e);
-    try {
-      restartDynamics(stamp, torque);
-    } catch (const Error& again) {
-      dynamicsError("dynamics", again);
-    }
-  }
-  held_torque_ = torque;
-  try {
-    dynamics_->setTorque(torque, at);  // the new torque holds from its stamp on, whatever happened above
-  } catch (const Error& e) {
-    dynamicsError("dynamics", e);
-  }
-}
-
-void RigPipeline::updateResonance(Stamp stamp, const StiffnessEstimate& estimate, PipelineSink& sink) {
-  try {
-    const std::array<double, 2> kb = estimator_->shaftRadialStiffness();
-    const std::array<double, 3> springs{kb[0], kb[1], estimate.mesh.mean};
-    // Skip the modal analysis when it cannot change the decision: K = sum k_i B_i with B_i >= 0
-    // and M fixed, so springs within factors [lo, hi] of those at the last publication bound every
-    // undamped eigenvalue omega^2 within the same factors (Courant-Fischer), and each natural
-    // frequency within [sqrt(lo), sqrt(hi)]. With hi = (1 + tau)^2 and lo = (1 - tau)^2 (tau =
-    // resonance_threshold) no frequency moves by more than tau, and no republication would follow.
-    // Until 2026-11-26 the factors were 1 +- tau, which ran the analysis about twice as often for
-    // the same publications. Both are shrunk by 1e-9 for the eigensolver's rounding (1e-15).
-    if (last_resonance_) {
-      const double tau = options_.resonance_threshold, margin = 1e-9;
-      const double hi = (1.0 + tau) * (1.0 + tau) * (1.0 - margin), lo = (1.0 - tau) * (1.0 - tau) * (1.0 + margin);
-      bool within = true;
-      for (int i = 0; i < 3 && within; ++i) {
-        within = springs[i] <= hi * springs_at_resonance_[i] && springs[i] >= lo * springs_at_resonance_[i];
-      }
-      if (within) return;
-    }
-    // The run-time settings' damping (the shared rig keeps the start-up one).
-    const DampingRatios damping{settings_.mesh_damping_ratio, settings_.bearing_damping_ratio};
-    const GearRotorParameters p = rigRotorParameters(*rig_, estimator_->mesh(), kb, damping);
-    ResonanceEstimate r;
-    r.modes = modalAnalysis(p, estimate.mesh.mean);
-    ++counters_.modal_updates;
-    bool moved = !last_resonance_;
-    for (std::size_t i = 0; !moved && i < r.modes.size(); ++i) {
-      const double last = last_resonance_->modes[i].natural_frequency;
-      moved = std::abs(r.modes[i].natural_frequency - last) > options_.resonance_threshold * last;
-    }
-    if (!moved) return;
-    for (const Mode& m : r.modes) {
-      if (!std::isfinite(m.natural_frequency) || !std::isfinite(m.damping_ratio) || !std::isfinite(m.damped_frequency)) {
-        throw InvalidInput("resonance: a modal result is not finite (not published)");  // never NaN on a topic
-      }
-    }
-    double margin = 0.0;
-    r.floquet_valid = dynamics_->floquetMargin(&margin) && std::isfinite(margin);
-    r.floquet_margin = r.floquet_valid ? margin : 0.0;
-    last_resonance_ = r;
-    springs_at_resonance_ = springs;
-    sink.resonance(stamp, r, resonanceBands(r));
-    ++counters_.resonance_out;
-  } catch (const Error& e) {
-    dynamicsError("resonance", e);
-  }
-}
-
-CalibrationBands RigPipeline::stiffnessBands(const StiffnessEstimate& estimate) const {
-  if (calibrator_) return calibrator_->bands(estimate.torque, *estimator_, false);
-  CalibrationBands b;  // no calibration: the drawing's model, bounds of zero width
-  b.mesh_stiffness = b.mesh_stiffness_low = b.mesh_stiffness_high = estimate.mesh.mean;
-  b.bearing_stiffness = b.bearing_stiffness_low = b.bearing_stiffness_high = estimator_->shaftRadialStiffness();
-  return b;
-}
-
-CalibrationBands RigPipeline::resonanceBands(const ResonanceEstimate& estimate) const {
-  if (calibrator_) return calibrator_->bands(estimator_->current().torque, *estimator_, true);
-  CalibrationBands b;  // no calibration: the drawing's frequencies, bounds of zero width
-  for (std::size_t i = 0; i < estimate.modes.size(); ++i) {
-    b.natural_frequency[i] = b.natural_frequency_low[i] = b.natural_frequency_high[i] = estimate.modes[i].natural_frequency;
-  }
-  return b;
+  // Every accepted input hands the new bearing stiffness to the dynamics at its own stamp (after a
+  // gap they stop first), then the resonance estimate is refreshed.
+  dynamics_->takeBearingStiffness(stamp, sink);
+  const DampingRatios damping{settings_.mesh_damping_ratio, settings_.bearing_damping_ratio};
+  resonance_->update(stamp, estimate, damping, dynamics_->model(), sink);
 }
 
 void RigPipeline::apply(const RuntimeSettings& settings) {
@@ -678,110 +227,14 @@ void RigPipeline::apply(const RuntimeSettings& settings) {
                                settings.bearing_damping_ratio != settings_.bearing_damping_ratio;
   settings_ = settings;
   if (damping_changed) {
-    if (dynamics_) dynamics_->setDamping(settings.mesh_damping_ratio, settings.bearing_damping_ratio);
-    last_resonance_.reset();  // damped frequencies and ratios changed: republish at the next input
+    if (dynamics_) dynamics_->model().setDamping(settings.mesh_damping_ratio, settings.bearing_damping_ratio);
+    resonance_->forget();  // damped frequencies and ratios changed: republish at the next input
   }
   if (dynamics_) {
     // The mesh-force estimator depends on the fidelity (MeshPeriodStatistics): a block spans one.
-    if (dynamics_->fidelity() != settings.fidelity) mesh_block_ = MeshPeriodAccumulator{};
-    dynamics_->setFidelity(settings.fidelity);
+    if (dynamics_->model().fidelity() != settings.fidelity) mesh_periods_->restart();
+    dynamics_->model().setFidelity(settings.fidelity);
   }
-}
-
-void RigPipeline::startMeshBlock(Stamp stamp, const DynamicsSample& s, double turns, double boundary,
-                                 double mesh_frequency) {
-  MeshPeriodAccumulator& a = mesh_block_;
-  a.in_block = true;
-  a.boundary = boundary;
-  // Whole periods spanning >= ~10 output samples at this speed (one at least).
-  const double n = std::ceil(10.0 * dynamics_->outputInterval() * std::abs(mesh_frequency) - 1e-9);
-  a.periods = static_cast<std::uint32_t>(std::clamp(n, 1.0, 1e6));
-  a.samples = 0;
-  a.start = stamp;
-  a.start_turns = turns;
-  a.start_velocity = s.state[5];
-  a.te_ref = s.dynamic_te;
-  a.force_ref = s.mesh_force;
-  a.te_sum = a.te_sq = a.force_sum = a.force_sq = a.torque_sum = 0.0;
-  a.te_min = a.te_max = s.dynamic_te;
-  a.force_min = a.force_max = s.mesh_force;
-}
-
-void RigPipeline::meshPeriodSample(Stamp stamp, const DynamicsSample& s, double mesh_frequency, PipelineSink& sink) {
-  MeshPeriodAccumulator& a = mesh_block_;
-  // The unwrapped phase is kept as an integer count plus the sample's phase in [0, 1), so that the
-  // count is exact on a switch (phase 0): floor(turns) is the count, not a rounding of it.
-  if (!a.have_last) {
-    a.have_last = true;
-    a.last_turns = s.phase;
-    if (s.phase == 0.0) startMeshBlock(stamp, s, s.phase, 0.0, mesh_frequency);  // a restart on a switch
-  } else {
-    const double dt = secondsBetween(stamp, a.last_stamp);
-    if (!(dt > 0.0)) return;  // the grid only moves forward
-    const double last_count = std::floor(a.last_turns);
-    const double last_phase = a.last_turns - last_count;
-    // Whole periods between the samples: those the speed implies, corrected by the phases.
-    const double count = last_count + std::round(mesh_frequency * dt - (s.phase - last_phase));
-    const double turns = count + s.phase;
-    if (a.in_block) {
-      const double half = 0.5 * dt;
-      const double te0 = a.last_te - a.te_ref, te1 = s.dynamic_te - a.te_ref;
-      const double f0 = a.last_force - a.force_ref, f1 = s.mesh_force - a.force_ref;
-      a.te_sum += half * (te0 + te1);
-      a.te_sq += half * (te0 * te0 + te1 * te1);
-      a.force_sum += half * (f0 + f1);
-      a.force_sq += half * (f0 * f0 + f1 * f1);
-      a.torque_sum += half * (a.last_torque + s.torque);
-      ++a.samples;
-      a.te_min = std::min(a.te_min, s.dynamic_te);
-      a.te_max = std::max(a.te_max, s.dynamic_te);
-      a.force_min = std::min(a.force_min, s.mesh_force);
-      a.force_max = std::max(a.force_max, s.mesh_force);
-      const bool forward = count >= a.boundary + a.periods;
-      const bool backward = count < a.boundary - a.periods;
-      if (forward || backward) {
-        MeshPeriodStatistics out;
-        out.start = a.start;
-        out.end = stamp;
-        out.duration = secondsBetween(stamp, a.start);
-        const double d = out.duration;
-        out.periods = static_cast<std::uint32_t>(forward ? count - a.boundary : a.boundary - (count + 1.0));
-        out.samples = a.samples;
-        const double te_dev = a.te_sum / d, force_dev = a.force_sum / d;
-        out.te_mean = a.te_ref + te_dev;
-        out.te_rms = std::sqrt(std::max(0.0, a.te_sq / d - te_dev * te_dev));
-        out.te_peak_to_peak = a.te_max - a.te_min;
-        out.torque = a.torque_sum / d;
-        const double drive = out.torque / estimator_->mesh().geometry().baseRadius(0);
-        const double inertia = dynamics_->fidelity() == Fidelity::kQuasiStatic
-                                   ? 0.0
-                                   : dynamics_->model().equivalentMass() * (s.state[5] - a.start_velocity) / d;
-        out.mesh_force_mean = drive - inertia;
-        out.mesh_force_rms = std::sqrt(std::max(0.0, a.force_sq / d - force_dev * force_dev));
-        out.mesh_force_peak_to_peak = a.force_max - a.force_min;
-        out.mesh_frequency = (turns - a.start_turns) / d;
-        bool finite = true;
-        for (double v : {out.te_mean, out.te_rms, out.te_peak_to_peak, out.mesh_force_mean, out.mesh_force_rms,
-                         out.mesh_force_peak_to_peak, out.mesh_frequency, out.torque}) {
-          finite = finite && std::isfinite(v);
-        }
-        if (finite) {  // never NaN on a topic (the sink's conversion would refuse it inside the advance)
-          ++counters_.mesh_period_stats_out;
-          sink.meshPeriod(stamp, out);
-        } else {
-          counters_.last_event = "mesh_period_stats: a statistic is not finite (not published)";
-        }
-        startMeshBlock(stamp, s, turns, forward ? count : count + 1.0, mesh_frequency);
-      }
-    } else if (count != last_count) {
-      startMeshBlock(stamp, s, turns, count > last_count ? count : count + 1.0, mesh_frequency);
-    }
-    a.last_turns = turns;
-  }
-  a.last_stamp = stamp;
-  a.last_te = s.dynamic_te;
-  a.last_force = s.mesh_force;
-  a.last_torque = s.torque;
 }
 
 }  // namespace drivetrain_stiffness

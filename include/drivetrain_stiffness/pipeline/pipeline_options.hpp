@@ -1,0 +1,47 @@
+// The pipeline's settings (the node's private parameters, docs/ros_api.md "Parameters"), validated
+// in one place. ROS-free.
+#pragma once
+
+#include <string>
+
+#include "drivetrain_stiffness/core/stiffness_estimator.hpp"
+
+namespace drivetrain_stiffness {
+
+/// Settings of the pipeline (the node's private parameters). validate() names the field and value.
+struct PipelineOptions {
+  EstimatorLimits limits = onlineLimits();  ///< limits.load_tolerance: ~bearing_load_tolerance
+  static EstimatorLimits onlineLimits() {
+    EstimatorLimits l;
+    // 1e-3 of the support load: the stiffness lags by ~3e-4, far inside the 1 % at which the
+    // dynamics take up a change (on a 1 % grid) and the resonance republishes; ripple no longer
+    // re-solves every bearing.
+    l.load_tolerance = 1e-3;
+    return l;
+  }
+  bool dynamics = true;              ///< integrate the 3-DOF model (needs the gearbox's dynamics block)
+  double output_rate = 1000.0;       ///< [Hz] transmission_error rate, rounded to divide the mesh period
+  double max_gap = 1.0;              ///< [s] a longer forward input gap restarts the dynamics
+  double stamp_jump_back = 1.0;      ///< [s] a stamp further back than this restarts everything
+  /// [s] the clock going back by more than this resets everything. 1 s tells a looping bag (it
+  /// jumps back by its length, seconds to hours) from a clock correction on a live rig: ntpd steps
+  /// offsets over 0.128 s (its default step threshold) and slews smaller ones; chrony's usual
+  /// `makestep 1.0 3` steps only by more than 1 s and only in its first three updates. A smaller
+  /// step back keeps the state; inputs stamped before the last accepted one are then rejected as
+  /// out of order (rule 2, counted) until the clock has caught up.
+  double clock_jump_back = 1.0;
+  double resonance_threshold = 0.01; ///< [-] relative frequency change that republishes resonance
+  int spectrum_window = 1024;        ///< [samples] TE spectrum window
+  int spectrum_hop = 256;            ///< [samples] between spectra
+  double pinion_speed_rpm = 1000.0;  ///< [rpm] nominal speed for the mesh phase
+  std::string torque_frame;          ///< required header.frame_id of torque inputs; empty = any
+  double mesh_phase_offset = 0.0;    ///< [-] mesh phase at measured pinion angle 0 (where a drive pair enters contact)
+  double motion_timeout = 0.1;       ///< [s] no joint_states for this long: back to ~pinion_speed_rpm
+  double gear_ratio_tolerance = 0.01;  ///< [rad] gear angle off -(z_p/z_g) pinion angle by more: reported
+  int motion_slices = 256;           ///< slices per mesh period of the measured-motion dynamics
+  /// Calibrate against the encoders' TE when the gearbox has a calibration block (rule 11).
+  bool calibrate = true;
+  void validate() const;
+};
+
+}  // namespace drivetrain_stiffness
