@@ -3,7 +3,7 @@
 // output) against one shed under backlog (rules and dynamics only), the ratio that tells how much
 // an overloaded node gains by shedding (docs/reliability.md, "Overload"). The node adds roscpp's
 // deserialization and one publish per output on top. BM_TorqueStepResponse: what a torque input
-// stamped between two output samples adds at the nominal phase (rule 10: the exact response to a
+// stamped between two output samples adds at the nominal phase (the own-stamp rule: the exact response to a
 // unit step at its instant, PeriodicExponentialPropagator::torqueStepResponse), at the live 1 kHz
 // output grid of the seed rig at 1000 rpm. BM_ExponentialSetUp: building those propagators.
 // Run: devel/lib/drivetrain_stiffness/pipeline_benchmark --benchmark_repetitions=3 --benchmark_report_aggregates_only=true

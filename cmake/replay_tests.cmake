@@ -164,7 +164,7 @@ target_include_directories(replay_calibrate_tests PRIVATE ${CMAKE_CURRENT_SOURCE
 target_link_libraries(replay_calibrate_tests ${PROJECT_NAME}_config ${PROJECT_NAME}_calibration)
 target_compile_definitions(replay_calibrate_tests PRIVATE DRIVETRAIN_SOURCE_DIR="${CMAKE_CURRENT_SOURCE_DIR}")
 
-# The live calibration through drivetrain_replay (rule 11): a torque_steps bag with the encoders
+# The live calibration through drivetrain_replay (the calibration rule): a torque_steps bag with the encoders
 # (drivetrain_rig_sim, 5 kHz joint_states) and test/data/calibration_servo.yaml. Twice: bags and CSV
 # byte-identical; /calibration and /measured_te in the bag equal calibration.csv and measured_te.csv,
 # whose columns are the message fields (msg/*.msg) and whose numbers are finite; --calibrate writes a
@@ -174,7 +174,7 @@ add_test(NAME replay_writes_the_calibration
   COMMAND ${CATKIN_DEVEL_PREFIX}/env.sh /usr/bin/python3 ${CMAKE_CURRENT_SOURCE_DIR}/test/replay/check_replay_calibration.py
           ${DEVEL_BIN} ${CMAKE_CURRENT_SOURCE_DIR} ${CMAKE_CURRENT_BINARY_DIR}/replay_calibration_test)
 
-# The node's measured_te and calibration (rule 11) on the graph equal the in-process pipeline's for
+# The node's measured_te and calibration (the calibration rule) on the graph equal the in-process pipeline's for
 # the same inputs in the same order, and /diagnostics shows the calibration.
 add_rostest_gtest(calibration_topics_rostest test/ros/calibration_topics.test test/ros/test_calibration_topics.cpp)
 target_link_libraries(calibration_topics_rostest ${PROJECT_NAME}_ros ${catkin_LIBRARIES})

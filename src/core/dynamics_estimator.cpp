@@ -580,7 +580,7 @@ bool DynamicsEstimator::slicedInsteadOfDopri5() const {
 
 bool DynamicsEstimator::advanceIntervalWithTorqueChanges() {
   // The interval from sample k_ with the torque held at its start, then each input from its stamp
-  // (rule 10). Exact: the held torque's propagation plus each step's size times the response to a
+  // (the own-stamp rule). Exact: the held torque's propagation plus each step's size times the response to a
   // unit step at its instant (PeriodicExponentialPropagator::torqueStepResponse); where the
   // contacts may leave the linear regime, false (nothing done: the caller moves onto the sliced
   // propagation, which takes the inputs at their stamps), or with bearing clearance dopri5

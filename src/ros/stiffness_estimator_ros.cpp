@@ -65,7 +65,7 @@ class StiffnessEstimatorRos::Publishers : public MessageSink {
     resonance_ = nh.advertise<drivetrain_stiffness::Resonance>("resonance", 10, true);  // latched: the last estimate
     spectrum_ = nh.advertise<drivetrain_stiffness::SpectralPeaks>("te_spectrum", 100);
     markers_ = nh.advertise<visualization_msgs::MarkerArray>("rig_markers", 10);
-    // The live calibration (rule 11): one measured TE per encoder reading (as transmission_error),
+    // The live calibration (the calibration rule): one measured TE per encoder reading (as transmission_error),
     // one calibration per closed window. Advertised with or without a calibration block, so the
     // interface does not depend on the gearbox file.
     measured_te_ = nh.advertise<drivetrain_stiffness::MeasuredTe>("measured_te", 10000);
@@ -330,7 +330,7 @@ void StiffnessEstimatorRos::diagnose(diagnostic_updater::DiagnosticStatusWrapper
   for (const auto& [key, count] : namedCounters(c)) status.add(key, count);
   status.add("last_event", c.last_event);
   status.add("phase_source", pipeline_->phaseSource());
-  // The time-out is taken on the next input's stamp (rule 9): with every input stopped, the age of
+  // The time-out is taken on the next input's stamp (the encoders rule): with every input stopped, the age of
   // the last reading on the node's clock says that the phase source above is stale.
   if (const std::optional<double> silence = pipeline_->encoderSilence(fromRosTime(ros::Time::now()))) {
     status.add("encoder_silence [s]", *silence);
@@ -360,7 +360,7 @@ void StiffnessEstimatorRos::diagnose(diagnostic_updater::DiagnosticStatusWrapper
                          static_cast<unsigned long long>(missed_deadlines_ - late_at_last_report_));
   }
   late_at_last_report_ = missed_deadlines_;
-  // The live calibration (rule 11): the last window's outcome, its counts and what the data determined.
+  // The live calibration (the calibration rule): the last window's outcome, its counts and what the data determined.
   status.add("calibration", calibrationStatus(*pipeline_));
   if (const Calibrator* calibrator = pipeline_->calibrator()) {
     const CalibrationEstimate& e = calibrator->estimate();

@@ -95,7 +95,7 @@ std::string utc(std::time_t t) {
   return buf;
 }
 
-/// The live calibration's final state (rule 11), by the Calibration message's field names.
+/// The live calibration's final state (the calibration rule), by the Calibration message's field names.
 nlohmann::json calibrationJson(const RigPipeline& pipeline) {
   nlohmann::json j;
   j["status"] = calibrationStatus(pipeline);

@@ -78,7 +78,7 @@ TEST(NoAllocation, TorqueAndEncoderInputsThroughARunUp) {
   EXPECT_STREQ(pipeline.phaseSource(), "encoders");
 }
 
-// The live calibration (rule 11) on the per-reading path: torque at 1 kHz and joint_states with
+// The live calibration (the calibration rule) on the per-reading path: torque at 1 kHz and joint_states with
 // both joints at 5 kHz, 120 rpm, the gear angle carrying the static model's TE (so loaded windows
 // pass the gate and run the whole update: fit, iterated EKF, bands, modal analyses). Warmed up
 // through a baseline and the first loaded windows, then 2 s (two gear turns, two updates) counted.

@@ -921,7 +921,7 @@ struct CalibrationSink : PipelineSink {
   void calibration(Stamp, const CalibrationEstimate& e) override { estimates.push_back(e); }
 };
 
-// Rule 11 through the pipeline: torque at 1 kHz, joint_states with both joints at 5 kHz carrying
+// The calibration rule through the pipeline: torque at 1 kHz, joint_states with both joints at 5 kHz carrying
 // the nominal rig's static TE; the baseline at 0 N·m, then 2 N·m. The processed measured TE must
 // match the model's prediction (the rig is the model here) to the encoder's resolution.
 TEST(RigPipelineCalibration, EncoderReadingsReachTheCalibratorAndTheSink) {

@@ -130,7 +130,7 @@ TEST(DynamicsEstimator, MatchesOfflineDopri5AcrossATorqueChange) {
   EXPECT_NEAR(after / before, 4.0, 0.2);
 }
 
-// Rule 10 at the nominal phase: torque inputs stamped inside an output interval take effect at
+// The own-stamp rule at the nominal phase: torque inputs stamped inside an output interval take effect at
 // their stamps, not at the sample before. Two inputs 0.4 and 0.7 ms into a 1 ms interval; the
 // reference is dopri5 at rtol 1e-11 switching the torque exactly there. The same run switching at
 // the sample instead differs from it by far more than the tolerance, so the check can fail.
@@ -230,7 +230,7 @@ TEST(DynamicsEstimator, TorqueStampsSurviveTheMoveOntoTheSlicedPropagation) {
   EXPECT_EQ(pending, moved);
 }
 
-// Rule 10 for a bearing-stiffness input: stamped 0.4 ms into an output interval at the nominal
+// The own-stamp rule for a bearing-stiffness input: stamped 0.4 ms into an output interval at the nominal
 // phase, it takes effect at its stamp. The dynamics move onto the sliced propagation at the
 // interval's start (sample 30), with the old stiffness up to the stamp and the new one after it.
 // Reference: dopri5 at rtol 1e-12 on the phase table up to sample 30 (the periodic propagators'

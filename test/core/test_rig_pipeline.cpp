@@ -77,7 +77,7 @@ TEST(RigPipeline, OptionsAreValidatedWithTheFieldNamed) {
   EXPECT_THROW(RigPipeline(rig(), o), InvalidInput);
 }
 
-// Rule 1 and the value rules: a zero stamp, NaN, Inf and absurd torques, a negative preload and an
+// The zero-stamp and value rules: a zero stamp, NaN, Inf and absurd torques, a negative preload and an
 // unknown bearing are rejected and counted by reason; the next good input is answered exactly as if
 // they had never come (the state is not poisoned).
 TEST(RigPipeline, BadInputsAreCountedAndDoNotPoisonTheState) {
@@ -105,7 +105,7 @@ TEST(RigPipeline, BadInputsAreCountedAndDoNotPoisonTheState) {
             b.stiffness_out.back().second.supports[0].solution.radialStiffness());
 }
 
-// Rules 2 and 3: a late stamp within ~stamp_jump_back is rejected (the dynamics cannot go back);
+// The out-of-order and burst rules: a late stamp within ~stamp_jump_back is rejected (the dynamics cannot go back);
 // equal stamps are accepted without releasing samples and the last torque is the one held; a stamp
 // further back restarts everything and is then accepted.
 TEST(RigPipeline, OutOfOrderBurstAndStampJumpBack) {
@@ -129,7 +129,7 @@ TEST(RigPipeline, OutOfOrderBurstAndStampJumpBack) {
   EXPECT_NEAR(r.te.back().t, at(-0.99).toSec(), 1e-6);
 }
 
-// Rule 4: a forward gap longer than ~max_gap restarts the dynamics instead of integrating it.
+// The gap rule: a forward gap longer than ~max_gap restarts the dynamics instead of integrating it.
 TEST(RigPipeline, LongGapRestartsTheDynamics) {
   PipelineOptions o;
   o.max_gap = 0.5;
@@ -145,7 +145,7 @@ TEST(RigPipeline, LongGapRestartsTheDynamics) {
   EXPECT_EQ(r.te.size(), before + 3);
 }
 
-// Rule 4 before rule 10: after a gap the dynamics restart before a stiffness stamped after it is
+// The gap rule before the own-stamp rule: after a gap the dynamics restart before a stiffness stamped after it is
 // taken up. The last torque before the gap lies off the 1 ms output grid (the dynamics stand on the
 // sample before it, its torque change pending), and the first after it moves a bearing stiffness by more than the 1 %
 // at which the dynamics take a change up: applied at the time before the gap, that change reached
@@ -216,7 +216,7 @@ TEST(RigPipeline, RefusalsAreTalliedByStreamAndReason) {
   EXPECT_EQ(t.entry(InputStream::kTorque, InputOutcome::kWrongFrame).found_other, 5u);
 }
 
-// Rule 5: the caller's clock going back (a looping bag) resets estimator and dynamics: the
+// The clock-jump rule: the caller's clock going back (a looping bag) resets estimator and dynamics: the
 // configured preloads return, and the replayed inputs are accepted again; a clock that only
 // repeats itself does not reset.
 TEST(RigPipeline, ClockJumpBackResetsEverything) {

@@ -1,4 +1,4 @@
-// The rig's measured motion as a pipeline input (rule 9 and 10 of rig_pipeline.hpp): the mesh
+// The rig's measured motion as a pipeline input (the encoders and own-stamp rules, docs/ros_api.md): the mesh
 // phase follows the encoder angle through speed changes and reversal, the velocity is
 // differentiated when absent, and every refusal, drop, time-out and gear-ratio mismatch is counted.
 #include <gtest/gtest.h>
@@ -54,7 +54,7 @@ double phaseOf(double angle, double offset = 0.0) {
 }
 double phaseDistance(double a, double b) { return std::abs(std::remainder(a - b, 1.0)); }
 
-/// Rule 9's pinion angle at t: the last reading (at k ms + 0.3 ms, see drive) extrapolated at its speed.
+/// The encoders rule's pinion angle at t: the last reading (at k ms + 0.3 ms, see drive) extrapolated at its speed.
 double extrapolated(const Profile& m, double t) {
   const double t_r = std::floor((t - 3e-4) / 1e-3 + 1e-9) * 1e-3 + 3e-4;
   return m.angle(t_r) + m.speed(t_r) * (t - t_r);
@@ -66,7 +66,7 @@ double sampleTime(std::size_t i) { return 1e-3 * static_cast<double>(i + 1); }
 
 TEST(RigPipelineMotion, PhaseFollowsTheEncoderThroughARunUp) {
   // 300 -> 3000 rpm in 0.2 s; offset 0.125 of a mesh period. Between readings the phase is
-  // extrapolated at the last reading's speed (rule 9): checked to 1e-6 of a period against that
+  // extrapolated at the last reading's speed (the encoders rule): checked to 1e-6 of a period against that
   // rule, and to a dt^2 / 2 z_p / 2 pi = 1.1e-3 of a period against the true angle (a = 1414 rad/s^2,
   // dt = 0.7 ms from the reading to the sample).
   PipelineOptions o;

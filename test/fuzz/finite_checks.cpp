@@ -116,7 +116,7 @@ void FiniteSink::resonance(Stamp, const ResonanceEstimate& estimate, const Calib
   requireAllFinite(bands);
   ++outputs;
 }
-// The calibration's and the mesh-period outputs (rule 11, the per-period statistics): every number
+// The calibration's and the mesh-period outputs (the calibration rule, the per-period statistics): every number
 // a message would carry, so "never a NaN on a topic" holds for them under hostile input too.
 void FiniteSink::measuredTe(Stamp, const MeasuredTeSample& s) {
   check("measured_te.te", s.te);

@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""The live calibration (docs/ros_api.md rule 11) through drivetrain_replay, end to end:
+"""The live calibration (docs/ros_api.md, the calibration rule) through drivetrain_replay, end to end:
  1. drivetrain_rig_sim --scenario torque_steps (0.05, 0.1, 0.2, -0.1, 0.1 N*m at 1000 rpm; the first
     step builds the unloaded baseline) with joint_states at 5 kHz (the second mesh harmonic needs
     more than 1 kHz), replayed with test/data/calibration_servo.yaml (a calibration: block) and

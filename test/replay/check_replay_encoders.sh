@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# drivetrain_replay following the encoders (docs/ros_api.md rules 9 and 10) on drivetrain_rig_sim's
-# run_up (0 -> 6000 rpm in 2 s) and reverse (+1000 rpm through 0 to -1000 rpm and back) bags with
+# drivetrain_replay following the encoders (docs/ros_api.md, the encoders and own-stamp rules) on
+# drivetrain_rig_sim's run_up (0 -> 6000 rpm in 2 s) and reverse (+1000 rpm through 0 to -1000 rpm and back) bags with
 # joint_states at 1 kHz:
 #  1. twice: the output bags are byte-identical (the pipeline reads no clock);
 #  2. every joint_states message accepted, none dropped, no dynamics error, every TE sample finite;

@@ -1,4 +1,4 @@
-// The node's live calibration (docs/ros_api.md rule 11) on the graph: with a gearbox that has a
+// The node's live calibration (docs/ros_api.md, the calibration rule) on the graph: with a gearbox that has a
 // calibration block (test/data/calibration_servo.yaml), torque steps at 1000 rpm and the encoders'
 // joint_states at 5 kHz (the first step at the baseline torque), the node publishes `measured_te`
 // and `calibration`, and with them the encoder-driven dynamics' `transmission_error` and

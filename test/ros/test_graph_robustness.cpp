@@ -103,11 +103,11 @@ TEST_F(GraphTest, NodeletAnswersAndAppliesTheStampRules) {
     std::lock_guard<std::mutex> l(m_);
     EXPECT_EQ(stiffness_.back().header.stamp, ros::Time(kT0, 0));  // stamped with the input's time
   }
-  // Rule 1: a zero stamp is rejected; rule 2: 0.5 s late (within ~stamp_jump_back) is rejected.
+  // The zero-stamp rule: a zero stamp is rejected; out of order: 0.5 s late (within ~stamp_jump_back) is rejected.
   send(-2e9, 0.1);     // zero stamp
   send(0.1, 0.1);      // accepted (answer 2)
   send(-0.4, 0.1);     // 0.5 s before the last one: out of order
-  // Rule 3: a burst of five equal stamps is accepted (answers 3-7) and releases no extra samples.
+  // The burst rule: a burst of five equal stamps is accepted (answers 3-7) and releases no extra samples.
   for (int i = 0; i < 5; ++i) send(0.2, 0.1 + 0.01 * i);
   send(0.203, 0.1);  // answer 8: three samples with the last torque of the burst held
   // Transport rules on the graph: a torque in the gear's frame is refused, and a gap of 4 in the

@@ -62,7 +62,7 @@ TEST(ReplayLaunch, OutputsCarryBagStampsAndTheLoopResets) {
     return it == out.diagnostics.end() ? -1L : std::stol(it->second);
   };
   // The first pass (1 s at rate 2 plus the start delay) and the loop's restart: the clock jump
-  // resets (rule 5), or, when the loop's first messages beat the /clock jump, the stamps do (rule 2).
+  // resets (the clock-jump rule), or, when the loop's first messages beat the /clock jump, the stamps do (source restarted).
   ASSERT_TRUE(waitWall([&] { return counter("clock_jump_resets") + counter("stamp_jump_resets") >= 1; }, 60.0))
       << "no reset when the bag looped";
   const std::size_t te_at_reset = [&] { std::lock_guard<std::mutex> l(mutex); return out.te.size(); }();

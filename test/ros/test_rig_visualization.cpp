@@ -93,7 +93,7 @@ TEST(RigVisualizer, FramesTurnAsTheGearsDo) {
 
 TEST(MessageConversion, JointStatesAreReadByTheConfiguredNames) {
   // The pinion's position and velocity and the gear's position by name, in any order; velocity
-  // may be absent (then differentiated: rule 9), the gear may be absent (no ratio check); without
+  // may be absent (then differentiated: the encoders rule), the gear may be absent (no ratio check); without
   // the pinion's position the message is refused, saying why (counted by the pipeline).
   const JointNames names{"motor", "output"};
   sensor_msgs::JointState m;

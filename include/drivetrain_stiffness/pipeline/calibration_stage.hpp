@@ -1,7 +1,6 @@
-// The calibration stage (the calibration rule, docs/ros_api.md "Time and input rules"): each
-// accepted encoder reading with the gear joint to the live Calibrator with the torque held at its
-// stamp, its outputs to the sink, its failures counted; and the stiffness and resonance bands the
-// sink is handed (the calibration's, or the drawing's model with bounds of zero width). ROS-free.
+// The calibration stage (the calibration rule, docs/ros_api.md): readings to the live Calibrator,
+// its outputs to the sink, its failures counted; and the bands handed with the stiffness and the
+// resonance. ROS-free.
 #pragma once
 
 #include <memory>
@@ -15,25 +14,21 @@ namespace drivetrain_stiffness {
 
 class CalibrationStage {
  public:
-  /// Calibrates when `enabled` and the rig has a calibration and a dynamics block (none otherwise).
-  /// Keeps references to `estimator` (the bearing models at their current settings; its mesh
-  /// table is shared) and `counters` (measured_te_out, calibration_out, calibration_errors,
-  /// last_event).
+  /// Calibrates when `enabled` and the rig has calibration and dynamics blocks. Keeps references
+  /// to `estimator` (its mesh table shared) and `counters`.
   CalibrationStage(std::shared_ptr<const RigConfig> rig, const StiffnessEstimator& estimator, bool enabled,
                    PipelineCounters& counters);
   /// The live calibration, or null.
   const Calibrator* calibrator() const { return calibrator_.get(); }
   /// The readings broke off: the open window is dropped.
   void interrupt();
-  /// One accepted reading at `stamp`: unwrapped pinion and gear angles [rad], mesh phase [-],
-  /// pinion speed [rad/s], held torque [N*m]; `continuous`: it follows the last one without a
-  /// break (else a new window starts). A sample and a closed window go to the sink; the library's
-  /// own errors (a refused message among them) are counted and drop the window. Needs calibrator().
+  /// One reading: unwrapped angles [rad], mesh phase [-], speed [rad/s], held torque [N*m];
+  /// not `continuous`: a new window. Errors are counted and drop the window. Needs calibrator().
   void reading(Stamp stamp, double pinion, double gear, double phase, double speed, double held_torque, bool continuous,
                PipelineSink& sink);
-  /// The bands of PipelineSink::stiffness for `estimate`.
+  /// PipelineSink::stiffness's bands.
   CalibrationBands stiffnessBands(const StiffnessEstimate& estimate) const;
-  /// The bands of PipelineSink::resonance at the estimator's current torque.
+  /// PipelineSink::resonance's bands, at the current torque.
   CalibrationBands resonanceBands(const ResonanceEstimate& estimate) const;
 
  private:

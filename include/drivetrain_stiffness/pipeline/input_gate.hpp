@@ -1,8 +1,6 @@
-// The input gate: the time, frame and transport rules every input passes before it is taken
-// (docs/ros_api.md "Time and input rules", each rule a function named as there), the joint_states
-// value rules, and the counting of every input accepted, refused (with RefusalTally) or lost on
-// the way (SequenceGaps). It decides; RigPipeline resets when it says the source or the clock
-// restarted. ROS-free.
+// The input gate: the time, frame, transport and joint_states value rules (docs/ros_api.md, each
+// a function named as there); every input counted, accepted, refused or dropped. It decides;
+// RigPipeline resets when it says the source or the clock restarted. ROS-free.
 #pragma once
 
 #include <cstdint>
@@ -21,8 +19,7 @@ namespace drivetrain_stiffness {
 
 class InputGate {
  public:
-  /// Uses ~stamp_jump_back, ~clock_jump_back [s] and ~torque_frame of `options` (validated);
-  /// counts in `counters` (kept by reference).
+  /// ~stamp_jump_back, ~clock_jump_back [s], ~torque_frame of `options`; keeps `counters` by reference.
   InputGate(const PipelineOptions& options, PipelineCounters& counters);
 
   // --- The rules, pure ---
@@ -30,35 +27,29 @@ class InputGate {
   static bool isZeroStamp(Stamp stamp) { return stamp.isZero(); }
   /// The stamp-range rule: negative, or past what ros::Time holds (2106-02-07).
   static bool outsideRosTime(Stamp stamp) { return !stamp.inRosRange(); }
-  /// The out-of-order rule: earlier than `last` by at most ~stamp_jump_back (equal stamps, a
-  /// burst, are in order).
+  /// The out-of-order rule: earlier than `last` by at most ~stamp_jump_back (a burst is in order).
   bool isOutOfOrder(Stamp stamp, std::optional<Stamp> last) const;
   /// The source-restart rule: earlier than `last` by more than ~stamp_jump_back.
   bool sourceRestarted(Stamp stamp, std::optional<Stamp> last) const;
-  /// The frame rule: a torque frame other than ~torque_frame (a leading '/' ignored; none set: any).
+  /// The frame rule: not ~torque_frame (a leading '/' ignored; none set: any).
   bool isWrongFrame(std::string_view frame_id) const;
   /// The clock-jump rule: the caller's clock at `now` went back by more than ~clock_jump_back.
   bool clockJumpedBack(Stamp now) const;
-  /// The joint_states value rules: finite angles, a velocity within +-1e5 rpm (InvalidInput
-  /// naming the field otherwise).
+  /// The joint_states value rules: finite, within +-1e5 rpm (InvalidInput naming the field).
   static void validateReading(const MotionInput& reading);
 
   // --- One input through the rules, counted ---
-  /// The messages `origin`'s publisher numbered on `stream` that never arrived, counted as dropped.
+  /// Counts as dropped what `origin`'s publisher numbered that never arrived.
   void countDrops(InputStream stream, const InputOrigin& origin);
-  /// The frame rule for a torque input: kWrongFrame (refused and counted) or kAccepted.
+  /// The frame rule on a torque input: kWrongFrame (refused, counted) or kAccepted.
   InputOutcome checkFrame(Stamp stamp, const InputOrigin& origin);
-  /// The time rules on `stream`'s own stamps: kAccepted, or kZeroStamp, kStampRange, kOutOfOrder
-  /// (not yet counted: reject()). A source restart passes; see noteSourceRestart.
+  /// The time rules on `stream`'s own stamps (a refusal is not yet counted: reject()).
   InputOutcome checkStamp(InputStream stream, Stamp stamp) const;
-  /// When the source restarted at `stamp`: counted (stamp_resets), remembered for the clock-jump
-  /// rule, and the reason to reset everything returned; nullopt otherwise.
+  /// The source-restart rule: the reason to reset everything (counted), or nullopt.
   std::optional<std::string> noteSourceRestart(InputStream stream, Stamp stamp);
-  /// The caller's clock at `now` (remembered): the reason to reset everything when it jumped back
-  /// (counted in clock_resets), unless the stamps already restarted since the last jump.
+  /// The clock-jump rule at `now`: the reason to reset (counted), unless the stamps restarted first.
   std::optional<std::string> observeClock(Stamp now);
-  /// Counts a refused input (its stream's, its reason's, the tally with `found`, the offending
-  /// value) and says why in last_event; returns `why`.
+  /// Counts a refusal (stream, reason, tally with `found`), says why in last_event; returns `why`.
   InputOutcome reject(InputOutcome why, InputStream stream, Stamp stamp, const std::string& reason,
                       std::string_view found = {});
   /// An input taken: counted, its stamp the stream's last.
@@ -67,7 +58,7 @@ class InputGate {
   void forgetStamps();
 
   const RefusalTally& refusals() const { return refusals_; }
-  /// Publishers whose drops cannot be seen (they leave header.seq constant), over every stream.
+  /// Publishers whose drops cannot be seen (header.seq constant).
   std::size_t unnumberedPublishers() const;
 
  private:
@@ -84,7 +75,7 @@ class InputGate {
   RefusalTally refusals_;
   std::array<Stream, kInputStreams> streams_;
   std::optional<Stamp> last_clock_;
-  bool stamps_restarted_ = false;  ///< a source restart since the last clock jump (that jump is the same)
+  bool stamps_restarted_ = false;  ///< a source restart since the last clock jump
 };
 
 }  // namespace drivetrain_stiffness

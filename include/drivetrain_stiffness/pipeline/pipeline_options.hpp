@@ -23,12 +23,8 @@ struct PipelineOptions {
   double output_rate = 1000.0;       ///< [Hz] transmission_error rate, rounded to divide the mesh period
   double max_gap = 1.0;              ///< [s] a longer forward input gap restarts the dynamics
   double stamp_jump_back = 1.0;      ///< [s] a stamp further back than this restarts everything
-  /// [s] the clock going back by more than this resets everything. 1 s tells a looping bag (it
-  /// jumps back by its length, seconds to hours) from a clock correction on a live rig: ntpd steps
-  /// offsets over 0.128 s (its default step threshold) and slews smaller ones; chrony's usual
-  /// `makestep 1.0 3` steps only by more than 1 s and only in its first three updates. A smaller
-  /// step back keeps the state; inputs stamped before the last accepted one are then rejected as
-  /// out of order (rule 2, counted) until the clock has caught up.
+  /// [s] the clock going back by more resets everything: a looping bag, not an ntpd or chrony step
+  /// (why 1 s: docs/reliability.md).
   double clock_jump_back = 1.0;
   double resonance_threshold = 0.01; ///< [-] relative frequency change that republishes resonance
   int spectrum_window = 1024;        ///< [samples] TE spectrum window
@@ -39,8 +35,7 @@ struct PipelineOptions {
   double motion_timeout = 0.1;       ///< [s] no joint_states for this long: back to ~pinion_speed_rpm
   double gear_ratio_tolerance = 0.01;  ///< [rad] gear angle off -(z_p/z_g) pinion angle by more: reported
   int motion_slices = 256;           ///< slices per mesh period of the measured-motion dynamics
-  /// Calibrate against the encoders' TE when the gearbox has a calibration block (rule 11).
-  bool calibrate = true;
+  bool calibrate = true;  ///< the calibration rule, with a calibration block in the gearbox
   void validate() const;
 };
 

@@ -25,10 +25,8 @@ struct ResonanceEstimate {
   double floquet_margin = 0.0;  ///< 1 - max |Floquet multiplier| (0 when not valid)
 };
 
-/// Statistics of the dynamic TE and the mesh force over a block of whole mesh periods (issue 12;
-/// MeshPeriodStage). Block and estimators: docs/pipeline.md, "Mesh-period statistics" (the mesh
-/// force's mean is a momentum balance, not the samples' mean). Named apart from the message
-/// drivetrain_stiffness/MeshPeriodStats, which shares the namespace.
+/// The dynamic TE and mesh force over a block of whole mesh periods (MeshPeriodStage; estimators:
+/// docs/pipeline.md, "Mesh-period statistics"). Not the message MeshPeriodStats.
 struct MeshPeriodStatistics {
   Stamp start, end;               ///< the block's first and last output samples
   double duration = 0.0;          ///< end - start [s]
@@ -40,19 +38,13 @@ struct MeshPeriodStatistics {
   double torque = 0.0;            ///< [N*m]
 };
 
-/// What the tf frames and markers of a transmission-error sample need besides the sample: plain
-/// values of that moment, so that a sink never asks the pipeline back in the middle of an advance.
+/// What a TE sample's tf frames and markers need, as values: a sink never calls the pipeline back.
 struct SampleContext {
-  /// [rad] at the sample's stamp, as the encoders count it (RigPipeline::encoderPinionAngle: without
-  /// the ~mesh_phase_offset that the mesh phase carries), or the nominal angle without encoders.
-  double pinion_angle = 0.0;
-  /// The last published resonance estimate, null when there is none since the last reset; points
-  /// at the pipeline's copy, valid during the call only.
-  const ResonanceEstimate* resonance = nullptr;
+  double pinion_angle = 0.0;  ///< [rad] at the stamp, as the encoders count it (no mesh phase offset)
+  const ResonanceEstimate* resonance = nullptr;  ///< the last published, or null; valid during the call
 };
 
-/// The TE spectrum's strongest lines over the sliding window, copied out of it (fixed storage: no
-/// allocation per spectrum).
+/// The TE spectrum's strongest lines over the sliding window (fixed storage).
 struct SpectrumPeaks {
   static constexpr std::size_t kMaxPeaks = 3;  ///< the lines the pipeline keeps (te_spectrum)
   std::array<SpectralPeak, kMaxPeaks> peaks{};  ///< the first `count`, strongest first
@@ -62,29 +54,23 @@ struct SpectrumPeaks {
 };
 
 /// Receives the pipeline's outputs as plain values; every method is optional. A sink may throw the
-/// library's own Error (a message it refuses, e.g. a non-finite number): the pipeline counts it.
+/// library's own Error (a message it refuses): the pipeline counts it.
 class PipelineSink {
  public:
   virtual ~PipelineSink() = default;
-  /// After an accepted input (throttled to ~stiffness_rate); stamp = the input's. `bands`: the
-  /// calibrated stiffness at the estimate's torque with its 95 % bounds, or without a calibration
-  /// the drawing's model (mesh: estimate.mesh.mean; bearings: the shafts' radial stiffness) with
-  /// bounds of zero width; the natural frequencies are not filled.
+  /// After an accepted input (throttled to ~stiffness_rate). `bands`: the calibrated stiffness with
+  /// 95 % bounds, else the drawing's model with bounds of zero width (frequencies unfilled).
   virtual void stiffness(Stamp /*stamp*/, const StiffnessEstimate& /*estimate*/, const CalibrationBands& /*bands*/) {}
   /// One transmission-error sample on the output grid, at `stamp` (exact; sample.t = stamp.toSec()).
   virtual void transmissionError(Stamp /*stamp*/, const DynamicsSample& /*sample*/, const SampleContext& /*context*/) {}
   /// New TE spectrum peaks; stamp of the newest sample in the window.
   virtual void spectrum(Stamp /*stamp*/, const SpectrumPeaks& /*peaks*/) {}
-  /// The resonance estimate moved by more than the threshold (or after a reset); stamp = the
-  /// input's. `bands`: the calibrated stiffness and natural frequencies at the current torque with
-  /// their 95 % bounds, or without a calibration the estimate's frequencies with bounds of zero
-  /// width (the stiffness entries then unfilled).
+  /// The estimate moved by more than ~resonance_threshold (or after a reset). `bands`: calibrated
+  /// stiffness and frequencies with 95 % bounds, else the estimate's frequencies of zero width.
   virtual void resonance(Stamp /*stamp*/, const ResonanceEstimate& /*estimate*/, const CalibrationBands& /*bands*/) {}
-  /// One encoder reading's measured TE (baseline and shaft orders removed) beside the calibrated
-  /// model's; stamp = the reading's (rule 11).
+  /// One reading's measured TE beside the calibrated model's (the calibration rule).
   virtual void measuredTe(Stamp /*stamp*/, const MeasuredTeSample& /*sample*/) {}
-  /// The calibration after a closed window (every window, whatever its outcome); stamp = the
-  /// reading that closed it.
+  /// The calibration after every closed window; stamp = the reading that closed it.
   virtual void calibration(Stamp /*stamp*/, const CalibrationEstimate& /*estimate*/) {}
   /// One block of whole mesh periods closed (MeshPeriodStatistics); stamp = its end sample's.
   virtual void meshPeriod(Stamp /*stamp*/, const MeshPeriodStatistics& /*stats*/) {}
@@ -105,10 +91,10 @@ struct PipelineCounters {
   std::uint64_t stiffness_out = 0, stiffness_coalesced = 0;  ///< published, and skipped by ~stiffness_rate
   std::uint64_t stiffness_refused = 0;  ///< stiffness messages the sink refused (its reason in last_event)
   std::uint64_t te_out = 0, spectra_out = 0, resonance_out = 0;
-  std::uint64_t modal_updates = 0;  ///< modal analyses actually run (see RigPipeline::updateResonance)
-  std::uint64_t measured_te_out = 0, calibration_out = 0;  ///< published (rule 11)
-  std::uint64_t mesh_period_stats_out = 0;  ///< blocks of whole mesh periods published (MeshPeriodStatistics)
-  std::uint64_t calibration_errors = 0;  ///< windows the calibration could not evaluate (last_event says why)
+  std::uint64_t modal_updates = 0;  ///< modal analyses run (ResonanceTracker)
+  std::uint64_t measured_te_out = 0, calibration_out = 0;  ///< published (the calibration rule)
+  std::uint64_t mesh_period_stats_out = 0;  ///< MeshPeriodStatistics published
+  std::uint64_t calibration_errors = 0;  ///< windows the calibration could not evaluate
   double simulated_s = 0.0;         ///< model time integrated
   std::string last_event;           ///< last rejection or reset, with its reason
 };

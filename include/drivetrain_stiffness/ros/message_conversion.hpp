@@ -23,7 +23,7 @@
 namespace drivetrain_stiffness {
 
 /// Refuses (InvalidInput) a stamp that ros::Time cannot hold instead of narrowing it to uint32:
-/// the pipeline never makes one (time rule 7), so this only guards other callers.
+/// the pipeline never makes one (the stamp-range rule), so this only guards other callers.
 ros::Time toRosTime(Stamp s);
 inline Stamp fromRosTime(const ros::Time& t) { return Stamp::fromSecNsec(t.sec, t.nsec); }
 
@@ -65,7 +65,7 @@ drivetrain_stiffness::Resonance toResonanceMsg(Stamp stamp, const std::string& f
 /// resonance messages (docs/calibration.md section 4); refuses a non-finite number, naming it.
 void fillStiffnessBands(const CalibrationBands& bands, drivetrain_stiffness::Stiffness& out);
 void fillResonanceBands(const CalibrationBands& bands, drivetrain_stiffness::Resonance& out);
-/// The calibration after a window (rule 11) and one reading's measured TE. Both refuse (InvalidInput
+/// The calibration after a window (the calibration rule) and one reading's measured TE. Both refuse (InvalidInput
 /// naming the field) a non-finite number instead of publishing it; the pipeline counts that in
 /// calibration_errors.
 drivetrain_stiffness::Calibration toCalibrationMsg(Stamp stamp, const std::string& frame_id, const CalibrationEstimate& e);

@@ -39,7 +39,7 @@ PipelineOptions readPipelineOptions(const Get& get, const RigConfig& rig) {
   o.motion_timeout = get("motion_timeout", o.motion_timeout);
   o.gear_ratio_tolerance = get("gear_ratio_tolerance", o.gear_ratio_tolerance);
   o.motion_slices = get("motion_slices", o.motion_slices);
-  // Rule 11: calibrate against the encoders' TE when the gearbox has a calibration block.
+  // The calibration rule: calibrate against the encoders' TE when the gearbox has a calibration block.
   o.calibrate = get("calibrate", o.calibrate);
   try {
     o.validate();
