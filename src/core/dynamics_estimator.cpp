@@ -571,7 +571,7 @@ bool DynamicsEstimator::slicedInsteadOfDopri5() const {
   // Full fidelity, an anti-backlash mesh, no bearing clearance: the sliced propagation is exact
   // through every change of the contacts (located on the exact solution), where dopri5 on the
   // phase table at rtol 1e-8 ran near real time (3.4x at 3 N m under torque_ripple's ripple,
-  // 1.6x at -0.5 N m, 2026-11-26 22:47 UTC). An ordinary gear's open backlash is no linear regime
+  // 1.6x at -0.5 N m). An ordinary gear's open backlash is no linear regime
   // (dopri5 either way) and its interval maps do not exist: it stays on the periodic propagators
   // with dopri5 for the interval, which costs it nothing after the backlash closes.
   return fidelity_ == Fidelity::kFull && mesh_->antiBacklash() && rig_->dynamics.bearing_clearance[0] == 0.0 &&

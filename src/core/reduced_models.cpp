@@ -209,10 +209,10 @@ AutoChoice chooseAutomatically(const GearRotorModel& model, double t0, const Sta
   // method may become the reference (a rig excitation, no bearing clearance, a bound of at least
   // kExponentialReferenceBound), the count comes from the pilot's first kDopriCountSamples output
   // samples alone: if the exponential method is then built and serves as the reference (the scenes
-  // it suits), dopri5 runs no further (its whole pilot, run first until 2026-11-26, was about a
-  // third of auto's time on nominal). Only where the reference must be dopri5 after all does it run
+  // it suits), dopri5 runs no further (its whole pilot would be about a third of auto's time on
+  // nominal). Only where the reference must be dopri5 after all does it run
   // the whole pilot, from the start again, so that the reference is the one it always was. Where the
-  // exponential method cannot be the reference, dopri5 runs the whole pilot at once, as before.
+  // exponential method cannot be the reference, dopri5 runs the whole pilot at once.
   // (The count over a quarter of a mesh period depends on the phase the pilot starts at, as tooth
   // switches and flank changes fall in it or not: 0.75-1.25x the 40-sample rate on nominal,
   // 0.6-1.5x on low_preload, by an independent review; it matters only near the break-even run.)

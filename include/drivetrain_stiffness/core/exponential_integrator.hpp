@@ -48,7 +48,7 @@ class PeriodicExponentialPropagator {
   /// constructor also cuts at the table's nodes, the switches and the samples, at least one step
   /// each: on the nominal bench scene (1000 rpm, 32 samples per period) 1,809 steps against about
   /// 1,730 estimated here at step 1/omega_max, 1,164 against 866 at step 2, and 540 at the least
-  /// however long the step (a review, 2026-11-26).
+  /// however long the step.
   static double estimatedSetupSteps(const GearRotorModel& model, const RigExcitation& excitation, double t0,
                                     double step_factor = 1.0);
 

@@ -53,10 +53,9 @@ struct AutoChoice {
 
 /// The cost of one Magnus step of the exponential method's set-up (an 11x11 matrix exponential)
 /// in steps of dopri5 on the same model: `auto`'s exchange rate between the two. Measured with
-/// drivetrain_bench (docs/bench.jsonl of 2026-11-26, after the block-triangular set-up: setup_s
-/// over magnus_steps_per_period against wall_s over steps): 3.6-6.7 us per Magnus step on
-/// nominal, torque_steps, near_rigid_bearings and parametric_resonance, against 0.93-1.1 us per
-/// dopri5 step; 10 until then (4.4-9.7 us against 0.44-1.0 us on 2026-11-25).
+/// drivetrain_bench (docs/bench.jsonl: setup_s over magnus_steps_per_period against wall_s over
+/// steps): 3.6-6.7 us per Magnus step on nominal, torque_steps, near_rigid_bearings and
+/// parametric_resonance, against 0.93-1.1 us per dopri5 step.
 constexpr double kMagnusStepCost = 5.0;
 /// Where the exponential method may become auto's reference, dopri5's cost over the run is
 /// predicted from its steps over this many output samples at the pilot's start (or the whole
@@ -66,7 +65,7 @@ constexpr int kDopriCountSamples = 8;
 /// The smallest error bound for which the exponential method, its contacts closed through the
 /// pilot, serves as the reference (built at Magnus step 1/omega_max, its err_rms_rel against dopri5
 /// at rtol 1e-12 is at most 1.2e-8 on the bench scenes: 40x below half this bound). Not step
-/// 2/omega_max, although it sets up in 0.65 of the time: a review (2026-11-26) found it at 7.4e-7
+/// 2/omega_max, although it sets up in 0.65 of the time: that step gives 7.4e-7
 /// to 2.4e-6 on the seed rig at 2,490-2,505 rpm with mesh damping ratios 0.05-0.01, where each table
 /// piece just fits in one step (1.3e-7 at most at step 1), which would break the bound unseen.
 constexpr double kExponentialReferenceBound = 1e-6;

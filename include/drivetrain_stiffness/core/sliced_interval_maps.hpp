@@ -17,7 +17,7 @@
 //
 // Each interval's maps are made the second time it is used after a change of the parameters (46 us
 // for an interval of 86 slices whose decompositions are made, about three crossings of it one by
-// one at 14 us; applying the whole map then costs 7 ns: scratch timing of 2026-11-26, 22 UTC, seed servo at
+// one at 14 us; applying the whole map then costs 7 ns: a scratch timing on the seed servo at
 // 1000 rpm), so a stiffness that changes at every interval never makes them, no input pays for the
 // whole period at once, and they depend on the inputs only, not on when the work is done (a replay
 // gives the same bytes). The storage is sized once for the grid: no allocation after the first period.

@@ -311,10 +311,9 @@ class SlicedModalPropagator {
 /// kMaxNonlinearStretches stretches in one call the rest of the interval goes to `nonlinear` in one
 /// piece (whose own work bound then holds). A template, not a std::function: the estimator's
 /// per-input path allocates nothing. Returns the number of stretches.
-/// The first stretch, as a fraction of the fastest period. Chosen when every clipped damper was a
-/// stretch (until 2026-11-26; now a linear regime, and the stretches serve only moments with both
-/// flanks unloaded): a damper clips for a small part of a period where a flank lifts or lands
-/// (docs/model.md, "Following the rig's motion"): on the 48 s
+/// The first stretch, as a fraction of the fastest period (the stretches serve only moments with
+/// both flanks unloaded; a clipped damper is a linear regime): a damper clips for a small part of
+/// a period where a flank lifts or lands (docs/model.md, "Following the rig's motion"): on the 48 s
 /// load_sweep bag a first stretch of a whole period had dopri5 integrate 62.5 ms of rig time in
 /// 4,525 stretches, one of 1/16 of a period 7.6 ms in 8,273 (2.1 million right-hand sides against
 /// 0.5 million). The doubling search costs one refused propagateLinear per doubling, about a
