@@ -1,9 +1,9 @@
-// Bag output per message: rosbag::Bag::write against drivetrain_replay's BagWriter (which writes the
-// same bytes, test/ros/test_bag_writer.cpp), LZ4 and uncompressed, for the two messages the replay
-// writes at every 1 kHz input (Stiffness with two bearings, TransmissionError). The bag goes to
-// /tmp; time includes the chunk compression and file writes, amortised (BagWriter does them on its
-// worker thread, so its figure is the cost left on the analysis thread).
-// Run: devel/lib/drivetrain_stiffness/bag_benchmark (figures: docs/performance.md, "Replay speed").
+// Bag output per message: rosbag::Bag::write against drivetrain_replay's BagWriter (which writes
+// the same bytes, test/ros/test_bag_writer.cpp), LZ4 and uncompressed, for the two messages the
+// replay writes at every 1 kHz input (Stiffness with two bearings, TransmissionError). The bag goes
+// to /tmp; time includes the chunk compression and file writes, amortised (BagWriter does them on
+// its worker thread, so its figure is the cost left on the analysis thread). Run:
+// devel/lib/drivetrain_stiffness/bag_benchmark (figures: docs/performance.md, "Replay speed").
 #include <benchmark/benchmark.h>
 
 #include <rosbag/bag.h>
@@ -47,7 +47,8 @@ void BM_RosbagWrite(benchmark::State& state) {
 BENCHMARK(BM_RosbagWrite)->Arg(1)->Arg(0)->ArgName("lz4")->Unit(benchmark::kMicrosecond);
 
 void BM_BagWriterWrite(benchmark::State& state) {
-  ds::BagWriter bag("/tmp/bag_benchmark_ours.bag", state.range(0) ? ds::BagCompression::Lz4 : ds::BagCompression::None);
+  ds::BagWriter bag("/tmp/bag_benchmark_ours.bag",
+                    state.range(0) ? ds::BagCompression::Lz4 : ds::BagCompression::None);
   Messages m;
   std::int64_t i = 0;
   for (auto _ : state) m.write(bag, ++i);

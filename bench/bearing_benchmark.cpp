@@ -10,10 +10,14 @@ using namespace drivetrain_stiffness;
 
 namespace {
 const BearingSupportConfig& config() {
-  static const BearingSupportConfig c = loadBearingFile(DRIVETRAIN_SOURCE_DIR "/config/bearings/7013ac.yaml");
+  static const BearingSupportConfig c =
+      loadBearingFile(DRIVETRAIN_SOURCE_DIR "/config/bearings/7013ac.yaml");
   return c;
 }
-BearingSupport support() { return BearingSupport(config().spec, config().arrangement, 1000.0, config().interference, config().tilt); }
+BearingSupport support() {
+  return BearingSupport(config().spec, config().arrangement, 1000.0, config().interference,
+                        config().tilt);
+}
 }  // namespace
 
 static void BM_WarmUpdate7013(benchmark::State& state) {
@@ -47,8 +51,10 @@ static void BM_RebuildAndColdUpdate7013(benchmark::State& state) {
   load[kUx] = 500.0;
   double inner = 2e-6;
   for (auto _ : state) {
-    inner = inner > 8e-6 ? 2e-6 : inner + 1e-7;  // a new interference: new geometry and Hertz constants
-    const BearingSupport s(config().spec, config().arrangement, 1000.0, Interference{inner, 0.0}, config().tilt);
+    inner =
+        inner > 8e-6 ? 2e-6 : inner + 1e-7;  // a new interference: new geometry and Hertz constants
+    const BearingSupport s(config().spec, config().arrangement, 1000.0, Interference{inner, 0.0},
+                           config().tilt);
     BearingSolution sol = s.solve(load);
     benchmark::DoNotOptimize(sol.stiffness(0, 0));
   }

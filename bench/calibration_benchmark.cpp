@@ -16,7 +16,8 @@ namespace {
 using namespace drivetrain_stiffness;
 
 RigConfig rig() {
-  RigConfig r = loadRigFile(std::string(DRIVETRAIN_SOURCE_DIR) + "/config/gearboxes/seed_servo.yaml");
+  RigConfig r =
+      loadRigFile(std::string(DRIVETRAIN_SOURCE_DIR) + "/config/gearboxes/seed_servo.yaml");
   r.calibration.present = true;
   return r;
 }
@@ -32,7 +33,8 @@ struct Feed {
   int next(Calibrator& c, const StiffnessEstimator& s, double torque) {
     const double t = i / rate, theta = speed * t;
     ++i;
-    return c.reading(t, theta, encoder.gearAngle(theta, torque), encoder.phase(theta), speed, torque, s, sample);
+    return c.reading(t, theta, encoder.gearAngle(theta, torque), encoder.phase(theta), speed,
+                     torque, s, sample);
   }
 };
 
@@ -62,7 +64,8 @@ BENCHMARK(BM_CalibratorReading);
 void BM_CalibratorWindow(benchmark::State& state) {
   Warmed w;
   for (auto _ : state) {
-    while (!(w.next() & Calibrator::kWindow)) {}  // one gear turn of readings, then the update
+    while (!(w.next() & Calibrator::kWindow)) {
+    }  // one gear turn of readings, then the update
   }
   w.report(state);
 }
@@ -71,12 +74,14 @@ BENCHMARK(BM_CalibratorWindow)->Unit(benchmark::kMillisecond);
 /// The reading that closes a loaded window alone: fit, features, the iterated EKF and the bands.
 void BM_CalibratorUpdate(benchmark::State& state) {
   Warmed w;
-  while (!(w.next() & Calibrator::kWindow)) {}
+  while (!(w.next() & Calibrator::kWindow)) {
+  }
   for (auto _ : state) {
     state.PauseTiming();
     for (int k = 0; k < 4990; ++k) w.next();  // a gear turn is 5,000 readings here
     state.ResumeTiming();
-    while (!(w.next() & Calibrator::kWindow)) {}
+    while (!(w.next() & Calibrator::kWindow)) {
+    }
   }
   w.report(state);
 }

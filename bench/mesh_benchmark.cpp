@@ -11,13 +11,15 @@ using namespace drivetrain_stiffness;
 
 namespace {
 const RigConfig& rig() {
-  static const RigConfig r = loadGearFile(DRIVETRAIN_SOURCE_DIR "/config/gearboxes/seed_servo.yaml");
+  static const RigConfig r =
+      loadGearFile(DRIVETRAIN_SOURCE_DIR "/config/gearboxes/seed_servo.yaml");
   return r;
 }
 }  // namespace
 
 static void BM_CompositeLookup(benchmark::State& state) {
-  const AntiBacklashMesh mesh(rig().gears, rig().anti_backlash, MeshStiffnessModel::kPotentialEnergy, 256);
+  const AntiBacklashMesh mesh(rig().gears, rig().anti_backlash,
+                              MeshStiffnessModel::kPotentialEnergy, 256);
   double phase = 0.0;
   for (auto _ : state) {
     phase += 0.0123456;  // sweep the period like a rotating pinion
@@ -28,7 +30,8 @@ static void BM_CompositeLookup(benchmark::State& state) {
 BENCHMARK(BM_CompositeLookup);
 
 static void BM_DriveLookup(benchmark::State& state) {
-  const AntiBacklashMesh mesh(rig().gears, rig().anti_backlash, MeshStiffnessModel::kPotentialEnergy, 256);
+  const AntiBacklashMesh mesh(rig().gears, rig().anti_backlash,
+                              MeshStiffnessModel::kPotentialEnergy, 256);
   double phase = 0.0;
   for (auto _ : state) {
     phase += 0.0123456;

@@ -9,7 +9,8 @@
 //    are kept (none decomposed);
 //  - BM_PipelineEncoderRunUp: RigPipeline with torque and joint_states at 1 kHz each through a
 //    run-up 0 -> 6000 rpm in 10 s (model seconds per second of work = the real-time factor).
-// Run: devel/lib/drivetrain_stiffness/motion_benchmark --benchmark_repetitions=3 --benchmark_report_aggregates_only=true
+// Run: devel/lib/drivetrain_stiffness/motion_benchmark --benchmark_repetitions=3
+// --benchmark_report_aggregates_only=true
 #include <benchmark/benchmark.h>
 
 #include <cmath>
@@ -29,8 +30,8 @@ const RigConfig& rig() {
   return r;
 }
 std::shared_ptr<const AntiBacklashMesh> mesh() {
-  static const auto m =
-      std::make_shared<const AntiBacklashMesh>(rig().gears, rig().anti_backlash, rig().mesh_model, rig().mesh_samples);
+  static const auto m = std::make_shared<const AntiBacklashMesh>(
+      rig().gears, rig().anti_backlash, rig().mesh_model, rig().mesh_samples);
   return m;
 }
 
@@ -50,9 +51,11 @@ static void BM_SlicedPropagation(benchmark::State& state) {
     if (!prop.propagate(y, phase, f, 1e-3, force)) state.SkipWithError("left the linear regime");
   }
   benchmark::DoNotOptimize(y);
-  state.counters["model_s_per_s"] = benchmark::Counter(1e-3 * static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
+  state.counters["model_s_per_s"] = benchmark::Counter(
+      1e-3 * static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
   state.counters["crossings_per_step"] =
-      static_cast<double>(prop.slicesCrossed() - crossed0) / static_cast<double>(std::max<benchmark::IterationCount>(1, state.iterations()));
+      static_cast<double>(prop.slicesCrossed() - crossed0) /
+      static_cast<double>(std::max<benchmark::IterationCount>(1, state.iterations()));
 }
 BENCHMARK(BM_SlicedPropagation)->Arg(100)->Arg(1000)->Arg(6000);
 
@@ -73,7 +76,8 @@ static void BM_SliceDecomposition(benchmark::State& state) {
     prop.propagate(y, phase, 333.33333333333331, 3e-3, 17.7);
   }
   state.counters["decompositions_per_iteration"] =
-      static_cast<double>(prop.decompositions()) / static_cast<double>(std::max<benchmark::IterationCount>(1, state.iterations()));
+      static_cast<double>(prop.decompositions()) /
+      static_cast<double>(std::max<benchmark::IterationCount>(1, state.iterations()));
 }
 BENCHMARK(BM_SliceDecomposition)->Unit(benchmark::kMicrosecond);
 
@@ -105,12 +109,18 @@ static void advanceAfterBearingChange(benchmark::State& state, double drift) {
   }
   benchmark::DoNotOptimize(y);
   const double n = static_cast<double>(std::max<benchmark::IterationCount>(1, state.iterations()));
-  state.counters["decompositions_per_advance"] = static_cast<double>(prop.decompositions() - all0) / n;
-  state.counters["general_per_advance"] = static_cast<double>(prop.generalDecompositions() - general0) / n;
+  state.counters["decompositions_per_advance"] =
+      static_cast<double>(prop.decompositions() - all0) / n;
+  state.counters["general_per_advance"] =
+      static_cast<double>(prop.generalDecompositions() - general0) / n;
 }
-static void BM_AdvanceAfterBearingChange(benchmark::State& state) { advanceAfterBearingChange(state, 1e-9); }
+static void BM_AdvanceAfterBearingChange(benchmark::State& state) {
+  advanceAfterBearingChange(state, 1e-9);
+}
 BENCHMARK(BM_AdvanceAfterBearingChange)->Arg(2000)->Arg(6000)->Unit(benchmark::kMicrosecond);
-static void BM_AdvanceAfterKeptBearingChange(benchmark::State& state) { advanceAfterBearingChange(state, 0.0); }
+static void BM_AdvanceAfterKeptBearingChange(benchmark::State& state) {
+  advanceAfterBearingChange(state, 0.0);
+}
 BENCHMARK(BM_AdvanceAfterKeptBearingChange)->Arg(6000)->Unit(benchmark::kMicrosecond);
 
 static void BM_PipelineEncoderRunUp(benchmark::State& state) {
@@ -120,7 +130,8 @@ static void BM_PipelineEncoderRunUp(benchmark::State& state) {
   const double a = 6000.0 / 60.0 * kTwoPi / 10.0;  // [rad/s^2]: 0 -> 6000 rpm in 10 s
   long k = 0;
   auto step = [&] {
-    const double t = 1e-3 * static_cast<double>(k % 10000);  // the run-up repeats (a restart every 10 s)
+    const double t =
+        1e-3 * static_cast<double>(k % 10000);  // the run-up repeats (a restart every 10 s)
     const std::int64_t ns = kEpoch + 1000000LL * k;
     pipeline.torque(Stamp{ns}, 0.1, sink);
     MotionInput m;
@@ -131,7 +142,8 @@ static void BM_PipelineEncoderRunUp(benchmark::State& state) {
   };
   for (int i = 0; i < 1000; ++i) step();
   for (auto _ : state) step();
-  state.counters["model_s_per_s"] = benchmark::Counter(1e-3 * static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
+  state.counters["model_s_per_s"] = benchmark::Counter(
+      1e-3 * static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
   state.counters["dynamics_errors"] = static_cast<double>(pipeline.counters().dynamics_errors);
 }
 BENCHMARK(BM_PipelineEncoderRunUp)->Iterations(10000);

@@ -27,8 +27,8 @@ std::vector<double> outputTimes(double t_end, double interval) {
 }
 }  // namespace
 
-PeerResult odeintDopri5(const GearRotorModel& m, const State6& y0, double t_end, double interval, double rtol,
-                        double atol, const SampleObserver& observe) {
+PeerResult odeintDopri5(const GearRotorModel& m, const State6& y0, double t_end, double interval,
+                        double rtol, double atol, const SampleObserver& observe) {
   using State = std::array<double, 6>;
   State x;
   for (int i = 0; i < 6; ++i) x[i] = y0[i];
@@ -41,8 +41,8 @@ PeerResult odeintDopri5(const GearRotorModel& m, const State6& y0, double t_end,
   };
   const std::vector<double> times = outputTimes(t_end, interval);
   r.steps = static_cast<long>(odeint::integrate_times(
-      odeint::make_dense_output(atol, rtol, odeint::runge_kutta_dopri5<State>()), system, x, times.begin(), times.end(),
-      interval * 0.5, [&](const State& s, double t) {
+      odeint::make_dense_output(atol, rtol, odeint::runge_kutta_dopri5<State>()), system, x,
+      times.begin(), times.end(), interval * 0.5, [&](const State& s, double t) {
         State6 y;
         for (int i = 0; i < 6; ++i) y[i] = s[i];
         observe(t, y);
@@ -50,8 +50,9 @@ PeerResult odeintDopri5(const GearRotorModel& m, const State6& y0, double t_end,
   return r;
 }
 
-PeerResult odeintRosenbrock4(const GearRotorModel& m, const State6& y0, double t_end, double interval, double rtol,
-                             double atol, const SampleObserver& observe) {
+PeerResult odeintRosenbrock4(const GearRotorModel& m, const State6& y0, double t_end,
+                             double interval, double rtol, double atol,
+                             const SampleObserver& observe) {
   using Vector = boost::numeric::ublas::vector<double>;
   using Matrix = boost::numeric::ublas::matrix<double>;
   Vector x(6);
@@ -75,13 +76,14 @@ PeerResult odeintRosenbrock4(const GearRotorModel& m, const State6& y0, double t
   };
   PeerResult r;
   const std::vector<double> times = outputTimes(t_end, interval);
-  r.steps = static_cast<long>(odeint::integrate_times(
-      odeint::make_dense_output(atol, rtol, odeint::rosenbrock4<double>()), std::make_pair(rhs, jac), x, times.begin(),
-      times.end(), interval * 0.5, [&](const Vector& s, double t) {
-        State6 y;
-        for (int i = 0; i < 6; ++i) y[i] = s[i];
-        observe(t, y);
-      }));
+  r.steps = static_cast<long>(
+      odeint::integrate_times(odeint::make_dense_output(atol, rtol, odeint::rosenbrock4<double>()),
+                              std::make_pair(rhs, jac), x, times.begin(), times.end(),
+                              interval * 0.5, [&](const Vector& s, double t) {
+                                State6 y;
+                                for (int i = 0; i < 6; ++i) y[i] = s[i];
+                                observe(t, y);
+                              }));
   return r;
 }
 
@@ -99,7 +101,8 @@ int cvodeRhs(sunrealtype t, N_Vector y, N_Vector ydot, void* user) {
   return 0;
 }
 
-int cvodeJac(sunrealtype t, N_Vector y, N_Vector, SUNMatrix j, void* user, N_Vector, N_Vector, N_Vector) {
+int cvodeJac(sunrealtype t, N_Vector y, N_Vector, SUNMatrix j, void* user, N_Vector, N_Vector,
+             N_Vector) {
   const auto* u = static_cast<CvodeUser*>(user);
   State6 s;
   for (int i = 0; i < 6; ++i) s[i] = NV_Ith_S(y, i);
@@ -110,10 +113,11 @@ int cvodeJac(sunrealtype t, N_Vector y, N_Vector, SUNMatrix j, void* user, N_Vec
 }
 }  // namespace
 
-PeerResult cvodeBdf(const GearRotorModel& m, const State6& y0, double t_end, double interval, double rtol, double atol,
-                    const SampleObserver& observe) {
+PeerResult cvodeBdf(const GearRotorModel& m, const State6& y0, double t_end, double interval,
+                    double rtol, double atol, const SampleObserver& observe) {
   SUNContext ctx = nullptr;
-  if (SUNContext_Create(nullptr, &ctx) != 0) throw std::runtime_error("CVODE: SUNContext_Create failed");
+  if (SUNContext_Create(nullptr, &ctx) != 0)
+    throw std::runtime_error("CVODE: SUNContext_Create failed");
   N_Vector y = N_VNew_Serial(6, ctx);
   for (int i = 0; i < 6; ++i) NV_Ith_S(y, i) = y0[i];
   void* mem = CVodeCreate(CV_BDF, ctx);
@@ -131,7 +135,8 @@ PeerResult cvodeBdf(const GearRotorModel& m, const State6& y0, double t_end, dou
   const long n = std::lround(t_end / interval);
   for (long i = 1; i <= n; ++i) {
     sunrealtype t = 0.0;
-    if (CVode(mem, i * interval, y, &t, CV_NORMAL) < 0) throw std::runtime_error("CVODE: integration failed");
+    if (CVode(mem, i * interval, y, &t, CV_NORMAL) < 0)
+      throw std::runtime_error("CVODE: integration failed");
     State6 s;
     for (int k = 0; k < 6; ++k) s[k] = NV_Ith_S(y, k);
     observe(i * interval, s);

@@ -20,12 +20,13 @@ using SampleObserver = std::function<void(double t, const State6& y)>;
 
 /// Integrates from (0, y0) to t_end, observing at multiples of `interval`; relative and absolute
 /// tolerances as given (absolute on every component).
-PeerResult odeintDopri5(const GearRotorModel& m, const State6& y0, double t_end, double interval, double rtol,
-                        double atol, const SampleObserver& observe);
-PeerResult odeintRosenbrock4(const GearRotorModel& m, const State6& y0, double t_end, double interval, double rtol,
-                             double atol, const SampleObserver& observe);
-PeerResult cvodeBdf(const GearRotorModel& m, const State6& y0, double t_end, double interval, double rtol, double atol,
-                    const SampleObserver& observe);
+PeerResult odeintDopri5(const GearRotorModel& m, const State6& y0, double t_end, double interval,
+                        double rtol, double atol, const SampleObserver& observe);
+PeerResult odeintRosenbrock4(const GearRotorModel& m, const State6& y0, double t_end,
+                             double interval, double rtol, double atol,
+                             const SampleObserver& observe);
+PeerResult cvodeBdf(const GearRotorModel& m, const State6& y0, double t_end, double interval,
+                    double rtol, double atol, const SampleObserver& observe);
 
 }  // namespace bench
 }  // namespace drivetrain_stiffness

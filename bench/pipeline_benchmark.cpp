@@ -3,10 +3,11 @@
 // output) against one shed under backlog (rules and dynamics only), the ratio that tells how much
 // an overloaded node gains by shedding (docs/reliability.md, "Overload"). The node adds roscpp's
 // deserialization and one publish per output on top. BM_TorqueStepResponse: what a torque input
-// stamped between two output samples adds at the nominal phase (the own-stamp rule: the exact response to a
-// unit step at its instant, PeriodicExponentialPropagator::torqueStepResponse), at the live 1 kHz
-// output grid of the seed rig at 1000 rpm. BM_ExponentialSetUp: building those propagators.
-// Run: devel/lib/drivetrain_stiffness/pipeline_benchmark --benchmark_repetitions=3 --benchmark_report_aggregates_only=true
+// stamped between two output samples adds at the nominal phase (the own-stamp rule: the exact
+// response to a unit step at its instant, PeriodicExponentialPropagator::torqueStepResponse), at
+// the live 1 kHz output grid of the seed rig at 1000 rpm. BM_ExponentialSetUp: building those
+// propagators. Run: devel/lib/drivetrain_stiffness/pipeline_benchmark --benchmark_repetitions=3
+// --benchmark_report_aggregates_only=true
 #include <benchmark/benchmark.h>
 
 #include <cmath>
@@ -29,7 +30,8 @@ void torqueInputs(benchmark::State& state, Backlog backlog) {
   for (auto _ : state) feed.next(backlog);
   benchmark::DoNotOptimize(feed.checksum());
   state.counters["model_s_per_s"] =
-      benchmark::Counter(RippleTorqueFeed::kInterval * static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
+      benchmark::Counter(RippleTorqueFeed::kInterval * static_cast<double>(state.iterations()),
+                         benchmark::Counter::kIsRate);
 }
 
 }  // namespace
@@ -48,8 +50,9 @@ static void BM_TorqueStepResponse(benchmark::State& state) {
   long k = 0;
   for (auto _ : state) {
     // Instants spread over the interval (golden-ratio steps), intervals over the mesh period.
-    const double offset = dynamics.outputInterval() * (0.6180339887 * static_cast<double>(k) -
-                                                        std::floor(0.6180339887 * static_cast<double>(k)));
+    const double offset =
+        dynamics.outputInterval() *
+        (0.6180339887 * static_cast<double>(k) - std::floor(0.6180339887 * static_cast<double>(k)));
     benchmark::DoNotOptimize(propagator.torqueStepResponse(k++, offset));
   }
 }
@@ -64,7 +67,8 @@ static void BM_ExponentialSetUp(benchmark::State& state) {
   dynamics.reset(0.0, 0.1);
   long steps = 0;
   for (auto _ : state) {
-    const PeriodicExponentialPropagator propagator(dynamics.model(), 0.0, dynamics.outputInterval(), 1.0, true);
+    const PeriodicExponentialPropagator propagator(dynamics.model(), 0.0, dynamics.outputInterval(),
+                                                   1.0, true);
     steps = propagator.magnusSteps();
     benchmark::DoNotOptimize(propagator.monodromy());
   }

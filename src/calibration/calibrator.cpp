@@ -24,11 +24,15 @@ const char* toString(WindowOutcome outcome) {
     case WindowOutcome::kBaseline: return "baseline";
     case WindowOutcome::kUpdated: return "updated";
     case WindowOutcome::kGated: return "gated (normalised innovation above ~gate)";
-    case WindowOutcome::kNoBaseline: return "no baseline yet (needs a window at |torque| <= ~baseline_torque)";
+    case WindowOutcome::kNoBaseline:
+      return "no baseline yet (needs a window at |torque| <= ~baseline_torque)";
     case WindowOutcome::kTooSlow: return "not excited: slower than ~min_speed_rpm";
-    case WindowOutcome::kNotQuasiStatic: return "not excited: mesh frequency above ~max_mesh_to_natural of the lowest mode";
-    case WindowOutcome::kTooSparse: return "not excited: too few readings per mesh period for the second harmonic";
-    case WindowOutcome::kIllConditioned: return "not excited: the readings do not determine the shaft orders";
+    case WindowOutcome::kNotQuasiStatic:
+      return "not excited: mesh frequency above ~max_mesh_to_natural of the lowest mode";
+    case WindowOutcome::kTooSparse:
+      return "not excited: too few readings per mesh period for the second harmonic";
+    case WindowOutcome::kIllConditioned:
+      return "not excited: the readings do not determine the shaft orders";
   }
   return "?";
 }
@@ -46,14 +50,16 @@ const RigConfig& required(const std::shared_ptr<const RigConfig>& rig) {
 
 Calibrator::Calibrator(const RigConfig& rig) : Calibrator(std::make_shared<const RigConfig>(rig)) {}
 
-Calibrator::Calibrator(std::shared_ptr<const RigConfig> shared_rig, std::shared_ptr<const AntiBacklashMesh> mesh)
+Calibrator::Calibrator(std::shared_ptr<const RigConfig> shared_rig,
+                       std::shared_ptr<const AntiBacklashMesh> mesh)
     : rig_(std::move(shared_rig)),
       config_(required(rig_).calibration),
       model_(*rig_, std::move(mesh)),
       regression_(rig_->gears.teeth[0], rig_->gears.teeth[1]) {
   const RigConfig& rig = *rig_;
   if (!config_.present) throw InvalidInput("calibration: the gearbox has no calibration block");
-  if (!rig.dynamics.present) throw InvalidInput("calibration: needs the gearbox's dynamics block (masses for the modes)");
+  if (!rig.dynamics.present)
+    throw InvalidInput("calibration: needs the gearbox's dynamics block (masses for the modes)");
   teeth_[0] = rig.gears.teeth[0];
   teeth_[1] = rig.gears.teeth[1];
   // Whole turns of both encoders shift x by 2 pi (m r_b,p + n r_b,g); with r_b proportional to z
@@ -63,13 +69,13 @@ Calibrator::Calibrator(std::shared_ptr<const RigConfig> shared_rig, std::shared_
   progress_.window_angle = gear_turn_;
   const CalibrationConfig& c = config_;
   CalibrationVector mean;
-  mean << c.mesh_stiffness_scale.mean, c.pinion_bearing_scale.mean, c.gear_bearing_scale.mean, c.preload_torque.mean,
-      c.te_offset.mean;
-  estimate_.prior_std << c.mesh_stiffness_scale.std, c.pinion_bearing_scale.std, c.gear_bearing_scale.std,
-      c.preload_torque.std, c.te_offset.std;
+  mean << c.mesh_stiffness_scale.mean, c.pinion_bearing_scale.mean, c.gear_bearing_scale.mean,
+      c.preload_torque.mean, c.te_offset.mean;
+  estimate_.prior_std << c.mesh_stiffness_scale.std, c.pinion_bearing_scale.std,
+      c.gear_bearing_scale.std, c.preload_torque.std, c.te_offset.std;
   CalibrationVector reference;
-  reference << c.mesh_stiffness_scale.reference(), c.pinion_bearing_scale.reference(), c.gear_bearing_scale.reference(),
-      c.preload_torque.reference(), c.te_offset.reference();
+  reference << c.mesh_stiffness_scale.reference(), c.pinion_bearing_scale.reference(),
+      c.gear_bearing_scale.reference(), c.preload_torque.reference(), c.te_offset.reference();
   if (!(rig.anti_backlash.spring_stiffness > 0.0)) {  // no scissor spring
     estimate_.prior_std[kPreloadTorque] = 0.0;
     reference[kPreloadTorque] = 0.0;
@@ -114,8 +120,9 @@ void Calibrator::interrupt() {
   filtered_torque_.reset();
 }
 
-int Calibrator::reading(double t, double pinion, double gear, double phase, double speed, double torque,
-                        const StiffnessEstimator& supports, MeasuredTeSample& sample) {
+int Calibrator::reading(double t, double pinion, double gear, double phase, double speed,
+                        double torque, const StiffnessEstimator& supports,
+                        MeasuredTeSample& sample) {
   ++progress_.readings;
   // 1. The measured TE, reduced onto the lattice around the first one.
   const double raw = model_.baseRadius()[0] * pinion + model_.baseRadius()[1] * gear;
@@ -179,7 +186,8 @@ int Calibrator::reading(double t, double pinion, double gear, double phase, doub
     } else {
       model_.shaftDeflection(torque, supports, shafts);
     }
-    sample.predicted = model_.at(estimate_.value, phase, torque, shafts, base_torque_, base_shafts_);
+    sample.predicted =
+        model_.at(estimate_.value, phase, torque, shafts, base_torque_, base_shafts_);
     sample.residual = sample.te - sample.predicted;
     sample.torque = torque;
     sample.phase = phase;
@@ -189,10 +197,12 @@ int Calibrator::reading(double t, double pinion, double gear, double phase, doub
 }
 
 bool Calibrator::inBand(double torque) const {
-  return std::abs(torque - window_.torque0) <= config_.torque_band + 0.01 * std::abs(window_.torque0);
+  return std::abs(torque - window_.torque0) <=
+         config_.torque_band + 0.01 * std::abs(window_.torque0);
 }
 
-WindowOutcome Calibrator::excitation(double speed, double duration, double& value, double& limit) const {
+WindowOutcome Calibrator::excitation(double speed, double duration, double& value,
+                                     double& limit) const {
   const double rpm = std::abs(speed) * 60.0 / kTwoPi;
   value = rpm;
   limit = config_.min_speed_rpm;
@@ -201,7 +211,8 @@ WindowOutcome Calibrator::excitation(double speed, double duration, double& valu
   const double lowest = estimate_.natural_frequency[0];
   value = mesh_hz;
   limit = config_.max_mesh_to_natural * lowest;
-  if (lowest > 0.0 && mesh_hz > config_.max_mesh_to_natural * lowest) return WindowOutcome::kNotQuasiStatic;
+  if (lowest > 0.0 && mesh_hz > config_.max_mesh_to_natural * lowest)
+    return WindowOutcome::kNotQuasiStatic;
   // The second mesh harmonic below 0.45 of the reading rate (Nyquist with a margin).
   const double rate = duration > 0.0 ? static_cast<double>(window_.n - 1) / duration : 0.0;
   value = rate;
@@ -226,7 +237,8 @@ void Calibrator::closeWindow(const StiffnessEstimator& supports) {
   estimate_.window_speed = speed;
   progress_.smallest_torque = std::min(progress_.smallest_torque, std::abs(torque));
   if (std::abs(torque) > config_.baseline_torque) ++progress_.loaded_windows;
-  if (estimate_.natural_frequency[0] == 0.0) outputs(torque, supports);  // the modes, for the first check
+  if (estimate_.natural_frequency[0] == 0.0)
+    outputs(torque, supports);  // the modes, for the first check
   OrderRegression::Fit fit;
   double value = 0.0, limit = 0.0;
   WindowOutcome outcome = excitation(speed, window_.t1 - window_.t0, value, limit);
@@ -250,7 +262,8 @@ void Calibrator::closeWindow(const StiffnessEstimator& supports) {
     const double k = static_cast<double>(++base_count_);
     base_torque_ += (torque - base_torque_) / k;
     base_mean_ += (fit.mean - base_mean_) / k;
-    for (int h = 0; h < OrderRegression::kMeshHarmonics; ++h) base_harmonics_[h] += (fit.harmonics[h] - base_harmonics_[h]) / k;
+    for (int h = 0; h < OrderRegression::kMeshHarmonics; ++h)
+      base_harmonics_[h] += (fit.harmonics[h] - base_harmonics_[h]) / k;
     // Variance of the running mean: the windows' own variances / k (between-window scatter is
     // checked by the NIS of the loaded windows).
     base_mean_var_ += (fit.mean_std * fit.mean_std - base_mean_var_) / k;
@@ -285,7 +298,8 @@ void Calibrator::closeWindow(const StiffnessEstimator& supports) {
 }
 
 FeatureVector Calibrator::predict(const CalibrationVector& state, double torque) const {
-  return model_.sampledFeatures(toParameters(state), torque, shafts_, base_torque_, base_shafts_, sampled_);
+  return model_.sampledFeatures(toParameters(state), torque, shafts_, base_torque_, base_shafts_,
+                                sampled_);
 }
 
 void Calibrator::update(const FeatureVector& z, const FeatureVector& z_std, double torque) {
@@ -295,14 +309,17 @@ void Calibrator::update(const FeatureVector& z, const FeatureVector& z_std, doub
   const double t = window_.t1;
   const double dt = has_update_t_ ? std::max(0.0, t - last_update_t_) : 0.0;
   const CalibrationVector walk = (state_prior_std_.array() > 0.0).select(state_reference_std_, 0.0);
-  const CalibrationMatrix Q = ((config_.drift * config_.drift * dt) * walk.cwiseAbs2()).asDiagonal();
+  const CalibrationMatrix Q =
+      ((config_.drift * config_.drift * dt) * walk.cwiseAbs2()).asDiagonal();
   const CalibrationMatrix prior = state_covariance_ + Q;
 
-  auto jacobian = [&](const CalibrationVector& p, Eigen::Matrix<double, kFeatureSize, kCalibrationSize>& H) {
+  auto jacobian = [&](const CalibrationVector& p,
+                      Eigen::Matrix<double, kFeatureSize, kCalibrationSize>& H) {
     H.setZero();
     // Closed-form columns where the features are simple in the parameter: the offset adds to the
     // mean; a bearing scale s divides its shaft's deflection (d/ds (u/s) = -u/s^2), which is the
-    // same at every phase, so it moves the mean only. The mesh scale and T_p by central differences.
+    // same at every phase, so it moves the mean only. The mesh scale and T_p by central
+    // differences.
     H(0, kTeOffset) = state_prior_std_[kTeOffset] > 0.0 ? 1.0 : 0.0;
     for (int s = 0; s < 2; ++s) {
       const int i = s == 0 ? kPinionBearingScale : kGearBearingScale;
@@ -317,12 +334,13 @@ void Calibrator::update(const FeatureVector& z, const FeatureVector& z_std, doub
       H.col(i) = (predict(a, torque) - predict(b, torque)) / (2.0 * step);
     }
   };
-  // Measurement noise: the window's own, the relative model error and the floor (docs/calibration.md).
-  // The model error repeats at an operating point: the n-th window there carries n times its
-  // variance, so a long dwell adds no more than one window's worth of model information.
-  // N (the fit's, the baseline's and the floor's variance) and M (the model error) apart, for
-  // model_error_ (model_error_scale.hpp).
-  Eigen::Matrix<double, kFeatureSize, kFeatureSize> R = Eigen::Matrix<double, kFeatureSize, kFeatureSize>::Zero();
+  // Measurement noise: the window's own, the relative model error and the floor
+  // (docs/calibration.md). The model error repeats at an operating point: the n-th window there
+  // carries n times its variance, so a long dwell adds no more than one window's worth of model
+  // information. N (the fit's, the baseline's and the floor's variance) and M (the model error)
+  // apart, for model_error_ (model_error_scale.hpp).
+  Eigen::Matrix<double, kFeatureSize, kFeatureSize> R =
+      Eigen::Matrix<double, kFeatureSize, kFeatureSize>::Zero();
   const FeatureVector h0 = predict(state_, torque);
   const double repeats = static_cast<double>(countAtOperatingPoint(torque));
   FeatureVector noise, model_variance;
@@ -331,7 +349,8 @@ void Calibrator::update(const FeatureVector& z, const FeatureVector& z_std, doub
     noise[i] = z_std[i] * z_std[i] + config_.te_noise_floor * config_.te_noise_floor;
     model_variance[i] = repeats * model * model;
     // Summed in the order R always was, not as noise + model_variance: the same bits as before.
-    R(i, i) = z_std[i] * z_std[i] + model_variance[i] + config_.te_noise_floor * config_.te_noise_floor;
+    R(i, i) =
+        z_std[i] * z_std[i] + model_variance[i] + config_.te_noise_floor * config_.te_noise_floor;
   }
   Eigen::Matrix<double, kFeatureSize, kCalibrationSize> H;
   jacobian(state_, H);
@@ -349,7 +368,8 @@ void Calibrator::update(const FeatureVector& z, const FeatureVector& z_std, doub
     return;
   }
   model_error_.predict(Q);
-  const FeatureVector variance = model_error_.innovationVariance(H, noise);  // before the update, at the prior's H
+  const FeatureVector variance =
+      model_error_.innovationVariance(H, noise);  // before the update, at the prior's H
   // Iterated EKF (Gauss-Newton on the posterior mode): relinearise at the new estimate.
   CalibrationVector theta = state_;
   Eigen::Matrix<double, kCalibrationSize, kFeatureSize> K;
@@ -361,9 +381,11 @@ void Calibrator::update(const FeatureVector& z, const FeatureVector& z_std, doub
     CalibrationVector next = state_ + K * (z - h - H * (state_ - theta));
     // Physical bounds: scales in [0.05, 20) as the YAML loader's, a preload torque >= 0.
     next[kMeshScale] = std::clamp(next[kMeshScale], 0.05, 19.9);
-    for (int i : {kPinionBearingScale, kGearBearingScale}) next[i] = std::clamp(next[i], 1.0 / 19.9, 1.0 / 0.05);
+    for (int i : {kPinionBearingScale, kGearBearingScale})
+      next[i] = std::clamp(next[i], 1.0 / 19.9, 1.0 / 0.05);
     next[kPreloadTorque] = std::max(0.0, next[kPreloadTorque]);
-    const double moved = ((next - theta).cwiseQuotient(state_prior_std_.cwiseMax(1e-300))).cwiseAbs().maxCoeff();
+    const double moved =
+        ((next - theta).cwiseQuotient(state_prior_std_.cwiseMax(1e-300))).cwiseAbs().maxCoeff();
     theta = next;
     if (moved < 1e-6) break;
   }
@@ -413,7 +435,8 @@ double Calibrator::spreadOf(F&& f, std::uint32_t depends_on) const {
   return std::sqrt(std::max(0.0, g.dot(covariance_ * g)));
 }
 
-CalibrationBands Calibrator::bands(double torque, const StiffnessEstimator& supports, bool with_modes) const {
+CalibrationBands Calibrator::bands(double torque, const StiffnessEstimator& supports,
+                                   bool with_modes) const {
   CalibrationBands out;
   out.calibrated = estimate_.updates > 0;
   const CalibrationVector& theta = estimate_.value;
@@ -430,7 +453,8 @@ CalibrationBands Calibrator::bands(double torque, const StiffnessEstimator& supp
   std::array<double, 2> unit{0.0, 0.0};
   for (std::size_t i = 0; i < rig_->bearings.size(); ++i) {
     const SupportEstimate& s = supports.current().supports[i];
-    unit[rig_->bearings[i].shaft] += s.solution.radialStiffness() / supports.supportConfig(i).stiffness_scale;
+    unit[rig_->bearings[i].shaft] +=
+        s.solution.radialStiffness() / supports.supportConfig(i).stiffness_scale;
   }
   for (int s = 0; s < 2; ++s) {
     const int index = s == 0 ? kPinionBearingScale : kGearBearingScale;
@@ -441,8 +465,10 @@ CalibrationBands Calibrator::bands(double torque, const StiffnessEstimator& supp
   if (!with_modes) return out;
   // Natural frequencies of the calibrated model (modal_analysis.hpp), each with its band.
   auto modes = [&](const CalibrationVector& p) {
-    const std::array<double, 2> kb{p[kPinionBearingScale] * unit[0], p[kGearBearingScale] * unit[1]};
-    return modalAnalysis(rigRotorParameters(*rig_, supports.mesh(), kb), model_.meanMeshStiffness(p, torque));
+    const std::array<double, 2> kb{p[kPinionBearingScale] * unit[0],
+                                   p[kGearBearingScale] * unit[1]};
+    return modalAnalysis(rigRotorParameters(*rig_, supports.mesh(), kb),
+                         model_.meanMeshStiffness(p, torque));
   };
   const std::array<Mode, 3> m = modes(theta);
   // The three frequencies' gradients together: two modal analyses per parameter that moves them.
@@ -454,7 +480,8 @@ CalibrationBands Calibrator::bands(double torque, const StiffnessEstimator& supp
     a[i] += step;
     b[i] -= step;
     const std::array<Mode, 3> ma = modes(a), mb = modes(b);
-    for (int k = 0; k < 3; ++k) G(k, i) = (ma[k].natural_frequency - mb[k].natural_frequency) / (2.0 * step);
+    for (int k = 0; k < 3; ++k)
+      G(k, i) = (ma[k].natural_frequency - mb[k].natural_frequency) / (2.0 * step);
   }
   const Eigen::Matrix3d frequency_covariance = G * P * G.transpose();
   for (int i = 0; i < 3; ++i) {
@@ -490,14 +517,17 @@ void Calibrator::outputs(double torque, const StiffnessEstimator& supports) {
   // reported covariance: information the windows seem to give but their model error takes back
   // (c > 1) does not count.
   for (int i = 0; i < kCalibrationSize; ++i) {
-    e.identified[i] = state_prior_std_[i] > 0.0 && std::sqrt(std::max(0.0, P(i, i))) < 0.5 * state_reference_std_[i];
+    e.identified[i] = state_prior_std_[i] > 0.0 &&
+                      std::sqrt(std::max(0.0, P(i, i))) < 0.5 * state_reference_std_[i];
   }
   // Series compliance at the reference torque: mean TE above zero torque over the mesh force.
   const double tr = config_.reference_torque;
   model_.shaftDeflection(tr, supports, scratch_);
   const std::array<double, 2> zero{0.0, 0.0};
   const double fr = model_.meshForce(tr);
-  auto compliance = [&](const CalibrationVector& p) { return (model_.features(p, tr, scratch_, 0.0, zero)[0] - p[kTeOffset]) / fr; };
+  auto compliance = [&](const CalibrationVector& p) {
+    return (model_.features(p, tr, scratch_, 0.0, zero)[0] - p[kTeOffset]) / fr;
+  };
   e.series_compliance = compliance(theta);
   e.series_compliance_std = spreadOf(compliance);
   // Stiffness and natural frequencies at the window's torque, with their bands.
@@ -518,7 +548,8 @@ void Calibrator::outputs(double torque, const StiffnessEstimator& supports) {
 
 double CalibrationProgress::windowSeconds(double speed) const {
   // The window rule closes a window once its readings span window_angle of pinion angle.
-  return std::abs(speed) > 0.0 ? window_angle / std::abs(speed) : std::numeric_limits<double>::infinity();
+  return std::abs(speed) > 0.0 ? window_angle / std::abs(speed)
+                               : std::numeric_limits<double>::infinity();
 }
 
 namespace {
@@ -534,7 +565,8 @@ bool nearer(const SteadyStretch& a, const SteadyStretch& b) {
 void keep(CalibrationProgress& p, const SteadyStretch& s, double baseline_torque) {
   if (s.readings == 0) return;
   p.smallest_torque = std::min(p.smallest_torque, std::abs(s.torque));
-  // Unloaded or loaded by the rule a closed window is judged by (closeWindow: |T| <= ~baseline_torque).
+  // Unloaded or loaded by the rule a closed window is judged by (closeWindow: |T| <=
+  // ~baseline_torque).
   SteadyStretch& kept = std::abs(s.torque) <= baseline_torque ? p.unloaded : p.loaded;
   if (nearer(s, kept)) kept = s;
 }
@@ -547,7 +579,9 @@ std::string format(const char* spec, Args... args) {
   return buffer;
 }
 
-std::string windowsCount(std::uint64_t n) { return format(n == 1 ? "%llu window" : "%llu windows", static_cast<unsigned long long>(n)); }
+std::string windowsCount(std::uint64_t n) {
+  return format(n == 1 ? "%llu window" : "%llu windows", static_cast<unsigned long long>(n));
+}
 
 }  // namespace
 
@@ -579,37 +613,48 @@ std::string Calibrator::waitingReason() const {
   // A stretch against the window it fell short of: one gear turn of pinion angle, in seconds at
   // the stretch's own mean speed.
   auto shortOf = [&](const SteadyStretch& s, const char* which) {
-    std::string out = format("the longest steady %storque (%.3g N*m) lasted %.2f s, %.2f of a gear turn, and a window needs one gear turn",
-                             which, s.torque, s.duration, s.angle / p.window_angle);
+    std::string out = format(
+        "the longest steady %storque (%.3g N*m) lasted %.2f s, %.2f of a gear turn, and a window "
+        "needs one gear turn",
+        which, s.torque, s.duration, s.angle / p.window_angle);
     const double rpm = std::abs(s.speed) * 60.0 / kTwoPi;
-    out += rpm > 0.0 ? format(", %.2f s at %.4g rpm", p.windowSeconds(s.speed), rpm) : std::string(", and the pinion stood still");
+    out += rpm > 0.0 ? format(", %.2f s at %.4g rpm", p.windowSeconds(s.speed), rpm)
+                     : std::string(", and the pinion stood still");
     return out;
   };
-  const std::string no_unloaded =
-      format("no torque was held at |T| <= ~baseline_torque = %g N*m for the unloaded baseline (the smallest: %.3g N*m)", tb,
-             p.smallest_torque);
+  const std::string no_unloaded = format(
+      "no torque was held at |T| <= ~baseline_torque = %g N*m for the unloaded baseline (the "
+      "smallest: %.3g N*m)",
+      tb, p.smallest_torque);
   if (estimate_.windows == 0) {
-    std::string out = "no window closed: " + shortOf(nearer(p.unloaded, p.loaded) ? p.unloaded : p.loaded, "");
+    std::string out =
+        "no window closed: " + shortOf(nearer(p.unloaded, p.loaded) ? p.unloaded : p.loaded, "");
     if (p.unloaded.readings == 0) out += "; " + no_unloaded;
     return out;
   }
   // Windows closed, none updated: what closed, then why each kind fell short.
-  static const char* const kShort[kWindowOutcomes] = {"none", "baseline", "updated", "gated", "before any baseline",
-                                                       "too slow", "not quasi-static", "too sparse", "ill-conditioned"};
+  static const char* const kShort[kWindowOutcomes] = {
+      "none",     "baseline",         "updated",    "gated",          "before any baseline",
+      "too slow", "not quasi-static", "too sparse", "ill-conditioned"};
   std::string counts;
   for (int i = 0; i < kWindowOutcomes; ++i) {
     if (p.closed[i] == 0) continue;
-    counts += format("%s%llu %s", counts.empty() ? "" : ", ", static_cast<unsigned long long>(p.closed[i]), kShort[i]);
+    counts += format("%s%llu %s", counts.empty() ? "" : ", ",
+                     static_cast<unsigned long long>(p.closed[i]), kShort[i]);
   }
-  std::string out = "no window updated the calibration (" + windowsCount(estimate_.windows) + " closed: " + counts + ")";
+  std::string out = "no window updated the calibration (" + windowsCount(estimate_.windows) +
+                    " closed: " + counts + ")";
   auto clause = [&out](const std::string& text) { out += "; " + text; };
   const std::uint64_t unloaded_windows = estimate_.windows - p.loaded_windows;
   if (estimate_.baseline_windows == 0 && unloaded_windows == 0) {
-    clause(p.unloaded.readings > 0 ? "no unloaded baseline window: " + shortOf(p.unloaded, "unloaded ") : no_unloaded);
+    clause(p.unloaded.readings > 0
+               ? "no unloaded baseline window: " + shortOf(p.unloaded, "unloaded ")
+               : no_unloaded);
   }
   if (p.loaded_windows == 0) {
-    clause(p.loaded.readings > 0 ? "no loaded window closed: " + shortOf(p.loaded, "loaded ")
-                                 : format("no torque above ~baseline_torque = %g N*m was held", tb));
+    clause(p.loaded.readings > 0
+               ? "no loaded window closed: " + shortOf(p.loaded, "loaded ")
+               : format("no torque above ~baseline_torque = %g N*m was held", tb));
   }
   auto last = [&p](WindowOutcome o, std::size_t& i) {
     i = static_cast<std::size_t>(o);
@@ -617,22 +662,30 @@ std::string Calibrator::waitingReason() const {
   };
   std::size_t i = 0;
   if (const std::uint64_t n = last(WindowOutcome::kTooSlow, i)) {
-    clause(windowsCount(n) + format(" too slow: the last at %.3g rpm, below ~min_speed_rpm = %g", p.value[i], p.limit[i]));
+    clause(windowsCount(n) + format(" too slow: the last at %.3g rpm, below ~min_speed_rpm = %g",
+                                    p.value[i], p.limit[i]));
   }
   if (const std::uint64_t n = last(WindowOutcome::kNotQuasiStatic, i)) {
-    clause(windowsCount(n) + format(" not quasi-static: the last at a mesh frequency of %.4g Hz, above ~max_mesh_to_natural x "
+    clause(windowsCount(n) + format(" not quasi-static: the last at a mesh frequency of %.4g Hz, "
+                                    "above ~max_mesh_to_natural x "
                                     "the lowest natural frequency = %.4g Hz",
                                     p.value[i], p.limit[i]));
   }
   if (const std::uint64_t n = last(WindowOutcome::kTooSparse, i)) {
-    clause(windowsCount(n) + format(" too sparse: the last read at %.4g Hz, and its second mesh harmonic needs more than %.4g Hz",
+    clause(windowsCount(n) + format(" too sparse: the last read at %.4g Hz, and its second mesh "
+                                    "harmonic needs more than %.4g Hz",
                                     p.value[i], p.limit[i]));
   }
   if (const std::uint64_t n = last(WindowOutcome::kIllConditioned, i)) {
-    clause(windowsCount(n) + format(" ill-conditioned: the last one's %.0f readings do not determine the shaft orders", p.value[i]));
+    clause(
+        windowsCount(n) +
+        format(" ill-conditioned: the last one's %.0f readings do not determine the shaft orders",
+               p.value[i]));
   }
   if (const std::uint64_t n = last(WindowOutcome::kGated, i)) {
-    clause(windowsCount(n) + format(" gated: the last one's normalised innovation squared %.3g, above ~gate = %g", p.value[i], p.limit[i]));
+    clause(windowsCount(n) +
+           format(" gated: the last one's normalised innovation squared %.3g, above ~gate = %g",
+                  p.value[i], p.limit[i]));
   }
   return out;
 }

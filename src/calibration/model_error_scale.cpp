@@ -14,29 +14,35 @@ void ModelErrorScale::reset(const CalibrationMatrix& prior) {
   windows_ = 0;
 }
 
-FeatureVector ModelErrorScale::innovationVariance(const FeatureRows& H, const FeatureVector& noise) const {
+FeatureVector ModelErrorScale::innovationVariance(const FeatureRows& H,
+                                                  const FeatureVector& noise) const {
   const CalibrationMatrix P = covariance();
   FeatureVector v;
   for (int j = 0; j < kFeatureSize; ++j) v[j] = H.row(j).dot(P * H.row(j).transpose()) + noise[j];
   return v;
 }
 
-void ModelErrorScale::update(const FeatureVector& nu, const FeatureVector& variance, const FeatureVector& noise,
-                             const FeatureVector& model, const Gain& K, const FeatureRows& H) {
+void ModelErrorScale::update(const FeatureVector& nu, const FeatureVector& variance,
+                             const FeatureVector& noise, const FeatureVector& model, const Gain& K,
+                             const FeatureRows& H) {
   for (int j = 0; j < kFeatureSize; ++j) {
     const double a = variance[j], m = model[j], nu2 = nu[j] * nu[j];
-    if (!(m > 0.0) || !(a >= 0.0) || !std::isfinite(nu2)) continue;  // no allowance there: nothing to learn
+    if (!(m > 0.0) || !(a >= 0.0) || !std::isfinite(nu2))
+      continue;  // no allowance there: nothing to learn
     for (int k = 0; k < kGrid; ++k) {
-      const double v = a + gridValue(k) * m;  // the innovation's variance if the model error were c M
+      const double v =
+          a + gridValue(k) * m;  // the innovation's variance if the model error were c M
       score_[j][k] += m * (nu2 - v) / (v * v);
     }
     ++scored_[j];
   }
   // Joseph form with each part of the true noise: P_N takes K N K', P_Mj takes K_j M_j K_j'.
   const CalibrationMatrix IKH = CalibrationMatrix::Identity() - K * H;
-  noise_part_ = (IKH * noise_part_ * IKH.transpose()).eval() + K * noise.asDiagonal() * K.transpose();
+  noise_part_ =
+      (IKH * noise_part_ * IKH.transpose()).eval() + K * noise.asDiagonal() * K.transpose();
   for (int j = 0; j < kFeatureSize; ++j) {
-    model_part_[j] = (IKH * model_part_[j] * IKH.transpose()).eval() + model[j] * (K.col(j) * K.col(j).transpose());
+    model_part_[j] = (IKH * model_part_[j] * IKH.transpose()).eval() +
+                     model[j] * (K.col(j) * K.col(j).transpose());
   }
   ++windows_;
 }

@@ -15,10 +15,12 @@ OrderRegression::OrderRegression(int pinion_teeth, int gear_teeth) {
   if (gear_teeth <= 0) throwInvalid("gears.teeth[1]", gear_teeth, "must be > 0");
   const double r = static_cast<double>(pinion_teeth) / gear_teeth;
   for (double o : {1.0, 2.0, r, 2.0 * r}) {
-    const bool known = std::any_of(orders_.begin(), orders_.begin() + orders_count_, [&](double x) { return std::abs(x - o) < 1e-9; });
+    const bool known = std::any_of(orders_.begin(), orders_.begin() + orders_count_,
+                                   [&](double x) { return std::abs(x - o) < 1e-9; });
     // An order on a mesh harmonic (z_p <= 2) would take the stiffness signal away: not removed.
     bool on_mesh = false;
-    for (int k = 1; k <= kMeshHarmonics; ++k) on_mesh = on_mesh || std::abs(o - k * pinion_teeth) < 1e-9;
+    for (int k = 1; k <= kMeshHarmonics; ++k)
+      on_mesh = on_mesh || std::abs(o - k * pinion_teeth) < 1e-9;
     if (!known && !on_mesh) orders_[orders_count_++] = o;
   }
   terms_ = 1 + 2 * orders_count_ + 2 * kMeshHarmonics;
@@ -94,7 +96,9 @@ bool OrderRegression::solve(Fit& out) const {
   for (int k = 0; k < kMeshHarmonics; ++k) {
     const int c = first + 2 * k;
     out.harmonics[k] = {beta[c], -beta[c + 1]};
-    if (k < 2) var = std::max({var, sigma2 * inv(c, c) / (d[c] * d[c]), sigma2 * inv(c + 1, c + 1) / (d[c + 1] * d[c + 1])});
+    if (k < 2)
+      var = std::max({var, sigma2 * inv(c, c) / (d[c] * d[c]),
+                      sigma2 * inv(c + 1, c + 1) / (d[c + 1] * d[c + 1])});
   }
   out.harmonic_std = std::sqrt(var);
   out.residual_rms = std::sqrt(rss / static_cast<double>(n_));

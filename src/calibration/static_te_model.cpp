@@ -22,14 +22,16 @@ const char* calibrationName(int index) {
   }
 }
 
-StaticTeModel::StaticTeModel(const RigConfig& rig, std::shared_ptr<const AntiBacklashMesh> rig_mesh) {
+StaticTeModel::StaticTeModel(const RigConfig& rig,
+                             std::shared_ptr<const AntiBacklashMesh> rig_mesh) {
   // The drawing's tooth stiffness (scale 1): the calibrated scale multiplies it. The rig's own
   // table is that table when the rig's scale is 1 (the same constructor arguments, so the same
   // numbers); a rig with another scale needs one at scale 1 of its own.
   if (rig_mesh && rig_mesh->stiffnessScale() == 1.0) {
     unit_ = std::move(rig_mesh);
   } else {
-    unit_ = std::make_shared<const AntiBacklashMesh>(rig.gears, rig.anti_backlash, rig.mesh_model, rig.mesh_samples, 1.0);
+    unit_ = std::make_shared<const AntiBacklashMesh>(rig.gears, rig.anti_backlash, rig.mesh_model,
+                                                     rig.mesh_samples, 1.0);
   }
   const AntiBacklashMesh& mesh = *unit_;
   switches_ = mesh.switchingPhases();
@@ -50,11 +52,13 @@ StaticTeModel::StaticTeModel(const RigConfig& rig, std::shared_ptr<const AntiBac
       const CompositeMesh c = mesh.exactAt(g.phase, 0.0);
       g.k1 = c.k1;
       g.k2 = c.k2;
-      for (int k = 0; k < kFeatureHarmonics; ++k) g.basis[k] = 2.0 * std::polar(1.0, -kTwoPi * (k + 1) * g.phase);
+      for (int k = 0; k < kFeatureHarmonics; ++k)
+        g.basis[k] = 2.0 * std::polar(1.0, -kTwoPi * (k + 1) * g.phase);
       grid_.push_back(g);
     }
   }
-  for (BothFlankMean& c : both_flank_means_) c.points.resize(grid_.size());  // no allocation on the bands' path
+  for (BothFlankMean& c : both_flank_means_)
+    c.points.resize(grid_.size());  // no allocation on the bands' path
 }
 
 bool StaticTeModel::nearSwitch(double phase, double guard) const {
@@ -71,7 +75,8 @@ void StaticTeModel::prepare(const PhaseHistogram& histogram, long count, Sampled
   out.ok = false;
   if (count <= 0) return;
   const double inv = 1.0 / static_cast<double>(count);
-  Eigen::Matrix<double, kProjectionTerms, kProjectionTerms> gram = Eigen::Matrix<double, kProjectionTerms, kProjectionTerms>::Zero();
+  Eigen::Matrix<double, kProjectionTerms, kProjectionTerms> gram =
+      Eigen::Matrix<double, kProjectionTerms, kProjectionTerms>::Zero();
   for (std::size_t b = 0; b < static_cast<std::size_t>(kPhaseBins); ++b) {
     const std::uint32_t n = histogram.count[b];
     if (n == 0) continue;
@@ -93,20 +98,24 @@ void StaticTeModel::prepare(const PhaseHistogram& histogram, long count, Sampled
   out.ok = out.gram.info() == Eigen::Success;
 }
 
-FeatureVector StaticTeModel::sampledFeatures(const CalibrationVector& p, double torque, const std::array<double, 2>& shafts,
-                                             double baseline_torque, const std::array<double, 2>& baseline_shafts,
+FeatureVector StaticTeModel::sampledFeatures(const CalibrationVector& p, double torque,
+                                             const std::array<double, 2>& shafts,
+                                             double baseline_torque,
+                                             const std::array<double, 2>& baseline_shafts,
                                              const SampledPhases& sampled) const {
   const double f = meshForce(torque), f0 = meshForce(baseline_torque);
   const double bearings = bearingTerm(p, shafts) - bearingTerm(p, baseline_shafts);
   Eigen::Matrix<double, kProjectionTerms, 1> b = Eigen::Matrix<double, kProjectionTerms, 1>::Zero();
   for (std::size_t i = 0; i < static_cast<std::size_t>(sampled.size); ++i) {
-    const double x = deflection(p, f, sampled.k1[i], sampled.k2[i]) - deflection(p, f0, sampled.k1[i], sampled.k2[i]);
+    const double x = deflection(p, f, sampled.k1[i], sampled.k2[i]) -
+                     deflection(p, f0, sampled.k1[i], sampled.k2[i]);
     b.noalias() += (sampled.weight[i] * x) * sampled.basis[i];
   }
   const Eigen::Matrix<double, kProjectionTerms, 1> coef = sampled.gram.solve(b);
   FeatureVector out;
   out[0] = coef[0] + bearings + p[kTeOffset];
-  for (int k = 0; k < kFeatureHarmonics; ++k) out[1 + k] = std::hypot(coef[1 + 2 * k], coef[2 + 2 * k]);
+  for (int k = 0; k < kFeatureHarmonics; ++k)
+    out[1 + k] = std::hypot(coef[1 + 2 * k], coef[2 + 2 * k]);
   return out;
 }
 
@@ -115,7 +124,8 @@ double StaticTeModel::meshDeflection(const CalibrationVector& p, double force, i
   return deflection(p, force, g.k1, g.k2);
 }
 
-StaticTeModel::Flanks StaticTeModel::flanks(const CalibrationVector& p, double force, double k1u, double k2u) const {
+StaticTeModel::Flanks StaticTeModel::flanks(const CalibrationVector& p, double force, double k1u,
+                                            double k2u) const {
   Flanks f;
   f.k1 = p[kMeshScale] * k1u;
   const double k2 = p[kMeshScale] * k2u;
@@ -125,7 +135,8 @@ StaticTeModel::Flanks StaticTeModel::flanks(const CalibrationVector& p, double f
   return f;
 }
 
-double StaticTeModel::deflection(const CalibrationVector& p, double force, double k1u, double k2u) const {
+double StaticTeModel::deflection(const CalibrationVector& p, double force, double k1u,
+                                 double k2u) const {
   // The three flank states of anti_backlash_mesh.hpp (an ordinary gear: the drive flank only).
   const Flanks f = flanks(p, force, k1u, k2u);
   switch (f.contact) {
@@ -140,7 +151,8 @@ double StaticTeModel::bearingTerm(const CalibrationVector& p, const std::array<d
   return shafts[0] / p[kPinionBearingScale] + shafts[1] / p[kGearBearingScale];
 }
 
-void StaticTeModel::shaftDeflection(double torque, const StiffnessEstimator& supports, std::array<double, 2>& out) {
+void StaticTeModel::shaftDeflection(double torque, const StiffnessEstimator& supports,
+                                    std::array<double, 2>& out) {
   // Two memos, both exact (the solves are deterministic functions of the supports' settings and
   // models, which supportsRevision names, and of the torque): the unloaded solutions do not depend
   // on the torque, and the calibrator asks for the same torque at every encoder reading until the
@@ -169,26 +181,30 @@ void StaticTeModel::shaftDeflection(double torque, const StiffnessEstimator& sup
     model.solve(load, &unloaded_[i].displacement, loaded_[i]);
     // The secant deflection of the support under the mesh force, carried to the gear by the lever
     // rule (a rigid shaft: the gear moves by the share-weighted support deflections).
-    out[c.shaft] += c.mesh_load_share * (loaded_[i].displacement[kUx] - unloaded_[i].displacement[kUx]);
+    out[c.shaft] +=
+        c.mesh_load_share * (loaded_[i].displacement[kUx] - unloaded_[i].displacement[kUx]);
   }
   if (torque < 0.0) out = {-out[0], -out[1]};
   deflection_memo_ = {revision, torque, out};
 }
 
-void StaticTeModel::waveform(const CalibrationVector& p, double torque, const std::array<double, 2>& shafts,
-                             double& mean, std::array<std::complex<double>, kFeatureHarmonics>& harmonics) const {
+void StaticTeModel::waveform(const CalibrationVector& p, double torque,
+                             const std::array<double, 2>& shafts, double& mean,
+                             std::array<std::complex<double>, kFeatureHarmonics>& harmonics) const {
   const double force = meshForce(torque);
   mean = bearingTerm(p, shafts);  // constant over the period: no harmonic
   harmonics.fill({0.0, 0.0});
   for (std::size_t j = 0; j < grid_.size(); ++j) {
     const double delta = meshDeflection(p, force, static_cast<int>(j));
     mean += grid_[j].weight * delta;
-    for (int k = 0; k < kFeatureHarmonics; ++k) harmonics[k] += grid_[j].weight * delta * grid_[j].basis[k];
+    for (int k = 0; k < kFeatureHarmonics; ++k)
+      harmonics[k] += grid_[j].weight * delta * grid_[j].basis[k];
   }
 }
 
-FeatureVector StaticTeModel::features(const CalibrationVector& p, double torque, const std::array<double, 2>& shafts,
-                                      double baseline_torque, const std::array<double, 2>& baseline_shafts) const {
+FeatureVector StaticTeModel::features(const CalibrationVector& p, double torque,
+                                      const std::array<double, 2>& shafts, double baseline_torque,
+                                      const std::array<double, 2>& baseline_shafts) const {
   double m = 0.0, m0 = 0.0;
   std::array<std::complex<double>, kFeatureHarmonics> c, c0;
   waveform(p, torque, shafts, m, c);
@@ -199,15 +215,20 @@ FeatureVector StaticTeModel::features(const CalibrationVector& p, double torque,
   return f;
 }
 
-double StaticTeModel::at(const CalibrationVector& p, double phase, double torque, const std::array<double, 2>& shafts,
-                         double baseline_torque, const std::array<double, 2>& baseline_shafts) const {
+double StaticTeModel::at(const CalibrationVector& p, double phase, double torque,
+                         const std::array<double, 2>& shafts, double baseline_torque,
+                         const std::array<double, 2>& baseline_shafts) const {
   // The grid point whose interval holds the phase (midpoints 1/64 of an interval apart: the
   // per-reading curve for plots; the features use the exact period integrals).
   const double ph = phase - std::floor(phase);
-  auto it = std::lower_bound(grid_.begin(), grid_.end(), ph, [](const GridPoint& g, double x) { return g.phase + 0.5 * g.weight < x; });
-  const int j = static_cast<int>(std::min<std::size_t>(static_cast<std::size_t>(it - grid_.begin()), grid_.size() - 1));
+  auto it = std::lower_bound(grid_.begin(), grid_.end(), ph, [](const GridPoint& g, double x) {
+    return g.phase + 0.5 * g.weight < x;
+  });
+  const int j = static_cast<int>(
+      std::min<std::size_t>(static_cast<std::size_t>(it - grid_.begin()), grid_.size() - 1));
   const double loaded = meshDeflection(p, meshForce(torque), j) + bearingTerm(p, shafts);
-  const double base = meshDeflection(p, meshForce(baseline_torque), j) + bearingTerm(p, baseline_shafts);
+  const double base =
+      meshDeflection(p, meshForce(baseline_torque), j) + bearingTerm(p, baseline_shafts);
   return loaded - base + p[kTeOffset];
 }
 
@@ -232,16 +253,16 @@ const StaticTeModel::BothFlankMean& StaticTeModel::bothFlankMean(const Calibrati
     FlankPoint& point = c.points[j];
     point = {f.k1, f.kc};
     c.mean += g.weight * (f.k1 + f.kc);  // as meanMeshStiffness sums it: the same bits
-    // AntiBacklashMesh::flankContact keeps both flanks for -F_p (1 + k_c/k1) <= F <= F_p (1 + k1/k_c).
-    // No loaded half (an ordinary gear): the drive flank alone at any force, no bound. No drive
-    // pair in contact: the back half carries the force up to F_p.
+    // AntiBacklashMesh::flankContact keeps both flanks for -F_p (1 + k_c/k1) <= F <= F_p (1 +
+    // k1/k_c). No loaded half (an ordinary gear): the drive flank alone at any force, no bound. No
+    // drive pair in contact: the back half carries the force up to F_p.
     if (f.kc > 0.0) {
       point.above = f.k1 > 0.0 ? f.fp * (f.k1 + f.kc) / f.kc : f.fp;
       if (f.k1 > 0.0) point.below = -f.fp * (f.k1 + f.kc) / f.k1;
     }
     if (!(f.kc > 0.0) || !(f.k1 > 0.0)) {
       never_both = true;  // an ordinary gear (or no tooth): never both flanks
-      continue;  // the other points' flank stiffnesses are still wanted
+      continue;           // the other points' flank stiffnesses are still wanted
     }
     // The range is taken 1e-12 inside those bounds, far beyond the rounding of its products.
     c.force_high = std::min(c.force_high, point.above * (1.0 - 1e-12));
@@ -267,11 +288,14 @@ double StaticTeModel::meanMeshStiffness(const CalibrationVector& p, double torqu
   // (its bounds, kept with the entry), taken 1e-12 towards this force, far beyond the rounding of
   // flankContact's products (as force_low and force_high).
   double k = 0.0;
-  double low = -std::numeric_limits<double>::infinity(), high = std::numeric_limits<double>::infinity();
+  double low = -std::numeric_limits<double>::infinity(),
+         high = std::numeric_limits<double>::infinity();
   for (std::size_t j = 0; j < grid_.size(); ++j) {
     const FlankPoint& f = both.points[j];
     const FlankContact contact = AntiBacklashMesh::flankContact(force, f.k1, f.kc, both.fp);
-    const double ks = contact == FlankContact::kBoth ? f.k1 + f.kc : (contact == FlankContact::kDriveOnly ? f.k1 : f.kc);
+    const double ks = contact == FlankContact::kBoth
+                          ? f.k1 + f.kc
+                          : (contact == FlankContact::kDriveOnly ? f.k1 : f.kc);
     k += grid_[j].weight * ks;
     for (const double bound : {f.above, f.below}) {
       if (!std::isfinite(bound)) continue;  // no change of state on that side

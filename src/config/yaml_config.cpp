@@ -14,15 +14,37 @@ namespace drivetrain_stiffness {
 namespace {
 constexpr double kDegToRad = kPi / 180.0;
 
-const std::set<std::string> kBearingKeys = {
-    "type", "balls", "ball_diameter", "pitch_diameter", "inner_groove_conformity",
-    "outer_groove_conformity", "diametral_clearance", "contact_angle_deg", "youngs_modulus",
-    "poisson_ratio", "width", "ellipticity", "max_contact_pressure", "bore_diameter",
-    "outside_diameter", "inner_raceway_diameter", "outer_raceway_diameter", "shaft_bore_diameter",
-    "housing_outside_diameter", "shaft_youngs_modulus", "shaft_poisson_ratio",
-    "housing_youngs_modulus", "housing_poisson_ratio", "inner_interference", "outer_interference",
-    "arrangement", "tilt", "axial_preload", "radial_preload"};
-const std::set<std::string> kRigBearingKeys = {"name", "shaft", "mesh_load_share", "file", "stiffness_scale"};
+const std::set<std::string> kBearingKeys = {"type",
+                                            "balls",
+                                            "ball_diameter",
+                                            "pitch_diameter",
+                                            "inner_groove_conformity",
+                                            "outer_groove_conformity",
+                                            "diametral_clearance",
+                                            "contact_angle_deg",
+                                            "youngs_modulus",
+                                            "poisson_ratio",
+                                            "width",
+                                            "ellipticity",
+                                            "max_contact_pressure",
+                                            "bore_diameter",
+                                            "outside_diameter",
+                                            "inner_raceway_diameter",
+                                            "outer_raceway_diameter",
+                                            "shaft_bore_diameter",
+                                            "housing_outside_diameter",
+                                            "shaft_youngs_modulus",
+                                            "shaft_poisson_ratio",
+                                            "housing_youngs_modulus",
+                                            "housing_poisson_ratio",
+                                            "inner_interference",
+                                            "outer_interference",
+                                            "arrangement",
+                                            "tilt",
+                                            "axial_preload",
+                                            "radial_preload"};
+const std::set<std::string> kRigBearingKeys = {"name", "shaft", "mesh_load_share", "file",
+                                               "stiffness_scale"};
 
 std::string key(const std::string& where, const std::string& name) { return where + "." + name; }
 
@@ -55,7 +77,8 @@ void rejectUnknownKeys(const YAML::Node& node, const std::string& where,
                        const std::set<std::string>& a, const std::set<std::string>& b = {}) {
   for (const auto& item : node) {
     const std::string name = keyName(item.first, where);
-    if (!a.count(name) && !b.count(name)) throw InvalidInput(key(where, printable(name)) + ": unknown key");
+    if (!a.count(name) && !b.count(name))
+      throw InvalidInput(key(where, printable(name)) + ": unknown key");
   }
 }
 
@@ -69,13 +92,15 @@ double readDouble(const YAML::Node& node, const std::string& where, const std::s
   }
 }
 
-double readDouble(const YAML::Node& node, const std::string& where, const std::string& name, double fallback) {
+double readDouble(const YAML::Node& node, const std::string& where, const std::string& name,
+                  double fallback) {
   return node[name] ? readDouble(node, where, name) : fallback;
 }
 
 int readInt(const YAML::Node& node, const std::string& where, const std::string& name) {
   const double v = readDouble(node, where, name);
-  if (!std::isfinite(v) || v != std::floor(v) || std::abs(v) > 1e6) throwInvalid(key(where, name), v, "must be an integer");
+  if (!std::isfinite(v) || v != std::floor(v) || std::abs(v) > 1e6)
+    throwInvalid(key(where, name), v, "must be an integer");
   return static_cast<int>(v);
 }
 
@@ -107,7 +132,8 @@ YAML::Node loadFile(const std::string& path) {
   // of a directory, and leaks its 2 KB prefetch buffer doing so (LeakSanitizer, scripts/test
   // --sanitize).
   std::error_code ec;
-  if (std::filesystem::is_directory(path, ec)) throw InvalidInput(path + ": is a directory, not a file");
+  if (std::filesystem::is_directory(path, ec))
+    throw InvalidInput(path + ": is a directory, not a file");
   try {
     return YAML::LoadFile(path);
   } catch (const YAML::BadFile&) {
@@ -115,7 +141,8 @@ YAML::Node loadFile(const std::string& path) {
   } catch (const std::ios_base::failure& e) {  // opened but unreadable (EIO, ...)
     throw InvalidInput(path + ": cannot read file (" + e.what() + ")");
   } catch (const YAML::Exception& e) {
-    throw InvalidInput(path + ": YAML syntax error at line " + std::to_string(e.mark.line + 1) + ": " + e.msg);
+    throw InvalidInput(path + ": YAML syntax error at line " + std::to_string(e.mark.line + 1) +
+                       ": " + e.msg);
   }
 }
 
@@ -140,19 +167,21 @@ BearingSupportConfig parseBearing(const YAML::Node& node, const std::string& whe
   if (node["diametral_clearance"] && node["contact_angle_deg"]) {
     throw InvalidInput(where + ": give diametral_clearance or contact_angle_deg, not both");
   }
-  if (node["diametral_clearance"]) s.diametral_clearance = readDouble(node, where, "diametral_clearance");
+  if (node["diametral_clearance"])
+    s.diametral_clearance = readDouble(node, where, "diametral_clearance");
   else if (node["contact_angle_deg"]) {
     // Checked here in degrees: the bearing's own check names contact_angle in radians, which is not
     // what the file says.
     const double deg = readDouble(node, where, "contact_angle_deg");
     requireInHalfOpenRange(key(where, "contact_angle_deg"), deg, 0.0, 90.0);
     s.contact_angle = deg * kDegToRad;
-  }
-  else throw InvalidInput(where + ": one of diametral_clearance or contact_angle_deg is required");
+  } else
+    throw InvalidInput(where + ": one of diametral_clearance or contact_angle_deg is required");
   s.width = readDouble(node, where, "width", 0.0);
   s.material.youngs_modulus = readDouble(node, where, "youngs_modulus");
   s.material.poisson_ratio = readDouble(node, where, "poisson_ratio");
-  s.ellipticity = parseEllipticityMethod(key(where, "ellipticity"), readString(node, where, "ellipticity", "exact"));
+  s.ellipticity = parseEllipticityMethod(key(where, "ellipticity"),
+                                         readString(node, where, "ellipticity", "exact"));
   s.max_contact_pressure = readDouble(node, where, "max_contact_pressure", s.max_contact_pressure);
 
   if (node["bore_diameter"] || node["outside_diameter"]) {
@@ -160,8 +189,10 @@ BearingSupportConfig parseBearing(const YAML::Node& node, const std::string& whe
     g.bore_diameter = readDouble(node, where, "bore_diameter");
     g.outside_diameter = readDouble(node, where, "outside_diameter");
     // Groove-bottom diameters default to d_m -/+ D (zero-clearance groove bottoms).
-    g.inner_raceway_diameter = readDouble(node, where, "inner_raceway_diameter", s.pitch_diameter - s.ball_diameter);
-    g.outer_raceway_diameter = readDouble(node, where, "outer_raceway_diameter", s.pitch_diameter + s.ball_diameter);
+    g.inner_raceway_diameter =
+        readDouble(node, where, "inner_raceway_diameter", s.pitch_diameter - s.ball_diameter);
+    g.outer_raceway_diameter =
+        readDouble(node, where, "outer_raceway_diameter", s.pitch_diameter + s.ball_diameter);
     g.shaft_bore_diameter = readDouble(node, where, "shaft_bore_diameter", 0.0);
     g.housing_outside_diameter = readDouble(node, where, "housing_outside_diameter", INFINITY);
     g.shaft = {readDouble(node, where, "shaft_youngs_modulus", s.material.youngs_modulus),
@@ -170,7 +201,8 @@ BearingSupportConfig parseBearing(const YAML::Node& node, const std::string& whe
                  readDouble(node, where, "housing_poisson_ratio", s.material.poisson_ratio)};
     s.fit = g;
   }
-  cfg.arrangement = parseArrangement(key(where, "arrangement"), readString(node, where, "arrangement", "single"));
+  cfg.arrangement =
+      parseArrangement(key(where, "arrangement"), readString(node, where, "arrangement", "single"));
   cfg.tilt = parseTiltCondition(key(where, "tilt"), readString(node, where, "tilt", "constrained"));
   cfg.axial_preload = readDouble(node, where, "axial_preload", 0.0);
   cfg.radial_preload = readDouble(node, where, "radial_preload", 0.0);
@@ -178,32 +210,46 @@ BearingSupportConfig parseBearing(const YAML::Node& node, const std::string& whe
   cfg.interference.outer = readDouble(node, where, "outer_interference", 0.0);
   requireNonNegative(key(where, "radial_preload"), cfg.radial_preload);
   // Build once so that every geometric and preload check runs at load time.
-  withContext(where, [&] { return BearingSupport(cfg.spec, cfg.arrangement, cfg.axial_preload, cfg.interference, cfg.tilt); });
+  withContext(where, [&] {
+    return BearingSupport(cfg.spec, cfg.arrangement, cfg.axial_preload, cfg.interference, cfg.tilt);
+  });
   return cfg;
 }
 
 namespace {
 const std::set<std::string> kGearKeys = {
-    "module", "pressure_angle_deg", "helix_angle_deg", "teeth", "profile_shift", "face_width",
-    "center_distance", "addendum_coefficient", "tool_dedendum_coefficient", "youngs_modulus",
-    "poisson_ratio", "bore_diameter"};
-const std::set<std::string> kAntiBacklashKeys = {"spring_stiffness", "preload_torque", "loaded_gear_face_width"};
+    "module",          "pressure_angle_deg",   "helix_angle_deg",
+    "teeth",           "profile_shift",        "face_width",
+    "center_distance", "addendum_coefficient", "tool_dedendum_coefficient",
+    "youngs_modulus",  "poisson_ratio",        "bore_diameter"};
+const std::set<std::string> kAntiBacklashKeys = {"spring_stiffness", "preload_torque",
+                                                 "loaded_gear_face_width"};
 const std::set<std::string> kMeshKeys = {"model", "samples", "stiffness_scale"};
-const std::set<std::string> kDynamicsKeys = {
-    "pinion_mass", "gear_mass", "pinion_inertia", "gear_inertia", "mesh_damping_ratio",
-    "bearing_damping_ratio", "bearing_clearance", "speed_rpm", "transmission_error_amplitude", "backlash", "torque"};
+const std::set<std::string> kDynamicsKeys = {"pinion_mass",
+                                             "gear_mass",
+                                             "pinion_inertia",
+                                             "gear_inertia",
+                                             "mesh_damping_ratio",
+                                             "bearing_damping_ratio",
+                                             "bearing_clearance",
+                                             "speed_rpm",
+                                             "transmission_error_amplitude",
+                                             "backlash",
+                                             "torque"};
 
-std::array<double, 2> readPair(const YAML::Node& node, const std::string& where, const std::string& name,
-                               std::array<double, 2> fallback) {
+std::array<double, 2> readPair(const YAML::Node& node, const std::string& where,
+                               const std::string& name, std::array<double, 2> fallback) {
   const YAML::Node v = node[name];
   if (!v) return fallback;
-  if (!v.IsSequence() || v.size() != 2) throw InvalidInput(key(where, name) + ": must be [pinion, gear]");
+  if (!v.IsSequence() || v.size() != 2)
+    throw InvalidInput(key(where, name) + ": must be [pinion, gear]");
   std::array<double, 2> out{};
   for (int i = 0; i < 2; ++i) {
     try {
       out[i] = v[i].as<double>();
     } catch (const YAML::Exception&) {
-      throw InvalidInput(key(where, name) + "[" + std::to_string(i) + "] = '" + YAML::Dump(v[i]) + "': not a number");
+      throw InvalidInput(key(where, name) + "[" + std::to_string(i) + "] = '" + YAML::Dump(v[i]) +
+                         "': not a number");
     }
   }
   return out;
@@ -231,7 +277,8 @@ void parseGears(const YAML::Node& root, const std::string& file, RigConfig& rig)
   g.face_width = readDouble(gears, where, "face_width", 0.0);
   if (gears["center_distance"]) g.center_distance = readDouble(gears, where, "center_distance");
   g.addendum_coefficient = readDouble(gears, where, "addendum_coefficient", g.addendum_coefficient);
-  g.tool_dedendum_coefficient = readDouble(gears, where, "tool_dedendum_coefficient", g.tool_dedendum_coefficient);
+  g.tool_dedendum_coefficient =
+      readDouble(gears, where, "tool_dedendum_coefficient", g.tool_dedendum_coefficient);
   g.material.youngs_modulus = readDouble(gears, where, "youngs_modulus", g.material.youngs_modulus);
   g.material.poisson_ratio = readDouble(gears, where, "poisson_ratio", g.material.poisson_ratio);
   g.bore_diameter = readPair(gears, where, "bore_diameter", {0.0, 0.0});
@@ -245,7 +292,8 @@ void parseGears(const YAML::Node& root, const std::string& file, RigConfig& rig)
     rig.anti_backlash.preload_torque = readDouble(ab, w, "preload_torque");
     rig.anti_backlash.loaded_gear_face_width = readDouble(ab, w, "loaded_gear_face_width", 0.0);
     withContext(file, [&] {
-      requirePositive("anti_backlash.spring_stiffness", rig.anti_backlash.spring_stiffness);  // the block means a spring
+      requirePositive("anti_backlash.spring_stiffness",
+                      rig.anti_backlash.spring_stiffness);  // the block means a spring
       validateAntiBacklash(rig.anti_backlash);
     });
   }
@@ -253,11 +301,14 @@ void parseGears(const YAML::Node& root, const std::string& file, RigConfig& rig)
     if (!mesh.IsMap()) throw InvalidInput(file + ": mesh: must be a mapping");
     rejectUnknownKeys(mesh, file + ": mesh", kMeshKeys);
     const std::string w = file + ": mesh";
-    rig.mesh_model = parseMeshStiffnessModel(key(w, "model"), readString(mesh, w, "model", "potential_energy"));
+    rig.mesh_model =
+        parseMeshStiffnessModel(key(w, "model"), readString(mesh, w, "model", "potential_energy"));
     if (mesh["samples"]) rig.mesh_samples = readInt(mesh, w, "samples");
-    if (rig.mesh_samples < 16 || rig.mesh_samples > 100000) throwInvalid(key(w, "samples"), rig.mesh_samples, "must be in [16, 100000]");
+    if (rig.mesh_samples < 16 || rig.mesh_samples > 100000)
+      throwInvalid(key(w, "samples"), rig.mesh_samples, "must be in [16, 100000]");
     rig.mesh_stiffness_scale = readDouble(mesh, w, "stiffness_scale", 1.0);
-    requireInHalfOpenRange(key(w, "stiffness_scale"), rig.mesh_stiffness_scale, kScaleLowest, kScaleBound);
+    requireInHalfOpenRange(key(w, "stiffness_scale"), rig.mesh_stiffness_scale, kScaleLowest,
+                           kScaleBound);
   }
 }
 
@@ -269,21 +320,34 @@ static void checkDynamics(const DynamicsConfig& c) {
   requirePositive("dynamics.gear_inertia", c.gear_inertia);
   requireDampingRatio("dynamics.mesh_damping_ratio", c.mesh_damping_ratio);
   requireDampingRatio("dynamics.bearing_damping_ratio", c.bearing_damping_ratio);
-  for (int i = 0; i < 2; ++i) requireNonNegative("dynamics.bearing_clearance[" + std::to_string(i) + "]", c.bearing_clearance[i]);
+  for (int i = 0; i < 2; ++i)
+    requireNonNegative("dynamics.bearing_clearance[" + std::to_string(i) + "]",
+                       c.bearing_clearance[i]);
   requirePositive("dynamics.speed_rpm", c.speed_rpm);
   requireNonNegative("dynamics.transmission_error_amplitude", c.transmission_error_amplitude);
   requireNonNegative("dynamics.backlash", c.backlash);
   requireFinite("dynamics.torque", c.torque);
 }
 
-const std::set<std::string> kCalibrationKeys = {
-    "mesh_stiffness_scale", "pinion_bearing_scale", "gear_bearing_scale", "preload_torque", "te_offset",
-    "baseline_torque", "torque_band", "min_speed_rpm", "max_mesh_to_natural", "gate", "model_error",
-    "te_noise_floor", "drift", "reference_torque"};
+const std::set<std::string> kCalibrationKeys = {"mesh_stiffness_scale",
+                                                "pinion_bearing_scale",
+                                                "gear_bearing_scale",
+                                                "preload_torque",
+                                                "te_offset",
+                                                "baseline_torque",
+                                                "torque_band",
+                                                "min_speed_rpm",
+                                                "max_mesh_to_natural",
+                                                "gate",
+                                                "model_error",
+                                                "te_noise_floor",
+                                                "drift",
+                                                "reference_torque"};
 
 // A prior `{mean: M, std: S}`; the mean defaults to `fallback` (the rig's own value).
-static CalibrationPrior readPrior(const YAML::Node& c, const std::string& w, const std::string& name, CalibrationPrior prior,
-                           double lower, double upper) {
+static CalibrationPrior readPrior(const YAML::Node& c, const std::string& w,
+                                  const std::string& name, CalibrationPrior prior, double lower,
+                                  double upper) {
   if (c[name]) {
     const YAML::Node p = c[name];
     const std::string where = key(w, name);
@@ -302,16 +366,17 @@ static CalibrationPrior readPrior(const YAML::Node& c, const std::string& w, con
   requireAtMost(key(w, name) + ".std", prior.std, upper - lower);
   if (prior.std > 0.0 && prior.reference_std == 0.0) {
     // Estimated, but judged against no spread: never identified, never drifting.
-    throwInvalid(key(w, name) + ".reference_std", prior.reference_std,
-                 "must be positive for an estimated parameter (std > 0); leave it out to judge against std");
+    throwInvalid(
+        key(w, name) + ".reference_std", prior.reference_std,
+        "must be positive for an estimated parameter (std > 0); leave it out to judge against std");
   }
   return prior;
 }
 
 // The optional top-level block `name` of `file`, checked to be a mapping of known keys; a null
 // node when the file has none.
-static YAML::Node optionalBlock(const YAML::Node& root, const std::string& file, const std::string& name,
-                                const std::set<std::string>& keys) {
+static YAML::Node optionalBlock(const YAML::Node& root, const std::string& file,
+                                const std::string& name, const std::set<std::string>& keys) {
   const YAML::Node block = root[name];
   if (!block) return block;
   const std::string w = file + ": " + name;
@@ -328,12 +393,16 @@ static void parseCalibration(const YAML::Node& root, const std::string& file, Ri
   CalibrationConfig& k = rig.calibration;
   k.present = true;
   auto shaftScale = [&](int shaft) {
-    for (const BearingSupportConfig& b : rig.bearings) if (b.shaft == shaft) return b.stiffness_scale;
+    for (const BearingSupportConfig& b : rig.bearings)
+      if (b.shaft == shaft) return b.stiffness_scale;
     return 1.0;
   };
-  k.mesh_stiffness_scale = readPrior(c, w, "mesh_stiffness_scale", {rig.mesh_stiffness_scale, 0.2}, kScaleLowest, kScaleBound);
-  k.pinion_bearing_scale = readPrior(c, w, "pinion_bearing_scale", {shaftScale(0), 0.3}, kScaleLowest, kScaleBound);
-  k.gear_bearing_scale = readPrior(c, w, "gear_bearing_scale", {shaftScale(1), 0.3}, kScaleLowest, kScaleBound);
+  k.mesh_stiffness_scale = readPrior(c, w, "mesh_stiffness_scale", {rig.mesh_stiffness_scale, 0.2},
+                                     kScaleLowest, kScaleBound);
+  k.pinion_bearing_scale =
+      readPrior(c, w, "pinion_bearing_scale", {shaftScale(0), 0.3}, kScaleLowest, kScaleBound);
+  k.gear_bearing_scale =
+      readPrior(c, w, "gear_bearing_scale", {shaftScale(1), 0.3}, kScaleLowest, kScaleBound);
   const double tp = rig.anti_backlash.preload_torque;
   k.preload_torque = readPrior(c, w, "preload_torque", {tp, 0.2 * tp}, 0.0, 1e6);
   k.te_offset = readPrior(c, w, "te_offset", {0.0, 1e-6}, -1e-3, 1e-3);
@@ -371,7 +440,8 @@ static void parseDynamics(const YAML::Node& root, const std::string& file, RigCo
   c.bearing_damping_ratio = readDouble(d, w, "bearing_damping_ratio", c.bearing_damping_ratio);
   c.bearing_clearance = readPair(d, w, "bearing_clearance", c.bearing_clearance);
   c.speed_rpm = readDouble(d, w, "speed_rpm", c.speed_rpm);
-  c.transmission_error_amplitude = readDouble(d, w, "transmission_error_amplitude", c.transmission_error_amplitude);
+  c.transmission_error_amplitude =
+      readDouble(d, w, "transmission_error_amplitude", c.transmission_error_amplitude);
   c.backlash = readDouble(d, w, "backlash", c.backlash);
   c.torque = readDouble(d, w, "torque", c.torque);
   withContext(file, [&] { checkDynamics(c); });
@@ -388,7 +458,8 @@ RigConfig loadGearFile(const std::string& path) {
 
 BearingSupportConfig loadBearingFile(const std::string& path) {
   const YAML::Node root = loadFile(path);
-  if (!root.IsMap() || !root["bearing"]) throw InvalidInput(path + ": needs a top-level 'bearing:' block");
+  if (!root.IsMap() || !root["bearing"])
+    throw InvalidInput(path + ": needs a top-level 'bearing:' block");
   BearingSupportConfig cfg = parseBearing(root["bearing"], path + ": bearing");
   cfg.name = readString(root["bearing"], path + ": bearing", "name", "bearing");
   return cfg;
@@ -402,8 +473,8 @@ RigConfig loadRigFile(const std::string& path) {
   }
   for (const auto& item : root) {
     const std::string name = keyName(item.first, path);
-    if (name != "gears" && name != "bearings" && name != "anti_backlash" && name != "mesh" && name != "dynamics" &&
-        name != "calibration") {
+    if (name != "gears" && name != "bearings" && name != "anti_backlash" && name != "mesh" &&
+        name != "dynamics" && name != "calibration") {
       throw InvalidInput(path + ": '" + printable(name) + "': unknown top-level key");
     }
   }
@@ -412,7 +483,8 @@ RigConfig loadRigFile(const std::string& path) {
   parseDynamics(root, where, rig);
 
   const YAML::Node list = root["bearings"];
-  if (!list.IsSequence() || list.size() == 0) throw InvalidInput(where + ": bearings: must be a non-empty list");
+  if (!list.IsSequence() || list.size() == 0)
+    throw InvalidInput(where + ": bearings: must be a non-empty list");
   std::set<std::string> names;
   for (std::size_t i = 0; i < list.size(); ++i) {
     const std::string entry = where + ": bearings[" + std::to_string(i) + "]";
@@ -420,7 +492,8 @@ RigConfig loadRigFile(const std::string& path) {
     if (!node.IsMap()) throw InvalidInput(entry + ": must be a mapping");
     if (node["file"]) {  // keys of the entry override those of the referenced bearing file
       const std::string name = readString(node, entry, "file", "");
-      const std::string file = !name.empty() && name[0] == '/' ? name : directoryOf(path) + "/" + name;
+      const std::string file =
+          !name.empty() && name[0] == '/' ? name : directoryOf(path) + "/" + name;
       // A refusal of the referenced file names the entry that references it, then the file.
       const std::string ref = entry + ".file = '" + name + "'";
       YAML::Node base;
@@ -429,8 +502,10 @@ RigConfig loadRigFile(const std::string& path) {
       } catch (const InvalidInput& e) {
         throw InvalidInput(ref + ": " + e.what());
       }
-      if (!base.IsMap() || !base["bearing"]) throw InvalidInput(ref + ": " + file + ": needs a top-level 'bearing:' block");
-      if (!base["bearing"].IsMap()) throw InvalidInput(ref + ": " + file + ": bearing: must be a mapping of bearing keys");
+      if (!base.IsMap() || !base["bearing"])
+        throw InvalidInput(ref + ": " + file + ": needs a top-level 'bearing:' block");
+      if (!base["bearing"].IsMap())
+        throw InvalidInput(ref + ": " + file + ": bearing: must be a mapping of bearing keys");
       YAML::Node merged = YAML::Clone(base["bearing"]);
       for (const auto& kv : node) {
         const std::string k = keyName(kv.first, entry);
@@ -441,14 +516,17 @@ RigConfig loadRigFile(const std::string& path) {
     BearingSupportConfig cfg = parseBearing(node, entry);
     cfg.name = readString(node, entry, "name", "");
     if (cfg.name.empty()) throw InvalidInput(entry + ".name: required");
-    if (!names.insert(cfg.name).second) throw InvalidInput(entry + ".name = '" + cfg.name + "': duplicate name");
+    if (!names.insert(cfg.name).second)
+      throw InvalidInput(entry + ".name = '" + cfg.name + "': duplicate name");
     const std::string shaft = readString(node, entry, "shaft", "pinion");
-    if (shaft != "pinion" && shaft != "gear") throw InvalidInput(entry + ".shaft = '" + shaft + "': must be 'pinion' or 'gear'");
+    if (shaft != "pinion" && shaft != "gear")
+      throw InvalidInput(entry + ".shaft = '" + shaft + "': must be 'pinion' or 'gear'");
     cfg.shaft = shaft == "pinion" ? 0 : 1;
     cfg.mesh_load_share = readDouble(node, entry, "mesh_load_share", 1.0);
     requireInHalfOpenRange(entry + ".mesh_load_share", cfg.mesh_load_share, 0.0, 1.0 + 1e-12);
     cfg.stiffness_scale = readDouble(node, entry, "stiffness_scale", 1.0);
-    requireInHalfOpenRange(entry + ".stiffness_scale", cfg.stiffness_scale, kScaleLowest, kScaleBound);
+    requireInHalfOpenRange(entry + ".stiffness_scale", cfg.stiffness_scale, kScaleLowest,
+                           kScaleBound);
     rig.bearings.push_back(cfg);
   }
   parseCalibration(root, where, rig);

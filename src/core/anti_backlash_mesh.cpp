@@ -20,16 +20,17 @@ const char* toString(FlankContact contact) {
 void validateAntiBacklash(const AntiBacklashSpec& spec) {
   // The upper bounds are past anything built (tooth pairs are ~1e9 N/m); at 1e308 the flank forces
   // overflow into a NaN mesh stiffness instead of a refusal.
-  requireNonNegative("anti_backlash.spring_stiffness", spec.spring_stiffness);  // 0: ordinary gear
+  requireNonNegative("anti_backlash.spring_stiffness", spec.spring_stiffness);   // 0: ordinary gear
   requireAtMost("anti_backlash.spring_stiffness", spec.spring_stiffness, 1e13);  // [N/m]
   requireNonNegative("anti_backlash.preload_torque", spec.preload_torque);
   requireAtMost("anti_backlash.preload_torque", spec.preload_torque, 1e6);  // [N m]
   requireNonNegative("anti_backlash.loaded_gear_face_width", spec.loaded_gear_face_width);
-  requireAtMost("anti_backlash.loaded_gear_face_width", spec.loaded_gear_face_width, 10.0);  // [m], as gears.face_width
+  requireAtMost("anti_backlash.loaded_gear_face_width", spec.loaded_gear_face_width,
+                10.0);  // [m], as gears.face_width
 }
 
-AntiBacklashMesh::AntiBacklashMesh(const GearPairSpec& gears, const AntiBacklashSpec& spec, MeshStiffnessModel model,
-                                   int samples, double stiffness_scale)
+AntiBacklashMesh::AntiBacklashMesh(const GearPairSpec& gears, const AntiBacklashSpec& spec,
+                                   MeshStiffnessModel model, int samples, double stiffness_scale)
     : geometry_(gears), spec_(spec), model_(model), scale_(stiffness_scale) {
   validateAntiBacklash(spec);
   // A calibrated scale is within a factor of a few of the drawing's; 0 or 1e3 is a typo.
@@ -38,7 +39,8 @@ AntiBacklashMesh::AntiBacklashMesh(const GearPairSpec& gears, const AntiBacklash
   const auto drive_model = makeToothPairStiffness(model, geometry_, gears.face_width);
   verified_ = drive_model->verified();
   drive_ = std::make_unique<MeshStiffnessTable>(geometry_, *drive_model, samples);
-  const double width2 = spec.loaded_gear_face_width > 0.0 ? spec.loaded_gear_face_width : gears.face_width;
+  const double width2 =
+      spec.loaded_gear_face_width > 0.0 ? spec.loaded_gear_face_width : gears.face_width;
   const auto back_model = makeToothPairStiffness(model, geometry_, width2);
   back_ = std::make_unique<MeshStiffnessTable>(geometry_, *back_model, samples);
 
@@ -55,7 +57,9 @@ AntiBacklashMesh::AntiBacklashMesh(const GearPairSpec& gears, const AntiBacklash
     breaks_.push_back(wrap((back_origin - g.pathStart()) / g.basePitch()));
   }
   std::sort(breaks_.begin(), breaks_.end());
-  breaks_.erase(std::unique(breaks_.begin(), breaks_.end(), [](double a, double b) { return b - a < 1e-12; }), breaks_.end());
+  breaks_.erase(
+      std::unique(breaks_.begin(), breaks_.end(), [](double a, double b) { return b - a < 1e-12; }),
+      breaks_.end());
   const int per_segment = std::max(16, samples / 2);
   for (std::size_t i = 0; i < breaks_.size(); ++i) {
     const double a = breaks_[i], b = i + 1 < breaks_.size() ? breaks_[i + 1] : 1.0;
@@ -85,9 +89,11 @@ AntiBacklashMesh::AntiBacklashMesh(const GearPairSpec& gears, const AntiBacklash
 }
 
 AntiBacklashMesh::AntiBacklashMesh(const RigConfig& rig)
-    : AntiBacklashMesh(rig.gears, rig.anti_backlash, rig.mesh_model, rig.mesh_samples, rig.mesh_stiffness_scale) {}
+    : AntiBacklashMesh(rig.gears, rig.anti_backlash, rig.mesh_model, rig.mesh_samples,
+                       rig.mesh_stiffness_scale) {}
 
-FlankContact AntiBacklashMesh::flankContact(double mesh_force, double k1, double k_chain, double preload_force) {
+FlankContact AntiBacklashMesh::flankContact(double mesh_force, double k1, double k_chain,
+                                            double preload_force) {
   if (!(k_chain > 0.0)) return FlankContact::kDriveOnly;  // no loaded half: an ordinary gear
   // F_m > F_p (1 + k1/k_c) and F_m < -F_p (1 + k_c/k1), multiplied out (k1, k_c > 0): no division
   // on the lookup path.
@@ -103,7 +109,9 @@ std::vector<double> AntiBacklashMesh::tableNodePhases() const {
     for (std::size_t j = 0; j < seg.values.size(); ++j) nodes.push_back(seg.start + j / seg.scale);
   }
   std::sort(nodes.begin(), nodes.end());
-  nodes.erase(std::unique(nodes.begin(), nodes.end(), [](double a, double b) { return b - a < 1e-12; }), nodes.end());
+  nodes.erase(
+      std::unique(nodes.begin(), nodes.end(), [](double a, double b) { return b - a < 1e-12; }),
+      nodes.end());
   while (!nodes.empty() && nodes.back() >= 1.0) nodes.pop_back();
   return nodes;
 }

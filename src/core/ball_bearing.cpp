@@ -18,7 +18,8 @@ void validateSpec(const BallBearingSpec& s) {
   // the equilibrium comes out NaN instead of refused.
   requireAtMost("pitch_diameter", s.pitch_diameter, kMaxDiameter);
   if (!(s.pitch_diameter > s.ball_diameter)) {
-    throwInvalid("pitch_diameter", s.pitch_diameter, "must exceed ball_diameter = " + formatValue(s.ball_diameter));
+    throwInvalid("pitch_diameter", s.pitch_diameter,
+                 "must exceed ball_diameter = " + formatValue(s.ball_diameter));
   }
   // Balls must fit around the pitch circle without overlapping: Z D < pi d_m.
   if (s.balls * s.ball_diameter >= kPi * s.pitch_diameter) {
@@ -40,14 +41,17 @@ void validateSpec(const BallBearingSpec& s) {
 }  // namespace
 
 namespace {
-constexpr EnumName<BearingType> kBearingTypes[] = {{BearingType::kAngularContact, "angular_contact"},
-                                                   {BearingType::kDeepGroove, "deep_groove"}};
+constexpr EnumName<BearingType> kBearingTypes[] = {
+    {BearingType::kAngularContact, "angular_contact"}, {BearingType::kDeepGroove, "deep_groove"}};
 }  // namespace
 
-BearingType parseBearingType(const std::string& field, const std::string& text) { return parseEnum(kBearingTypes, field, text); }
+BearingType parseBearingType(const std::string& field, const std::string& text) {
+  return parseEnum(kBearingTypes, field, text);
+}
 const char* toString(BearingType type) { return enumName(kBearingTypes, type); }
 
-BallBearing::Derived BallBearing::derive(const BallBearingSpec& s, const Interference& interference) {
+BallBearing::Derived BallBearing::derive(const BallBearingSpec& s,
+                                         const Interference& interference) {
   validateSpec(s);
   requireNonNegative("inner_interference", interference.inner);
   requireNonNegative("outer_interference", interference.outer);
@@ -59,21 +63,25 @@ BallBearing::Derived BallBearing::derive(const BallBearingSpec& s, const Interfe
                                          : 2.0 * d.a0 * (1.0 - std::cos(*s.contact_angle));
   if (interference.inner > 0.0 || interference.outer > 0.0) {
     if (!s.fit) {
-      throw InvalidInput("inner_interference = " + formatValue(interference.inner) +
-                         ", outer_interference = " + formatValue(interference.outer) +
-                         ": an interference needs the fit geometry (bore_diameter, outside_diameter, "
-                         "inner_raceway_diameter, outer_raceway_diameter)");
+      throw InvalidInput(
+          "inner_interference = " + formatValue(interference.inner) +
+          ", outer_interference = " + formatValue(interference.outer) +
+          ": an interference needs the fit geometry (bore_diameter, outside_diameter, "
+          "inner_raceway_diameter, outer_raceway_diameter)");
     }
     const FitGeometry& g = *s.fit;
-    if (!(g.inner_raceway_diameter < s.pitch_diameter && s.pitch_diameter < g.outer_raceway_diameter)) {
-      throw InvalidInput("pitch_diameter = " + formatValue(s.pitch_diameter) + " must lie between "
-                         "inner_raceway_diameter = " + formatValue(g.inner_raceway_diameter) +
+    if (!(g.inner_raceway_diameter < s.pitch_diameter &&
+          s.pitch_diameter < g.outer_raceway_diameter)) {
+      throw InvalidInput("pitch_diameter = " + formatValue(s.pitch_diameter) +
+                         " must lie between "
+                         "inner_raceway_diameter = " +
+                         formatValue(g.inner_raceway_diameter) +
                          " and outer_raceway_diameter = " + formatValue(g.outer_raceway_diameter));
     }
-    InnerRingFit inner{interference.inner, g.bore_diameter, g.inner_raceway_diameter,
-                       g.shaft_bore_diameter, s.material, g.shaft};
-    OuterRingFit outer{interference.outer, g.outside_diameter, g.outer_raceway_diameter,
-                       g.housing_outside_diameter, s.material, g.housing};
+    InnerRingFit inner{interference.inner,    g.bore_diameter, g.inner_raceway_diameter,
+                       g.shaft_bore_diameter, s.material,      g.shaft};
+    OuterRingFit outer{interference.outer,         g.outside_diameter, g.outer_raceway_diameter,
+                       g.housing_outside_diameter, s.material,         g.housing};
     d.delta_inner = innerRingFit(inner).raceway_change;
     d.delta_outer = outerRingFit(outer).raceway_change;
   }
@@ -87,7 +95,8 @@ BallBearing::Derived BallBearing::derive(const BallBearingSpec& s, const Interfe
                      " or the balls can never touch both raceways");
   }
   d.alpha_free = d.ar0 < d.a0 ? std::acos(d.ar0 / d.a0) : 0.0;
-  d.ri = s.pitch_diameter / 2.0 + (s.inner_groove_conformity - 0.5) * D * std::cos(d.alpha_free);  // seed 003 eq 8
+  d.ri = s.pitch_diameter / 2.0 +
+         (s.inner_groove_conformity - 0.5) * D * std::cos(d.alpha_free);  // seed 003 eq 8
   return d;
 }
 
@@ -110,7 +119,8 @@ BallBearing::BallBearing(const BallBearingSpec& spec, const Interference& interf
       d_(derive(spec, interference)),
       inner_(raceContact(spec_, d_.alpha_free, true)),
       outer_(raceContact(spec_, d_.alpha_free, false)),
-      kn_(combinedLoadDeflectionConstant(inner_.loadDeflectionConstant(), outer_.loadDeflectionConstant())) {
+      kn_(combinedLoadDeflectionConstant(inner_.loadDeflectionConstant(),
+                                         outer_.loadDeflectionConstant())) {
   setAzimuths();
 }
 
@@ -123,7 +133,8 @@ void BallBearing::assign(const BallBearingSpec& spec, const Interference& interf
   d_ = d;
   inner_ = inner;
   outer_ = outer;
-  kn_ = combinedLoadDeflectionConstant(inner_.loadDeflectionConstant(), outer_.loadDeflectionConstant());
+  kn_ = combinedLoadDeflectionConstant(inner_.loadDeflectionConstant(),
+                                       outer_.loadDeflectionConstant());
   setAzimuths();
 }
 
@@ -150,11 +161,11 @@ BearingEvaluation BallBearing::evaluate(const Vector5d& q, double axial_offset) 
     const double delta = l - a0;
     if (delta <= 0.0) continue;
     const double root = std::sqrt(delta);
-    const double load = kn_ * delta * root;             // Q = Kn delta^1.5 (seed 000 eq 6)
-    out.energy += 0.4 * load * delta;                   // (2/5) Kn delta^2.5
-    const double nr = ar / l, nz = az / l;              // cos(alpha), sin(alpha)
-    const double kn_dir = 1.5 * kn_ * root;             // dQ/d(delta)
-    const double kt = load / l;                         // geometric (contact-angle change) term
+    const double load = kn_ * delta * root;  // Q = Kn delta^1.5 (seed 000 eq 6)
+    out.energy += 0.4 * load * delta;        // (2/5) Kn delta^2.5
+    const double nr = ar / l, nz = az / l;   // cos(alpha), sin(alpha)
+    const double kn_dir = 1.5 * kn_ * root;  // dQ/d(delta)
+    const double kt = load / l;              // geometric (contact-angle change) term
     const double krr = kn_dir * nr * nr + kt * nz * nz;
     const double kzz = kn_dir * nz * nz + kt * nr * nr;
     const double krz = (kn_dir - kt) * nr * nz;
@@ -220,12 +231,17 @@ double BallBearing::axialDisplacementForLoad(double axial_load) const {
   while (thrust(hi, &slope) < axial_load) {
     lo = hi;
     hi *= 2.0;
-    if (hi > spec_.ball_diameter) throw UnreachableLoad("axial_load = " + formatValue(axial_load) + " N exceeds what the bearing geometry can carry");
+    if (hi > spec_.ball_diameter)
+      throw UnreachableLoad("axial_load = " + formatValue(axial_load) +
+                            " N exceeds what the bearing geometry can carry");
   }
   double u = hi;
   for (int i = 0; i < 100; ++i) {
     const double r = thrust(u, &slope) - axial_load;
-    if (r > 0.0) hi = u; else lo = u;
+    if (r > 0.0)
+      hi = u;
+    else
+      lo = u;
     double next = slope > 0.0 ? u - r / slope : 0.5 * (lo + hi);
     if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);  // safeguard: stay inside the bracket
     if (std::abs(next - u) <= 1e-15 + 1e-13 * u) return next;

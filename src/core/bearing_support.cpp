@@ -10,13 +10,16 @@
 namespace drivetrain_stiffness {
 
 namespace {
-constexpr EnumName<Arrangement> kArrangements[] = {
-    {Arrangement::kSingle, "single"}, {Arrangement::kBackToBack, "back_to_back"}, {Arrangement::kFaceToFace, "face_to_face"}};
+constexpr EnumName<Arrangement> kArrangements[] = {{Arrangement::kSingle, "single"},
+                                                   {Arrangement::kBackToBack, "back_to_back"},
+                                                   {Arrangement::kFaceToFace, "face_to_face"}};
 constexpr EnumName<TiltCondition> kTiltConditions[] = {{TiltCondition::kConstrained, "constrained"},
                                                        {TiltCondition::kFree, "free"}};
 }  // namespace
 
-Arrangement parseArrangement(const std::string& field, const std::string& text) { return parseEnum(kArrangements, field, text); }
+Arrangement parseArrangement(const std::string& field, const std::string& text) {
+  return parseEnum(kArrangements, field, text);
+}
 const char* toString(Arrangement a) { return enumName(kArrangements, a); }
 TiltCondition parseTiltCondition(const std::string& field, const std::string& text) {
   return parseEnum(kTiltConditions, field, text);
@@ -36,15 +39,16 @@ Matrix5d rowTransform(double z, bool mirrored) {
 }
 }  // namespace
 
-BearingSupport::BearingSupport(const BallBearingSpec& spec, Arrangement arrangement, double axial_preload,
-                               const Interference& interference, TiltCondition tilt,
-                               const SolverOptions& options)
+BearingSupport::BearingSupport(const BallBearingSpec& spec, Arrangement arrangement,
+                               double axial_preload, const Interference& interference,
+                               TiltCondition tilt, const SolverOptions& options)
     : bearing_(spec, interference) {
   configure(arrangement, axial_preload, tilt, options);
 }
 
-void BearingSupport::assign(const BallBearingSpec& spec, Arrangement arrangement, double axial_preload,
-                            const Interference& interference, TiltCondition tilt, const SolverOptions& options) {
+void BearingSupport::assign(const BallBearingSpec& spec, Arrangement arrangement,
+                            double axial_preload, const Interference& interference,
+                            TiltCondition tilt, const SolverOptions& options) {
   bearing_.assign(spec, interference);
   configure(arrangement, axial_preload, tilt, options);
 }
@@ -60,17 +64,20 @@ void BearingSupport::configure(Arrangement arrangement, double axial_preload, Ti
   free_ << 1.0, 1.0, 1.0, 1.0, 1.0;
   if (tilt_ == TiltCondition::kConstrained) free_[kThetaX] = free_[kThetaY] = 0.0;
   requireNonNegative("axial_preload", axial_preload);
-  if (options.max_iterations < 1) throwInvalid("max_iterations", options.max_iterations, "must be >= 1");
+  if (options.max_iterations < 1)
+    throwInvalid("max_iterations", options.max_iterations, "must be >= 1");
   to_row_[0] = to_row_[1] = Matrix5d::Identity();
   if (arrangement_ != Arrangement::kSingle) {
     if (spec.type != BearingType::kAngularContact) {
       throw InvalidInput(std::string("arrangement = '") + toString(arrangement) +
                          "': duplex pairs need type = angular_contact");
     }
-    if (!(axial_preload > 0.0)) throwInvalid("axial_preload", axial_preload, "a duplex pair needs a preload > 0");
+    if (!(axial_preload > 0.0))
+      throwInvalid("axial_preload", axial_preload, "a duplex pair needs a preload > 0");
     try {
       offset_ = bearing_.axialDisplacementForLoad(axial_preload);
-    } catch (const UnreachableLoad& e) {  // named as the caller gave it: the pair's preload, not "axial_load"
+    } catch (const UnreachableLoad&
+                 e) {  // named as the caller gave it: the pair's preload, not "axial_load"
       throw UnreachableLoad("axial_preload = " + formatValue(axial_preload) + ": " + e.what());
     }
     const double half = spec.width / 2.0;
@@ -121,8 +128,9 @@ Vector5d BearingSupport::coldStart(const Vector5d& load) const {
   const double radial = std::hypot(load[kUx], load[kUy]);
   if (radial > 0.0) {
     const double eps = delta_axial / l;
-    const double kr = rows() * 0.5 * z * b.loadDeflectionConstant() * std::sqrt(delta_axial) *
-                      (1.5 * std::cos(alpha) * std::cos(alpha) + eps * std::sin(alpha) * std::sin(alpha));
+    const double kr =
+        rows() * 0.5 * z * b.loadDeflectionConstant() * std::sqrt(delta_axial) *
+        (1.5 * std::cos(alpha) * std::cos(alpha) + eps * std::sin(alpha) * std::sin(alpha));
     // Stribeck's Q_max = 5 F_r / (Z cos alpha), the usual allowance for clearance (Harris &
     // Kotzalas, load-distribution chapter), gives the radial approach when there is no preload.
     // Only a starting point: the Newton solve decides the answer.
@@ -136,20 +144,22 @@ Vector5d BearingSupport::coldStart(const Vector5d& load) const {
   return q;
 }
 
-bool BearingSupport::newton(const Vector5d& load, Vector5d& q, int& iterations, double& residual) const {
+bool BearingSupport::newton(const Vector5d& load, Vector5d& q, int& iterations,
+                            double& residual) const {
   const double ri = bearing_.innerGrooveCentreRadius();
   Vector5d scale;  // moments -> equivalent forces at the groove radius, so all residuals are in N
   scale << 1.0, 1.0, 1.0, 1.0 / ri, 1.0 / ri;
   const double load_scale = std::max({1.0, load.head<3>().cwiseAbs().maxCoeff(),
-                                      load.tail<2>().cwiseAbs().maxCoeff() / ri,
-                                      axial_preload_});
+                                      load.tail<2>().cwiseAbs().maxCoeff() / ri, axial_preload_});
   const double tolerance = options_.absolute_tolerance + options_.relative_tolerance * load_scale;
   // Trust radius for one step: a fraction of the groove-centre distance A, far larger than a
   // Hertz approach but small enough to stop a step through the clearance from overshooting.
   const double trust = 0.25 * bearing_.grooveCentreDistance();
   Vector5d metric;  // natural units: rotations weighted by R_i^2
   metric << 1.0, 1.0, 1.0, ri * ri, ri * ri;
-  auto potential = [&](const BearingEvaluation& e, const Vector5d& x) { return e.energy - load.dot(x); };
+  auto potential = [&](const BearingEvaluation& e, const Vector5d& x) {
+    return e.energy - load.dot(x);
+  };
 
   BearingEvaluation eval = evaluate(q);
   Vector5d grad = (eval.force - load).cwiseProduct(free_);  // prescribed DOFs carry reactions
@@ -158,8 +168,9 @@ bool BearingSupport::newton(const Vector5d& load, Vector5d& q, int& iterations, 
     if (residual <= tolerance) return true;
     // Regularised Newton direction: K + lambda M is positive definite even where K is singular
     // (balls out of contact, a direction without stiffness).
-    const double k_ref = std::max(eval.stiffness.diagonal().cwiseQuotient(metric).maxCoeff(),
-                                  bearing_.loadDeflectionConstant() * std::sqrt(1e-9 * bearing_.spec().ball_diameter));
+    const double k_ref = std::max(
+        eval.stiffness.diagonal().cwiseQuotient(metric).maxCoeff(),
+        bearing_.loadDeflectionConstant() * std::sqrt(1e-9 * bearing_.spec().ball_diameter));
     Matrix5d a = eval.stiffness;
     a.diagonal() += 1e-10 * k_ref * metric;
     for (int i = 0; i < 5; ++i) {
@@ -200,27 +211,33 @@ bool BearingSupport::newton(const Vector5d& load, Vector5d& q, int& iterations, 
   return residual <= tolerance;
 }
 
-BearingSolution BearingSupport::solve(const Vector5d& external_load, const Vector5d* warm_start) const {
+BearingSolution BearingSupport::solve(const Vector5d& external_load,
+                                      const Vector5d* warm_start) const {
   BearingSolution sol;
   solve(external_load, warm_start, sol);
   return sol;
 }
 
-void BearingSupport::solve(const Vector5d& external_load, const Vector5d* warm_start, BearingSolution& sol) const {
+void BearingSupport::solve(const Vector5d& external_load, const Vector5d* warm_start,
+                           BearingSolution& sol) const {
   static const char* kNames[5] = {"force_x", "force_y", "force_z", "moment_x", "moment_y"};
   for (int i = 0; i < 5; ++i) {
     // The name is built only on failure: this runs on every stiffness update.
-    if (!std::isfinite(external_load[i])) throwNotFinite(std::string("load.") + kNames[i], external_load[i]);
+    if (!std::isfinite(external_load[i]))
+      throwNotFinite(std::string("load.") + kNames[i], external_load[i]);
   }
-  if (tilt_ == TiltCondition::kConstrained && (external_load[kThetaX] != 0.0 || external_load[kThetaY] != 0.0)) {
+  if (tilt_ == TiltCondition::kConstrained &&
+      (external_load[kThetaX] != 0.0 || external_load[kThetaY] != 0.0)) {
     throwInvalid(external_load[kThetaX] != 0.0 ? "load.moment_x" : "load.moment_y",
                  external_load[external_load[kThetaX] != 0.0 ? kThetaX : kThetaY],
                  "a moment needs tilt = free (with constrained tilt the moment is a reaction)");
   }
-  if (warm_start && !warm_start->allFinite()) throw InvalidInput("warm_start: contains a non-finite value");
+  if (warm_start && !warm_start->allFinite())
+    throw InvalidInput("warm_start: contains a non-finite value");
   const Vector5d load = totalLoad(external_load);
 
-  Vector5d q = warm_start ? *warm_start : coldStart(load);  // read before `sol` (it may hold the warm start)
+  Vector5d q =
+      warm_start ? *warm_start : coldStart(load);  // read before `sol` (it may hold the warm start)
   sol.load = load;
   sol.stiffness.setZero();
   sol.residual = 0.0;
@@ -237,10 +254,11 @@ void BearingSupport::solve(const Vector5d& external_load, const Vector5d* warm_s
     }
   }
   if (!sol.converged) {
-    throw UnreachableLoad("bearing equilibrium did not converge (residual " + formatValue(sol.residual) +
-                          " N after " + std::to_string(sol.iterations) + " iterations) for load [" +
-                          formatValue(external_load[0]) + ", " + formatValue(external_load[1]) + ", " +
-                          formatValue(external_load[2]) + ", " + formatValue(external_load[3]) + ", " +
+    throw UnreachableLoad("bearing equilibrium did not converge (residual " +
+                          formatValue(sol.residual) + " N after " + std::to_string(sol.iterations) +
+                          " iterations) for load [" + formatValue(external_load[0]) + ", " +
+                          formatValue(external_load[1]) + ", " + formatValue(external_load[2]) +
+                          ", " + formatValue(external_load[3]) + ", " +
                           formatValue(external_load[4]) + "]");
   }
   sol.displacement = q;
@@ -263,22 +281,27 @@ void BearingSupport::finish(BearingSolution& sol) const {
       if (!b.in_contact) continue;
       ++sol.balls_in_contact;
       sol.max_contact_pressure = std::max(sol.max_contact_pressure, b.max_pressure);
-      if (bearing_.spec().type == BearingType::kAngularContact && b.contact_angle < 0.0 && b.load > 1e-9) {
-        throw UnreachableLoad("load drives a ball of an angular-contact bearing against its missing shoulder "
-                              "(contact angle " + formatValue(b.contact_angle * 180.0 / kPi) +
-                              " deg at azimuth " + formatValue(b.azimuth * 180.0 / kPi) +
-                              " deg); raise the axial preload or use type deep_groove");
+      if (bearing_.spec().type == BearingType::kAngularContact && b.contact_angle < 0.0 &&
+          b.load > 1e-9) {
+        throw UnreachableLoad(
+            "load drives a ball of an angular-contact bearing against its missing shoulder "
+            "(contact angle " +
+            formatValue(b.contact_angle * 180.0 / kPi) + " deg at azimuth " +
+            formatValue(b.azimuth * 180.0 / kPi) +
+            " deg); raise the axial preload or use type deep_groove");
       }
     }
   }
   if (sol.max_contact_pressure > bearing_.spec().max_contact_pressure) {
-    throw UnreachableLoad("contact pressure " + formatValue(sol.max_contact_pressure) +
-                          " Pa exceeds max_contact_pressure = " +
-                          formatValue(bearing_.spec().max_contact_pressure) + " Pa (ISO 76 static limit)");
+    throw UnreachableLoad(
+        "contact pressure " + formatValue(sol.max_contact_pressure) +
+        " Pa exceeds max_contact_pressure = " + formatValue(bearing_.spec().max_contact_pressure) +
+        " Pa (ISO 76 static limit)");
   }
 }
 
-std::optional<double> radialSecantStiffness(const BearingSupport& support, const Vector5d& external_load,
+std::optional<double> radialSecantStiffness(const BearingSupport& support,
+                                            const Vector5d& external_load,
                                             const BearingSolution& at_load) {
   if (external_load[kUx] == 0.0) return std::nullopt;
   Vector5d unloaded = external_load;

@@ -12,20 +12,28 @@
 
 namespace drivetrain_stiffness {
 
-DynamicsEstimator::DynamicsEstimator(const RigConfig& rig, const std::array<double, 2>& bearing_stiffness,
+DynamicsEstimator::DynamicsEstimator(const RigConfig& rig,
+                                     const std::array<double, 2>& bearing_stiffness,
                                      double output_rate)
     : DynamicsEstimator(std::make_shared<const RigConfig>(rig), bearing_stiffness, output_rate,
                         std::make_shared<const AntiBacklashMesh>(rig)) {}
 
-DynamicsEstimator::DynamicsEstimator(std::shared_ptr<const RigConfig> rig, const std::array<double, 2>& bearing_stiffness,
-                                     double output_rate, std::shared_ptr<const AntiBacklashMesh> mesh)
-    : rig_(std::move(rig)), bearing_stiffness_(bearing_stiffness), requested_rate_(output_rate),
+DynamicsEstimator::DynamicsEstimator(std::shared_ptr<const RigConfig> rig,
+                                     const std::array<double, 2>& bearing_stiffness,
+                                     double output_rate,
+                                     std::shared_ptr<const AntiBacklashMesh> mesh)
+    : rig_(std::move(rig)),
+      bearing_stiffness_(bearing_stiffness),
+      requested_rate_(output_rate),
       mesh_(std::move(mesh)) {
-  if (!rig_) throw std::invalid_argument("DynamicsEstimator: no rig");  // a caller's bug, not bad data
+  if (!rig_)
+    throw std::invalid_argument("DynamicsEstimator: no rig");  // a caller's bug, not bad data
   damping_ = DampingRatios::of(rig_->dynamics);
-  if (!rig_->dynamics.present) throw InvalidInput("dynamics: the gearbox file has no 'dynamics:' block");
+  if (!rig_->dynamics.present)
+    throw InvalidInput("dynamics: the gearbox file has no 'dynamics:' block");
   requirePositive("output_rate", output_rate);
-  for (int i = 0; i < 2; ++i) requireNonNegative("bearing_stiffness[" + std::to_string(i) + "]", bearing_stiffness[i]);
+  for (int i = 0; i < 2; ++i)
+    requireNonNegative("bearing_stiffness[" + std::to_string(i) + "]", bearing_stiffness[i]);
   if (!mesh_) throw InvalidInput("dynamics: no mesh table");
   fallback_.relative_tolerance = 1e-8;
   fallback_.absolute_tolerance = 1e-15;
@@ -43,8 +51,8 @@ void DynamicsEstimator::build() {
   try {
     buildModel();
   } catch (const InvalidInput& e) {
-    throw InvalidInput("dynamics.speed_rpm = " + formatValue(rig_->dynamics.speed_rpm) + " with output_rate = " +
-                       formatValue(requested_rate_) + ": " + e.what());
+    throw InvalidInput("dynamics.speed_rpm = " + formatValue(rig_->dynamics.speed_rpm) +
+                       " with output_rate = " + formatValue(requested_rate_) + ": " + e.what());
   }
   ++rebuilds_;
 }
@@ -67,7 +75,8 @@ void DynamicsEstimator::buildModel() {
   const double interval = period / per_period;
   // A mesh so slow that its period overflows the grid arithmetic (0 or NaN samples) would make
   // every advanceTo() convert NaN to an index.
-  if (!(interval > 0.0 && std::isfinite(interval))) throwInvalid("mesh period", period, "gives no usable output grid");
+  if (!(interval > 0.0 && std::isfinite(interval)))
+    throwInvalid("mesh period", period, "gives no usable output grid");
   std::unique_ptr<PeriodicExponentialPropagator> propagator;
   if (d.bearing_clearance[0] == 0.0 && d.bearing_clearance[1] == 0.0) {
     // With the settling bound: near a knee advanceTo moves onto the sliced propagation.
@@ -83,7 +92,8 @@ void DynamicsEstimator::reset(double t, double torque) {
   requireFinite("t", t);
   requireFinite("torque", torque);
   if (periodic_stale_) {
-    build();  // parameters changed while following the motion: the nominal phase needs its own propagators
+    build();  // parameters changed while following the motion: the nominal phase needs its own
+              // propagators
     periodic_stale_ = false;
   }
   following_ = false;
@@ -106,7 +116,8 @@ void DynamicsEstimator::setTorque(double torque, std::optional<double> at) {
   if (started_ && !following_ && at) {
     // Nominal phase: the state sits on sample k_; a torque stamped inside the interval that
     // follows takes effect at its stamp (advanceTo applies it there), not at the sample.
-    // A stamp on the sample to rounding (1e-9 of an interval: a picosecond at 1 kHz) is taken there.
+    // A stamp on the sample to rounding (1e-9 of an interval: a picosecond at 1 kHz) is taken
+    // there.
     const double offset = (*at - origin_) - k_ * interval_;
     if (offset > 1e-9 * interval_ && offset < interval_) {
       if (torque_changes_ == 0) interval_torque_ = torque_;
@@ -123,13 +134,15 @@ void DynamicsEstimator::setTorque(double torque, std::optional<double> at) {
   model_->setTorqueInput(torque);
 }
 
-void DynamicsEstimator::setBearingStiffness(const std::array<double, 2>& k, std::optional<double> at) {
+void DynamicsEstimator::setBearingStiffness(const std::array<double, 2>& k,
+                                            std::optional<double> at) {
   for (int i = 0; i < 2; ++i) {
     // The field name is built only on failure: this runs on every accepted input.
     if (!(k[i] >= 0.0)) requireNonNegative("bearing_stiffness[" + std::to_string(i) + "]", k[i]);
   }
   bool changed = false;
-  for (int i = 0; i < 2; ++i) changed |= std::abs(k[i] - bearing_stiffness_[i]) > 0.01 * std::max(bearing_stiffness_[i], 1.0);
+  for (int i = 0; i < 2; ++i)
+    changed |= std::abs(k[i] - bearing_stiffness_[i]) > 0.01 * std::max(bearing_stiffness_[i], 1.0);
   if (!changed) return;
   if (started_ && at) moveTo(*at);
   const std::array<double, 2> before = bearing_stiffness_;
@@ -202,25 +215,30 @@ double DynamicsEstimator::nominalMeshFrequency() const {
 }
 
 void DynamicsEstimator::setMotionSlices(int slices) {
-  if (slices < 4 || slices > 65536) throwInvalid("motion_slices", slices, "must be in [4, 65536] per mesh period");
+  if (slices < 4 || slices > 65536)
+    throwInvalid("motion_slices", slices, "must be in [4, 65536] per mesh period");
   if (slices == motion_slices_) return;
-  if (following_) throw InvalidInput("motion_slices: cannot change while following the measured motion (reset first)");
+  if (following_)
+    throw InvalidInput(
+        "motion_slices: cannot change while following the measured motion (reset first)");
   motion_slices_ = slices;
   full_ = SlicedDynamics{};
   mean_ = SlicedDynamics{};
   interval_maps_.reset();
 }
 
-void DynamicsEstimator::SlicedDynamics::build(std::shared_ptr<const SlicedMesh> mesh_slices, const GearRotorParameters& p,
+void DynamicsEstimator::SlicedDynamics::build(std::shared_ptr<const SlicedMesh> mesh_slices,
+                                              const GearRotorParameters& p,
                                               const DynamicsConfig& d) {
   slices = std::move(mesh_slices);
   // The live node's load follows the input (RigExcitationSpec::balanced_load): F_d = T / r_p.
   model = std::make_unique<GearRotorModel>(
-      p, std::make_shared<const SlicedExcitation>(slices, d.transmission_error_amplitude, d.backlash,
-                                                  1.0 / p.pinion_base_radius, 0.0));
+      p, std::make_shared<const SlicedExcitation>(slices, d.transmission_error_amplitude,
+                                                  d.backlash, 1.0 / p.pinion_base_radius, 0.0));
   const bool clearance = p.bearing_clearance[0] > 0.0 || p.bearing_clearance[1] > 0.0;
   exact = clearance ? nullptr
-                    : std::make_unique<SlicedModalPropagator>(p, slices, d.transmission_error_amplitude, d.backlash);
+                    : std::make_unique<SlicedModalPropagator>(
+                          p, slices, d.transmission_error_amplitude, d.backlash);
 }
 
 void DynamicsEstimator::SlicedDynamics::setParameters(const GearRotorParameters& p) {
@@ -266,10 +284,12 @@ void DynamicsEstimator::moveTo(double t) {
   if (!following_) startFollowing();
   const double t_rel = t - origin_;
   if (t_rel < t_state_ - 1e-12) {
-    throw InvalidInput("t = " + formatValue(t) + ": before the current time " + formatValue(time()) + " (time went backwards; reset)");
+    throw InvalidInput("t = " + formatValue(t) + ": before the current time " +
+                       formatValue(time()) + " (time went backwards; reset)");
   }
   if (std::floor(t_rel / interval_ + 1e-9) > k_) {
-    throw InvalidInput("t = " + formatValue(t) + ": output samples lie before it; advanceTo(t) first");
+    throw InvalidInput("t = " + formatValue(t) +
+                       ": output samples lie before it; advanceTo(t) first");
   }
   propagateTo(t_rel);
 }
@@ -283,29 +303,39 @@ void DynamicsEstimator::followMotion(double t, double mesh_phase, double mesh_fr
   mesh_frequency_ = mesh_frequency;
 }
 
-double DynamicsEstimator::meshPhase() const { return following_ ? phase_ : nominalMeshFrequency() * k_ * interval_; }
+double DynamicsEstimator::meshPhase() const {
+  return following_ ? phase_ : nominalMeshFrequency() * k_ * interval_;
+}
 
-double DynamicsEstimator::meshFrequency() const { return following_ ? mesh_frequency_ : nominalMeshFrequency(); }
+double DynamicsEstimator::meshFrequency() const {
+  return following_ ? mesh_frequency_ : nominalMeshFrequency();
+}
 
-double DynamicsEstimator::slicesIn(double h) const { return std::abs(mesh_frequency_) * h * full_.slices->size(); }
+double DynamicsEstimator::slicesIn(double h) const {
+  return std::abs(mesh_frequency_) * h * full_.slices->size();
+}
 
 void DynamicsEstimator::requireSliceBound(double t_rel) const {
   const double h = t_rel - t_state_, crossings = slicesIn(h);
   if (crossings > kMaxSlicesPerAdvance) {
-    throw InvalidInput("t = " + formatValue(origin_ + t_rel) + ": " + formatValue(h) + " s at a mesh frequency of " +
-                       formatValue(mesh_frequency_) + " Hz crosses " + formatValue(crossings) + " phase slices (more than " +
-                       formatValue(kMaxSlicesPerAdvance) + " in one call); reset at the new time instead");
+    throw InvalidInput("t = " + formatValue(origin_ + t_rel) + ": " + formatValue(h) +
+                       " s at a mesh frequency of " + formatValue(mesh_frequency_) +
+                       " Hz crosses " + formatValue(crossings) + " phase slices (more than " +
+                       formatValue(kMaxSlicesPerAdvance) +
+                       " in one call); reset at the new time instead");
   }
 }
 
 void DynamicsEstimator::countSlicesCrossed(double t_rel, double& crossed) const {
   crossed += slicesIn(interval_);
   if (crossed > kMaxSlicesPerAdvance) {
-    throw InvalidInput("t = " + formatValue(origin_ + t_rel) + ": at the nominal phase, where the interval maps do not " +
-                       "apply, this advance crossed more than " + formatValue(kMaxSlicesPerAdvance) +
-                       " phase slices one by one (a mesh frequency of " + formatValue(mesh_frequency_) +
-                       " Hz); the dynamics up to " + formatValue(origin_ + t_state_) +
-                       " s are kept, reset at the new time for the rest");
+    throw InvalidInput(
+        "t = " + formatValue(origin_ + t_rel) +
+        ": at the nominal phase, where the interval maps do not " +
+        "apply, this advance crossed more than " + formatValue(kMaxSlicesPerAdvance) +
+        " phase slices one by one (a mesh frequency of " + formatValue(mesh_frequency_) +
+        " Hz); the dynamics up to " + formatValue(origin_ + t_state_) +
+        " s are kept, reset at the new time for the rest");
   }
 }
 
@@ -328,7 +358,8 @@ void DynamicsEstimator::propagateTo(double t_rel) {
   const SlicedModalPropagator* exact = moving().exact.get();
   const auto dopri5 = [this](double t0, double t1, State6& y, double& phase) {
     t_state_ = t0;  // the motion input's anchor (movingModelAtState)
-    y = integrate(movingModelAtState(), IntegratorMethod::kDopri5, fallback_, t0, y, t1, t1 - t0, nullptr);
+    y = integrate(movingModelAtState(), IntegratorMethod::kDopri5, fallback_, t0, y, t1, t1 - t0,
+                  nullptr);
     phase += mesh_frequency_ * (t1 - t0);
     ++fallback_intervals_;
   };
@@ -341,12 +372,14 @@ void DynamicsEstimator::propagateTo(double t_rel) {
   t_state_ = t_rel;
 }
 
-void DynamicsEstimator::followFromHere(double t_rel, const std::function<void(const DynamicsSample&)>& sink) {
+void DynamicsEstimator::followFromHere(double t_rel,
+                                       const std::function<void(const DynamicsSample&)>& sink) {
   startFollowing();
   advanceFollowing(t_rel, sink);
 }
 
-void DynamicsEstimator::advanceFollowing(double t_rel, const std::function<void(const DynamicsSample&)>& sink) {
+void DynamicsEstimator::advanceFollowing(double t_rel,
+                                         const std::function<void(const DynamicsSample&)>& sink) {
   // Along the encoders every interval crosses its slices one by one: the whole advance is bounded
   // before any work. At the nominal phase an interval the maps take costs one product whatever the
   // speed, so only the intervals crossed slice by slice count against the bound, as they come: a
@@ -377,9 +410,13 @@ int DynamicsEstimator::mapsInterval() {
   }
   const double f = nominalMeshFrequency();
   const double per_period = std::round(1.0 / (f * interval_));
-  if (!(f > 0.0) || !(per_period >= 1.0 && per_period <= PeriodicExponentialPropagator::kMaxIntervalsPerPeriod)) return -1;
-  if (!interval_maps_ || interval_maps_->intervals() != static_cast<int>(per_period) || interval_maps_->meshFrequency() != f) {
-    interval_maps_ = std::make_unique<SlicedIntervalMaps>(*full_.slices, static_cast<int>(per_period), f);
+  if (!(f > 0.0) ||
+      !(per_period >= 1.0 && per_period <= PeriodicExponentialPropagator::kMaxIntervalsPerPeriod))
+    return -1;
+  if (!interval_maps_ || interval_maps_->intervals() != static_cast<int>(per_period) ||
+      interval_maps_->meshFrequency() != f) {
+    interval_maps_ =
+        std::make_unique<SlicedIntervalMaps>(*full_.slices, static_cast<int>(per_period), f);
     maps_settle_ = -1;
   }
   // The settling table was made with the parameters of the last build; its answers hold for the
@@ -390,7 +427,8 @@ int DynamicsEstimator::mapsInterval() {
   // larger gain) leave the maps unused: every slice is then crossed with its own regime bound. (The
   // gain bounds the free swing without its decay, so the damping moves it little: a tenth of the
   // mesh damping stayed within the 5 % on the seed servo.)
-  if (maps_settle_ < 0) maps_settle_ = full_.exact->loadedSwingGain() <= 1.05 * propagator_->settleGain() ? 1 : 0;
+  if (maps_settle_ < 0)
+    maps_settle_ = full_.exact->loadedSwingGain() <= 1.05 * propagator_->settleGain() ? 1 : 0;
   if (maps_settle_ == 0) return -1;
   return static_cast<int>(k_ % interval_maps_->intervals());
 }
@@ -416,7 +454,8 @@ bool DynamicsEstimator::intervalByMaps() {
     if (m > end) return false;
     const double h = (interval_maps_->offset(i, m) - u) / f;
     if (h > 0.0 && !exact.propagate(y, phase, f, h, drive_force)) return false;
-    if (!exact.inLoadedRegime(y, static_cast<double>(i) / n + interval_maps_->offset(i, m), f)) return false;
+    if (!exact.inLoadedRegime(y, static_cast<double>(i) / n + interval_maps_->offset(i, m), f))
+      return false;
   }
   if (!interval_maps_->toEnd(exact, i, m, y, drive_force)) return false;
   // The grid's own phase at the interval's end: the period's tooth switch is 0, the slice entered.
@@ -432,18 +471,21 @@ bool DynamicsEstimator::intervalByMaps() {
 bool DynamicsEstimator::headByMaps(double t_rel) {
   if (!(t_rel > t_state_)) return false;
   const double t0 = k_ * interval_;
-  if (std::abs(t_state_ - t0) > 1e-9 * interval_) return false;  // off the grid: the slices one by one
+  if (std::abs(t_state_ - t0) > 1e-9 * interval_)
+    return false;  // off the grid: the slices one by one
   const int i = mapsInterval();
   if (i < 0) return false;
   const SlicedModalPropagator& exact = *full_.exact;
   const double f = interval_maps_->meshFrequency(), u = f * (t_rel - t0);
   const int m = interval_maps_->boundaryAtOrBefore(i, u);
-  if (m == 0 || m == interval_maps_->boundaries(i)) return false;  // inside the first slice: nothing to gain
+  if (m == 0 || m == interval_maps_->boundaries(i))
+    return false;  // inside the first slice: nothing to gain
   const double drive_force = driveForce();
   if (!exact.inLoadedRegime(y_, phase_, f)) return false;
   State6 y = y_;
   if (!interval_maps_->fromStart(exact, i, m, y, drive_force)) return false;
-  double phase = static_cast<double>(i) / interval_maps_->intervals() + interval_maps_->offset(i, m);
+  double phase =
+      static_cast<double>(i) / interval_maps_->intervals() + interval_maps_->offset(i, m);
   if (!exact.inLoadedRegime(y, phase, f)) return false;
   const double h = t_rel - (t0 + interval_maps_->offset(i, m) / f);
   if (h > 0.0 && !exact.propagate(y, phase, f, h, drive_force)) return false;
@@ -471,12 +513,15 @@ bool DynamicsEstimator::floquetMargin(double* margin) const {
     if (!propagator_) return false;
     monodromy = propagator_->monodromy();
   }
-  const Eigen::Matrix<std::complex<double>, 6, 1> mu = Eigen::EigenSolver<Matrix6>(monodromy, false).eigenvalues();
+  const Eigen::Matrix<std::complex<double>, 6, 1> mu =
+      Eigen::EigenSolver<Matrix6>(monodromy, false).eigenvalues();
   *margin = 1.0 - mu.cwiseAbs().maxCoeff();
   return true;
 }
 
-DynamicsSample DynamicsEstimator::sample(double t_rel, const State6& y) const { return sampleOf(*model_, t_rel, y); }
+DynamicsSample DynamicsEstimator::sample(double t_rel, const State6& y) const {
+  return sampleOf(*model_, t_rel, y);
+}
 
 GearRotorModel& DynamicsEstimator::movingModelAtState() {
   GearRotorModel& model = *moving().model;
@@ -485,7 +530,9 @@ GearRotorModel& DynamicsEstimator::movingModelAtState() {
   return model;
 }
 
-DynamicsSample DynamicsEstimator::movingSample() { return sampleOf(movingModelAtState(), t_state_, y_); }
+DynamicsSample DynamicsEstimator::movingSample() {
+  return sampleOf(movingModelAtState(), t_state_, y_);
+}
 
 void DynamicsEstimator::propagateQuasiStatic(double h, double drive_force) {
   // quasi_static along the measured motion (reduced_models.hpp: m_s -> 0): each shaft is a damped
@@ -496,8 +543,10 @@ void DynamicsEstimator::propagateQuasiStatic(double h, double drive_force) {
   // gear F / k1 + b sign F), so delta' = 0 inside a slice and the torsional coordinate follows
   // from delta = x + x_p - x_g - e.
   const GearRotorParameters& p = full_.model->parameters();
-  shaftStep(p.pinion_mass, p.bearing_damping[0], p.bearing_stiffness[0], -drive_force, h, y_[0], y_[3]);
-  shaftStep(p.gear_mass, p.bearing_damping[1], p.bearing_stiffness[1], drive_force, h, y_[1], y_[4]);
+  shaftStep(p.pinion_mass, p.bearing_damping[0], p.bearing_stiffness[0], -drive_force, h, y_[0],
+            y_[3]);
+  shaftStep(p.gear_mass, p.bearing_damping[1], p.bearing_stiffness[1], drive_force, h, y_[1],
+            y_[4]);
   phase_ = wrapTurns(phase_ + mesh_frequency_ * h);
   // On the period's tooth switch (to 1e-7 of a period: where a sample lands on it) the slice the
   // motion enters, the right limit in time, as meshForSample reports the nominal model's.
@@ -523,7 +572,8 @@ void DynamicsEstimator::propagateQuasiStatic(double h, double drive_force) {
   y_[5] = -y_[3] + y_[4] + a * kTwoPi * mesh_frequency_ * std::cos(theta);
 }
 
-void DynamicsEstimator::shaftStep(double m, double c, double k, double force, double h, double& x, double& v) {
+void DynamicsEstimator::shaftStep(double m, double c, double k, double force, double h, double& x,
+                                  double& v) {
   // m x'' + c x' + k x = F held: about the static deflection F / k, the free response of the damped
   // oscillator, u = e^{-sigma t} (u0 cos(w_d t) + (v0 + sigma u0) sin(w_d t) / w_d) and
   // v = e^{-sigma t} (v0 cos(w_d t) - (sigma v0 + (k/m) u0) sin(w_d t) / w_d), sigma = c / 2m,
@@ -539,13 +589,15 @@ void DynamicsEstimator::shaftStep(double m, double c, double k, double force, do
   const double sigma = 0.5 * c / m, w2 = k / m;
   const std::complex<double> wd = std::sqrt(std::complex<double>(w2 - sigma * sigma, 0.0));
   const std::complex<double> cos_term = std::cos(wd * h);
-  const std::complex<double> sinc = std::abs(wd * h) < 1e-8 ? std::complex<double>(h, 0.0) : std::sin(wd * h) / wd;
+  const std::complex<double> sinc =
+      std::abs(wd * h) < 1e-8 ? std::complex<double>(h, 0.0) : std::sin(wd * h) / wd;
   const double decay = std::exp(-sigma * h), u0 = x - force / k, v0 = v;
   x = force / k + decay * (u0 * cos_term.real() + (v0 + sigma * u0) * sinc.real());
   v = decay * (v0 * cos_term.real() - (sigma * v0 + w2 * u0) * sinc.real());
 }
 
-DynamicsSample DynamicsEstimator::sampleOf(const GearRotorModel& model, double t_rel, const State6& y) const {
+DynamicsSample DynamicsEstimator::sampleOf(const GearRotorModel& model, double t_rel,
+                                           const State6& y) const {
   DynamicsSample s;
   s.t = origin_ + t_rel;
   s.state = y;
@@ -574,26 +626,28 @@ bool DynamicsEstimator::slicedInsteadOfDopri5() const {
   // 1.6x at -0.5 N m). An ordinary gear's open backlash is no linear regime
   // (dopri5 either way) and its interval maps do not exist: it stays on the periodic propagators
   // with dopri5 for the interval, which costs it nothing after the backlash closes.
-  return fidelity_ == Fidelity::kFull && mesh_->antiBacklash() && rig_->dynamics.bearing_clearance[0] == 0.0 &&
-         rig_->dynamics.bearing_clearance[1] == 0.0;
+  return fidelity_ == Fidelity::kFull && mesh_->antiBacklash() &&
+         rig_->dynamics.bearing_clearance[0] == 0.0 && rig_->dynamics.bearing_clearance[1] == 0.0;
 }
 
 bool DynamicsEstimator::advanceIntervalWithTorqueChanges() {
   // The interval from sample k_ with the torque held at its start, then each input from its stamp
-  // (the own-stamp rule). Exact: the held torque's propagation plus each step's size times the response to a
-  // unit step at its instant (PeriodicExponentialPropagator::torqueStepResponse); where the
-  // contacts may leave the linear regime, false (nothing done: the caller moves onto the sliced
-  // propagation, which takes the inputs at their stamps), or with bearing clearance dopri5
+  // (the own-stamp rule). Exact: the held torque's propagation plus each step's size times the
+  // response to a unit step at its instant (PeriodicExponentialPropagator::torqueStepResponse);
+  // where the contacts may leave the linear regime, false (nothing done: the caller moves onto the
+  // sliced propagation, which takes the inputs at their stamps), or with bearing clearance dopri5
   // piecewise between the stamps.
   const double t_k = k_ * interval_, t_next = (k_ + 1) * interval_;
   bool done = false;
   bool settles = propagator_ && propagator_->contactsSettle(interval_torque_);
-  for (int i = 0; i < torque_changes_ && settles; ++i) settles = propagator_->contactsSettle(torque_change_[i].torque);
+  for (int i = 0; i < torque_changes_ && settles; ++i)
+    settles = propagator_->contactsSettle(torque_change_[i].torque);
   if (settles) {
     State6 added = State6::Zero();
     double before = interval_torque_;
     for (int i = 0; i < torque_changes_; ++i) {
-      added += (torque_change_[i].torque - before) * propagator_->torqueStepResponse(k_, torque_change_[i].offset);
+      added += (torque_change_[i].torque - before) *
+               propagator_->torqueStepResponse(k_, torque_change_[i].offset);
       before = torque_change_[i].torque;
     }
     PeriodicExponentialPropagator::Augmented z = propagator_->augment(t_k, y_);
@@ -608,7 +662,9 @@ bool DynamicsEstimator::advanceIntervalWithTorqueChanges() {
     for (int i = 0; i <= torque_changes_; ++i) {
       const double to = i < torque_changes_ ? t_k + torque_change_[i].offset : t_next;
       model_->setTorqueInput(held);
-      if (to > from) y_ = integrate(*model_, IntegratorMethod::kDopri5, fallback_, from, y_, to, to - from, nullptr);
+      if (to > from)
+        y_ = integrate(*model_, IntegratorMethod::kDopri5, fallback_, from, y_, to, to - from,
+                       nullptr);
       if (i < torque_changes_) held = torque_change_[i].torque;
       from = to;
     }
@@ -620,16 +676,20 @@ bool DynamicsEstimator::advanceIntervalWithTorqueChanges() {
   return true;
 }
 
-void DynamicsEstimator::advanceTo(double t, const std::function<void(const DynamicsSample&)>& sink) {
+void DynamicsEstimator::advanceTo(double t,
+                                  const std::function<void(const DynamicsSample&)>& sink) {
   requireFinite("t", t);
   if (!started_) throw InvalidInput("dynamics: advanceTo before reset");
   if (t < time() - 1e-12) {
-    throw InvalidInput("t = " + formatValue(t) + ": before the current time " + formatValue(time()) + " (time went backwards; reset)");
+    throw InvalidInput("t = " + formatValue(t) + ": before the current time " +
+                       formatValue(time()) + " (time went backwards; reset)");
   }
   const double samples = std::floor((t - origin_) / interval_ + 1e-9) - k_;
   if (samples > kMaxSamplesPerAdvance) {
-    throw InvalidInput("t = " + formatValue(t) + ": a gap of " + formatValue(t - time()) + " s (" + formatValue(samples) +
-                       " samples) is too long to integrate in one call; reset at the new time instead");
+    throw InvalidInput(
+        "t = " + formatValue(t) + ": a gap of " + formatValue(t - time()) + " s (" +
+        formatValue(samples) +
+        " samples) is too long to integrate in one call; reset at the new time instead");
   }
   if (following_) {
     advanceFollowing(t - origin_, sink);
@@ -647,7 +707,8 @@ void DynamicsEstimator::advanceTo(double t, const std::function<void(const Dynam
     }
     if (sink) sink(sample(k_ * interval_, y_));
   }
-  if (k_end > k_) torque_changes_ = 0;  // reduced fidelities hold each torque from the sample before it
+  if (k_end > k_)
+    torque_changes_ = 0;  // reduced fidelities hold each torque from the sample before it
   if (fidelity_ != Fidelity::kFull && k_end > k_) {
     // Reduced fidelities run on the same grid; the observer's first call is the start state.
     const long k0 = k_;
@@ -679,7 +740,8 @@ void DynamicsEstimator::advanceTo(double t, const std::function<void(const Dynam
       return;
     }
     if (!done) {
-      y_ = integrate(*model_, IntegratorMethod::kDopri5, fallback_, t_k, y_, t_next, interval_, nullptr);
+      y_ = integrate(*model_, IntegratorMethod::kDopri5, fallback_, t_k, y_, t_next, interval_,
+                     nullptr);
       ++fallback_intervals_;
     }
     ++k_;

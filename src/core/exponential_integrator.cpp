@@ -26,14 +26,16 @@ bool stepInside(const TorqueProfile& torque, double a, double b) {
 // torsional mode and the TE forcing.
 double fastestRate(const GearRotorModel& model, const RigExcitation& excitation, double t0) {
   const GearRotorParameters& p = model.parameters();
-  const double period = 1.0 / excitation.meshFrequency(), te_omega = kTwoPi * excitation.meshFrequency();
+  const double period = 1.0 / excitation.meshFrequency(),
+               te_omega = kTwoPi * excitation.meshFrequency();
   double k_max = 0.0;
   for (int i = 0; i < 64; ++i) {
     MeshInstant mi;
     excitation.at(t0 + period * (i + 0.5) / 64, mi);
     k_max = std::max(k_max, mi.k_drive + mi.k_back);
   }
-  return std::sqrt(std::max({(k_max + p.bearing_stiffness[0]) / p.pinion_mass, (k_max + p.bearing_stiffness[1]) / p.gear_mass,
+  return std::sqrt(std::max({(k_max + p.bearing_stiffness[0]) / p.pinion_mass,
+                             (k_max + p.bearing_stiffness[1]) / p.gear_mass,
                              2.0 * k_max / model.equivalentMass(), te_omega * te_omega}));
 }
 // State indices of the augmented system.
@@ -45,14 +47,19 @@ double PeriodicExponentialPropagator::torqueAt(double t) const {
 }
 
 PeriodicExponentialPropagator::PeriodicExponentialPropagator(const GearRotorModel& model, double t0,
-                                                             double output_interval, double step_factor,
+                                                             double output_interval,
+                                                             double step_factor,
                                                              bool tabulate_settling)
     : model_(model), t0_(t0), interval_(output_interval) {
-  if (!model_.rigExcitation()) throw InvalidInput("method exponential: needs a rig excitation (mesh stiffness periodic in the mesh phase)");
+  if (!model_.rigExcitation())
+    throw InvalidInput(
+        "method exponential: needs a rig excitation (mesh stiffness periodic in the mesh phase)");
   const RigExcitation& excitation = rig();
   const GearRotorParameters& p = model.parameters();
   if (p.bearing_clearance[0] > 0.0 || p.bearing_clearance[1] > 0.0) {
-    throw InvalidInput("method exponential: bearing clearance makes the model nonlinear at every crossing; use dopri5");
+    throw InvalidInput(
+        "method exponential: bearing clearance makes the model nonlinear at every crossing; use "
+        "dopri5");
   }
   requireFinite("t0", t0);
   requirePositive("output_interval", output_interval);
@@ -62,12 +69,15 @@ PeriodicExponentialPropagator::PeriodicExponentialPropagator(const GearRotorMode
   const double n_real = period / output_interval;
   // Checked before lround: a slow mesh on a fine grid asks for more intervals than a long holds.
   if (!(n_real <= kMaxIntervalsPerPeriod)) {
-    throwInvalid("output_interval", output_interval, "gives " + formatValue(n_real) + " samples per mesh period of " +
-                 formatValue(period) + " s: more than " + formatValue(kMaxIntervalsPerPeriod) + " stored propagators");
+    throwInvalid("output_interval", output_interval,
+                 "gives " + formatValue(n_real) + " samples per mesh period of " +
+                     formatValue(period) + " s: more than " + formatValue(kMaxIntervalsPerPeriod) +
+                     " stored propagators");
   }
   const long n = std::lround(n_real);
   if (n < 1 || std::abs(n_real - n) > 1e-9 * n_real) {
-    throwInvalid("output_interval", output_interval, "must divide the mesh period " + formatValue(period) + " s");
+    throwInvalid("output_interval", output_interval,
+                 "must divide the mesh period " + formatValue(period) + " s");
   }
   te_amplitude_ = spec.te_amplitude;
   te_omega_ = kTwoPi * excitation.meshFrequency();
@@ -85,8 +95,9 @@ PeriodicExponentialPropagator::PeriodicExponentialPropagator(const GearRotorMode
   // The set-up costs one Magnus step (an 11x11 exponential, ~5 us) per h_max over a mesh period:
   // a slow mesh makes that hours (0.001 rpm on the seed-000 rig: 2e9 steps). Refused up front.
   if (!(period / h_max <= kMaxSetupSteps)) {
-    throwInvalid("mesh period", period, "needs " + formatValue(period / h_max) + " Magnus steps to set up (more than " +
-                 formatValue(kMaxSetupSteps) + "): the mesh is too slow for exact propagation");
+    throwInvalid("mesh period", period,
+                 "needs " + formatValue(period / h_max) + " Magnus steps to set up (more than " +
+                     formatValue(kMaxSetupSteps) + "): the mesh is too slow for exact propagation");
   }
 
   // Pieces end exactly on the tooth-count switches and on every node of the phase table, so that
@@ -102,7 +113,8 @@ PeriodicExponentialPropagator::PeriodicExponentialPropagator(const GearRotorMode
         if (t > t0 && t < t0 + period) kinks.push_back(t);
       }
     }
-    for (double t = excitation.nextSwitch(t0); t < t0 + period; t = excitation.nextSwitch(t)) kinks.push_back(t);
+    for (double t = excitation.nextSwitch(t0); t < t0 + period; t = excitation.nextSwitch(t))
+      kinks.push_back(t);
     std::sort(kinks.begin(), kinks.end());
   }
 
@@ -110,7 +122,8 @@ PeriodicExponentialPropagator::PeriodicExponentialPropagator(const GearRotorMode
   // the generator states (sin, cos, 1) and the torque O(1). The exponential is accurate normwise,
   // so without this the O(1) forcing columns would pollute the 1e-7 m displacements.
   Eigen::Matrix<double, 11, 1> scale;
-  scale << 1e-6, 1e-6, 1e-6, 1e-6 * w_max, 1e-6 * w_max, 1e-6 * w_max, 1.0, 1.0, 1.0, 1.0, 1.0 / output_interval;
+  scale << 1e-6, 1e-6, 1e-6, 1e-6 * w_max, 1e-6 * w_max, 1e-6 * w_max, 1.0, 1.0, 1.0, 1.0,
+      1.0 / output_interval;
   // Balancing as an elementwise factor, (D^-1 X D)_rc = X_rc scale_c / scale_r: no dense product.
   const Matrix11 to_balanced = scale.cwiseInverse() * scale.transpose();
 
@@ -124,12 +137,14 @@ PeriodicExponentialPropagator::PeriodicExponentialPropagator(const GearRotorMode
   tail_begin_.assign(1, 0);
   node_count_.resize(n);
   // Node propagators kept per mesh period: at most kMaxStoredNodes (every node_stride_-th node).
-  node_stride_ = static_cast<int>(std::max(1.0, std::ceil(period / h_max * 1.05 / kMaxStoredNodes)));
+  node_stride_ =
+      static_cast<int>(std::max(1.0, std::ceil(period / h_max * 1.05 / kMaxStoredNodes)));
   // What torqueStepResponse needs (node products, per-piece operators) only where the torque can
   // step inside an interval: the model's own input (the node) or a step profile.
   torque_steps_ = held_ || spec.torque.kind == TorqueProfile::Kind::kSteps;
   // The augmented matrix is [[state 6x6, forcing 6x5], [0, generator 5x5]]: the generator rows
-  // (sin, cos, 1, u, u') never read the state, and so do Omega, its exponentials and their products.
+  // (sin, cos, 1, u, u') never read the state, and so do Omega, its exponentials and their
+  // products.
   using Blocks = BlockTriangular<6, 5>;
   std::vector<Blocks> step_exps;  // one interval's Magnus steps, balanced units
   for (long j = 0; j < n; ++j) {
@@ -140,7 +155,8 @@ PeriodicExponentialPropagator::PeriodicExponentialPropagator(const GearRotorMode
     kc_[j] = mj.k_back;
     backlash_offset_[j] = mj.backlash;
     std::vector<double> cuts = {a};
-    for (auto it = std::upper_bound(kinks.begin(), kinks.end(), a); it != kinks.end() && *it < b; ++it) {
+    for (auto it = std::upper_bound(kinks.begin(), kinks.end(), a); it != kinks.end() && *it < b;
+         ++it) {
       if (*it - cuts.back() > 1e-12 * output_interval) cuts.push_back(*it);
     }
     if (b - cuts.back() <= 1e-12 * output_interval) cuts.pop_back();
@@ -164,7 +180,8 @@ PeriodicExponentialPropagator::PeriodicExponentialPropagator(const GearRotorMode
       // 1e307 over a gram): refused by name here, where the blocks would otherwise turn NaN.
       if (!aa.allFinite() || !ab.allFinite()) {
         throwInvalid("system matrix", (aa.allFinite() ? ab : aa).cwiseAbs().maxCoeff(),
-                     "overflows at t = " + formatValue(cuts[c]) + " s: the parameters are beyond double range");
+                     "overflows at t = " + formatValue(cuts[c]) +
+                         " s: the parameters are beyond double range");
       }
       const Matrix11 commutator = a1.lazyProduct(a0) - a0.lazyProduct(a1);
       // The generator rows never read the state (systemMatrix), so A0, A1 and [A1, A0] have a zero
@@ -176,12 +193,14 @@ PeriodicExponentialPropagator::PeriodicExponentialPropagator(const GearRotorMode
       if (torque_steps_) piece_operators_.push_back(pieceOperators(aa, ab, len));
       for (int s = 0; s < steps; ++s) {
         const Matrix11 omega = h * (a0 + ((s + 0.5) * h) * a1) + (h * h * h / 12.0) * commutator;
-        step_exps.push_back(blockTriangularExp(Blocks::fromDense(omega.cwiseProduct(to_balanced))));  // balanced units
+        step_exps.push_back(blockTriangularExp(
+            Blocks::fromDense(omega.cwiseProduct(to_balanced))));  // balanced units
         phi = step_exps.back() * phi;
         ++magnus_steps_;
       }
     }
-    propagators_[j] = phi.dense().cwiseQuotient(to_balanced).topRows<9>();  // back to physical units
+    propagators_[j] =
+        phi.dense().cwiseQuotient(to_balanced).topRows<9>();  // back to physical units
     // Phi(b, node) backwards from the end, kept at the nodes stride, 2 stride, ... and the last.
     const int m = static_cast<int>(step_exps.size());
     const int kept = torque_steps_ ? (m + node_stride_ - 1) / node_stride_ : 0;
@@ -213,7 +232,8 @@ PeriodicExponentialPropagator::PeriodicExponentialPropagator(const GearRotorMode
   if (tabulate_settling && preload_force_ > 0.0) tabulateSettling(excitation, kinks, period);
 }
 
-void PeriodicExponentialPropagator::tabulateSettling(const RigExcitation& excitation, const std::vector<double>& kinks,
+void PeriodicExponentialPropagator::tabulateSettling(const RigExcitation& excitation,
+                                                     const std::vector<double>& kinks,
                                                      double period) {
   // The stiffness over one period: uniformly, and on both sides of every switch and table node.
   std::vector<double> times;
@@ -303,8 +323,8 @@ bool PeriodicExponentialPropagator::contactsSettle(double torque) const {
   const double f = mean_force_ + torque_gain_ * (torque - torque_mean_);
   if (!std::isfinite(f)) return false;
   const auto it = std::lower_bound(settle_force_.begin(), settle_force_.end(), f);
-  const std::size_t hi =
-      std::min<std::size_t>(static_cast<std::size_t>(it - settle_force_.begin()), settle_force_.size() - 1);
+  const std::size_t hi = std::min<std::size_t>(static_cast<std::size_t>(it - settle_force_.begin()),
+                                               settle_force_.size() - 1);
   const std::size_t lo = hi > 0 ? hi - 1 : 0;
   return settle_ok_[lo] && settle_ok_[hi];  // both neighbours on the grid
 }
@@ -331,19 +351,19 @@ PeriodicExponentialPropagator::PieceOperators PeriodicExponentialPropagator::pie
   return ops;
 }
 
-PeriodicExponentialPropagator::Vector7 PeriodicExponentialPropagator::magnusStepOnTorque(const PieceOperators& ops,
-                                                                                        double tau, double h,
-                                                                                        const Vector7& v) const {
+PeriodicExponentialPropagator::Vector7 PeriodicExponentialPropagator::magnusStepOnTorque(
+    const PieceOperators& ops, double tau, double h, const Vector7& v) const {
   // The constructor's 4th-order Magnus step over [tau, tau + h] of a piece applied to a vector of
   // the state and the torque slot only. That subspace is invariant: no TE generator row (sin, cos,
   // 1) reads the state or the torque, and the torque slot's own row reads only u', zero for a
   // step. So the 7x7 restriction of Omega (commutator included, as the rows outside add nothing to
-  // it) acts alone. With A linear in the piece, the Gauss points t1, t2 = tau + (1/2 -+ sqrt(3)/6) h
-  // give Omega = h/2 (A(t1) + A(t2)) + sqrt(3) h^2/12 [A(t2), A(t1)] = h A(tau + h/2) +
-  // h^3/12 [A1, A0]. exp(Omega) v is summed as its Taylor series on the vector, in balanced units
-  // where |Omega| is about h omega_max <= the step factor: to 1e-17 of the sum within some 25
-  // terms, matrix-vector products instead of a matrix exponential.
-  const Matrix7 omega = h * (ops.a0 + (tau + 0.5 * h) * ops.a1) + (h * h * h / 12.0) * ops.commutator;
+  // it) acts alone. With A linear in the piece, the Gauss points t1, t2 = tau + (1/2 -+ sqrt(3)/6)
+  // h give Omega = h/2 (A(t1) + A(t2)) + sqrt(3) h^2/12 [A(t2), A(t1)] = h A(tau + h/2) + h^3/12
+  // [A1, A0]. exp(Omega) v is summed as its Taylor series on the vector, in balanced units where
+  // |Omega| is about h omega_max <= the step factor: to 1e-17 of the sum within some 25 terms,
+  // matrix-vector products instead of a matrix exponential.
+  const Matrix7 omega =
+      h * (ops.a0 + (tau + 0.5 * h) * ops.a1) + (h * h * h / 12.0) * ops.commutator;
   Vector7 term = v.cwiseQuotient(scale7_), sum = term;
   for (int n = 1; n < 60; ++n) {
     term = omega * term / static_cast<double>(n);
@@ -355,12 +375,15 @@ PeriodicExponentialPropagator::Vector7 PeriodicExponentialPropagator::magnusStep
 
 State6 PeriodicExponentialPropagator::torqueStepResponse(long k, double offset) const {
   if (!torque_steps_) {
-    throw InvalidInput("torque step response: this propagator's torque cannot step (neither the model's input nor a step "
-                       "profile), so its node products were not built");
+    throw InvalidInput(
+        "torque step response: this propagator's torque cannot step (neither the model's input nor "
+        "a step "
+        "profile), so its node products were not built");
   }
   requireFinite("offset", offset);
   if (offset < 0.0 || offset > interval_ * (1.0 + 1e-12)) {
-    throwInvalid("offset", offset, "must lie in the output interval [0, " + formatValue(interval_) + "] s");
+    throwInvalid("offset", offset,
+                 "must lie in the output interval [0, " + formatValue(interval_) + "] s");
   }
   const long n = static_cast<long>(propagators_.size());
   const int j = static_cast<int>(((k % n) + n) % n);
@@ -369,14 +392,16 @@ State6 PeriodicExponentialPropagator::torqueStepResponse(long k, double offset) 
   int p = piece_begin_[j];
   while (p + 1 < piece_begin_[j + 1] && pieces_[p + 1].start <= t) ++p;
   const MagnusPiece& piece = pieces_[p];
-  const int local = std::clamp(static_cast<int>(std::floor((t - piece.start) / piece.h)), 0, piece.steps - 1);
+  const int local =
+      std::clamp(static_cast<int>(std::floor((t - piece.start) / piece.h)), 0, piece.steps - 1);
   const int m = node_count_[j];
   int node = piece.first_node + local + 1;  // the node that ends the step holding t
   const double step_end = piece.start + (local + 1) * piece.h;
   // Unit torque state at t (no displacement, velocity or TE), carried to that node exactly...
   Vector7 v = Vector7::Zero();
   v[6] = 1.0;
-  if (step_end - t > 0.0) v = magnusStepOnTorque(piece_operators_[p], t - piece.start, step_end - t, v);
+  if (step_end - t > 0.0)
+    v = magnusStepOnTorque(piece_operators_[p], t - piece.start, step_end - t, v);
   // ... and on to the next kept node (node_stride_ > 1 only for very slow meshes).
   while (node < m && node % node_stride_ != 0) {
     int q = piece_begin_[j];
@@ -388,14 +413,16 @@ State6 PeriodicExponentialPropagator::torqueStepResponse(long k, double offset) 
   return tails_[tail_begin_[j] + (node + node_stride_ - 1) / node_stride_ - 1] * v;
 }
 
-PeriodicExponentialPropagator::Matrix11 PeriodicExponentialPropagator::systemMatrix(double t) const {
+PeriodicExponentialPropagator::Matrix11 PeriodicExponentialPropagator::systemMatrix(
+    double t) const {
   MeshInstant m;
   rig().at(t, m);  // stiffness, preload and backlash: the drive force enters through the u columns
   const GearRotorParameters& p = model_.parameters();
   const double ks = m.k_drive + m.k_back, cs = p.mesh_damping;
   const bool anti_backlash = m.k_back > 0.0 || m.preload_force > 0.0;
-  // Mesh force F = ks delta + cs delta' (both flanks closed: F_p cancels) or k1 (delta - b) + c delta'
-  // (ordinary gear on its drive flank), delta = x + x_p - x_g - A sin, delta' = v + v_p - v_g - A w cos.
+  // Mesh force F = ks delta + cs delta' (both flanks closed: F_p cancels) or k1 (delta - b) + c
+  // delta' (ordinary gear on its drive flank), delta = x + x_p - x_g - A sin, delta' = v + v_p -
+  // v_g - A w cos.
   Eigen::Matrix<double, 1, 11> f = Eigen::Matrix<double, 1, 11>::Zero();
   f[kXp] = ks;
   f[kXg] = -ks;
@@ -424,7 +451,8 @@ PeriodicExponentialPropagator::Matrix11 PeriodicExponentialPropagator::systemMat
   return a;
 }
 
-bool PeriodicExponentialPropagator::linearRegime(int j, const Eigen::Matrix<double, 9, 1>& z) const {
+bool PeriodicExponentialPropagator::linearRegime(int j,
+                                                 const Eigen::Matrix<double, 9, 1>& z) const {
   const GearRotorParameters& p = model_.parameters();
   const double delta = z[kX] + z[kXp] - z[kXg] - te_amplitude_ * z[kSin];
   const double rate = z[kV] + z[kVp] - z[kVg] - te_amplitude_ * te_omega_ * z[kCos];
@@ -440,7 +468,8 @@ bool PeriodicExponentialPropagator::linearRegime(int j, const Eigen::Matrix<doub
   return g > 0.0 && total >= 0.0 && total <= 2.0 * k1 * g;
 }
 
-double PeriodicExponentialPropagator::estimatedSetupSteps(const GearRotorModel& model, const RigExcitation& excitation,
+double PeriodicExponentialPropagator::estimatedSetupSteps(const GearRotorModel& model,
+                                                          const RigExcitation& excitation,
                                                           double t0, double step_factor) {
   requirePositive("magnus_step_factor", step_factor);
   return fastestRate(model, excitation, t0) / (step_factor * excitation.meshFrequency());
@@ -453,7 +482,8 @@ Matrix6 PeriodicExponentialPropagator::monodromy() const {
   return phi;
 }
 
-PeriodicExponentialPropagator::Augmented PeriodicExponentialPropagator::augment(double t, const State6& y) const {
+PeriodicExponentialPropagator::Augmented PeriodicExponentialPropagator::augment(
+    double t, const State6& y) const {
   Augmented z;
   z.head<6>() = y;
   z[kSin] = std::sin(te_omega_ * t + te_phase_);
@@ -478,7 +508,9 @@ bool PeriodicExponentialPropagator::step(long k, Augmented& z, double torque_k, 
   next.noalias() = propagators_[((k % n) + n) % n].lazyProduct(w);  // as in run() (its comment)
   if (added) next.head<6>() += *added;
   if (!next.allFinite() || next.head<3>().cwiseAbs().maxCoeff() > divergence_limit_) {
-    throw UnstableIntegration("integrator exponential: displacement beyond the divergence limit at sample " + std::to_string(k + 1));
+    throw UnstableIntegration(
+        "integrator exponential: displacement beyond the divergence limit at sample " +
+        std::to_string(k + 1));
   }
   if (!linearRegime(static_cast<int>((((k + 1) % n) + n) % n), next)) return false;
   z = next;
@@ -486,12 +518,14 @@ bool PeriodicExponentialPropagator::step(long k, Augmented& z, double torque_k, 
 }
 
 State6 PeriodicExponentialPropagator::run(const State6& y0, double t_end, const Observer& observe,
-                                          const IntegratorOptions& fallback, IntegrationStats* stats) const {
+                                          const IntegratorOptions& fallback,
+                                          IntegrationStats* stats) const {
   if (!y0.allFinite()) throw InvalidInput("initial state: contains a non-finite value");
   const double span = t_end - t0_;
   const long k_end = std::lround(span / interval_);
   if (k_end < 0 || std::abs(span - k_end * interval_) > 1e-9 * std::max(interval_, span)) {
-    throwInvalid("t_end", t_end, "must be t0 plus a whole number of output intervals " + formatValue(interval_));
+    throwInvalid("t_end", t_end,
+                 "must be t0 plus a whole number of output intervals " + formatValue(interval_));
   }
   IntegrationStats st;
   const TorqueProfile& torque = rig().spec().torque;
@@ -506,11 +540,12 @@ State6 PeriodicExponentialPropagator::run(const State6& y0, double t_end, const 
   Eigen::Matrix<double, 11, 1> w;
   // The interval's propagator: k mod n carried rather than divided out at every sample. Each
   // product is Eigen's lazyProduct: 9 + 1 + 11 is above Eigen's threshold for coefficient-based
-  // products, so operator* took its GEMV kernel, whose call costs more than the product at this size
-  // (69 -> 41-52 ns a sample in a scratch loop). With Eigen 3.4 and SSE/AVX the results are bit for
-  // bit those of the GEMV kernel: rows 0-7 are computed in packets in the same column order, and
-  // row 8 (summed in another order, without packets) is the constant generator row, exactly e_8.
-  // Without vectorisation the last bits could differ (an independent review measured it).
+  // products, so operator* took its GEMV kernel, whose call costs more than the product at this
+  // size (69 -> 41-52 ns a sample in a scratch loop). With Eigen 3.4 and SSE/AVX the results are
+  // bit for bit those of the GEMV kernel: rows 0-7 are computed in packets in the same column
+  // order, and row 8 (summed in another order, without packets) is the constant generator row,
+  // exactly e_8. Without vectorisation the last bits could differ (an independent review measured
+  // it).
   int j = 0;
   for (long k = 0; k < k_end; ++k) {
     const double t_next = t0_ + (k + 1) * interval_;
@@ -519,7 +554,8 @@ State6 PeriodicExponentialPropagator::run(const State6& y0, double t_end, const 
     w[kU] = u;
     w[kUdot] = (u_next - u) / interval_;
     Eigen::Matrix<double, 9, 1> z_next;
-    if (torque.kind == TorqueProfile::Kind::kSteps && stepInside(torque, t_next - interval_, t_next)) {
+    if (torque.kind == TorqueProfile::Kind::kSteps &&
+        stepInside(torque, t_next - interval_, t_next)) {
       // Torque steps inside this interval: the torque held from its start, plus each step's size
       // times the response to a unit step at its instant (exact: the system is linear).
       w[kUdot] = 0.0;
@@ -527,7 +563,8 @@ State6 PeriodicExponentialPropagator::run(const State6& y0, double t_end, const 
       double before = u + torque.mean;
       for (const auto& step : torque.steps) {
         if (step.first > t_next - interval_ && step.first <= t_next) {
-          z_next.head<6>() += (step.second - before) * torqueStepResponse(k, step.first - (t_next - interval_));
+          z_next.head<6>() +=
+              (step.second - before) * torqueStepResponse(k, step.first - (t_next - interval_));
           before = step.second;
           ++st.events;
         }
@@ -541,9 +578,13 @@ State6 PeriodicExponentialPropagator::run(const State6& y0, double t_end, const 
       const double t_k = t0_ + k * interval_;
       IntegrationStats rest;
       bool first = true;
-      const State6 y_end = integrate(model_, IntegratorMethod::kDopri5, fallback, t_k, z.head<6>(), t_end, interval_,
-                                     [&](double t, const State6& y) { if (!first && observe) observe(t, y); first = false; },
-                                     &rest);
+      const State6 y_end = integrate(
+          model_, IntegratorMethod::kDopri5, fallback, t_k, z.head<6>(), t_end, interval_,
+          [&](double t, const State6& y) {
+            if (!first && observe) observe(t, y);
+            first = false;
+          },
+          &rest);
       st.steps += rest.steps;
       st.rhs_evaluations += rest.rhs_evaluations;
       st.events += rest.events;
@@ -557,7 +598,8 @@ State6 PeriodicExponentialPropagator::run(const State6& y0, double t_end, const 
     j = j_next;
     ++st.steps;
     if (!z.allFinite() || z.head<3>().cwiseAbs().maxCoeff() > fallback.divergence_limit) {
-      throw UnstableIntegration("integrator exponential diverged at t = " + formatValue(t_next) + " s (no bounded response)");
+      throw UnstableIntegration("integrator exponential diverged at t = " + formatValue(t_next) +
+                                " s (no bounded response)");
     }
     if (observe) observe(t_next, z.head<6>());
   }

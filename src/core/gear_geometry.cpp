@@ -8,7 +8,9 @@
 
 namespace drivetrain_stiffness {
 namespace {
-std::string gearField(const char* name, int i) { return std::string("gears.") + name + "[" + std::to_string(i) + "]"; }
+std::string gearField(const char* name, int i) {
+  return std::string("gears.") + name + "[" + std::to_string(i) + "]";
+}
 }  // namespace
 
 double involute(double alpha) { return std::tan(alpha) - alpha; }
@@ -20,7 +22,10 @@ double inverseInvolute(double value) {
   for (int i = 0; i < 60; ++i) {
     const double f = std::tan(a) - a - value;
     const double df = std::tan(a) * std::tan(a);  // d inv / d alpha = tan^2(alpha)
-    if (df <= 0.0) { a = 1e-8; continue; }
+    if (df <= 0.0) {
+      a = 1e-8;
+      continue;
+    }
     const double next = std::clamp(a - f / df, 0.5 * a, 0.5 * (a + kPi / 2.0));
     if (std::abs(next - a) < 1e-15) return next;
     a = next;
@@ -34,7 +39,8 @@ void validateGearPair(const GearPairSpec& spec) {
   requireInOpenRange("gears.pressure_angle_deg", spec.pressure_angle * 180.0 / kPi, 0.0, 45.0);
   requireInHalfOpenRange("gears.helix_angle_deg", spec.helix_angle * 180.0 / kPi, 0.0, 45.0);
   for (int i = 0; i < 2; ++i) {
-    if (spec.teeth[i] < 5 || spec.teeth[i] > 100000) throwInvalid(gearField("teeth", i), spec.teeth[i], "must be an integer >= 5");
+    if (spec.teeth[i] < 5 || spec.teeth[i] > 100000)
+      throwInvalid(gearField("teeth", i), spec.teeth[i], "must be an integer >= 5");
     requireInOpenRange(gearField("profile_shift", i), spec.profile_shift[i], -2.0, 2.0);
     requireNonNegative(gearField("bore_diameter", i), spec.bore_diameter[i]);
   }
@@ -48,7 +54,8 @@ void validateGearPair(const GearPairSpec& spec) {
 }
 
 double baseRadius(const GearPairSpec& spec, int gear_index) {
-  if (gear_index != 0 && gear_index != 1) throwInvalid("gear_index", gear_index, "must be 0 (pinion) or 1 (gear)");
+  if (gear_index != 0 && gear_index != 1)
+    throwInvalid("gear_index", gear_index, "must be 0 (pinion) or 1 (gear)");
   return 0.5 * spec.module * spec.teeth[gear_index] * std::cos(spec.pressure_angle);
 }
 
@@ -66,8 +73,9 @@ SpurGearGeometry::SpurGearGeometry(const GearPairSpec& spec) : spec_(spec) {
     // Undercut by the generating rack: x >= h_a - z sin^2(alpha) / 2 (ISO 21771 / Niemann-Winter).
     const double x_min = ha - 0.5 * z * std::sin(alpha) * std::sin(alpha);
     if (x < x_min - 1e-12) {
-      throw InvalidInput(gearField("teeth", i) + " = " + std::to_string(z) + " with " + gearField("profile_shift", i) +
-                         " = " + formatValue(x) + ": undercut; needs profile_shift >= " + formatValue(x_min));
+      throw InvalidInput(gearField("teeth", i) + " = " + std::to_string(z) + " with " +
+                         gearField("profile_shift", i) + " = " + formatValue(x) +
+                         ": undercut; needs profile_shift >= " + formatValue(x_min));
     }
     r_[i] = 0.5 * m * z;
     rb_[i] = r_[i] * std::cos(alpha);
@@ -77,13 +85,17 @@ SpurGearGeometry::SpurGearGeometry(const GearPairSpec& spec) : spec_(spec) {
   }
   const double a0 = r_[0] + r_[1];
   const double x_sum = spec.profile_shift[0] + spec.profile_shift[1];
-  // Tight-mesh operating pressure angle: inv(alpha_w) = inv(alpha) + 2 tan(alpha) (x1 + x2) / (z1 + z2).
-  const double alpha_tight = inverseInvolute(involute(alpha) + 2.0 * std::tan(alpha) * x_sum / (spec.teeth[0] + spec.teeth[1]));
+  // Tight-mesh operating pressure angle: inv(alpha_w) = inv(alpha) + 2 tan(alpha) (x1 + x2) / (z1 +
+  // z2).
+  const double alpha_tight = inverseInvolute(involute(alpha) + 2.0 * std::tan(alpha) * x_sum /
+                                                                   (spec.teeth[0] + spec.teeth[1]));
   const double a_tight = a0 * std::cos(alpha) / std::cos(alpha_tight);
   if (spec.center_distance) {
     a_w_ = *spec.center_distance;
     if (a_w_ < a_tight * (1.0 - 1e-9)) {
-      throwInvalid("gears.center_distance", a_w_, "is below the tight-mesh distance " + formatValue(a_tight) + " m: the teeth would interpenetrate");
+      throwInvalid("gears.center_distance", a_w_,
+                   "is below the tight-mesh distance " + formatValue(a_tight) +
+                       " m: the teeth would interpenetrate");
     }
     alpha_w_ = std::acos(a0 * std::cos(alpha) / a_w_);
   } else {
@@ -98,12 +110,15 @@ SpurGearGeometry::SpurGearGeometry(const GearPairSpec& spec) : spec_(spec) {
     rw_[i] = rb_[i] / std::cos(alpha_w_);
     // Tooth thickness on a circle of pressure angle a: s = 2 r_c (s_0/(2r) + inv(alpha) - inv(a)),
     // s_0 = m (pi/2 + 2 x tan(alpha)) (ISO 21771).
-    const double s0_half_angle = (kPi / 2.0 + 2.0 * spec.profile_shift[i] * std::tan(alpha)) / spec.teeth[i];
+    const double s0_half_angle =
+        (kPi / 2.0 + 2.0 * spec.profile_shift[i] * std::tan(alpha)) / spec.teeth[i];
     sw_[i] = 2.0 * rw_[i] * (s0_half_angle + involute(alpha) - involute(alpha_w_));
     const double alpha_a = std::acos(rb_[i] / ra_[i]);
-    const double tip_thickness = 2.0 * ra_[i] * (s0_half_angle + involute(alpha) - involute(alpha_a));
+    const double tip_thickness =
+        2.0 * ra_[i] * (s0_half_angle + involute(alpha) - involute(alpha_a));
     if (tip_thickness < 0.0) {
-      throwInvalid(gearField("profile_shift", i), spec.profile_shift[i], "gives pointed teeth (negative tip thickness)");
+      throwInvalid(gearField("profile_shift", i), spec.profile_shift[i],
+                   "gives pointed teeth (negative tip thickness)");
     }
   }
   backlash_ = 2.0 * kPi * rw_[0] / spec.teeth[0] - sw_[0] - sw_[1];
@@ -113,17 +128,21 @@ SpurGearGeometry::SpurGearGeometry(const GearPairSpec& spec) : spec_(spec) {
   s_a_ = t1t2_ - std::sqrt(ra_[1] * ra_[1] - rb_[1] * rb_[1]);
   s_p_ = rb_[0] * std::tan(alpha_w_);
   if (s_a_ < 0.0 || s_e_ > t1t2_) {
-    throw InvalidInput("gears: involute interference: the path of contact [" + formatValue(s_a_) + ", " + formatValue(s_e_) +
-                       "] m leaves the line of action [0, " + formatValue(t1t2_) + "] m (tip of one gear below the other's base circle)");
+    throw InvalidInput("gears: involute interference: the path of contact [" + formatValue(s_a_) +
+                       ", " + formatValue(s_e_) + "] m leaves the line of action [0, " +
+                       formatValue(t1t2_) + "] m (tip of one gear below the other's base circle)");
   }
   if (contactRatio() < 1.0) {
-    throwInvalid("gears.center_distance", a_w_, "gives a transverse contact ratio " + formatValue(contactRatio()) + " < 1");
+    throwInvalid("gears.center_distance", a_w_,
+                 "gives a transverse contact ratio " + formatValue(contactRatio()) + " < 1");
   }
   if (a_w_ - ra_[0] - rf_[1] < 0.0 || a_w_ - ra_[1] - rf_[0] < 0.0) {
-    throwInvalid("gears.addendum_coefficient", ha, "tips reach the other gear's root circle (no bottom clearance)");
+    throwInvalid("gears.addendum_coefficient", ha,
+                 "tips reach the other gear's root circle (no bottom clearance)");
   }
-  // Back-flank phase: the back flank of a pinion tooth reaches the pitch point s_w1 / r_w1 of pinion
-  // rotation after its drive flank, i.e. s_w1 / p_w mesh periods later (p_w = 2 pi r_w1 / z1).
+  // Back-flank phase: the back flank of a pinion tooth reaches the pitch point s_w1 / r_w1 of
+  // pinion rotation after its drive flank, i.e. s_w1 / p_w mesh periods later (p_w = 2 pi r_w1 /
+  // z1).
   back_offset_ = sw_[0] / (2.0 * kPi * rw_[0] / spec.teeth[0]);
   // Back pair k sits at s' = back_origin - (phi + k) p_b: moving from the pinion tip to its root.
   back_origin_ = s_p_ + (s_p_ - s_a_) + back_offset_ * pb_;

@@ -32,8 +32,15 @@ double contact(double k, double c, double g, double g_rate, double* dk, double* 
   *closed = 1;
   const double spring = k * g;
   const double total = spring + c * g_rate;
-  if (total < 0.0) { *dk = *dc = 0.0; return 0.0; }
-  if (total > 2.0 * spring) { *dk = 2.0 * k; *dc = 0.0; return 2.0 * spring; }
+  if (total < 0.0) {
+    *dk = *dc = 0.0;
+    return 0.0;
+  }
+  if (total > 2.0 * spring) {
+    *dk = 2.0 * k;
+    *dc = 0.0;
+    return 2.0 * spring;
+  }
   *dk = k;
   *dc = c;
   return total;
@@ -49,9 +56,12 @@ void GearRotorParameters::validate() const {
   requirePositive("dynamics.pinion_base_radius", pinion_base_radius);
   requirePositive("dynamics.gear_base_radius", gear_base_radius);
   // Literal names: the modal analysis validates on every call, and a built name would allocate.
-  static constexpr const char* kStiffness[2] = {"dynamics.bearing_stiffness[0]", "dynamics.bearing_stiffness[1]"};
-  static constexpr const char* kDamping[2] = {"dynamics.bearing_damping[0]", "dynamics.bearing_damping[1]"};
-  static constexpr const char* kClearance[2] = {"dynamics.bearing_clearance[0]", "dynamics.bearing_clearance[1]"};
+  static constexpr const char* kStiffness[2] = {"dynamics.bearing_stiffness[0]",
+                                                "dynamics.bearing_stiffness[1]"};
+  static constexpr const char* kDamping[2] = {"dynamics.bearing_damping[0]",
+                                              "dynamics.bearing_damping[1]"};
+  static constexpr const char* kClearance[2] = {"dynamics.bearing_clearance[0]",
+                                                "dynamics.bearing_clearance[1]"};
   for (int i = 0; i < 2; ++i) {
     requireNonNegative(kStiffness[i], bearing_stiffness[i]);
     requireNonNegative(kDamping[i], bearing_damping[i]);
@@ -71,25 +81,31 @@ void MeshMotion::validate() const {
   requireFinite("mesh frequency", frequency);
 }
 
-double ConstantExcitation::nextSwitch(double) const { return std::numeric_limits<double>::infinity(); }
+double ConstantExcitation::nextSwitch(double) const {
+  return std::numeric_limits<double>::infinity();
+}
 
-GearRotorModel::GearRotorModel(const GearRotorParameters& p, std::shared_ptr<const GearExcitation> excitation)
+GearRotorModel::GearRotorModel(const GearRotorParameters& p,
+                               std::shared_ptr<const GearExcitation> excitation)
     : p_(p), excitation_(std::move(excitation)) {
   p_.validate();
   if (!excitation_) throw InvalidInput("excitation: missing");
   m_s_ = p_.equivalentMass();
 }
 
-GearRotorModel::GearRotorModel(const GearRotorParameters& p, std::shared_ptr<const RigExcitation> excitation)
+GearRotorModel::GearRotorModel(const GearRotorParameters& p,
+                               std::shared_ptr<const RigExcitation> excitation)
     : GearRotorModel(p, std::shared_ptr<const GearExcitation>(excitation)) {
   rig_ = std::move(excitation);
   torque_input_used_ = rig_->takesTorqueInput();
 }
 
-GearRotorModel::GearRotorModel(const GearRotorParameters& p, std::shared_ptr<RigExcitation> excitation)
+GearRotorModel::GearRotorModel(const GearRotorParameters& p,
+                               std::shared_ptr<RigExcitation> excitation)
     : GearRotorModel(p, std::shared_ptr<const RigExcitation>(std::move(excitation))) {}
 
-GearRotorModel::GearRotorModel(const GearRotorParameters& p, std::shared_ptr<const SlicedExcitation> excitation)
+GearRotorModel::GearRotorModel(const GearRotorParameters& p,
+                               std::shared_ptr<const SlicedExcitation> excitation)
     : GearRotorModel(p, std::shared_ptr<const GearExcitation>(excitation)) {
   sliced_ = std::move(excitation);
   torque_input_used_ = true;
@@ -97,11 +113,13 @@ GearRotorModel::GearRotorModel(const GearRotorParameters& p, std::shared_ptr<con
   torque_input_ = sliced_->torque();
 }
 
-GearRotorModel::GearRotorModel(const GearRotorParameters& p, std::shared_ptr<SlicedExcitation> excitation)
+GearRotorModel::GearRotorModel(const GearRotorParameters& p,
+                               std::shared_ptr<SlicedExcitation> excitation)
     : GearRotorModel(p, std::shared_ptr<const SlicedExcitation>(std::move(excitation))) {}
 
 void GearRotorModel::setMotionInput(const MeshMotion& motion) {
-  if (!sliced_) throw InvalidInput("motion input: the model's excitation has a mesh phase of its own");
+  if (!sliced_)
+    throw InvalidInput("motion input: the model's excitation has a mesh phase of its own");
   motion.validate();
   motion_input_ = motion;
 }
@@ -111,7 +129,8 @@ double GearRotorModel::nextSwitch(double t) const {
 }
 
 void GearRotorModel::setTorqueInput(double torque) {
-  if (!torque_input_used_) throw InvalidInput("torque input: the model's excitation has a torque profile of its own");
+  if (!torque_input_used_)
+    throw InvalidInput("torque input: the model's excitation has a torque profile of its own");
   requireFinite("torque", torque);
   torque_input_ = torque;
 }
@@ -151,11 +170,14 @@ GearRotorForces GearRotorModel::forces(double t, const State6& y) const {
     f.mesh_damping_slope = dc;
     f.back_flank = contact(m.k_back, c2, g2, -f.delta_rate, &dk, &dc, &f.regime.code[1]);
   } else {
-    // Ordinary gear with backlash b (seed 000 eq 17): drive flank for delta > b, back flank for delta < -b.
-    f.drive_flank = contact(m.k_drive, p_.mesh_damping, f.delta - m.backlash, f.delta_rate, &dk, &dc, &f.regime.code[0]);
+    // Ordinary gear with backlash b (seed 000 eq 17): drive flank for delta > b, back flank for
+    // delta < -b.
+    f.drive_flank = contact(m.k_drive, p_.mesh_damping, f.delta - m.backlash, f.delta_rate, &dk,
+                            &dc, &f.regime.code[0]);
     f.mesh_slope = dk;
     f.mesh_damping_slope = dc;
-    f.back_flank = contact(m.k_drive, p_.mesh_damping, -f.delta - m.backlash, -f.delta_rate, &dk, &dc, &f.regime.code[1]);
+    f.back_flank = contact(m.k_drive, p_.mesh_damping, -f.delta - m.backlash, -f.delta_rate, &dk,
+                           &dc, &f.regime.code[1]);
   }
   // F = F1 - F2 with g2 decreasing in delta: both slopes add.
   f.mesh = f.drive_flank - f.back_flank;
@@ -203,7 +225,7 @@ Matrix6 GearRotorModel::jacobian(double t, const State6& y) const {
   j(0, 3) = j(1, 4) = j(2, 5) = 1.0;
   const Eigen::Vector3d d_delta(1.0, -1.0, 1.0);  // d delta / d (x_p, x_g, x)
   const Eigen::Vector3d inv_m(1.0 / p_.pinion_mass, 1.0 / p_.gear_mass, 1.0 / m_s_);
-  const Eigen::Vector3d sign(-1.0, 1.0, -1.0);    // mesh force enters pinion -, gear +, x -
+  const Eigen::Vector3d sign(-1.0, 1.0, -1.0);  // mesh force enters pinion -, gear +, x -
   for (int r = 0; r < 3; ++r) {
     for (int c = 0; c < 3; ++c) {
       j(3 + r, c) = sign[r] * f.mesh_slope * d_delta[c] * inv_m[r];
@@ -223,7 +245,8 @@ double GearRotorModel::energy(double t, const State6& y) const {
   const double delta = y[2] + y[0] - y[1] - m.te;
   const double ks = m.k_drive + m.k_back;
   return 0.5 * (p_.pinion_mass * y[3] * y[3] + p_.gear_mass * y[4] * y[4] + m_s_ * y[5] * y[5]) +
-         0.5 * (p_.bearing_stiffness[0] * y[0] * y[0] + p_.bearing_stiffness[1] * y[1] * y[1] + ks * delta * delta);
+         0.5 * (p_.bearing_stiffness[0] * y[0] * y[0] + p_.bearing_stiffness[1] * y[1] * y[1] +
+                ks * delta * delta);
 }
 
 double meshForSample(const GearRotorModel& model, double t, double interval, MeshInstant& m) {

@@ -10,7 +10,8 @@ namespace drivetrain_stiffness {
 namespace {
 
 // F(rho) as a function of ln(kappa) for kappa > 1: [(k^2+1)E - 2F] / [(k^2-1)E]
-// (Hamrock & Brewe 1983, the exact ellipticity relation solved for F(rho)). Monotonically increasing from 0 at kappa = 1.
+// (Hamrock & Brewe 1983, the exact ellipticity relation solved for F(rho)). Monotonically
+// increasing from 0 at kappa = 1.
 double curvatureDifferenceOf(double log_kappa) {
   const double kappa = std::exp(log_kappa);
   const double modulus = std::sqrt(1.0 - 1.0 / (kappa * kappa));
@@ -21,8 +22,8 @@ double curvatureDifferenceOf(double log_kappa) {
 }  // namespace
 
 namespace {
-constexpr EnumName<EllipticityMethod> kEllipticityMethods[] = {{EllipticityMethod::kExact, "exact"},
-                                                               {EllipticityMethod::kHamrockDowson, "hamrock_dowson"}};
+constexpr EnumName<EllipticityMethod> kEllipticityMethods[] = {
+    {EllipticityMethod::kExact, "exact"}, {EllipticityMethod::kHamrockDowson, "hamrock_dowson"}};
 }  // namespace
 
 EllipticityMethod parseEllipticityMethod(const std::string& field, const std::string& text) {
@@ -35,7 +36,8 @@ double reducedModulus(double youngs_a, double poisson_a, double youngs_b, double
   requirePositive("youngs_modulus", youngs_b);
   requireInHalfOpenRange("poisson_ratio", poisson_a, 0.0, 0.5);
   requireInHalfOpenRange("poisson_ratio", poisson_b, 0.0, 0.5);
-  return 2.0 / ((1.0 - poisson_a * poisson_a) / youngs_a + (1.0 - poisson_b * poisson_b) / youngs_b);
+  return 2.0 /
+         ((1.0 - poisson_a * poisson_a) / youngs_a + (1.0 - poisson_b * poisson_b) / youngs_b);
 }
 
 EllipticityParameters exactEllipticity(double curvature_difference) {
@@ -80,7 +82,8 @@ EllipticityParameters exactEllipticity(double curvature_difference) {
 
 EllipticityParameters hamrockDowsonEllipticity(double radius_ratio_y_over_x) {
   requireFinite("ry_over_rx", radius_ratio_y_over_x);
-  if (radius_ratio_y_over_x < 1.0) throwInvalid("ry_over_rx", radius_ratio_y_over_x, "must be >= 1");
+  if (radius_ratio_y_over_x < 1.0)
+    throwInvalid("ry_over_rx", radius_ratio_y_over_x, "must be >= 1");
   EllipticityParameters out;
   // Seed 000 eq 8 (Hamrock & Dowson 1981 fits); seed letters e, L, F are kappa, script E, script F.
   out.ellipticity = 1.0339 * std::pow(radius_ratio_y_over_x, 0.636);

@@ -12,19 +12,24 @@
 namespace drivetrain_stiffness {
 namespace {
 
-void checkState(const State6& y, double t, double h, IntegratorMethod method, const IntegratorOptions& o) {
+void checkState(const State6& y, double t, double h, IntegratorMethod method,
+                const IntegratorOptions& o) {
   if (!y.allFinite() || y.head<3>().cwiseAbs().maxCoeff() > o.divergence_limit) {
-    throw UnstableIntegration(std::string("integrator ") + toString(method) + " diverged at t = " + formatValue(t) +
-                              " s with step " + formatValue(h) + " s: the step is beyond the stability limit of the "
-                              "stiffest mode (explicit methods: h < 2.79 / omega_max) or the model has no bounded response");
+    throw UnstableIntegration(std::string("integrator ") + toString(method) + " diverged at t = " +
+                              formatValue(t) + " s with step " + formatValue(h) +
+                              " s: the step is beyond the stability limit of the "
+                              "stiffest mode (explicit methods: h < 2.79 / omega_max) or the model "
+                              "has no bounded response");
   }
 }
 
 // Output grid: observe every grid time t0 + k interval in (previous step end, t_next], evaluated
 // by `value` (the state, or the dense output inside a step).
 template <typename Value>
-void emit(double t_next, double t0, double interval, long& next_index, const Observer& observe, Value value) {
-  for (double t_out = t0 + next_index * interval; t_out <= t_next + 1e-9 * interval; t_out = t0 + next_index * interval) {
+void emit(double t_next, double t0, double interval, long& next_index, const Observer& observe,
+          Value value) {
+  for (double t_out = t0 + next_index * interval; t_out <= t_next + 1e-9 * interval;
+       t_out = t0 + next_index * interval) {
     observe(t_out, value(std::min(t_out, t_next)));
     ++next_index;
   }
@@ -34,7 +39,8 @@ long fixedStepCount(double span, double h, double interval, long* per_output) {
   const double n_out = interval / h;
   *per_output = std::lround(n_out);
   if (*per_output < 1 || std::abs(n_out - *per_output) > 1e-6 * n_out) {
-    throwInvalid("output_interval", interval, "must be a whole multiple of the step " + formatValue(h));
+    throwInvalid("output_interval", interval,
+                 "must be a whole multiple of the step " + formatValue(h));
   }
   const double n = span / h;
   if (std::abs(n - std::round(n)) > 1e-6 * std::max(1.0, n)) {
@@ -43,18 +49,23 @@ long fixedStepCount(double span, double h, double interval, long* per_output) {
   return std::lround(n);
 }
 
-// ---- Dormand-Prince 5(4) coefficients (Dormand & Prince, J. Comput. Appl. Math. 6 (1980) 19; dense
-// output after Hairer, Norsett & Wanner, Solving ODEs I, sec. II.6, routine DOPRI5). ----
+// ---- Dormand-Prince 5(4) coefficients (Dormand & Prince, J. Comput. Appl. Math. 6 (1980) 19;
+// dense output after Hairer, Norsett & Wanner, Solving ODEs I, sec. II.6, routine DOPRI5). ----
 constexpr double c2 = 1.0 / 5, c3 = 3.0 / 10, c4 = 4.0 / 5, c5 = 8.0 / 9;
 constexpr double a21 = 1.0 / 5;
 constexpr double a31 = 3.0 / 40, a32 = 9.0 / 40;
 constexpr double a41 = 44.0 / 45, a42 = -56.0 / 15, a43 = 32.0 / 9;
-constexpr double a51 = 19372.0 / 6561, a52 = -25360.0 / 2187, a53 = 64448.0 / 6561, a54 = -212.0 / 729;
-constexpr double a61 = 9017.0 / 3168, a62 = -355.0 / 33, a63 = 46732.0 / 5247, a64 = 49.0 / 176, a65 = -5103.0 / 18656;
-constexpr double a71 = 35.0 / 384, a73 = 500.0 / 1113, a74 = 125.0 / 192, a75 = -2187.0 / 6784, a76 = 11.0 / 84;
-constexpr double e1 = 71.0 / 57600, e3 = -71.0 / 16695, e4 = 71.0 / 1920, e5 = -17253.0 / 339200, e6 = 22.0 / 525, e7 = -1.0 / 40;
-constexpr double d1 = -12715105075.0 / 11282082432, d3 = 87487479700.0 / 32700410799, d4 = -10690763975.0 / 1880347072,
-                 d5 = 701980252875.0 / 199316789632, d6 = -1453857185.0 / 822651844, d7 = 69997945.0 / 29380423;
+constexpr double a51 = 19372.0 / 6561, a52 = -25360.0 / 2187, a53 = 64448.0 / 6561,
+                 a54 = -212.0 / 729;
+constexpr double a61 = 9017.0 / 3168, a62 = -355.0 / 33, a63 = 46732.0 / 5247, a64 = 49.0 / 176,
+                 a65 = -5103.0 / 18656;
+constexpr double a71 = 35.0 / 384, a73 = 500.0 / 1113, a74 = 125.0 / 192, a75 = -2187.0 / 6784,
+                 a76 = 11.0 / 84;
+constexpr double e1 = 71.0 / 57600, e3 = -71.0 / 16695, e4 = 71.0 / 1920, e5 = -17253.0 / 339200,
+                 e6 = 22.0 / 525, e7 = -1.0 / 40;
+constexpr double d1 = -12715105075.0 / 11282082432, d3 = 87487479700.0 / 32700410799,
+                 d4 = -10690763975.0 / 1880347072, d5 = 701980252875.0 / 199316789632,
+                 d6 = -1453857185.0 / 822651844, d7 = 69997945.0 / 29380423;
 
 struct DenseStep {
   State6 r1, r2, r3, r4, r5;
@@ -67,14 +78,15 @@ struct DenseStep {
 
 class Dopri5 {
  public:
-  Dopri5(const GearRotorModel& m, const IntegratorOptions& o, IntegrationStats& st) : m_(m), o_(o), st_(st) {}
+  Dopri5(const GearRotorModel& m, const IntegratorOptions& o, IntegrationStats& st)
+      : m_(m), o_(o), st_(st) {}
 
-  // One attempted step of size h from (t, y) with k1 = f(t, y). Fills y_new, k7 = f(t+h, y_new), the
-  // dense output and returns the scaled error norm.
-  // `ends_on_switch`: the step ends exactly on a jump of the right-hand side; its last stages are
-  // evaluated just before it, on the side the step belongs to.
-  double attempt(double t, const State6& y, const State6& k1, double h, State6& y_new, State6& k7, DenseStep& dense,
-                 bool ends_on_switch = false) {
+  // One attempted step of size h from (t, y) with k1 = f(t, y). Fills y_new, k7 = f(t+h, y_new),
+  // the dense output and returns the scaled error norm. `ends_on_switch`: the step ends exactly on
+  // a jump of the right-hand side; its last stages are evaluated just before it, on the side the
+  // step belongs to.
+  double attempt(double t, const State6& y, const State6& k1, double h, State6& y_new, State6& k7,
+                 DenseStep& dense, bool ends_on_switch = false) {
     State6 k2, k3, k4, k5, k6;
     const double t_end = ends_on_switch ? std::nextafter(t + h, t) : t + h;
     m_.rhs(t + c2 * h, y + h * a21 * k1, k2);
@@ -111,15 +123,18 @@ class Dopri5 {
   double vel_scale_ = 1.0;
 };
 
-ContactRegime regimeAt(const GearRotorModel& m, double t, const State6& y) { return m.forces(t, y).regime; }
+ContactRegime regimeAt(const GearRotorModel& m, double t, const State6& y) {
+  return m.forces(t, y).regime;
+}
 
 }  // namespace
 
 namespace {
-constexpr EnumName<IntegratorMethod> kIntegratorMethods[] = {{IntegratorMethod::kRk4, "rk4"},
-                                                             {IntegratorMethod::kTrapezoidal, "trapezoidal"},
-                                                             {IntegratorMethod::kDopri5, "dopri5"},
-                                                             {IntegratorMethod::kExponential, "exponential"}};
+constexpr EnumName<IntegratorMethod> kIntegratorMethods[] = {
+    {IntegratorMethod::kRk4, "rk4"},
+    {IntegratorMethod::kTrapezoidal, "trapezoidal"},
+    {IntegratorMethod::kDopri5, "dopri5"},
+    {IntegratorMethod::kExponential, "exponential"}};
 }  // namespace
 
 IntegratorMethod parseIntegratorMethod(const std::string& field, const std::string& text) {
@@ -127,11 +142,14 @@ IntegratorMethod parseIntegratorMethod(const std::string& field, const std::stri
 }
 const char* toString(IntegratorMethod m) { return enumName(kIntegratorMethods, m); }
 
-State6 integrate(const GearRotorModel& model, IntegratorMethod method, const IntegratorOptions& o, double t0,
-                 const State6& y0, double t_end, double interval, const Observer& observe, IntegrationStats* stats_out) {
+State6 integrate(const GearRotorModel& model, IntegratorMethod method, const IntegratorOptions& o,
+                 double t0, const State6& y0, double t_end, double interval,
+                 const Observer& observe, IntegrationStats* stats_out) {
   requireFinite("t0", t0);
   requireFinite("t_end", t_end);
-  if (!(t_end >= t0)) throwInvalid("t_end", t_end, "must be >= t0 = " + formatValue(t0) + " (time must not run backwards)");
+  if (!(t_end >= t0))
+    throwInvalid("t_end", t_end,
+                 "must be >= t0 = " + formatValue(t0) + " (time must not run backwards)");
   requirePositive("output_interval", interval);
   requirePositive("step", o.step);
   if (!y0.allFinite()) throw InvalidInput("initial state: contains a non-finite value");
@@ -141,7 +159,10 @@ State6 integrate(const GearRotorModel& model, IntegratorMethod method, const Int
   }
   IntegrationStats stats;
   long next_out = 0;
-  if (observe) { observe(t0, y0); next_out = 1; }
+  if (observe) {
+    observe(t0, y0);
+    next_out = 1;
+  }
   State6 y = y0;
 
   if (method == IntegratorMethod::kRk4 || method == IntegratorMethod::kTrapezoidal) {
@@ -175,7 +196,8 @@ State6 integrate(const GearRotorModel& model, IntegratorMethod method, const Int
           stats.rhs_evaluations += 2;
           const double scale = 1e-14 * (y1.head<3>().cwiseAbs().maxCoeff() + 1e-15);
           const double vscale = 1e-14 * (y1.tail<3>().cwiseAbs().maxCoeff() + 1e-12);
-          converged = dy.head<3>().cwiseAbs().maxCoeff() <= scale && dy.tail<3>().cwiseAbs().maxCoeff() <= vscale;
+          converged = dy.head<3>().cwiseAbs().maxCoeff() <= scale &&
+                      dy.tail<3>().cwiseAbs().maxCoeff() <= vscale;
         }
         // A contact change inside the step can make Newton cycle between regimes: the step is kept
         // (bounded) but counted, so a caller can see how often it happened.
@@ -193,11 +215,13 @@ State6 integrate(const GearRotorModel& model, IntegratorMethod method, const Int
   // ---- dopri5 ----
   IntegrationStats& st = stats;
   Dopri5 dp(model, o, st);
-  // Velocities are compared with displacements through the fastest natural scale: omega_ref = sqrt(k/m).
+  // Velocities are compared with displacements through the fastest natural scale: omega_ref =
+  // sqrt(k/m).
   MeshInstant mi;
   model.meshAt(t0, mi);
   const GearRotorParameters& p = model.parameters();
-  const double k_ref = std::max({mi.k_drive + mi.k_back, p.bearing_stiffness[0], p.bearing_stiffness[1], 1.0});
+  const double k_ref =
+      std::max({mi.k_drive + mi.k_back, p.bearing_stiffness[0], p.bearing_stiffness[1], 1.0});
   const double m_ref = std::min({model.equivalentMass(), p.pinion_mass, p.gear_mass});
   dp.setVelocityScale(std::sqrt(k_ref / m_ref));
   double t = t0, h = std::min(o.step, o.max_step);
@@ -209,38 +233,50 @@ State6 integrate(const GearRotorModel& model, IntegratorMethod method, const Int
   long switches_in_place = 0;
   while (t < t_end) {
     if (o.max_steps > 0 && st.steps + st.rejected > o.max_steps) {
-      throw UnstableIntegration("integrator dopri5: more than " + std::to_string(o.max_steps) + " steps from t = " +
-                                formatValue(t0) + " s to " + formatValue(t_end) + " s (stopped at " + formatValue(t) +
+      throw UnstableIntegration("integrator dopri5: more than " + std::to_string(o.max_steps) +
+                                " steps from t = " + formatValue(t0) + " s to " +
+                                formatValue(t_end) + " s (stopped at " + formatValue(t) +
                                 " s): the work bound of one call");
     }
     const double switch_time = model.nextSwitch(t);
     double h_try = std::min({h, o.max_step, t_end - t});
     bool hits_switch = false;
-    if (switch_time - t <= h_try) { h_try = switch_time - t; hits_switch = true; }
+    if (switch_time - t <= h_try) {
+      h_try = switch_time - t;
+      hits_switch = true;
+    }
     const double tiny = 64.0 * std::numeric_limits<double>::epsilon() * std::max(1.0, std::abs(t));
     if (h_try < tiny) {
       if (hits_switch) {  // already on the switch (to rounding): step onto it, restart the stages
         // An excitation whose next switch never gets past rounding would loop here for ever.
         if (++switches_in_place > 1000000) {
-          throw UnstableIntegration("integrator dopri5: the excitation's switch events stopped advancing at t = " +
-                                    formatValue(t) + " s");
+          throw UnstableIntegration(
+              "integrator dopri5: the excitation's switch events stopped advancing at t = " +
+              formatValue(t) + " s");
         }
         t = switch_time;
         model.rhs(t, y, k1);
         continue;
       }
       if (t_end - t < tiny) break;  // at the end (to rounding)
-      h_try = tiny;  // a step shrunk by an event right at the step start: take the smallest step, never skip
+      h_try = tiny;  // a step shrunk by an event right at the step start: take the smallest step,
+                     // never skip
     }
     const double err = dp.attempt(t, y, k1, h_try, y_new, k7, dense, hits_switch);
     if (!(err <= 1.0)) {
       ++st.rejected;
       if (h_try <= tiny) {
-        throw UnstableIntegration("integrator dopri5: step size underflow at t = " + formatValue(t) +
-                                  " s (the error test fails at the smallest step " + formatValue(h_try) +
-                                  " s; tolerances too tight for double precision, or a discontinuity the step cannot resolve)");
+        throw UnstableIntegration(
+            "integrator dopri5: step size underflow at t = " + formatValue(t) +
+            " s (the error test fails at the smallest step " + formatValue(h_try) +
+            " s; tolerances too tight for double precision, or a discontinuity the step cannot "
+            "resolve)");
       }
-      if (!std::isfinite(err)) { h = 0.1 * h_try; } else { h = h_try * std::max(0.2, 0.9 * std::pow(err, -0.2)); }
+      if (!std::isfinite(err)) {
+        h = 0.1 * h_try;
+      } else {
+        h = h_try * std::max(0.2, 0.9 * std::pow(err, -0.2));
+      }
       continue;
     }
     double t_new = t + h_try;
@@ -251,10 +287,14 @@ State6 integrate(const GearRotorModel& model, IntegratorMethod method, const Int
         double lo = t, hi = t_new;
         for (int i = 0; i < 60 && hi - lo > 1e-14 * std::max(1.0, std::abs(t)); ++i) {
           const double mid = 0.5 * (lo + hi);
-          if (regimeAt(model, mid, dense.at(mid)) == r0) lo = mid; else hi = mid;
+          if (regimeAt(model, mid, dense.at(mid)) == r0)
+            lo = mid;
+          else
+            hi = mid;
         }
         if (hi - t > 1e-9 * h_try) {
-          // Redo the step up to the event so no step straddles the kink; the next step starts on it.
+          // Redo the step up to the event so no step straddles the kink; the next step starts on
+          // it.
           const double h_event = hi - t;
           dp.attempt(t, y, k1, h_event, y_new, k7, dense);
           hits_switch = false;
@@ -265,7 +305,8 @@ State6 integrate(const GearRotorModel& model, IntegratorMethod method, const Int
       }
     }
     checkState(y_new, t_new, h_try, IntegratorMethod::kDopri5, o);
-    if (observe) emit(t_new, t0, interval, next_out, observe, [&](double tq) { return dense.at(tq); });
+    if (observe)
+      emit(t_new, t0, interval, next_out, observe, [&](double tq) { return dense.at(tq); });
     t = hits_switch ? switch_time : t_new;  // land exactly on the switch
     y = y_new;
     k1 = k7;

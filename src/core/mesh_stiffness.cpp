@@ -11,23 +11,27 @@ namespace drivetrain_stiffness {
 namespace {
 
 // 16-point Gauss-Legendre nodes and weights on [-1, 1] (Abramowitz & Stegun, Table 25.4).
-constexpr std::array<double, 8> kNodes = {0.0950125098376374, 0.2816035507792589, 0.4580167776572274,
-                                          0.6178762444026438, 0.7554044083550030, 0.8656312023878318,
-                                          0.9445750230732326, 0.9894009349916499};
-constexpr std::array<double, 8> kWeights = {0.1894506104550685, 0.1826034150449236, 0.1691565193950025,
-                                            0.1495959888165767, 0.1246289712555339, 0.0951585116824928,
-                                            0.0622535239386479, 0.0271524594117541};
+constexpr std::array<double, 8> kNodes = {
+    0.0950125098376374, 0.2816035507792589, 0.4580167776572274, 0.6178762444026438,
+    0.7554044083550030, 0.8656312023878318, 0.9445750230732326, 0.9894009349916499};
+constexpr std::array<double, 8> kWeights = {
+    0.1894506104550685, 0.1826034150449236, 0.1691565193950025, 0.1495959888165767,
+    0.1246289712555339, 0.0951585116824928, 0.0622535239386479, 0.0271524594117541};
 
 template <typename F>
 double gauss(double a, double b, F&& f) {
   const double mid = 0.5 * (a + b), half = 0.5 * (b - a);
   double sum = 0.0;
-  for (std::size_t i = 0; i < kNodes.size(); ++i) sum += kWeights[i] * (f(mid - half * kNodes[i]) + f(mid + half * kNodes[i]));
+  for (std::size_t i = 0; i < kNodes.size(); ++i)
+    sum += kWeights[i] * (f(mid - half * kNodes[i]) + f(mid + half * kNodes[i]));
   return sum * half;
 }
 
-// Sainsot, Velex & Duverger (2004) Table 1: X = A/theta_f^2 + B h_f^2 + C h_f/theta_f + D/theta_f + E h_f + F.
-struct FilletCoefficients { double a, b, c, d, e, f; };
+// Sainsot, Velex & Duverger (2004) Table 1: X = A/theta_f^2 + B h_f^2 + C h_f/theta_f + D/theta_f +
+// E h_f + F.
+struct FilletCoefficients {
+  double a, b, c, d, e, f;
+};
 constexpr FilletCoefficients kL{-5.574e-5, -1.9986e-3, -2.3015e-4, 4.7702e-3, 0.0271, 6.8045};
 constexpr FilletCoefficients kM{60.111e-5, 28.100e-3, -83.431e-4, -9.9256e-3, 0.1624, 0.9086};
 constexpr FilletCoefficients kP{-50.952e-5, 185.50e-3, 0.0538e-4, 53.300e-3, 0.2895, 0.9236};
@@ -45,7 +49,8 @@ double hertzStiffness(const GearPairSpec& spec, double width) {
 
 class PotentialEnergyModel : public ToothPairStiffness {
  public:
-  PotentialEnergyModel(const SpurGearGeometry& g, double width) : g_(g), width_(width), k_h_(hertzStiffness(g.spec(), width)) {}
+  PotentialEnergyModel(const SpurGearGeometry& g, double width)
+      : g_(g), width_(width), k_h_(hertzStiffness(g.spec(), width)) {}
   double pairStiffness(const ContactPoint& c) const override {
     double compliance = 1.0 / k_h_;
     for (int i = 0; i < 2; ++i) compliance += tooth(i, c.pressure_angle[i]).total();
@@ -54,16 +59,19 @@ class PotentialEnergyModel : public ToothPairStiffness {
   ToothCompliance tooth(int i, double alpha_c) const {
     const GearPairSpec& s = g_.spec();
     const double rb = g_.baseRadius(i), alpha2 = g_.halfToothAngleAtBase(i), rf = g_.rootRadius(i);
-    ToothCompliance t = toothBeamCompliance(rb, alpha2, rf, alpha_c, s.material.youngs_modulus, s.material.poisson_ratio, width_);
+    ToothCompliance t = toothBeamCompliance(rb, alpha2, rf, alpha_c, s.material.youngs_modulus,
+                                            s.material.poisson_ratio, width_);
     // Load line crossing the centre line, measured from the root circle (Sainsot's u_f).
     const double rc = rb / std::cos(alpha_c), phi_c = alpha2 - involute(alpha_c);
     const double load_angle = std::tan(alpha_c) - alpha2;
     const double u_f = rc * std::cos(phi_c) - rc * std::sin(phi_c) * std::tan(load_angle) - rf;
-    // Half tooth angle at the root circle: constant-thickness segment below the base circle, else involute.
+    // Half tooth angle at the root circle: constant-thickness segment below the base circle, else
+    // involute.
     const double theta_f = rf < rb * std::cos(alpha2) ? std::asin(rb * std::sin(alpha2) / rf)
-                                                       : alpha2 - involute(std::acos(rb / rf));
+                                                      : alpha2 - involute(std::acos(rb / rf));
     const double bore = s.bore_diameter[i] > 0.0 ? 0.5 * s.bore_diameter[i] : 0.5 * rf;
-    t.fillet = filletFoundationCompliance(rf, theta_f, bore, u_f, load_angle, s.material.youngs_modulus, width_);
+    t.fillet = filletFoundationCompliance(rf, theta_f, bore, u_f, load_angle,
+                                          s.material.youngs_modulus, width_);
     return t;
   }
 
@@ -83,7 +91,8 @@ class KuangYangModel : public ToothPairStiffness {
   }
   double pairStiffness(const ContactPoint& c) const override {
     const double ki = tooth(0, c.radius[0]), kj = tooth(1, c.radius[1]);
-    // Seed 000 eq 3: k = ki kj kh B / (ki kj + (ki + kj) kh): teeth and Hertz in series, times width.
+    // Seed 000 eq 3: k = ki kj kh B / (ki kj + (ki + kj) kh): teeth and Hertz in series, times
+    // width.
     return ki * kj * k_h_unit_ * width_ / (ki * kj + (ki + kj) * k_h_unit_);
   }
   bool verified() const override { return false; }
@@ -117,9 +126,10 @@ class Iso6336Model : public ToothPairStiffness {
 }  // namespace
 
 namespace {
-constexpr EnumName<MeshStiffnessModel> kMeshStiffnessModels[] = {{MeshStiffnessModel::kPotentialEnergy, "potential_energy"},
-                                                                 {MeshStiffnessModel::kKuangYang, "kuang_yang"},
-                                                                 {MeshStiffnessModel::kIso6336, "iso6336"}};
+constexpr EnumName<MeshStiffnessModel> kMeshStiffnessModels[] = {
+    {MeshStiffnessModel::kPotentialEnergy, "potential_energy"},
+    {MeshStiffnessModel::kKuangYang, "kuang_yang"},
+    {MeshStiffnessModel::kIso6336, "iso6336"}};
 }  // namespace
 
 MeshStiffnessModel parseMeshStiffnessModel(const std::string& field, const std::string& text) {
@@ -127,8 +137,8 @@ MeshStiffnessModel parseMeshStiffnessModel(const std::string& field, const std::
 }
 const char* toString(MeshStiffnessModel model) { return enumName(kMeshStiffnessModels, model); }
 
-ToothCompliance toothBeamCompliance(double rb, double alpha2, double x_root, double alpha_c, double youngs,
-                                    double poisson, double width) {
+ToothCompliance toothBeamCompliance(double rb, double alpha2, double x_root, double alpha_c,
+                                    double youngs, double poisson, double width) {
   const double shear_modulus = youngs / (2.0 * (1.0 + poisson));
   const double rc = rb / std::cos(alpha_c), phi_c = alpha2 - involute(alpha_c);
   const double xc = rc * std::cos(phi_c), hc = rc * std::sin(phi_c);
@@ -147,9 +157,18 @@ ToothCompliance toothBeamCompliance(double rb, double alpha2, double x_root, dou
   const double xb = rb * std::cos(alpha2), hb = rb * std::sin(alpha2);
   if (x_root < xb) {
     double b, s, a;
-    out.bending += gauss(x_root, xb, [&](double x) { section(x, hb, &b, &s, &a); return b; });
-    out.shear += gauss(x_root, xb, [&](double x) { section(x, hb, &b, &s, &a); return s; });
-    out.axial += gauss(x_root, xb, [&](double x) { section(x, hb, &b, &s, &a); return a; });
+    out.bending += gauss(x_root, xb, [&](double x) {
+      section(x, hb, &b, &s, &a);
+      return b;
+    });
+    out.shear += gauss(x_root, xb, [&](double x) {
+      section(x, hb, &b, &s, &a);
+      return s;
+    });
+    out.axial += gauss(x_root, xb, [&](double x) {
+      section(x, hb, &b, &s, &a);
+      return a;
+    });
   }
   // Involute segment, parametrised by the pressure angle a of the profile point:
   // r = rb / cos a, phi = alpha2 - inv(a), x = r cos phi, h = r sin phi,
@@ -159,7 +178,8 @@ ToothCompliance toothBeamCompliance(double rb, double alpha2, double x_root, dou
     auto integrand = [&](double a, int which) {
       const double r = rb / std::cos(a), phi = alpha2 - involute(a);
       const double x = r * std::cos(phi), h = r * std::sin(phi);
-      const double dxda = rb * std::sin(a) / (std::cos(a) * std::cos(a)) * std::cos(phi) + r * std::sin(phi) * std::tan(a) * std::tan(a);
+      const double dxda = rb * std::sin(a) / (std::cos(a) * std::cos(a)) * std::cos(phi) +
+                          r * std::sin(phi) * std::tan(a) * std::tan(a);
       double b, s, ax;
       section(x, h, &b, &s, &ax);
       return (which == 0 ? b : which == 1 ? s : ax) * dxda;
@@ -171,14 +191,17 @@ ToothCompliance toothBeamCompliance(double rb, double alpha2, double x_root, dou
   return out;
 }
 
-double filletFoundationCompliance(double rf, double theta_f, double r_int, double u_f, double load_angle,
-                                  double youngs, double width) {
+double filletFoundationCompliance(double rf, double theta_f, double r_int, double u_f,
+                                  double load_angle, double youngs, double width) {
   requirePositive("root_radius", rf);
   requirePositive("bore_radius", r_int);
-  if (!(r_int < rf)) throwInvalid("gears.bore_diameter", 2.0 * r_int, "must be smaller than the root diameter " + formatValue(2.0 * rf));
+  if (!(r_int < rf))
+    throwInvalid("gears.bore_diameter", 2.0 * r_int,
+                 "must be smaller than the root diameter " + formatValue(2.0 * rf));
   const double hf = rf / r_int, sf = 2.0 * rf * theta_f, ratio = u_f / sf;
   const double c = std::cos(load_angle), t = std::tan(load_angle);
-  // Sainsot et al. (2004) eq 4: 1/k_f = cos^2(a_m)/(E b) [L (u_f/S_f)^2 + M (u_f/S_f) + P (1 + Q tan^2 a_m)].
+  // Sainsot et al. (2004) eq 4: 1/k_f = cos^2(a_m)/(E b) [L (u_f/S_f)^2 + M (u_f/S_f) + P (1 + Q
+  // tan^2 a_m)].
   return c * c / (youngs * width) *
          (filletFit(kL, hf, theta_f) * ratio * ratio + filletFit(kM, hf, theta_f) * ratio +
           filletFit(kP, hf, theta_f) * (1.0 + filletFit(kQ, hf, theta_f) * t * t));
@@ -191,16 +214,19 @@ Iso6336Stiffness iso6336Stiffness(const GearPairSpec& spec) {
   const double alpha_t = std::atan(std::tan(alpha_n) / std::cos(beta));
   const double beta_b = std::atan(std::tan(beta) * std::cos(alpha_t));
   std::array<double, 2> zn{};
-  for (int i = 0; i < 2; ++i) zn[i] = spec.teeth[i] / (std::cos(beta) * std::cos(beta_b) * std::cos(beta_b));
+  for (int i = 0; i < 2; ++i)
+    zn[i] = spec.teeth[i] / (std::cos(beta) * std::cos(beta_b) * std::cos(beta_b));
   const double x1 = spec.profile_shift[0], x2 = spec.profile_shift[1];
   // q' [mm um/N] with C1..C9 of ISO 6336-1 method B (python-gearbox iso.py; Drivetrain Gear_Set.m
   // has C9 x1^2 where the standard has C9 x2^2).
-  const double q = 0.04723 + 0.15551 / zn[0] + 0.25791 / zn[1] - 0.00635 * x1 - 0.11654 * x1 / zn[0] -
-                   0.00193 * x2 - 0.24188 * x2 / zn[1] + 0.00529 * x1 * x1 + 0.00182 * x2 * x2;
+  const double q = 0.04723 + 0.15551 / zn[0] + 0.25791 / zn[1] - 0.00635 * x1 -
+                   0.11654 * x1 / zn[0] - 0.00193 * x2 - 0.24188 * x2 / zn[1] + 0.00529 * x1 * x1 +
+                   0.00182 * x2 * x2;
   const double c_th = 1.0 / q;  // N/(mm um)
-  out.c_m = 0.8;  // solid disc gears
-  out.c_r = 1.0;  // solid gear blanks
-  out.c_b = (1.0 + 0.5 * (1.2 - spec.tool_dedendum_coefficient)) * (1.0 - 0.02 * (20.0 - alpha_n * 180.0 / kPi));
+  out.c_m = 0.8;                // solid disc gears
+  out.c_r = 1.0;                // solid gear blanks
+  out.c_b = (1.0 + 0.5 * (1.2 - spec.tool_dedendum_coefficient)) *
+            (1.0 - 0.02 * (20.0 - alpha_n * 180.0 / kPi));
   const double e_ratio = spec.material.youngs_modulus / 2.06e11;  // E / E_st, E_st = 206 000 N/mm^2
   const double c_prime = c_th * out.c_m * out.c_r * out.c_b * std::cos(beta) * e_ratio;
   // Transverse contact ratio of the transverse section (spur: the geometry itself).
@@ -222,25 +248,30 @@ Iso6336Stiffness iso6336Stiffness(const GearPairSpec& spec) {
   return out;
 }
 
-std::unique_ptr<ToothPairStiffness> makeToothPairStiffness(MeshStiffnessModel model, const SpurGearGeometry& geometry,
+std::unique_ptr<ToothPairStiffness> makeToothPairStiffness(MeshStiffnessModel model,
+                                                           const SpurGearGeometry& geometry,
                                                            double face_width) {
   requirePositive("gears.face_width", face_width);
   switch (model) {
-    case MeshStiffnessModel::kPotentialEnergy: return std::make_unique<PotentialEnergyModel>(geometry, face_width);
-    case MeshStiffnessModel::kKuangYang: return std::make_unique<KuangYangModel>(geometry, face_width);
+    case MeshStiffnessModel::kPotentialEnergy:
+      return std::make_unique<PotentialEnergyModel>(geometry, face_width);
+    case MeshStiffnessModel::kKuangYang:
+      return std::make_unique<KuangYangModel>(geometry, face_width);
     case MeshStiffnessModel::kIso6336: return std::make_unique<Iso6336Model>(geometry, face_width);
   }
   throw InvalidInput("mesh stiffness model: unknown");
 }
 
-MeshStiffnessTable::MeshStiffnessTable(const SpurGearGeometry& geometry, const ToothPairStiffness& model, int samples)
+MeshStiffnessTable::MeshStiffnessTable(const SpurGearGeometry& geometry,
+                                       const ToothPairStiffness& model, int samples)
     : geometry_(geometry) {
   if (samples < 2 || samples > 1000000) throwInvalid("samples", samples, "must be in [2, 1e6]");
   s0_ = geometry.pathStart();
   const double step = (geometry.pathEnd() - s0_) / (samples - 1);
   inv_step_ = 1.0 / step;
   values_.resize(samples);
-  for (int i = 0; i < samples; ++i) values_[i] = model.pairStiffness(geometry.contactAt(s0_ + i * step));
+  for (int i = 0; i < samples; ++i)
+    values_[i] = model.pairStiffness(geometry.contactAt(s0_ + i * step));
 }
 
 double MeshStiffnessTable::pair(double s) const {

@@ -19,9 +19,12 @@ std::array<Mode, 3> modalAnalysis(const GearRotorParameters& p, double ks) {
   const double ms = p.equivalentMass(), cs = p.mesh_damping;
   const Eigen::Vector3d mass(p.pinion_mass, p.gear_mass, ms);
   // docs/model.md: K and C share the mesh pattern plus the bearings.
-  const Eigen::Matrix3d k = meshBearingMatrix(ks, p.bearing_stiffness), c = meshBearingMatrix(cs, p.bearing_damping);
-  const Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::Matrix3d> undamped(k, Eigen::Matrix3d(mass.asDiagonal()));
-  if (undamped.info() != Eigen::Success) throw InvalidInput("modal analysis: eigen-solution failed");
+  const Eigen::Matrix3d k = meshBearingMatrix(ks, p.bearing_stiffness),
+                        c = meshBearingMatrix(cs, p.bearing_damping);
+  const Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::Matrix3d> undamped(
+      k, Eigen::Matrix3d(mass.asDiagonal()));
+  if (undamped.info() != Eigen::Success)
+    throw InvalidInput("modal analysis: eigen-solution failed");
   // State-space eigenvalues for the damped frequencies and damping ratios.
   Eigen::Matrix<double, 6, 6> a = Eigen::Matrix<double, 6, 6>::Zero();
   a.topRightCorner<3, 3>().setIdentity();
@@ -58,7 +61,8 @@ std::array<Mode, 3> modalAnalysis(const GearRotorParameters& p, double ks) {
   return modes;
 }
 
-FloquetResult floquet(const GearRotorModel& model, const State6& y_ref, double t0, double period, int steps) {
+FloquetResult floquet(const GearRotorModel& model, const State6& y_ref, double t0, double period,
+                      int steps) {
   requirePositive("period", period);
   if (steps < 1) throwInvalid("steps", steps, "must be >= 1");
   Matrix6 phi;
@@ -72,7 +76,8 @@ FloquetResult floquet(const GearRotorModel& model, const State6& y_ref, double t
     const double h = period / steps;
     for (int i = 0; i < steps; ++i) {
       const double t = t0 + i * h;
-      const Matrix6 j1 = model.jacobian(t, y_ref), j2 = model.jacobian(t + 0.5 * h, y_ref), j4 = model.jacobian(t + h, y_ref);
+      const Matrix6 j1 = model.jacobian(t, y_ref), j2 = model.jacobian(t + 0.5 * h, y_ref),
+                    j4 = model.jacobian(t + h, y_ref);
       const Matrix6 k1 = j1 * phi;
       const Matrix6 k2 = j2 * (phi + 0.5 * h * k1);
       const Matrix6 k3 = j2 * (phi + 0.5 * h * k2);

@@ -12,7 +12,8 @@
 
 namespace drivetrain_stiffness {
 
-MeshStiffnessRange meshStiffnessRange(const AntiBacklashMesh& mesh, double mesh_force, int samples) {
+MeshStiffnessRange meshStiffnessRange(const AntiBacklashMesh& mesh, double mesh_force,
+                                      int samples) {
   if (samples < 1) throwInvalid("samples", samples, "must be >= 1");
   requireFinite("mesh_force", mesh_force);
   MeshStiffnessRange r{INFINITY, 0.0};
@@ -29,7 +30,8 @@ namespace {
 /// The Floquet multipliers of the rig's model at its nominal speed, linearised about the static
 /// equilibrium under `torque`: the model the online dynamics integrates (DynamicsEstimator), the
 /// pinion speed n [rpm] giving the mesh frequency z_p n / 60.
-MeshPeriodFloquet meshPeriodFloquet(const RigConfig& rig, std::shared_ptr<const AntiBacklashMesh> mesh,
+MeshPeriodFloquet meshPeriodFloquet(const RigConfig& rig,
+                                    std::shared_ptr<const AntiBacklashMesh> mesh,
                                     const GearRotorParameters& p, double torque) {
   const DynamicsConfig& d = rig.dynamics;
   RigExcitationSpec spec;
@@ -49,7 +51,8 @@ MeshPeriodFloquet meshPeriodFloquet(const RigConfig& rig, std::shared_ptr<const 
 }  // namespace
 
 OperatingPointModes operatingPointModes(const RigConfig& rig, double torque) {
-  if (!rig.dynamics.present) throw InvalidInput("dynamics: the gearbox file has no 'dynamics:' block");
+  if (!rig.dynamics.present)
+    throw InvalidInput("dynamics: the gearbox file has no 'dynamics:' block");
   requireFinite("torque", torque);
   OperatingPointModes r;
   r.torque = torque;
@@ -59,7 +62,8 @@ OperatingPointModes operatingPointModes(const RigConfig& rig, double torque) {
   const AntiBacklashMesh& mesh = estimator.mesh();
   r.parameters = rigRotorParameters(rig, mesh, r.bearing_stiffness);
   r.mesh_mean = meanMeshStiffness(mesh);
-  r.mesh_range = meshStiffnessRange(mesh, meshForce(rig.gears, 0, torque));  // pinion torque -> LOA force
+  r.mesh_range =
+      meshStiffnessRange(mesh, meshForce(rig.gears, 0, torque));  // pinion torque -> LOA force
   r.modes_mean = modalAnalysis(r.parameters, r.mesh_mean);
   r.modes_single_pair = modalAnalysis(r.parameters, r.mesh_range.min);
   r.modes_double_pair = modalAnalysis(r.parameters, r.mesh_range.max);

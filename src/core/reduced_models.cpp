@@ -34,7 +34,8 @@ long gridCount(double t0, double t_end, double interval) {
 double meanStiffness(const RigExcitation& e) { return meanMeshStiffness(e.mesh()); }
 
 // One shaft on its bearing, m x'' + c x' + k x = f(t), f linear over the interval (first-order
-// hold): exact propagation through the exponential of [[0,1,0,0],[-k/m,-c/m,1/m,0],[0,0,0,1],[0,0,0,0]].
+// hold): exact propagation through the exponential of
+// [[0,1,0,0],[-k/m,-c/m,1/m,0],[0,0,0,1],[0,0,0,0]].
 struct ShaftPropagator {
   Eigen::Matrix4d phi;
   ShaftPropagator(double m, double c, double k, double h) {
@@ -46,7 +47,8 @@ struct ShaftPropagator {
     a(2, 3) = 1.0;
     // Balance displacement (um) against force (N): the exponential is accurate normwise.
     const Eigen::Vector4d s(1e-6, 1e-6 * std::sqrt(std::max(k, 1.0) / m), 1.0, 1.0 / h);
-    phi = s.asDiagonal() * (s.cwiseInverse().asDiagonal() * (a * h) * s.asDiagonal()).exp() * s.cwiseInverse().asDiagonal();
+    phi = s.asDiagonal() * (s.cwiseInverse().asDiagonal() * (a * h) * s.asDiagonal()).exp() *
+          s.cwiseInverse().asDiagonal();
   }
   void step(double& x, double& v, double f0, double f1, double h) const {
     Eigen::Vector4d z(x, v, f0, (f1 - f0) / h);
@@ -59,15 +61,18 @@ struct ShaftPropagator {
 }  // namespace
 
 namespace {
-constexpr EnumName<Fidelity> kFidelities[] = {
-    {Fidelity::kFull, "full"}, {Fidelity::kQuasiStatic, "quasi_static"}, {Fidelity::kLinearModal, "linear_modal"}};
+constexpr EnumName<Fidelity> kFidelities[] = {{Fidelity::kFull, "full"},
+                                              {Fidelity::kQuasiStatic, "quasi_static"},
+                                              {Fidelity::kLinearModal, "linear_modal"}};
 }  // namespace
 
-Fidelity parseFidelity(const std::string& field, const std::string& text) { return parseEnum(kFidelities, field, text); }
+Fidelity parseFidelity(const std::string& field, const std::string& text) {
+  return parseEnum(kFidelities, field, text);
+}
 const char* toString(Fidelity f) { return enumName(kFidelities, f); }
 
-State6 integrateReduced(const GearRotorModel& model, Fidelity fidelity, double t0, const State6& y0, double t_end,
-                        double interval, const Observer& observe) {
+State6 integrateReduced(const GearRotorModel& model, Fidelity fidelity, double t0, const State6& y0,
+                        double t_end, double interval, const Observer& observe) {
   const long n = gridCount(t0, t_end, interval);
   if (!y0.allFinite()) throw InvalidInput("initial state: contains a non-finite value");
   const GearRotorParameters& p = model.parameters();
@@ -75,7 +80,8 @@ State6 integrateReduced(const GearRotorModel& model, Fidelity fidelity, double t
   if (observe) observe(t0, y0);
   if (fidelity == Fidelity::kQuasiStatic) {
     rigExcitation(model, "quasi_static");
-    const ShaftPropagator pin(p.pinion_mass, p.bearing_damping[0], p.bearing_stiffness[0], interval);
+    const ShaftPropagator pin(p.pinion_mass, p.bearing_damping[0], p.bearing_stiffness[0],
+                              interval);
     const ShaftPropagator gear(p.gear_mass, p.bearing_damping[1], p.bearing_stiffness[1], interval);
     MeshInstant m;
     model.meshAt(t0, m);
@@ -83,14 +89,19 @@ State6 integrateReduced(const GearRotorModel& model, Fidelity fidelity, double t
     for (long k = 0; k < n; ++k) {
       const double t = t0 + (k + 1) * interval;
       meshForSample(model, t, interval, m);  // on a tooth switch: the right limit
-      pin.step(y[0], y[3], -f, -m.drive_force, interval);   // the pinion is pushed back by the mesh force
+      pin.step(y[0], y[3], -f, -m.drive_force,
+               interval);  // the pinion is pushed back by the mesh force
       gear.step(y[1], y[4], f, m.drive_force, interval);
       f = m.drive_force;
       const double ks = m.k_drive + m.k_back;
       const bool ordinary = m.k_back == 0.0 && m.preload_force == 0.0;
-      const double delta = ks > 0.0 ? m.drive_force / ks + (ordinary ? std::copysign(m.backlash, m.drive_force) : 0.0) : 0.0;
+      const double delta =
+          ks > 0.0
+              ? m.drive_force / ks + (ordinary ? std::copysign(m.backlash, m.drive_force) : 0.0)
+              : 0.0;
       const double x_new = delta - y[0] + y[1] + m.te;
-      y[5] = (x_new - y[2]) / interval;  // torsional rate from the samples (the mode itself is not modelled)
+      y[5] = (x_new - y[2]) /
+             interval;  // torsional rate from the samples (the mode itself is not modelled)
       y[2] = x_new;
       if (observe) observe(t, y);
     }
@@ -99,9 +110,11 @@ State6 integrateReduced(const GearRotorModel& model, Fidelity fidelity, double t
   if (fidelity == Fidelity::kLinearModal) {
     const RigExcitation& e = rigExcitation(model, "linear_modal");
     const double ks = meanStiffness(e), cs = p.mesh_damping, ms = model.equivalentMass();
-    const double a_te = e.spec().te_amplitude, w = kTwoPi * e.meshFrequency(), psi = kTwoPi * e.spec().initial_phase;
+    const double a_te = e.spec().te_amplitude, w = kTwoPi * e.meshFrequency(),
+                 psi = kTwoPi * e.spec().initial_phase;
     const TorqueProfile& torque = e.spec().torque;
-    // The pinion torque at each sample: the model's input if it takes one (held), else the profile's.
+    // The pinion torque at each sample: the model's input if it takes one (held), else the
+    // profile's.
     const bool held = e.takesTorqueInput();
     const double input = model.torqueInput();
     auto torqueAt = [&](double t) { return held ? input : torque.at(t); };
@@ -109,7 +122,8 @@ State6 integrateReduced(const GearRotorModel& model, Fidelity fidelity, double t
     model.meshAt(t0, m0);
     const double gain = e.torqueGain();
     const double mean_force = m0.drive_force - gain * (torqueAt(t0) - torque.mean);
-    // State [x_p x_g x v_p v_g v sin cos 1 u u'] as in the exponential method, stiffness at its mean.
+    // State [x_p x_g x v_p v_g v sin cos 1 u u'] as in the exponential method, stiffness at its
+    // mean.
     Eigen::Matrix<double, 11, 11> a = Eigen::Matrix<double, 11, 11>::Zero();
     Eigen::Matrix<double, 1, 11> f = Eigen::Matrix<double, 1, 11>::Zero();
     // An ordinary gear closes its backlash b on the loaded flank: F = k_s (delta - b sign F).
@@ -129,12 +143,14 @@ State6 integrateReduced(const GearRotorModel& model, Fidelity fidelity, double t
     a(6, 7) = w;
     a(7, 6) = -w;
     a(9, 10) = 1.0;
-    const double w_max = std::sqrt(std::max({(ks + p.bearing_stiffness[0]) / p.pinion_mass,
-                                             (ks + p.bearing_stiffness[1]) / p.gear_mass, 2.0 * ks / ms}));
+    const double w_max =
+        std::sqrt(std::max({(ks + p.bearing_stiffness[0]) / p.pinion_mass,
+                            (ks + p.bearing_stiffness[1]) / p.gear_mass, 2.0 * ks / ms}));
     Eigen::Matrix<double, 11, 1> s;
     s << 1e-6, 1e-6, 1e-6, 1e-6 * w_max, 1e-6 * w_max, 1e-6 * w_max, 1, 1, 1, 1, 1.0 / interval;
     const Eigen::Matrix<double, 11, 11> phi =
-        s.asDiagonal() * (s.cwiseInverse().asDiagonal() * (a * interval) * s.asDiagonal()).exp() * s.cwiseInverse().asDiagonal();
+        s.asDiagonal() * (s.cwiseInverse().asDiagonal() * (a * interval) * s.asDiagonal()).exp() *
+        s.cwiseInverse().asDiagonal();
     Eigen::Matrix<double, 11, 1> z;
     z.head<6>() = y;
     z[6] = std::sin(w * t0 + psi);
@@ -155,7 +171,8 @@ State6 integrateReduced(const GearRotorModel& model, Fidelity fidelity, double t
   throw InvalidInput("integrateReduced: use integrate() for the full model");
 }
 
-IntegratorOptions autoOptions(IntegratorMethod method, double relative_tolerance, const IntegratorScale& scale) {
+IntegratorOptions autoOptions(IntegratorMethod method, double relative_tolerance,
+                              const IntegratorScale& scale) {
   // dopri5 at the chosen rtol (in SI the absolute tolerance 1e-6 of it, in metres), every method
   // with steps of at most 0.1 ms (SI), and the divergence limit of the model's units.
   IntegratorOptions o;
@@ -172,9 +189,9 @@ double defaultPilotDuration(double run_duration, double output_interval) {
   return std::min(0.25 * run_duration, 40.0 * output_interval);
 }
 
-AutoChoice chooseAutomatically(const GearRotorModel& model, double t0, const State6& y0, double interval,
-                               double pilot_duration, double error_bound, double run_duration,
-                               const IntegratorScale& scale) {
+AutoChoice chooseAutomatically(const GearRotorModel& model, double t0, const State6& y0,
+                               double interval, double pilot_duration, double error_bound,
+                               double run_duration, const IntegratorScale& scale) {
   requirePositive("error_bound", error_bound);
   requirePositive("pilot_duration", pilot_duration);
   requireNonNegative("run_duration", run_duration);
@@ -211,19 +228,22 @@ AutoChoice chooseAutomatically(const GearRotorModel& model, double t0, const Sta
   // samples alone: if the exponential method is then built and serves as the reference (the scenes
   // it suits), dopri5 runs no further (its whole pilot would be about a third of auto's time on
   // nominal). Only where the reference must be dopri5 after all does it run
-  // the whole pilot, from the start again, so that the reference is the one it always was. Where the
-  // exponential method cannot be the reference, dopri5 runs the whole pilot at once.
-  // (The count over a quarter of a mesh period depends on the phase the pilot starts at, as tooth
-  // switches and flank changes fall in it or not: 0.75-1.25x the 40-sample rate on nominal,
-  // 0.6-1.5x on low_preload, by an independent review; it matters only near the break-even run.)
+  // the whole pilot, from the start again, so that the reference is the one it always was. Where
+  // the exponential method cannot be the reference, dopri5 runs the whole pilot at once. (The count
+  // over a quarter of a mesh period depends on the phase the pilot starts at, as tooth switches and
+  // flank changes fall in it or not: 0.75-1.25x the 40-sample rate on nominal, 0.6-1.5x on
+  // low_preload, by an independent review; it matters only near the break-even run.)
   choice.relative_tolerance = std::max(error_bound / 100.0, 1e-11);
-  const IntegratorOptions dopri = autoOptions(IntegratorMethod::kDopri5, choice.relative_tolerance, scale);
+  const IntegratorOptions dopri =
+      autoOptions(IntegratorMethod::kDopri5, choice.relative_tolerance, scale);
   const RigExcitation* rig = model.rigExcitation();
   const GearRotorParameters& p = model.parameters();
-  const bool linear_possible = rig && p.bearing_clearance[0] <= 0.0 && p.bearing_clearance[1] <= 0.0;
+  const bool linear_possible =
+      rig && p.bearing_clearance[0] <= 0.0 && p.bearing_clearance[1] <= 0.0;
   const bool may_be_reference = linear_possible && error_bound >= kExponentialReferenceBound;
-  const double count_duration =
-      may_be_reference ? std::min(choice.pilot_duration, kDopriCountSamples * interval) : choice.pilot_duration;
+  const double count_duration = may_be_reference
+                                    ? std::min(choice.pilot_duration, kDopriCountSamples * interval)
+                                    : choice.pilot_duration;
   IntegrationStats dopri_stats;
   std::vector<double> reference;
   const bool whole_pilot_counted = count_duration >= choice.pilot_duration;
@@ -235,7 +255,8 @@ AutoChoice chooseAutomatically(const GearRotorModel& model, double t0, const Sta
   if (whole_pilot_counted) {
     reference = dopriPilot();
   } else {
-    integrate(model, IntegratorMethod::kDopri5, dopri, t0, y0, t0 + count_duration, interval, nullptr, &dopri_stats);
+    integrate(model, IntegratorMethod::kDopri5, dopri, t0, y0, t0 + count_duration, interval,
+              nullptr, &dopri_stats);
   }
   choice.dopri_pilot_steps = dopri_stats.steps;
   std::string reference_name = "dopri5";
@@ -254,14 +275,18 @@ AutoChoice chooseAutomatically(const GearRotorModel& model, double t0, const Sta
   std::vector<double> exponential;
   if (linear_possible) {
     const double run = run_duration > 0.0 ? run_duration : std::numeric_limits<double>::infinity();
-    const double dopri_cost = static_cast<double>(std::max(1L, dopri_stats.steps)) * (run / count_duration);
+    const double dopri_cost =
+        static_cast<double>(std::max(1L, dopri_stats.steps)) * (run / count_duration);
     try {
-      const double exponential_cost = PeriodicExponentialPropagator::estimatedSetupSteps(model, *rig, t0) * kMagnusStepCost +
-                                      (std::isfinite(run) ? run / interval : 0.0);
+      const double exponential_cost =
+          PeriodicExponentialPropagator::estimatedSetupSteps(model, *rig, t0) * kMagnusStepCost +
+          (std::isfinite(run) ? run / interval : 0.0);
       if (exponential_cost < dopri_cost) {
-        auto propagator = std::make_shared<const PeriodicExponentialPropagator>(model, t0, interval);
+        auto propagator =
+            std::make_shared<const PeriodicExponentialPropagator>(model, t0, interval);
         IntegrationStats stats;
-        exponential = deltas([&](const Observer& o) { propagator->run(y0, t_end, o, IntegratorOptions{}, &stats); });
+        exponential = deltas(
+            [&](const Observer& o) { propagator->run(y0, t_end, o, IntegratorOptions{}, &stats); });
         exponential_closed = stats.fallbacks == 0;
         choice.exponential = std::move(propagator);
       }
@@ -269,7 +294,8 @@ AutoChoice chooseAutomatically(const GearRotorModel& model, double t0, const Sta
       choice.pilot_errors.emplace_back("exponential (not applicable)", INFINITY);
     }
   }
-  const bool exponential_reference = exponential_closed && error_bound >= kExponentialReferenceBound;
+  const bool exponential_reference =
+      exponential_closed && error_bound >= kExponentialReferenceBound;
   if (exponential_reference) {
     reference = exponential;
     reference_name = "exponential";
@@ -279,12 +305,15 @@ AutoChoice chooseAutomatically(const GearRotorModel& model, double t0, const Sta
   }
   if (rig) {
     for (Fidelity f : {Fidelity::kQuasiStatic, Fidelity::kLinearModal}) {
-      const double err =
-          rmsError(deltas([&](const Observer& o) { integrateReduced(model, f, t0, y0, t_end, interval, o); }), reference);
+      const double err = rmsError(deltas([&](const Observer& o) {
+                                    integrateReduced(model, f, t0, y0, t_end, interval, o);
+                                  }),
+                                  reference);
       if (accept(toString(f), err)) {
         choice.fidelity = f;
         choice.exponential.reset();
-        choice.reason = std::string(toString(f)) + " meets the bound on the pilot (against " + reference_name + ")";
+        choice.reason = std::string(toString(f)) + " meets the bound on the pilot (against " +
+                        reference_name + ")";
         return choice;
       }
     }
@@ -294,15 +323,19 @@ AutoChoice chooseAutomatically(const GearRotorModel& model, double t0, const Sta
     if (chosen) {
       choice.pilot_errors.emplace_back("exponential (the reference)", 0.0);
     } else if (exponential_closed) {
-      chosen = accept("exponential", rmsError(exponential, reference));  // bound below its own accuracy claim
+      chosen = accept("exponential",
+                      rmsError(exponential, reference));  // bound below its own accuracy claim
     }
     if (chosen) {
       choice.method = IntegratorMethod::kExponential;
-      choice.reason = "full model, exact exponential propagation (contacts closed through the pilot; set-up and run "
-                      "predicted cheaper than dopri5's)";
+      choice.reason =
+          "full model, exact exponential propagation (contacts closed through the pilot; set-up "
+          "and run "
+          "predicted cheaper than dopri5's)";
       return choice;
     }
-    if (!exponential_closed) choice.pilot_errors.emplace_back("exponential (a contact opened in the pilot)", INFINITY);
+    if (!exponential_closed)
+      choice.pilot_errors.emplace_back("exponential (a contact opened in the pilot)", INFINITY);
     choice.exponential.reset();
   }
   choice.method = IntegratorMethod::kDopri5;
@@ -310,12 +343,15 @@ AutoChoice chooseAutomatically(const GearRotorModel& model, double t0, const Sta
   return choice;
 }
 
-State6 integrateChoice(const GearRotorModel& model, const AutoChoice& choice, double t0, const State6& y0, double t_end,
-                       double interval, const Observer& observe, IntegrationStats* stats) {
-  if (choice.fidelity != Fidelity::kFull) return integrateReduced(model, choice.fidelity, t0, y0, t_end, interval, observe);
+State6 integrateChoice(const GearRotorModel& model, const AutoChoice& choice, double t0,
+                       const State6& y0, double t_end, double interval, const Observer& observe,
+                       IntegrationStats* stats) {
+  if (choice.fidelity != Fidelity::kFull)
+    return integrateReduced(model, choice.fidelity, t0, y0, t_end, interval, observe);
   const IntegratorOptions o = autoOptions(choice.method, choice.relative_tolerance, choice.scale);
   if (choice.method == IntegratorMethod::kExponential && choice.exponential) {
-    return choice.exponential->run(y0, t_end, observe, o, stats);  // the pilot's propagators, built once
+    return choice.exponential->run(y0, t_end, observe, o,
+                                   stats);  // the pilot's propagators, built once
   }
   return integrate(model, choice.method, o, t0, y0, t_end, interval, observe, stats);
 }

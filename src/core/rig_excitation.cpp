@@ -25,10 +25,12 @@ double TorqueProfile::at(double t) const {
       return torque;
     }
     case Kind::kChirp: {
-      // Linear chirp: instantaneous frequency f0 + (f1 - f0) t / T, phase 2 pi (f0 t + (f1 - f0) t^2 / 2T).
+      // Linear chirp: instantaneous frequency f0 + (f1 - f0) t / T, phase 2 pi (f0 t + (f1 - f0)
+      // t^2 / 2T).
       const double tt = std::min(t, chirp_duration);
-      const double phase = kTwoPi * (chirp_start * tt + 0.5 * (chirp_end - chirp_start) * tt * tt / chirp_duration) +
-                           kTwoPi * chirp_end * std::max(0.0, t - chirp_duration);
+      const double phase =
+          kTwoPi * (chirp_start * tt + 0.5 * (chirp_end - chirp_start) * tt * tt / chirp_duration) +
+          kTwoPi * chirp_end * std::max(0.0, t - chirp_duration);
       return mean + amplitude * std::sin(phase);
     }
     case Kind::kInput: return 0.0;  // the model adds its input (RigExcitation::driveForce)
@@ -52,8 +54,8 @@ void TorqueProfile::validate() const {
   }
 }
 
-RigExcitation::RigExcitation(std::shared_ptr<const AntiBacklashMesh> mesh, const GearRotorParameters& params,
-                             const RigExcitationSpec& spec)
+RigExcitation::RigExcitation(std::shared_ptr<const AntiBacklashMesh> mesh,
+                             const GearRotorParameters& params, const RigExcitationSpec& spec)
     : mesh_(std::move(mesh)), spec_(spec) {
   if (!mesh_) throw InvalidInput("mesh: missing");
   params.validate();
@@ -65,7 +67,8 @@ RigExcitation::RigExcitation(std::shared_ptr<const AntiBacklashMesh> mesh, const
   mesh_frequency_ = spec.speed * mesh_->geometry().spec().teeth[0] / kTwoPi;
   m_s_ = params.equivalentMass();
   if (spec.balanced_load) {
-    // m_s (r_p T_p / I_p + r_g T_g / I_g) with T_g = T_p r_g / r_p equals T_p / r_p (docs/model.md).
+    // m_s (r_p T_p / I_p + r_g T_g / I_g) with T_g = T_p r_g / r_p equals T_p / r_p
+    // (docs/model.md).
     torque_gain_ = 1.0 / params.pinion_base_radius;
     load_term_ = 0.0;
   } else {
@@ -98,13 +101,19 @@ double RigExcitation::nextSwitch(double t) const {
   const double whole = std::floor(turns), phase = turns - whole;
   double next = whole + 1.0 + (switches_.empty() ? 0.0 : switches_.front());
   for (double s : switches_) {
-    if (s > phase) { next = whole + s; break; }  // however close: a skipped switch would be straddled
+    if (s > phase) {
+      next = whole + s;
+      break;
+    }  // however close: a skipped switch would be straddled
   }
   double time = (next - spec_.initial_phase) / mesh_frequency_;
   // Torque steps are switches of the right-hand side too.
   if (spec_.torque.kind == TorqueProfile::Kind::kSteps) {
     for (const auto& s : spec_.torque.steps) {
-      if (s.first > t * (1.0 + 1e-15) + 1e-300 && s.first < time) { time = s.first; break; }
+      if (s.first > t * (1.0 + 1e-15) + 1e-300 && s.first < time) {
+        time = s.first;
+        break;
+      }
     }
   }
   return time > t ? time : std::nextafter(t, std::numeric_limits<double>::infinity());

@@ -21,7 +21,8 @@ class OscillatorExcitation : public GearExcitation {
   OscillatorExcitation(double w, double f_m, double f_te, std::array<double, 3> ripple)
       : w_(w), f_m_(f_m), f_te_(f_te), ripple_(ripple) {}
   void at(double t, MeshInstant& out) const override {
-    out.k_drive = 1.0 - ripple_[0] * std::cos(w_ * t) - ripple_[1] * std::cos(2 * w_ * t) - ripple_[2] * std::cos(3 * w_ * t);
+    out.k_drive = 1.0 - ripple_[0] * std::cos(w_ * t) - ripple_[1] * std::cos(2 * w_ * t) -
+                  ripple_[2] * std::cos(3 * w_ * t);
     out.k_back = 0.0;
     out.preload_force = 0.0;
     out.backlash = 1.0;
@@ -36,8 +37,8 @@ class OscillatorExcitation : public GearExcitation {
   std::array<double, 3> ripple_;
 };
 
-Scene oscillatorScene(const std::string& name, double w, double zeta, double f_m, double f_te, std::array<double, 3> ripple,
-                      int periods, const std::string& description) {
+Scene oscillatorScene(const std::string& name, double w, double zeta, double f_m, double f_te,
+                      std::array<double, 3> ripple, int periods, const std::string& description) {
   // Unit equivalent mass (r_p = r_g = 1, I_p = I_g = 2 gives m_s = 1); the shafts are made
   // immovable (huge masses, no bearing stiffness) so the model reduces to the single DOF x.
   GearRotorParameters p;
@@ -48,7 +49,8 @@ Scene oscillatorScene(const std::string& name, double w, double zeta, double f_m
   Scene s;
   s.name = name;
   s.description = description;
-  s.model = std::make_shared<GearRotorModel>(p, std::make_shared<OscillatorExcitation>(w, f_m, f_te, ripple));
+  s.model = std::make_shared<GearRotorModel>(
+      p, std::make_shared<OscillatorExcitation>(w, f_m, f_te, ripple));
   s.initial = State6::Zero();
   s.initial[2] = 1.0 + f_m;  // start just in contact
   s.duration = periods * kTwoPi / w;
@@ -65,7 +67,8 @@ std::array<double, 2> bearingStiffness(const RigConfig& rig, double torque) {
   StiffnessEstimator estimator(rig);
   const StiffnessEstimate& e = estimator.setTorque(torque);
   std::array<double, 2> k{{0.0, 0.0}};
-  for (std::size_t i = 0; i < e.supports.size(); ++i) k[rig.bearings[i].shaft] += e.supports[i].solution.radialStiffness();
+  for (std::size_t i = 0; i < e.supports.size(); ++i)
+    k[rig.bearings[i].shaft] += e.supports[i].solution.radialStiffness();
   return k;
 }
 
@@ -73,8 +76,8 @@ struct RigSceneSetup {
   RigConfig rig;
   RigExcitationSpec excitation;
   double duration = 0.03;
-  double bearing_scale = 1.0;    ///< multiply the bearing-model stiffness
-  bool parametric = false;       ///< choose the speed for mesh frequency = 2 f_1
+  double bearing_scale = 1.0;  ///< multiply the bearing-model stiffness
+  bool parametric = false;     ///< choose the speed for mesh frequency = 2 f_1
 };
 
 /// The rotor of a rig scene: the mesh table, its mean stiffness and the model's parameters.
@@ -98,7 +101,8 @@ RigRotor rigRotor(const RigSceneSetup& setup) {
   return r;
 }
 
-/// Explicit methods: 20 steps per period of the stiffest mode, rounded to divide the output interval.
+/// Explicit methods: 20 steps per period of the stiffest mode, rounded to divide the output
+/// interval.
 double suggestedStep(const RigRotor& r, double output_interval) {
   const GearRotorParameters& p = r.p;
   const double w_max = std::sqrt(std::max({(r.k_mean + p.bearing_stiffness[0]) / p.pinion_mass,
@@ -116,9 +120,13 @@ Scene rigScene(const std::string& name, const std::string& description, RigScene
   const GearRotorParameters& p = rotor.p;
   if (setup.parametric) {
     // Lowest natural frequency of the linearised system (docs/model.md), mesh frequency = 2 f_1.
-    Eigen::Matrix3d mm = Eigen::Vector3d(p.pinion_mass, p.gear_mass, p.equivalentMass()).asDiagonal();
+    Eigen::Matrix3d mm =
+        Eigen::Vector3d(p.pinion_mass, p.gear_mass, p.equivalentMass()).asDiagonal();
     const Eigen::Matrix3d kk = meshBearingMatrix(k_mean, p.bearing_stiffness);
-    const double f1 = std::sqrt(Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::Matrix3d>(kk, mm).eigenvalues()[0]) / kTwoPi;
+    const double f1 =
+        std::sqrt(
+            Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::Matrix3d>(kk, mm).eigenvalues()[0]) /
+        kTwoPi;
     setup.excitation.speed = 2.0 * f1 * kTwoPi / rig.gears.teeth[0];
   }
   Scene s;
@@ -147,10 +155,12 @@ Scene rigScene(const std::string& name, const std::string& description, RigScene
 // changes there): both are time events.
 class MotionExcitation : public GearExcitation {
  public:
-  MotionExcitation(const SceneMotion& m, double torque_gain, double torque) : interval_(m.reading_interval) {
+  MotionExcitation(const SceneMotion& m, double torque_gain, double torque)
+      : interval_(m.reading_interval) {
     for (std::size_t k = 0; k + 1 < m.readings(); ++k) {
-      pieces_.emplace_back(m.slices, m.te_amplitude, m.backlash, torque_gain, 0.0,
-                           MeshMotion{static_cast<double>(k) * interval_, m.phase[k], m.meshFrequency(k)}, torque);
+      pieces_.emplace_back(
+          m.slices, m.te_amplitude, m.backlash, torque_gain, 0.0,
+          MeshMotion{static_cast<double>(k) * interval_, m.phase[k], m.meshFrequency(k)}, torque);
     }
     if (pieces_.empty()) throw InvalidInput("scene motion: needs at least two readings");
   }
@@ -166,7 +176,8 @@ class MotionExcitation : public GearExcitation {
   /// k with readingTime(k) <= t < readingTime(k + 1); the first before 0, the last after the end.
   std::size_t piece(double t) const {
     if (!(t > 0.0)) return 0;
-    std::size_t k = static_cast<std::size_t>(std::min(std::floor(t / interval_), static_cast<double>(pieces_.size() - 1)));
+    std::size_t k = static_cast<std::size_t>(
+        std::min(std::floor(t / interval_), static_cast<double>(pieces_.size() - 1)));
     while (k + 1 < pieces_.size() && readingTime(k + 1) <= t) ++k;
     while (k > 0 && readingTime(k) > t) --k;
     return k;
@@ -185,15 +196,18 @@ SpeedProfile motionProfile(const std::string& name, double T) {
   if (name == "run_up") return SpeedProfile(SpeedRamp{0.0, radPerSecond(6000.0), 0.0, T});
   if (name == "speed_steps") {
     return SpeedProfile(SpeedSteps{radPerSecond(500.0),
-                                   {{T / 4.0, radPerSecond(1000.0)}, {T / 2.0, radPerSecond(2000.0)},
+                                   {{T / 4.0, radPerSecond(1000.0)},
+                                    {T / 2.0, radPerSecond(2000.0)},
                                     {3.0 * T / 4.0, radPerSecond(4000.0)}},
                                    T / 20.0});
   }
   return SpeedProfile(SpeedReversal{radPerSecond(1000.0), 0.0, T});  // reverse
 }
 
-Scene motionScene(const std::string& name, const std::string& description, RigSceneSetup setup, double duration) {
-  constexpr double kReading = 1e-3;  // encoder readings at 1 kHz, as drivetrain_rig_sim's joint_rate
+Scene motionScene(const std::string& name, const std::string& description, RigSceneSetup setup,
+                  double duration) {
+  constexpr double kReading =
+      1e-3;  // encoder readings at 1 kHz, as drivetrain_rig_sim's joint_rate
   if (!(duration >= 0.02 && duration <= 100.0)) {
     throwInvalid("duration", duration, "a motion scene needs 0.02 s (20 readings) to 100 s");
   }
@@ -208,7 +222,8 @@ Scene motionScene(const std::string& name, const std::string& description, RigSc
   double fastest = 0.0;  // [rad/s]
   for (long k = 0; k <= readings; ++k) {
     motion->phase.push_back(motion->closedFormPhase(static_cast<double>(k) * kReading));
-    fastest = std::max(fastest, std::abs(motion->pinion_speed.speed(static_cast<double>(k) * kReading)));
+    fastest =
+        std::max(fastest, std::abs(motion->pinion_speed.speed(static_cast<double>(k) * kReading)));
   }
   // The node's default ~motion_slices.
   motion->slices = std::make_shared<const SlicedMesh>(rotor.mesh, 256);
@@ -220,15 +235,17 @@ Scene motionScene(const std::string& name, const std::string& description, RigSc
   Scene s;
   s.name = name;
   s.description = description;
-  s.model = std::make_shared<GearRotorModel>(rotor.p, std::make_shared<MotionExcitation>(*motion, torque_gain,
-                                                                                        setup.excitation.torque.mean));
+  s.model = std::make_shared<GearRotorModel>(
+      rotor.p,
+      std::make_shared<MotionExcitation>(*motion, torque_gain, setup.excitation.torque.mean));
   s.initial = staticEquilibrium(*s.model, 0.0);
   // At least 32 samples per mesh period at the fastest speed, a whole number per reading.
   const double fastest_mesh_hz = fastest * motion->pinion_teeth / kTwoPi;
   s.output_interval = kReading / std::max(1.0, std::ceil(32.0 * fastest_mesh_hz * kReading));
   s.duration = T;
   // The first tenth discarded (the start from static equilibrium rings for a few ms), cut half a
-  // sample off the grid so that fixed-step samples, whose times are sums of steps, fall on the same side.
+  // sample off the grid so that fixed-step samples, whose times are sums of steps, fall on the same
+  // side.
   s.transient = (std::round(0.1 * T / s.output_interval) + 0.5) * s.output_interval;
   s.suggested_step = suggestedStep(rotor, s.output_interval);
   s.motion = std::move(motion);
@@ -238,31 +255,47 @@ Scene motionScene(const std::string& name, const std::string& description, RigSc
 }  // namespace
 
 std::vector<std::string> sceneNames() {
-  return {"nominal", "torque_steps", "low_preload", "bearing_rattle", "near_rigid_bearings",
-          "parametric_resonance", "kahraman_singh", "chaotic", "run_up", "speed_steps", "reverse"};
+  return {"nominal",
+          "torque_steps",
+          "low_preload",
+          "bearing_rattle",
+          "near_rigid_bearings",
+          "parametric_resonance",
+          "kahraman_singh",
+          "chaotic",
+          "run_up",
+          "speed_steps",
+          "reverse"};
 }
 
 std::vector<std::string> motionSceneNames() { return {"run_up", "speed_steps", "reverse"}; }
 
-double SceneMotion::closedFormPhase(double t) const { return initial_phase + pinion_teeth * pinion_speed.angle(t) / kTwoPi; }
+double SceneMotion::closedFormPhase(double t) const {
+  return initial_phase + pinion_teeth * pinion_speed.angle(t) / kTwoPi;
+}
 
 Scene makeScene(const std::string& name, const RigConfig& rig_in, double duration) {
   const std::vector<std::string> moving = motionSceneNames();
   const bool motion = std::find(moving.begin(), moving.end(), name) != moving.end();
   if (duration != 0.0 && !motion) {
-    throwInvalid("duration", duration, "only the motion scenes (run_up, speed_steps, reverse) take a duration");
+    throwInvalid("duration", duration,
+                 "only the motion scenes (run_up, speed_steps, reverse) take a duration");
   }
   if (name == "kahraman_singh") {
-    return oscillatorScene(name, 0.5, 0.05, 0.1, 0.01, {0.2, 0.1, 0.05}, 200,
-                           "dimensionless backlash oscillator, k = 1 - 0.2 cos W t - 0.1 cos 2W t - 0.05 cos 3W t, "
-                           "zeta 0.05, F_m 0.1, F_te 0.01, W = 0.5 (gear.md section 3)");
+    return oscillatorScene(
+        name, 0.5, 0.05, 0.1, 0.01, {0.2, 0.1, 0.05}, 200,
+        "dimensionless backlash oscillator, k = 1 - 0.2 cos W t - 0.1 cos 2W t - 0.05 cos 3W t, "
+        "zeta 0.05, F_m 0.1, F_te 0.01, W = 0.5 (gear.md section 3)");
   }
   if (name == "chaotic") {
     return oscillatorScene(name, 1.4, 0.02, 0.02, 0.02, {0.3, 0.0, 0.0}, 300,
-                           "backlash oscillator at low load and damping with 30 % stiffness ripple: impacts, sensitive "
-                           "dependence on the initial state (a 1e-9 perturbation grows to O(1): positive Lyapunov exponent)");
+                           "backlash oscillator at low load and damping with 30 % stiffness "
+                           "ripple: impacts, sensitive "
+                           "dependence on the initial state (a 1e-9 perturbation grows to O(1): "
+                           "positive Lyapunov exponent)");
   }
-  if (!rig_in.dynamics.present) throw InvalidInput("scene '" + name + "': the gearbox file has no 'dynamics:' block");
+  if (!rig_in.dynamics.present)
+    throw InvalidInput("scene '" + name + "': the gearbox file has no 'dynamics:' block");
   RigSceneSetup setup;
   setup.rig = rig_in;
   const DynamicsConfig& d = rig_in.dynamics;
@@ -285,7 +318,10 @@ Scene makeScene(const std::string& name, const RigConfig& rig_in, double duratio
     setup.excitation.torque.amplitude = 0.8 * d.torque;
     setup.excitation.torque.frequency = 500.0;
     setup.duration = 0.02;
-    return rigScene(name, "spring preload 0.01 N m (F_p 0.89 N) under 0.1 +- 0.08 N m at 500 Hz: the g2 flank separates and re-impacts", setup);
+    return rigScene(name,
+                    "spring preload 0.01 N m (F_p 0.89 N) under 0.1 +- 0.08 N m at 500 Hz: the g2 "
+                    "flank separates and re-impacts",
+                    setup);
   }
   if (name == "bearing_rattle") {
     // Zero mean load: only a torque fluctuation pushes the shafts (a TE alone is absorbed by the
@@ -297,7 +333,10 @@ Scene makeScene(const std::string& name, const RigConfig& rig_in, double duratio
     setup.excitation.torque.amplitude = 0.05;
     setup.excitation.torque.frequency = 500.0;
     setup.duration = 0.02;
-    return rigScene(name, "zero mean torque, +-0.05 N m at 500 Hz, 10 um radial bearing clearance: the shafts rattle in the clearance", setup);
+    return rigScene(name,
+                    "zero mean torque, +-0.05 N m at 500 Hz, 10 um radial bearing clearance: the "
+                    "shafts rattle in the clearance",
+                    setup);
   }
   if (name == "near_rigid_bearings") {
     setup.bearing_scale = 1e4;
@@ -311,22 +350,37 @@ Scene makeScene(const std::string& name, const RigConfig& rig_in, double duratio
   }
   if (motion) {
     const double T = duration > 0.0 ? duration : 1.0;
-    const std::string held = ", torque " + formatValue(d.torque) + " N m held, sliced mesh (256 slices), encoder readings at 1 kHz";
-    if (name == "run_up") return motionScene(name, "pinion 0 -> 6000 rpm linearly over the scene" + held, setup, T);
+    const std::string held = ", torque " + formatValue(d.torque) +
+                             " N m held, sliced mesh (256 slices), encoder readings at 1 kHz";
+    if (name == "run_up")
+      return motionScene(name, "pinion 0 -> 6000 rpm linearly over the scene" + held, setup, T);
     if (name == "speed_steps") {
-      return motionScene(name, "pinion 500, 1000, 2000, 4000 rpm, a quarter of the scene each, each step a ramp of "
-                               "1/20 of the scene" + held, setup, T);
+      return motionScene(
+          name,
+          "pinion 500, 1000, 2000, 4000 rpm, a quarter of the scene each, each step a ramp of "
+          "1/20 of the scene" +
+              held,
+          setup, T);
     }
-    return motionScene(name, "pinion 1000 rpm cos(2 pi t / T): through zero at T/4 to -1000 rpm at T/2, zero again "
-                             "at 3T/4, back to +1000 rpm" + held, setup, T);
+    return motionScene(
+        name,
+        "pinion 1000 rpm cos(2 pi t / T): through zero at T/4 to -1000 rpm at T/2, zero again "
+        "at 3T/4, back to +1000 rpm" +
+            held,
+        setup, T);
   }
-  throw InvalidInput("scene = '" + name + "': unknown (nominal, torque_steps, low_preload, bearing_rattle, "
-                     "near_rigid_bearings, parametric_resonance, kahraman_singh, chaotic, run_up, speed_steps, reverse)");
+  throw InvalidInput("scene = '" + name +
+                     "': unknown (nominal, torque_steps, low_preload, bearing_rattle, "
+                     "near_rigid_bearings, parametric_resonance, kahraman_singh, chaotic, run_up, "
+                     "speed_steps, reverse)");
 }
 
-State6 propagateMotionScene(const Scene& scene, const SlicedModalPropagator& exact, const IntegratorOptions& fallback,
-                            const Observer& observe, IntegrationStats* stats) {
-  if (!scene.motion) throw InvalidInput("scene '" + scene.name + "': at a constant speed, no measured motion to follow");
+State6 propagateMotionScene(const Scene& scene, const SlicedModalPropagator& exact,
+                            const IntegratorOptions& fallback, const Observer& observe,
+                            IntegrationStats* stats) {
+  if (!scene.motion)
+    throw InvalidInput("scene '" + scene.name +
+                       "': at a constant speed, no measured motion to follow");
   const SceneMotion& m = *scene.motion;
   const double h = scene.output_interval;
   const long per_reading = std::lround(m.reading_interval / h);
@@ -348,12 +402,13 @@ State6 propagateMotionScene(const Scene& scene, const SlicedModalPropagator& exa
     // As the node propagates: exact through the changes of the contacts, dopri5 on the same sliced
     // model and motion through each moment in no linear regime (fallbacks: the sample intervals
     // that needed it).
-    const long stretches = propagateMeasured(exact, y, phase, f, t, static_cast<double>(i + 1) * h, m.drive_force,
-                                             [&](double t0, double t1, State6& z, double& p) {
-                                               z = integrate(*scene.model, IntegratorMethod::kDopri5, fallback, t0, z, t1,
-                                                             t1 - t0, nullptr);
-                                               p += f * (t1 - t0);
-                                             });
+    const long stretches =
+        propagateMeasured(exact, y, phase, f, t, static_cast<double>(i + 1) * h, m.drive_force,
+                          [&](double t0, double t1, State6& z, double& p) {
+                            z = integrate(*scene.model, IntegratorMethod::kDopri5, fallback, t0, z,
+                                          t1, t1 - t0, nullptr);
+                            p += f * (t1 - t0);
+                          });
     if (stretches > 0 && st.fallbacks++ == 0) st.fallback_from = t;
     if (observe) observe(static_cast<double>(i + 1) * h, y);
   }
@@ -362,11 +417,13 @@ State6 propagateMotionScene(const Scene& scene, const SlicedModalPropagator& exa
   return y;
 }
 
-std::vector<SweepPoint> sweepOscillator(const OscillatorSweepSpec& spec, const std::vector<double>& frequencies) {
+std::vector<SweepPoint> sweepOscillator(const OscillatorSweepSpec& spec,
+                                        const std::vector<double>& frequencies) {
   requireInHalfOpenRange("sweep.zeta", spec.zeta, 0.0, 1.0);
   requireFinite("sweep.mean_force", spec.mean_force);
   requireFinite("sweep.te_force", spec.te_force);
-  if (spec.settle < 1 || spec.measure < 1) throw InvalidInput("sweep: settle and measure must be >= 1 period");
+  if (spec.settle < 1 || spec.measure < 1)
+    throw InvalidInput("sweep: settle and measure must be >= 1 period");
   GearRotorParameters p;
   p.pinion_mass = p.gear_mass = 1e12;
   p.pinion_inertia = p.gear_inertia = 2.0;
@@ -382,13 +439,15 @@ std::vector<SweepPoint> sweepOscillator(const OscillatorSweepSpec& spec, const s
   std::vector<SweepPoint> out;
   for (double w : frequencies) {
     requirePositive("sweep.frequency", w);
-    const GearRotorModel model(p, std::make_shared<OscillatorExcitation>(w, spec.mean_force, spec.te_force, spec.ripple));
+    const GearRotorModel model(
+        p, std::make_shared<OscillatorExcitation>(w, spec.mean_force, spec.te_force, spec.ripple));
     const double period = kTwoPi / w;
     SweepPoint pt;
     pt.frequency = w;
     pt.min_x = INFINITY;
     pt.max_x = -INFINITY;
-    y = integrate(model, IntegratorMethod::kDopri5, o, 0.0, y, (spec.settle + spec.measure) * period, period / 50,
+    y = integrate(model, IntegratorMethod::kDopri5, o, 0.0, y,
+                  (spec.settle + spec.measure) * period, period / 50,
                   [&](double t, const State6& s) {
                     if (t >= spec.settle * period) {
                       pt.min_x = std::min(pt.min_x, s[2]);
@@ -396,7 +455,9 @@ std::vector<SweepPoint> sweepOscillator(const OscillatorSweepSpec& spec, const s
                     }
                   });
     pt.peak_to_peak = pt.max_x - pt.min_x;
-    pt.regime = pt.min_x < -1.0 ? "double_sided_impact" : pt.min_x < 1.0 ? "single_sided_impact" : "no_impact";
+    pt.regime = pt.min_x < -1.0  ? "double_sided_impact"
+                : pt.min_x < 1.0 ? "single_sided_impact"
+                                 : "no_impact";
     out.push_back(pt);
   }
   return out;

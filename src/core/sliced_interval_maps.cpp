@@ -9,12 +9,14 @@ namespace drivetrain_stiffness {
 
 SlicedIntervalMaps::SlicedIntervalMaps(const SlicedMesh& slices, int intervals, double f) : f_(f) {
   if (intervals < 1) throwInvalid("intervals", intervals, "must be at least 1 per mesh period");
-  if (!(f > 0.0) || !std::isfinite(f)) throwInvalid("mesh frequency", f, "must be positive and finite");
+  if (!(f > 0.0) || !std::isfinite(f))
+    throwInvalid("mesh frequency", f, "must be positive and finite");
   intervals_.resize(static_cast<std::size_t>(intervals));
   for (int i = 0; i < intervals; ++i) {
     // Interval i spans the phases [i/n, (i+1)/n]: its start, every slice boundary strictly inside
     // it, its end (a boundary on the end is the next interval's start).
-    const double q0 = static_cast<double>(i) / intervals, q1 = static_cast<double>(i + 1) / intervals;
+    const double q0 = static_cast<double>(i) / intervals,
+                 q1 = static_cast<double>(i + 1) / intervals;
     Interval& v = intervals_[static_cast<std::size_t>(i)];
     int j = slices.sliceAt(q0, false);
     v.offset.push_back(0.0);
@@ -48,7 +50,8 @@ bool SlicedIntervalMaps::available(const SlicedModalPropagator& exact, int i) {
 
 int SlicedIntervalMaps::boundaryAtOrBefore(int i, double u) const {
   const std::vector<double>& offset = intervals_[static_cast<std::size_t>(i)].offset;
-  const int m = static_cast<int>(std::upper_bound(offset.begin(), offset.end(), u) - offset.begin()) - 1;
+  const int m =
+      static_cast<int>(std::upper_bound(offset.begin(), offset.end(), u) - offset.begin()) - 1;
   return std::clamp(m, 0, static_cast<int>(offset.size()) - 1);
 }
 
@@ -62,9 +65,11 @@ bool SlicedIntervalMaps::make(const SlicedModalPropagator& exact, int i) {
   // map is kept in tail[m] for the backward pass.
   v.head[0] = AffineMap{};
   for (int m = 0; m < pieces; ++m) {
-    const double h = (v.offset[static_cast<std::size_t>(m) + 1] - v.offset[static_cast<std::size_t>(m)]) / f_;
+    const double h =
+        (v.offset[static_cast<std::size_t>(m) + 1] - v.offset[static_cast<std::size_t>(m)]) / f_;
     AffineMap& piece = v.tail[static_cast<std::size_t>(m)];
-    if (!exact.loadedSliceMap(v.slice[static_cast<std::size_t>(m)], q0 + v.offset[static_cast<std::size_t>(m)], f_, h, piece)) {
+    if (!exact.loadedSliceMap(v.slice[static_cast<std::size_t>(m)],
+                              q0 + v.offset[static_cast<std::size_t>(m)], f_, h, piece)) {
       return false;
     }
     piece.after(v.head[static_cast<std::size_t>(m)], v.head[static_cast<std::size_t>(m) + 1]);
@@ -80,13 +85,15 @@ bool SlicedIntervalMaps::make(const SlicedModalPropagator& exact, int i) {
   return true;
 }
 
-bool SlicedIntervalMaps::toEnd(const SlicedModalPropagator& exact, int i, int m, State6& y, double drive_force) {
+bool SlicedIntervalMaps::toEnd(const SlicedModalPropagator& exact, int i, int m, State6& y,
+                               double drive_force) {
   if (!available(exact, i)) return false;
   intervals_[static_cast<std::size_t>(i)].tail[static_cast<std::size_t>(m)].apply(y, drive_force);
   return true;
 }
 
-bool SlicedIntervalMaps::fromStart(const SlicedModalPropagator& exact, int i, int m, State6& y, double drive_force) {
+bool SlicedIntervalMaps::fromStart(const SlicedModalPropagator& exact, int i, int m, State6& y,
+                                   double drive_force) {
   if (!available(exact, i)) return false;
   intervals_[static_cast<std::size_t>(i)].head[static_cast<std::size_t>(m)].apply(y, drive_force);
   return true;

@@ -9,9 +9,11 @@
 
 namespace drivetrain_stiffness {
 
-SlicedMesh::SlicedMesh(std::shared_ptr<const AntiBacklashMesh> mesh, int slices) : mesh_(std::move(mesh)) {
+SlicedMesh::SlicedMesh(std::shared_ptr<const AntiBacklashMesh> mesh, int slices)
+    : mesh_(std::move(mesh)) {
   if (!mesh_) throw InvalidInput("sliced mesh: no mesh table");
-  if (slices < 4 || slices > 65536) throwInvalid("motion_slices", slices, "must be in [4, 65536] per mesh period");
+  if (slices < 4 || slices > 65536)
+    throwInvalid("motion_slices", slices, "must be in [4, 65536] per mesh period");
   std::vector<double> b;
   for (int j = 0; j < slices; ++j) b.push_back(static_cast<double>(j) / slices);
   for (double s : mesh_->switchingPhases()) b.push_back(s - std::floor(s));
@@ -20,8 +22,9 @@ SlicedMesh::SlicedMesh(std::shared_ptr<const AntiBacklashMesh> mesh, int slices)
   for (double x : b) {
     if (bounds_.empty() || x - bounds_.back() > 1e-9) {
       bounds_.push_back(x);
-    } else if (x != bounds_.back() && std::find(mesh_->switchingPhases().begin(), mesh_->switchingPhases().end(), x) !=
-                                          mesh_->switchingPhases().end()) {
+    } else if (x != bounds_.back() &&
+               std::find(mesh_->switchingPhases().begin(), mesh_->switchingPhases().end(), x) !=
+                   mesh_->switchingPhases().end()) {
       bounds_.back() = x;
     }
   }
@@ -36,7 +39,8 @@ SlicedMesh::SlicedMesh(std::shared_ptr<const AntiBacklashMesh> mesh, int slices)
   for (int j = 0; j < n; ++j) {
     double s1 = 0.0, sc = 0.0;
     for (int q = 0; q < 16; ++q) {
-      const CompositeMesh c = mesh_->at(bounds_[j] + (q + 0.5) / 16.0 * (bounds_[j + 1] - bounds_[j]), 0.0);
+      const CompositeMesh c =
+          mesh_->at(bounds_[j] + (q + 0.5) / 16.0 * (bounds_[j + 1] - bounds_[j]), 0.0);
       s1 += c.k1;
       sc += c.k_chain;
     }
@@ -45,11 +49,14 @@ SlicedMesh::SlicedMesh(std::shared_ptr<const AntiBacklashMesh> mesh, int slices)
   }
   anti_backlash_ = mesh_->antiBacklash();
   phasors_.resize(bounds_.size());
-  for (std::size_t k = 0; k < bounds_.size(); ++k) phasors_[k] = std::polar(1.0, kTwoPi * bounds_[k]);
-  phasors_.front() = phasors_.back() = 1.0;  // phase 0 and 1 turn: sin(2 pi) would round to -2.4e-16
+  for (std::size_t k = 0; k < bounds_.size(); ++k)
+    phasors_[k] = std::polar(1.0, kTwoPi * bounds_[k]);
+  phasors_.front() = phasors_.back() =
+      1.0;  // phase 0 and 1 turn: sin(2 pi) would round to -2.4e-16
 }
 
-std::shared_ptr<const SlicedMesh> SlicedMesh::periodMean(std::shared_ptr<const AntiBacklashMesh> mesh) {
+std::shared_ptr<const SlicedMesh> SlicedMesh::periodMean(
+    std::shared_ptr<const AntiBacklashMesh> mesh) {
   if (!mesh) throw InvalidInput("sliced mesh: no mesh table");
   std::shared_ptr<SlicedMesh> mean(new SlicedMesh());
   mean->mesh_ = std::move(mesh);
@@ -67,16 +74,23 @@ std::shared_ptr<const SlicedMesh> SlicedMesh::periodMean(std::shared_ptr<const A
 
 int SlicedMesh::sliceAt(double p, bool backward) const {
   // upper_bound: first boundary > p, so bounds_[j] <= p < bounds_[j + 1].
-  int j = static_cast<int>(std::upper_bound(bounds_.begin(), bounds_.end(), p) - bounds_.begin()) - 1;
+  int j =
+      static_cast<int>(std::upper_bound(bounds_.begin(), bounds_.end(), p) - bounds_.begin()) - 1;
   if (backward && j > 0 && p == bounds_[j]) --j;
   if (backward && j == 0 && p == 0.0) j = size() - 1;
   return std::clamp(j, 0, size() - 1);
 }
 
-SlicedExcitation::SlicedExcitation(std::shared_ptr<const SlicedMesh> slices, double te_amplitude, double backlash,
-                                   double torque_gain, double load_term, const MeshMotion& motion, double torque)
-    : slices_(std::move(slices)), te_amplitude_(te_amplitude), backlash_(backlash), torque_gain_(torque_gain),
-      load_term_(load_term), motion_(motion), torque_(torque) {
+SlicedExcitation::SlicedExcitation(std::shared_ptr<const SlicedMesh> slices, double te_amplitude,
+                                   double backlash, double torque_gain, double load_term,
+                                   const MeshMotion& motion, double torque)
+    : slices_(std::move(slices)),
+      te_amplitude_(te_amplitude),
+      backlash_(backlash),
+      torque_gain_(torque_gain),
+      load_term_(load_term),
+      motion_(motion),
+      torque_(torque) {
   if (!slices_) throw InvalidInput("sliced excitation: no sliced mesh");
   requireNonNegative("transmission_error_amplitude", te_amplitude);
   requireNonNegative("backlash", backlash);
@@ -86,7 +100,8 @@ SlicedExcitation::SlicedExcitation(std::shared_ptr<const SlicedMesh> slices, dou
   requireFinite("torque", torque);
 }
 
-void SlicedExcitation::at(double t, const MeshMotion& motion, double torque, MeshInstant& out) const {
+void SlicedExcitation::at(double t, const MeshMotion& motion, double torque,
+                          MeshInstant& out) const {
   const double turns = motion.phaseAt(t);
   out.phase = turns - std::floor(turns);
   // On a boundary the slice the motion enters (the right limit in time): nextSwitch returns times
@@ -118,7 +133,8 @@ double SlicedExcitation::nextSwitch(double t, const MeshMotion& motion) const {
   // Without this the phase of the returned time can round to just short of the boundary, and every
   // later call returns that same boundary again (dopri5 would crawl by one ulp per step).
   double time = motion.t0 + (target - motion.phase0) / f;
-  for (int i = 0; i < 64 && (f > 0.0 ? motion.phaseAt(time) < target : motion.phaseAt(time) > target); ++i) {
+  for (int i = 0;
+       i < 64 && (f > 0.0 ? motion.phaseAt(time) < target : motion.phaseAt(time) > target); ++i) {
     time = std::nextafter(time, std::numeric_limits<double>::infinity());
   }
   return time > t ? time : std::nextafter(t, std::numeric_limits<double>::infinity());

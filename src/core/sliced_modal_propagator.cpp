@@ -20,7 +20,8 @@ double norm2(Complex z) { return z.real() * z.real() + z.imag() * z.imag(); }
 /// n / d written out (a complex division calls __divdc3; |d| is far from overflow here).
 Complex divide(Complex n, Complex d) {
   const double inv = 1.0 / norm2(d);
-  return {(n.real() * d.real() + n.imag() * d.imag()) * inv, (n.imag() * d.real() - n.real() * d.imag()) * inv};
+  return {(n.real() * d.real() + n.imag() * d.imag()) * inv,
+          (n.imag() * d.real() - n.real() * d.imag()) * inv};
 }
 
 /// phi_1(z) = (e^z - 1) / z by its Taylor series, for |z| < 0.05: sum_k z^k / (k + 1)!, stopped
@@ -28,10 +29,11 @@ Complex divide(Complex n, Complex d) {
 /// most 8 terms are needed (0.05^8 / 9! < 1e-16), 16 allowed.
 [[gnu::always_inline]] inline Complex phi1Series(Complex z) {
   // 1/k as constants: a division per term would cost more than the rest of the term.
-  static constexpr double kInverse[18] = {0.0,       1.0,        1.0 / 2,  1.0 / 3,  1.0 / 4,  1.0 / 5,
-                                          1.0 / 6,   1.0 / 7,    1.0 / 8,  1.0 / 9,  1.0 / 10, 1.0 / 11,
-                                          1.0 / 12,  1.0 / 13,   1.0 / 14, 1.0 / 15, 1.0 / 16, 1.0 / 17};
-  double sr = 1.0, si = 0.0, tr = 1.0, ti = 0.0;  // sum and term, written out (no NaN-recovery branch)
+  static constexpr double kInverse[18] = {
+      0.0,     1.0,      1.0 / 2,  1.0 / 3,  1.0 / 4,  1.0 / 5,  1.0 / 6,  1.0 / 7,  1.0 / 8,
+      1.0 / 9, 1.0 / 10, 1.0 / 11, 1.0 / 12, 1.0 / 13, 1.0 / 14, 1.0 / 15, 1.0 / 16, 1.0 / 17};
+  double sr = 1.0, si = 0.0, tr = 1.0,
+         ti = 0.0;  // sum and term, written out (no NaN-recovery branch)
   for (int k = 2; k <= 17; ++k) {
     const double r = (tr * z.real() - ti * z.imag()) * kInverse[k];
     ti = (tr * z.imag() + ti * z.real()) * kInverse[k];
@@ -48,13 +50,15 @@ Complex divide(Complex n, Complex d) {
 /// hypot in libstdc++, and a complex division calls __divdc3 (Annex G's scaling), which together
 /// cost as much as the exponentials of a slice step; |mu - lambda| is far from overflow here
 /// (the modes are below 1e7 rad/s).
-[[gnu::always_inline]] inline Complex forcedIntegral(Complex lambda, Complex mu, double h, Complex e_lambda, Complex e_mu) {
+[[gnu::always_inline]] inline Complex forcedIntegral(Complex lambda, Complex mu, double h,
+                                                     Complex e_lambda, Complex e_mu) {
   const Complex d = mu - lambda, z = d * h;
   // The difference quotient loses about eps / |z| to cancellation (the two exponentials agree to
   // |z|): below |z| = 0.05 the series takes over, so E is accurate to 5e-15 either way. A larger
   // threshold would send most slices at high speed (|lambda h| ~ 0.1 at 6000 rpm) to the series,
   // which costs three times the quotient.
-  if (norm2(z) < 0.0025) return h * e_lambda * phi1Series(z);  // = (e^{mu h} - e^{lambda h}) / (mu - lambda)
+  if (norm2(z) < 0.0025)
+    return h * e_lambda * phi1Series(z);  // = (e^{mu h} - e^{lambda h}) / (mu - lambda)
   return divide(e_mu - e_lambda, d);
 }
 
@@ -86,7 +90,8 @@ double largestMagnitude(const Vector& lambda) {
   for (Eigen::Index k = 0; k < lambda.size(); ++k) {
     if (norm2(lambda[k]) < top * (1.0 - 1e-12)) continue;
     bool repeated = false;  // |conj z| = |z| bit for bit: hypot ignores the signs
-    for (Eigen::Index l = 0; l < k && !repeated; ++l) repeated = lambda[l] == lambda[k] || lambda[l] == std::conj(lambda[k]);
+    for (Eigen::Index l = 0; l < k && !repeated; ++l)
+      repeated = lambda[l] == lambda[k] || lambda[l] == std::conj(lambda[k]);
     if (!repeated) largest = std::max(largest, std::abs(lambda[k]));
   }
   return largest;
@@ -94,7 +99,8 @@ double largestMagnitude(const Vector& lambda) {
 
 }  // namespace
 
-SlicedModalPropagator::SlicedModalPropagator(const GearRotorParameters& p, std::shared_ptr<const SlicedMesh> slices,
+SlicedModalPropagator::SlicedModalPropagator(const GearRotorParameters& p,
+                                             std::shared_ptr<const SlicedMesh> slices,
                                              double te_amplitude, double backlash)
     : slices_(std::move(slices)), te_amplitude_(te_amplitude), backlash_(backlash) {
   if (!slices_) throw InvalidInput("sliced propagator: no sliced mesh");
@@ -114,7 +120,9 @@ SlicedModalPropagator::SlicedModalPropagator(const GearRotorParameters& p, std::
 void SlicedModalPropagator::setParameters(const GearRotorParameters& p) {
   p.validate();
   if (p.bearing_clearance[0] > 0.0 || p.bearing_clearance[1] > 0.0) {
-    throw InvalidInput("exact propagation: bearing clearance makes the model nonlinear at every crossing; use dopri5");
+    throw InvalidInput(
+        "exact propagation: bearing clearance makes the model nonlinear at every crossing; use "
+        "dopri5");
   }
   p_ = p;
   m_s_ = p.equivalentMass();
@@ -156,7 +164,8 @@ void SlicedModalPropagator::setParameters(const GearRotorParameters& p) {
   if (!(p.mesh_damping == conditions_mesh_damping_)) {
     for (int r = 0; r < kRegimes; ++r) {
       std::vector<RegimeConditions>& table = conditions_[static_cast<std::size_t>(r)];
-      for (std::size_t j = 0; j < table.size(); ++j) table[j] = makeConditions(static_cast<MeshRegime>(r), static_cast<int>(j));
+      for (std::size_t j = 0; j < table.size(); ++j)
+        table[j] = makeConditions(static_cast<MeshRegime>(r), static_cast<int>(j));
     }
     conditions_mesh_damping_ = p.mesh_damping;
   }
@@ -164,8 +173,10 @@ void SlicedModalPropagator::setParameters(const GearRotorParameters& p) {
   // regime (both flanks: k1 + k_c), which bounds every omega^2 of the undamped problem.
   double k = 0.0;
   for (int j = 0; j < slices_->size(); ++j) k = std::max(k, slices_->k1(j) + slices_->kChain(j));
-  const double trace = (p.bearing_stiffness[0] + k) / p.pinion_mass + (p.bearing_stiffness[1] + k) / p.gear_mass + k / m_s_;
-  fastest_period_bound_ = trace > 0.0 ? kTwoPi / std::sqrt(trace) : std::numeric_limits<double>::infinity();
+  const double trace = (p.bearing_stiffness[0] + k) / p.pinion_mass +
+                       (p.bearing_stiffness[1] + k) / p.gear_mass + k / m_s_;
+  fastest_period_bound_ =
+      trace > 0.0 ? kTwoPi / std::sqrt(trace) : std::numeric_limits<double>::infinity();
 }
 
 void SlicedModalPropagator::tabulateRegimeConditions(MeshRegime r) const {
@@ -180,8 +191,10 @@ void SlicedModalPropagator::tabulateRegimeConditions(MeshRegime r) const {
 SlicedModalPropagator::FlankLaw SlicedModalPropagator::flankLaw(int flank, int j) const {
   // GearRotorModel::forces, each flank's spring force s = k g and its spring-and-damper force
   // t = k g + c g' written in the mesh deflection delta (docs/model.md eqs M1-M3):
-  //  - anti-backlash drive flank, g1 = delta + F_p / k1: s1 = F_p + k1 delta, damper c1 = c k1 / (k1 + k_c);
-  //  - anti-backlash back path, g2 = F_p / k_c - delta: s2 = F_p - k_c delta, damper c2 = c - c1 on -delta';
+  //  - anti-backlash drive flank, g1 = delta + F_p / k1: s1 = F_p + k1 delta, damper c1 = c k1 /
+  //  (k1 + k_c);
+  //  - anti-backlash back path, g2 = F_p / k_c - delta: s2 = F_p - k_c delta, damper c2 = c - c1 on
+  //  -delta';
   //  - ordinary gear with backlash b, drive flank g = delta - b: s = -k1 b + k1 delta, damper c;
   //  - ordinary gear, back flank g = -delta - b: s = -k1 b - k1 delta, damper c on -delta'.
   const SlicedMesh& m = *slices_;
@@ -222,7 +235,8 @@ double SlicedModalPropagator::driveFlankDamping(int j) const {
   return k1 + kc > 0.0 ? p_.mesh_damping * k1 / (k1 + kc) : 0.0;
 }
 
-SlicedModalPropagator::RegimeConditions SlicedModalPropagator::makeConditions(MeshRegime r, int j) const {
+SlicedModalPropagator::RegimeConditions SlicedModalPropagator::makeConditions(MeshRegime r,
+                                                                              int j) const {
   // The contact rules of GearRotorModel::forces for regime r, each a force linear in the mesh
   // deflection and its rate, c0 + alpha delta + beta delta', that must be > 0 (strict) or >= 0.
   // With s and t a flank's spring and spring-and-damper forces (flankLaw), the rule of
@@ -237,7 +251,8 @@ SlicedModalPropagator::RegimeConditions SlicedModalPropagator::makeConditions(Me
   auto rule = [&](double c0, double alpha, double beta, bool strict) {
     // The rule's force scale for regimeMargin: its constant and the TE amplitude's share.
     const double scale = std::fabs(c0) + std::fabs(alpha) * te_amplitude_ + 1e-300;
-    return ContactCondition{c0, alpha, beta, std::fabs(alpha), std::fabs(beta), 1.0 / scale, strict};
+    return ContactCondition{c0,          alpha, beta, std::fabs(alpha), std::fabs(beta),
+                            1.0 / scale, strict};
   };
   auto add = [&](const ContactCondition& c) { out.c[static_cast<std::size_t>(out.n++)].first = c; };
   const FlankState states[2] = {driveState(r), backState(r)};
@@ -254,8 +269,8 @@ SlicedModalPropagator::RegimeConditions SlicedModalPropagator::makeConditions(Me
         add(rule(f.c0, f.alpha, -f.beta, false));  // 2 s - t >= 0
         break;
       case FlankState::kStiffened:
-        add(rule(f.c0, f.alpha, 0.0, true));        // s > 0
-        add(rule(-f.c0, -f.alpha, f.beta, true));   // t - 2 s > 0
+        add(rule(f.c0, f.alpha, 0.0, true));       // s > 0
+        add(rule(-f.c0, -f.alpha, f.beta, true));  // t - 2 s > 0
         break;
       case FlankState::kUnloaded: {
         Clause& c = out.c[static_cast<std::size_t>(out.n++)];
@@ -280,8 +295,10 @@ Matrix6 SlicedModalPropagator::systemMatrix(MeshRegime r, int j) const {
   const Eigen::Vector3d m_inv(1.0 / p_.pinion_mass, 1.0 / p_.gear_mass, 1.0 / m_s_);
   Matrix6 a = Matrix6::Zero();
   a.topRightCorner<3, 3>().setIdentity();
-  a.bottomLeftCorner<3, 3>() = -(m_inv.asDiagonal() * meshBearingMatrix(t.stiffness, p_.bearing_stiffness));
-  a.bottomRightCorner<3, 3>() = -(m_inv.asDiagonal() * meshBearingMatrix(t.damping, p_.bearing_damping));
+  a.bottomLeftCorner<3, 3>() =
+      -(m_inv.asDiagonal() * meshBearingMatrix(t.stiffness, p_.bearing_stiffness));
+  a.bottomRightCorner<3, 3>() =
+      -(m_inv.asDiagonal() * meshBearingMatrix(t.damping, p_.bearing_damping));
   return a;
 }
 
@@ -303,7 +320,8 @@ const SlicedModalPropagator::Slice& SlicedModalPropagator::slice(MeshRegime r, i
   if (below.ready && below.has_upper) done = decomposeSeeded(r, j, s, below.upper);
   if (!done && above.ready && above.has_upper) done = decomposeSeeded(r, j, s, above.upper);
   if (!done && previous_ >= 0) {
-    const std::vector<Slice>& before = sets_[static_cast<std::size_t>(previous_)].slices[static_cast<std::size_t>(r)];
+    const std::vector<Slice>& before =
+        sets_[static_cast<std::size_t>(previous_)].slices[static_cast<std::size_t>(r)];
     if (!before.empty() && before[static_cast<std::size_t>(j)].has_upper) {
       done = decomposeSeeded(r, j, s, before[static_cast<std::size_t>(j)].upper);
     }
@@ -316,24 +334,26 @@ const SlicedModalPropagator::Slice& SlicedModalPropagator::slice(MeshRegime r, i
   return s;
 }
 
-bool SlicedModalPropagator::decomposeSeeded(MeshRegime r, int j, Slice& s, std::array<Complex, 3> seeds) const {
+bool SlicedModalPropagator::decomposeSeeded(MeshRegime r, int j, Slice& s,
+                                            std::array<Complex, 3> seeds) const {
   // The slice's modes as the quadratic eigenvalue problem Q(lambda) u = 0 with
   // Q = lambda^2 M + lambda C + K, M = diag(m_p, m_g, m_s), and K, C = diag(bearing, bearing, 0) +
-  // (mesh) g g^T, g = (1, -1, 1) (meshBearingMatrix): the eigenvalues of A = [[0, I], [-M^-1 K, -M^-1 C]]
-  // are the roots of det Q, and its eigenvectors are (u, lambda u) (Tisseur and Meerbergen, "The
-  // quadratic eigenvalue problem", SIAM Review 43(2), 2001, section 3.4). With the bearing parts
-  // diagonal, Q = D(lambda) + sigma(lambda) g g^T, D_i = lambda^2 m_i + lambda c_i + k_i,
-  // sigma = lambda c_s + k_s, and by the matrix determinant lemma
+  // (mesh) g g^T, g = (1, -1, 1) (meshBearingMatrix): the eigenvalues of A = [[0, I], [-M^-1 K,
+  // -M^-1 C]] are the roots of det Q, and its eigenvectors are (u, lambda u) (Tisseur and
+  // Meerbergen, "The quadratic eigenvalue problem", SIAM Review 43(2), 2001, section 3.4). With the
+  // bearing parts diagonal, Q = D(lambda) + sigma(lambda) g g^T, D_i = lambda^2 m_i + lambda c_i +
+  // k_i, sigma = lambda c_s + k_s, and by the matrix determinant lemma
   //   det Q = D_0 D_1 D_2 + sigma (D_1 D_2 + D_0 D_2 + D_0 D_1),
-  // a closed form that Newton's method polishes from a seed in a few steps (the mesh stiffness moves
-  // little from one slice to the next). The null vector is u_i = g_i prod_{l != i} D_l (a column of
-  // adj Q = det(D) D^-1 - sigma adj-part, which for this rank-one update is that vector up to
-  // scale). M, C and K are symmetric, so the left eigenvector of A is (lambda M u + C u, M u) and
-  // the row of A's inverse eigenvector matrix is that over u^T (2 lambda M + C) u = u^T Q'(lambda) u
-  // (same reference). The result is accepted only if every root converged, the three are distinct
-  // with positive imaginary parts, and with their conjugates they reproduce trace(A) and det(A),
-  // which no set that repeats a root or misses one does; otherwise the caller falls back to the
-  // general eigensolver. Cost: about a tenth of Eigen's EigenSolver plus the inverse of V.
+  // a closed form that Newton's method polishes from a seed in a few steps (the mesh stiffness
+  // moves little from one slice to the next). The null vector is u_i = g_i prod_{l != i} D_l (a
+  // column of adj Q = det(D) D^-1 - sigma adj-part, which for this rank-one update is that vector
+  // up to scale). M, C and K are symmetric, so the left eigenvector of A is (lambda M u + C u, M u)
+  // and the row of A's inverse eigenvector matrix is that over u^T (2 lambda M + C) u = u^T
+  // Q'(lambda) u (same reference). The result is accepted only if every root converged, the three
+  // are distinct with positive imaginary parts, and with their conjugates they reproduce trace(A)
+  // and det(A), which no set that repeats a root or misses one does; otherwise the caller falls
+  // back to the general eigensolver. Cost: about a tenth of Eigen's EigenSolver plus the inverse of
+  // V.
   const MeshTerms t = meshTerms(r, j);
   const double ks = t.stiffness, cs = t.damping;
   const std::array<double, 3> mass{p_.pinion_mass, p_.gear_mass, m_s_};
@@ -354,13 +374,17 @@ bool SlicedModalPropagator::decomposeSeeded(MeshRegime r, int j, Slice& s, std::
       const Complex sigma = l * cs + ks;
       const Complex pair_sum = d[1] * d[2] + d[0] * d[2] + d[0] * d[1];
       const Complex f = d[0] * d[1] * d[2] + sigma * pair_sum;
-      const Complex df = dd[0] * d[1] * d[2] + d[0] * dd[1] * d[2] + d[0] * d[1] * dd[2] + cs * pair_sum +
-                         sigma * (dd[1] * d[2] + d[1] * dd[2] + dd[0] * d[2] + d[0] * dd[2] + dd[0] * d[1] + d[0] * dd[1]);
+      const Complex df = dd[0] * d[1] * d[2] + d[0] * dd[1] * d[2] + d[0] * d[1] * dd[2] +
+                         cs * pair_sum +
+                         sigma * (dd[1] * d[2] + d[1] * dd[2] + dd[0] * d[2] + d[0] * dd[2] +
+                                  dd[0] * d[1] + d[0] * dd[1]);
       const double den = norm2(df);
       if (!(den > 0.0) || !std::isfinite(den)) return false;
-      const Complex step((f.real() * df.real() + f.imag() * df.imag()) / den, (f.imag() * df.real() - f.real() * df.imag()) / den);
+      const Complex step((f.real() * df.real() + f.imag() * df.imag()) / den,
+                         (f.imag() * df.real() - f.real() * df.imag()) / den);
       l -= step;
-      converged = norm2(step) <= 1e-28 * norm2(l);  // |step| <= 1e-14 |lambda|: the next step is at rounding
+      converged = norm2(step) <=
+                  1e-28 * norm2(l);  // |step| <= 1e-14 |lambda|: the next step is at rounding
     }
     if (!converged || !(l.imag() > 0.0)) return false;
   }
@@ -383,7 +407,9 @@ bool SlicedModalPropagator::decomposeSeeded(MeshRegime r, int j, Slice& s, std::
   }
   // Eigenvectors, in the layout step() expects: k = 0..2 the modes with positive imaginary part
   // (weight 2), k = 3..5 their conjugates (weight 0, kept for monodromy()).
-  const double w_ref = std::sqrt(std::max(1.0, (k_matrix.cwiseAbs().array().colwise() / Eigen::Array3d(mass[0], mass[1], mass[2])).maxCoeff()));
+  const double w_ref = std::sqrt(std::max(
+      1.0, (k_matrix.cwiseAbs().array().colwise() / Eigen::Array3d(mass[0], mass[1], mass[2]))
+               .maxCoeff()));
   for (int k = 0; k < 3; ++k) {
     const Complex l = seeds[k];
     diag(l, d, dd);
@@ -429,7 +455,8 @@ bool SlicedModalPropagator::decomposeSeeded(MeshRegime r, int j, Slice& s, std::
   for (int i = 0; i < 6; ++i) {
     double a[3];
     for (int c = 0; c < 3; ++c) a[c] = std::sqrt(norm2(s.v(i, c)));
-    const double sum = a[0] + a[1] + a[2] + a[0] + a[1] + a[2];  // left to right, as infinityNorm sums
+    const double sum =
+        a[0] + a[1] + a[2] + a[0] + a[1] + a[2];  // left to right, as infinityNorm sums
     v_norm = std::max(v_norm, sum / (i < 3 ? 1.0 : w_ref));
   }
   for (int i = 0; i < 3; ++i) {
@@ -463,7 +490,8 @@ void SlicedModalPropagator::decomposeGeneral(MeshRegime r, int j, Slice& s) cons
     const CMatrix v_b = eig.eigenvectors();
     const Eigen::PartialPivLU<CMatrix> lu(v_b);
     const CMatrix v_b_inv = lu.inverse();
-    // A defective (critically damped) or nearly defective pair has no usable eigenbasis: dopri5 takes it.
+    // A defective (critically damped) or nearly defective pair has no usable eigenbasis: dopri5
+    // takes it.
     const double condition = infinityNorm(v_b) * infinityNorm(v_b_inv);
     s.usable = std::isfinite(condition) && condition < 1e8;
     s.lambda = eig.eigenvalues();
@@ -480,34 +508,42 @@ void SlicedModalPropagator::decomposeGeneral(MeshRegime r, int j, Slice& s) cons
     for (int k = 0; k < 6; ++k) {
       if (s.weight[k] == 0.0 || s.lambda[k].imag() == 0.0) continue;
       for (int j = k + 1; j < 6; ++j) {
-        const bool pair = s.weight[j] != 0.0 && std::abs(s.lambda[j] - std::conj(s.lambda[k])) <= 1e-12 * std::abs(s.lambda[k]) &&
-                          (s.v.col(j) - s.v.col(k).conjugate()).cwiseAbs().maxCoeff() <= 1e-12 * s.v.col(k).cwiseAbs().maxCoeff();
+        const bool pair =
+            s.weight[j] != 0.0 &&
+            std::abs(s.lambda[j] - std::conj(s.lambda[k])) <= 1e-12 * std::abs(s.lambda[k]) &&
+            (s.v.col(j) - s.v.col(k).conjugate()).cwiseAbs().maxCoeff() <=
+                1e-12 * s.v.col(k).cwiseAbs().maxCoeff();
         if (pair) {
           s.weight[k] = 2.0;
           s.weight[j] = 0.0;
           break;
         }
       }
-      if (s.weight[k] != 2.0) s.usable = false;  // a complex eigenvalue without its conjugate: not a real system's
+      if (s.weight[k] != 2.0)
+        s.usable = false;  // a complex eigenvalue without its conjugate: not a real system's
     }
   }
   s.has_upper = false;
   if (s.usable && std::count(s.weight.begin(), s.weight.end(), 2.0) == 3) {
     int i = 0;
     for (int k = 0; k < 6; ++k) {
-      if (s.weight[k] == 2.0) s.upper[i++] = s.lambda[k].imag() > 0.0 ? s.lambda[k] : std::conj(s.lambda[k]);
+      if (s.weight[k] == 2.0)
+        s.upper[i++] = s.lambda[k].imag() > 0.0 ? s.lambda[k] : std::conj(s.lambda[k]);
     }
     s.has_upper = true;
   }
 }
 
-void SlicedModalPropagator::prepare(const Slice& s, MeshRegime r, int j, const State6& y, Complex e_theta0, double w,
-                                    double drive_force, Piece& out) const {
+void SlicedModalPropagator::prepare(const Slice& s, MeshRegime r, int j, const State6& y,
+                                    Complex e_theta0, double w, double drive_force,
+                                    Piece& out) const {
   const MeshTerms& t = conditions(r, j).terms;  // tabulated: this runs at every step
   // Forcing in modal coordinates: U sin(theta) + W w cos(theta) + G, written as
-  // P e^{i w s} + Q e^{-i w s} + G with sin x = (e^{ix} - e^{-ix}) / 2i, cos x = (e^{ix} + e^{-ix}) / 2.
+  // P e^{i w s} + Q e^{-i w s} + G with sin x = (e^{ix} - e^{-ix}) / 2i, cos x = (e^{ix} + e^{-ix})
+  // / 2.
   const double u = -t.stiffness * te_amplitude_, wc = -t.damping * te_amplitude_ * w;
-  const Complex p_coef = e_theta0 * Complex(0.5 * wc, -0.5 * u), q_coef = std::conj(e_theta0) * Complex(0.5 * wc, 0.5 * u);
+  const Complex p_coef = e_theta0 * Complex(0.5 * wc, -0.5 * u),
+                q_coef = std::conj(e_theta0) * Complex(0.5 * wc, 0.5 * u);
   const Complex iw(0.0, w);
   out.n = 0;
   for (int k = 0; k < 6; ++k) {
@@ -537,7 +573,8 @@ void SlicedModalPropagator::prepare(const Slice& s, MeshRegime r, int j, const S
   }
 }
 
-void SlicedModalPropagator::advance(const Slice& s, const Piece& piece, double w, double h, Complex e_mu, State6& y) const {
+void SlicedModalPropagator::advance(const Slice& s, const Piece& piece, double w, double h,
+                                    Complex e_mu, State6& y) const {
   // eta(h) = e^{lambda h} R + P' e^{iwh} + Q' e^{-iwh} + G' (the particular form, no division), or
   // where some |mu - lambda| h < 0.05 the same by the forced integrals E with their phi_1 series
   // (the particular form would lose eps / |z| to cancellation there, as the quotient would).
@@ -554,7 +591,8 @@ void SlicedModalPropagator::advance(const Slice& s, const Piece& piece, double w
     const Complex e_l(magnitude * std::cos(angle), magnitude * std::sin(angle));
     Complex eta;
     const double h2 = h * h;
-    if (piece.particular[i] && piece.n1[i] * h2 >= 0.0025 && piece.n2[i] * h2 >= 0.0025 && piece.nl[i] * h2 >= 0.0025) {
+    if (piece.particular[i] && piece.n1[i] * h2 >= 0.0025 && piece.n2[i] * h2 >= 0.0025 &&
+        piece.nl[i] * h2 >= 0.0025) {
       eta = e_l * piece.r0[i] + piece.pf[i] * e_mu + piece.qf[i] * e_mu_conj + piece.gf[i];
     } else {
       eta = e_l * piece.eta0[i] + piece.force_p[i] * forcedIntegral(lambda, mu, h, e_l, e_mu) +
@@ -563,13 +601,16 @@ void SlicedModalPropagator::advance(const Slice& s, const Piece& piece, double w
     }
     // Re(v_k eta) only: the imaginary part would be dropped.
     const double weight = s.weight[k];
-    for (int c = 0; c < 6; ++c) next[c] += weight * (s.v(c, k).real() * eta.real() - s.v(c, k).imag() * eta.imag());
+    for (int c = 0; c < 6; ++c)
+      next[c] += weight * (s.v(c, k).real() * eta.real() - s.v(c, k).imag() * eta.imag());
   }
   y = next;
 }
 
-bool SlicedModalPropagator::inRegime(MeshRegime r, int j, const State6& y, Complex e_theta, double w) const {
-  // The conditions of regime r at y, with the TE forcing's phase theta given as e_theta = e^{i theta}.
+bool SlicedModalPropagator::inRegime(MeshRegime r, int j, const State6& y, Complex e_theta,
+                                     double w) const {
+  // The conditions of regime r at y, with the TE forcing's phase theta given as e_theta = e^{i
+  // theta}.
   const RegimeConditions& rc = conditions(r, j);
   if (!rc.possible) return false;
   const double delta = y[2] + y[0] - y[1] - te_amplitude_ * e_theta.imag();
@@ -586,7 +627,9 @@ bool SlicedModalPropagator::inRegime(MeshRegime r, int j, const State6& y, Compl
   return all;
 }
 
-std::optional<SlicedModalPropagator::MeshRegime> SlicedModalPropagator::regimeAt(int j, const State6& y, Complex e_theta,
+std::optional<SlicedModalPropagator::MeshRegime> SlicedModalPropagator::regimeAt(int j,
+                                                                                 const State6& y,
+                                                                                 Complex e_theta,
                                                                                  double w) const {
   // Each flank's state from its forces (makeConditions' three pieces, which cover every finite
   // state once), then the regime's own test, which also refuses a regime without mesh stiffness.
@@ -602,19 +645,21 @@ std::optional<SlicedModalPropagator::MeshRegime> SlicedModalPropagator::regimeAt
     const double spring = f.c0 + f.alpha * delta, total = spring + f.beta * rate;
     const double spare = spring + (-f.beta) * rate;  // 2 s - t
     states[flank] = !f.exists || !(spring > 0.0) || total < 0.0 ? FlankState::kUnloaded
-                    : spare >= 0.0                               ? FlankState::kLoaded
-                                                                 : FlankState::kStiffened;
+                    : spare >= 0.0                              ? FlankState::kLoaded
+                                                                : FlankState::kStiffened;
   }
   const MeshRegime r = regimeOf(states[0], states[1]);
-  if (!inRegime(r, j, y, e_theta, w)) return std::nullopt;  // both unloaded: no linear propagation here
+  if (!inRegime(r, j, y, e_theta, w))
+    return std::nullopt;  // both unloaded: no linear propagation here
   return r;
 }
 
-double SlicedModalPropagator::regimeMargin(const Slice& s, MeshRegime r, int j, const Piece& piece, Complex e_theta0,
-                                           double w) const {
+double SlicedModalPropagator::regimeMargin(const Slice& s, MeshRegime r, int j, const Piece& piece,
+                                           Complex e_theta0, double w) const {
   // A lower bound, over any step from the prepared state while the slice lasts, of every contact
   // rule of the regime (conditions(): forces c0 + alpha delta + beta delta' that must stay >= 0),
-  // over the rule's scale. Per mode the exact solution is eta_k(t) = e^{lambda t} R_k + P'_k e^{iwt}
+  // over the rule's scale. Per mode the exact solution is eta_k(t) = e^{lambda t} R_k + P'_k
+  // e^{iwt}
   // + Q'_k e^{-iwt} + G'_k (prepare), and delta = Re sum_k w_k p_k eta_k - A sin(theta) with
   // p_k = g . u_k (u_k the displacement half of v_k, g = (1, -1, 1)); delta' takes lambda_k on the
   // free part and +-iw on the forced one. So each condition is a constant, decaying modes (each at
@@ -659,7 +704,8 @@ double SlicedModalPropagator::regimeMargin(const Slice& s, MeshRegime r, int j, 
   return worst;
 }
 
-bool SlicedModalPropagator::propagate(State6& y, double& phase, double f, double duration, double drive_force) const {
+bool SlicedModalPropagator::propagate(State6& y, double& phase, double f, double duration,
+                                      double drive_force) const {
   State6 z = y;
   double p = phase;
   if (!(propagateLinear(z, p, f, duration, drive_force) >= duration)) return false;
@@ -670,7 +716,9 @@ bool SlicedModalPropagator::propagate(State6& y, double& phase, double f, double
 
 double SlicedModalPropagator::propagateLinear(State6& y, double& phase, double f, double duration,
                                               double drive_force) const {
-  if (!(duration >= 0.0) || !std::isfinite(f) || !std::isfinite(phase) || !std::isfinite(drive_force)) return 0.0;
+  if (!(duration >= 0.0) || !std::isfinite(f) || !std::isfinite(phase) ||
+      !std::isfinite(drive_force))
+    return 0.0;
   const SlicedMesh& m = *slices_;
   const int n = m.size();
   const double w = kTwoPi * f;
@@ -734,7 +782,8 @@ double SlicedModalPropagator::propagateLinear(State6& y, double& phase, double f
         ++substeps_;
       }
     }
-    const Complex e_end = crossing ? m.boundaryPhasor(f > 0.0 ? j + 1 : j) : e_theta * std::polar(1.0, w * h);
+    const Complex e_end =
+        crossing ? m.boundaryPhasor(f > 0.0 ? j + 1 : j) : e_theta * std::polar(1.0, w * h);
     advance(s, piece, w, h, e_end * std::conj(e_theta), z_end);
     if (!z_end.allFinite()) return handBack();
     const bool leaves = !inRegime(regime, j, z_end, e_end, w);
@@ -781,14 +830,17 @@ double SlicedModalPropagator::propagateLinear(State6& y, double& phase, double f
   return handBack();  // remaining is 0: the whole duration
 }
 
-double SlicedModalPropagator::regimeValue(MeshRegime r, int j, const State6& y, Complex e_theta, double w) const {
+double SlicedModalPropagator::regimeValue(MeshRegime r, int j, const State6& y, Complex e_theta,
+                                          double w) const {
   // inRegime's conditions as one continuous number: the least clause, each rule's force over its
   // scale (an either-clause: the larger of its two rules). >= 0 where the contacts are r's (up to
   // the strict rules' equality, which inRegime decides).
   const RegimeConditions& rc = conditions(r, j);
   const double delta = y[2] + y[0] - y[1] - te_amplitude_ * e_theta.imag();
   const double rate = y[5] + y[3] - y[4] - te_amplitude_ * w * e_theta.real();
-  const auto value = [&](const ContactCondition& c) { return (c.c0 + c.alpha * delta + c.beta * rate) * c.inverse_scale; };
+  const auto value = [&](const ContactCondition& c) {
+    return (c.c0 + c.alpha * delta + c.beta * rate) * c.inverse_scale;
+  };
   double least = std::numeric_limits<double>::infinity();
   for (int i = 0; i < rc.n; ++i) {
     const Clause& c = rc.c[static_cast<std::size_t>(i)];
@@ -797,8 +849,9 @@ double SlicedModalPropagator::regimeValue(MeshRegime r, int j, const State6& y, 
   return least;
 }
 
-double SlicedModalPropagator::locateChange(const Slice& s, const Piece& piece, MeshRegime r, int j, Complex e_theta,
-                                           double w, double h, const State6& start, const State6& end, Complex* e_hi) const {
+double SlicedModalPropagator::locateChange(const Slice& s, const Piece& piece, MeshRegime r, int j,
+                                           Complex e_theta, double w, double h, const State6& start,
+                                           const State6& end, Complex* e_hi) const {
   // The first length out of regime r, bracketed by [lo, hi] (in r at lo = 0, out of it at hi = h)
   // to the resolution of 40 halvings (2^-40 of the step, itself at most an eighth of the fastest
   // mode's period where the bound cannot clear it), the contacts tested as at the step's ends.
@@ -837,8 +890,10 @@ double SlicedModalPropagator::locateChange(const Slice& s, const Piece& piece, M
     lo = t;
     g_lo = std::max(g, 0.0);
   }
-  double checked = 2.0 * (hi - lo);  // the bracket's width two trials ago (the first trial may be false position)
-  int kept = 0;  // +1: lo kept by the last trial, -1: hi kept (Illinois halves a value kept twice)
+  double checked =
+      2.0 *
+      (hi - lo);  // the bracket's width two trials ago (the first trial may be false position)
+  int kept = 0;   // +1: lo kept by the last trial, -1: hi kept (Illinois halves a value kept twice)
   for (int it = 0; it < 3 * kEventHalvings && hi - lo > tol; ++it) {
     bool halve = g_lo < kRoundingValue || !(g_lo - g_hi > 0.0);
     if (it % 2 == 0) {
@@ -874,7 +929,8 @@ double SlicedModalPropagator::locateChange(const Slice& s, const Piece& piece, M
 
 Matrix6 SlicedModalPropagator::monodromy(double f) const { return monodromyIn(loadedRegime(), f); }
 
-bool SlicedModalPropagator::loadedSliceMap(int j, double phase, double f, double h, AffineMap& out) const {
+bool SlicedModalPropagator::loadedSliceMap(int j, double phase, double f, double h,
+                                           AffineMap& out) const {
   const MeshRegime r = loadedRegime();
   const Slice& s = slice(r, j);
   if (!s.usable) return false;
@@ -919,11 +975,13 @@ bool SlicedModalPropagator::inLoadedRegime(const State6& y, double phase, double
   return inRegime(loadedRegime(), j, y, std::polar(1.0, kTwoPi * frac), kTwoPi * f);
 }
 
-std::optional<Matrix6> SlicedModalPropagator::monodromy(double f, const State6& y, double phase) const {
+std::optional<Matrix6> SlicedModalPropagator::monodromy(double f, const State6& y,
+                                                        double phase) const {
   requireFinite("mesh frequency", f);
   requireFinite("mesh phase", phase);
   // wrapTurns, as inLoadedRegime: phase - floor(phase) rounds to 1.0 for a phase just below an
-  // integer (-1e-17), which sliceAt would clamp to the last slice where the period's first is meant.
+  // integer (-1e-17), which sliceAt would clamp to the last slice where the period's first is
+  // meant.
   const double frac = wrapTurns(phase);
   const int j = slices_->sliceAt(frac, f < 0.0);
   const Complex e_theta = std::polar(1.0, kTwoPi * frac);
@@ -933,12 +991,15 @@ std::optional<Matrix6> SlicedModalPropagator::monodromy(double f, const State6& 
   // loaded, or one loaded and the other open. A stiffened flank (just landed) or a damper clipped
   // at zero (opening) is a moment, as is any state that the period map of its regime would
   // misdescribe: no margin there.
-  if (*r != MeshRegime::kBothFlanks && *r != MeshRegime::kDriveFlank && *r != MeshRegime::kBackFlank) return std::nullopt;
+  if (*r != MeshRegime::kBothFlanks && *r != MeshRegime::kDriveFlank &&
+      *r != MeshRegime::kBackFlank)
+    return std::nullopt;
   const double delta = y[2] + y[0] - y[1] - te_amplitude_ * e_theta.imag();
   for (int flank = 0; flank < 2; ++flank) {
     const FlankState state = flank == 0 ? driveState(*r) : backState(*r);
     const FlankLaw law = flankLaw(flank, j);
-    if (state == FlankState::kUnloaded && law.exists && law.c0 + law.alpha * delta > 0.0) return std::nullopt;
+    if (state == FlankState::kUnloaded && law.exists && law.c0 + law.alpha * delta > 0.0)
+      return std::nullopt;
   }
   return monodromyIn(*r, f);
 }

@@ -16,7 +16,9 @@ constexpr double kMaxTime = 1e9;
 void requireSpeed(const std::string& field, double value) {
   requireFinite(field, value);
   if (!(std::abs(value) <= kMaxShaftSpeed)) {
-    throwInvalid(field, value, "must lie in [-" + formatValue(kMaxShaftSpeed) + ", " + formatValue(kMaxShaftSpeed) + "] rad/s");
+    throwInvalid(field, value,
+                 "must lie in [-" + formatValue(kMaxShaftSpeed) + ", " +
+                     formatValue(kMaxShaftSpeed) + "] rad/s");
   }
 }
 
@@ -39,7 +41,8 @@ SpeedProfile::SpeedProfile(const SpeedRamp& r) : initial_speed_(r.from) {
   requireSpeed("speed_ramp.to", r.to);
   requireTime("speed_ramp.start", r.start);
   requireTime("speed_ramp.end", r.end);
-  if (!(r.end > r.start)) throwInvalid("speed_ramp.end", r.end, "must be > speed_ramp.start = " + formatValue(r.start));
+  if (!(r.end > r.start))
+    throwInvalid("speed_ramp.end", r.end, "must be > speed_ramp.start = " + formatValue(r.start));
   addSpan(r.start, r.end, r.from, r.to, Shape::kLinear);
 }
 
@@ -56,10 +59,11 @@ SpeedProfile::SpeedProfile(const SpeedSteps& s) : initial_speed_(s.initial) {
       const double previous_end = s.steps[i - 1].time + s.ramp_duration;
       if (!(step.time >= previous_end)) {
         throwInvalid(field + ".time", step.time,
-                     "must be >= the previous step's time + speed_steps.ramp_duration = " + formatValue(previous_end) +
-                         " (the ramps must not overlap)");
+                     "must be >= the previous step's time + speed_steps.ramp_duration = " +
+                         formatValue(previous_end) + " (the ramps must not overlap)");
       }
-      if (step.time > spans_.back().end) addSpan(spans_.back().end, step.time, level, level, Shape::kLinear);  // hold
+      if (step.time > spans_.back().end)
+        addSpan(spans_.back().end, step.time, level, level, Shape::kLinear);  // hold
     }
     addSpan(step.time, step.time + s.ramp_duration, level, step.speed, Shape::kLinear);
     level = step.speed;
@@ -68,7 +72,8 @@ SpeedProfile::SpeedProfile(const SpeedSteps& s) : initial_speed_(s.initial) {
 
 SpeedProfile::SpeedProfile(const SpeedReversal& r) : initial_speed_(r.speed) {
   requireSpeed("speed_reversal.speed", r.speed);
-  if (!(r.speed > 0.0)) throwInvalid("speed_reversal.speed", r.speed, "must be > 0 (it reverses to -speed)");
+  if (!(r.speed > 0.0))
+    throwInvalid("speed_reversal.speed", r.speed, "must be > 0 (it reverses to -speed)");
   requireTime("speed_reversal.start", r.start);
   requireDuration("speed_reversal.period", r.period);
   // speed cos(2 pi (t - start) / period) as two half cosines: +speed -> -speed -> +speed.
@@ -83,7 +88,8 @@ void SpeedProfile::addSpan(double begin, double end, double from, double to, Sha
     const Span& last = spans_.back();
     // Over a whole span both shapes integrate to the mean speed times the duration: linear,
     // (from + to) D / 2 (trapezoid, exact for a linear function); half cosine,
-    // integral_0^D [m + h cos(pi tau / D)] dtau = m D + h D sin(pi) / pi = m D with m = (from + to) / 2.
+    // integral_0^D [m + h cos(pi tau / D)] dtau = m D + h D sin(pi) / pi = m D with m = (from + to)
+    // / 2.
     s.angle_at_begin = last.angle_at_begin + 0.5 * (last.from + last.to) * (last.end - last.begin);
   }
   spans_.push_back(s);
@@ -93,10 +99,13 @@ void SpeedProfile::addSpan(double begin, double end, double from, double to, Sha
 double SpeedProfile::speed(double t) const {
   if (spans_.empty() || t < spans_.front().begin) return initial_speed_;
   if (t >= spans_.back().end) return spans_.back().to;
-  const auto it = std::upper_bound(spans_.begin(), spans_.end(), t, [](double x, const Span& s) { return x < s.begin; }) - 1;
+  const auto it = std::upper_bound(spans_.begin(), spans_.end(), t,
+                                   [](double x, const Span& s) { return x < s.begin; }) -
+                  1;
   const double u = (t - it->begin) / (it->end - it->begin);  // in [0, 1)
   if (it->shape == Shape::kLinear) return it->from + (it->to - it->from) * u;
-  // Half cosine between the knots' speeds: m + h cos(pi u), m = (from + to) / 2, h = (from - to) / 2.
+  // Half cosine between the knots' speeds: m + h cos(pi u), m = (from + to) / 2, h = (from - to)
+  // / 2.
   return 0.5 * (it->from + it->to) + 0.5 * (it->from - it->to) * std::cos(kPi * u);
 }
 
@@ -107,9 +116,12 @@ double SpeedProfile::angleFromFirstKnot(double t) const {
   const Span& last = spans_.back();
   if (t >= last.end) {
     // The last span whole (mean speed times duration, as in addSpan), then the held speed.
-    return last.angle_at_begin + 0.5 * (last.from + last.to) * (last.end - last.begin) + last.to * (t - last.end);
+    return last.angle_at_begin + 0.5 * (last.from + last.to) * (last.end - last.begin) +
+           last.to * (t - last.end);
   }
-  const auto it = std::upper_bound(spans_.begin(), spans_.end(), t, [](double x, const Span& s) { return x < s.begin; }) - 1;
+  const auto it = std::upper_bound(spans_.begin(), spans_.end(), t,
+                                   [](double x, const Span& s) { return x < s.begin; }) -
+                  1;
   const double d = it->end - it->begin, tau = t - it->begin;
   if (it->shape == Shape::kLinear) {
     // integral_0^tau [a + (b - a) s / D] ds = a tau + (b - a) tau^2 / (2 D)

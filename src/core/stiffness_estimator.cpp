@@ -24,14 +24,17 @@ void EstimatorLimits::validate(std::string_view load_tolerance_field) const {
 StiffnessEstimator::StiffnessEstimator(const RigConfig& rig, const EstimatorLimits& limits)
     : StiffnessEstimator(std::make_shared<const RigConfig>(rig), limits) {}
 
-StiffnessEstimator::StiffnessEstimator(std::shared_ptr<const RigConfig> rig, const EstimatorLimits& limits)
+StiffnessEstimator::StiffnessEstimator(std::shared_ptr<const RigConfig> rig,
+                                       const EstimatorLimits& limits)
     : rig_(std::move(rig)), limits_(limits) {
-  if (!rig_) throw std::invalid_argument("StiffnessEstimator: no rig");  // a caller's bug, not bad data
+  if (!rig_)
+    throw std::invalid_argument("StiffnessEstimator: no rig");  // a caller's bug, not bad data
   mesh_ = std::make_shared<const AntiBacklashMesh>(*rig_);
   limits.validate();
   if (rig_->bearings.empty()) throw InvalidInput("bearings: at least one support is required");
   for (const BearingSupportConfig& b : rig_->bearings) {
-    requireInHalfOpenRange("bearings[" + b.name + "].stiffness_scale", b.stiffness_scale, 0.05, 20.0);
+    requireInHalfOpenRange("bearings[" + b.name + "].stiffness_scale", b.stiffness_scale, 0.05,
+                           20.0);
   }
   // Period means of k1 and k_chain (the table's exact ones, as meanMeshStiffness takes them): they
   // decide the flank state of the mean stiffness.
@@ -59,7 +62,8 @@ long StiffnessEstimator::nextSupportsRevision() {
 }
 
 std::unique_ptr<BearingSupport> StiffnessEstimator::build(const BearingSupportConfig& c) {
-  return std::make_unique<BearingSupport>(c.spec, c.arrangement, c.axial_preload, c.interference, c.tilt);
+  return std::make_unique<BearingSupport>(c.spec, c.arrangement, c.axial_preload, c.interference,
+                                          c.tilt);
 }
 
 const StiffnessEstimate& StiffnessEstimator::reset() {
@@ -109,7 +113,8 @@ StiffnessEstimate StiffnessEstimator::solveAll(double torque, double pinion_angl
 void StiffnessEstimator::validateTorque(double torque) const {
   requireFinite("torque", torque);
   if (std::abs(torque) > limits_.max_abs_torque) {
-    throwInvalid("torque", torque, "exceeds max_abs_torque = " + formatValue(limits_.max_abs_torque) + " N·m");
+    throwInvalid("torque", torque,
+                 "exceeds max_abs_torque = " + formatValue(limits_.max_abs_torque) + " N·m");
   }
 }
 
@@ -143,7 +148,8 @@ double StiffnessEstimator::radialLoad(const BearingSupportConfig& c, double mesh
 }
 
 bool StiffnessEstimator::solutionStands(std::size_t i, double radial_load) const {
-  if (limits_.load_tolerance <= 0.0 || i >= estimate_.supports.size() || i >= supports_.size()) return false;
+  if (limits_.load_tolerance <= 0.0 || i >= estimate_.supports.size() || i >= supports_.size())
+    return false;
   const SupportEstimate& last = estimate_.supports[i];
   return std::abs(radial_load - last.radial_load) <=
          limits_.load_tolerance * (last.radial_load + supports_[i].config.axial_preload);
@@ -188,7 +194,8 @@ const StiffnessEstimate& StiffnessEstimator::setTorque(double torque, double pin
   return estimate_;
 }
 
-const StiffnessEstimate& StiffnessEstimator::setPreloads(const std::vector<PreloadSetting>& settings) {
+const StiffnessEstimate& StiffnessEstimator::setPreloads(
+    const std::vector<PreloadSetting>& settings) {
   validatePreloads(settings);
   // In place and all or nothing, with no allocation in steady state, as setTorque: the settings are
   // staged in the workspaces (a support named twice takes its last), a support whose geometry
@@ -210,7 +217,8 @@ const StiffnessEstimate& StiffnessEstimator::setPreloads(const std::vector<Prelo
     const std::size_t i = supportIndex(p.name);  // known: validated above
     Support& s = supports_[i];
     Workspace& w = workspace_[i];
-    const bool geometry_changed = w.axial_preload != p.axial_preload || w.interference.inner != p.inner_interference ||
+    const bool geometry_changed = w.axial_preload != p.axial_preload ||
+                                  w.interference.inner != p.inner_interference ||
                                   w.interference.outer != p.outer_interference;
     w.axial_preload = p.axial_preload;
     w.radial_preload = p.radial_preload;
@@ -232,8 +240,10 @@ const StiffnessEstimate& StiffnessEstimator::setPreloads(const std::vector<Prelo
   for (std::size_t i = 0; i < n; ++i) {
     const Support& s = supports_[i];
     Workspace& w = workspace_[i];
-    w.radial_load = w.radial_preload + s.config.mesh_load_share * mesh_force;  // radialLoad(), new preload
-    const bool unchanged = !w.rebuilt && w.radial_preload == s.config.radial_preload;  // model and radial preload
+    w.radial_load =
+        w.radial_preload + s.config.mesh_load_share * mesh_force;  // radialLoad(), new preload
+    const bool unchanged =
+        !w.rebuilt && w.radial_preload == s.config.radial_preload;  // model and radial preload
     w.solved = !(unchanged && solutionStands(i, w.radial_load));
     if (!w.solved) continue;
     Vector5d load = Vector5d::Zero();

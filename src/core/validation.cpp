@@ -38,28 +38,33 @@ void requireAtMost(std::string_view field, double value, double limit) {
 void requireYoungsModulus(std::string_view field, double value) {
   requireFinite(field, value);
   if (!(value >= kMinYoungsModulus && value <= kMaxYoungsModulus)) {
-    throwInvalid(std::string(field), value, "must lie in [" + formatValue(kMinYoungsModulus) + ", " + formatValue(kMaxYoungsModulus) + "] Pa");
+    throwInvalid(std::string(field), value,
+                 "must lie in [" + formatValue(kMinYoungsModulus) + ", " +
+                     formatValue(kMaxYoungsModulus) + "] Pa");
   }
 }
 
 void requireInOpenRange(std::string_view field, double value, double lower, double upper) {
   requireFinite(field, value);
   if (!(value > lower && value < upper)) {
-    throwInvalid(std::string(field), value, "must lie in (" + formatValue(lower) + ", " + formatValue(upper) + ")");
+    throwInvalid(std::string(field), value,
+                 "must lie in (" + formatValue(lower) + ", " + formatValue(upper) + ")");
   }
 }
 
 void requireInHalfOpenRange(std::string_view field, double value, double lower, double upper) {
   requireFinite(field, value);
   if (!(value >= lower && value < upper)) {
-    throwInvalid(std::string(field), value, "must lie in [" + formatValue(lower) + ", " + formatValue(upper) + ")");
+    throwInvalid(std::string(field), value,
+                 "must lie in [" + formatValue(lower) + ", " + formatValue(upper) + ")");
   }
 }
 
 void requireInClosedRange(std::string_view field, double value, double lower, double upper) {
   requireFinite(field, value);
   if (!(value >= lower && value <= upper)) {
-    throwInvalid(std::string(field), value, "must lie in [" + formatValue(lower) + ", " + formatValue(upper) + "]");
+    throwInvalid(std::string(field), value,
+                 "must lie in [" + formatValue(lower) + ", " + formatValue(upper) + "]");
   }
 }
 

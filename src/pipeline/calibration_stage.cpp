@@ -4,8 +4,9 @@
 
 namespace drivetrain_stiffness {
 
-CalibrationStage::CalibrationStage(std::shared_ptr<const RigConfig> rig, const StiffnessEstimator& estimator,
-                                   bool enabled, PipelineCounters& counters)
+CalibrationStage::CalibrationStage(std::shared_ptr<const RigConfig> rig,
+                                   const StiffnessEstimator& estimator, bool enabled,
+                                   PipelineCounters& counters)
     : estimator_(estimator), counters_(counters) {
   // One mesh table for the rig: the stiffness estimator's, shared read only.
   if (enabled && rig->calibration.present && rig->dynamics.present) {
@@ -21,7 +22,8 @@ void CalibrationStage::reading(Stamp stamp, double pinion, double gear, double p
                                double held_torque, bool continuous, PipelineSink& sink) {
   if (!continuous) calibrator_->interrupt();
   try {
-    const int out = calibrator_->reading(stamp.toSec(), pinion, gear, phase, speed, held_torque, estimator_, measured_te_);
+    const int out = calibrator_->reading(stamp.toSec(), pinion, gear, phase, speed, held_torque,
+                                         estimator_, measured_te_);
     // Counted once the sink took it: a message the sink refuses (non-finite) is an error, not both.
     if (out & Calibrator::kSample) {
       sink.measuredTe(stamp, measured_te_);
@@ -42,7 +44,8 @@ CalibrationBands CalibrationStage::stiffnessBands(const StiffnessEstimate& estim
   if (calibrator_) return calibrator_->bands(estimate.torque, estimator_, false);
   CalibrationBands b;  // no calibration: the drawing's model, bounds of zero width
   b.mesh_stiffness = b.mesh_stiffness_low = b.mesh_stiffness_high = estimate.mesh.mean;
-  b.bearing_stiffness = b.bearing_stiffness_low = b.bearing_stiffness_high = estimator_.shaftRadialStiffness();
+  b.bearing_stiffness = b.bearing_stiffness_low = b.bearing_stiffness_high =
+      estimator_.shaftRadialStiffness();
   return b;
 }
 
@@ -50,7 +53,8 @@ CalibrationBands CalibrationStage::resonanceBands(const ResonanceEstimate& estim
   if (calibrator_) return calibrator_->bands(estimator_.current().torque, estimator_, true);
   CalibrationBands b;  // no calibration: the drawing's frequencies, bounds of zero width
   for (std::size_t i = 0; i < estimate.modes.size(); ++i) {
-    b.natural_frequency[i] = b.natural_frequency_low[i] = b.natural_frequency_high[i] = estimate.modes[i].natural_frequency;
+    b.natural_frequency[i] = b.natural_frequency_low[i] = b.natural_frequency_high[i] =
+        estimate.modes[i].natural_frequency;
   }
   return b;
 }

@@ -7,13 +7,14 @@
 
 namespace drivetrain_stiffness {
 
-DynamicsStage::DynamicsStage(std::shared_ptr<const RigConfig> rig, const StiffnessEstimator& estimator,
-                             const PipelineOptions& options, Fidelity fidelity, PhaseSource& phase,
-                             PipelineCounters& counters)
+DynamicsStage::DynamicsStage(std::shared_ptr<const RigConfig> rig,
+                             const StiffnessEstimator& estimator, const PipelineOptions& options,
+                             Fidelity fidelity, PhaseSource& phase, PipelineCounters& counters)
     : estimator_(estimator),
       phase_(phase),
       counters_(counters),
-      model_(std::move(rig), estimator.shaftRadialStiffness(), options.output_rate, estimator.sharedMesh()),
+      model_(std::move(rig), estimator.shaftRadialStiffness(), options.output_rate,
+             estimator.sharedMesh()),
       max_gap_(options.max_gap) {
   model_.setFidelity(fidelity);
   model_.setMotionSlices(options.motion_slices);
@@ -53,7 +54,8 @@ void DynamicsStage::stopAfterGap(Stamp stamp) {
   const double gap = secondsBetween(stamp, epoch_) - model_.time();
   if (!(gap > max_gap_)) return;
   ++counters_.gap_restarts;
-  counters_.last_event = "input gap of " + formatValue(gap) + " s (more than ~max_gap): dynamics restarted";
+  counters_.last_event =
+      "input gap of " + formatValue(gap) + " s (more than ~max_gap): dynamics restarted";
   stop();
 }
 
@@ -117,7 +119,8 @@ bool DynamicsStage::takeTorque(Stamp stamp, double torque, PipelineSink& sink) {
     }
   }
   try {
-    model_.setTorque(torque, at);  // the new torque holds from its stamp on, whatever happened above
+    model_.setTorque(torque,
+                     at);  // the new torque holds from its stamp on, whatever happened above
   } catch (const Error& e) {
     error("dynamics", e);
   }
@@ -145,7 +148,8 @@ void DynamicsStage::followAnchor(Stamp stamp) {
     // Another stream may have taken the model past this stamp: the motion applies from there.
     const double t = std::max(secondsBetween(stamp, epoch_), model_.time());
     const Stamp at{epoch_.ns + std::llround(t * 1e9)};
-    model_.followMotion(t, phase_.meshTurns(phase_.pinionAngle(at)), phase_.meshTurns(phase_.anchor()->speed));
+    model_.followMotion(t, phase_.meshTurns(phase_.pinionAngle(at)),
+                        phase_.meshTurns(phase_.anchor()->speed));
   } catch (const Error& e) {
     error("dynamics", e);
   }

@@ -37,7 +37,8 @@ bool InputGate::sourceRestarted(Stamp stamp, std::optional<Stamp> last) const {
 bool InputGate::isWrongFrame(std::string_view frame_id) const {
   if (torque_frame_.empty()) return false;
   // tf2 strips a leading '/' (ROS 1 frame ids may still carry one).
-  const std::string_view frame = !frame_id.empty() && frame_id.front() == '/' ? frame_id.substr(1) : frame_id;
+  const std::string_view frame =
+      !frame_id.empty() && frame_id.front() == '/' ? frame_id.substr(1) : frame_id;
   return frame != torque_frame_;
 }
 
@@ -51,7 +52,8 @@ void InputGate::validateReading(const MotionInput& reading) {
     requireFinite("joint_states: pinion velocity", *reading.pinion_velocity);
     // The same bound as ~pinion_speed_rpm: +-1e5 rpm.
     if (std::abs(*reading.pinion_velocity) > 1e5 * kTwoPi / 60.0) {
-      throwInvalid("joint_states: pinion velocity", *reading.pinion_velocity, "beyond +-1e5 rpm (10472 rad/s)");
+      throwInvalid("joint_states: pinion velocity", *reading.pinion_velocity,
+                   "beyond +-1e5 rpm (10472 rad/s)");
     }
   }
   if (reading.gear_angle) requireFinite("joint_states: gear position", *reading.gear_angle);
@@ -69,8 +71,9 @@ void InputGate::countDrops(InputStream s, const InputOrigin& origin) {
 InputOutcome InputGate::checkFrame(Stamp stamp, const InputOrigin& origin) {
   if (!isWrongFrame(origin.frame_id)) return InputOutcome::kAccepted;
   return reject(InputOutcome::kWrongFrame, InputStream::kTorque, stamp,
-                "header.frame_id = '" + printableText(origin.frame_id) + "', expected ~torque_frame = '" +
-                    torque_frame_ + "' (the sign of torque.z selects the loaded flank)",
+                "header.frame_id = '" + printableText(origin.frame_id) +
+                    "', expected ~torque_frame = '" + torque_frame_ +
+                    "' (the sign of torque.z selects the loaded flank)",
                 origin.frame_id);
 }
 
@@ -86,7 +89,8 @@ std::optional<std::string> InputGate::noteSourceRestart(InputStream s, Stamp sta
   if (!sourceRestarted(stamp, last)) return std::nullopt;
   ++counters_.stamp_resets;
   stamps_restarted_ = true;
-  return std::string(toString(s)) + " stamp went back by " + formatValue(secondsBetween(*last, stamp)) +
+  return std::string(toString(s)) + " stamp went back by " +
+         formatValue(secondsBetween(*last, stamp)) +
          " s (more than ~stamp_jump_back): source restarted";
 }
 
@@ -102,14 +106,15 @@ std::optional<std::string> InputGate::observeClock(Stamp now) {
   std::optional<std::string> reason;
   if (back) {
     ++counters_.clock_resets;
-    reason = "clock went back from " + formatValue(last_clock_->toSec()) + " s to " + formatValue(now.toSec()) + " s";
+    reason = "clock went back from " + formatValue(last_clock_->toSec()) + " s to " +
+             formatValue(now.toSec()) + " s";
   }
   last_clock_ = now;
   return reason;
 }
 
-InputOutcome InputGate::reject(InputOutcome why, InputStream s, Stamp stamp, const std::string& reason,
-                               std::string_view found) {
+InputOutcome InputGate::reject(InputOutcome why, InputStream s, Stamp stamp,
+                               const std::string& reason, std::string_view found) {
   switch (s) {
     case InputStream::kTorque: ++counters_.rejected_torque; break;
     case InputStream::kPreload: ++counters_.rejected_preload; break;

@@ -5,11 +5,12 @@
 
 namespace drivetrain_stiffness {
 
-MeshPeriodStage::MeshPeriodStage(const DynamicsEstimator& dynamics, double pinion_base_radius, PipelineCounters& counters)
+MeshPeriodStage::MeshPeriodStage(const DynamicsEstimator& dynamics, double pinion_base_radius,
+                                 PipelineCounters& counters)
     : dynamics_(dynamics), base_radius_(pinion_base_radius), counters_(counters) {}
 
-void MeshPeriodStage::startBlock(Stamp stamp, const DynamicsSample& s, double turns, double boundary,
-                                 double mesh_frequency) {
+void MeshPeriodStage::startBlock(Stamp stamp, const DynamicsSample& s, double turns,
+                                 double boundary, double mesh_frequency) {
   Accumulator& a = block_;
   a.in_block = true;
   a.boundary = boundary;
@@ -44,15 +45,16 @@ void MeshPeriodStage::accumulate(const DynamicsSample& s, double dt) {
   a.force_max = std::max(a.force_max, s.mesh_force);
 }
 
-MeshPeriodStatistics MeshPeriodStage::close(Stamp stamp, const DynamicsSample& s, double count, double turns,
-                                            bool forward) const {
+MeshPeriodStatistics MeshPeriodStage::close(Stamp stamp, const DynamicsSample& s, double count,
+                                            double turns, bool forward) const {
   const Accumulator& a = block_;
   MeshPeriodStatistics out;
   out.start = a.start;
   out.end = stamp;
   out.duration = secondsBetween(stamp, a.start);
   const double d = out.duration;
-  out.periods = static_cast<std::uint32_t>(forward ? count - a.boundary : a.boundary - (count + 1.0));
+  out.periods =
+      static_cast<std::uint32_t>(forward ? count - a.boundary : a.boundary - (count + 1.0));
   out.samples = a.samples;
   const double te_dev = a.te_sum / d, force_dev = a.force_sum / d;
   out.te_mean = a.te_ref + te_dev;
@@ -61,9 +63,10 @@ MeshPeriodStatistics MeshPeriodStage::close(Stamp stamp, const DynamicsSample& s
   out.torque = a.torque_sum / d;
   // The momentum balance of the relative mesh coordinate (docs/pipeline.md): not the samples' mean.
   const double drive = out.torque / base_radius_;
-  const double inertia = dynamics_.fidelity() == Fidelity::kQuasiStatic
-                             ? 0.0
-                             : dynamics_.model().equivalentMass() * (s.state[5] - a.start_velocity) / d;
+  const double inertia =
+      dynamics_.fidelity() == Fidelity::kQuasiStatic
+          ? 0.0
+          : dynamics_.model().equivalentMass() * (s.state[5] - a.start_velocity) / d;
   out.mesh_force_mean = drive - inertia;
   out.mesh_force_rms = std::sqrt(std::max(0.0, a.force_sq / d - force_dev * force_dev));
   out.mesh_force_peak_to_peak = a.force_max - a.force_min;
@@ -73,8 +76,9 @@ MeshPeriodStatistics MeshPeriodStage::close(Stamp stamp, const DynamicsSample& s
 
 void MeshPeriodStage::publish(Stamp stamp, const MeshPeriodStatistics& out, PipelineSink& sink) {
   bool finite = true;
-  for (double v : {out.te_mean, out.te_rms, out.te_peak_to_peak, out.mesh_force_mean, out.mesh_force_rms,
-                   out.mesh_force_peak_to_peak, out.mesh_frequency, out.torque}) {
+  for (double v :
+       {out.te_mean, out.te_rms, out.te_peak_to_peak, out.mesh_force_mean, out.mesh_force_rms,
+        out.mesh_force_peak_to_peak, out.mesh_frequency, out.torque}) {
     finite = finite && std::isfinite(v);
   }
   if (finite) {  // never NaN on a topic (the sink's conversion would refuse it inside the advance)
@@ -85,14 +89,16 @@ void MeshPeriodStage::publish(Stamp stamp, const MeshPeriodStatistics& out, Pipe
   }
 }
 
-void MeshPeriodStage::sample(Stamp stamp, const DynamicsSample& s, double mesh_frequency, PipelineSink& sink) {
+void MeshPeriodStage::sample(Stamp stamp, const DynamicsSample& s, double mesh_frequency,
+                             PipelineSink& sink) {
   Accumulator& a = block_;
   // The unwrapped phase is kept as an integer count plus the sample's phase in [0, 1), so that the
   // count is exact on a switch (phase 0): floor(turns) is the count, not a rounding of it.
   if (!a.have_last) {
     a.have_last = true;
     a.last_turns = s.phase;
-    if (s.phase == 0.0) startBlock(stamp, s, s.phase, 0.0, mesh_frequency);  // a restart on a switch
+    if (s.phase == 0.0)
+      startBlock(stamp, s, s.phase, 0.0, mesh_frequency);  // a restart on a switch
   } else {
     const double dt = secondsBetween(stamp, a.last_stamp);
     if (!(dt > 0.0)) return;  // the grid only moves forward

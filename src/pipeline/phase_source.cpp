@@ -6,7 +6,8 @@
 
 namespace drivetrain_stiffness {
 
-PhaseSource::PhaseSource(const PipelineOptions& options, int pinion_teeth, int gear_teeth, PipelineCounters& counters)
+PhaseSource::PhaseSource(const PipelineOptions& options, int pinion_teeth, int gear_teeth,
+                         PipelineCounters& counters)
     : teeth_p_(pinion_teeth),
       teeth_g_(gear_teeth),
       nominal_speed_(options.pinion_speed_rpm * kTwoPi / 60.0),
@@ -30,7 +31,9 @@ double PhaseSource::stiffnessAngle(Stamp stamp, Stamp origin) const {
   return anchor_ ? pinionAngle(stamp) : nominal_speed_ * secondsBetween(stamp, origin);
 }
 
-double PhaseSource::meshTurns(double pinion_angle) const { return pinion_angle * teeth_p_ / kTwoPi; }
+double PhaseSource::meshTurns(double pinion_angle) const {
+  return pinion_angle * teeth_p_ / kTwoPi;
+}
 
 double PhaseSource::meshPhase(double pinion_angle) const {
   const double turns = meshTurns(pinion_angle) + mesh_phase_offset_;
@@ -47,8 +50,10 @@ std::optional<double> PhaseSource::encoderSilence(Stamp now) const {
   return secondsBetween(now, reading_->stamp);
 }
 
-PhaseSource::Reading PhaseSource::unwrap(Stamp stamp, const MotionInput& m, bool& continuous) const {
-  const Reading* last = reading_ && secondsBetween(stamp, reading_->stamp) <= motion_timeout_ ? &*reading_ : nullptr;
+PhaseSource::Reading PhaseSource::unwrap(Stamp stamp, const MotionInput& m,
+                                         bool& continuous) const {
+  const Reading* last =
+      reading_ && secondsBetween(stamp, reading_->stamp) <= motion_timeout_ ? &*reading_ : nullptr;
   continuous = last != nullptr;
   // An angle is used modulo a turn only (exact for any finite double: std::remainder), so an
   // encoder count of any size neither overflows the phase (z_p theta) nor loses the unwrapping.
@@ -59,28 +64,36 @@ PhaseSource::Reading PhaseSource::unwrap(Stamp stamp, const MotionInput& m, bool
   next.stamp = stamp;
   const double dt = last ? secondsBetween(stamp, last->stamp) : 0.0;
   next.pinion = pinion_in;
-  if (last) next.pinion += kTwoPi * std::round((last->pinion + last->speed * dt - pinion_in) / kTwoPi);
+  if (last)
+    next.pinion += kTwoPi * std::round((last->pinion + last->speed * dt - pinion_in) / kTwoPi);
   if (m.pinion_velocity) {
     next.speed = *m.pinion_velocity;
   } else if (last && dt > 0.0) {
     next.speed = (next.pinion - last->pinion) / dt;  // backward difference of the encoder angle
   } else {
-    next.speed = last ? last->speed : 0.0;  // first reading without velocity: standing until the next
+    next.speed =
+        last ? last->speed : 0.0;  // first reading without velocity: standing until the next
   }
   if (m.gear_angle) {
     // Meshing gears: theta_g = -(z_p / z_g) theta_p + const (+ TE / r_b,g, micro-radians).
     const double gear_in = std::remainder(*m.gear_angle, kTwoPi);
     next.gear = gear_in;
     if (last && last->gear) {
-      *next.gear += kTwoPi * std::round((*last->gear - ratio() * (next.pinion - last->pinion) - gear_in) / kTwoPi);
+      *next.gear +=
+          kTwoPi *
+          std::round((*last->gear - ratio() * (next.pinion - last->pinion) - gear_in) / kTwoPi);
     }
-    next.gear_reference = last && last->gear_reference ? last->gear_reference : std::optional<double>(*next.gear + ratio() * next.pinion);
+    next.gear_reference = last && last->gear_reference
+                              ? last->gear_reference
+                              : std::optional<double>(*next.gear + ratio() * next.pinion);
   }
-  const double max_speed = 1e5 * kTwoPi / 60.0;  // the bound of ~pinion_speed_rpm and of a measured velocity
+  const double max_speed =
+      1e5 * kTwoPi / 60.0;  // the bound of ~pinion_speed_rpm and of a measured velocity
   if (!(std::abs(next.speed) <= max_speed)) {
     throwInvalid("joint_states: pinion position", m.pinion_angle,
-                 "implies " + formatValue(next.speed) + " rad/s since the last reading (beyond +-1e5 rpm): an encoder "
-                 "jump, or readings too far apart to unwrap");
+                 "implies " + formatValue(next.speed) +
+                     " rad/s since the last reading (beyond +-1e5 rpm): an encoder "
+                     "jump, or readings too far apart to unwrap");
   }
   return next;
 }
@@ -91,9 +104,10 @@ void PhaseSource::checkGearRatio(Reading& reading) {
   const double off = residual - *reading.gear_reference;
   if (std::abs(off) > gear_ratio_tolerance_) {
     ++counters_.gear_ratio_mismatches;
-    counters_.last_event = "joint_states: the gear angle moved " + formatValue(off) +
-                           " rad off -(z_p/z_g) x the pinion angle (more than ~gear_ratio_tolerance): a slip, or a "
-                           "wrong ~pinion_joint/~gear_joint mapping";
+    counters_.last_event =
+        "joint_states: the gear angle moved " + formatValue(off) +
+        " rad off -(z_p/z_g) x the pinion angle (more than ~gear_ratio_tolerance): a slip, or a "
+        "wrong ~pinion_joint/~gear_joint mapping";
     reading.gear_reference = residual;  // one report per slip; a wrong mapping keeps reporting
   }
 }
@@ -105,10 +119,12 @@ void PhaseSource::anchorTo(const Reading& reading) {
 }
 
 std::optional<Stamp> PhaseSource::encodersTimedOut(Stamp stamp) {
-  if (!encoders_ || !reading_ || secondsBetween(stamp, reading_->stamp) <= motion_timeout_) return std::nullopt;
+  if (!encoders_ || !reading_ || secondsBetween(stamp, reading_->stamp) <= motion_timeout_)
+    return std::nullopt;
   ++counters_.motion_timeouts;
-  counters_.last_event = "joint_states: none for ~motion_timeout = " + formatValue(motion_timeout_) +
-                         " s: the mesh phase runs at ~pinion_speed_rpm from there";
+  counters_.last_event =
+      "joint_states: none for ~motion_timeout = " + formatValue(motion_timeout_) +
+      " s: the mesh phase runs at ~pinion_speed_rpm from there";
   return Stamp{reading_->stamp.ns + std::llround(motion_timeout_ * 1e9)};
 }
 

@@ -9,41 +9,52 @@
 namespace drivetrain_stiffness {
 
 void PipelineOptions::validate() const {
-  limits.validate("bearing_load_tolerance");  // StiffnessEstimator's rules, under the parameter's name
+  limits.validate(
+      "bearing_load_tolerance");  // StiffnessEstimator's rules, under the parameter's name
   requirePositive("output_rate", output_rate);
-  if (output_rate > 1e6) throw InvalidInput("output_rate = " + formatValue(output_rate) + ": must be <= 1e6 Hz");
+  if (output_rate > 1e6)
+    throw InvalidInput("output_rate = " + formatValue(output_rate) + ": must be <= 1e6 Hz");
   requirePositive("max_gap", max_gap);
   if (max_gap * output_rate > DynamicsEstimator::kMaxSamplesPerAdvance) {
-    throw InvalidInput("max_gap = " + formatValue(max_gap) + ": max_gap * output_rate must be <= 1e7 samples");
+    throw InvalidInput("max_gap = " + formatValue(max_gap) +
+                       ": max_gap * output_rate must be <= 1e7 samples");
   }
   requireNonNegative("stamp_jump_back", stamp_jump_back);
   requireNonNegative("clock_jump_back", clock_jump_back);
   requirePositive("resonance_threshold", resonance_threshold);
   if (resonance_threshold >= 1.0) {
-    throw InvalidInput("resonance_threshold = " + formatValue(resonance_threshold) + ": must be < 1 (relative)");
+    throw InvalidInput("resonance_threshold = " + formatValue(resonance_threshold) +
+                       ": must be < 1 (relative)");
   }
   if (spectrum_window < 8 || spectrum_window > (1 << 20)) {
-    throw InvalidInput("spectrum_window = " + std::to_string(spectrum_window) + ": must be in [8, 1048576] samples");
+    throw InvalidInput("spectrum_window = " + std::to_string(spectrum_window) +
+                       ": must be in [8, 1048576] samples");
   }
   if (spectrum_hop < 1 || spectrum_hop > spectrum_window) {
-    throw InvalidInput("spectrum_hop = " + std::to_string(spectrum_hop) + ": must be in [1, spectrum_window]");
+    throw InvalidInput("spectrum_hop = " + std::to_string(spectrum_hop) +
+                       ": must be in [1, spectrum_window]");
   }
   requireFinite("pinion_speed_rpm", pinion_speed_rpm);
   if (std::abs(pinion_speed_rpm) > 1e5) {
-    throw InvalidInput("pinion_speed_rpm = " + formatValue(pinion_speed_rpm) + ": must be within +-1e5 rpm");
+    throw InvalidInput("pinion_speed_rpm = " + formatValue(pinion_speed_rpm) +
+                       ": must be within +-1e5 rpm");
   }
   requireFinite("mesh_phase_offset", mesh_phase_offset);
   if (!(mesh_phase_offset >= 0.0 && mesh_phase_offset < 1.0)) {
-    throw InvalidInput("mesh_phase_offset = " + formatValue(mesh_phase_offset) + ": must be in [0, 1) (a fraction of a mesh period)");
+    throw InvalidInput("mesh_phase_offset = " + formatValue(mesh_phase_offset) +
+                       ": must be in [0, 1) (a fraction of a mesh period)");
   }
   requirePositive("motion_timeout", motion_timeout);
-  if (motion_timeout > 3600.0) throw InvalidInput("motion_timeout = " + formatValue(motion_timeout) + ": must be <= 3600 s");
+  if (motion_timeout > 3600.0)
+    throw InvalidInput("motion_timeout = " + formatValue(motion_timeout) + ": must be <= 3600 s");
   requirePositive("gear_ratio_tolerance", gear_ratio_tolerance);
   if (motion_slices < 4 || motion_slices > 65536) {
-    throw InvalidInput("motion_slices = " + std::to_string(motion_slices) + ": must be in [4, 65536] per mesh period");
+    throw InvalidInput("motion_slices = " + std::to_string(motion_slices) +
+                       ": must be in [4, 65536] per mesh period");
   }
   if (!torque_frame.empty() && torque_frame.front() == '/') {
-    throw InvalidInput("torque_frame = '" + torque_frame + "': a frame id without a leading '/' (or empty: any frame)");
+    throw InvalidInput("torque_frame = '" + torque_frame +
+                       "': a frame id without a leading '/' (or empty: any frame)");
   }
 }
 

@@ -13,8 +13,8 @@ const char* toString(InputStream stream) {
   return "?";
 }
 
-void RefusalTally::record(InputStream stream, InputOutcome why, Stamp stamp, std::string_view reason,
-                          std::string_view found) {
+void RefusalTally::record(InputStream stream, InputOutcome why, Stamp stamp,
+                          std::string_view reason, std::string_view found) {
   Entry& e = entries_[static_cast<std::size_t>(stream)][static_cast<std::size_t>(why)];
   if (e.count++ == 0) {
     e.first_stamp = stamp;

@@ -6,16 +6,23 @@
 namespace drivetrain_stiffness {
 
 ResonanceTracker::ResonanceTracker(const RigConfig& rig, const StiffnessEstimator& estimator,
-                                   const CalibrationStage& calibration, double threshold, PipelineCounters& counters)
-    : rig_(rig), estimator_(estimator), calibration_(calibration), threshold_(threshold), counters_(counters) {}
+                                   const CalibrationStage& calibration, double threshold,
+                                   PipelineCounters& counters)
+    : rig_(rig),
+      estimator_(estimator),
+      calibration_(calibration),
+      threshold_(threshold),
+      counters_(counters) {}
 
 bool ResonanceTracker::withinCourantFischerBounds(const std::array<double, 3>& springs,
-                                                  const std::array<double, 3>& at_last, double threshold) {
+                                                  const std::array<double, 3>& at_last,
+                                                  double threshold) {
   // K = sum k_i B_i with B_i >= 0 and M fixed: springs within factors [lo, hi] bound every
   // undamped omega^2 within the same factors, each frequency within [sqrt(lo), sqrt(hi)]. Shrunk by
   // 1e-9 for the eigensolver's rounding (1e-15). Derivation and history: docs/resonance.md.
   const double tau = threshold, margin = 1e-9;
-  const double hi = (1.0 + tau) * (1.0 + tau) * (1.0 - margin), lo = (1.0 - tau) * (1.0 - tau) * (1.0 + margin);
+  const double hi = (1.0 + tau) * (1.0 + tau) * (1.0 - margin),
+               lo = (1.0 - tau) * (1.0 - tau) * (1.0 + margin);
   bool within = true;
   for (int i = 0; i < 3 && within; ++i) {
     within = springs[i] <= hi * at_last[i] && springs[i] >= lo * at_last[i];
@@ -23,8 +30,9 @@ bool ResonanceTracker::withinCourantFischerBounds(const std::array<double, 3>& s
   return within;
 }
 
-void ResonanceTracker::update(Stamp stamp, const StiffnessEstimate& estimate, const DampingRatios& damping,
-                              const DynamicsEstimator& dynamics, PipelineSink& sink) {
+void ResonanceTracker::update(Stamp stamp, const StiffnessEstimate& estimate,
+                              const DampingRatios& damping, const DynamicsEstimator& dynamics,
+                              PipelineSink& sink) {
   try {
     const std::array<double, 2> kb = estimator_.shaftRadialStiffness();
     const std::array<double, 3> springs{kb[0], kb[1], estimate.mesh.mean};
@@ -40,8 +48,10 @@ void ResonanceTracker::update(Stamp stamp, const StiffnessEstimate& estimate, co
     }
     if (!moved) return;
     for (const Mode& m : r.modes) {
-      if (!std::isfinite(m.natural_frequency) || !std::isfinite(m.damping_ratio) || !std::isfinite(m.damped_frequency)) {
-        throw InvalidInput("resonance: a modal result is not finite (not published)");  // never NaN on a topic
+      if (!std::isfinite(m.natural_frequency) || !std::isfinite(m.damping_ratio) ||
+          !std::isfinite(m.damped_frequency)) {
+        throw InvalidInput(
+            "resonance: a modal result is not finite (not published)");  // never NaN on a topic
       }
     }
     double margin = 0.0;

@@ -9,7 +9,8 @@ namespace {
 /// The rig as the pipeline runs it, built once and shared read only by the stiffness estimator, the
 /// dynamics and the calibration: the gearbox with the start-up damping ratios of the run-time
 /// settings and, with dynamics, the nominal speed of the options.
-std::shared_ptr<const RigConfig> runningRig(const RigConfig& gearbox, const PipelineOptions& options,
+std::shared_ptr<const RigConfig> runningRig(const RigConfig& gearbox,
+                                            const PipelineOptions& options,
                                             const RuntimeSettings& settings) {
   options.validate();
   settings.validate();
@@ -19,7 +20,8 @@ std::shared_ptr<const RigConfig> runningRig(const RigConfig& gearbox, const Pipe
   if (options.dynamics && rig->dynamics.present) {
     // One speed for both mesh phases: the stiffness estimate's and the dynamics' (their grid too).
     if (!(options.pinion_speed_rpm > 0.0)) {
-      throw InvalidInput("pinion_speed_rpm = " + formatValue(options.pinion_speed_rpm) + ": must be > 0 with dynamics");
+      throw InvalidInput("pinion_speed_rpm = " + formatValue(options.pinion_speed_rpm) +
+                         ": must be > 0 with dynamics");
     }
     rig->dynamics.speed_rpm = options.pinion_speed_rpm;
   }
@@ -30,23 +32,28 @@ std::shared_ptr<const RigConfig> runningRig(const RigConfig& gearbox, const Pipe
 RigPipeline::RigPipeline(const RigConfig& rig, const PipelineOptions& options)
     : RigPipeline(rig, options, RuntimeSettings::forRig(rig)) {}
 
-RigPipeline::RigPipeline(const RigConfig& rig, const PipelineOptions& options, const RuntimeSettings& settings)
+RigPipeline::RigPipeline(const RigConfig& rig, const PipelineOptions& options,
+                         const RuntimeSettings& settings)
     : rig_(runningRig(rig, options, settings)), options_(options), settings_(settings) {
   gate_ = std::make_unique<InputGate>(options_, counters_);
   // One mesh table for the rig: the stiffness estimator's, shared read only with the dynamics and
   // the calibration.
   estimator_ = std::make_unique<StiffnessEstimator>(rig_, options_.limits);
-  calibration_ = std::make_unique<CalibrationStage>(rig_, *estimator_, options_.calibrate, counters_);
-  resonance_ = std::make_unique<ResonanceTracker>(*rig_, *estimator_, *calibration_, options_.resonance_threshold, counters_);
+  calibration_ =
+      std::make_unique<CalibrationStage>(rig_, *estimator_, options_.calibrate, counters_);
+  resonance_ = std::make_unique<ResonanceTracker>(*rig_, *estimator_, *calibration_,
+                                                  options_.resonance_threshold, counters_);
   const auto& teeth = estimator_->mesh().geometry().spec().teeth;
   phase_ = std::make_unique<PhaseSource>(options_, teeth[0], teeth[1], counters_);
   if (options_.dynamics) {
-    dynamics_ = std::make_unique<DynamicsStage>(rig_, *estimator_, options_, settings_.fidelity, *phase_, counters_);
+    dynamics_ = std::make_unique<DynamicsStage>(rig_, *estimator_, options_, settings_.fidelity,
+                                                *phase_, counters_);
     te_output_ = std::make_unique<TeOutput>(*phase_, resonance_->last(), counters_);
-    te_spectrum_ = std::make_unique<TeSpectrumStage>(options_.spectrum_window, options_.spectrum_hop,
-                                                     dynamics_->model().outputInterval(), counters_);
-    mesh_periods_ = std::make_unique<MeshPeriodStage>(dynamics_->model(), estimator_->mesh().geometry().baseRadius(0),
-                                                      counters_);
+    te_spectrum_ =
+        std::make_unique<TeSpectrumStage>(options_.spectrum_window, options_.spectrum_hop,
+                                          dynamics_->model().outputInterval(), counters_);
+    mesh_periods_ = std::make_unique<MeshPeriodStage>(
+        dynamics_->model(), estimator_->mesh().geometry().baseRadius(0), counters_);
     // The order in which each sample reaches them (and so the sink's calls).
     dynamics_->addConsumer(*te_output_);
     dynamics_->addConsumer(*te_spectrum_);
@@ -73,14 +80,19 @@ bool RigPipeline::observeClock(Stamp now, PipelineSink& /*sink*/) {
 
 double RigPipeline::pinionAngle(Stamp stamp) const { return phase_->pinionAngle(stamp); }
 
-double RigPipeline::encoderPinionAngle(Stamp stamp) const { return phase_->encoderPinionAngle(stamp); }
+double RigPipeline::encoderPinionAngle(Stamp stamp) const {
+  return phase_->encoderPinionAngle(stamp);
+}
 
-std::optional<double> RigPipeline::encoderSilence(Stamp now) const { return phase_->encoderSilence(now); }
+std::optional<double> RigPipeline::encoderSilence(Stamp now) const {
+  return phase_->encoderSilence(now);
+}
 
 const char* RigPipeline::phaseSource() const { return phase_->name(); }
 
 template <typename Validate, typename Update>
-InputOutcome RigPipeline::take(InputStream stream, Stamp stamp, PipelineSink& sink, Validate validate, Update update) {
+InputOutcome RigPipeline::take(InputStream stream, Stamp stamp, PipelineSink& sink,
+                               Validate validate, Update update) {
   // Values first: a bad value must not trigger a source-restart reset before it is refused.
   try {
     validate();
@@ -91,10 +103,12 @@ InputOutcome RigPipeline::take(InputStream stream, Stamp stamp, PipelineSink& si
   if (time_ok != InputOutcome::kAccepted) {
     return gate_->reject(time_ok, stream, stamp, "stamp " + formatValue(stamp.toSec()) + " s");
   }
-  if (const std::optional<std::string> restarted = gate_->noteSourceRestart(stream, stamp)) reset(*restarted);
+  if (const std::optional<std::string> restarted = gate_->noteSourceRestart(stream, stamp))
+    reset(*restarted);
   const StiffnessEstimate* estimate = nullptr;
   try {
-    // Transactional: throws without changing the state. No estimate: a shed input (no stiffness update).
+    // Transactional: throws without changing the state. No estimate: a shed input (no stiffness
+    // update).
     estimate = update();
   } catch (const InvalidInput& e) {
     return gate_->reject(InputOutcome::kInvalidValue, stream, stamp, e.what());
@@ -108,8 +122,8 @@ InputOutcome RigPipeline::take(InputStream stream, Stamp stamp, PipelineSink& si
   return InputOutcome::kAccepted;
 }
 
-InputOutcome RigPipeline::torque(Stamp stamp, double torque, PipelineSink& sink, const InputOrigin& origin,
-                                 Backlog backlog) {
+InputOutcome RigPipeline::torque(Stamp stamp, double torque, PipelineSink& sink,
+                                 const InputOrigin& origin, Backlog backlog) {
   gate_->countDrops(InputStream::kTorque, origin);
   if (gate_->checkFrame(stamp, origin) != InputOutcome::kAccepted) return InputOutcome::kWrongFrame;
   const InputOutcome outcome = take(
@@ -126,38 +140,44 @@ InputOutcome RigPipeline::torque(Stamp stamp, double torque, PipelineSink& sink,
           ++counters_.stiffness_shed;
           return nullptr;
         }
-        const StiffnessEstimate& e = estimator_->setTorque(torque, phase_->stiffnessAngle(stamp, origin_stamp));
+        const StiffnessEstimate& e =
+            estimator_->setTorque(torque, phase_->stiffnessAngle(stamp, origin_stamp));
         phase_->setOrigin(origin_stamp);
         return &e;
       });
   // The torque the calibration pairs the next readings with (kept as it was when this one restarted
   // the dynamics: what the pipeline has always done).
-  if (outcome == InputOutcome::kAccepted && (!dynamics_ || dynamics_->takeTorque(stamp, torque, sink))) {
+  if (outcome == InputOutcome::kAccepted &&
+      (!dynamics_ || dynamics_->takeTorque(stamp, torque, sink))) {
     held_torque_ = torque;
   }
   return outcome;
 }
 
-InputOutcome RigPipeline::preload(Stamp stamp, const std::vector<PreloadSetting>& settings, PipelineSink& sink,
-                                  const InputOrigin& origin) {
+InputOutcome RigPipeline::preload(Stamp stamp, const std::vector<PreloadSetting>& settings,
+                                  PipelineSink& sink, const InputOrigin& origin) {
   gate_->countDrops(InputStream::kPreload, origin);
-  return take(InputStream::kPreload, stamp, sink, [&] { estimator_->validatePreloads(settings); },
-              [&]() -> const StiffnessEstimate* { return &estimator_->setPreloads(settings); });
+  return take(
+      InputStream::kPreload, stamp, sink, [&] { estimator_->validatePreloads(settings); },
+      [&]() -> const StiffnessEstimate* { return &estimator_->setPreloads(settings); });
 }
 
-InputOutcome RigPipeline::motion(Stamp stamp, const MotionInput& reading, PipelineSink& sink, const InputOrigin& origin) {
+InputOutcome RigPipeline::motion(Stamp stamp, const MotionInput& reading, PipelineSink& sink,
+                                 const InputOrigin& origin) {
   gate_->countDrops(InputStream::kJointStates, origin);
-  return take(InputStream::kJointStates, stamp, sink, [&] { InputGate::validateReading(reading); },
-              [&]() -> const StiffnessEstimate* {
-                acceptMotion(stamp, reading, sink);
-                return nullptr;  // no stiffness message: the estimate has not changed
-              });
+  return take(
+      InputStream::kJointStates, stamp, sink, [&] { InputGate::validateReading(reading); },
+      [&]() -> const StiffnessEstimate* {
+        acceptMotion(stamp, reading, sink);
+        return nullptr;  // no stiffness message: the estimate has not changed
+      });
 }
 
-InputOutcome RigPipeline::motionRefused(Stamp stamp, const std::string& reason, const InputOrigin& origin,
-                                        std::string_view found) {
+InputOutcome RigPipeline::motionRefused(Stamp stamp, const std::string& reason,
+                                        const InputOrigin& origin, std::string_view found) {
   gate_->countDrops(InputStream::kJointStates, origin);
-  return gate_->reject(InputOutcome::kInvalidValue, InputStream::kJointStates, stamp, reason, found);
+  return gate_->reject(InputOutcome::kInvalidValue, InputStream::kJointStates, stamp, reason,
+                       found);
 }
 
 void RigPipeline::acceptMotion(Stamp stamp, const MotionInput& m, PipelineSink& sink) {
@@ -176,8 +196,9 @@ void RigPipeline::acceptMotion(Stamp stamp, const MotionInput& m, PipelineSink& 
   // the running block of mesh periods would count a period that never was.
   if (!phase_->encodersDrive() && mesh_periods_) mesh_periods_->restart();
   if (calibration_->calibrator() && accepted.gear) {  // the calibration rule
-    calibration_->reading(stamp, accepted.pinion, *accepted.gear, phase_->meshPhase(accepted.pinion), accepted.speed,
-                          held_torque_, continuous, sink);
+    calibration_->reading(stamp, accepted.pinion, *accepted.gear,
+                          phase_->meshPhase(accepted.pinion), accepted.speed, held_torque_,
+                          continuous, sink);
   }
   phase_->anchorTo(accepted);
   if (dynamics_) dynamics_->followAnchor(stamp);
@@ -193,7 +214,8 @@ void RigPipeline::checkMotionTimeout(Stamp stamp, PipelineSink& sink) {
 
 void RigPipeline::afterUpdate(Stamp stamp, const StiffnessEstimate& estimate, PipelineSink& sink) {
   // Coalescing by stamp, not by wall time, so a replay coalesces exactly as the live node did.
-  const bool due = settings_.stiffness_rate <= 0.0 || !last_stiffness_out_ || stamp < *last_stiffness_out_ ||
+  const bool due = settings_.stiffness_rate <= 0.0 || !last_stiffness_out_ ||
+                   stamp < *last_stiffness_out_ ||
                    secondsBetween(stamp, *last_stiffness_out_) >= 1.0 / settings_.stiffness_rate;
   if (due) {
     try {
@@ -212,7 +234,8 @@ void RigPipeline::afterUpdate(Stamp stamp, const StiffnessEstimate& estimate, Pi
   pushStiffness(stamp, estimate, sink);
 }
 
-void RigPipeline::pushStiffness(Stamp stamp, const StiffnessEstimate& estimate, PipelineSink& sink) {
+void RigPipeline::pushStiffness(Stamp stamp, const StiffnessEstimate& estimate,
+                                PipelineSink& sink) {
   if (!dynamics_) return;
   // Every accepted input hands the new bearing stiffness to the dynamics at its own stamp (after a
   // gap they stop first), then the resonance estimate is refreshed.
@@ -227,7 +250,8 @@ void RigPipeline::apply(const RuntimeSettings& settings) {
                                settings.bearing_damping_ratio != settings_.bearing_damping_ratio;
   settings_ = settings;
   if (damping_changed) {
-    if (dynamics_) dynamics_->model().setDamping(settings.mesh_damping_ratio, settings.bearing_damping_ratio);
+    if (dynamics_)
+      dynamics_->model().setDamping(settings.mesh_damping_ratio, settings.bearing_damping_ratio);
     resonance_->forget();  // damped frequencies and ratios changed: republish at the next input
   }
   if (dynamics_) {

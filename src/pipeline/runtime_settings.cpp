@@ -8,8 +8,8 @@ namespace {
 
 void requireIn(const char* field, double value, double lo, double hi, const char* unit) {
   if (!(value >= lo && value <= hi)) {
-    throw InvalidInput(std::string(field) + " = " + formatValue(value) + ": must be in [" + formatValue(lo) + ", " +
-                       formatValue(hi) + "]" + unit);
+    throw InvalidInput(std::string(field) + " = " + formatValue(value) + ": must be in [" +
+                       formatValue(lo) + ", " + formatValue(hi) + "]" + unit);
   }
 }
 

@@ -5,7 +5,8 @@
 namespace drivetrain_stiffness {
 
 std::uint64_t SequenceGaps::observe(std::string_view publisher, std::uint32_t seq) {
-  auto it = std::find_if(publishers_.begin(), publishers_.end(), [&](const Publisher& p) { return p.name == publisher; });
+  auto it = std::find_if(publishers_.begin(), publishers_.end(),
+                         [&](const Publisher& p) { return p.name == publisher; });
   if (it == publishers_.end()) {
     if (publishers_.size() >= kMaxPublishers) {
       ++untracked_;
@@ -27,8 +28,8 @@ std::uint64_t SequenceGaps::observe(std::string_view publisher, std::uint32_t se
 }
 
 std::size_t SequenceGaps::unnumberedPublishers() const {
-  return static_cast<std::size_t>(
-      std::count_if(publishers_.begin(), publishers_.end(), [](const Publisher& p) { return !p.advanced; }));
+  return static_cast<std::size_t>(std::count_if(publishers_.begin(), publishers_.end(),
+                                                [](const Publisher& p) { return !p.advanced; }));
 }
 
 }  // namespace drivetrain_stiffness

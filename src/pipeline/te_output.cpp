@@ -2,7 +2,8 @@
 
 namespace drivetrain_stiffness {
 
-void TeOutput::sample(Stamp stamp, const DynamicsSample& s, double /*mesh_frequency*/, PipelineSink& sink) {
+void TeOutput::sample(Stamp stamp, const DynamicsSample& s, double /*mesh_frequency*/,
+                      PipelineSink& sink) {
   SampleContext context;
   context.pinion_angle = phase_.encoderPinionAngle(stamp);
   context.resonance = resonance_ ? &*resonance_ : nullptr;

@@ -8,7 +8,8 @@ namespace drivetrain_stiffness {
 TeSpectrumStage::TeSpectrumStage(int window, int hop, double interval, PipelineCounters& counters)
     : spectrum_(window, hop, interval, SpectrumPeaks::kMaxPeaks), counters_(counters) {}
 
-void TeSpectrumStage::sample(Stamp stamp, const DynamicsSample& s, double /*mesh_frequency*/, PipelineSink& sink) {
+void TeSpectrumStage::sample(Stamp stamp, const DynamicsSample& s, double /*mesh_frequency*/,
+                             PipelineSink& sink) {
   if (!spectrum_.push(s.dynamic_te)) return;
   const std::vector<SpectralPeak>& peaks = spectrum_.peaks();
   SpectrumPeaks& out = peaks_;

@@ -18,8 +18,12 @@ std::string masterRunId() {
 
 }  // namespace
 
-MasterWatch::MasterWatch(double period, std::function<void(const std::string&, const std::string&)> onRestart)
-    : period_(period), on_restart_(std::move(onRestart)), run_id_(masterRunId()), thread_([this] { run(); }) {}
+MasterWatch::MasterWatch(double period,
+                         std::function<void(const std::string&, const std::string&)> onRestart)
+    : period_(period),
+      on_restart_(std::move(onRestart)),
+      run_id_(masterRunId()),
+      thread_([this] { run(); }) {}
 
 MasterWatch::~MasterWatch() {
   {
@@ -32,7 +36,8 @@ MasterWatch::~MasterWatch() {
 
 void MasterWatch::run() {
   std::unique_lock<std::mutex> lock(mutex_);
-  while (!stop_cv_.wait_for(lock, std::chrono::duration<double>(period_), [this] { return stop_; })) {
+  while (
+      !stop_cv_.wait_for(lock, std::chrono::duration<double>(period_), [this] { return stop_; })) {
     lock.unlock();
     const std::string id = masterRunId();
     lock.lock();

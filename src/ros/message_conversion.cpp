@@ -8,13 +8,16 @@ namespace drivetrain_stiffness {
 
 ros::Time toRosTime(Stamp s) {
   if (!s.inRosRange()) {
-    throw InvalidInput("stamp = " + formatValue(s.toSec()) + " s: outside ROS time [0, 4294967295.999999999] s (1970 to 2106)");
+    throw InvalidInput("stamp = " + formatValue(s.toSec()) +
+                       " s: outside ROS time [0, 4294967295.999999999] s (1970 to 2106)");
   }
   return ros::Time(static_cast<std::uint32_t>(s.sec()), static_cast<std::uint32_t>(s.nsec()));
 }
 
 TorqueInput toTorqueInput(const geometry_msgs::WrenchStamped& msg, std::string_view publisher) {
-  return {fromRosTime(msg.header.stamp), msg.wrench.torque.z, {publisher, msg.header.seq, msg.header.frame_id}};
+  return {fromRosTime(msg.header.stamp),
+          msg.wrench.torque.z,
+          {publisher, msg.header.seq, msg.header.frame_id}};
 }
 
 void toPreloadSettings(const drivetrain_stiffness::Preload& msg, std::vector<PreloadSetting>& out) {
@@ -67,7 +70,9 @@ void fillStiffnessMsg(Stamp stamp, const std::string& frame_id, const StiffnessE
   out.radial_stiffness_1 = estimate.supports.size() > 1 ? out.bearings[1].radial_stiffness : 0.0;
 }
 
-drivetrain_stiffness::TransmissionError toTransmissionErrorMsg(Stamp stamp, const std::string& frame_id, const DynamicsSample& s) {
+drivetrain_stiffness::TransmissionError toTransmissionErrorMsg(Stamp stamp,
+                                                               const std::string& frame_id,
+                                                               const DynamicsSample& s) {
   drivetrain_stiffness::TransmissionError m;
   m.header.stamp = toRosTime(stamp);
   m.header.frame_id = frame_id;
@@ -84,7 +89,8 @@ drivetrain_stiffness::TransmissionError toTransmissionErrorMsg(Stamp stamp, cons
   return m;
 }
 
-drivetrain_stiffness::SpectralPeaks toSpectralPeaksMsg(Stamp stamp, const std::string& frame_id, const SpectrumPeaks& in) {
+drivetrain_stiffness::SpectralPeaks toSpectralPeaksMsg(Stamp stamp, const std::string& frame_id,
+                                                       const SpectrumPeaks& in) {
   drivetrain_stiffness::SpectralPeaks peaks;
   peaks.header.stamp = toRosTime(stamp);
   peaks.header.frame_id = frame_id;
@@ -102,7 +108,8 @@ drivetrain_stiffness::SpectralPeaks toSpectralPeaksMsg(Stamp stamp, const std::s
   return peaks;
 }
 
-drivetrain_stiffness::Resonance toResonanceMsg(Stamp stamp, const std::string& frame_id, const ResonanceEstimate& r) {
+drivetrain_stiffness::Resonance toResonanceMsg(Stamp stamp, const std::string& frame_id,
+                                               const ResonanceEstimate& r) {
   drivetrain_stiffness::Resonance msg;
   msg.header.stamp = toRosTime(stamp);
   msg.header.frame_id = frame_id;
@@ -117,8 +124,9 @@ drivetrain_stiffness::Resonance toResonanceMsg(Stamp stamp, const std::string& f
   msg.f3_hz = r.modes[2].natural_frequency;
   msg.floquet_valid = r.floquet_valid;
   msg.floquet_margin = r.floquet_margin;
-  msg.source = "modal: bearing model at this load, mean composite mesh stiffness of the flank state; "
-               "Floquet: exact monodromy of the mesh period";
+  msg.source =
+      "modal: bearing model at this load, mean composite mesh stiffness of the flank state; "
+      "Floquet: exact monodromy of the mesh period";
   return msg;
 }
 
@@ -126,7 +134,9 @@ namespace {
 
 /// Never a NaN on a topic: a non-finite number is refused with the message field named.
 double finite(const char* msg, const char* field, double value) {
-  if (!std::isfinite(value)) throw InvalidInput(std::string(msg) + "." + field + " = " + formatValue(value) + ": not finite, not published");
+  if (!std::isfinite(value))
+    throw InvalidInput(std::string(msg) + "." + field + " = " + formatValue(value) +
+                       ": not finite, not published");
   return value;
 }
 
@@ -134,8 +144,8 @@ double finite(const char* msg, const char* field, double value) {
 
 // The message has flat fields for the five parameters and the three features: a change of either
 // vector must come with a change of the message.
-static_assert(kCalibrationSize == 5 && kMeshScale == 0 && kPinionBearingScale == 1 && kGearBearingScale == 2 &&
-                  kPreloadTorque == 3 && kTeOffset == 4,
+static_assert(kCalibrationSize == 5 && kMeshScale == 0 && kPinionBearingScale == 1 &&
+                  kGearBearingScale == 2 && kPreloadTorque == 3 && kTeOffset == 4,
               "Calibration.msg holds exactly these parameters");
 static_assert(kFeatureSize == 3, "Calibration.msg holds the mean TE and two mesh harmonics");
 
@@ -145,10 +155,12 @@ void fillStiffnessBands(const CalibrationBands& b, drivetrain_stiffness::Stiffne
   m.mesh_stiffness_mean_calibrated = f("mesh_stiffness_mean_calibrated", b.mesh_stiffness);
   m.mesh_stiffness_mean_low = f("mesh_stiffness_mean_low", b.mesh_stiffness_low);
   m.mesh_stiffness_mean_high = f("mesh_stiffness_mean_high", b.mesh_stiffness_high);
-  m.pinion_bearing_stiffness_calibrated = f("pinion_bearing_stiffness_calibrated", b.bearing_stiffness[0]);
+  m.pinion_bearing_stiffness_calibrated =
+      f("pinion_bearing_stiffness_calibrated", b.bearing_stiffness[0]);
   m.pinion_bearing_stiffness_low = f("pinion_bearing_stiffness_low", b.bearing_stiffness_low[0]);
   m.pinion_bearing_stiffness_high = f("pinion_bearing_stiffness_high", b.bearing_stiffness_high[0]);
-  m.gear_bearing_stiffness_calibrated = f("gear_bearing_stiffness_calibrated", b.bearing_stiffness[1]);
+  m.gear_bearing_stiffness_calibrated =
+      f("gear_bearing_stiffness_calibrated", b.bearing_stiffness[1]);
   m.gear_bearing_stiffness_low = f("gear_bearing_stiffness_low", b.bearing_stiffness_low[1]);
   m.gear_bearing_stiffness_high = f("gear_bearing_stiffness_high", b.bearing_stiffness_high[1]);
 }
@@ -167,7 +179,8 @@ void fillResonanceBands(const CalibrationBands& b, drivetrain_stiffness::Resonan
   m.f3_hz_high = f("f3_hz_high", b.natural_frequency_high[2]);
 }
 
-drivetrain_stiffness::Calibration toCalibrationMsg(Stamp stamp, const std::string& frame_id, const CalibrationEstimate& e) {
+drivetrain_stiffness::Calibration toCalibrationMsg(Stamp stamp, const std::string& frame_id,
+                                                   const CalibrationEstimate& e) {
   auto f = [](const char* field, double value) { return finite("calibration", field, value); };
   drivetrain_stiffness::Calibration m;
   m.header.stamp = toRosTime(stamp);
@@ -231,7 +244,8 @@ drivetrain_stiffness::Calibration toCalibrationMsg(Stamp stamp, const std::strin
   return m;
 }
 
-drivetrain_stiffness::MeasuredTe toMeasuredTeMsg(Stamp stamp, const std::string& frame_id, const MeasuredTeSample& s) {
+drivetrain_stiffness::MeasuredTe toMeasuredTeMsg(Stamp stamp, const std::string& frame_id,
+                                                 const MeasuredTeSample& s) {
   auto f = [](const char* field, double value) { return finite("measured_te", field, value); };
   drivetrain_stiffness::MeasuredTe m;
   m.header.stamp = toRosTime(stamp);
@@ -244,8 +258,11 @@ drivetrain_stiffness::MeasuredTe toMeasuredTeMsg(Stamp stamp, const std::string&
   return m;
 }
 
-drivetrain_stiffness::MeshPeriodStats toMeshPeriodStatsMsg(Stamp stamp, const std::string& frame_id, const MeshPeriodStatistics& s) {
-  auto f = [](const char* field, double value) { return finite("mesh_period_stats", field, value); };
+drivetrain_stiffness::MeshPeriodStats toMeshPeriodStatsMsg(Stamp stamp, const std::string& frame_id,
+                                                           const MeshPeriodStatistics& s) {
+  auto f = [](const char* field, double value) {
+    return finite("mesh_period_stats", field, value);
+  };
   drivetrain_stiffness::MeshPeriodStats m;
   m.header.stamp = toRosTime(stamp);
   m.header.frame_id = frame_id;
@@ -266,7 +283,8 @@ drivetrain_stiffness::MeshPeriodStats toMeshPeriodStatsMsg(Stamp stamp, const st
 std::string calibrationStatus(const RigPipeline& pipeline) {
   if (const Calibrator* c = pipeline.calibrator()) {
     const CalibrationEstimate& e = c->estimate();
-    return e.windows == 0 ? "waiting for the first window (a gear turn at a steady torque)" : toString(e.outcome);
+    return e.windows == 0 ? "waiting for the first window (a gear turn at a steady torque)"
+                          : toString(e.outcome);
   }
   if (!pipeline.rig().calibration.present) return "off: the gearbox has no calibration block";
   if (!pipeline.options().calibrate) return "off: ~calibrate is false";
@@ -291,13 +309,15 @@ std::string jointNamesOf(const sensor_msgs::JointState& msg) {
   if (msg.name.empty()) return "no joint names";
   std::string names = "joints ";
   for (std::size_t i = 0; i < msg.name.size(); ++i) {
-    if (i == 4 && msg.name.size() > 5) return names + ", ... (" + std::to_string(msg.name.size()) + " in all)";
+    if (i == 4 && msg.name.size() > 5)
+      return names + ", ... (" + std::to_string(msg.name.size()) + " in all)";
     names += (i ? ", '" : "'") + printableText(msg.name[i]) + "'";
   }
   return names;
 }
 
-std::optional<MotionInput> toMotionInput(const sensor_msgs::JointState& msg, const JointNames& names, std::string& why) {
+std::optional<MotionInput> toMotionInput(const sensor_msgs::JointState& msg,
+                                         const JointNames& names, std::string& why) {
   // sensor_msgs/JointState: name[i] goes with position[i], velocity[i], effort[i]; velocity and
   // effort may be empty (not measured).
   auto index = [&](const std::string& joint) -> long {
@@ -308,16 +328,20 @@ std::optional<MotionInput> toMotionInput(const sensor_msgs::JointState& msg, con
   };
   const long p = index(names.pinion);
   if (p < 0 || static_cast<std::size_t>(p) >= msg.position.size()) {
-    why = p < 0 ? "no joint named '" + names.pinion + "' (~pinion_joint); the message has " + jointNamesOf(msg)
-                : "joint '" + names.pinion + "' has no position (" + std::to_string(msg.position.size()) + " positions for " +
+    why = p < 0 ? "no joint named '" + names.pinion + "' (~pinion_joint); the message has " +
+                      jointNamesOf(msg)
+                : "joint '" + names.pinion + "' has no position (" +
+                      std::to_string(msg.position.size()) + " positions for " +
                       std::to_string(msg.name.size()) + " names)";
     return std::nullopt;
   }
   MotionInput m;
   m.pinion_angle = msg.position[static_cast<std::size_t>(p)];
-  if (static_cast<std::size_t>(p) < msg.velocity.size()) m.pinion_velocity = msg.velocity[static_cast<std::size_t>(p)];
+  if (static_cast<std::size_t>(p) < msg.velocity.size())
+    m.pinion_velocity = msg.velocity[static_cast<std::size_t>(p)];
   const long g = index(names.gear);
-  if (g >= 0 && static_cast<std::size_t>(g) < msg.position.size()) m.gear_angle = msg.position[static_cast<std::size_t>(g)];
+  if (g >= 0 && static_cast<std::size_t>(g) < msg.position.size())
+    m.gear_angle = msg.position[static_cast<std::size_t>(g)];
   return m;
 }
 

@@ -8,7 +8,8 @@ namespace drivetrain_stiffness {
 namespace {
 
 double nominalMeshForce(const RigConfig& rig) {
-  const double torque = rig.dynamics.present ? rig.dynamics.torque : 0.1;  // seed 000 Table 1: 0.1 N*m
+  const double torque =
+      rig.dynamics.present ? rig.dynamics.torque : 0.1;  // seed 000 Table 1: 0.1 N*m
   return std::abs(meshForce(rig.gears, 0, torque));
 }
 
@@ -18,23 +19,27 @@ MessageSink::MessageSink(const RigPipeline& pipeline, const OutputSettings& sett
     : settings_(settings),
       tf_rate_(pipeline.settings().tf_rate),
       exaggeration_(pipeline.settings().exaggeration),
-      visualizer_(pipeline.estimator().mesh().geometry(), pipeline.rig().gears.face_width, nominalMeshForce(pipeline.rig()),
-                  settings.frames, pipeline.settings().exaggeration) {}
+      visualizer_(pipeline.estimator().mesh().geometry(), pipeline.rig().gears.face_width,
+                  nominalMeshForce(pipeline.rig()), settings.frames,
+                  pipeline.settings().exaggeration) {}
 
 void MessageSink::apply(const RuntimeSettings& settings) {
   tf_rate_ = settings.tf_rate;
   exaggeration_ = settings.exaggeration;
 }
 
-void MessageSink::stiffness(Stamp stamp, const StiffnessEstimate& estimate, const CalibrationBands& bands) {
+void MessageSink::stiffness(Stamp stamp, const StiffnessEstimate& estimate,
+                            const CalibrationBands& bands) {
   fillStiffnessMsg(stamp, settings_.frames.rig, estimate, stiffness_msg_);
   fillStiffnessBands(bands, stiffness_msg_);
   stiffness_msg_.header.seq = stiffness_seq_++;
   emitStiffness(stiffness_msg_);
 }
 
-void MessageSink::transmissionError(Stamp stamp, const DynamicsSample& sample, const SampleContext& context) {
-  drivetrain_stiffness::TransmissionError te = toTransmissionErrorMsg(stamp, settings_.frames.pinion, sample);
+void MessageSink::transmissionError(Stamp stamp, const DynamicsSample& sample,
+                                    const SampleContext& context) {
+  drivetrain_stiffness::TransmissionError te =
+      toTransmissionErrorMsg(stamp, settings_.frames.pinion, sample);
   te.header.seq = te_seq_++;
   emitTransmissionError(te);
   if (tf_rate_ <= 0.0) return;
@@ -50,7 +55,8 @@ void MessageSink::spectrum(Stamp stamp, const SpectrumPeaks& peaks) {
   emitSpectrum(toSpectralPeaksMsg(stamp, settings_.frames.pinion, peaks));
 }
 
-void MessageSink::resonance(Stamp stamp, const ResonanceEstimate& estimate, const CalibrationBands& bands) {
+void MessageSink::resonance(Stamp stamp, const ResonanceEstimate& estimate,
+                            const CalibrationBands& bands) {
   drivetrain_stiffness::Resonance m = toResonanceMsg(stamp, settings_.frames.rig, estimate);
   fillResonanceBands(bands, m);
   emitResonance(m);
@@ -69,7 +75,8 @@ void MessageSink::calibration(Stamp stamp, const CalibrationEstimate& estimate) 
 }
 
 void MessageSink::meshPeriod(Stamp stamp, const MeshPeriodStatistics& stats) {
-  drivetrain_stiffness::MeshPeriodStats m = toMeshPeriodStatsMsg(stamp, settings_.frames.pinion, stats);
+  drivetrain_stiffness::MeshPeriodStats m =
+      toMeshPeriodStatsMsg(stamp, settings_.frames.pinion, stats);
   m.header.seq = mesh_period_seq_++;
   emitMeshPeriodStats(m);
 }

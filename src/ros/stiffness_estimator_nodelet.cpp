@@ -14,7 +14,8 @@ class StiffnessEstimatorNodelet : public nodelet::Nodelet {
   void onInit() override {
     try {
       // Multi-threaded handles: the class locks its own state.
-      estimator_ = std::make_unique<StiffnessEstimatorRos>(getMTNodeHandle(), getMTPrivateNodeHandle());
+      estimator_ =
+          std::make_unique<StiffnessEstimatorRos>(getMTNodeHandle(), getMTPrivateNodeHandle());
     } catch (const std::exception& e) {
       NODELET_FATAL("stiffness_estimator: %s", e.what());
       throw;  // the manager reports the failed load

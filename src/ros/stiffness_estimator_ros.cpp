@@ -62,31 +62,44 @@ class StiffnessEstimatorRos::Publishers : public MessageSink {
     stiffness_ = nh.advertise<drivetrain_stiffness::Stiffness>("stiffness", 10000);
     // A torque input can release many samples at once (the gap since the previous input).
     te_ = nh.advertise<drivetrain_stiffness::TransmissionError>("transmission_error", 10000);
-    resonance_ = nh.advertise<drivetrain_stiffness::Resonance>("resonance", 10, true);  // latched: the last estimate
+    resonance_ = nh.advertise<drivetrain_stiffness::Resonance>("resonance", 10,
+                                                               true);  // latched: the last estimate
     spectrum_ = nh.advertise<drivetrain_stiffness::SpectralPeaks>("te_spectrum", 100);
     markers_ = nh.advertise<visualization_msgs::MarkerArray>("rig_markers", 10);
-    // The live calibration (the calibration rule): one measured TE per encoder reading (as transmission_error),
-    // one calibration per closed window. Advertised with or without a calibration block, so the
-    // interface does not depend on the gearbox file.
+    // The live calibration (the calibration rule): one measured TE per encoder reading (as
+    // transmission_error), one calibration per closed window. Advertised with or without a
+    // calibration block, so the interface does not depend on the gearbox file.
     measured_te_ = nh.advertise<drivetrain_stiffness::MeasuredTe>("measured_te", 10000);
     calibration_ = nh.advertise<drivetrain_stiffness::Calibration>("calibration", 10000);
     // The TE and mesh force per block of whole mesh periods (~10 output samples or more each).
-    mesh_period_stats_ = nh.advertise<drivetrain_stiffness::MeshPeriodStats>("mesh_period_stats", 1000);
+    mesh_period_stats_ =
+        nh.advertise<drivetrain_stiffness::MeshPeriodStats>("mesh_period_stats", 1000);
   }
 
  protected:
   void emitStiffness(const drivetrain_stiffness::Stiffness& m) override { stiffness_.publish(m); }
-  void emitTransmissionError(const drivetrain_stiffness::TransmissionError& m) override { te_.publish(m); }
+  void emitTransmissionError(const drivetrain_stiffness::TransmissionError& m) override {
+    te_.publish(m);
+  }
   void emitSpectrum(const drivetrain_stiffness::SpectralPeaks& m) override { spectrum_.publish(m); }
   void emitResonance(const drivetrain_stiffness::Resonance& m) override { resonance_.publish(m); }
-  void emitMeasuredTe(const drivetrain_stiffness::MeasuredTe& m) override { measured_te_.publish(m); }
-  void emitCalibration(const drivetrain_stiffness::Calibration& m) override { calibration_.publish(m); }
-  void emitMeshPeriodStats(const drivetrain_stiffness::MeshPeriodStats& m) override { mesh_period_stats_.publish(m); }
-  void emitTransforms(const std::vector<geometry_msgs::TransformStamped>& t) override { tf_.sendTransform(t); }
+  void emitMeasuredTe(const drivetrain_stiffness::MeasuredTe& m) override {
+    measured_te_.publish(m);
+  }
+  void emitCalibration(const drivetrain_stiffness::Calibration& m) override {
+    calibration_.publish(m);
+  }
+  void emitMeshPeriodStats(const drivetrain_stiffness::MeshPeriodStats& m) override {
+    mesh_period_stats_.publish(m);
+  }
+  void emitTransforms(const std::vector<geometry_msgs::TransformStamped>& t) override {
+    tf_.sendTransform(t);
+  }
   void emitMarkers(const visualization_msgs::MarkerArray& m) override { markers_.publish(m); }
 
  private:
-  ros::Publisher stiffness_, te_, resonance_, spectrum_, markers_, measured_te_, calibration_, mesh_period_stats_;
+  ros::Publisher stiffness_, te_, resonance_, spectrum_, markers_, measured_te_, calibration_,
+      mesh_period_stats_;
   tf2_ros::TransformBroadcaster tf_;
 };
 
@@ -96,30 +109,38 @@ StiffnessEstimatorRos::StiffnessEstimatorRos(ros::NodeHandle nh, ros::NodeHandle
     : diagnostics_(nh, pnh, pnh.getNamespace()) {
   gearbox_config_ = readParam<std::string>(pnh, "gearbox_config", "");
   if (gearbox_config_.empty()) {
-    throw InvalidInput("~gearbox_config: required parameter (path to a gearbox YAML file) is missing");
+    throw InvalidInput(
+        "~gearbox_config: required parameter (path to a gearbox YAML file) is missing");
   }
   const RigConfig rig = loadRigFile(gearbox_config_);
-  const auto get = [&pnh](const std::string& name, const auto& fallback) { return readParam(pnh, name, fallback); };
-  pipeline_ = std::make_unique<RigPipeline>(rig, readPipelineOptions(get, rig), readRuntimeSettings(get, rig));
+  const auto get = [&pnh](const std::string& name, const auto& fallback) {
+    return readParam(pnh, name, fallback);
+  };
+  pipeline_ = std::make_unique<RigPipeline>(rig, readPipelineOptions(get, rig),
+                                            readRuntimeSettings(get, rig));
   publishers_ = std::make_unique<Publishers>(nh, *pipeline_, readOutputSettings(get));
   joints_ = readJointNames(get);
   deadline_ = readParam(pnh, "deadline", deadline_);
   requirePositive("~deadline", deadline_);
   const int queue = readParam(pnh, "torque_queue_size", 1000);
   if (queue < 1 || queue > 1000000) {
-    throw InvalidInput("~torque_queue_size = " + std::to_string(queue) + ": must be in [1, 1000000]");
+    throw InvalidInput("~torque_queue_size = " + std::to_string(queue) +
+                       ": must be in [1, 1000000]");
   }
   diagnostic_period_ = readParam(pnh, "diagnostic_period", diagnostic_period_);
   if (!(diagnostic_period_ > 0.0 && diagnostic_period_ <= 60.0)) {
-    throw InvalidInput("~diagnostic_period = " + formatValue(diagnostic_period_) + ": must be in (0, 60] s");
+    throw InvalidInput("~diagnostic_period = " + formatValue(diagnostic_period_) +
+                       ": must be in (0, 60] s");
   }
   shed_queue_age_ = readParam(pnh, "shed_queue_age", shed_queue_age_);
   if (!(shed_queue_age_ >= 0.0 && shed_queue_age_ <= 60.0)) {
-    throw InvalidInput("~shed_queue_age = " + formatValue(shed_queue_age_) + ": must be in [0, 60] s (0: never shed)");
+    throw InvalidInput("~shed_queue_age = " + formatValue(shed_queue_age_) +
+                       ": must be in [0, 60] s (0: never shed)");
   }
   const double master_check_period = readParam(pnh, "master_check_period", 1.0);
   if (!(master_check_period >= 0.0 && master_check_period <= 60.0)) {
-    throw InvalidInput("~master_check_period = " + formatValue(master_check_period) + ": must be in [0, 60] s (0: off)");
+    throw InvalidInput("~master_check_period = " + formatValue(master_check_period) +
+                       ": must be in [0, 60] s (0: off)");
   }
   // Starts under this master: the parameter server outlives a respawned process, so a SIGKILL and
   // roslaunch's respawn show up as a restart on /diagnostics. Written by the node, not a setting.
@@ -138,40 +159,53 @@ StiffnessEstimatorRos::StiffnessEstimatorRos(ros::NodeHandle nh, ros::NodeHandle
   pnh.setParam("exaggeration", run.exaggeration);
   pnh.setParam("stiffness_rate", run.stiffness_rate);
   pnh.setParam("tf_rate", run.tf_rate);
-  reconfigure_ = std::make_unique<dynamic_reconfigure::Server<drivetrain_stiffness::EstimatorConfig>>(reconfigure_mutex_, pnh);
-  reconfigure_->setCallback([this](drivetrain_stiffness::EstimatorConfig& c, std::uint32_t level) { onReconfigure(c, level); });
+  reconfigure_ =
+      std::make_unique<dynamic_reconfigure::Server<drivetrain_stiffness::EstimatorConfig>>(
+          reconfigure_mutex_, pnh);
+  reconfigure_->setCallback([this](drivetrain_stiffness::EstimatorConfig& c, std::uint32_t level) {
+    onReconfigure(c, level);
+  });
 
   diagnostics_.setHardwareID("drivetrain_stiffness");
   diagnostics_.add("stiffness_estimator", this, &StiffnessEstimatorRos::diagnose);
   // Relative topic names, so launch files can remap and namespace them (wiki.ros.org/Names).
-  torque_sub_ = nh.subscribe("torque", static_cast<std::uint32_t>(queue),
-                                                           &StiffnessEstimatorRos::onTorque, this, ros::TransportHints().tcpNoDelay());
+  torque_sub_ =
+      nh.subscribe("torque", static_cast<std::uint32_t>(queue), &StiffnessEstimatorRos::onTorque,
+                   this, ros::TransportHints().tcpNoDelay());
   preload_sub_ = nh.subscribe("preload", 100, &StiffnessEstimatorRos::onPreload, this);
   // The rig's encoders, by the ROS convention for joint positions (sensor_msgs/JointState).
-  joint_states_sub_ = nh.subscribe("joint_states", 1000, &StiffnessEstimatorRos::onJointStates, this,
-                                   ros::TransportHints().tcpNoDelay());
+  joint_states_sub_ = nh.subscribe("joint_states", 1000, &StiffnessEstimatorRos::onJointStates,
+                                   this, ros::TransportHints().tcpNoDelay());
   // The updater publishes at ~diagnostic_period; poll it often enough to keep that period.
-  diagnostic_timer_ = nh.createWallTimer(ros::WallDuration(0.05), [this](const ros::WallTimerEvent&) { onDiagnosticTimer(); });
+  diagnostic_timer_ = nh.createWallTimer(
+      ros::WallDuration(0.05), [this](const ros::WallTimerEvent&) { onDiagnosticTimer(); });
   private_namespace_ = pnh.getNamespace();
   pnh.getParam(private_namespace_, parameters_);
   if (master_check_period > 0.0) {
-    master_watch_ = std::make_unique<MasterWatch>(master_check_period, [this](const std::string& a, const std::string& b) {
-      onMasterRestart(a, b);
-    });
+    master_watch_ = std::make_unique<MasterWatch>(
+        master_check_period,
+        [this](const std::string& a, const std::string& b) { onMasterRestart(a, b); });
   }
-  ROS_INFO("stiffness_estimator: %zu bearing supports from %s; dynamics %s; calibration %s; start %d under this master",
-           rig.bearings.size(), gearbox_config_.c_str(), pipeline_->dynamics() ? toString(pipeline_->settings().fidelity) : "off",
-           pipeline_->calibrator() ? "on" : calibrationStatus(*pipeline_).c_str(), starts_);
+  ROS_INFO(
+      "stiffness_estimator: %zu bearing supports from %s; dynamics %s; calibration %s; start %d "
+      "under this master",
+      rig.bearings.size(), gearbox_config_.c_str(),
+      pipeline_->dynamics() ? toString(pipeline_->settings().fidelity) : "off",
+      pipeline_->calibrator() ? "on" : calibrationStatus(*pipeline_).c_str(), starts_);
 }
 
 StiffnessEstimatorRos::~StiffnessEstimatorRos() = default;
 
-void StiffnessEstimatorRos::onMasterRestart(const std::string& old_run_id, const std::string& new_run_id) {
+void StiffnessEstimatorRos::onMasterRestart(const std::string& old_run_id,
+                                            const std::string& new_run_id) {
   // The parameters go first, so that the respawned process reads the same settings it had.
   if (parameters_.valid()) ros::param::set(private_namespace_, parameters_);
-  ROS_ERROR("stiffness_estimator: the ROS master restarted (run_id %s -> %s): this node's topics are no longer "
-            "registered; its parameters are restored and it exits for roslaunch to respawn it (rig.launch: respawn)",
-            old_run_id.c_str(), new_run_id.c_str());
+  ROS_ERROR(
+      "stiffness_estimator: the ROS master restarted (run_id %s -> %s): this node's topics are no "
+      "longer "
+      "registered; its parameters are restored and it exits for roslaunch to respawn it "
+      "(rig.launch: respawn)",
+      old_run_id.c_str(), new_run_id.c_str());
   ros::requestShutdown();
 }
 
@@ -199,22 +233,24 @@ void StiffnessEstimatorRos::finishInput(const ros::WallTime& start, double cpu_s
   if (cpu > deadline_) ++missed_deadlines_cpu_;
 }
 
-void StiffnessEstimatorRos::onTorque(const ros::MessageEvent<const geometry_msgs::WrenchStamped>& event) {
+void StiffnessEstimatorRos::onTorque(
+    const ros::MessageEvent<const geometry_msgs::WrenchStamped>& event) {
   const ros::WallTime start = ros::WallTime::now();
   const double cpu_start = threadCpuSeconds();
   const geometry_msgs::WrenchStamped& msg = *event.getConstMessage();
   std::lock_guard<std::mutex> lock(mutex_);
   observeClock();
   const TorqueInput in = toTorqueInput(msg, event.getPublisherName());
-  const InputOutcome outcome =
-      pipeline_->torque(in.stamp, in.torque, *publishers_, in.origin, backlogOf(event.getReceiptTime()));
+  const InputOutcome outcome = pipeline_->torque(in.stamp, in.torque, *publishers_, in.origin,
+                                                 backlogOf(event.getReceiptTime()));
   if (outcome != InputOutcome::kAccepted) {
     ROS_WARN_THROTTLE(1.0, "stiffness_estimator: %s", pipeline_->counters().last_event.c_str());
   }
   finishInput(start, cpu_start);
 }
 
-void StiffnessEstimatorRos::onPreload(const ros::MessageEvent<const drivetrain_stiffness::Preload>& event) {
+void StiffnessEstimatorRos::onPreload(
+    const ros::MessageEvent<const drivetrain_stiffness::Preload>& event) {
   const ros::WallTime start = ros::WallTime::now();
   const double cpu_start = threadCpuSeconds();
   const drivetrain_stiffness::Preload& msg = *event.getConstMessage();
@@ -229,7 +265,8 @@ void StiffnessEstimatorRos::onPreload(const ros::MessageEvent<const drivetrain_s
   finishInput(start, cpu_start);
 }
 
-void StiffnessEstimatorRos::onJointStates(const ros::MessageEvent<const sensor_msgs::JointState>& event) {
+void StiffnessEstimatorRos::onJointStates(
+    const ros::MessageEvent<const sensor_msgs::JointState>& event) {
   const ros::WallTime start = ros::WallTime::now();
   const double cpu_start = threadCpuSeconds();
   const sensor_msgs::JointState& msg = *event.getConstMessage();
@@ -237,16 +274,18 @@ void StiffnessEstimatorRos::onJointStates(const ros::MessageEvent<const sensor_m
   observeClock();
   const InputOrigin origin{event.getPublisherName(), msg.header.seq, msg.header.frame_id};
   const std::optional<MotionInput> reading = toMotionInput(msg, joints_, joint_refusal_);
-  const InputOutcome outcome = reading ? pipeline_->motion(fromRosTime(msg.header.stamp), *reading, *publishers_, origin)
-                                       : pipeline_->motionRefused(fromRosTime(msg.header.stamp), joint_refusal_, origin,
-                                                                   jointNamesOf(msg));
+  const InputOutcome outcome =
+      reading ? pipeline_->motion(fromRosTime(msg.header.stamp), *reading, *publishers_, origin)
+              : pipeline_->motionRefused(fromRosTime(msg.header.stamp), joint_refusal_, origin,
+                                         jointNamesOf(msg));
   if (outcome != InputOutcome::kAccepted) {
     ROS_WARN_THROTTLE(1.0, "stiffness_estimator: %s", pipeline_->counters().last_event.c_str());
   }
   finishInput(start, cpu_start);
 }
 
-void StiffnessEstimatorRos::onReconfigure(drivetrain_stiffness::EstimatorConfig& config, std::uint32_t /*level*/) {
+void StiffnessEstimatorRos::onReconfigure(drivetrain_stiffness::EstimatorConfig& config,
+                                          std::uint32_t /*level*/) {
   std::lock_guard<std::mutex> lock(mutex_);
   try {
     // All or nothing: RigPipeline::apply validates the whole set before it changes anything (the
@@ -259,12 +298,14 @@ void StiffnessEstimatorRos::onReconfigure(drivetrain_stiffness::EstimatorConfig&
     next.exaggeration = config.exaggeration;
     next.tf_rate = config.tf_rate;
     pipeline_->apply(next);
-    publishers_->apply(pipeline_->settings());  // the same settings for the drawing (tf rate, exaggeration)
+    publishers_->apply(
+        pipeline_->settings());  // the same settings for the drawing (tf rate, exaggeration)
     applied_config_ = config;
     ++reconfigurations_;
   } catch (const InvalidInput& e) {
     ROS_ERROR("stiffness_estimator: reconfiguration refused, settings unchanged: %s", e.what());
-    if (applied_config_) config = *applied_config_;  // what the server echoes back: the settings in force
+    if (applied_config_)
+      config = *applied_config_;  // what the server echoes back: the settings in force
   }
 }
 
@@ -291,36 +332,45 @@ void StiffnessEstimatorRos::diagnose(diagnostic_updater::DiagnosticStatusWrapper
   const std::uint64_t resets = c.clock_resets + c.stamp_resets + c.gap_restarts;
   status.summary(diagnostic_msgs::DiagnosticStatus::OK, "estimating");
   if (rejected > rejected_at_last_report_) {
-    status.summaryf(diagnostic_msgs::DiagnosticStatus::WARN, "%llu inputs rejected since last report; last: %s",
-                    static_cast<unsigned long long>(rejected - rejected_at_last_report_), c.last_event.c_str());
+    status.summaryf(
+        diagnostic_msgs::DiagnosticStatus::WARN, "%llu inputs rejected since last report; last: %s",
+        static_cast<unsigned long long>(rejected - rejected_at_last_report_), c.last_event.c_str());
   }
   if (resets > resets_at_last_report_) {
-    status.mergeSummaryf(diagnostic_msgs::DiagnosticStatus::WARN, "estimator reset: %s", c.last_event.c_str());
+    status.mergeSummaryf(diagnostic_msgs::DiagnosticStatus::WARN, "estimator reset: %s",
+                         c.last_event.c_str());
   }
   if (dropped > dropped_at_last_report_) {
-    status.mergeSummaryf(diagnostic_msgs::DiagnosticStatus::WARN, "%llu inputs dropped on the way since last report",
+    status.mergeSummaryf(diagnostic_msgs::DiagnosticStatus::WARN,
+                         "%llu inputs dropped on the way since last report",
                          static_cast<unsigned long long>(dropped - dropped_at_last_report_));
   }
   if (c.motion_timeouts > motion_timeouts_at_last_report_) {
-    status.mergeSummaryf(diagnostic_msgs::DiagnosticStatus::WARN, "encoders silent for ~motion_timeout: phase from ~pinion_speed_rpm");
+    status.mergeSummaryf(diagnostic_msgs::DiagnosticStatus::WARN,
+                         "encoders silent for ~motion_timeout: phase from ~pinion_speed_rpm");
   }
   if (c.gear_ratio_mismatches > ratio_mismatches_at_last_report_) {
-    status.mergeSummaryf(diagnostic_msgs::DiagnosticStatus::WARN, "gear angle off the tooth ratio: %s", c.last_event.c_str());
+    status.mergeSummaryf(diagnostic_msgs::DiagnosticStatus::WARN,
+                         "gear angle off the tooth ratio: %s", c.last_event.c_str());
   }
   if (c.calibration_errors > calibration_errors_at_last_report_) {
-    status.mergeSummaryf(diagnostic_msgs::DiagnosticStatus::WARN, "%llu calibration errors since last report; last: %s",
-                         static_cast<unsigned long long>(c.calibration_errors - calibration_errors_at_last_report_),
-                         c.last_event.c_str());
+    status.mergeSummaryf(
+        diagnostic_msgs::DiagnosticStatus::WARN,
+        "%llu calibration errors since last report; last: %s",
+        static_cast<unsigned long long>(c.calibration_errors - calibration_errors_at_last_report_),
+        c.last_event.c_str());
   }
   calibration_errors_at_last_report_ = c.calibration_errors;
   motion_timeouts_at_last_report_ = c.motion_timeouts;
   ratio_mismatches_at_last_report_ = c.gear_ratio_mismatches;
   if (c.stiffness_shed > shed_at_last_report_) {
-    status.mergeSummaryf(diagnostic_msgs::DiagnosticStatus::WARN, "overloaded: %llu torque inputs shed since last report",
+    status.mergeSummaryf(diagnostic_msgs::DiagnosticStatus::WARN,
+                         "overloaded: %llu torque inputs shed since last report",
                          static_cast<unsigned long long>(c.stiffness_shed - shed_at_last_report_));
   }
   if (starts_ > 1 && !restart_reported_) {
-    status.mergeSummaryf(diagnostic_msgs::DiagnosticStatus::WARN, "restarted (start %d under this master)", starts_);
+    status.mergeSummaryf(diagnostic_msgs::DiagnosticStatus::WARN,
+                         "restarted (start %d under this master)", starts_);
     restart_reported_ = true;
   }
   rejected_at_last_report_ = rejected;
@@ -330,15 +380,17 @@ void StiffnessEstimatorRos::diagnose(diagnostic_updater::DiagnosticStatusWrapper
   for (const auto& [key, count] : namedCounters(c)) status.add(key, count);
   status.add("last_event", c.last_event);
   status.add("phase_source", pipeline_->phaseSource());
-  // The time-out is taken on the next input's stamp (the encoders rule): with every input stopped, the age of
-  // the last reading on the node's clock says that the phase source above is stale.
-  if (const std::optional<double> silence = pipeline_->encoderSilence(fromRosTime(ros::Time::now()))) {
+  // The time-out is taken on the next input's stamp (the encoders rule): with every input stopped,
+  // the age of the last reading on the node's clock says that the phase source above is stale.
+  if (const std::optional<double> silence =
+          pipeline_->encoderSilence(fromRosTime(ros::Time::now()))) {
     status.add("encoder_silence [s]", *silence);
     if (*silence > pipeline_->options().motion_timeout) {
-      status.mergeSummaryf(diagnostic_msgs::DiagnosticStatus::WARN,
-                           "no joint_states for %.3g s (more than ~motion_timeout) and no input since: the phase "
-                           "falls back to ~pinion_speed_rpm at the next one",
-                           *silence);
+      status.mergeSummaryf(
+          diagnostic_msgs::DiagnosticStatus::WARN,
+          "no joint_states for %.3g s (more than ~motion_timeout) and no input since: the phase "
+          "falls back to ~pinion_speed_rpm at the next one",
+          *silence);
     }
   }
   status.add("process_restarts", starts_ - 1);
@@ -356,11 +408,13 @@ void StiffnessEstimatorRos::diagnose(diagnostic_updater::DiagnosticStatusWrapper
     status.add(s.name + ".radial_stiffness [N/m]", s.solution.radialStiffness());
   }
   if (missed_deadlines_ > late_at_last_report_) {
-    status.mergeSummaryf(diagnostic_msgs::DiagnosticStatus::WARN, "%llu inputs took longer than ~deadline since last report",
+    status.mergeSummaryf(diagnostic_msgs::DiagnosticStatus::WARN,
+                         "%llu inputs took longer than ~deadline since last report",
                          static_cast<unsigned long long>(missed_deadlines_ - late_at_last_report_));
   }
   late_at_last_report_ = missed_deadlines_;
-  // The live calibration (the calibration rule): the last window's outcome, its counts and what the data determined.
+  // The live calibration (the calibration rule): the last window's outcome, its counts and what the
+  // data determined.
   status.add("calibration", calibrationStatus(*pipeline_));
   if (const Calibrator* calibrator = pipeline_->calibrator()) {
     const CalibrationEstimate& e = calibrator->estimate();
@@ -377,11 +431,14 @@ void StiffnessEstimatorRos::diagnose(diagnostic_updater::DiagnosticStatusWrapper
     const std::string waiting = calibrator->waitingReason();
     status.add("calibration_waiting", waiting.empty() ? "no" : waiting);
     if (!waiting.empty() && calibrator->progress().readings > 0) {
-      status.mergeSummaryf(diagnostic_msgs::DiagnosticStatus::WARN, "calibration waiting: %s", waiting.c_str());
+      status.mergeSummaryf(diagnostic_msgs::DiagnosticStatus::WARN, "calibration waiting: %s",
+                           waiting.c_str());
     }
-    static const char* const units[kCalibrationSize] = {"[-]", "[-]", "[-]", "[N*m]", "[m]"};  // CalibrationIndex order
+    static const char* const units[kCalibrationSize] = {"[-]", "[-]", "[-]", "[N*m]",
+                                                        "[m]"};  // CalibrationIndex order
     for (int i = 0; i < kCalibrationSize; ++i) {
-      status.addf(std::string("calibration.") + calibrationName(i) + " " + units[i], "%.6g +- %.2g", e.value[i], e.std[i]);
+      status.addf(std::string("calibration.") + calibrationName(i) + " " + units[i], "%.6g +- %.2g",
+                  e.value[i], e.std[i]);
     }
   }
   if (const DynamicsEstimator* d = pipeline_->dynamics()) {
@@ -393,7 +450,8 @@ void StiffnessEstimatorRos::diagnose(diagnostic_updater::DiagnosticStatusWrapper
     // Real-time factor: model time integrated per second of processing.
     const double rtf = processing_s_ > 0.0 ? c.simulated_s / processing_s_ : 0.0;
     status.add("realtime_factor", rtf);
-    if (rtf > 0.0 && rtf < 1.0) status.mergeSummary(diagnostic_msgs::DiagnosticStatus::WARN, "slower than real time");
+    if (rtf > 0.0 && rtf < 1.0)
+      status.mergeSummary(diagnostic_msgs::DiagnosticStatus::WARN, "slower than real time");
   }
 }
 

@@ -21,7 +21,8 @@ SweepDirection parseSweepDirection(const std::string& field, const std::string& 
   return parseEnum(kSweepDirections, field, text);
 }
 
-std::vector<double> frequencyGrid(const std::string& field, double start, double stop, double step) {
+std::vector<double> frequencyGrid(const std::string& field, double start, double stop,
+                                  double step) {
   requireFinite(field + ".start", start);
   requirePositive(field + ".step", step);
   if (!(stop >= start)) throwInvalid(field + ".stop", stop, "must be >= " + field + ".start");
@@ -33,11 +34,15 @@ std::vector<double> frequencyGrid(const std::string& field, double start, double
 }
 
 double largestRelativeDifference(const std::vector<double>& a, const std::vector<double>& b) {
-  if (a.size() != b.size()) throwInvalid("responses", b.size(), "points against " + std::to_string(a.size()) + ": must be equal");
+  if (a.size() != b.size())
+    throwInvalid("responses", b.size(),
+                 "points against " + std::to_string(a.size()) + ": must be equal");
   double worst = 0.0;
   for (std::size_t i = 0; i < a.size(); ++i) {
-    if (!(a[i] >= 0.0 && b[i] >= 0.0)) throwInvalid("response[" + std::to_string(i) + "]", std::min(a[i], b[i]), "must be >= 0");
-    if (std::max(a[i], b[i]) > 0.0) worst = std::max(worst, std::abs(a[i] - b[i]) / std::max(a[i], b[i]));
+    if (!(a[i] >= 0.0 && b[i] >= 0.0))
+      throwInvalid("response[" + std::to_string(i) + "]", std::min(a[i], b[i]), "must be >= 0");
+    if (std::max(a[i], b[i]) > 0.0)
+      worst = std::max(worst, std::abs(a[i] - b[i]) / std::max(a[i], b[i]));
   }
   return worst;
 }
@@ -85,8 +90,10 @@ SweepOutput torqueSweep(const RigConfig& rig, const SweepSpec& spec) {
     for (double f : order) {
       // Continuous torque at the step: 2 pi f_new t + phi_new = 2 pi f_old t + phi_old (mod 2 pi),
       // so the step itself does not kick the system onto another branch.
-      if (started) ex.torque.retune(f, t);
-      else ex.torque.frequency = f;
+      if (started)
+        ex.torque.retune(f, t);
+      else
+        ex.torque.frequency = f;
       const auto excitation = std::make_shared<RigExcitation>(mesh, p, ex);
       const GearRotorModel model(p, excitation);
       if (!started) {
@@ -164,15 +171,18 @@ SweepOutput torqueSweep(const RigConfig& rig, const SweepSpec& spec) {
   if (out.frequency.size() >= 3) {
     for (int c = 0; c < 3; ++c) {
       // A "peak" that rises less than 2 % above the higher of the two minima separating it from
-      // higher ground (or the curve's end) on either side, i.e. with under 2 % prominence, is window ripple, not a
-      // resonance: on the seed rig the x RMS is flat within 0.43 % over 60-3000 Hz.
+      // higher ground (or the curve's end) on either side, i.e. with under 2 % prominence, is
+      // window ripple, not a resonance: on the seed rig the x RMS is flat within 0.43 % over
+      // 60-3000 Hz.
       const std::vector<double>& y = out.rms[c];
       for (const SpectralPeak& pk : curvePeaks(out.frequency, y, 3)) {
-        const auto i = static_cast<long>(std::lround((pk.frequency - out.frequency.front()) / spec.step));
+        const auto i =
+            static_cast<long>(std::lround((pk.frequency - out.frequency.front()) / spec.step));
         const long top = std::clamp(i, 0L, static_cast<long>(y.size()) - 1);
         double left = y[top], right = y[top];
         for (long j = top - 1; j >= 0 && y[j] <= y[top]; --j) left = std::min(left, y[j]);
-        for (long j = top + 1; j < static_cast<long>(y.size()) && y[j] <= y[top]; ++j) right = std::min(right, y[j]);
+        for (long j = top + 1; j < static_cast<long>(y.size()) && y[j] <= y[top]; ++j)
+          right = std::min(right, y[j]);
         if (pk.amplitude > 1.02 * std::max(left, right)) out.peaks[c].push_back(pk);
       }
     }

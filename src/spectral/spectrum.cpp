@@ -26,19 +26,21 @@ void refine(double a, double b, double c, double* offset, double* height) {
   *height = std::exp(lb - 0.25 * (la - lc) * *offset);
 }
 
-void peaksOf(const std::vector<double>& x, const std::vector<double>& y, int n, int separation, std::size_t first,
-             PeakScratch& scratch, std::vector<SpectralPeak>& out) {
+void peaksOf(const std::vector<double>& x, const std::vector<double>& y, int n, int separation,
+             std::size_t first, PeakScratch& scratch, std::vector<SpectralPeak>& out) {
   std::vector<std::size_t>& maxima = scratch.maxima;
   maxima.clear();
   for (std::size_t k = std::max<std::size_t>(first, 1); k + 1 < y.size(); ++k) {
     if (y[k] > y[k - 1] && y[k] >= y[k + 1]) maxima.push_back(k);
   }
-  std::sort(maxima.begin(), maxima.end(), [&](std::size_t a, std::size_t b) { return y[a] > y[b]; });
+  std::sort(maxima.begin(), maxima.end(),
+            [&](std::size_t a, std::size_t b) { return y[a] > y[b]; });
   std::vector<std::size_t>& kept = scratch.kept;
   kept.clear();
   for (std::size_t k : maxima) {
     bool near = false;
-    for (std::size_t j : kept) near |= (k > j ? k - j : j - k) < static_cast<std::size_t>(separation);
+    for (std::size_t j : kept)
+      near |= (k > j ? k - j : j - k) < static_cast<std::size_t>(separation);
     if (!near) kept.push_back(k);
     if (static_cast<int>(kept.size()) == n) break;
   }
@@ -51,8 +53,8 @@ void peaksOf(const std::vector<double>& x, const std::vector<double>& y, int n, 
   }
 }
 
-std::vector<SpectralPeak> peaksOf(const std::vector<double>& x, const std::vector<double>& y, int n, int separation,
-                                  std::size_t first) {
+std::vector<SpectralPeak> peaksOf(const std::vector<double>& x, const std::vector<double>& y, int n,
+                                  int separation, std::size_t first) {
   PeakScratch scratch;
   std::vector<SpectralPeak> out;
   peaksOf(x, y, n, separation, first, scratch, out);
@@ -85,7 +87,8 @@ SpectrumAnalyzer::SpectrumAnalyzer(int n, double dt) : n_(n) {
   plan_->out.resize(n / 2 + 1);
   {
     std::lock_guard<std::mutex> lock(plannerMutex());
-    plan_->plan = fftw_plan_dft_r2c_1d(n, in_.data(), reinterpret_cast<fftw_complex*>(plan_->out.data()), FFTW_ESTIMATE);
+    plan_->plan = fftw_plan_dft_r2c_1d(
+        n, in_.data(), reinterpret_cast<fftw_complex*>(plan_->out.data()), FFTW_ESTIMATE);
   }
   out_.resolution = 1.0 / (n * dt);
   for (int k = 0; k <= n / 2; ++k) out_.frequency.push_back(k * out_.resolution);
@@ -99,7 +102,8 @@ SpectrumAnalyzer::~SpectrumAnalyzer() {
 }
 
 const Spectrum& SpectrumAnalyzer::compute(const std::vector<double>& x) {
-  if (static_cast<int>(x.size()) != n_) throwInvalid("samples", static_cast<double>(x.size()), "must equal the analyzer length");
+  if (static_cast<int>(x.size()) != n_)
+    throwInvalid("samples", static_cast<double>(x.size()), "must equal the analyzer length");
   double mean = 0.0;
   for (double v : x) {
     requireFinite("signal", v);
@@ -112,7 +116,9 @@ const Spectrum& SpectrumAnalyzer::compute(const std::vector<double>& x) {
 }
 
 Spectrum amplitudeSpectrum(const std::vector<double>& x, double dt) {
-  if (x.size() < 8) throwInvalid("samples", static_cast<double>(x.size()), "need at least 8 samples for a spectrum");
+  if (x.size() < 8)
+    throwInvalid("samples", static_cast<double>(x.size()),
+                 "need at least 8 samples for a spectrum");
   SpectrumAnalyzer analyzer(static_cast<int>(x.size()), dt);
   return analyzer.compute(x);
 }
@@ -124,13 +130,17 @@ std::vector<SpectralPeak> topPeaks(const Spectrum& s, int n, int min_separation)
   return out;
 }
 
-void topPeaks(const Spectrum& s, int n, int min_separation, PeakScratch& scratch, std::vector<SpectralPeak>& out) {
+void topPeaks(const Spectrum& s, int n, int min_separation, PeakScratch& scratch,
+              std::vector<SpectralPeak>& out) {
   if (n < 1) throwInvalid("peaks", n, "must be >= 1");
-  peaksOf(s.frequency, s.amplitude, n, min_separation, 2, scratch, out);  // skip DC and its window leakage
+  peaksOf(s.frequency, s.amplitude, n, min_separation, 2, scratch,
+          out);  // skip DC and its window leakage
 }
 
-std::vector<SpectralPeak> curvePeaks(const std::vector<double>& x, const std::vector<double>& y, int n) {
-  if (x.size() != y.size() || x.size() < 3) throw InvalidInput("curvePeaks: need matching x and y with at least 3 points");
+std::vector<SpectralPeak> curvePeaks(const std::vector<double>& x, const std::vector<double>& y,
+                                     int n) {
+  if (x.size() != y.size() || x.size() < 3)
+    throw InvalidInput("curvePeaks: need matching x and y with at least 3 points");
   return peaksOf(x, y, n, 2, 1);
 }
 

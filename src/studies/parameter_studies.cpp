@@ -25,7 +25,8 @@
 namespace drivetrain_stiffness {
 namespace {
 
-/// Inclusive grid start, start + step, ..., stop (rounded count, so 1e-6..1e-5 by 5e-7 has 19 points).
+/// Inclusive grid start, start + step, ..., stop (rounded count, so 1e-6..1e-5 by 5e-7 has 19
+/// points).
 std::vector<double> grid(double start, double stop, double step) {
   const int n = static_cast<int>(std::lround((stop - start) / step)) + 1;
   std::vector<double> g(n);
@@ -40,9 +41,11 @@ struct Settings {
 
 /// Rig state at `s`: the estimator at the rig's mean torque (the mesh force adds to the radial
 /// preload as on the rig).
-const StiffnessEstimate& solveAt(StiffnessEstimator& estimator, const RigConfig& rig, const Settings& s) {
+const StiffnessEstimate& solveAt(StiffnessEstimator& estimator, const RigConfig& rig,
+                                 const Settings& s) {
   std::vector<PreloadSetting> settings;
-  for (const BearingSupportConfig& b : rig.bearings) settings.push_back({b.name, s.axial, s.radial, s.inner, s.outer});
+  for (const BearingSupportConfig& b : rig.bearings)
+    settings.push_back({b.name, s.axial, s.radial, s.inner, s.outer});
   estimator.setPreloads(settings);
   return estimator.setTorque(rig.dynamics.present ? rig.dynamics.torque : 0.0);
 }
@@ -57,22 +60,30 @@ StudyTable bearingSurface(const RigConfig& rig, bool shrink) {
   StiffnessEstimator estimator(rig);
   Settings s = configured(rig);
   if (shrink) {
-    t = {"bearing_shrink", "seed 000 Fig 4", "surface",
-         {"inner_interference_m", "outer_interference_m", "radial_stiffness_N_per_m"}, {}};
+    t = {"bearing_shrink",
+         "seed 000 Fig 4",
+         "surface",
+         {"inner_interference_m", "outer_interference_m", "radial_stiffness_N_per_m"},
+         {}};
     for (double inner : grid(2e-6, 8e-6, 5e-7))
       for (double outer : grid(2e-6, 8e-6, 5e-7)) {
         s.inner = inner;
         s.outer = outer;
-        t.rows.push_back({inner, outer, solveAt(estimator, rig, s).supports.front().solution.radialStiffness()});
+        t.rows.push_back(
+            {inner, outer, solveAt(estimator, rig, s).supports.front().solution.radialStiffness()});
       }
   } else {
-    t = {"bearing_preload", "seed 000 Fig 5", "surface",
-         {"axial_preload_N", "radial_preload_N", "radial_stiffness_N_per_m"}, {}};
+    t = {"bearing_preload",
+         "seed 000 Fig 5",
+         "surface",
+         {"axial_preload_N", "radial_preload_N", "radial_stiffness_N_per_m"},
+         {}};
     for (double axial : grid(400.0, 2000.0, 100.0))
       for (double radial : grid(400.0, 2000.0, 100.0)) {
         s.axial = axial;
         s.radial = radial;
-        t.rows.push_back({axial, radial, solveAt(estimator, rig, s).supports.front().solution.radialStiffness()});
+        t.rows.push_back({axial, radial,
+                          solveAt(estimator, rig, s).supports.front().solution.radialStiffness()});
       }
   }
   return t;
@@ -80,41 +91,59 @@ StudyTable bearingSurface(const RigConfig& rig, bool shrink) {
 
 /// Natural frequencies at the mean composite mesh stiffness (the linear modes of seed 000 eq 15-18)
 /// with the bearing stiffness of each shaft summed over its supports.
-std::vector<double> resonanceRow(double x, StiffnessEstimator& estimator, const RigConfig& rig, const Settings& s) {
+std::vector<double> resonanceRow(double x, StiffnessEstimator& estimator, const RigConfig& rig,
+                                 const Settings& s) {
   solveAt(estimator, rig, s);
   const std::array<double, 2> kb = estimator.shaftRadialStiffness();
   const double km = meanMeshStiffness(estimator.mesh());
-  const std::array<Mode, 3> modes = modalAnalysis(rigRotorParameters(rig, estimator.mesh(), kb), km);
+  const std::array<Mode, 3> modes =
+      modalAnalysis(rigRotorParameters(rig, estimator.mesh(), kb), km);
   std::vector<double> row{x, kb[0], kb[1], km};
   for (const Mode& m : modes) row.push_back(m.natural_frequency);
-  for (const Mode& m : modes) row.push_back(m.dominant == "x_p" ? 0.0 : m.dominant == "x_g" ? 1.0 : 2.0);
+  for (const Mode& m : modes)
+    row.push_back(m.dominant == "x_p" ? 0.0 : m.dominant == "x_g" ? 1.0 : 2.0);
   return row;
 }
 
-const std::vector<std::string> kResonanceColumns{
-    "pinion_bearing_stiffness_N_per_m", "gear_bearing_stiffness_N_per_m", "mean_mesh_stiffness_N_per_m",
-    "f1_hz", "f2_hz", "f3_hz", "f1_dominant", "f2_dominant", "f3_dominant"};
+const std::vector<std::string> kResonanceColumns{"pinion_bearing_stiffness_N_per_m",
+                                                 "gear_bearing_stiffness_N_per_m",
+                                                 "mean_mesh_stiffness_N_per_m",
+                                                 "f1_hz",
+                                                 "f2_hz",
+                                                 "f3_hz",
+                                                 "f1_dominant",
+                                                 "f2_dominant",
+                                                 "f3_dominant"};
 
 StudyTable resonanceStudy(const RigConfig& rig, bool shrink) {
-  if (!rig.dynamics.present) throw InvalidInput("resonance studies need a 'dynamics:' block (masses, inertias)");
+  if (!rig.dynamics.present)
+    throw InvalidInput("resonance studies need a 'dynamics:' block (masses, inertias)");
   StiffnessEstimator estimator(rig);
   StudyTable t;
   std::vector<std::string> columns{shrink ? "outer_interference_m" : "radial_preload_N"};
   columns.insert(columns.end(), kResonanceColumns.begin(), kResonanceColumns.end());
   if (shrink) {
     t = {"resonance_shrink", "seed 000 Fig 10", "curves", columns, {}};
-    for (double outer : grid(1e-6, 1e-5, 5e-7)) t.rows.push_back(resonanceRow(outer, estimator, rig, {1000.0, 1000.0, 5e-6, outer}));
+    for (double outer : grid(1e-6, 1e-5, 5e-7))
+      t.rows.push_back(resonanceRow(outer, estimator, rig, {1000.0, 1000.0, 5e-6, outer}));
   } else {
     t = {"resonance_preload", "seed 000 Fig 11", "curves", columns, {}};
-    for (double radial : grid(200.0, 2000.0, 100.0)) t.rows.push_back(resonanceRow(radial, estimator, rig, {1200.0, radial, 5e-6, 5e-6}));
+    for (double radial : grid(200.0, 2000.0, 100.0))
+      t.rows.push_back(resonanceRow(radial, estimator, rig, {1200.0, radial, 5e-6, 5e-6}));
   }
   return t;
 }
 
 StudyTable rmsSweep(const RigConfig& rig) {
-  if (!rig.dynamics.present) throw InvalidInput("rms_sweep needs a 'dynamics:' block (masses, inertias)");
-  const SweepOutput sweep = torqueSweep(rig, SweepSpec{});  // seed 000 section 4.2: 60..3000 Hz by 60 Hz
-  StudyTable t{"rms_sweep", "seed 000 Fig 9", "curves", {"frequency_hz", "rms_x_p_m", "rms_x_g_m", "rms_x_m"}, {}};
+  if (!rig.dynamics.present)
+    throw InvalidInput("rms_sweep needs a 'dynamics:' block (masses, inertias)");
+  const SweepOutput sweep =
+      torqueSweep(rig, SweepSpec{});  // seed 000 section 4.2: 60..3000 Hz by 60 Hz
+  StudyTable t{"rms_sweep",
+               "seed 000 Fig 9",
+               "curves",
+               {"frequency_hz", "rms_x_p_m", "rms_x_g_m", "rms_x_m"},
+               {}};
   for (std::size_t i = 0; i < sweep.frequency.size(); ++i)
     t.rows.push_back({sweep.frequency[i], sweep.rms[0][i], sweep.rms[1][i], sweep.rms[2][i]});
   return t;
@@ -123,13 +152,14 @@ StudyTable rmsSweep(const RigConfig& rig) {
 }  // namespace
 
 const std::vector<std::string>& studyNames() {
-  static const std::vector<std::string> names{"bearing_shrink", "bearing_preload", "rms_sweep", "resonance_shrink",
-                                              "resonance_preload"};
+  static const std::vector<std::string> names{"bearing_shrink", "bearing_preload", "rms_sweep",
+                                              "resonance_shrink", "resonance_preload"};
   return names;
 }
 
 StudyTable runStudy(const std::string& name, const RigConfig& rig) {
-  if (rig.bearings.empty()) throw InvalidInput("bearings: the studies need at least one bearing support");
+  if (rig.bearings.empty())
+    throw InvalidInput("bearings: the studies need at least one bearing support");
   if (name == "bearing_shrink") return bearingSurface(rig, true);
   if (name == "bearing_preload") return bearingSurface(rig, false);
   if (name == "rms_sweep") return rmsSweep(rig);

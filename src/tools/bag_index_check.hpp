@@ -30,8 +30,9 @@ struct BagTopic {
 
 /// How the replay reads a connection's messages.
 struct ReadRule {
-  bool read = false;                   ///< the view visits them (a named topic)
-  std::optional<MessageLayout> layout;  ///< and deserializes them as this type (its MD5 sum matches)
+  bool read = false;  ///< the view visits them (a named topic)
+  std::optional<MessageLayout>
+      layout;  ///< and deserializes them as this type (its MD5 sum matches)
 };
 using ReadRules = std::function<ReadRule(const BagConnection&)>;
 

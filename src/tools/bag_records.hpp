@@ -3,8 +3,8 @@
 // SequentialBagReader (reads chunks without the index) and checkBagIndex (checks what the index
 // promises before rosbag::Bag dereferences it).
 //
-// Layout: <header_len u32><header><data_len u32><data>, header = repeated <field_len u32><name>=<value>,
-// integers little-endian, times as <sec u32><nsec u32>.
+// Layout: <header_len u32><header><data_len u32><data>, header = repeated <field_len
+// u32><name>=<value>, integers little-endian, times as <sec u32><nsec u32>.
 #pragma once
 
 #include <cstdint>
@@ -15,7 +15,8 @@
 #include <string>
 #include <string_view>
 
-static_assert(__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__, "bag records are little-endian; this reader copies host integers");
+static_assert(__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__,
+              "bag records are little-endian; this reader copies host integers");
 
 namespace drivetrain_stiffness::bag {
 
@@ -42,8 +43,8 @@ inline std::uint32_t u32(const std::uint8_t* p) {
 
 std::string opName(std::uint8_t op);
 
-/// Calls visit(name, value) for each <len u32><name>=<value> field filling [p, p + n) exactly (views
-/// into the bytes, no copies). Returns what is wrong, or "".
+/// Calls visit(name, value) for each <len u32><name>=<value> field filling [p, p + n) exactly
+/// (views into the bytes, no copies). Returns what is wrong, or "".
 template <typename Visit>
 std::string forEachField(const std::uint8_t* p, std::size_t n, Visit&& visit) {
   for (std::size_t i = 0; i < n;) {
@@ -95,8 +96,9 @@ std::string parseChunkRecord(const std::uint8_t* p, std::size_t n, ChunkRecord& 
 /// chunk may claim at most what LZ4 can expand to (a run length grows by one byte per 255), and a
 /// bz2 chunk, which can expand a million-fold on repetitive data, is decompressed in steps into a
 /// buffer that grows with its output, so a damaged size field never allocates what it asks for.
-std::string decompressChunk(const std::string& compression, const std::uint8_t* in, std::size_t in_size,
-                            std::uint32_t size, std::unique_ptr<std::uint8_t[]>& out);
+std::string decompressChunk(const std::string& compression, const std::uint8_t* in,
+                            std::size_t in_size, std::uint32_t size,
+                            std::unique_ptr<std::uint8_t[]>& out);
 
 /// A top-level record: its header, and where its data is (read separately, only when needed).
 struct TopRecord {

@@ -8,8 +8,9 @@
 // - rosbag::Bag::open reads the index at the end of the file before anything else: an unclosed
 //   recording throws BagUnindexedException, a truncated copy of a closed bag "Error reading from
 //   file: wanted 4 bytes, read 0 bytes" (its header points past the end). rosbag::Bag has no public
-//   way to read chunks without the index (bag.h: readChunkHeader, decompressChunk etc. are private),
-//   and bagmode::Append reads the same index first (openAppend calls startReadingVersion200).
+//   way to read chunks without the index (bag.h: readChunkHeader, decompressChunk etc. are
+//   private), and bagmode::Append reads the same index first (openAppend calls
+//   startReadingVersion200).
 // - `rosbag reindex` (python3-rosbag, _BagReader200.reindex) on a temporary copy would mean a
 //   Python subprocess and a copy of the whole bag, and it loses what we want to keep: on the
 //   first chunk it cannot read (truncated, unterminated, undecompressable) it drops that whole
@@ -35,7 +36,8 @@ namespace drivetrain_stiffness {
 
 /// Where and why reading stopped before the end of a bag.
 struct BagDamage {
-  std::uint64_t offset = 0;  ///< byte offset in the file of the record or chunk where reading failed
+  std::uint64_t offset =
+      0;  ///< byte offset in the file of the record or chunk where reading failed
   std::string what;
   /// "'FILE' at byte OFFSET: WHAT"
   std::string describe(const std::string& file) const;
@@ -46,7 +48,7 @@ struct BagConnection {
   std::string topic;
   std::map<std::string, std::string> header;  ///< type, md5sum, message_definition, callerid, ...
   std::string field(const std::string& name) const;  ///< empty if absent
-  std::uint64_t messages = 0;  ///< message records read on it so far
+  std::uint64_t messages = 0;                        ///< message records read on it so far
 };
 
 /// One message record, as read.
@@ -55,7 +57,8 @@ struct BagRecordMessage {
   ros::Time time;                      ///< record time
   const std::uint8_t* data = nullptr;  ///< serialized message; valid until the next call to next()
   std::uint32_t size = 0;
-  /// Byte offset of the record in the file in an uncompressed chunk; of its chunk in a compressed one.
+  /// Byte offset of the record in the file in an uncompressed chunk; of its chunk in a compressed
+  /// one.
   std::uint64_t offset = 0;
 };
 
@@ -69,7 +72,8 @@ class SequentialBagReader {
   /// (damage() says which); a bag whose index is missing ends in damage.
   bool next(BagRecordMessage& message);
   const std::optional<BagDamage>& damage() const { return damage_; }
-  /// Where the chunks end and the index begins, from the bag header; 0 if not read or never written.
+  /// Where the chunks end and the index begins, from the bag header; 0 if not read or never
+  /// written.
   std::uint64_t indexPosition() const { return index_position_; }
   /// The connections read so far, by id, with the messages read on each.
   const std::map<std::uint32_t, BagConnection>& connections() const { return connections_; }
@@ -97,10 +101,11 @@ class SequentialBagReader {
   // may ask for gigabytes: reserved, never touched).
   std::unique_ptr<std::uint8_t[]> chunk_;
   std::size_t chunk_size_ = 0, chunk_next_ = 0;
-  std::uint64_t chunk_offset_ = 0;       ///< its record in the file
-  std::uint64_t chunk_data_offset_ = 0;  ///< of its data (uncompressed chunks: record offsets in the file)
+  std::uint64_t chunk_offset_ = 0;  ///< its record in the file
+  std::uint64_t chunk_data_offset_ =
+      0;  ///< of its data (uncompressed chunks: record offsets in the file)
   bool chunk_compressed_ = false;
-  std::string chunk_short_;              ///< why its data ends early (truncated, unfinished); empty if whole
+  std::string chunk_short_;  ///< why its data ends early (truncated, unfinished); empty if whole
   std::optional<BagDamage> damage_;
 };
 

@@ -8,10 +8,12 @@
 
 #include <roslz4/lz4s.h>
 
-// Record layout, ROS bag format 2.0 (http://wiki.ros.org/Bags/Format/2.0, "Records" and "Op codes"):
+// Record layout, ROS bag format 2.0 (http://wiki.ros.org/Bags/Format/2.0, "Records" and "Op
+// codes"):
 //   <header_len u32><header><data_len u32><data>, header = repeated <field_len u32><name>=<value>,
 // integers little-endian, times as <sec u32><nsec u32>.
-static_assert(__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__, "bag records are little-endian; this writer copies host integers");
+static_assert(__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__,
+              "bag records are little-endian; this writer copies host integers");
 
 namespace drivetrain_stiffness {
 namespace bag_records {  // record encoding, used only in this file
@@ -24,8 +26,14 @@ constexpr std::uint32_t kFileHeaderLength = 4096;
 // rosbag's LZ4Stream uses block size id 6; roslz4 is the library behind its "lz4" chunks.
 constexpr int kLz4BlockSizeId = 6;
 
-enum Op : std::uint8_t { kMessageData = 0x02, kBagHeader = 0x03, kIndexData = 0x04, kChunk = 0x05, kChunkInfo = 0x06,
-                         kConnection = 0x07 };
+enum Op : std::uint8_t {
+  kMessageData = 0x02,
+  kBagHeader = 0x03,
+  kIndexData = 0x04,
+  kChunk = 0x05,
+  kChunkInfo = 0x06,
+  kConnection = 0x07
+};
 
 void append(std::vector<std::uint8_t>& out, const void* data, std::size_t n) {
   const auto* p = static_cast<const std::uint8_t*>(data);
@@ -63,7 +71,8 @@ class Fields {
 };
 
 /// <header_len><header><data_len><data>
-void appendRecord(std::vector<std::uint8_t>& out, const Fields& header, const void* data, std::size_t n) {
+void appendRecord(std::vector<std::uint8_t>& out, const Fields& header, const void* data,
+                  std::size_t n) {
   appendValue(out, static_cast<std::uint32_t>(header.data().size()));
   append(out, header.data().data(), header.data().size());
   appendValue(out, static_cast<std::uint32_t>(n));
@@ -86,11 +95,16 @@ std::uint8_t* putU32(std::uint8_t* p, std::uint32_t v) { return put(p, &v, sizeo
 using namespace bag_records;  // NOLINT(build/namespaces)
 
 BagWriter::BagWriter(const std::string& path, BagCompression compression, std::size_t chunk_bytes)
-    : path_(path), compression_(compression), chunk_bytes_(chunk_bytes), worker_([this](Chunk& c) { writeChunk(c); }) {
+    : path_(path),
+      compression_(compression),
+      chunk_bytes_(chunk_bytes),
+      worker_([this](Chunk& c) { writeChunk(c); }) {
   if (chunk_bytes_ == 0 || chunk_bytes_ > (1u << 30)) {
-    throw std::invalid_argument("BagWriter: chunk size = " + std::to_string(chunk_bytes) + " bytes, must be in (0, 1 GiB]");
+    throw std::invalid_argument("BagWriter: chunk size = " + std::to_string(chunk_bytes) +
+                                " bytes, must be in (0, 1 GiB]");
   }
-  static_assert(sizeof(IndexEntry) == 12 && sizeof(ChunkInfo::Count) == 8, "index entries are packed u32 fields");
+  static_assert(sizeof(IndexEntry) == 12 && sizeof(ChunkInfo::Count) == 8,
+                "index entries are packed u32 fields");
   file_ = std::fopen(path_.c_str(), "wb");
   if (!file_) throw std::runtime_error("cannot write bag '" + path_ + "': " + std::strerror(errno));
   struct CloseOnThrow {  // the destructor does not run if the constructor throws
@@ -101,7 +115,8 @@ BagWriter::BagWriter(const std::string& path, BagCompression compression, std::s
     }
   } guard{file_};
   writeBytes(kVersionLine, kVersionLineLength);
-  // Placeholder of the final header's exact size (all its fields are fixed-width); rewritten by close().
+  // Placeholder of the final header's exact size (all its fields are fixed-width); rewritten by
+  // close().
   Fields header;
   header.u32("chunk_count", 0).u32("conn_count", 0).u64("index_pos", 0).op(kBagHeader);
   std::vector<std::uint8_t> record;
@@ -120,13 +135,14 @@ BagWriter::~BagWriter() {
   }
 }
 
-std::uint32_t BagWriter::connection(const std::string& topic, const char* datatype, const char* md5sum,
-                                    const char* definition) {
+std::uint32_t BagWriter::connection(const std::string& topic, const char* datatype,
+                                    const char* md5sum, const char* definition) {
   for (std::size_t id = 0; id < connections_.size(); ++id) {
     const Connection& c = connections_[id];
     if (c.topic != topic) continue;
     if (c.datatype != datatype) {
-      throw std::invalid_argument("BagWriter: topic '" + topic + "' has type " + c.datatype + ", not " + datatype);
+      throw std::invalid_argument("BagWriter: topic '" + topic + "' has type " + c.datatype +
+                                  ", not " + datatype);
     }
     return static_cast<std::uint32_t>(id);
   }
@@ -137,19 +153,26 @@ std::uint32_t BagWriter::connection(const std::string& topic, const char* dataty
   // connection header rosbag::Bag::write makes: md5sum, message_definition, type.
   Fields header, connection_header;
   header.u32("conn", id).op(kConnection).text("topic", topic);
-  connection_header.text("md5sum", md5sum).text("message_definition", definition).text("type", datatype);
-  appendRecord(chunk_.data, header, connection_header.data().data(), connection_header.data().size());
-  appendRecord(connection_records_, header, connection_header.data().data(), connection_header.data().size());
+  connection_header.text("md5sum", md5sum)
+      .text("message_definition", definition)
+      .text("type", datatype);
+  appendRecord(chunk_.data, header, connection_header.data().data(),
+               connection_header.data().size());
+  appendRecord(connection_records_, header, connection_header.data().data(),
+               connection_header.data().size());
   chunk_.index.resize(connections_.size());
   return id;
 }
 
 void BagWriter::checkWritable(const std::string& topic, const ros::Time& time) const {
   if (closed_) throw std::logic_error("BagWriter: write after close of '" + path_ + "'");
-  if (time.isZero()) throw std::invalid_argument("BagWriter: record time 0 on topic '" + topic + "' (a bag needs time > 0)");
+  if (time.isZero())
+    throw std::invalid_argument("BagWriter: record time 0 on topic '" + topic +
+                                "' (a bag needs time > 0)");
 }
 
-std::uint8_t* BagWriter::beginMessage(std::uint32_t conn, const ros::Time& time, std::uint32_t length) {
+std::uint8_t* BagWriter::beginMessage(std::uint32_t conn, const ros::Time& time,
+                                      std::uint32_t length) {
   Chunk& c = chunk_;
   if (c.messages++ == 0) {
     c.start = c.end = time;
@@ -199,13 +222,15 @@ void BagWriter::writeChunk(Chunk& chunk) {
       compressed_.resize(capacity);
       auto out_size = static_cast<unsigned int>(capacity);
       const int rc = roslz4_buffToBuffCompress(reinterpret_cast<char*>(chunk.data.data()),
-                                               static_cast<unsigned int>(chunk.data.size()), compressed_.data(), &out_size,
-                                               kLz4BlockSizeId);
+                                               static_cast<unsigned int>(chunk.data.size()),
+                                               compressed_.data(), &out_size, kLz4BlockSizeId);
       if (rc == ROSLZ4_OUTPUT_SMALL) {
         capacity *= 2;
         continue;
       }
-      if (rc != ROSLZ4_OK) throw std::runtime_error("LZ4 compression failed (roslz4 code " + std::to_string(rc) + ") for '" + path_ + "'");
+      if (rc != ROSLZ4_OK)
+        throw std::runtime_error("LZ4 compression failed (roslz4 code " + std::to_string(rc) +
+                                 ") for '" + path_ + "'");
       payload = compressed_.data();
       payload_size = out_size;
       break;
@@ -225,7 +250,10 @@ void BagWriter::writeChunk(Chunk& chunk) {
     });
     const auto count = static_cast<std::uint32_t>(entries.size());
     Fields index_header;
-    index_header.u32("conn", static_cast<std::uint32_t>(id)).u32("count", count).op(kIndexData).u32("ver", 1);
+    index_header.u32("conn", static_cast<std::uint32_t>(id))
+        .u32("count", count)
+        .op(kIndexData)
+        .u32("ver", 1);
     appendRecord(records, index_header, entries.data(), entries.size() * sizeof(IndexEntry));
     info.counts.push_back({static_cast<std::uint32_t>(id), count});
   }
@@ -235,7 +263,8 @@ void BagWriter::writeChunk(Chunk& chunk) {
 
 Fields BagWriter::chunkHeader(std::size_t uncompressed_size) const {
   Fields header;
-  header.text("compression", compression_ == BagCompression::Lz4 ? "lz4" : "none").op(kChunk)
+  header.text("compression", compression_ == BagCompression::Lz4 ? "lz4" : "none")
+      .op(kChunk)
       .u32("size", static_cast<std::uint32_t>(uncompressed_size));
   return header;
 }
@@ -255,20 +284,28 @@ void BagWriter::close() {
   });
   if (!error) {
     try {
-      // Index section (format 2.0, "Bag header": index_pos): every connection record, then one chunk
-      // info record (op 0x06, version 1) per chunk; then the header is rewritten with the counts.
+      // Index section (format 2.0, "Bag header": index_pos): every connection record, then one
+      // chunk info record (op 0x06, version 1) per chunk; then the header is rewritten with the
+      // counts.
       const std::uint64_t index_position = position_;
       std::vector<std::uint8_t> index = connection_records_;
       for (const ChunkInfo& info : chunk_infos_) {
         Fields header;
-        header.u64("chunk_pos", info.position).u32("count", static_cast<std::uint32_t>(info.counts.size()))
-            .time("end_time", info.end).op(kChunkInfo).time("start_time", info.start).u32("ver", 1);
-        appendRecord(index, header, info.counts.data(), info.counts.size() * sizeof(ChunkInfo::Count));
+        header.u64("chunk_pos", info.position)
+            .u32("count", static_cast<std::uint32_t>(info.counts.size()))
+            .time("end_time", info.end)
+            .op(kChunkInfo)
+            .time("start_time", info.start)
+            .u32("ver", 1);
+        appendRecord(index, header, info.counts.data(),
+                     info.counts.size() * sizeof(ChunkInfo::Count));
       }
       writeBytes(index.data(), index.size());
       Fields header;
       header.u32("chunk_count", static_cast<std::uint32_t>(chunk_infos_.size()))
-          .u32("conn_count", static_cast<std::uint32_t>(connections_.size())).u64("index_pos", index_position).op(kBagHeader);
+          .u32("conn_count", static_cast<std::uint32_t>(connections_.size()))
+          .u64("index_pos", index_position)
+          .op(kBagHeader);
       std::vector<std::uint8_t> record;
       const std::string padding(kFileHeaderLength - header.data().size(), ' ');
       appendRecord(record, header, padding.data(), padding.size());
@@ -281,7 +318,8 @@ void BagWriter::close() {
     }
   }
   if (std::fclose(file_) != 0 && !error) {
-    error = std::make_exception_ptr(std::runtime_error("cannot close bag '" + path_ + "': " + std::strerror(errno)));
+    error = std::make_exception_ptr(
+        std::runtime_error("cannot close bag '" + path_ + "': " + std::strerror(errno)));
   }
   file_ = nullptr;
   if (error) std::rethrow_exception(error);

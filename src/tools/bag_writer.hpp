@@ -1,5 +1,6 @@
-// BagWriter: writes ROS bag format 2.0 (http://wiki.ros.org/Bags/Format/2.0) for drivetrain_replay's
-// output streams, readable by rosbag::View, Python rosbag, `rosbag info/play` and rqt_bag.
+// BagWriter: writes ROS bag format 2.0 (http://wiki.ros.org/Bags/Format/2.0) for
+// drivetrain_replay's output streams, readable by rosbag::View, Python rosbag, `rosbag info/play`
+// and rqt_bag.
 //
 // Why not rosbag::Bag::write: measured on this machine, it costs 1.6 us per message with LZ4 and
 // 2.2 us uncompressed, in a bare loop outside our code. Its header template seeks to the end of the
@@ -34,8 +35,10 @@ enum class BagCompression { None, Lz4 };
 class BagWriter {
  public:
   /// Opens (truncates) `path`. A chunk is closed once its uncompressed data exceeds chunk_bytes
-  /// (rosbag's rule and default, 768 KiB). Throws std::runtime_error naming the path if it cannot be written.
-  BagWriter(const std::string& path, BagCompression compression, std::size_t chunk_bytes = 768 * 1024);
+  /// (rosbag's rule and default, 768 KiB). Throws std::runtime_error naming the path if it cannot
+  /// be written.
+  BagWriter(const std::string& path, BagCompression compression,
+            std::size_t chunk_bytes = 768 * 1024);
   ~BagWriter();  ///< closes the bag if close() was not called; errors there are printed, not thrown
   BagWriter(const BagWriter&) = delete;
   BagWriter& operator=(const BagWriter&) = delete;
@@ -45,15 +48,19 @@ class BagWriter {
   template <class M>
   void write(const std::string& topic, const ros::Time& time, const M& msg) {
     namespace mt = ros::message_traits;
-    checkWritable(topic, time);  // before connection(): a refused write leaves no connection behind, as in rosbag
-    const std::uint32_t conn = connection(topic, mt::datatype(msg), mt::md5sum(msg), mt::definition(msg));
+    checkWritable(
+        topic,
+        time);  // before connection(): a refused write leaves no connection behind, as in rosbag
+    const std::uint32_t conn =
+        connection(topic, mt::datatype(msg), mt::md5sum(msg), mt::definition(msg));
     const std::uint32_t length = ros::serialization::serializationLength(msg);
     ros::serialization::OStream out(beginMessage(conn, time, length), length);
     ros::serialization::serialize(out, msg);
     endMessage();
   }
 
-  /// Writes the last chunk, the index and the file header. Throws on an I/O error (naming the path).
+  /// Writes the last chunk, the index and the file header. Throws on an I/O error (naming the
+  /// path).
   void close();
 
  private:
@@ -64,10 +71,10 @@ class BagWriter {
     std::uint32_t sec, nsec, offset;  ///< record time and offset in the uncompressed chunk
   };
   struct Chunk {
-    std::vector<std::uint8_t> data;               ///< uncompressed records
-    std::vector<std::vector<IndexEntry>> index;   ///< per connection id
+    std::vector<std::uint8_t> data;              ///< uncompressed records
+    std::vector<std::vector<IndexEntry>> index;  ///< per connection id
     std::size_t messages = 0;
-    ros::Time start, end;                         ///< earliest and latest record time
+    ros::Time start, end;  ///< earliest and latest record time
   };
   struct ChunkInfo {
     std::uint64_t position;
@@ -78,7 +85,8 @@ class BagWriter {
     std::vector<Count> counts;
   };
 
-  std::uint32_t connection(const std::string& topic, const char* datatype, const char* md5sum, const char* definition);
+  std::uint32_t connection(const std::string& topic, const char* datatype, const char* md5sum,
+                           const char* definition);
   void checkWritable(const std::string& topic, const ros::Time& time) const;
   std::uint8_t* beginMessage(std::uint32_t conn, const ros::Time& time, std::uint32_t length);
   void endMessage();
@@ -91,7 +99,8 @@ class BagWriter {
   BagCompression compression_;
   std::size_t chunk_bytes_;
   std::FILE* file_ = nullptr;
-  std::uint64_t position_ = 0;  ///< file offset (worker thread once started; main thread after join)
+  std::uint64_t position_ =
+      0;  ///< file offset (worker thread once started; main thread after join)
   std::vector<Connection> connections_;
   std::vector<std::uint8_t> connection_records_;  ///< the index copy of each connection record
   Chunk chunk_;

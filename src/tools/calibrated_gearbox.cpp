@@ -22,7 +22,9 @@ namespace fs = std::filesystem;
 /// The directory a relative `file:` of `path` resolves against (as loadRigFile's directoryOf).
 fs::path directoryOf(const std::string& path) {
   const auto slash = path.find_last_of('/');
-  return slash == std::string::npos ? fs::path(".") : fs::path(path.substr(0, slash).empty() ? "/" : path.substr(0, slash));
+  return slash == std::string::npos
+             ? fs::path(".")
+             : fs::path(path.substr(0, slash).empty() ? "/" : path.substr(0, slash));
 }
 
 bool sameDirectory(const fs::path& a, const fs::path& b) {
@@ -47,7 +49,8 @@ std::string yamlNumber(double value) {
   char buf[64];
   const auto r = std::to_chars(buf, buf + sizeof buf, value);
   std::string s(buf, r.ptr);
-  if (!std::isfinite(value)) return s;  // never asked for: the estimate is finite (InvalidInput before)
+  if (!std::isfinite(value))
+    return s;  // never asked for: the estimate is finite (InvalidInput before)
   const auto e = s.find('e');
   std::string mantissa = s.substr(0, e), exponent = e == std::string::npos ? "" : s.substr(e + 1);
   if (mantissa.find('.') == std::string::npos) mantissa += ".0";
@@ -55,18 +58,22 @@ std::string yamlNumber(double value) {
   return exponent.empty() ? mantissa : mantissa + "e" + exponent;
 }
 
-std::string calibratedGearboxYaml(const std::string& config_path, const CalibrationEstimate& estimate,
-                                  const std::string& out_path, const CalibrationProvenance& provenance) {
+std::string calibratedGearboxYaml(const std::string& config_path,
+                                  const CalibrationEstimate& estimate, const std::string& out_path,
+                                  const CalibrationProvenance& provenance) {
   // The config as the node reads it (the bearings' shafts, the scissor spring), then its YAML tree.
   const RigConfig rig = loadRigFile(config_path);
   if (!rig.calibration.present) {
-    throw InvalidInput("--calibrate: '" + config_path + "' has no calibration: block: nothing was calibrated "
+    throw InvalidInput("--calibrate: '" + config_path +
+                       "' has no calibration: block: nothing was calibrated "
                        "(docs/calibration.md)");
   }
   if (estimate.updates == 0) {
-    throw InvalidInput("--calibrate: no window of the bag updated the calibration (" + std::to_string(estimate.windows) +
+    throw InvalidInput("--calibrate: no window of the bag updated the calibration (" +
+                       std::to_string(estimate.windows) +
                        " windows: " + std::to_string(estimate.baseline_windows) + " baseline, " +
-                       std::to_string(estimate.gated) + " gated, " + std::to_string(estimate.not_excited) +
+                       std::to_string(estimate.gated) + " gated, " +
+                       std::to_string(estimate.not_excited) +
                        " not excited; last: " + toString(estimate.outcome) + "): nothing written");
   }
   for (int i = 0; i < kCalibrationSize; ++i) {
@@ -97,16 +104,18 @@ std::string calibratedGearboxYaml(const std::string& config_path, const Calibrat
     root["anti_backlash"]["preload_torque"] = number(estimate.value[kPreloadTorque]);
   }
   // The posterior becomes the next run's prior; the drawing's spread (this file's reference, its
-  // std unless it was calibrated before) stays the one `identified` and the drift are judged against.
-  // A parameter the data did not identify keeps the drawing's spread as its std: the file holds no
-  // covariance, and the bearing scales' posterior stds (each about half the prior's, the two
-  // strongly anti-correlated because only their compliances' sum is seen) would, as independent
+  // std unless it was calibrated before) stays the one `identified` and the drift are judged
+  // against. A parameter the data did not identify keeps the drawing's spread as its std: the file
+  // holds no covariance, and the bearing scales' posterior stds (each about half the prior's, the
+  // two strongly anti-correlated because only their compliances' sum is seen) would, as independent
   // priors, claim to know their difference, and the next run would flag them identified.
   YAML::Node calibration = root["calibration"];
-  if (!calibration.IsMap()) calibration = YAML::Node(YAML::NodeType::Map);  // `calibration: {}` or `calibration:`
+  if (!calibration.IsMap())
+    calibration = YAML::Node(YAML::NodeType::Map);  // `calibration: {}` or `calibration:`
   const CalibrationConfig& c = rig.calibration;
-  const CalibrationPrior* drawing[kCalibrationSize] = {&c.mesh_stiffness_scale, &c.pinion_bearing_scale,
-                                                       &c.gear_bearing_scale, &c.preload_torque, &c.te_offset};
+  const CalibrationPrior* drawing[kCalibrationSize] = {
+      &c.mesh_stiffness_scale, &c.pinion_bearing_scale, &c.gear_bearing_scale, &c.preload_torque,
+      &c.te_offset};
   for (int i = 0; i < kCalibrationSize; ++i) {
     YAML::Node prior(YAML::NodeType::Map);
     const bool held = !(estimate.prior_std[i] > 0.0);
@@ -118,7 +127,8 @@ std::string calibratedGearboxYaml(const std::string& config_path, const Calibrat
     double reference = drawing[i]->reference();
     if (i == kPinionBearingScale || i == kGearBearingScale) {
       const double ratio = estimate.value[i] / drawing[i]->mean;
-      reference = std::min(reference * ratio * ratio, kScaleBound - kScaleLowest);  // the loader's widest
+      reference =
+          std::min(reference * ratio * ratio, kScaleBound - kScaleLowest);  // the loader's widest
     }
     prior["mean"] = number(estimate.value[i]);
     prior["std"] = number(held ? 0.0 : identified ? estimate.std[i] : reference);
@@ -141,24 +151,31 @@ std::string calibratedGearboxYaml(const std::string& config_path, const Calibrat
   header += "# and the bag\n#   " + oneLine(provenance.bag) + "\n";
   if (!provenance.recorded.empty()) header += "# recorded " + oneLine(provenance.recorded) + "\n";
   if (!provenance.written.empty()) header += "# written " + oneLine(provenance.written) + "\n";
-  if (!provenance.status.empty() && provenance.status != "ok") header += "# replay status: " + oneLine(provenance.status) + "\n";
-  header += "# " + std::to_string(estimate.windows) + " windows: " + std::to_string(estimate.updates) + " updates, " +
-            std::to_string(estimate.baseline_windows) + " baseline, " + std::to_string(estimate.gated) + " gated, " +
-            std::to_string(estimate.not_excited) + " not excited.\n";
+  if (!provenance.status.empty() && provenance.status != "ok")
+    header += "# replay status: " + oneLine(provenance.status) + "\n";
+  header += "# " + std::to_string(estimate.windows) +
+            " windows: " + std::to_string(estimate.updates) + " updates, " +
+            std::to_string(estimate.baseline_windows) + " baseline, " +
+            std::to_string(estimate.gated) + " gated, " + std::to_string(estimate.not_excited) +
+            " not excited.\n";
   header += "# Set from the posterior: mesh.stiffness_scale, bearings[].stiffness_scale (by shaft)";
   header += rig.anti_backlash.spring_stiffness > 0.0 ? ", anti_backlash.preload_torque" : "";
-  header += ", and calibration.<parameter>: {mean, std} (the next run's priors: the posterior std where\n"
-            "# identified, the drawing's spread where not; reference_std: the drawing's spread, which\n"
-            "# 'identified' and the drift are judged against).\n";
-  header += "# Not identified (posterior std not below half the drawing's spread; the value stays near its prior): " +
-            (not_identified.empty() ? std::string("none") : not_identified) + "\n";
+  header +=
+      ", and calibration.<parameter>: {mean, std} (the next run's priors: the posterior std where\n"
+      "# identified, the drawing's spread where not; reference_std: the drawing's spread, which\n"
+      "# 'identified' and the drift are judged against).\n";
+  header +=
+      "# Not identified (posterior std not below half the drawing's spread; the value stays near "
+      "its prior): " +
+      (not_identified.empty() ? std::string("none") : not_identified) + "\n";
   if (!held.empty()) header += "# Held (prior std 0, not estimated): " + held + "\n";
   header += "# The original file's comments are not kept (re-written by yaml-cpp).\n";
 
   YAML::Emitter out;
   out.SetIndent(2);
   out << root;
-  if (!out.good()) throw std::runtime_error("--calibrate: cannot emit the YAML: " + out.GetLastError());
+  if (!out.good())
+    throw std::runtime_error("--calibrate: cannot emit the YAML: " + out.GetLastError());
   return header + out.c_str() + "\n";
 }
 
@@ -171,10 +188,14 @@ void writeCalibratedGearbox(const std::string& config_path, const CalibrationEst
     fs::create_directories(parent, ec);
   }
   std::ofstream file(out_path, std::ios::binary | std::ios::trunc);
-  if (!file) throw std::runtime_error("--calibrate = '" + out_path + "': cannot write: " + std::strerror(errno));
+  if (!file)
+    throw std::runtime_error("--calibrate = '" + out_path +
+                             "': cannot write: " + std::strerror(errno));
   file << text;
   file.close();
-  if (!file) throw std::runtime_error("--calibrate = '" + out_path + "': cannot write: " + std::strerror(errno));
+  if (!file)
+    throw std::runtime_error("--calibrate = '" + out_path +
+                             "': cannot write: " + std::strerror(errno));
 }
 
 }  // namespace drivetrain_stiffness

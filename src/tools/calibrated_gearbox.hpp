@@ -1,9 +1,10 @@
-// drivetrain_replay --calibrate: the gearbox YAML with the live calibration's result, a file the node
-// and the tools load like any other (loadRigFile). ROS-free.
+// drivetrain_replay --calibrate: the gearbox YAML with the live calibration's result, a file the
+// node and the tools load like any other (loadRigFile). ROS-free.
 //
 // It starts from the --config file's YAML tree (yaml-cpp: its comments are not kept) and sets
 //  - mesh.stiffness_scale                  = mesh_stiffness_scale
-//  - bearings[i].stiffness_scale           = the scale of bearing i's shaft (pinion_bearing_scale or
+//  - bearings[i].stiffness_scale           = the scale of bearing i's shaft (pinion_bearing_scale
+//  or
 //                                            gear_bearing_scale)
 //  - anti_backlash.preload_torque          = preload_torque (with a scissor spring only)
 //  - calibration.<parameter>: {mean, std}  = the posterior (mean = estimate, std = posterior std)
@@ -21,7 +22,8 @@ namespace drivetrain_stiffness {
 /// Where the calibration came from, for the header comment (free text, one line each).
 struct CalibrationProvenance {
   std::string bag;       ///< the replayed bag
-  std::string recorded;  ///< the record times it spans (e.g. "2026-01-01T00:00:00Z to 2026-01-01T00:00:02Z")
+  std::string recorded;  ///< the record times it spans (e.g. "2026-01-01T00:00:00Z to
+                         ///< 2026-01-01T00:00:02Z")
   std::string written;   ///< when the file was written (UTC)
   std::string status;    ///< the replay's status ("ok", or "incomplete: ...")
 };
@@ -29,8 +31,9 @@ struct CalibrationProvenance {
 /// The calibrated gearbox YAML text for `config_path` (the file the replay ran with), to be written
 /// at `out_path` (for the `file:` references). Refuses (InvalidInput naming --calibrate) a config
 /// without a calibration block and an estimate that no window updated.
-std::string calibratedGearboxYaml(const std::string& config_path, const CalibrationEstimate& estimate,
-                                  const std::string& out_path, const CalibrationProvenance& provenance);
+std::string calibratedGearboxYaml(const std::string& config_path,
+                                  const CalibrationEstimate& estimate, const std::string& out_path,
+                                  const CalibrationProvenance& provenance);
 
 /// calibratedGearboxYaml written to `out_path` (its directory created if needed). Throws
 /// InvalidInput as above, std::runtime_error naming the path if it cannot be written.

@@ -64,9 +64,13 @@ struct WindowLog : PipelineSink {
   bool enabled = false;
   void calibration(Stamp, const CalibrationEstimate& e) override {
     if (!enabled) return;
-    std::cout << nlohmann::json{{"window", e.windows}, {"outcome", toString(e.outcome)}, {"torque", e.window_torque},
-                                {"nis", e.nis}, {"mesh_stiffness_scale", e.value[kMeshScale]},
-                                {"preload_torque", e.value[kPreloadTorque]}, {"preload_torque_std", e.std[kPreloadTorque]},
+    std::cout << nlohmann::json{{"window", e.windows},
+                                {"outcome", toString(e.outcome)},
+                                {"torque", e.window_torque},
+                                {"nis", e.nis},
+                                {"mesh_stiffness_scale", e.value[kMeshScale]},
+                                {"preload_torque", e.value[kPreloadTorque]},
+                                {"preload_torque_std", e.std[kPreloadTorque]},
                                 {"measured", {e.measured[0], e.measured[1], e.measured[2]}},
                                 {"predicted", {e.predicted[0], e.predicted[1], e.predicted[2]}}}
                      .dump()
@@ -89,19 +93,23 @@ double median(std::vector<double> v) {
 
 int main(int argc, char** argv) {
   using namespace drivetrain_stiffness;
-  CLI::App app{"Monte Carlo of the live calibration over load_sweep recordings of rigs with known truth"};
+  CLI::App app{
+      "Monte Carlo of the live calibration over load_sweep recordings of rigs with known truth"};
   std::string config = "config/gearboxes/seed_servo.yaml";
   int runs = 50;
   std::uint64_t seed = 1;
   double speed = 120.0;
-  app.add_option("--config", config, "Nominal gearbox YAML (its calibration block, or the defaults)");
+  app.add_option("--config", config,
+                 "Nominal gearbox YAML (its calibration block, or the defaults)");
   app.add_option("--runs", runs, "Number of rigs")->check(CLI::Range(1, 100000));
   app.add_option("--seed", seed, "Seed of the draws (each run's recording uses seed + run)");
   app.add_option("--speed-rpm", speed, "[rpm] pinion speed of the sweeps");
   bool windows = false;
   app.add_flag("--windows", windows, "Print every closed window too");
   double dwell = 0.0, dwell_torque = 3.0;
-  app.add_option("--dwell", dwell, "[s] after the sweep, a hold at --dwell-torque: the estimate's drift over it (docs/calibration.md)");
+  app.add_option("--dwell", dwell,
+                 "[s] after the sweep, a hold at --dwell-torque: the estimate's drift over it "
+                 "(docs/calibration.md)");
   app.add_option("--dwell-torque", dwell_torque, "[N*m] the dwell's pinion torque (3)");
   CLI11_PARSE(app, argc, argv);
   try {
@@ -110,16 +118,21 @@ int main(int argc, char** argv) {
     std::uniform_real_distribution<double> uni(0.0, 1.0);
     int covered_mesh = 0, covered_tp = 0, covered_compliance = 0, flags_right = 0;
     double worst_mesh = 0.0, worst_tp = 0.0, worst_compliance = 0.0;
-    double z2_mesh = 0.0, z2_tp = 0.0, z2_compliance = 0.0;  // sums of (error / std)^2: 1 per run on average if the stds are right
-    std::vector<double> errors_mesh, errors_tp, errors_compliance;  // |relative error| per run, for the medians
+    double z2_mesh = 0.0, z2_tp = 0.0,
+           z2_compliance =
+               0.0;  // sums of (error / std)^2: 1 per run on average if the stds are right
+    std::vector<double> errors_mesh, errors_tp,
+        errors_compliance;     // |relative error| per run, for the medians
     double worst_drift = 0.0;  // [sigmas at the dwell's start] the largest move over the dwell
     int drifted = 0;           // runs with a move beyond 1 sigma
     for (int run = 0; run < runs; ++run) {
       RigConfig truth = nominal;
       truth.mesh_stiffness_scale = 0.8 + 0.4 * uni(draw);
       const double pinion_scale = 0.7 + 0.6 * uni(draw), gear_scale = 0.7 + 0.6 * uni(draw);
-      for (BearingSupportConfig& b : truth.bearings) b.stiffness_scale = b.shaft == 0 ? pinion_scale : gear_scale;
-      truth.anti_backlash.preload_torque = nominal.anti_backlash.preload_torque * (0.8 + 0.4 * uni(draw));
+      for (BearingSupportConfig& b : truth.bearings)
+        b.stiffness_scale = b.shaft == 0 ? pinion_scale : gear_scale;
+      truth.anti_backlash.preload_torque =
+          nominal.anti_backlash.preload_torque * (0.8 + 0.4 * uni(draw));
       LoadSweepSpec spec;
       spec.seed = seed + static_cast<std::uint64_t>(run);
       spec.speed_rpm = speed;
@@ -128,12 +141,14 @@ int main(int argc, char** argv) {
       const LoadSweep sweep = makeLoadSweep(truth, spec);
 
       PipelineOptions options;
-      options.dynamics = false;  // the calibration needs the readings and the torque, not the node's dynamics
+      options.dynamics =
+          false;  // the calibration needs the readings and the torque, not the node's dynamics
       RigPipeline pipeline(nominal, options);
       WindowLog sink;
       sink.enabled = windows;
       CalibrationEstimate before_dwell;
-      replay(sweep, pipeline, sink, dwell > 0.0 ? sweep.truth.levels.back().t0 : -1.0, &before_dwell);
+      replay(sweep, pipeline, sink, dwell > 0.0 ? sweep.truth.levels.back().t0 : -1.0,
+             &before_dwell);
       const CalibrationEstimate& e = pipeline.calibrator()->estimate();
 
       // The truth's series compliance at the reference torque, from the same static model.
@@ -155,17 +170,20 @@ int main(int argc, char** argv) {
       errors_tp.push_back(std::abs(et));
       errors_compliance.push_back(std::abs(ec));
       const bool cm = std::abs(e.value[kMeshScale] - p[kMeshScale]) <= k95 * e.std[kMeshScale];
-      const bool ct = std::abs(e.value[kPreloadTorque] - p[kPreloadTorque]) <= k95 * e.std[kPreloadTorque];
+      const bool ct =
+          std::abs(e.value[kPreloadTorque] - p[kPreloadTorque]) <= k95 * e.std[kPreloadTorque];
       const bool cc = std::abs(e.series_compliance - compliance) <= k95 * e.series_compliance_std;
       covered_mesh += cm;
       covered_tp += ct;
       covered_compliance += cc;
-      auto z2 = [](double error, double std) { return error * error / std::max(std * std, 1e-300); };
+      auto z2 = [](double error, double std) {
+        return error * error / std::max(std * std, 1e-300);
+      };
       z2_mesh += z2(e.value[kMeshScale] - p[kMeshScale], e.std[kMeshScale]);
       z2_tp += z2(e.value[kPreloadTorque] - p[kPreloadTorque], e.std[kPreloadTorque]);
       z2_compliance += z2(e.series_compliance - compliance, e.series_compliance_std);
-      const bool flags = e.identified[kMeshScale] && e.identified[kPreloadTorque] && !e.identified[kPinionBearingScale] &&
-                         !e.identified[kGearBearingScale];
+      const bool flags = e.identified[kMeshScale] && e.identified[kPreloadTorque] &&
+                         !e.identified[kPinionBearingScale] && !e.identified[kGearBearingScale];
       flags_right += flags;
       nlohmann::json line;
       line["run"] = run;
@@ -175,23 +193,34 @@ int main(int argc, char** argv) {
         line["std"][calibrationName(i)] = e.std[i];
         line["identified"][calibrationName(i)] = e.identified[i];
       }
-      line["series_compliance"] = {{"truth", compliance}, {"estimate", e.series_compliance}, {"std", e.series_compliance_std}};
-      line["error"] = {{"mesh_stiffness_scale", em}, {"preload_torque", et}, {"series_compliance", ec}};
-      line["covered"] = {{"mesh_stiffness_scale", cm}, {"preload_torque", ct}, {"series_compliance", cc}};
-      line["model_error_scale"] = {e.model_error_scale[0], e.model_error_scale[1], e.model_error_scale[2]};
+      line["series_compliance"] = {{"truth", compliance},
+                                   {"estimate", e.series_compliance},
+                                   {"std", e.series_compliance_std}};
+      line["error"] = {
+          {"mesh_stiffness_scale", em}, {"preload_torque", et}, {"series_compliance", ec}};
+      line["covered"] = {
+          {"mesh_stiffness_scale", cm}, {"preload_torque", ct}, {"series_compliance", cc}};
+      line["model_error_scale"] = {e.model_error_scale[0], e.model_error_scale[1],
+                                   e.model_error_scale[2]};
       if (dwell > 0.0) {
-        // Drift over the dwell: each estimate's move in units of its std at the dwell's start and end.
+        // Drift over the dwell: each estimate's move in units of its std at the dwell's start and
+        // end.
         nlohmann::json drift;
         double run_worst = 0.0;
         for (int i : {kMeshScale, kPreloadTorque, kTeOffset}) {
           const double move = std::abs(e.value[i] - before_dwell.value[i]);
           const double sigmas = move / std::max(before_dwell.std[i], 1e-300);
-          drift[calibrationName(i)] = {{"move", move}, {"sigmas_start", sigmas}, {"sigmas_end", move / std::max(e.std[i], 1e-300)}};
+          drift[calibrationName(i)] = {{"move", move},
+                                       {"sigmas_start", sigmas},
+                                       {"sigmas_end", move / std::max(e.std[i], 1e-300)}};
           run_worst = std::max(run_worst, sigmas);
         }
         const double cmove = std::abs(e.series_compliance - before_dwell.series_compliance);
-        drift["series_compliance"] = {{"move", cmove}, {"sigmas_start", cmove / std::max(before_dwell.series_compliance_std, 1e-300)}};
-        run_worst = std::max(run_worst, cmove / std::max(before_dwell.series_compliance_std, 1e-300));
+        drift["series_compliance"] = {
+            {"move", cmove},
+            {"sigmas_start", cmove / std::max(before_dwell.series_compliance_std, 1e-300)}};
+        run_worst =
+            std::max(run_worst, cmove / std::max(before_dwell.series_compliance_std, 1e-300));
         drift["windows"] = e.windows - before_dwell.windows;
         drift["updates"] = e.updates - before_dwell.updates;
         line["dwell"] = drift;
@@ -206,16 +235,25 @@ int main(int argc, char** argv) {
     }
     nlohmann::json summary;
     summary["runs"] = runs;
-    summary["worst_error"] = {{"mesh_stiffness_scale", worst_mesh}, {"preload_torque", worst_tp}, {"series_compliance", worst_compliance}};
+    summary["worst_error"] = {{"mesh_stiffness_scale", worst_mesh},
+                              {"preload_torque", worst_tp},
+                              {"series_compliance", worst_compliance}};
     summary["median_error"] = {{"mesh_stiffness_scale", median(errors_mesh)},
                                {"preload_torque", median(errors_tp)},
                                {"series_compliance", median(errors_compliance)}};
-    summary["covered"] = {{"mesh_stiffness_scale", covered_mesh}, {"preload_torque", covered_tp}, {"series_compliance", covered_compliance}};
+    summary["covered"] = {{"mesh_stiffness_scale", covered_mesh},
+                          {"preload_torque", covered_tp},
+                          {"series_compliance", covered_compliance}};
     summary["identification_flags_right"] = flags_right;
     const double n = std::max(1, runs);
-    summary["rms_error_over_std"] = {{"mesh_stiffness_scale", std::sqrt(z2_mesh / n)}, {"preload_torque", std::sqrt(z2_tp / n)},
+    summary["rms_error_over_std"] = {{"mesh_stiffness_scale", std::sqrt(z2_mesh / n)},
+                                     {"preload_torque", std::sqrt(z2_tp / n)},
                                      {"series_compliance", std::sqrt(z2_compliance / n)}};
-    if (dwell > 0.0) summary["dwell"] = {{"seconds", dwell}, {"torque", dwell_torque}, {"worst_sigmas", worst_drift}, {"runs_beyond_1_sigma", drifted}};
+    if (dwell > 0.0)
+      summary["dwell"] = {{"seconds", dwell},
+                          {"torque", dwell_torque},
+                          {"worst_sigmas", worst_drift},
+                          {"runs_beyond_1_sigma", drifted}};
     std::cout << nlohmann::json{{"summary", summary}}.dump() << std::endl;
   } catch (const std::exception& e) {
     std::cerr << "drivetrain_calibration_mc: " << e.what() << "\n";

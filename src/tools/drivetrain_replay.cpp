@@ -6,7 +6,8 @@
 // bit-identical outputs (nothing depends on the wall clock except the printed speed).
 // A truncated or damaged bag is read up to the damage (ReplayInput): the outputs up to there are
 // written and closed, the summary's status says "incomplete: ..." and the exit code is 4.
-//   drivetrain_replay --bag rig.bag --config config/gearboxes/seed_servo.yaml --out out.bag --report report/
+//   drivetrain_replay --bag rig.bag --config config/gearboxes/seed_servo.yaml --out out.bag
+//   --report report/
 #include <CLI/CLI.hpp>
 #include <cerrno>
 #include <chrono>
@@ -30,8 +31,8 @@
 #include "python_script.hpp"  // NOLINT(build/include_subdir)
 #include "replay_input.hpp"   // NOLINT(build/include_subdir)
 #include "drivetrain_stiffness/config/yaml_parameters.hpp"
-#include "replay_summary.hpp"  // NOLINT(build/include_subdir)
-#include "replay_writer.hpp"  // NOLINT(build/include_subdir)
+#include "replay_summary.hpp"      // NOLINT(build/include_subdir)
+#include "replay_writer.hpp"       // NOLINT(build/include_subdir)
 #include "calibrated_gearbox.hpp"  // NOLINT(build/include_subdir)
 
 namespace drivetrain_stiffness {
@@ -47,25 +48,34 @@ YamlParameters readParameterFile(const std::string& path) {
   } catch (const YAML::Exception& e) {
     throw InvalidInput("--params = '" + path + "': " + e.what());
   }
-  if (!root.IsMap() && !root.IsNull()) throw InvalidInput("--params = '" + path + "': not a map of parameters");
+  if (!root.IsMap() && !root.IsNull())
+    throw InvalidInput("--params = '" + path + "': not a map of parameters");
   return YamlParameters(root);
 }
 
 // Exit codes (docs/replay_exit_codes.md); 2 is left unused (CLI11's own codes are mapped to 1).
-constexpr int kExitOk = 0, kExitRefused = 1, kExitWrongType = 3, kExitIncomplete = 4, kExitNoTorque = 5;
+constexpr int kExitOk = 0, kExitRefused = 1, kExitWrongType = 3, kExitIncomplete = 4,
+              kExitNoTorque = 5;
 constexpr char kExitCodesHelp[] =
     "Exit codes (docs/replay_exit_codes.md):\n"
     "  0  ok: the whole bag was read\n"
-    "  1  refused or failed: bad options, an unreadable config or parameter file, a file that is not a\n"
-    "     bag (nothing replayed); an output or the report that cannot be written; --calibrate without a\n"
-    "     calibration, or after a bag in which no window updated it (the other outputs are written)\n"
-    "  3  messages of the wrong type on the torque, preload or joint_states topic (counted as wrong_type;\n"
+    "  1  refused or failed: bad options, an unreadable config or parameter file, a file that is "
+    "not a\n"
+    "     bag (nothing replayed); an output or the report that cannot be written; --calibrate "
+    "without a\n"
+    "     calibration, or after a bag in which no window updated it (the other outputs are "
+    "written)\n"
+    "  3  messages of the wrong type on the torque, preload or joint_states topic (counted as "
+    "wrong_type;\n"
     "     stderr names the topic, the type found and the type expected)\n"
-    "  4  incomplete: the bag is truncated or damaged; the outputs up to the damage are written and\n"
+    "  4  incomplete: the bag is truncated or damaged; the outputs up to the damage are written "
+    "and\n"
     "     closed, and the summary's status says \"incomplete: 'FILE' at byte OFFSET: ...\" (takes\n"
     "     precedence over 3 and 5)\n"
-    "  5  no torque accepted: no message on the torque topic was accepted (none there, or every one\n"
-    "     refused), so nothing was estimated; stderr's run summary says why, and lists the bag's topics\n"
+    "  5  no torque accepted: no message on the torque topic was accepted (none there, or every "
+    "one\n"
+    "     refused), so nothing was estimated; stderr's run summary says why, and lists the bag's "
+    "topics\n"
     "     when a named one is absent";
 
 /// The exit code's line in the run summary.
@@ -83,7 +93,8 @@ std::string exitMeaning(int code) {
 void ensureDirectory(const std::string& option, const std::string& dir) {
   std::error_code ec;
   std::filesystem::create_directories(dir, ec);
-  if (ec || !std::filesystem::is_directory(dir)) throw InvalidInput(option + " = '" + dir + "': not a directory and cannot be created");
+  if (ec || !std::filesystem::is_directory(dir))
+    throw InvalidInput(option + " = '" + dir + "': not a directory and cannot be created");
 }
 
 /// Seconds since the epoch as UTC, ISO 8601 (for --calibrate's header comment).
@@ -95,7 +106,8 @@ std::string utc(std::time_t t) {
   return buf;
 }
 
-/// The live calibration's final state (the calibration rule), by the Calibration message's field names.
+/// The live calibration's final state (the calibration rule), by the Calibration message's field
+/// names.
 nlohmann::json calibrationJson(const RigPipeline& pipeline) {
   nlohmann::json j;
   j["status"] = calibrationStatus(pipeline);
@@ -105,7 +117,8 @@ nlohmann::json calibrationJson(const RigPipeline& pipeline) {
   for (int i = 0; i < kCalibrationSize; ++i) {
     j[calibrationName(i)] = e.value[i];
     j[std::string(calibrationName(i)) + "_std"] = e.std[i];
-    j[std::string(calibrationName(i)) + "_identified"] = static_cast<bool>(e.identified[static_cast<std::size_t>(i)]);
+    j[std::string(calibrationName(i)) + "_identified"] =
+        static_cast<bool>(e.identified[static_cast<std::size_t>(i)]);
   }
   // Why no window has updated the estimate yet, with the numbers (null once one has).
   const std::string waiting = c->waitingReason();
@@ -131,20 +144,24 @@ nlohmann::json countersJson(const PipelineCounters& c) {
 
 /// JSON text whatever bytes its strings hold (bag strings are escaped at the source; this also
 /// covers a path or a config value given in another encoding).
-std::string jsonText(const nlohmann::json& j) { return j.dump(2, ' ', false, nlohmann::json::error_handler_t::replace); }
+std::string jsonText(const nlohmann::json& j) {
+  return j.dump(2, ' ', false, nlohmann::json::error_handler_t::replace);
+}
 
 /// Where the dynamics' time went, over the whole bag (the pipeline keeps its dynamics through
 /// restarts): deterministic counts, unlike the speed. model_updates: the builds (at the start, and
-/// at a restart after a change) and the bearing-stiffness or damping changes taken up while running;
-/// dopri5_intervals: intervals handed to dopri5; the sliced propagation's (at the fidelity of the
-/// bag's end: the full model's, or linear_modal's mean model's) slice crossings, decompositions
-/// (general: by Eigen's eigensolver), contact changes located, and steps cut where the regime bound
-/// could not clear them; at the nominal phase after a change, the stretches the interval maps took
-/// and the intervals made (docs/model.md).
+/// at a restart after a change) and the bearing-stiffness or damping changes taken up while
+/// running; dopri5_intervals: intervals handed to dopri5; the sliced propagation's (at the fidelity
+/// of the bag's end: the full model's, or linear_modal's mean model's) slice crossings,
+/// decompositions (general: by Eigen's eigensolver), contact changes located, and steps cut where
+/// the regime bound could not clear them; at the nominal phase after a change, the stretches the
+/// interval maps took and the intervals made (docs/model.md).
 nlohmann::json dynamicsWorkJson(const DynamicsEstimator& d) {
-  nlohmann::json work = {{"model_updates", d.rebuilds()}, {"dopri5_intervals", d.fallbackIntervals()},
-                         {"mapped_stretches", d.mappedStretches()},
-                         {"interval_maps_made", d.intervalMaps() ? d.intervalMaps()->intervalsMade() : 0L}};
+  nlohmann::json work = {
+      {"model_updates", d.rebuilds()},
+      {"dopri5_intervals", d.fallbackIntervals()},
+      {"mapped_stretches", d.mappedStretches()},
+      {"interval_maps_made", d.intervalMaps() ? d.intervalMaps()->intervalsMade() : 0L}};
   if (const SlicedModalPropagator* s = d.movingSlicedPropagator()) {
     work["slices_crossed"] = s->slicesCrossed();
     work["slice_decompositions"] = s->decompositions();
@@ -158,16 +175,19 @@ nlohmann::json dynamicsWorkJson(const DynamicsEstimator& d) {
 /// The calibration's status, and while no window has updated it, why (Calibrator::waitingReason).
 std::string calibrationLine(const nlohmann::json& calibration) {
   std::string line = calibration["status"].get<std::string>();
-  if (calibration.contains("waiting") && calibration["waiting"].is_string()) line += "; " + calibration["waiting"].get<std::string>();
+  if (calibration.contains("waiting") && calibration["waiting"].is_string())
+    line += "; " + calibration["waiting"].get<std::string>();
   return line;
 }
 
 /// What the run did, for stderr: the status, the inputs, the calibration, the exit code's meaning.
-std::string runSummaryText(const std::string& bag_path, std::uint64_t messages, const nlohmann::json& summary,
-                           const ReplaySummary& inputs, const RigPipeline& pipeline,
-                           const std::vector<BagTopic>& bag_topics, int code) {
-  std::string text = "drivetrain_replay: '" + printableText(bag_path) + "': " + std::to_string(messages) +
-                     " messages read on the named topics, " + std::to_string(ReplaySummary::accepted(pipeline.counters())) +
+std::string runSummaryText(const std::string& bag_path, std::uint64_t messages,
+                           const nlohmann::json& summary, const ReplaySummary& inputs,
+                           const RigPipeline& pipeline, const std::vector<BagTopic>& bag_topics,
+                           int code) {
+  std::string text = "drivetrain_replay: '" + printableText(bag_path) +
+                     "': " + std::to_string(messages) + " messages read on the named topics, " +
+                     std::to_string(ReplaySummary::accepted(pipeline.counters())) +
                      " inputs accepted\n";
   text += inputs.text(pipeline, bag_topics);
   text += "  calibration: " + calibrationLine(summary["calibration"]) + "\n";
@@ -187,27 +207,33 @@ void writeTextFile(const std::string& option, const std::string& path, const std
 }
 
 /// report.md: the status and the run summary; plot_replay.py appends the figures when plots are on.
-std::string reportMarkdown(const nlohmann::json& summary, const std::string& inputs_markdown, const RigPipeline& pipeline,
-                           const std::string& out_bag) {
+std::string reportMarkdown(const nlohmann::json& summary, const std::string& inputs_markdown,
+                           const RigPipeline& pipeline, const std::string& out_bag) {
   std::ostringstream f;
   const std::string status = summary["status"].get<std::string>();
   f << "# Stiffness estimator report\n\n";
   if (status.rfind("incomplete", 0) == 0) {
-    f << "**Incomplete replay**: the bag could not be read to its end; the outputs and the figures below cover the "
-         "messages before the damage only.\n\n`" << status << "`\n\n";
+    f << "**Incomplete replay**: the bag could not be read to its end; the outputs and the figures "
+         "below cover the "
+         "messages before the damage only.\n\n`"
+      << status << "`\n\n";
   } else if (status != "ok") {
-    f << "**No torque accepted**: no message on the torque topic was used, so there are no estimates; the inputs "
+    f << "**No torque accepted**: no message on the torque topic was used, so there are no "
+         "estimates; the inputs "
          "below say why.\n\n";
   }
-  f << "Source: `" << summary["bag"].get<std::string>() << "`; outputs: `" << printableText(out_bag) << "`.\n\n";
+  f << "Source: `" << summary["bag"].get<std::string>() << "`; outputs: `" << printableText(out_bag)
+    << "`.\n\n";
   f << "## Inputs\n\n" << inputs_markdown << "\n";
   f << "## Calibration\n\n" << calibrationLine(summary["calibration"]) << "\n\n";
   const PipelineCounters& c = pipeline.counters();
   f << "## Outputs\n\n| output | count |\n|---|---|\n";
   for (const auto& [key, count] : namedCounters(c)) {
-    if (key.size() > 10 && key.compare(key.size() - 10, 10, "_published") == 0) f << "| " << key << " | " << count << " |\n";
+    if (key.size() > 10 && key.compare(key.size() - 10, 10, "_published") == 0)
+      f << "| " << key << " | " << count << " |\n";
   }
-  f << "| dynamics restarted after a gap / on an error | " << c.gap_restarts << " / " << c.dynamics_errors << " |\n";
+  f << "| dynamics restarted after a gap / on an error | " << c.gap_restarts << " / "
+    << c.dynamics_errors << " |\n";
   f << "| model time integrated | " << c.simulated_s << " s |\n";
   return f.str();
 }
@@ -215,51 +241,65 @@ std::string reportMarkdown(const nlohmann::json& summary, const std::string& inp
 /// drivetrain_replay's command line.
 struct ReplayOptions {
   std::string bag_path, config, params, out_bag, csv_dir, report_dir, calibrate_out;
-  std::string torque_topic = "torque", preload_topic = "preload", joint_states_topic = "joint_states";
+  std::string torque_topic = "torque", preload_topic = "preload",
+              joint_states_topic = "joint_states";
   std::string plot_script = DRIVETRAIN_PLOT_REPLAY_SCRIPT;
   std::string compression = "lz4";
   std::string topics_option = "all", csv_topics_option;
   bool plots = true;
 };
 
-/// Parses the command line into `o`; returns an exit code when the run ends here (--help, bad options).
+/// Parses the command line into `o`; returns an exit code when the run ends here (--help, bad
+/// options).
 std::optional<int> parseOptions(int argc, char** argv, ReplayOptions& o) {
-  CLI::App app{"Replays a recorded bag through the stiffness estimator's pipeline (no master needed)"};
+  CLI::App app{
+      "Replays a recorded bag through the stiffness estimator's pipeline (no master needed)"};
   app.footer(kExitCodesHelp);
   app.add_option("--bag", o.bag_path, "Recorded bag with the rig's torque and preload")->required();
   app.add_option("--config", o.config, "Gearbox YAML, as the node's ~gearbox_config")->required();
-  app.add_option("--params", o.params, "The node's parameter YAML (e.g. config/stiffness_estimator.yaml)");
+  app.add_option("--params", o.params,
+                 "The node's parameter YAML (e.g. config/stiffness_estimator.yaml)");
   app.add_option("--out", o.out_bag, "Bag to write with the node's output topics");
-  app.add_option("--compression", o.compression, "Chunk compression of --out: lz4 (as rosbag record --lz4) or none")
+  app.add_option("--compression", o.compression,
+                 "Chunk compression of --out: lz4 (as rosbag record --lz4) or none")
       ->check(CLI::IsMember({"lz4", "none"}));
   app.add_option("--csv", o.csv_dir, "Directory for one CSV file per output topic");
   app.add_option("--topics", o.topics_option,
-                 "Output topics written to --out and --csv (and the report's): all, or a comma-separated list of "
-                 "stiffness, transmission_error, te_spectrum, resonance, measured_te, calibration, mesh_period_stats, "
+                 "Output topics written to --out and --csv (and the report's): all, or a "
+                 "comma-separated list of "
+                 "stiffness, transmission_error, te_spectrum, resonance, measured_te, calibration, "
+                 "mesh_period_stats, "
                  "tf, rig_markers")
       ->capture_default_str();
-  app.add_option("--csv-topics", o.csv_topics_option, "Output topics written to --csv alone (default: --topics)");
+  app.add_option("--csv-topics", o.csv_topics_option,
+                 "Output topics written to --csv alone (default: --topics)");
   app.add_option("--calibrate", o.calibrate_out,
-                 "Gearbox YAML to write with the calibrated values (needs a calibration: block in --config and a window "
+                 "Gearbox YAML to write with the calibrated values (needs a calibration: block in "
+                 "--config and a window "
                  "that updated the calibration)");
   app.add_option("--report", o.report_dir,
-                 "Directory for summary.json, report.md and PNG plots (CSV in DIR/csv, outputs in DIR/outputs.bag unless "
+                 "Directory for summary.json, report.md and PNG plots (CSV in DIR/csv, outputs in "
+                 "DIR/outputs.bag unless "
                  "--csv, --out)");
   app.add_option("--torque-topic", o.torque_topic, "geometry_msgs/WrenchStamped, torque.z [N*m]");
   app.add_option("--preload-topic", o.preload_topic, "drivetrain_stiffness/Preload");
-  app.add_option("--joint-states-topic", o.joint_states_topic,
-                 "sensor_msgs/JointState, the rig's encoders (~pinion_joint, ~gear_joint from --params)");
-  app.add_option("--plot-script", o.plot_script, "matplotlib script: OUTPUT_BAG REPORT_DIR INPUT_BAG");
+  app.add_option(
+      "--joint-states-topic", o.joint_states_topic,
+      "sensor_msgs/JointState, the rig's encoders (~pinion_joint, ~gear_joint from --params)");
+  app.add_option("--plot-script", o.plot_script,
+                 "matplotlib script: OUTPUT_BAG REPORT_DIR INPUT_BAG");
   app.add_flag("!--no-plots", o.plots, "Write the report without PNG plots");
   try {
     app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {  // --help is one too (exit code 0); CLI11's own codes are 100+
+  } catch (
+      const CLI::ParseError& e) {  // --help is one too (exit code 0); CLI11's own codes are 100+
     return app.exit(e) == 0 ? kExitOk : kExitRefused;
   }
   return std::nullopt;
 }
 
-/// What the message loop read: the messages on the named topics and their first and last record time.
+/// What the message loop read: the messages on the named topics and their first and last record
+/// time.
 struct ReadSpan {
   std::uint64_t messages = 0;
   std::optional<ros::Time> first, last;
@@ -267,8 +307,8 @@ struct ReadSpan {
 };
 
 /// Feeds every message of `input` to the pipeline in record order, counting each on its topic.
-ReadSpan replayMessages(ReplayInput& input, const ReplayOptions& o, const JointNames& joints, RigPipeline& pipeline,
-                        ReplayWriter& writer, ReplaySummary& inputs) {
+ReadSpan replayMessages(ReplayInput& input, const ReplayOptions& o, const JointNames& joints,
+                        RigPipeline& pipeline, ReplayWriter& writer, ReplaySummary& inputs) {
   ReadSpan span;
   std::string joint_refusal;
   std::vector<PreloadSetting> preload_settings;  // each preload message's, converted in place
@@ -313,8 +353,9 @@ ReadSpan replayMessages(ReplayInput& input, const ReplayOptions& o, const JointN
 }
 
 /// summary.json (without `speed`): status, inputs, counters, calibration, final estimates.
-nlohmann::json summaryJson(const ReplayOptions& o, const RigConfig& rig, const JointNames& joints, const ReplayInput& input,
-                           const ReadSpan& span, const ReplaySummary& inputs, const RigPipeline& pipeline,
+nlohmann::json summaryJson(const ReplayOptions& o, const RigConfig& rig, const JointNames& joints,
+                           const ReplayInput& input, const ReadSpan& span,
+                           const ReplaySummary& inputs, const RigPipeline& pipeline,
                            const ReplayWriter& writer, const std::vector<BagTopic>& bag_topics) {
   nlohmann::json summary;
   summary["bag"] = printableText(o.bag_path);
@@ -322,20 +363,24 @@ nlohmann::json summaryJson(const ReplayOptions& o, const RigConfig& rig, const J
   if (const auto& damage = input.damage()) {
     summary["status"] = "incomplete: " + printableText(damage->describe(o.bag_path)) + "; " +
                         std::to_string(span.messages) + " messages read before it";
-    summary["damage"] = {{"file", printableText(o.bag_path)}, {"offset", damage->offset},
-                         {"what", printableText(damage->what)}, {"messages_before", span.messages}};
+    summary["damage"] = {{"file", printableText(o.bag_path)},
+                         {"offset", damage->offset},
+                         {"what", printableText(damage->what)},
+                         {"messages_before", span.messages}};
   } else if (pipeline.counters().accepted_torque == 0) {
-    summary["status"] = "no torque accepted: no message on the torque topic '" + printableText(o.torque_topic) +
-                        "' was accepted (" + std::to_string(ReplaySummary::accepted(pipeline.counters())) +
+    summary["status"] = "no torque accepted: no message on the torque topic '" +
+                        printableText(o.torque_topic) + "' was accepted (" +
+                        std::to_string(ReplaySummary::accepted(pipeline.counters())) +
                         " inputs accepted on the other topics); see \"inputs\"";
   }
   summary["messages"] = span.messages;
   summary["wrong_type"] = inputs.wrongType();
   summary["inputs"] = inputs.json(pipeline, bag_topics);
   summary["span_s"] = span.seconds();
-  summary["topics"] = writer.topics().describe();  // what --out holds
+  summary["topics"] = writer.topics().describe();         // what --out holds
   summary["csv_topics"] = writer.csvTopics().describe();  // what the CSV files hold
-  // [s since the epoch] the first and last stamp read (null for a bag without one): a campaign sorts by start.
+  // [s since the epoch] the first and last stamp read (null for a bag without one): a campaign
+  // sorts by start.
   summary["start"] = span.first ? nlohmann::json(span.first->toSec()) : nlohmann::json(nullptr);
   summary["end"] = span.last ? nlohmann::json(span.last->toSec()) : nlohmann::json(nullptr);
   // What the report's motion figures read the input bag with (plot_replay.py): the encoders' topic
@@ -349,10 +394,13 @@ nlohmann::json summaryJson(const ReplayOptions& o, const RigConfig& rig, const J
   summary["calibration"] = calibrationJson(pipeline);
   // The per-mesh-period statistics over the bag (a campaign's row): speed, torque, TE RMS, force.
   summary["mesh_periods"] = writer.meshPeriodTotals().json();
-  if (const DynamicsEstimator* d = pipeline.dynamics()) summary["dynamics_work"] = dynamicsWorkJson(*d);
+  if (const DynamicsEstimator* d = pipeline.dynamics())
+    summary["dynamics_work"] = dynamicsWorkJson(*d);
   if (const auto& r = pipeline.lastResonance()) {
-    for (const Mode& mode : r->modes) summary["final_resonance_hz"].push_back(mode.natural_frequency);
-    summary["final_floquet_margin"] = r->floquet_valid ? nlohmann::json(r->floquet_margin) : nlohmann::json(nullptr);
+    for (const Mode& mode : r->modes)
+      summary["final_resonance_hz"].push_back(mode.natural_frequency);
+    summary["final_floquet_margin"] =
+        r->floquet_valid ? nlohmann::json(r->floquet_margin) : nlohmann::json(nullptr);
   }
   for (const SupportEstimate& s : pipeline.estimator().current().supports) {
     summary["final_radial_stiffness"][s.name] = s.solution.radialStiffness();
@@ -360,18 +408,21 @@ nlohmann::json summaryJson(const ReplayOptions& o, const RigConfig& rig, const J
   return summary;
 }
 
-/// --calibrate: writes the calibrated gearbox, or says in `summary` why not; returns the refusal ("" if written).
-std::string writeCalibration(const ReplayOptions& o, const ReadSpan& span, const RigPipeline& pipeline,
-                             nlohmann::json& summary) {
+/// --calibrate: writes the calibrated gearbox, or says in `summary` why not; returns the refusal
+/// ("" if written).
+std::string writeCalibration(const ReplayOptions& o, const ReadSpan& span,
+                             const RigPipeline& pipeline, nlohmann::json& summary) {
   CalibrationProvenance provenance;
   provenance.bag = std::filesystem::absolute(o.bag_path).string();
   if (span.first) {
-    provenance.recorded = utc(static_cast<std::time_t>(span.first->sec)) + " to " + utc(static_cast<std::time_t>(span.last->sec));
+    provenance.recorded = utc(static_cast<std::time_t>(span.first->sec)) + " to " +
+                          utc(static_cast<std::time_t>(span.last->sec));
   }
   provenance.written = utc(std::time(nullptr));
   provenance.status = summary["status"].get<std::string>();
   try {
-    writeCalibratedGearbox(o.config, pipeline.calibrator()->estimate(), o.calibrate_out, provenance);
+    writeCalibratedGearbox(o.config, pipeline.calibrator()->estimate(), o.calibrate_out,
+                           provenance);
     summary["calibrated_gearbox"] = o.calibrate_out;
     return "";
   } catch (const std::exception& e) {
@@ -390,24 +441,28 @@ int run(int argc, char** argv) {
   ReplaySummary inputs(o.torque_topic, o.preload_topic, o.joint_states_topic);
   inputs.requireDistinctTopics();
   const OutputTopics topics = OutputTopics::parse("--topics", o.topics_option);
-  const OutputTopics csv_topics =
-      o.csv_topics_option.empty() ? topics : OutputTopics::parse("--csv-topics", o.csv_topics_option);
-  const OutputTopics plotted = OutputTopics::parse("", "transmission_error,stiffness,resonance,mesh_period_stats");
+  const OutputTopics csv_topics = o.csv_topics_option.empty()
+                                      ? topics
+                                      : OutputTopics::parse("--csv-topics", o.csv_topics_option);
+  const OutputTopics plotted =
+      OutputTopics::parse("", "transmission_error,stiffness,resonance,mesh_period_stats");
   if (!o.report_dir.empty() && o.plots && !topics.includes(plotted)) {
-    throw InvalidInput("--topics = '" + o.topics_option + "': the report's plots read " + plotted.describe() +
-                       " from its outputs.bag; add them, or pass --no-plots");
+    throw InvalidInput("--topics = '" + o.topics_option + "': the report's plots read " +
+                       plotted.describe() + " from its outputs.bag; add them, or pass --no-plots");
   }
   const RigConfig rig = loadRigFile(o.config);
   const YamlParameters get = readParameterFile(o.params);
   RigPipeline pipeline(rig, readPipelineOptions(get, rig), readRuntimeSettings(get, rig));
   if (!o.calibrate_out.empty() && !pipeline.calibrator()) {  // refused before anything is read
-    throw InvalidInput("--calibrate = '" + o.calibrate_out + "': no calibration runs with --config '" + o.config +
-                       "' (" + calibrationStatus(pipeline) + ")");
+    throw InvalidInput("--calibrate = '" + o.calibrate_out +
+                       "': no calibration runs with --config '" + o.config + "' (" +
+                       calibrationStatus(pipeline) + ")");
   }
   if (!o.report_dir.empty()) {
     ensureDirectory("--report", o.report_dir);
     if (o.csv_dir.empty()) o.csv_dir = o.report_dir + "/csv";
-    if (o.out_bag.empty()) o.out_bag = o.report_dir + "/outputs.bag";  // what the report's plots read
+    if (o.out_bag.empty())
+      o.out_bag = o.report_dir + "/outputs.bag";  // what the report's plots read
   }
   if (!o.csv_dir.empty()) ensureDirectory("--csv", o.csv_dir);
 
@@ -416,27 +471,34 @@ int run(int argc, char** argv) {
   ReplayInput input(o.bag_path, o.torque_topic, o.preload_topic, o.joint_states_topic);
   const JointNames joints = readJointNames(get);
   ReplayWriter writer(pipeline, readOutputSettings(get), o.out_bag,
-                      o.compression == "none" ? BagCompression::None : BagCompression::Lz4, o.csv_dir, topics, csv_topics);
+                      o.compression == "none" ? BagCompression::None : BagCompression::Lz4,
+                      o.csv_dir, topics, csv_topics);
   const auto start = std::chrono::steady_clock::now();  // only for the printed speed
   const ReadSpan span = replayMessages(input, o, joints, pipeline, writer, inputs);
   writer.close();
-  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const double wall =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
   const std::vector<BagTopic> bag_topics = input.topics();
   if (input.damage()) inputs.markDamaged();
   // The torque drives every estimate: without one accepted nothing was estimated or simulated.
   const bool no_torque = pipeline.counters().accepted_torque == 0;
-  nlohmann::json summary = summaryJson(o, rig, joints, input, span, inputs, pipeline, writer, bag_topics);
-  // --calibrate: written or refused (no window updated the calibration); the other outputs stand either way.
-  const std::string calibrate_error = o.calibrate_out.empty() ? "" : writeCalibration(o, span, pipeline, summary);
+  nlohmann::json summary =
+      summaryJson(o, rig, joints, input, span, inputs, pipeline, writer, bag_topics);
+  // --calibrate: written or refused (no window updated the calibration); the other outputs stand
+  // either way.
+  const std::string calibrate_error =
+      o.calibrate_out.empty() ? "" : writeCalibration(o, span, pipeline, summary);
   std::string failure = calibrate_error;  // the refusal that makes the exit code 1
   if (!o.report_dir.empty()) {
     writeTextFile("--report", o.report_dir + "/summary.json", jsonText(summary) + "\n");
-    writeTextFile("--report", o.report_dir + "/report.md",
-                  reportMarkdown(summary, inputs.markdown(pipeline, bag_topics), pipeline, o.out_bag));
+    writeTextFile(
+        "--report", o.report_dir + "/report.md",
+        reportMarkdown(summary, inputs.markdown(pipeline, bag_topics), pipeline, o.out_bag));
     if (o.plots) {  // a failing plot script leaves every other output written
       try {
-        runPythonScript("--plot-script", findScript(o.plot_script, "plot_replay.py"), {o.out_bag, o.report_dir, o.bag_path});
+        runPythonScript("--plot-script", findScript(o.plot_script, "plot_replay.py"),
+                        {o.out_bag, o.report_dir, o.bag_path});
       } catch (const InvalidInput& e) {
         if (failure.empty()) failure = e.what();
       }
@@ -449,12 +511,14 @@ int run(int argc, char** argv) {
                                             : kExitOk;
   // Speed: separate from the outputs above, which must stay identical between runs. Without a
   // torque nothing was estimated or simulated: no speed to speak of.
-  summary["speed"] = {{"wall_s", wall},
-                      {"realtime_factor", no_torque || !(wall > 0.0) ? nlohmann::json(nullptr)
-                                                                     : nlohmann::json(span.seconds() / wall)}};
+  summary["speed"] = {
+      {"wall_s", wall},
+      {"realtime_factor", no_torque || !(wall > 0.0) ? nlohmann::json(nullptr)
+                                                     : nlohmann::json(span.seconds() / wall)}};
   std::cout << jsonText(summary) << std::endl;
   // The run summary, on stderr at the end of every run (in report.md above).
-  std::cerr << runSummaryText(o.bag_path, span.messages, summary, inputs, pipeline, bag_topics, code);
+  std::cerr << runSummaryText(o.bag_path, span.messages, summary, inputs, pipeline, bag_topics,
+                              code);
   if (!failure.empty()) std::cerr << "drivetrain_replay: " << failure << "\n";
   return code;
 }

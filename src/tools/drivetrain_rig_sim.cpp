@@ -3,14 +3,17 @@
 // and /joint_states (sensor_msgs/JointState, the pinion and gear encoders) with header stamps and
 // record times from a fixed epoch, so the bags are reproducible byte for byte (scenario_bag.hpp).
 // Needs no master. Example:
-//   drivetrain_rig_sim --scenario torque_ripple --config config/gearboxes/seed_servo.yaml --out ripple.bag
+//   drivetrain_rig_sim --scenario torque_ripple --config config/gearboxes/seed_servo.yaml --out
+//   ripple.bag
 // load_sweep (load_sweep.hpp) takes --seed and --speed-rpm and adds its truth to the summary:
-//   drivetrain_rig_sim --scenario load_sweep --config test/data/perturbed_servo.yaml --out sweep.bag --seed 7
+//   drivetrain_rig_sim --scenario load_sweep --config test/data/perturbed_servo.yaml --out
+//   sweep.bag --seed 7
 // --campaign DIR writes a test campaign instead of one bag (docs/campaign.md): --bags N bags of the
-// scenario, bag i starting at --epoch + i * --interval with seed --seed + i, the rig's mesh stiffness
-// scale (or its bearings', or its preload torque) multiplied by the --step-* factor from bag --step-at
-// on, and DIR/truth.csv with each bag's true rig:
-//   drivetrain_rig_sim --scenario load_sweep --config config/gearboxes/seed_servo.yaml --campaign wear
+// scenario, bag i starting at --epoch + i * --interval with seed --seed + i, the rig's mesh
+// stiffness scale (or its bearings', or its preload torque) multiplied by the --step-* factor from
+// bag --step-at on, and DIR/truth.csv with each bag's true rig:
+//   drivetrain_rig_sim --scenario load_sweep --config config/gearboxes/seed_servo.yaml --campaign
+//   wear
 //     --bags 8 --interval 3600 --step-at 4 --step-mesh-scale 0.9 --duration 12
 #include <CLI/CLI.hpp>
 #include <cstdint>
@@ -30,11 +33,13 @@
 namespace {
 
 /// load_sweep's truth for the summary: what the calibration should find, and how the bag was made.
-nlohmann::json truthJson(const drivetrain_stiffness::LoadSweep& sweep, const drivetrain_stiffness::LoadSweepSpec& spec) {
+nlohmann::json truthJson(const drivetrain_stiffness::LoadSweep& sweep,
+                         const drivetrain_stiffness::LoadSweepSpec& spec) {
   using drivetrain_stiffness::kArcsecond;
   const drivetrain_stiffness::LoadSweepTruth& t = sweep.truth;
   nlohmann::json levels = nlohmann::json::array();
-  for (const drivetrain_stiffness::LoadSweepLevel& l : t.levels) levels.push_back({{"t0", l.t0}, {"t1", l.t1}, {"torque", l.torque}});
+  for (const drivetrain_stiffness::LoadSweepLevel& l : t.levels)
+    levels.push_back({{"t0", l.t0}, {"t1", l.t1}, {"torque", l.torque}});
   return {{"mesh_stiffness_scale", t.mesh_stiffness_scale},
           {"pinion_bearing_scale", t.bearing_scale[0]},
           {"gear_bearing_scale", t.bearing_scale[1]},
@@ -62,34 +67,42 @@ struct CampaignSpec {
   double interval = 3600.0;      ///< [s] between bag starts
   int step_at = -1;              ///< first bag of the changed rig; < 0: no change
   double step_mesh_scale = 1.0;  ///< [-] multiplies mesh.stiffness_scale from step_at on
-  double step_bearing_scale = 1.0;  ///< [-] multiplies every bearing's stiffness_scale from step_at on
+  double step_bearing_scale =
+      1.0;  ///< [-] multiplies every bearing's stiffness_scale from step_at on
   double step_preload_scale = 1.0;  ///< [-] multiplies anti_backlash.preload_torque from step_at on
 };
 
 /// Bag `index` of the campaign: --config's rig with the step applied from step_at on.
-drivetrain_stiffness::RigConfig campaignRig(drivetrain_stiffness::RigConfig rig, const CampaignSpec& c, int index) {
+drivetrain_stiffness::RigConfig campaignRig(drivetrain_stiffness::RigConfig rig,
+                                            const CampaignSpec& c, int index) {
   if (c.step_at < 0 || index < c.step_at) return rig;
   rig.mesh_stiffness_scale *= c.step_mesh_scale;
-  for (drivetrain_stiffness::BearingSupportConfig& b : rig.bearings) b.stiffness_scale *= c.step_bearing_scale;
+  for (drivetrain_stiffness::BearingSupportConfig& b : rig.bearings)
+    b.stiffness_scale *= c.step_bearing_scale;
   rig.anti_backlash.preload_torque *= c.step_preload_scale;
   return rig;
 }
 
 /// Writes the campaign's bags and DIR/truth.csv (one row per bag: file, start stamp [s], the true
 /// scales and preload torque [N*m]); prints one JSON line per bag.
-void writeCampaign(const drivetrain_stiffness::RigConfig& rig, const CampaignSpec& c, const drivetrain_stiffness::ScenarioSpec& spec,
-                   drivetrain_stiffness::LoadSweepSpec sweep_spec, drivetrain_stiffness::ScenarioBagOptions bag) {
+void writeCampaign(const drivetrain_stiffness::RigConfig& rig, const CampaignSpec& c,
+                   const drivetrain_stiffness::ScenarioSpec& spec,
+                   drivetrain_stiffness::LoadSweepSpec sweep_spec,
+                   drivetrain_stiffness::ScenarioBagOptions bag) {
   using namespace drivetrain_stiffness;
-  if (c.bags < 1 || c.bags > 100000) throw InvalidInput("--bags: " + std::to_string(c.bags) + " (1 to 100000)");
+  if (c.bags < 1 || c.bags > 100000)
+    throw InvalidInput("--bags: " + std::to_string(c.bags) + " (1 to 100000)");
   requirePositive("--interval", c.interval);
-  for (const auto& [name, v] : {std::pair<const char*, double>{"--step-mesh-scale", c.step_mesh_scale},
-                                {"--step-bearing-scale", c.step_bearing_scale},
-                                {"--step-preload-scale", c.step_preload_scale}}) {
+  for (const auto& [name, v] :
+       {std::pair<const char*, double>{"--step-mesh-scale", c.step_mesh_scale},
+        {"--step-bearing-scale", c.step_bearing_scale},
+        {"--step-preload-scale", c.step_preload_scale}}) {
     requirePositive(name, v);
   }
   std::filesystem::create_directories(c.dir);
   std::ofstream truth(c.dir + "/truth.csv");
-  truth << "bag,start,mesh_stiffness_scale,pinion_bearing_scale,gear_bearing_scale,preload_torque\n";
+  truth
+      << "bag,start,mesh_stiffness_scale,pinion_bearing_scale,gear_bearing_scale,preload_torque\n";
   truth.precision(17);
   const double epoch0 = bag.epoch;
   const std::uint64_t seed0 = sweep_spec.seed;
@@ -108,10 +121,13 @@ void writeCampaign(const drivetrain_stiffness::RigConfig& rig, const CampaignSpe
     writeScenarioBag(made.events, bag, c.dir + "/" + name);
     // The rig's own values (its supports' scales per shaft, as load_sweep's truth reports them).
     std::array<double, 2> bearing_scale{{1.0, 1.0}};
-    for (const BearingSupportConfig& b : bag_rig.bearings) bearing_scale[static_cast<std::size_t>(b.shaft)] = b.stiffness_scale;
-    truth << name << "," << bag.epoch << "," << bag_rig.mesh_stiffness_scale << "," << bearing_scale[0] << ","
-          << bearing_scale[1] << "," << bag_rig.anti_backlash.preload_torque << "\n";
-    std::cout << "{\"bag\": \"" << c.dir << "/" << name << "\", \"start\": " << std::fixed << bag.epoch << std::defaultfloat
+    for (const BearingSupportConfig& b : bag_rig.bearings)
+      bearing_scale[static_cast<std::size_t>(b.shaft)] = b.stiffness_scale;
+    truth << name << "," << bag.epoch << "," << bag_rig.mesh_stiffness_scale << ","
+          << bearing_scale[0] << "," << bearing_scale[1] << ","
+          << bag_rig.anti_backlash.preload_torque << "\n";
+    std::cout << "{\"bag\": \"" << c.dir << "/" << name << "\", \"start\": " << std::fixed
+              << bag.epoch << std::defaultfloat
               << ", \"mesh_stiffness_scale\": " << bag_rig.mesh_stiffness_scale << "}\n";
   }
 }
@@ -127,28 +143,45 @@ int main(int argc, char** argv) {
   bool no_velocity = false;
   drivetrain_stiffness::LoadSweepSpec sweep_spec;
   app.add_option("--scenario", spec.name, "Scenario:\n" + scenarioHelp())->required();
-  app.add_option("--config", config, "Gearbox YAML (support names, configured preloads, dynamics block, teeth)")->required();
+  app.add_option("--config", config,
+                 "Gearbox YAML (support names, configured preloads, dynamics block, teeth)")
+      ->required();
   CampaignSpec campaign;
   auto* out_opt = app.add_option("--out", out, "Bag to write");
-  auto* campaign_opt = app.add_option("--campaign", campaign.dir, "Directory for a campaign of --bags bags (instead of --out)");
+  auto* campaign_opt = app.add_option("--campaign", campaign.dir,
+                                      "Directory for a campaign of --bags bags (instead of --out)");
   out_opt->excludes(campaign_opt);
   app.add_option("--bags", campaign.bags, "--campaign: number of bags")->needs(campaign_opt);
-  app.add_option("--interval", campaign.interval, "--campaign: [s] between bag starts (3600)")->needs(campaign_opt);
-  app.add_option("--step-at", campaign.step_at, "--campaign: first bag (0-based) of the changed rig")->needs(campaign_opt);
-  app.add_option("--step-mesh-scale", campaign.step_mesh_scale, "--campaign: factor on the mesh stiffness scale from --step-at on");
-  app.add_option("--step-bearing-scale", campaign.step_bearing_scale, "--campaign: factor on every bearing's stiffness scale from --step-at on");
-  app.add_option("--step-preload-scale", campaign.step_preload_scale, "--campaign: factor on the preload torque from --step-at on");
-  app.add_option("--duration", spec.duration, "[s] length of the scenario (2; load_sweep: its natural length, this scales its holds)");
+  app.add_option("--interval", campaign.interval, "--campaign: [s] between bag starts (3600)")
+      ->needs(campaign_opt);
+  app.add_option("--step-at", campaign.step_at,
+                 "--campaign: first bag (0-based) of the changed rig")
+      ->needs(campaign_opt);
+  app.add_option("--step-mesh-scale", campaign.step_mesh_scale,
+                 "--campaign: factor on the mesh stiffness scale from --step-at on");
+  app.add_option("--step-bearing-scale", campaign.step_bearing_scale,
+                 "--campaign: factor on every bearing's stiffness scale from --step-at on");
+  app.add_option("--step-preload-scale", campaign.step_preload_scale,
+                 "--campaign: factor on the preload torque from --step-at on");
+  app.add_option(
+      "--duration", spec.duration,
+      "[s] length of the scenario (2; load_sweep: its natural length, this scales its holds)");
   app.add_option("--rate", spec.torque_rate, "[Hz] torque sample rate");
-  app.add_option("--joint-rate", spec.joint_rate, "[Hz] encoder (joint_states) sample rate, 1000 by default (load_sweep: 5000); 0: none");
-  app.add_option("--seed", sweep_spec.seed, "load_sweep: seed of the encoder errors, stamp jitter and torque noise (1)");
-  app.add_option("--speed-rpm", sweep_spec.speed_rpm, "load_sweep: [rpm] constant pinion speed (120)");
-  app.add_flag("--no-velocity", no_velocity, "joint_states without velocity (the node differentiates the angle)");
+  app.add_option(
+      "--joint-rate", spec.joint_rate,
+      "[Hz] encoder (joint_states) sample rate, 1000 by default (load_sweep: 5000); 0: none");
+  app.add_option("--seed", sweep_spec.seed,
+                 "load_sweep: seed of the encoder errors, stamp jitter and torque noise (1)");
+  app.add_option("--speed-rpm", sweep_spec.speed_rpm,
+                 "load_sweep: [rpm] constant pinion speed (120)");
+  app.add_flag("--no-velocity", no_velocity,
+               "joint_states without velocity (the node differentiates the angle)");
   app.add_option("--epoch", bag.epoch, "[s] stamp of the scenario start");
   app.add_option("--torque-topic", bag.torque_topic);
   app.add_option("--preload-topic", bag.preload_topic);
   app.add_option("--joint-topic", bag.joint_topic, "sensor_msgs/JointState topic (/joint_states)");
-  app.add_option("--pinion-joint", bag.pinion_joint, "JointState name of the pinion shaft (pinion)");
+  app.add_option("--pinion-joint", bag.pinion_joint,
+                 "JointState name of the pinion shaft (pinion)");
   app.add_option("--gear-joint", bag.gear_joint, "JointState name of the gear shaft (gear)");
   CLI11_PARSE(app, argc, argv);
   spec.joint_velocity = !no_velocity;
@@ -181,8 +214,9 @@ int main(int argc, char** argv) {
     }
     const std::vector<RigEvent>& events = made.events;
     const ScenarioBagCounts n = writeScenarioBag(events, bag, out);
-    std::cout << "{\"scenario\": \"" << spec.name << "\", \"events\": " << events.size() << ", \"torque\": " << n.torque
-              << ", \"preload\": " << n.preload << ", \"joint_states\": " << n.joint_states << ", \"bag\": \"" << out << "\"";
+    std::cout << "{\"scenario\": \"" << spec.name << "\", \"events\": " << events.size()
+              << ", \"torque\": " << n.torque << ", \"preload\": " << n.preload
+              << ", \"joint_states\": " << n.joint_states << ", \"bag\": \"" << out << "\"";
     if (sweep) std::cout << ", \"truth\": " << truthJson(made, sweep_spec).dump();
     std::cout << "}\n";
   } catch (const std::exception& e) {

@@ -17,7 +17,8 @@ namespace {
 /// Nearest-rank percentile of a sorted, non-empty vector: the smallest value with at least p % of
 /// the samples at or below it (no interpolation: every reported latency was actually observed).
 double percentile(const std::vector<double>& sorted, double p) {
-  const auto rank = static_cast<std::size_t>(std::ceil(p / 100.0 * static_cast<double>(sorted.size())));
+  const auto rank =
+      static_cast<std::size_t>(std::ceil(p / 100.0 * static_cast<double>(sorted.size())));
   return sorted[std::clamp<std::size_t>(rank, 1, sorted.size()) - 1];
 }
 
@@ -66,15 +67,19 @@ nlohmann::json toJson(const LoadResult& r) {
           {"heap_end_b", r.heap_end_b}};
 }
 
-LoadGenerator::LoadGenerator(const ros::NodeHandle& nh, const LoadOptions& options) : options_(options), nh_(nh) {
+LoadGenerator::LoadGenerator(const ros::NodeHandle& nh, const LoadOptions& options)
+    : options_(options), nh_(nh) {
   nh_.setCallbackQueue(&queue_);
   // Both queues hold every message of the run: a drop on our side (a slow callback thread, a
   // backed-up socket) would otherwise be blamed on the node.
-  const double expected = (options_.rate_hz > 0.0 ? options_.rate_hz : 1e5) * (options_.duration_s + options_.settle_timeout_s);
+  const double expected = (options_.rate_hz > 0.0 ? options_.rate_hz : 1e5) *
+                          (options_.duration_s + options_.settle_timeout_s);
   const auto queue = static_cast<std::uint32_t>(std::clamp(expected, 1000.0, 1e8));
   torque_pub_ = nh_.advertise<geometry_msgs::WrenchStamped>("torque", queue);
-  stiffness_sub_ = nh_.subscribe("stiffness", queue, &LoadGenerator::onStiffness, this, ros::TransportHints().tcpNoDelay());
-  te_sub_ = nh_.subscribe("transmission_error", queue, &LoadGenerator::onTransmissionError, this, ros::TransportHints().tcpNoDelay());
+  stiffness_sub_ = nh_.subscribe("stiffness", queue, &LoadGenerator::onStiffness, this,
+                                 ros::TransportHints().tcpNoDelay());
+  te_sub_ = nh_.subscribe("transmission_error", queue, &LoadGenerator::onTransmissionError, this,
+                          ros::TransportHints().tcpNoDelay());
   diagnostics_sub_ = nh_.subscribe("/diagnostics", 100, &LoadGenerator::onDiagnostics, this);
   spinner_ = std::make_unique<ros::AsyncSpinner>(1, &queue_);
   spinner_->start();
@@ -100,9 +105,12 @@ bool LoadGenerator::waitFor(F done, double timeout_s) {
 
 bool LoadGenerator::connect() {
   // One diagnostics report proves the node is up and its counters are readable.
-  const bool ok = waitFor([this] { return torque_pub_.getNumSubscribers() > 0 && stiffness_sub_.getNumPublishers() > 0 &&
-                                          diagnostics_received_ > 0; },
-                          options_.connect_timeout_s);
+  const bool ok = waitFor(
+      [this] {
+        return torque_pub_.getNumSubscribers() > 0 && stiffness_sub_.getNumPublishers() > 0 &&
+               diagnostics_received_ > 0;
+      },
+      options_.connect_timeout_s);
   // getNumPublishers() counts our stiffness link before the node has finished its handshake: an
   // answer sent meanwhile would be lost to us, not by the node.
   if (ok) ros::WallDuration(0.5).sleep();
@@ -111,8 +119,9 @@ bool LoadGenerator::connect() {
 
 void LoadGenerator::onStiffness(const Stiffness::ConstPtr& msg) {
   const ros::Time now = ros::Time::now();  // before the lock: its wait is not the node's latency
-  bool finite = std::isfinite(msg->torque) && std::isfinite(msg->mesh_force) && std::isfinite(msg->mesh_stiffness) &&
-                std::isfinite(msg->radial_stiffness_0) && std::isfinite(msg->radial_stiffness_1);
+  bool finite = std::isfinite(msg->torque) && std::isfinite(msg->mesh_force) &&
+                std::isfinite(msg->mesh_stiffness) && std::isfinite(msg->radial_stiffness_0) &&
+                std::isfinite(msg->radial_stiffness_1);
   for (const auto& b : msg->bearings) finite = finite && std::isfinite(b.radial_stiffness);
   std::lock_guard<std::mutex> lock(mutex_);
   latencies_s_.push_back((now - msg->header.stamp).toSec());
@@ -122,7 +131,8 @@ void LoadGenerator::onStiffness(const Stiffness::ConstPtr& msg) {
 }
 
 void LoadGenerator::onTransmissionError(const TransmissionError::ConstPtr& msg) {
-  const bool finite = std::isfinite(msg->dynamic_te) && std::isfinite(msg->static_te) && std::isfinite(msg->mesh_force);
+  const bool finite = std::isfinite(msg->dynamic_te) && std::isfinite(msg->static_te) &&
+                      std::isfinite(msg->mesh_force);
   std::lock_guard<std::mutex> lock(mutex_);
   ++te_received_;
   te_lost_ += te_gaps_.observe("transmission_error", msg->header.seq);
@@ -137,20 +147,34 @@ void LoadGenerator::onDiagnostics(const diagnostic_msgs::DiagnosticArray::ConstP
     diag_.diagnostics_seen = true;
     for (const auto& kv : status.values) {
       const char* v = kv.value.c_str();
-      if (kv.key == "accepted_torque") diag_.accepted_torque = std::strtoull(v, nullptr, 10);
-      else if (kv.key == "rejected_torque") diag_.rejected_torque = std::strtoull(v, nullptr, 10);
-      else if (kv.key == "missed_deadlines") diag_.missed_deadlines = std::strtoull(v, nullptr, 10);
-      else if (kv.key == "missed_deadlines_cpu") diag_.missed_deadlines_cpu = std::strtoull(v, nullptr, 10);
-      else if (kv.key == "max_processing_cpu [s]") diag_.max_processing_cpu_s = std::strtod(v, nullptr);
-      else if (kv.key == "stiffness_published") diag_.stiffness_published = std::strtoull(v, nullptr, 10);
-      else if (kv.key == "dropped_torque") diag_.dropped_torque = std::strtoull(v, nullptr, 10);
-      else if (kv.key == "stiffness_shed") diag_.stiffness_shed = std::strtoull(v, nullptr, 10);
-      else if (kv.key == "stiffness_coalesced") diag_.stiffness_coalesced = std::strtoull(v, nullptr, 10);
-      else if (kv.key == "transmission_error_published") diag_.te_published = std::strtoull(v, nullptr, 10);
-      else if (kv.key == "max_processing [s]") diag_.max_processing_s = std::strtod(v, nullptr);
-      else if (kv.key == "mean_processing [s]") diag_.mean_processing_s = std::strtod(v, nullptr);
-      else if (kv.key == "resident_memory [kB]") diag_.rss_end_kb = std::strtod(v, nullptr);
-      else if (kv.key == "heap_in_use [B]") diag_.heap_end_b = std::strtod(v, nullptr);
+      if (kv.key == "accepted_torque")
+        diag_.accepted_torque = std::strtoull(v, nullptr, 10);
+      else if (kv.key == "rejected_torque")
+        diag_.rejected_torque = std::strtoull(v, nullptr, 10);
+      else if (kv.key == "missed_deadlines")
+        diag_.missed_deadlines = std::strtoull(v, nullptr, 10);
+      else if (kv.key == "missed_deadlines_cpu")
+        diag_.missed_deadlines_cpu = std::strtoull(v, nullptr, 10);
+      else if (kv.key == "max_processing_cpu [s]")
+        diag_.max_processing_cpu_s = std::strtod(v, nullptr);
+      else if (kv.key == "stiffness_published")
+        diag_.stiffness_published = std::strtoull(v, nullptr, 10);
+      else if (kv.key == "dropped_torque")
+        diag_.dropped_torque = std::strtoull(v, nullptr, 10);
+      else if (kv.key == "stiffness_shed")
+        diag_.stiffness_shed = std::strtoull(v, nullptr, 10);
+      else if (kv.key == "stiffness_coalesced")
+        diag_.stiffness_coalesced = std::strtoull(v, nullptr, 10);
+      else if (kv.key == "transmission_error_published")
+        diag_.te_published = std::strtoull(v, nullptr, 10);
+      else if (kv.key == "max_processing [s]")
+        diag_.max_processing_s = std::strtod(v, nullptr);
+      else if (kv.key == "mean_processing [s]")
+        diag_.mean_processing_s = std::strtod(v, nullptr);
+      else if (kv.key == "resident_memory [kB]")
+        diag_.rss_end_kb = std::strtod(v, nullptr);
+      else if (kv.key == "heap_in_use [B]")
+        diag_.heap_end_b = std::strtod(v, nullptr);
     }
     // The baseline: the first report after the warm-up (start-up allocations are done by then).
     const bool warm = !warmup_end_.isZero() && ros::WallTime::now() >= warmup_end_;
@@ -166,7 +190,8 @@ LoadResult LoadGenerator::run() {
   const bool burst = options_.rate_hz <= 0.0;
   // A burst sends as many as 1e5 Hz would in duration_s, as fast as publish() returns.
   const double period = burst ? 0.0 : 1.0 / options_.rate_hz;  // [s]
-  const auto total = static_cast<std::uint64_t>(std::llround((burst ? 1e5 : options_.rate_hz) * options_.duration_s));
+  const auto total = static_cast<std::uint64_t>(
+      std::llround((burst ? 1e5 : options_.rate_hz) * options_.duration_s));
   {
     std::lock_guard<std::mutex> lock(mutex_);
     latencies_s_.clear();
@@ -201,26 +226,36 @@ LoadResult LoadGenerator::run() {
       if (lateness > period) ++r.late_sends;  // its slot was missed
       r.max_send_lateness_s = std::max(r.max_send_lateness_s, lateness);
     }
-    // roscpp numbers header.seq itself (per publication, gaps = losses); set it the same way anyway.
+    // roscpp numbers header.seq itself (per publication, gaps = losses); set it the same way
+    // anyway.
     m.header.seq = next_seq_++;
     m.header.stamp = ros::Time::now();
-    m.wrench.torque.z = options_.nominal_torque + options_.ripple_torque * std::sin(kTwoPi * options_.ripple_hz * t);
+    m.wrench.torque.z = options_.nominal_torque +
+                        options_.ripple_torque * std::sin(kTwoPi * options_.ripple_hz * t);
     torque_pub_.publish(m);
     if (r.sent == 0) first_send = now;
     last_send = now;
     ++r.sent;
   }
-  if (r.sent > 1) r.send_rate_hz = static_cast<double>(r.sent - 1) / (last_send - first_send).toSec();
+  if (r.sent > 1)
+    r.send_rate_hz = static_cast<double>(r.sent - 1) / (last_send - first_send).toSec();
 
   // Settle on the node's own counts, not on time: first until it has accounted for every input
   // sent (accepted, rejected or seen dropped: the newest always arrives, as roscpp's queues drop
   // the oldest), then until every answer it published has arrived or been seen missing. Both
   // against its counters when this run started (they are totals since the node started).
   const std::uint64_t sent = r.sent;
-  const auto processed = [](const LoadResult& d) { return d.accepted_torque + d.rejected_torque + d.dropped_torque; };
-  waitFor([&] { return processed(diag_) - processed(baseline) >= sent; }, options_.settle_timeout_s);
-  waitFor([&] { return latencies_s_.size() + answers_lost_ >= diag_.stiffness_published - baseline.stiffness_published; },
+  const auto processed = [](const LoadResult& d) {
+    return d.accepted_torque + d.rejected_torque + d.dropped_torque;
+  };
+  waitFor([&] { return processed(diag_) - processed(baseline) >= sent; },
           options_.settle_timeout_s);
+  waitFor(
+      [&] {
+        return latencies_s_.size() + answers_lost_ >=
+               diag_.stiffness_published - baseline.stiffness_published;
+      },
+      options_.settle_timeout_s);
   std::uint64_t reports = 0;
   {
     std::lock_guard<std::mutex> lock(mutex_);

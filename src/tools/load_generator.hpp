@@ -25,14 +25,16 @@
 namespace drivetrain_stiffness {
 
 struct LoadOptions {
-  double rate_hz = 1000.0;      ///< [Hz] torque send rate; 0 = as fast as publish() goes (outruns the node)
-  double duration_s = 10.0;     ///< [s] sending time
-  double warmup_s = 2.0;        ///< [s] after the first send: the first RSS after it is the baseline
+  double rate_hz =
+      1000.0;  ///< [Hz] torque send rate; 0 = as fast as publish() goes (outruns the node)
+  double duration_s = 10.0;  ///< [s] sending time
+  double warmup_s = 2.0;     ///< [s] after the first send: the first RSS after it is the baseline
   double connect_timeout_s = 20.0;  ///< [s] for the node to appear on all three topics
-  double settle_timeout_s = 10.0;   ///< [s] after the last send, for the last answers and diagnostics
-  double nominal_torque = 0.1;      ///< [N*m] seed rig nominal
-  double ripple_torque = 0.01;      ///< [N*m] amplitude of the ripple
-  double ripple_hz = 100.0;         ///< [Hz] ripple frequency
+  double settle_timeout_s =
+      10.0;                     ///< [s] after the last send, for the last answers and diagnostics
+  double nominal_torque = 0.1;  ///< [N*m] seed rig nominal
+  double ripple_torque = 0.01;  ///< [N*m] amplitude of the ripple
+  double ripple_hz = 100.0;     ///< [Hz] ripple frequency
   std::string diagnostic_status = "stiffness_estimator: stiffness_estimator";
 };
 
@@ -40,10 +42,12 @@ struct LoadOptions {
 struct LoadResult {
   static constexpr double kNone = std::numeric_limits<double>::quiet_NaN();
   std::uint64_t sent = 0, answered = 0;
-  std::uint64_t answers_lost = 0;   ///< stiffness answers the node published that never arrived (seq gaps)
-  std::uint64_t te_received = 0, te_lost = 0;  ///< transmission_error samples received, and lost (seq gaps)
-  std::uint64_t non_finite = 0;     ///< answers or samples with a NaN or Inf in a number field
-  std::uint64_t late_sends = 0;     ///< sent more than one period after their deadline
+  std::uint64_t answers_lost =
+      0;  ///< stiffness answers the node published that never arrived (seq gaps)
+  std::uint64_t te_received = 0,
+                te_lost = 0;         ///< transmission_error samples received, and lost (seq gaps)
+  std::uint64_t non_finite = 0;      ///< answers or samples with a NaN or Inf in a number field
+  std::uint64_t late_sends = 0;      ///< sent more than one period after their deadline
   double max_send_lateness_s = 0.0;  ///< [s] worst send time - deadline
   double send_rate_hz = 0.0;         ///< [Hz] mean rate between the first and the last send
   double latency_p50_s = kNone, latency_p90_s = kNone, latency_p99_s = kNone, latency_max_s = kNone;
@@ -51,10 +55,11 @@ struct LoadResult {
   bool diagnostics_seen = false;
   double rss_warmup_kb = kNone, rss_end_kb = kNone;  ///< [kB] VmRSS of the node
   double heap_end_b = kNone;  ///< [B] the node's live heap at the end (queues drained)
-  std::uint64_t accepted_torque = 0, rejected_torque = 0, missed_deadlines = 0, stiffness_published = 0;
+  std::uint64_t accepted_torque = 0, rejected_torque = 0, missed_deadlines = 0,
+                stiffness_published = 0;
   std::uint64_t dropped_torque = 0, stiffness_shed = 0, stiffness_coalesced = 0, te_published = 0;
   std::uint64_t missed_deadlines_warmup = 0;
-  std::uint64_t missed_deadlines_cpu = 0;     ///< the node's own CPU time beyond ~deadline
+  std::uint64_t missed_deadlines_cpu = 0;         ///< the node's own CPU time beyond ~deadline
   std::uint64_t missed_deadlines_cpu_warmup = 0;  ///< of those, by the RSS baseline report
   double max_processing_cpu_s = kNone;  ///< of missed_deadlines, those by the RSS baseline report
   double max_processing_s = kNone, mean_processing_s = kNone;

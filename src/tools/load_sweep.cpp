@@ -22,7 +22,8 @@ namespace {
 class Stream {
  public:
   Stream(std::uint64_t seed, std::uint32_t stream) {
-    std::seed_seq seq{static_cast<std::uint32_t>(seed & 0xffffffffu), static_cast<std::uint32_t>(seed >> 32), stream};
+    std::seed_seq seq{static_cast<std::uint32_t>(seed & 0xffffffffu),
+                      static_cast<std::uint32_t>(seed >> 32), stream};
     engine_.seed(seq);
   }
   /// Uniform in [0, 1): the top 53 bits.
@@ -56,13 +57,15 @@ void validate(const RigConfig& rig, const LoadSweepSpec& s) {
   requirePositive("step_turns", s.step_turns);
   if (s.positive_levels < 1) throwInvalid("positive_levels", s.positive_levels, "must be >= 1");
   if (s.negative_levels < 1) throwInvalid("negative_levels", s.negative_levels, "must be >= 1");
-  if (!(s.overdrive > 1.0 && s.overdrive <= 10.0)) throwInvalid("overdrive", s.overdrive, "must be in (1, 10]");
+  if (!(s.overdrive > 1.0 && s.overdrive <= 10.0))
+    throwInvalid("overdrive", s.overdrive, "must be in (1, 10]");
   requireNonNegative("eccentricity_min", s.eccentricity_min);
   if (!(s.eccentricity_max >= s.eccentricity_min && s.eccentricity_max < 1e-2)) {
     throwInvalid("eccentricity_max", s.eccentricity_max, "must be in [eccentricity_min, 1e-2) rad");
   }
   requireNonNegative("stamp_jitter", s.stamp_jitter);
-  if (!(s.stamp_jitter < 0.5 / s.joint_rate)) throwInvalid("stamp_jitter", s.stamp_jitter, "must be below half a reading interval");
+  if (!(s.stamp_jitter < 0.5 / s.joint_rate))
+    throwInvalid("stamp_jitter", s.stamp_jitter, "must be below half a reading interval");
   requireNonNegative("torque_noise", s.torque_noise);
   requireNonNegative("torque_noise_floor", s.torque_noise_floor);
   requirePositive("lead_in", s.lead_in);
@@ -71,9 +74,13 @@ void validate(const RigConfig& rig, const LoadSweepSpec& s) {
   requireFinite("dwell_torque", s.dwell_torque);
   requirePositive("gears.teeth[0]", rig.gears.teeth[0]);
   requirePositive("gears.teeth[1]", rig.gears.teeth[1]);
-  if (!rig.dynamics.present) throw InvalidInput("dynamics: load_sweep needs the gearbox's 'dynamics:' block (the true rig's TE)");
+  if (!rig.dynamics.present)
+    throw InvalidInput(
+        "dynamics: load_sweep needs the gearbox's 'dynamics:' block (the true rig's TE)");
   if (!(rig.anti_backlash.spring_stiffness > 0.0)) {
-    throw InvalidInput("anti_backlash.spring_stiffness = 0: load_sweep crosses the anti-backlash knee; an ordinary gear has none");
+    throw InvalidInput(
+        "anti_backlash.spring_stiffness = 0: load_sweep crosses the anti-backlash knee; an "
+        "ordinary gear has none");
   }
 }
 
@@ -86,23 +93,27 @@ std::array<double, 2> shaftScales(const RigConfig& rig) {
     if (s == 0.0) s = b.stiffness_scale;
     if (b.stiffness_scale != s) {
       throwInvalid("bearings[" + b.name + "].stiffness_scale", b.stiffness_scale,
-                   "differs from another support of the same shaft (" + formatValue(s) + "): load_sweep's truth has one scale per shaft");
+                   "differs from another support of the same shaft (" + formatValue(s) +
+                       "): load_sweep's truth has one scale per shaft");
     }
   }
   for (int i = 0; i < 2; ++i) {
-    if (scale[i] == 0.0) throw InvalidInput(std::string("bearings: no support on the ") + (i == 0 ? "pinion" : "gear") + " shaft");
+    if (scale[i] == 0.0)
+      throw InvalidInput(std::string("bearings: no support on the ") +
+                         (i == 0 ? "pinion" : "gear") + " shaft");
   }
   return scale;
 }
 
-/// The torque staircase: [0] the baseline, then the positive levels, a zero, the negative levels and a
-/// final zero. The levels of each direction are evenly spaced, h apart, with the knee halfway between
-/// two of them (no level sits on the knee, where the features' slope changes): the knee is at
-/// (m + 1/2) h, m + 1/2 the half-integer nearest to levels / overdrive, so the top level is about
-/// overdrive x the knee (10 levels at 1.5: h = knee / 6.5, top 1.54 knee; 6 levels: h = knee / 4.5,
-/// top 1.33 knee).
-/// Levels beyond `limit` [N*m] in magnitude (what the rig's bearings carry) are left out.
-std::vector<double> torqueLevels(const LoadSweepSpec& s, double knee, double reverse_knee, double limit) {
+/// The torque staircase: [0] the baseline, then the positive levels, a zero, the negative levels
+/// and a final zero. The levels of each direction are evenly spaced, h apart, with the knee halfway
+/// between two of them (no level sits on the knee, where the features' slope changes): the knee is
+/// at (m + 1/2) h, m + 1/2 the half-integer nearest to levels / overdrive, so the top level is
+/// about overdrive x the knee (10 levels at 1.5: h = knee / 6.5, top 1.54 knee; 6 levels: h = knee
+/// / 4.5, top 1.33 knee). Levels beyond `limit` [N*m] in magnitude (what the rig's bearings carry)
+/// are left out.
+std::vector<double> torqueLevels(const LoadSweepSpec& s, double knee, double reverse_knee,
+                                 double limit) {
   auto ladder = [&](int n, double k) {
     const long m = std::max(0L, std::min<long>(n - 1, std::lround(n / s.overdrive - 0.5)));
     const double h = k / (static_cast<double>(m) + 0.5);
@@ -125,7 +136,8 @@ std::int64_t nanoseconds(double t) { return std::llround(t * 1e9); }
 /// Collects the truth dynamics' torsional coordinate on the readings' grid.
 class TruthSink : public PipelineSink {
  public:
-  TruthSink(std::int64_t epoch_ns, double joint_rate, long lead, std::vector<double>& te, std::vector<char>& filled)
+  TruthSink(std::int64_t epoch_ns, double joint_rate, long lead, std::vector<double>& te,
+            std::vector<char>& filled)
       : epoch_ns_(epoch_ns), joint_rate_(joint_rate), lead_(lead), te_(te), filled_(filled) {}
   double correction = 0.0;  ///< [m] c(T) of the torque the dynamics hold (see makeLoadSweep)
 
@@ -136,7 +148,8 @@ class TruthSink : public PipelineSink {
     const std::int64_t rel = stamp.ns - epoch_ns_;
     const long j = std::lround(static_cast<double>(rel) * 1e-9 * joint_rate_);
     if (std::llabs(rel - nanoseconds(j / joint_rate_)) > 1) {
-      throw InvalidInput("load_sweep: a truth sample at " + std::to_string(rel) + " ns after the start is off the readings' grid");
+      throw InvalidInput("load_sweep: a truth sample at " + std::to_string(rel) +
+                         " ns after the start is off the readings' grid");
     }
     const long k = j - lead_;
     if (k < 0 || k >= static_cast<long>(te_.size())) return;
@@ -154,8 +167,9 @@ class TruthSink : public PipelineSink {
 
 void require(InputOutcome outcome, const RigPipeline& pipeline, const char* what, double t) {
   if (outcome != InputOutcome::kAccepted) {
-    throw InvalidInput(std::string("load_sweep: the truth dynamics refused the ") + what + " at t = " + formatValue(t) +
-                       " s (" + toString(outcome) + "): " + pipeline.counters().last_event);
+    throw InvalidInput(std::string("load_sweep: the truth dynamics refused the ") + what +
+                       " at t = " + formatValue(t) + " s (" + toString(outcome) +
+                       "): " + pipeline.counters().last_event);
   }
 }
 
@@ -169,7 +183,8 @@ CalibrationVector LoadSweepTruth::parameters() const {
 
 double loadSweepNaturalDuration(const RigConfig& rig, const LoadSweepSpec& s) {
   validate(rig, s);
-  const int holds = s.positive_levels + s.negative_levels + 2;  // after the baseline: levels and two zeros
+  const int holds =
+      s.positive_levels + s.negative_levels + 2;  // after the baseline: levels and two zeros
   return (s.baseline_turns + holds * s.step_turns) * gearTurn(rig, s.speed_rpm);
 }
 
@@ -184,14 +199,16 @@ LoadSweep makeLoadSweep(const RigConfig& rig, const LoadSweepSpec& s) {
   truth.gear_turn = gearTurn(rig, s.speed_rpm);
 
   // The knees of the TRUE rig (static_te_model.hpp): the back half lifts at F = F_p (1 + k1/k_c),
-  // the drive half at F = -F_p (1 + k_c/k1), F = T / r_b,pinion, F_p = T_p / r_b,gear, period means.
+  // the drive half at F = -F_p (1 + k_c/k1), F = T / r_b,pinion, F_p = T_p / r_b,gear, period
+  // means.
   StaticTeModel model(rig);
   const std::array<double, 2> rb = model.baseRadius();
   const CalibrationVector p = truth.parameters();
   truth.knee_torque = model.kneeTorque(p);
   const double fp_torque = truth.preload_torque / rb[1] * rb[0];  // F_p r_b,p [N*m]
   if (!(truth.knee_torque > fp_torque && fp_torque > 0.0)) {
-    throwInvalid("anti_backlash.preload_torque", truth.preload_torque, "gives no knee to sweep across");
+    throwInvalid("anti_backlash.preload_torque", truth.preload_torque,
+                 "gives no knee to sweep across");
   }
   const double k1_over_kc = truth.knee_torque / fp_torque - 1.0;
   truth.reverse_knee_torque = -fp_torque * (1.0 + 1.0 / k1_over_kc);
@@ -199,9 +216,9 @@ LoadSweep makeLoadSweep(const RigConfig& rig, const LoadSweepSpec& s) {
   // The holds, their boundaries on the torque samples' grid (the true torque steps there).
   const double stretch = s.duration > 0.0 ? s.duration / natural : 1.0;
   // The bearings' limit: the largest torque the true rig's supports carry (ISO 76 contact pressure;
-  // the seed's reach it near 11.2 N*m), by bisection, with 4 % left for the published torque's noise
-  // (6 sigma at 0.5 %: 3 %). Levels beyond it are left out (the sweep is then shorter than its
-  // natural duration); the knee must stay below it with at least one level above.
+  // the seed's reach it near 11.2 N*m), by bisection, with 4 % left for the published torque's
+  // noise (6 sigma at 0.5 %: 3 %). Levels beyond it are left out (the sweep is then shorter than
+  // its natural duration); the knee must stay below it with at least one level above.
   double carried = 0.0, refused = 100.0;
   {
     StiffnessEstimator probe(rig);
@@ -218,25 +235,31 @@ LoadSweep makeLoadSweep(const RigConfig& rig, const LoadSweepSpec& s) {
     }
   }
   const double limit = 0.96 * carried;
-  const std::vector<double> levels = torqueLevels(s, truth.knee_torque, truth.reverse_knee_torque, limit);
-  const long above = std::count_if(levels.begin(), levels.end(), [&](double t) { return t > truth.knee_torque; });
+  const std::vector<double> levels =
+      torqueLevels(s, truth.knee_torque, truth.reverse_knee_torque, limit);
+  const long above =
+      std::count_if(levels.begin(), levels.end(), [&](double t) { return t > truth.knee_torque; });
   if (above < 1) {
     throwInvalid("anti_backlash.preload_torque", truth.preload_torque,
-                 "puts the knee (" + formatValue(truth.knee_torque) + " N*m) beyond 0.96 x the torque the bearings carry (" +
-                     formatValue(carried) + " N*m): no level above the knee");
+                 "puts the knee (" + formatValue(truth.knee_torque) +
+                     " N*m) beyond 0.96 x the torque the bearings carry (" + formatValue(carried) +
+                     " N*m): no level above the knee");
   }
   double end = 0.0;
   long sample = 0;
   for (std::size_t i = 0; i < levels.size(); ++i) {
     end += stretch * (i == 0 ? s.baseline_turns : s.step_turns) * truth.gear_turn;
     const long next = std::lround(end * s.torque_rate);
-    if (next <= sample) throwInvalid("duration", s.duration, "leaves a hold without a torque sample");
+    if (next <= sample)
+      throwInvalid("duration", s.duration, "leaves a hold without a torque sample");
     truth.levels.push_back({sample / s.torque_rate, next / s.torque_rate, levels[i]});
     sample = next;
   }
   if (s.dwell > 0.0) {  // the constant-load dwell after the sweep
     if (std::abs(s.dwell_torque) > limit) {
-      throwInvalid("dwell_torque", s.dwell_torque, "beyond 0.96 x the torque the bearings carry (" + formatValue(carried) + " N*m)");
+      throwInvalid(
+          "dwell_torque", s.dwell_torque,
+          "beyond 0.96 x the torque the bearings carry (" + formatValue(carried) + " N*m)");
     }
     end += s.dwell;
     const long next = std::lround(end * s.torque_rate);
@@ -248,8 +271,8 @@ LoadSweep makeLoadSweep(const RigConfig& rig, const LoadSweepSpec& s) {
   const long n_torque = sample;
   const long n_joint = std::lround(truth.duration * s.joint_rate);
   if (n_torque > 100000000 || n_joint > 100000000) {
-    throw InvalidInput("load_sweep: " + std::to_string(n_torque) + " torque samples and " + std::to_string(n_joint) +
-                       " readings: at most 1e8 each");
+    throw InvalidInput("load_sweep: " + std::to_string(n_torque) + " torque samples and " +
+                       std::to_string(n_joint) + " readings: at most 1e8 each");
   }
 
   // ---- The truth: the true rig's 3-DOF dynamics under the true torque and the exact motion ----
@@ -259,7 +282,8 @@ LoadSweep makeLoadSweep(const RigConfig& rig, const LoadSweepSpec& s) {
   // dynamics round their grid to divide the mesh period).
   const double omega = s.speed_rpm * kTwoPi / 60.0;
   RigConfig true_rig = rig;
-  const double per_period = std::max(1.0, std::round(s.joint_rate * 60.0 / (s.speed_rpm * rig.gears.teeth[0])));
+  const double per_period =
+      std::max(1.0, std::round(s.joint_rate * 60.0 / (s.speed_rpm * rig.gears.teeth[0])));
   true_rig.dynamics.speed_rpm = 60.0 * s.joint_rate / (per_period * rig.gears.teeth[0]);
   PipelineOptions options;
   options.output_rate = s.joint_rate;
@@ -273,14 +297,16 @@ LoadSweep makeLoadSweep(const RigConfig& rig, const LoadSweepSpec& s) {
   // non-zero stamp): the dynamics start at the first torque input, on a reading.
   const long lead = std::max(1L, std::lround(s.lead_in * s.joint_rate));
   const std::int64_t epoch_ns = 10000000000LL;
-  auto stampOf = [&](long j) { return Stamp{epoch_ns + nanoseconds(j / s.joint_rate)}; };  // j: readings since -lead
+  auto stampOf = [&](long j) {
+    return Stamp{epoch_ns + nanoseconds(j / s.joint_rate)};
+  };  // j: readings since -lead
   TruthSink sink(epoch_ns, s.joint_rate, lead, out.te, filled);
 
-  // The encoder TE is x_enc = x + c(T). The dynamics' torsional coordinate x = delta - x_p + x_g + e
-  // (gear_rotor_model.hpp) carries the shafts' static deflection with the TANGENT bearing stiffness
-  // k_shaft(T) that they linearise about: F / k_shaft per shaft. That is right for the small
-  // perturbations about the operating point (the mesh-frequency motion), but a static offset from
-  // zero load needs the SECANT: the exact solution's deflection u(F_0 + |F|) - u(F_0), which a
+  // The encoder TE is x_enc = x + c(T). The dynamics' torsional coordinate x = delta - x_p + x_g +
+  // e (gear_rotor_model.hpp) carries the shafts' static deflection with the TANGENT bearing
+  // stiffness k_shaft(T) that they linearise about: F / k_shaft per shaft. That is right for the
+  // small perturbations about the operating point (the mesh-frequency motion), but a static offset
+  // from zero load needs the SECANT: the exact solution's deflection u(F_0 + |F|) - u(F_0), which a
   // Hertzian bearing (stiffening with load) makes smaller than F / k_tangent. So
   //   c(T) = sum_shaft [ d_shaft(T) / scale_shaft - F / k_shaft(T) ],   F = T / r_b,p (signed),
   // with d = StaticTeModel::shaftDeflection (scale-1 secant deflections {-x_p, x_g}, signed with
@@ -302,7 +328,8 @@ LoadSweep makeLoadSweep(const RigConfig& rig, const LoadSweepSpec& s) {
 
   std::vector<PreloadSetting> preload;
   for (const BearingSupportConfig& b : rig.bearings) {
-    preload.push_back({b.name, b.axial_preload, b.radial_preload, b.interference.inner, b.interference.outer});
+    preload.push_back(
+        {b.name, b.axial_preload, b.radial_preload, b.interference.inner, b.interference.outer});
   }
   auto reading = [&](long j) {
     MotionInput m;
@@ -314,8 +341,10 @@ LoadSweep makeLoadSweep(const RigConfig& rig, const LoadSweepSpec& s) {
   // dynamics at static equilibrium.
   require(pipeline.motion(stampOf(0), reading(0), sink), pipeline, "reading", -lead / s.joint_rate);
   require(pipeline.preload(stampOf(0), preload, sink), pipeline, "preload", -lead / s.joint_rate);
-  require(pipeline.torque(stampOf(0), truth.levels.front().torque, sink), pipeline, "torque", -lead / s.joint_rate);
-  if (!pipeline.dynamics() || !pipeline.dynamics()->started()) throw InvalidInput("load_sweep: the truth dynamics did not start");
+  require(pipeline.torque(stampOf(0), truth.levels.front().torque, sink), pipeline, "torque",
+          -lead / s.joint_rate);
+  if (!pipeline.dynamics() || !pipeline.dynamics()->started())
+    throw InvalidInput("load_sweep: the truth dynamics did not start");
   sink.correction = correction(truth.levels.front().torque);
   std::size_t level = 1;  // the next step
   const long j_end = lead + n_joint;
@@ -325,10 +354,12 @@ LoadSweep makeLoadSweep(const RigConfig& rig, const LoadSweepSpec& s) {
     // before it), then a step at the same instant: the rig's send order.
     auto stepsUpTo = [&](bool inclusive) {
       while (level < truth.levels.size()) {
-        const std::int64_t step_ns = epoch_ns + nanoseconds(truth.levels[level].t0 + lead / s.joint_rate);
+        const std::int64_t step_ns =
+            epoch_ns + nanoseconds(truth.levels[level].t0 + lead / s.joint_rate);
         if (step_ns > at.ns || (!inclusive && step_ns == at.ns)) break;
         const double torque = truth.levels[level].torque;
-        require(pipeline.torque(Stamp{step_ns}, torque, sink), pipeline, "torque", truth.levels[level].t0);
+        require(pipeline.torque(Stamp{step_ns}, torque, sink), pipeline, "torque",
+                truth.levels[level].t0);
         sink.correction = correction(torque);
         ++level;
       }
@@ -338,12 +369,15 @@ LoadSweep makeLoadSweep(const RigConfig& rig, const LoadSweepSpec& s) {
     stepsUpTo(true);
   }
   const PipelineCounters& counters = pipeline.counters();
-  if (counters.dynamics_errors != 0 || counters.gap_restarts != 0 || counters.motion_timeouts != 0) {
-    throw InvalidInput("load_sweep: the truth dynamics were interrupted (" + counters.last_event + ")");
+  if (counters.dynamics_errors != 0 || counters.gap_restarts != 0 ||
+      counters.motion_timeouts != 0) {
+    throw InvalidInput("load_sweep: the truth dynamics were interrupted (" + counters.last_event +
+                       ")");
   }
   for (std::size_t k = 0; k < filled.size(); ++k) {
     if (filled[k] != 1) {
-      throw InvalidInput("load_sweep: reading " + std::to_string(k) + " got " + std::to_string(filled[k]) +
+      throw InvalidInput("load_sweep: reading " + std::to_string(k) + " got " +
+                         std::to_string(filled[k]) +
                          " truth samples (the output grid missed the readings)");
     }
   }
@@ -353,7 +387,8 @@ LoadSweep makeLoadSweep(const RigConfig& rig, const LoadSweepSpec& s) {
   // theta_g (the joint_states convention: the gear's angle falls when the pinion's rises); each
   // with its mounting error eps sin(theta + psi), then the 2^20-count grid. Stamps: the true time
   // plus a uniform jitter, the angles those at the true time; record time = the true time.
-  Stream encoders(s.seed, kEncoderStream), jitter(s.seed, kJitterStream), noise(s.seed, kTorqueStream);
+  Stream encoders(s.seed, kEncoderStream), jitter(s.seed, kJitterStream),
+      noise(s.seed, kTorqueStream);
   for (int i = 0; i < 2; ++i) {
     truth.eccentricity[i] = encoders.uniform(s.eccentricity_min, s.eccentricity_max);
     truth.eccentricity_phase[i] = encoders.uniform(0.0, kTwoPi);
@@ -366,8 +401,10 @@ LoadSweep makeLoadSweep(const RigConfig& rig, const LoadSweepSpec& s) {
     const double theta_p = omega * e.t;
     const double theta_g = (out.te[static_cast<std::size_t>(k)] - rb[0] * theta_p) / rb[1];
     MotionInput m;
-    m.pinion_angle = quantiseEncoderAngle(theta_p + truth.eccentricity[0] * std::sin(theta_p + truth.eccentricity_phase[0]));
-    m.gear_angle = quantiseEncoderAngle(theta_g + truth.eccentricity[1] * std::sin(theta_g + truth.eccentricity_phase[1]));
+    m.pinion_angle = quantiseEncoderAngle(
+        theta_p + truth.eccentricity[0] * std::sin(theta_p + truth.eccentricity_phase[0]));
+    m.gear_angle = quantiseEncoderAngle(
+        theta_g + truth.eccentricity[1] * std::sin(theta_g + truth.eccentricity_phase[1]));
     if (s.joint_velocity) {
       m.pinion_velocity = omega;
       e.gear_velocity = -ratio * omega;
@@ -377,18 +414,22 @@ LoadSweep makeLoadSweep(const RigConfig& rig, const LoadSweepSpec& s) {
     out.events.push_back(std::move(e));
   }
   out.events.push_back({0.0, std::nullopt, preload});
-  // Torque: the true staircase sampled at torque_rate, plus Gaussian noise of sigma = torque_noise |T|
+  // Torque: the true staircase sampled at torque_rate, plus Gaussian noise of sigma = torque_noise
+  // |T|
   // + torque_noise_floor (the truth above ran on the true torque).
   level = 0;
   for (long k = 0; k < n_torque; ++k) {
     const double t = k / s.torque_rate;
-    while (level + 1 < truth.levels.size() && std::lround(truth.levels[level + 1].t0 * s.torque_rate) <= k) ++level;
+    while (level + 1 < truth.levels.size() &&
+           std::lround(truth.levels[level + 1].t0 * s.torque_rate) <= k)
+      ++level;
     const double torque = truth.levels[level].torque;
     const double sigma = s.torque_noise * std::abs(torque) + s.torque_noise_floor;
     out.events.push_back({t, torque + sigma * noise.normal(), {}});
   }
   // In send order; at equal times a reading first, then the preload, then the torque.
-  std::stable_sort(out.events.begin(), out.events.end(), [](const RigEvent& a, const RigEvent& b) { return a.t < b.t; });
+  std::stable_sort(out.events.begin(), out.events.end(),
+                   [](const RigEvent& a, const RigEvent& b) { return a.t < b.t; });
   return out;
 }
 

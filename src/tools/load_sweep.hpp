@@ -37,14 +37,15 @@ struct LoadSweepSpec {
   double overdrive = 1.5;       ///< [-] the top level about this times the knee (each direction)
   double eccentricity_min = 10.0 * kArcsecond;  ///< [rad] range of each encoder's mounting error
   double eccentricity_max = 20.0 * kArcsecond;
-  double stamp_jitter = 20e-6;        ///< [s] joint_states header stamps: true time + uniform(+-this)
-  double torque_noise = 0.005;        ///< [-] published torque: sigma = torque_noise |T| + torque_noise_floor
-  double torque_noise_floor = 1e-3;   ///< [N*m]
-  double lead_in = 0.1;               ///< [s] the truth dynamics run this long before t = 0
+  double stamp_jitter = 20e-6;  ///< [s] joint_states header stamps: true time + uniform(+-this)
+  double torque_noise =
+      0.005;  ///< [-] published torque: sigma = torque_noise |T| + torque_noise_floor
+  double torque_noise_floor = 1e-3;  ///< [N*m]
+  double lead_in = 0.1;              ///< [s] the truth dynamics run this long before t = 0
   /// [s] a final hold at `dwell_torque` after the sweep, for the calibration's drift at constant
   /// load (drivetrain_calibration_mc --dwell); 0: none. Not scaled by `duration`.
   double dwell = 0.0;
-  double dwell_torque = 3.0;          ///< [N*m] the dwell's pinion torque (within the bearings' limit)
+  double dwell_torque = 3.0;  ///< [N*m] the dwell's pinion torque (within the bearings' limit)
 };
 
 /// One hold of the true torque: [t0, t1) [s].
@@ -53,15 +54,15 @@ struct LoadSweepLevel {
 };
 
 struct LoadSweepTruth {
-  double mesh_stiffness_scale = 1.0;                 ///< rig.mesh_stiffness_scale
-  std::array<double, 2> bearing_scale{{1.0, 1.0}};   ///< stiffness_scale of each shaft's supports
-  double preload_torque = 0.0;                       ///< [N*m] anti_backlash.preload_torque
-  double knee_torque = 0.0;                          ///< [N*m] where the back half lifts (> 0)
-  double reverse_knee_torque = 0.0;                  ///< [N*m] where the drive half lifts (< 0)
-  double gear_turn = 0.0;                            ///< [s] one gear revolution
-  double duration = 0.0;                             ///< [s]
+  double mesh_stiffness_scale = 1.0;                ///< rig.mesh_stiffness_scale
+  std::array<double, 2> bearing_scale{{1.0, 1.0}};  ///< stiffness_scale of each shaft's supports
+  double preload_torque = 0.0;                      ///< [N*m] anti_backlash.preload_torque
+  double knee_torque = 0.0;                         ///< [N*m] where the back half lifts (> 0)
+  double reverse_knee_torque = 0.0;                 ///< [N*m] where the drive half lifts (< 0)
+  double gear_turn = 0.0;                           ///< [s] one gear revolution
+  double duration = 0.0;                            ///< [s]
   std::vector<LoadSweepLevel> levels;
-  std::array<double, 2> eccentricity{{0.0, 0.0}};       ///< [rad] pinion, gear encoder
+  std::array<double, 2> eccentricity{{0.0, 0.0}};        ///< [rad] pinion, gear encoder
   std::array<double, 2> eccentricity_phase{{0.0, 0.0}};  ///< [rad]
   /// The calibration's parameters of the true rig (te_offset 0).
   CalibrationVector parameters() const;

@@ -20,8 +20,8 @@ class MeshPeriodTotals {
 
   void add(const drivetrain_stiffness::MeshPeriodStats& m);
 
-  /// {"blocks", "speed_min", "speed_max" [rad/s], "torque_min", "torque_max" [N*m], "te_rms" (sqrt of
-  /// the duration-weighted mean of the blocks' te_rms^2) [m], "te_peak_to_peak" (the largest
+  /// {"blocks", "speed_min", "speed_max" [rad/s], "torque_min", "torque_max" [N*m], "te_rms" (sqrt
+  /// of the duration-weighted mean of the blocks' te_rms^2) [m], "te_peak_to_peak" (the largest
   /// block's) [m], "mesh_force_mean" (duration-weighted) [N]}; the figures null without a block
   /// of positive duration.
   nlohmann::json json() const;

@@ -12,7 +12,8 @@ class Cursor {
 
   bool fixed(std::size_t n, const char* field) {
     if (!ok()) return false;
-    if (n > left_) return fail(field, std::to_string(n) + " bytes, " + std::to_string(left_) + " left");
+    if (n > left_)
+      return fail(field, std::to_string(n) + " bytes, " + std::to_string(left_) + " left");
     p_ += n;
     left_ -= n;
     return true;
@@ -37,7 +38,9 @@ class Cursor {
     for (std::uint32_t i = 0; i < n && ok(); ++i) each(*this);
     return ok();
   }
-  bool header() { return fixed(4, "header.seq") && fixed(8, "header.stamp") && string("header.frame_id"); }
+  bool header() {
+    return fixed(4, "header.seq") && fixed(8, "header.stamp") && string("header.frame_id");
+  }
   std::string finish() {
     if (ok() && left_ > 0) error_ = std::to_string(left_) + " bytes left over after the last field";
     return error_;
@@ -51,15 +54,17 @@ class Cursor {
   }
   bool length(const char* field, std::uint32_t& n) {
     if (!ok()) return false;
-    if (left_ < 4) return fail(field, "its length is cut off (" + std::to_string(left_) + " of 4 bytes)");
+    if (left_ < 4)
+      return fail(field, "its length is cut off (" + std::to_string(left_) + " of 4 bytes)");
     std::memcpy(&n, p_, 4);
     p_ += 4;
     left_ -= 4;
     return true;
   }
   bool tooLong(const char* field, std::uint32_t n, std::size_t least) {
-    return fail(field, "claims " + std::to_string(n) + " elements of at least " + std::to_string(least) +
-                           " bytes, " + std::to_string(left_) + " bytes left");
+    return fail(field, "claims " + std::to_string(n) + " elements of at least " +
+                           std::to_string(least) + " bytes, " + std::to_string(left_) +
+                           " bytes left");
   }
 
   const std::uint8_t* p_;
@@ -69,15 +74,14 @@ class Cursor {
 
 }  // namespace
 
-std::string checkSerializedMessage(MessageLayout layout, const std::uint8_t* data, std::size_t size) {
+std::string checkSerializedMessage(MessageLayout layout, const std::uint8_t* data,
+                                   std::size_t size) {
   // Field order and types: geometry_msgs/WrenchStamped, sensor_msgs/JointState,
   // drivetrain_stiffness/Preload (msg/Preload.msg, msg/BearingPreload.msg).
   Cursor c(data, size);
   c.header();
   switch (layout) {
-    case MessageLayout::kWrenchStamped:
-      c.fixed(6 * 8, "wrench");
-      break;
+    case MessageLayout::kWrenchStamped: c.fixed(6 * 8, "wrench"); break;
     case MessageLayout::kJointState:
       c.array("name", 4, [](Cursor& e) { e.string("name[]"); });
       c.fixedArray("position", 8);
@@ -85,7 +89,8 @@ std::string checkSerializedMessage(MessageLayout layout, const std::uint8_t* dat
       c.fixedArray("effort", 8);
       break;
     case MessageLayout::kPreload:
-      c.array("bearings", 4 + 4 * 8, [](Cursor& e) { e.string("bearings[].name") && e.fixed(4 * 8, "bearings[]"); });
+      c.array("bearings", 4 + 4 * 8,
+              [](Cursor& e) { e.string("bearings[].name") && e.fixed(4 * 8, "bearings[]"); });
       break;
   }
   return c.finish();

@@ -15,6 +15,7 @@ enum class MessageLayout { kWrenchStamped, kPreload, kJointState };
 /// "" if [data, data + size) holds exactly one message of `layout` (ROS 1 serialization: uint32
 /// lengths before every string and variable array, little-endian), every length within the bytes
 /// that follow it; otherwise what is wrong, naming the field.
-std::string checkSerializedMessage(MessageLayout layout, const std::uint8_t* data, std::size_t size);
+std::string checkSerializedMessage(MessageLayout layout, const std::uint8_t* data,
+                                   std::size_t size);
 
 }  // namespace drivetrain_stiffness

@@ -14,8 +14,10 @@ extern char** environ;
 
 namespace drivetrain_stiffness {
 
-void runPythonScript(const std::string& option, const std::string& script, const std::vector<std::string>& args) {
-  const std::string python = ::access("/usr/bin/python3", X_OK) == 0 ? "/usr/bin/python3" : "python3";
+void runPythonScript(const std::string& option, const std::string& script,
+                     const std::vector<std::string>& args) {
+  const std::string python =
+      ::access("/usr/bin/python3", X_OK) == 0 ? "/usr/bin/python3" : "python3";
   std::vector<std::string> argv_s{python, script};
   argv_s.insert(argv_s.end(), args.begin(), args.end());
   std::vector<char*> argv;
@@ -33,13 +35,15 @@ void runPythonScript(const std::string& option, const std::string& script, const
   do {
     waited = waitpid(pid, &status, 0);
   } while (waited < 0 && errno == EINTR);
-  if (waited < 0) throw InvalidInput(option + " = '" + script + "': cannot wait for it: " + std::strerror(errno));
+  if (waited < 0)
+    throw InvalidInput(option + " = '" + script + "': cannot wait for it: " + std::strerror(errno));
   if (!WIFEXITED(status)) {
-    throw InvalidInput(option + " = '" + script + "' ended by signal " + std::to_string(WTERMSIG(status)) +
-                       " (the other outputs are written)");
+    throw InvalidInput(option + " = '" + script + "' ended by signal " +
+                       std::to_string(WTERMSIG(status)) + " (the other outputs are written)");
   }
   if (WEXITSTATUS(status) != 0) {
-    throw InvalidInput(option + " = '" + script + "' failed with exit code " + std::to_string(WEXITSTATUS(status)) +
+    throw InvalidInput(option + " = '" + script + "' failed with exit code " +
+                       std::to_string(WEXITSTATUS(status)) +
                        ": its message is above (the other outputs are written)");
   }
 }

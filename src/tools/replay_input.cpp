@@ -15,7 +15,8 @@
 namespace drivetrain_stiffness {
 namespace {
 
-/// A connection header's field, by reference into the header (which outlives the messages); "" if absent.
+/// A connection header's field, by reference into the header (which outlives the messages); "" if
+/// absent.
 const std::string& headerField(const std::map<std::string, std::string>* header, const char* name) {
   static const std::string kNone;
   if (!header) return kNone;
@@ -30,9 +31,11 @@ std::string firstLine(const std::string& path) {
   std::error_code ec;
   const fs::file_status status = fs::status(path, ec);
   const std::string option = "--bag = '" + path + "': ";
-  if (!fs::exists(status)) throw InvalidInput(option + "no such file" + (ec ? " (" + ec.message() + ")" : ""));
+  if (!fs::exists(status))
+    throw InvalidInput(option + "no such file" + (ec ? " (" + ec.message() + ")" : ""));
   if (fs::is_directory(status)) throw InvalidInput(option + "a directory, not a bag file");
-  if (!fs::is_regular_file(status)) throw InvalidInput(option + "not a regular file (a device, pipe or socket)");
+  if (!fs::is_regular_file(status))
+    throw InvalidInput(option + "not a regular file (a device, pipe or socket)");
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InvalidInput(option + "cannot be read: " + std::strerror(errno));
   std::string line(32, '\0');
@@ -50,11 +53,17 @@ std::string recordTime(const ros::Time& t) {
 template <class T>
 constexpr MessageLayout layoutOf();
 template <>
-constexpr MessageLayout layoutOf<geometry_msgs::WrenchStamped>() { return MessageLayout::kWrenchStamped; }
+constexpr MessageLayout layoutOf<geometry_msgs::WrenchStamped>() {
+  return MessageLayout::kWrenchStamped;
+}
 template <>
-constexpr MessageLayout layoutOf<drivetrain_stiffness::Preload>() { return MessageLayout::kPreload; }
+constexpr MessageLayout layoutOf<drivetrain_stiffness::Preload>() {
+  return MessageLayout::kPreload;
+}
 template <>
-constexpr MessageLayout layoutOf<sensor_msgs::JointState>() { return MessageLayout::kJointState; }
+constexpr MessageLayout layoutOf<sensor_msgs::JointState>() {
+  return MessageLayout::kJointState;
+}
 
 template <class T>
 bool hasTypeOf(const BagConnection& connection) {
@@ -81,26 +90,35 @@ bool topicMatches(const std::string& topic, const std::string& wanted) {
   // Equal, or equal but for one leading '/' on one side; without building strings: it runs twice
   // per message.
   const std::string_view t(topic), w(wanted);
-  return t == w || (!t.empty() && t[0] == '/' && t.substr(1) == w) || (!w.empty() && w[0] == '/' && w.substr(1) == t);
+  return t == w || (!t.empty() && t[0] == '/' && t.substr(1) == w) ||
+         (!w.empty() && w[0] == '/' && w.substr(1) == t);
 }
 
-ReplayInput::ReplayInput(const std::string& path, const std::string& torque_topic, const std::string& preload_topic,
-                         const std::string& joint_states_topic)
-    : path_(path), torque_topic_(torque_topic), preload_topic_(preload_topic), joint_states_topic_(joint_states_topic) {
+ReplayInput::ReplayInput(const std::string& path, const std::string& torque_topic,
+                         const std::string& preload_topic, const std::string& joint_states_topic)
+    : path_(path),
+      torque_topic_(torque_topic),
+      preload_topic_(preload_topic),
+      joint_states_topic_(joint_states_topic) {
   const std::string version = firstLine(path);
-  if (version.rfind("#ROSBAG V", 0) != 0) throw InvalidInput("--bag = '" + path + "': not a ROS bag (it does not start with '#ROSBAG V')");
+  if (version.rfind("#ROSBAG V", 0) != 0)
+    throw InvalidInput("--bag = '" + path +
+                       "': not a ROS bag (it does not start with '#ROSBAG V')");
   if (version != "#ROSBAG V2.0") {
-    throw InvalidInput("--bag = '" + path + "': a bag of format " + version.substr(9) +
-                       "; only format 2.0 is read (`rosbag filter OLD.bag NEW.bag True` writes a copy in 2.0)");
+    throw InvalidInput(
+        "--bag = '" + path + "': a bag of format " + version.substr(9) +
+        "; only format 2.0 is read (`rosbag filter OLD.bag NEW.bag True` writes a copy in 2.0)");
   }
   check_ = checkBagIndex(path, [this](const BagConnection& c) { return readRule(c); });
   if (check_.usable) {
     try {
       bag_ = std::make_unique<rosbag::Bag>();
       bag_->open(path, rosbag::bagmode::Read);
-      view_ = std::make_unique<rosbag::View>(*bag_, [this](const rosbag::ConnectionInfo* c) { return isWanted(c->topic); });
+      view_ = std::make_unique<rosbag::View>(
+          *bag_, [this](const rosbag::ConnectionInfo* c) { return isWanted(c->topic); });
       return;
-    } catch (const std::exception& e) {  // rosbag::BagException: a bag the check passed and rosbag refuses
+    } catch (const std::exception&
+                 e) {  // rosbag::BagException: a bag the check passed and rosbag refuses
       index_unusable_ = std::string("rosbag::Bag cannot open it: ") + e.what();
       view_.reset();
       bag_.reset();
@@ -117,7 +135,8 @@ ReadRule ReplayInput::readRule(const BagConnection& connection) const {
   if (!rule.read) return rule;
   // The type follows the topic as in drivetrain_replay's loop: torque first.
   if (isTorque(connection.topic)) {
-    if (hasTypeOf<geometry_msgs::WrenchStamped>(connection)) rule.layout = MessageLayout::kWrenchStamped;
+    if (hasTypeOf<geometry_msgs::WrenchStamped>(connection))
+      rule.layout = MessageLayout::kWrenchStamped;
   } else if (isJointStates(connection.topic)) {
     if (hasTypeOf<sensor_msgs::JointState>(connection)) rule.layout = MessageLayout::kJointState;
   } else if (hasTypeOf<drivetrain_stiffness::Preload>(connection)) {
@@ -129,7 +148,8 @@ ReadRule ReplayInput::readRule(const BagConnection& connection) const {
 std::vector<BagTopic> ReplayInput::topics() const {
   if (!sequential_) return check_.topics;
   std::vector<BagTopic> topics;
-  for (const auto& [id, c] : sequential_->connections()) topics.push_back({c.topic, c.field("type"), c.field("md5sum"), c.messages});
+  for (const auto& [id, c] : sequential_->connections())
+    topics.push_back({c.topic, c.field("type"), c.field("md5sum"), c.messages});
   return topics;
 }
 
@@ -146,9 +166,13 @@ void ReplayInput::advance() {
   if (has_message_) ++read_;
 }
 
-bool ReplayInput::isTorque(const std::string& topic) const { return topicMatches(topic, torque_topic_); }
+bool ReplayInput::isTorque(const std::string& topic) const {
+  return topicMatches(topic, torque_topic_);
+}
 
-bool ReplayInput::isJointStates(const std::string& topic) const { return topicMatches(topic, joint_states_topic_); }
+bool ReplayInput::isJointStates(const std::string& topic) const {
+  return topicMatches(topic, joint_states_topic_);
+}
 
 bool ReplayInput::isWanted(const std::string& topic) const {
   return isTorque(topic) || topicMatches(topic, preload_topic_) || isJointStates(topic);
@@ -178,7 +202,8 @@ bool ReplayInput::nextIndexed() {
     message_.joint_states_ = joints ? m.instantiate<sensor_msgs::JointState>() : nullptr;
     message_.preload_ = torque || joints ? nullptr : m.instantiate<drivetrain_stiffness::Preload>();
     return true;
-  } catch (const std::exception& e) {  // a chunk that does not decompress, a damaged record or message
+  } catch (
+      const std::exception& e) {  // a chunk that does not decompress, a damaged record or message
     damage_ = locateDamage(e.what());
     return false;
   }
@@ -192,8 +217,10 @@ bool ReplayInput::nextSequential() {
       decode(raw, message_);
       return true;
     } catch (const std::exception& e) {
-      damage_ = BagDamage{raw.offset, "the " + raw.connection->topic + " message at record time " + recordTime(raw.time) +
-                                          " does not deserialize: " + e.what() + "; " + withoutIndex()};
+      damage_ =
+          BagDamage{raw.offset, "the " + raw.connection->topic + " message at record time " +
+                                    recordTime(raw.time) + " does not deserialize: " + e.what() +
+                                    "; " + withoutIndex()};
       return false;
     }
   }
@@ -201,14 +228,17 @@ bool ReplayInput::nextSequential() {
   return false;
 }
 
-std::string ReplayInput::withoutIndex() const { return "read without the index (" + index_unusable_ + ")"; }
+std::string ReplayInput::withoutIndex() const {
+  return "read without the index (" + index_unusable_ + ")";
+}
 
 void ReplayInput::decode(const BagRecordMessage& raw, ReplayMessage& message) const {
   message.time_ = raw.time;
   message.topic_ = &raw.connection->topic;
   message.caller_id_ = &headerField(&raw.connection->header, "callerid");
   message.data_type_ = &headerField(&raw.connection->header, "type");
-  const bool torque = isTorque(raw.connection->topic), joints = !torque && isJointStates(raw.connection->topic);
+  const bool torque = isTorque(raw.connection->topic),
+             joints = !torque && isJointStates(raw.connection->topic);
   message.torque_ = torque ? deserialize<geometry_msgs::WrenchStamped>(raw) : nullptr;
   message.joint_states_ = joints ? deserialize<sensor_msgs::JointState>(raw) : nullptr;
   message.preload_ = torque || joints ? nullptr : deserialize<drivetrain_stiffness::Preload>(raw);
@@ -217,16 +247,20 @@ void ReplayInput::decode(const BagRecordMessage& raw, ReplayMessage& message) co
 /// A sequential reading ends in damage: the reader's, or (every chunk read whole) the index that
 /// rosbag could not read.
 BagDamage ReplayInput::endOfSequentialReading() const {
-  if (const auto& damage = sequential_->damage()) return BagDamage{damage->offset, damage->what + "; " + withoutIndex()};
-  return BagDamage{sequential_->indexPosition(), "every chunk reads whole, so the index from this byte is damaged; " + withoutIndex()};
+  if (const auto& damage = sequential_->damage())
+    return BagDamage{damage->offset, damage->what + "; " + withoutIndex()};
+  return BagDamage{
+      sequential_->indexPosition(),
+      "every chunk reads whole, so the index from this byte is damaged; " + withoutIndex()};
 }
 
-/// rosbag::View failed on message read_ + 1: where is the damage? Reads the bag sequentially up to the
-/// first record that fails to read or to deserialize as the loop would.
+/// rosbag::View failed on message read_ + 1: where is the damage? Reads the bag sequentially up to
+/// the first record that fails to read or to deserialize as the loop would.
 BagDamage ReplayInput::locateDamage(const std::string& rosbag_error) const {
   const std::string topic = message_.topic_ ? *message_.topic_ : std::string("?");
-  const std::string failed = "rosbag::View cannot read message " + std::to_string(read_ + 1) + " (" + topic +
-                             " at record time " + recordTime(message_.time_) + "): " + rosbag_error;
+  const std::string failed = "rosbag::View cannot read message " + std::to_string(read_ + 1) +
+                             " (" + topic + " at record time " + recordTime(message_.time_) +
+                             "): " + rosbag_error;
   try {
     SequentialBagReader reader(path_);
     BagRecordMessage raw;
@@ -236,12 +270,17 @@ BagDamage ReplayInput::locateDamage(const std::string& rosbag_error) const {
       try {
         decode(raw, scratch);
       } catch (const std::exception& e) {
-        return BagDamage{raw.offset, "the " + raw.connection->topic + " message at record time " + recordTime(raw.time) +
+        return BagDamage{raw.offset, "the " + raw.connection->topic + " message at record time " +
+                                         recordTime(raw.time) +
                                          " does not deserialize: " + e.what() + "; " + failed};
       }
     }
-    if (const auto& damage = reader.damage()) return BagDamage{damage->offset, damage->what + "; " + failed};
-    return BagDamage{reader.indexPosition(), failed + "; every chunk reads whole without the index, so the index from this byte is damaged"};
+    if (const auto& damage = reader.damage())
+      return BagDamage{damage->offset, damage->what + "; " + failed};
+    return BagDamage{
+        reader.indexPosition(),
+        failed +
+            "; every chunk reads whole without the index, so the index from this byte is damaged"};
   } catch (const InvalidInput& e) {  // not format 2.0
     return BagDamage{0, failed + "; byte offset unknown: " + e.what()};
   }

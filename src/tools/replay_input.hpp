@@ -1,6 +1,7 @@
-// drivetrain_replay's input: the torque, preload and joint_states messages of a recorded bag, each one read and
-// deserialized before the message loop gets it, so the loop never meets a read error: the first
-// message that cannot be read ends the input, and damage() says where (byte offset) and what.
+// drivetrain_replay's input: the torque, preload and joint_states messages of a recorded bag, each
+// one read and deserialized before the message loop gets it, so the loop never meets a read error:
+// the first message that cannot be read ends the input, and damage() says where (byte offset) and
+// what.
 //  - A closed bag whose index checkBagIndex finds whole is read with rosbag::View in record-time
 //    order through the index, up to the first message whose record or bytes the check found
 //    damaged (the index also lets the view read past damage in records it never visits, which
@@ -8,7 +9,8 @@
 //  - Any other bag (no index: a recording cut short, a truncated copy; a damaged bag header or
 //    index) is read by SequentialBagReader, in file order (the order rosbag record wrote it:
 //    record-time order), up to the first damage.
-// Every message is checked against its type's layout (message_layout.hpp) before it is deserialized.
+// Every message is checked against its type's layout (message_layout.hpp) before it is
+// deserialized.
 #pragma once
 
 #include <cstdint>
@@ -49,7 +51,8 @@ class ReplayMessage {
  private:
   friend class ReplayInput;
   ros::Time time_;
-  const std::string* topic_ = nullptr;  ///< the connection's, which outlives the message (no copy per message)
+  const std::string* topic_ =
+      nullptr;  ///< the connection's, which outlives the message (no copy per message)
   const std::string* caller_id_ = nullptr;  ///< likewise
   const std::string* data_type_ = nullptr;  ///< likewise
   boost::shared_ptr<geometry_msgs::WrenchStamped> torque_;
@@ -74,7 +77,8 @@ class ReplayInput {
  public:
   /// Throws InvalidInput ("--bag = 'PATH': ...") if the path does not exist, is a directory or
   /// another non-file, cannot be read, is not a bag, or is a bag of a format other than 2.0.
-  ReplayInput(const std::string& path, const std::string& torque_topic, const std::string& preload_topic,
+  ReplayInput(const std::string& path, const std::string& torque_topic,
+              const std::string& preload_topic,
               const std::string& joint_states_topic = "joint_states");
 
   struct End {};

@@ -9,7 +9,8 @@
 namespace drivetrain_stiffness {
 namespace {
 
-constexpr InputStream kStreams[] = {InputStream::kTorque, InputStream::kPreload, InputStream::kJointStates};
+constexpr InputStream kStreams[] = {InputStream::kTorque, InputStream::kPreload,
+                                    InputStream::kJointStates};
 constexpr InputOutcome kRefusals[] = {InputOutcome::kWrongFrame,      InputOutcome::kInvalidValue,
                                       InputOutcome::kUnreachableLoad, InputOutcome::kZeroStamp,
                                       InputOutcome::kOutOfOrder,      InputOutcome::kStampRange};
@@ -36,7 +37,8 @@ std::uint64_t droppedOn(InputStream s, const PipelineCounters& c) {
 
 std::string stampText(Stamp s) {
   char text[40];
-  std::snprintf(text, sizeof text, "%lld.%09lld s", static_cast<long long>(s.sec()), static_cast<long long>(s.nsec()));
+  std::snprintf(text, sizeof text, "%lld.%09lld s", static_cast<long long>(s.sec()),
+                static_cast<long long>(s.nsec()));
   return text;
 }
 
@@ -49,11 +51,15 @@ std::string foundText(const RefusalTally::Entry& e) {
   return text;
 }
 
-bool typeWanted(const BagTopic& t, const ReplayInputTopic& input) { return t.type == input.expected_type; }
+bool typeWanted(const BagTopic& t, const ReplayInputTopic& input) {
+  return t.type == input.expected_type;
+}
 
 /// The sentences of the summary, one per line; `bullet` starts each detail line.
-/// The bag's message count on `topic` (as named, with or without the leading '/'); nullopt if absent.
-std::optional<std::uint64_t> inBag(const std::string& topic, const std::vector<BagTopic>& bag_topics) {
+/// The bag's message count on `topic` (as named, with or without the leading '/'); nullopt if
+/// absent.
+std::optional<std::uint64_t> inBag(const std::string& topic,
+                                   const std::vector<BagTopic>& bag_topics) {
   std::optional<std::uint64_t> n;
   for (const BagTopic& t : bag_topics) {
     if (topicMatches(t.topic, topic)) n = n.value_or(0) + t.messages;
@@ -61,17 +67,20 @@ std::optional<std::uint64_t> inBag(const std::string& topic, const std::vector<B
   return n;
 }
 
-std::vector<std::string> sentences(const std::array<ReplayInputTopic, kInputStreams>& inputs, const RigPipeline& pipeline,
-                                   const std::vector<BagTopic>& bag_topics, const std::string& bullet, bool damaged) {
+std::vector<std::string> sentences(const std::array<ReplayInputTopic, kInputStreams>& inputs,
+                                   const RigPipeline& pipeline,
+                                   const std::vector<BagTopic>& bag_topics,
+                                   const std::string& bullet, bool damaged) {
   std::vector<std::string> out;
   const PipelineCounters& c = pipeline.counters();
   bool list_topics = false;
   for (const ReplayInputTopic& in : inputs) {
-    const std::string head = std::string(toString(in.stream)) + " on '" + printableText(in.topic) + "' (" +
-                             in.expected_type + ", " + in.option + "): ";
+    const std::string head = std::string(toString(in.stream)) + " on '" + printableText(in.topic) +
+                             "' (" + in.expected_type + ", " + in.option + "): ";
     const std::optional<std::uint64_t> held = inBag(in.topic, bag_topics);
     if (in.read == 0 && held) {
-      out.push_back(head + std::to_string(*held) + " in the bag, none read" + (damaged ? " before the damage" : ""));
+      out.push_back(head + std::to_string(*held) + " in the bag, none read" +
+                    (damaged ? " before the damage" : ""));
       continue;
     }
     if (in.read == 0) {
@@ -83,29 +92,33 @@ std::vector<std::string> sentences(const std::array<ReplayInputTopic, kInputStre
       list_topics = true;
       for (const BagTopic& t : bag_topics) {
         if (typeWanted(t, in)) {
-          out.push_back(bullet + "'" + printableText(t.topic) + "' holds " + std::to_string(t.messages) + " " +
-                        in.expected_type + " messages: " + in.option + " " + printableText(t.topic) + " reads them");
+          out.push_back(bullet + "'" + printableText(t.topic) + "' holds " +
+                        std::to_string(t.messages) + " " + in.expected_type +
+                        " messages: " + in.option + " " + printableText(t.topic) + " reads them");
         }
       }
       continue;
     }
     const std::uint64_t refused = pipeline.refusals().total(in.stream);
-    out.push_back(head + std::to_string(in.read) + " read, " + std::to_string(acceptedOn(in.stream, c)) + " accepted, " +
-                  std::to_string(refused) + " refused" +
-                  (in.wrongType() ? ", " + std::to_string(in.wrongType()) + " of another type" : ""));
+    out.push_back(
+        head + std::to_string(in.read) + " read, " + std::to_string(acceptedOn(in.stream, c)) +
+        " accepted, " + std::to_string(refused) + " refused" +
+        (in.wrongType() ? ", " + std::to_string(in.wrongType()) + " of another type" : ""));
     for (const InputOutcome why : kRefusals) {
       const RefusalTally::Entry& e = pipeline.refusals().entry(in.stream, why);
       if (e.count == 0) continue;
       std::string line = bullet + std::to_string(e.count) + " refused (" + toString(why) + ")";
       if (!e.found.empty()) line += ", found " + foundText(e);
-      out.push_back(line + "; the first, stamped " + stampText(e.first_stamp) + ": " + e.first_reason);
+      out.push_back(line + "; the first, stamped " + stampText(e.first_stamp) + ": " +
+                    e.first_reason);
     }
     for (const auto& [type, n] : in.wrong_types) {
-      out.push_back(bullet + std::to_string(n) + " of type " + printableText(type) + ", not " + in.expected_type +
-                    ": not read");
+      out.push_back(bullet + std::to_string(n) + " of type " + printableText(type) + ", not " +
+                    in.expected_type + ": not read");
     }
     if (const std::uint64_t dropped = droppedOn(in.stream, c)) {
-      out.push_back(bullet + std::to_string(dropped) + " numbered by their publisher never reached the bag (header.seq gaps)");
+      out.push_back(bullet + std::to_string(dropped) +
+                    " numbered by their publisher never reached the bag (header.seq gaps)");
     }
   }
   if (list_topics) {
@@ -116,7 +129,8 @@ std::vector<std::string> sentences(const std::array<ReplayInputTopic, kInputStre
                     std::to_string(t.messages) + " messages");
     }
     if (bag_topics.size() > kMaxTopicsListed) {
-      out.push_back(bullet + "and " + std::to_string(bag_topics.size() - kMaxTopicsListed) + " more");
+      out.push_back(bullet + "and " + std::to_string(bag_topics.size() - kMaxTopicsListed) +
+                    " more");
     }
   }
   return out;
@@ -132,17 +146,34 @@ std::uint64_t ReplayInputTopic::wrongType() const {
 
 ReplaySummary::ReplaySummary(const std::string& torque_topic, const std::string& preload_topic,
                              const std::string& joint_states_topic)
-    : inputs_{{{InputStream::kTorque, "--torque-topic", torque_topic, "geometry_msgs/WrenchStamped", 0, {}},
-               {InputStream::kPreload, "--preload-topic", preload_topic, "drivetrain_stiffness/Preload", 0, {}},
-               {InputStream::kJointStates, "--joint-states-topic", joint_states_topic, "sensor_msgs/JointState", 0, {}}}} {}
+    : inputs_{{{InputStream::kTorque,
+                "--torque-topic",
+                torque_topic,
+                "geometry_msgs/WrenchStamped",
+                0,
+                {}},
+               {InputStream::kPreload,
+                "--preload-topic",
+                preload_topic,
+                "drivetrain_stiffness/Preload",
+                0,
+                {}},
+               {InputStream::kJointStates,
+                "--joint-states-topic",
+                joint_states_topic,
+                "sensor_msgs/JointState",
+                0,
+                {}}}} {}
 
 void ReplaySummary::requireDistinctTopics() const {
   for (std::size_t i = 0; i < inputs_.size(); ++i) {
-    if (inputs_[i].topic.empty()) throw InvalidInput(inputs_[i].option + " = '': a topic name is needed");
+    if (inputs_[i].topic.empty())
+      throw InvalidInput(inputs_[i].option + " = '': a topic name is needed");
     for (std::size_t j = i + 1; j < inputs_.size(); ++j) {
       if (topicMatches(inputs_[i].topic, inputs_[j].topic)) {
-        throw InvalidInput(inputs_[i].option + " = '" + inputs_[i].topic + "' and " + inputs_[j].option + " = '" +
-                           inputs_[j].topic + "' name one topic for two inputs; each input needs its own");
+        throw InvalidInput(inputs_[i].option + " = '" + inputs_[i].topic + "' and " +
+                           inputs_[j].option + " = '" + inputs_[j].topic +
+                           "' name one topic for two inputs; each input needs its own");
       }
     }
   }
@@ -164,19 +195,25 @@ std::uint64_t ReplaySummary::accepted(const PipelineCounters& c) {
   return c.accepted_torque + c.accepted_preload + c.accepted_motion;
 }
 
-nlohmann::json ReplaySummary::json(const RigPipeline& pipeline, const std::vector<BagTopic>& bag_topics) const {
+nlohmann::json ReplaySummary::json(const RigPipeline& pipeline,
+                                   const std::vector<BagTopic>& bag_topics) const {
   nlohmann::json j;
   const PipelineCounters& c = pipeline.counters();
   for (const ReplayInputTopic& in : inputs_) {
-    nlohmann::json t = {{"topic", printableText(in.topic)}, {"type", in.expected_type},
-                        {"in_bag", in.read > 0 || inBag(in.topic, bag_topics).has_value()}, {"read", in.read},
-                        {"accepted", acceptedOn(in.stream, c)}, {"refused", pipeline.refusals().total(in.stream)},
+    nlohmann::json t = {{"topic", printableText(in.topic)},
+                        {"type", in.expected_type},
+                        {"in_bag", in.read > 0 || inBag(in.topic, bag_topics).has_value()},
+                        {"read", in.read},
+                        {"accepted", acceptedOn(in.stream, c)},
+                        {"refused", pipeline.refusals().total(in.stream)},
                         {"dropped", droppedOn(in.stream, c)}};
     t["refused_by_reason"] = nlohmann::json::object();
     for (const InputOutcome why : kRefusals) {
       const RefusalTally::Entry& e = pipeline.refusals().entry(in.stream, why);
       if (e.count == 0) continue;
-      nlohmann::json r = {{"count", e.count}, {"first_stamp", e.first_stamp.toSec()}, {"first_reason", e.first_reason}};
+      nlohmann::json r = {{"count", e.count},
+                          {"first_stamp", e.first_stamp.toSec()},
+                          {"first_reason", e.first_reason}};
       r["found"] = nlohmann::json::object();
       for (const RefusalTally::Found& f : e.found) r["found"][f.value] = f.count;
       r["found_other"] = e.found_other;
@@ -188,18 +225,23 @@ nlohmann::json ReplaySummary::json(const RigPipeline& pipeline, const std::vecto
   }
   j["bag_topics"] = nlohmann::json::array();
   for (const BagTopic& t : bag_topics) {
-    j["bag_topics"].push_back({{"topic", printableText(t.topic)}, {"type", printableText(t.type)}, {"messages", t.messages}});
+    j["bag_topics"].push_back({{"topic", printableText(t.topic)},
+                               {"type", printableText(t.type)},
+                               {"messages", t.messages}});
   }
   return j;
 }
 
-std::string ReplaySummary::text(const RigPipeline& pipeline, const std::vector<BagTopic>& bag_topics) const {
+std::string ReplaySummary::text(const RigPipeline& pipeline,
+                                const std::vector<BagTopic>& bag_topics) const {
   std::string text;
-  for (const std::string& line : sentences(inputs_, pipeline, bag_topics, "    ", damaged_)) text += "  " + line + "\n";
+  for (const std::string& line : sentences(inputs_, pipeline, bag_topics, "    ", damaged_))
+    text += "  " + line + "\n";
   return text;
 }
 
-std::string ReplaySummary::markdown(const RigPipeline& pipeline, const std::vector<BagTopic>& bag_topics) const {
+std::string ReplaySummary::markdown(const RigPipeline& pipeline,
+                                    const std::vector<BagTopic>& bag_topics) const {
   std::string md;
   for (const std::string& line : sentences(inputs_, pipeline, bag_topics, "  - ", damaged_)) {
     md += (line.rfind("  - ", 0) == 0 ? line : "- " + line) + "\n";
@@ -211,8 +253,9 @@ std::string ReplaySummary::wrongTypeText() const {
   std::string text;
   for (const ReplayInputTopic& in : inputs_) {
     for (const auto& [type, n] : in.wrong_types) {
-      text += std::string(toString(in.stream)) + " topic '" + printableText(in.topic) + "' (" + in.option + "): " +
-              std::to_string(n) + " messages of type " + printableText(type) + ", expected " + in.expected_type + "\n";
+      text += std::string(toString(in.stream)) + " topic '" + printableText(in.topic) + "' (" +
+              in.option + "): " + std::to_string(n) + " messages of type " + printableText(type) +
+              ", expected " + in.expected_type + "\n";
     }
   }
   return text;

@@ -25,13 +25,15 @@ struct ReplayInputTopic {
   std::string topic;          ///< as named (with or without a leading '/')
   std::string expected_type;  ///< e.g. "geometry_msgs/WrenchStamped"
   std::uint64_t read = 0;     ///< messages on the topic, of any type
-  std::map<std::string, std::uint64_t> wrong_types;  ///< recorded type -> messages (not the expected type)
+  std::map<std::string, std::uint64_t>
+      wrong_types;  ///< recorded type -> messages (not the expected type)
   std::uint64_t wrongType() const;
 };
 
 class ReplaySummary {
  public:
-  ReplaySummary(const std::string& torque_topic, const std::string& preload_topic, const std::string& joint_states_topic);
+  ReplaySummary(const std::string& torque_topic, const std::string& preload_topic,
+                const std::string& joint_states_topic);
   /// Throws InvalidInput naming both options when one topic is named for two inputs.
   void requireDistinctTopics() const;
   ReplayInputTopic& input(InputStream stream) { return inputs_[static_cast<std::size_t>(stream)]; }

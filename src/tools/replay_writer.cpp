@@ -46,7 +46,8 @@ CsvFile& CsvFile::number(double v) {
 }
 
 CsvFile& CsvFile::text(const std::string& s) {
-  block_.cells.push_back({Cell::Kind::kText, static_cast<std::uint32_t>(block_.texts.size()), 0, 0.0});
+  block_.cells.push_back(
+      {Cell::Kind::kText, static_cast<std::uint32_t>(block_.texts.size()), 0, 0.0});
   block_.texts.push_back(s);
   return *this;
 }
@@ -76,7 +77,8 @@ void CsvFile::format(Block& block) {
     row_start = false;
     switch (c.kind) {
       case Cell::Kind::kNumber: {
-        const auto r = std::to_chars(buf, buf + sizeof buf, c.number);  // shortest form that reads back exactly
+        const auto r = std::to_chars(buf, buf + sizeof buf,
+                                     c.number);  // shortest form that reads back exactly
         formatted_.append(buf, r.ptr);
         break;
       }
@@ -99,8 +101,7 @@ void CsvFile::format(Block& block) {
         }
         break;
       }
-      case Cell::Kind::kEndRow:
-        break;
+      case Cell::Kind::kEndRow: break;
     }
   }
   if (std::fwrite(formatted_.data(), 1, formatted_.size(), file_) != formatted_.size()) {
@@ -115,7 +116,8 @@ void CsvFile::close() {
     if (!block_.cells.empty()) handOver();
   });
   if (std::fclose(file_) != 0 && !error) {
-    error = std::make_exception_ptr(std::runtime_error("cannot write " + path_ + ": " + std::strerror(errno)));
+    error = std::make_exception_ptr(
+        std::runtime_error("cannot write " + path_ + ": " + std::strerror(errno)));
   }
   if (error) std::rethrow_exception(error);
 }
@@ -127,12 +129,13 @@ OutputTopics OutputTopics::parse(const std::string& option, const std::string& l
   while (true) {
     const std::size_t end = std::min(list.find(',', begin), list.size());
     const std::string name = list.substr(begin, end - begin);
-    const auto* found = std::find_if(std::begin(kNames), std::end(kNames), [&](const char* n) { return name == n; });
+    const auto* found = std::find_if(std::begin(kNames), std::end(kNames),
+                                     [&](const char* n) { return name == n; });
     if (found == std::end(kNames)) {
       std::string known;
       for (const char* n : kNames) known += std::string(known.empty() ? "" : ", ") + n;
-      throw InvalidInput(option + " = '" + list + "': unknown topic '" + name + "' (all, or a comma-separated list of: " +
-                         known + ")");
+      throw InvalidInput(option + " = '" + list + "': unknown topic '" + name +
+                         "' (all, or a comma-separated list of: " + known + ")");
     }
     bits |= 1u << static_cast<unsigned>(found - std::begin(kNames));
     if (end == list.size()) break;
@@ -150,67 +153,95 @@ std::string OutputTopics::describe() const {
   return out;
 }
 
-ReplayWriter::ReplayWriter(const RigPipeline& pipeline, const OutputSettings& settings, const std::string& out_bag,
-                           BagCompression compression, const std::string& csv_dir, OutputTopics bag_topics,
+ReplayWriter::ReplayWriter(const RigPipeline& pipeline, const OutputSettings& settings,
+                           const std::string& out_bag, BagCompression compression,
+                           const std::string& csv_dir, OutputTopics bag_topics,
                            OutputTopics csv_topics)
     : MessageSink(pipeline, settings),
       bag_topics_(bag_topics),
       csv_topics_(csv_topics),
       mesh_period_totals_(pipeline.rig().gears.teeth[0]) {
-  // BagWriter, not rosbag::Bag: rosbag's per-message syscalls cap the replay near 300x (bag_writer.hpp).
+  // BagWriter, not rosbag::Bag: rosbag's per-message syscalls cap the replay near 300x
+  // (bag_writer.hpp).
   if (!out_bag.empty()) bag_ = std::make_unique<BagWriter>(out_bag, compression);
   if (csv_dir.empty()) return;
   std::string bearings;
   for (const SupportEstimate& s : pipeline.estimator().current().supports) {
     bearing_names_.push_back(s.name);
-    for (const char* f : {"radial_stiffness", "axial_stiffness", "tilt_stiffness", "radial_load", "axial_load",
-                          "max_contact_pressure", "balls_in_contact"}) {
+    for (const char* f : {"radial_stiffness", "axial_stiffness", "tilt_stiffness", "radial_load",
+                          "axial_load", "max_contact_pressure", "balls_in_contact"}) {
       bearings += "," + s.name + "." + f;
     }
   }
-  if (csv_topics_.has(OutputTopics::kStiffness)) stiffness_csv_ = std::make_unique<CsvFile>(csv_dir + "/stiffness.csv",
-      "stamp,torque,mesh_force,mesh_phase,mesh_stiffness,mesh_stiffness_mean,mesh_stiffness_drive,mesh_stiffness_back,"
-      "drive_flank_loaded,back_flank_loaded" + bearings +
-      ",calibrated,mesh_stiffness_mean_calibrated,mesh_stiffness_mean_low,mesh_stiffness_mean_high,"
-      "pinion_bearing_stiffness_calibrated,pinion_bearing_stiffness_low,pinion_bearing_stiffness_high,"
-      "gear_bearing_stiffness_calibrated,gear_bearing_stiffness_low,gear_bearing_stiffness_high");
-  if (csv_topics_.has(OutputTopics::kTransmissionError)) te_csv_ = std::make_unique<CsvFile>(csv_dir + "/transmission_error.csv",
-      "stamp,dynamic_te,static_te,x_p,x_g,x,mesh_force,mesh_phase,torque,drive_flank_loaded,back_flank_loaded");
-  if (csv_topics_.has(OutputTopics::kTeSpectrum)) spectrum_csv_ = std::make_unique<CsvFile>(csv_dir + "/te_spectrum.csv",
-      "stamp,peak_frequency_hz,peak_amplitude,f2_hz,a2,f3_hz,a3,window_s,resolution_hz");
-  if (csv_topics_.has(OutputTopics::kResonance)) resonance_csv_ = std::make_unique<CsvFile>(csv_dir + "/resonance.csv",
-      "stamp,f1_hz,f2_hz,f3_hz,zeta1,zeta2,zeta3,dominant1,dominant2,dominant3,floquet_valid,floquet_margin,"
-      "calibrated,f1_hz_calibrated,f1_hz_low,f1_hz_high,f2_hz_calibrated,f2_hz_low,f2_hz_high,f3_hz_calibrated,f3_hz_low,"
-      "f3_hz_high");
+  if (csv_topics_.has(OutputTopics::kStiffness))
+    stiffness_csv_ =
+        std::make_unique<CsvFile>(csv_dir + "/stiffness.csv",
+                                  "stamp,torque,mesh_force,mesh_phase,mesh_stiffness,mesh_"
+                                  "stiffness_mean,mesh_stiffness_drive,mesh_stiffness_back,"
+                                  "drive_flank_loaded,back_flank_loaded" +
+                                      bearings +
+                                      ",calibrated,mesh_stiffness_mean_calibrated,mesh_stiffness_"
+                                      "mean_low,mesh_stiffness_mean_high,"
+                                      "pinion_bearing_stiffness_calibrated,pinion_bearing_"
+                                      "stiffness_low,pinion_bearing_stiffness_high,"
+                                      "gear_bearing_stiffness_calibrated,gear_bearing_stiffness_"
+                                      "low,gear_bearing_stiffness_high");
+  if (csv_topics_.has(OutputTopics::kTransmissionError))
+    te_csv_ = std::make_unique<CsvFile>(csv_dir + "/transmission_error.csv",
+                                        "stamp,dynamic_te,static_te,x_p,x_g,x,mesh_force,mesh_"
+                                        "phase,torque,drive_flank_loaded,back_flank_loaded");
+  if (csv_topics_.has(OutputTopics::kTeSpectrum))
+    spectrum_csv_ = std::make_unique<CsvFile>(
+        csv_dir + "/te_spectrum.csv",
+        "stamp,peak_frequency_hz,peak_amplitude,f2_hz,a2,f3_hz,a3,window_s,resolution_hz");
+  if (csv_topics_.has(OutputTopics::kResonance))
+    resonance_csv_ =
+        std::make_unique<CsvFile>(csv_dir + "/resonance.csv",
+                                  "stamp,f1_hz,f2_hz,f3_hz,zeta1,zeta2,zeta3,dominant1,dominant2,"
+                                  "dominant3,floquet_valid,floquet_margin,"
+                                  "calibrated,f1_hz_calibrated,f1_hz_low,f1_hz_high,f2_hz_"
+                                  "calibrated,f2_hz_low,f2_hz_high,f3_hz_calibrated,f3_hz_low,"
+                                  "f3_hz_high");
   // The calibration's files, named after the message fields in message order (the ctest
-  // replay_writes_the_calibration checks the columns against msg/); header only without a calibration.
-  if (csv_topics_.has(OutputTopics::kMeasuredTe)) measured_te_csv_ = std::make_unique<CsvFile>(csv_dir + "/measured_te.csv", "stamp,te,predicted,residual,torque,mesh_phase");
+  // replay_writes_the_calibration checks the columns against msg/); header only without a
+  // calibration.
+  if (csv_topics_.has(OutputTopics::kMeasuredTe))
+    measured_te_csv_ = std::make_unique<CsvFile>(csv_dir + "/measured_te.csv",
+                                                 "stamp,te,predicted,residual,torque,mesh_phase");
   // Per block of whole mesh periods, named after the MeshPeriodStats fields in message order.
-  if (csv_topics_.has(OutputTopics::kMeshPeriodStats)) mesh_period_csv_ = std::make_unique<CsvFile>(csv_dir + "/mesh_period_stats.csv",
-      "stamp,te_mean,te_rms,te_peak_to_peak,mesh_force_mean,mesh_force_rms,mesh_force_peak_to_peak,mesh_frequency,torque,"
-      "periods,samples,duration");
+  if (csv_topics_.has(OutputTopics::kMeshPeriodStats))
+    mesh_period_csv_ =
+        std::make_unique<CsvFile>(csv_dir + "/mesh_period_stats.csv",
+                                  "stamp,te_mean,te_rms,te_peak_to_peak,mesh_force_mean,mesh_force_"
+                                  "rms,mesh_force_peak_to_peak,mesh_frequency,torque,"
+                                  "periods,samples,duration");
   std::string parameters, identified;
   for (int i = 0; i < kCalibrationSize; ++i) {
     parameters += std::string(",") + calibrationName(i) + "," + calibrationName(i) + "_std";
     identified += std::string(",") + calibrationName(i) + "_identified";
   }
   std::string bands;
-  for (const char* f : {"mesh_stiffness", "pinion_bearing_stiffness", "gear_bearing_stiffness", "natural_frequency_1",
-                        "natural_frequency_2", "natural_frequency_3"}) {
+  for (const char* f : {"mesh_stiffness", "pinion_bearing_stiffness", "gear_bearing_stiffness",
+                        "natural_frequency_1", "natural_frequency_2", "natural_frequency_3"}) {
     bands += std::string(",") + f + "," + f + "_low," + f + "_high";
   }
-  if (csv_topics_.has(OutputTopics::kCalibration)) calibration_csv_ = std::make_unique<CsvFile>(csv_dir + "/calibration.csv",
-      "stamp" + parameters + identified +
-      ",nis,excited,baseline,outcome,windows,baseline_windows,updates,gated,not_excited,window_torque,window_speed,"
-      "series_compliance,series_compliance_std" + bands +
-      ",knee_torque,measured_mean_te,predicted_mean_te,measured_mesh_harmonic_1,predicted_mesh_harmonic_1,"
-      "measured_mesh_harmonic_2,predicted_mesh_harmonic_2");
+  if (csv_topics_.has(OutputTopics::kCalibration))
+    calibration_csv_ = std::make_unique<CsvFile>(
+        csv_dir + "/calibration.csv", "stamp" + parameters + identified +
+                                          ",nis,excited,baseline,outcome,windows,baseline_windows,"
+                                          "updates,gated,not_excited,window_torque,window_speed,"
+                                          "series_compliance,series_compliance_std" +
+                                          bands +
+                                          ",knee_torque,measured_mean_te,predicted_mean_te,"
+                                          "measured_mesh_harmonic_1,predicted_mesh_harmonic_1,"
+                                          "measured_mesh_harmonic_2,predicted_mesh_harmonic_2");
 }
 
 void ReplayWriter::close() {
   // Each close throws on an I/O error, naming its file.
   if (bag_) bag_->close();
-  for (auto* csv : {&stiffness_csv_, &te_csv_, &spectrum_csv_, &resonance_csv_, &measured_te_csv_, &calibration_csv_, &mesh_period_csv_}) {
+  for (auto* csv : {&stiffness_csv_, &te_csv_, &spectrum_csv_, &resonance_csv_, &measured_te_csv_,
+                    &calibration_csv_, &mesh_period_csv_}) {
     if (*csv) (*csv)->close();
   }
 }
@@ -219,24 +250,48 @@ void ReplayWriter::emitStiffness(const drivetrain_stiffness::Stiffness& m) {
   if (auto* bag = bagFor(OutputTopics::kStiffness)) bag->write("/stiffness", m.header.stamp, m);
   if (!stiffness_csv_) return;
   CsvFile& c = *stiffness_csv_;
-  c.stamp(m.header.stamp).number(m.torque).number(m.mesh_force).number(m.mesh_phase).number(m.mesh_stiffness);
+  c.stamp(m.header.stamp)
+      .number(m.torque)
+      .number(m.mesh_force)
+      .number(m.mesh_phase)
+      .number(m.mesh_stiffness);
   c.number(m.mesh_stiffness_mean).number(m.mesh_stiffness_drive).number(m.mesh_stiffness_back);
   c.number(m.drive_flank_loaded).number(m.back_flank_loaded);
   for (const auto& b : m.bearings) {
-    c.number(b.radial_stiffness).number(b.axial_stiffness).number(b.tilt_stiffness).number(b.radial_load);
+    c.number(b.radial_stiffness)
+        .number(b.axial_stiffness)
+        .number(b.tilt_stiffness)
+        .number(b.radial_load);
     c.number(b.axial_load).number(b.max_contact_pressure).number(b.balls_in_contact);
   }
-  c.number(m.calibrated).number(m.mesh_stiffness_mean_calibrated).number(m.mesh_stiffness_mean_low).number(m.mesh_stiffness_mean_high);
-  c.number(m.pinion_bearing_stiffness_calibrated).number(m.pinion_bearing_stiffness_low).number(m.pinion_bearing_stiffness_high);
-  c.number(m.gear_bearing_stiffness_calibrated).number(m.gear_bearing_stiffness_low).number(m.gear_bearing_stiffness_high);
+  c.number(m.calibrated)
+      .number(m.mesh_stiffness_mean_calibrated)
+      .number(m.mesh_stiffness_mean_low)
+      .number(m.mesh_stiffness_mean_high);
+  c.number(m.pinion_bearing_stiffness_calibrated)
+      .number(m.pinion_bearing_stiffness_low)
+      .number(m.pinion_bearing_stiffness_high);
+  c.number(m.gear_bearing_stiffness_calibrated)
+      .number(m.gear_bearing_stiffness_low)
+      .number(m.gear_bearing_stiffness_high);
   c.endRow();
 }
 
 void ReplayWriter::emitTransmissionError(const drivetrain_stiffness::TransmissionError& m) {
-  if (auto* bag = bagFor(OutputTopics::kTransmissionError)) bag->write("/transmission_error", m.header.stamp, m);
+  if (auto* bag = bagFor(OutputTopics::kTransmissionError))
+    bag->write("/transmission_error", m.header.stamp, m);
   if (!te_csv_) return;
-  te_csv_->stamp(m.header.stamp).number(m.dynamic_te).number(m.static_te).number(m.x_p).number(m.x_g).number(m.x);
-  te_csv_->number(m.mesh_force).number(m.mesh_phase).number(m.torque).number(m.drive_flank_loaded).number(m.back_flank_loaded);
+  te_csv_->stamp(m.header.stamp)
+      .number(m.dynamic_te)
+      .number(m.static_te)
+      .number(m.x_p)
+      .number(m.x_g)
+      .number(m.x);
+  te_csv_->number(m.mesh_force)
+      .number(m.mesh_phase)
+      .number(m.torque)
+      .number(m.drive_flank_loaded)
+      .number(m.back_flank_loaded);
   te_csv_->endRow();
 }
 
@@ -267,7 +322,11 @@ void ReplayWriter::emitResonance(const drivetrain_stiffness::Resonance& m) {
 void ReplayWriter::emitMeasuredTe(const drivetrain_stiffness::MeasuredTe& m) {
   if (auto* bag = bagFor(OutputTopics::kMeasuredTe)) bag->write("/measured_te", m.header.stamp, m);
   if (!measured_te_csv_) return;
-  measured_te_csv_->stamp(m.header.stamp).number(m.te).number(m.predicted).number(m.residual).number(m.torque);
+  measured_te_csv_->stamp(m.header.stamp)
+      .number(m.te)
+      .number(m.predicted)
+      .number(m.residual)
+      .number(m.torque);
   measured_te_csv_->number(m.mesh_phase).endRow();
 }
 
@@ -282,17 +341,34 @@ void ReplayWriter::emitCalibration(const drivetrain_stiffness::Calibration& m) {
   c.number(m.preload_torque).number(m.preload_torque_std);
   c.number(m.te_offset).number(m.te_offset_std);
   c.number(m.mesh_stiffness_scale_identified).number(m.pinion_bearing_scale_identified);
-  c.number(m.gear_bearing_scale_identified).number(m.preload_torque_identified).number(m.te_offset_identified);
+  c.number(m.gear_bearing_scale_identified)
+      .number(m.preload_torque_identified)
+      .number(m.te_offset_identified);
   c.number(m.nis).number(m.excited).number(m.baseline).text(m.outcome);
   c.number(static_cast<double>(m.windows)).number(static_cast<double>(m.baseline_windows));
-  c.number(static_cast<double>(m.updates)).number(static_cast<double>(m.gated)).number(static_cast<double>(m.not_excited));
-  c.number(m.window_torque).number(m.window_speed).number(m.series_compliance).number(m.series_compliance_std);
+  c.number(static_cast<double>(m.updates))
+      .number(static_cast<double>(m.gated))
+      .number(static_cast<double>(m.not_excited));
+  c.number(m.window_torque)
+      .number(m.window_speed)
+      .number(m.series_compliance)
+      .number(m.series_compliance_std);
   c.number(m.mesh_stiffness).number(m.mesh_stiffness_low).number(m.mesh_stiffness_high);
-  c.number(m.pinion_bearing_stiffness).number(m.pinion_bearing_stiffness_low).number(m.pinion_bearing_stiffness_high);
-  c.number(m.gear_bearing_stiffness).number(m.gear_bearing_stiffness_low).number(m.gear_bearing_stiffness_high);
-  c.number(m.natural_frequency_1).number(m.natural_frequency_1_low).number(m.natural_frequency_1_high);
-  c.number(m.natural_frequency_2).number(m.natural_frequency_2_low).number(m.natural_frequency_2_high);
-  c.number(m.natural_frequency_3).number(m.natural_frequency_3_low).number(m.natural_frequency_3_high);
+  c.number(m.pinion_bearing_stiffness)
+      .number(m.pinion_bearing_stiffness_low)
+      .number(m.pinion_bearing_stiffness_high);
+  c.number(m.gear_bearing_stiffness)
+      .number(m.gear_bearing_stiffness_low)
+      .number(m.gear_bearing_stiffness_high);
+  c.number(m.natural_frequency_1)
+      .number(m.natural_frequency_1_low)
+      .number(m.natural_frequency_1_high);
+  c.number(m.natural_frequency_2)
+      .number(m.natural_frequency_2_low)
+      .number(m.natural_frequency_2_high);
+  c.number(m.natural_frequency_3)
+      .number(m.natural_frequency_3_low)
+      .number(m.natural_frequency_3_high);
   c.number(m.knee_torque).number(m.measured_mean_te).number(m.predicted_mean_te);
   c.number(m.measured_mesh_harmonic_1).number(m.predicted_mesh_harmonic_1);
   c.number(m.measured_mesh_harmonic_2).number(m.predicted_mesh_harmonic_2).endRow();
@@ -300,7 +376,8 @@ void ReplayWriter::emitCalibration(const drivetrain_stiffness::Calibration& m) {
 
 void ReplayWriter::emitMeshPeriodStats(const drivetrain_stiffness::MeshPeriodStats& m) {
   mesh_period_totals_.add(m);
-  if (auto* bag = bagFor(OutputTopics::kMeshPeriodStats)) bag->write("/mesh_period_stats", m.header.stamp, m);
+  if (auto* bag = bagFor(OutputTopics::kMeshPeriodStats))
+    bag->write("/mesh_period_stats", m.header.stamp, m);
   if (!mesh_period_csv_) return;
   CsvFile& c = *mesh_period_csv_;
   c.stamp(m.header.stamp).number(m.te_mean).number(m.te_rms).number(m.te_peak_to_peak);

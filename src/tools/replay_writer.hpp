@@ -10,26 +10,35 @@
 #include <string>
 #include <vector>
 
-
-#include "bag_writer.hpp"  // NOLINT(build/include_subdir)
+#include "bag_writer.hpp"          // NOLINT(build/include_subdir)
 #include "mesh_period_totals.hpp"  // NOLINT(build/include_subdir)
 #include "drivetrain_stiffness/ros/message_sink.hpp"
 
 namespace drivetrain_stiffness {
 
 /// Which output topics drivetrain_replay writes (--topics to the bag and the CSV files,
-/// --csv-topics to the CSV files alone). The messages are built either way (the pipeline and the sink
-/// run identically); only their writing is skipped. A campaign keeps a bag's report small with it
-/// (measured_te at the encoders' 5 kHz is the largest file: docs/campaign.md).
+/// --csv-topics to the CSV files alone). The messages are built either way (the pipeline and the
+/// sink run identically); only their writing is skipped. A campaign keeps a bag's report small with
+/// it (measured_te at the encoders' 5 kHz is the largest file: docs/campaign.md).
 class OutputTopics {
  public:
   /// In the order of kNames; a bit per topic.
-  enum Topic : unsigned { kStiffness, kTransmissionError, kTeSpectrum, kResonance, kMeasuredTe, kCalibration,
-                          kMeshPeriodStats, kTf, kRigMarkers, kCount };
+  enum Topic : unsigned {
+    kStiffness,
+    kTransmissionError,
+    kTeSpectrum,
+    kResonance,
+    kMeasuredTe,
+    kCalibration,
+    kMeshPeriodStats,
+    kTf,
+    kRigMarkers,
+    kCount
+  };
   /// The topic names as written to the bag (without the leading '/'), as --topics takes them.
-  static constexpr const char* kNames[kCount] = {"stiffness", "transmission_error", "te_spectrum", "resonance",
-                                                 "measured_te", "calibration", "mesh_period_stats", "tf",
-                                                 "rig_markers"};
+  static constexpr const char* kNames[kCount] = {
+      "stiffness",   "transmission_error", "te_spectrum", "resonance",  "measured_te",
+      "calibration", "mesh_period_stats",  "tf",          "rig_markers"};
   static OutputTopics all() { return OutputTopics((1u << kCount) - 1u); }
   /// "all", or names from kNames separated by commas; throws InvalidInput naming `option` and the
   /// unknown or empty name.
@@ -53,7 +62,8 @@ class CsvFile {
   CsvFile& operator=(const CsvFile&) = delete;
   CsvFile& stamp(const ros::Time& t);  ///< sec.nsec, exact
   CsvFile& number(double v);
-  CsvFile& text(const std::string& s);  ///< quoted (RFC 4180) if it holds a comma, a quote or a line break
+  CsvFile& text(
+      const std::string& s);  ///< quoted (RFC 4180) if it holds a comma, a quote or a line break
   void endRow();
   void close();  ///< writes the rest; throws naming the path on an I/O error
 
@@ -82,8 +92,9 @@ class ReplayWriter : public MessageSink {
  public:
   /// out_bag and csv_dir may be empty (not written); only `bag_topics` go to the bag and only
   /// `csv_topics` to the CSV files.
-  ReplayWriter(const RigPipeline& pipeline, const OutputSettings& settings, const std::string& out_bag,
-               BagCompression compression, const std::string& csv_dir, OutputTopics bag_topics = OutputTopics::all(),
+  ReplayWriter(const RigPipeline& pipeline, const OutputSettings& settings,
+               const std::string& out_bag, BagCompression compression, const std::string& csv_dir,
+               OutputTopics bag_topics = OutputTopics::all(),
                OutputTopics csv_topics = OutputTopics::all());
   void close();
   /// Every mesh_period_stats block so far, summed (whether or not --topics writes the topic).
@@ -104,13 +115,15 @@ class ReplayWriter : public MessageSink {
 
  private:
   /// The bag, if --out was given and the topic is selected.
-  BagWriter* bagFor(OutputTopics::Topic t) const { return bag_topics_.has(t) ? bag_.get() : nullptr; }
+  BagWriter* bagFor(OutputTopics::Topic t) const {
+    return bag_topics_.has(t) ? bag_.get() : nullptr;
+  }
 
   OutputTopics bag_topics_, csv_topics_;
   MeshPeriodTotals mesh_period_totals_;
   std::unique_ptr<BagWriter> bag_;
-  std::unique_ptr<CsvFile> stiffness_csv_, te_csv_, spectrum_csv_, resonance_csv_, measured_te_csv_, calibration_csv_,
-      mesh_period_csv_;
+  std::unique_ptr<CsvFile> stiffness_csv_, te_csv_, spectrum_csv_, resonance_csv_, measured_te_csv_,
+      calibration_csv_, mesh_period_csv_;
   std::vector<std::string> bearing_names_;
 };
 

@@ -17,8 +17,9 @@ constexpr double kEncoderCounts = 1048576.0;  ///< 2^20 counts per revolution (a
 double quantiseEncoderAngle(double angle);
 
 struct EncoderSample {
-  MotionInput motion;                   ///< quantised pinion and gear angles; the pinion's exact speed
-  std::optional<double> gear_velocity;  ///< [rad/s] -(z_p / z_g) omega_p, beside motion.pinion_velocity
+  MotionInput motion;  ///< quantised pinion and gear angles; the pinion's exact speed
+  std::optional<double>
+      gear_velocity;  ///< [rad/s] -(z_p / z_g) omega_p, beside motion.pinion_velocity
 };
 
 /// Both encoders at time t [s] with the pinion on `pinion`: theta_p quantised; theta_g =

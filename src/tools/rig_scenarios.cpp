@@ -21,7 +21,9 @@ std::vector<PreloadSetting> preloadOfAll(const RigConfig& rig, double axial) {
   return out;
 }
 
-double configuredAxial(const RigConfig& rig) { return rig.bearings.empty() ? 0.0 : rig.bearings.front().axial_preload; }
+double configuredAxial(const RigConfig& rig) {
+  return rig.bearings.empty() ? 0.0 : rig.bearings.front().axial_preload;
+}
 
 /// [rad/s] from [rpm]: one revolution (2 pi rad) per minute (60 s).
 double radPerSecond(double rpm) { return rpm * kTwoPi / 60.0; }
@@ -40,13 +42,17 @@ SpeedProfile scenarioSpeed(const RigConfig& rig, const ScenarioSpec& spec) {
   if (s == "speed_steps") {
     // 500, 1000, 2000, 4000 rpm, a quarter of the duration each, every step a 50 ms linear ramp.
     const double ramp = 0.05;
-    if (!(T / 4.0 >= ramp)) throwInvalid("duration", T, "speed_steps needs >= 0.2 s (four dwells, each at least its 0.05 s ramp)");
+    if (!(T / 4.0 >= ramp))
+      throwInvalid("duration", T,
+                   "speed_steps needs >= 0.2 s (four dwells, each at least its 0.05 s ramp)");
     return SpeedProfile(SpeedSteps{radPerSecond(500.0),
-                                   {{T / 4.0, radPerSecond(1000.0)}, {T / 2.0, radPerSecond(2000.0)},
+                                   {{T / 4.0, radPerSecond(1000.0)},
+                                    {T / 2.0, radPerSecond(2000.0)},
                                     {3.0 * T / 4.0, radPerSecond(4000.0)}},
                                    ramp});
   }
-  // +1000 rpm, zero at T/4, -1000 rpm at T/2, zero at 3T/4, +1000 rpm at T: 1000 rpm cos(2 pi t / T).
+  // +1000 rpm, zero at T/4, -1000 rpm at T/2, zero at 3T/4, +1000 rpm at T: 1000 rpm cos(2 pi t /
+  // T).
   if (s == "reverse") return SpeedProfile(SpeedReversal{radPerSecond(1000.0), 0.0, T});
   return SpeedProfile(radPerSecond(rig.dynamics.present ? rig.dynamics.speed_rpm : 1000.0));
 }
@@ -58,7 +64,8 @@ void addEncoderEvents(const RigConfig& rig, const ScenarioSpec& spec, const Spee
   if (spec.joint_rate == 0.0) return;
   const long n = std::lround(spec.duration * spec.joint_rate);
   if (n < 2 || n > 100000000) {
-    throw InvalidInput("duration * joint_rate = " + std::to_string(n) + ": must be in [2, 1e8] samples (joint_rate 0: none)");
+    throw InvalidInput("duration * joint_rate = " + std::to_string(n) +
+                       ": must be in [2, 1e8] samples (joint_rate 0: none)");
   }
   requirePositive("gears.teeth[0]", rig.gears.teeth[0]);
   requirePositive("gears.teeth[1]", rig.gears.teeth[1]);
@@ -77,24 +84,36 @@ void addEncoderEvents(const RigConfig& rig, const ScenarioSpec& spec, const Spee
 }  // namespace
 
 std::string scenarioHelp() {
-  return "torque_ripple: mean torque (gearbox dynamics.torque) with 6th and 12th shaft-order ripple (5 % and 2 %) at "
+  return "torque_ripple: mean torque (gearbox dynamics.torque) with 6th and 12th shaft-order "
+         "ripple (5 % and 2 %) at "
          "the nominal speed, preload re-sent at 1 Hz\n"
-         "torque_steps: 0.05, 0.1, 0.2, -0.1 (reversal onto the anti-backlash flank) and 0.1 N*m, equal dwell\n"
-         "preload_ramp: axial preload of every support ramped 200 -> 2000 N at 10 Hz, constant torque\n"
-         "speed_sweep: mesh-order torque ripple (5 %) whose frequency sweeps 5 -> 11 kHz, through the transverse "
+         "torque_steps: 0.05, 0.1, 0.2, -0.1 (reversal onto the anti-backlash flank) and 0.1 N*m, "
+         "equal dwell\n"
+         "preload_ramp: axial preload of every support ramped 200 -> 2000 N at 10 Hz, constant "
+         "torque\n"
+         "speed_sweep: mesh-order torque ripple (5 %) whose frequency sweeps 5 -> 11 kHz, through "
+         "the transverse "
          "modes (use --rate >= 25000)\n"
-         "faults: torque_ripple with a NaN, an Inf, an absurd torque, a zero stamp, an out-of-order stamp, a burst of "
-         "equal stamps and a jump back of the stamps by 0.6 duration (a looped recording) injected\n"
-         "(the five above at the gearbox's constant dynamics.speed_rpm; the four below at constant torque "
+         "faults: torque_ripple with a NaN, an Inf, an absurd torque, a zero stamp, an "
+         "out-of-order stamp, a burst of "
+         "equal stamps and a jump back of the stamps by 0.6 duration (a looped recording) "
+         "injected\n"
+         "(the five above at the gearbox's constant dynamics.speed_rpm; the four below at constant "
+         "torque "
          "dynamics.torque, preload sent once)\n"
          "run_up: pinion speed 0 -> 6000 rpm linearly over the duration\n"
          "coast_down: pinion speed 6000 -> 0 rpm linearly over the duration\n"
-         "speed_steps: 500, 1000, 2000, 4000 rpm, a quarter of the duration each, each step a 50 ms linear ramp\n"
-         "reverse: +1000 rpm through zero (at 1/4) to -1000 rpm (at 1/2) and back (zero at 3/4, +1000 rpm at the "
+         "speed_steps: 500, 1000, 2000, 4000 rpm, a quarter of the duration each, each step a 50 "
+         "ms linear ramp\n"
+         "reverse: +1000 rpm through zero (at 1/4) to -1000 rpm (at 1/2) and back (zero at 3/4, "
+         "+1000 rpm at the "
          "end): 1000 rpm cos(2 pi t / duration); the torque keeps its sign\n"
-         "load_sweep: a calibration recording whose true rig is the --config one (load_sweep.hpp): 120 rpm "
-         "(--speed-rpm), a torque staircase across the anti-backlash knee both ways, the gear encoder carrying the "
-         "true rig's TE, encoder mounting errors, stamp jitter and torque noise from --seed; joint rate 5000 Hz by "
+         "load_sweep: a calibration recording whose true rig is the --config one (load_sweep.hpp): "
+         "120 rpm "
+         "(--speed-rpm), a torque staircase across the anti-backlash knee both ways, the gear "
+         "encoder carrying the "
+         "true rig's TE, encoder mounting errors, stamp jitter and torque noise from --seed; joint "
+         "rate 5000 Hz by "
          "default; its natural length unless --duration is given (which scales every hold)\n";
 }
 
@@ -102,9 +121,11 @@ std::vector<RigEvent> makeScenario(const RigConfig& rig, const ScenarioSpec& spe
   requirePositive("duration", spec.duration);
   requirePositive("rate", spec.torque_rate);
   const long n = std::lround(spec.duration * spec.torque_rate);
-  if (n < 2 || n > 100000000) throw InvalidInput("duration * rate = " + std::to_string(n) + ": must be in [2, 1e8] samples");
+  if (n < 2 || n > 100000000)
+    throw InvalidInput("duration * rate = " + std::to_string(n) + ": must be in [2, 1e8] samples");
   const double dt = 1.0 / spec.torque_rate;
-  const double mean = rig.dynamics.present ? rig.dynamics.torque : 0.1;  // seed 000 Table 1: 0.1 N*m
+  const double mean =
+      rig.dynamics.present ? rig.dynamics.torque : 0.1;  // seed 000 Table 1: 0.1 N*m
   const double shaft_hz = (rig.dynamics.present ? rig.dynamics.speed_rpm : 1000.0) / 60.0;
   std::vector<RigEvent> events;
   const std::string& s = spec.name;
@@ -114,34 +135,39 @@ std::vector<RigEvent> makeScenario(const RigConfig& rig, const ScenarioSpec& spe
   auto ripple = [&](double t) {
     // Servo motors ripple at multiples of six per electrical revolution; with one pole pair
     // that is the 6th and 12th shaft order.
-    return mean * (1.0 + 0.05 * std::sin(kTwoPi * 6.0 * shaft_hz * t) + 0.02 * std::sin(kTwoPi * 12.0 * shaft_hz * t));
+    return mean * (1.0 + 0.05 * std::sin(kTwoPi * 6.0 * shaft_hz * t) +
+                   0.02 * std::sin(kTwoPi * 12.0 * shaft_hz * t));
   };
   if (s == "torque_ripple" || s == "faults") {
     for (long k = 0; k < n; ++k) {
       const double t = k * dt;
-      if (k % std::max(1L, std::lround(spec.torque_rate)) == 0) events.push_back({t, std::nullopt, preloadOfAll(rig, configuredAxial(rig))});
+      if (k % std::max(1L, std::lround(spec.torque_rate)) == 0)
+        events.push_back({t, std::nullopt, preloadOfAll(rig, configuredAxial(rig))});
       events.push_back({t, ripple(t), {}});
     }
     if (s == "faults") {
-      // Injected after the clean stream, each at its own time, so every rule is visible in the counters.
-      const double nan = std::numeric_limits<double>::quiet_NaN(), inf = std::numeric_limits<double>::infinity();
+      // Injected after the clean stream, each at its own time, so every rule is visible in the
+      // counters.
+      const double nan = std::numeric_limits<double>::quiet_NaN(),
+                   inf = std::numeric_limits<double>::infinity();
       const double t1 = 0.25 * spec.duration;
       events.push_back({t1 + 0.1 * dt, nan, {}});
       events.push_back({t1 + 0.2 * dt, inf, {}});
-      events.push_back({t1 + 0.3 * dt, 1e6, {}});                    // absurd (over max_abs_torque)
-      events.push_back({t1 + 0.4 * dt, mean, {}, true});             // zero stamp
-      events.push_back({t1 + 0.5 * dt, mean, {}, false, -0.5});      // 0.5 s late: out of order
-      for (int i = 0; i < 5; ++i) events.push_back({t1 + 0.6 * dt, mean, {}, false, 0.0});  // burst, equal stamps
-      std::vector<PreloadSetting> bad = preloadOfAll(rig, -100.0);   // negative preload
+      events.push_back({t1 + 0.3 * dt, 1e6, {}});                // absurd (over max_abs_torque)
+      events.push_back({t1 + 0.4 * dt, mean, {}, true});         // zero stamp
+      events.push_back({t1 + 0.5 * dt, mean, {}, false, -0.5});  // 0.5 s late: out of order
+      for (int i = 0; i < 5; ++i)
+        events.push_back({t1 + 0.6 * dt, mean, {}, false, 0.0});    // burst, equal stamps
+      std::vector<PreloadSetting> bad = preloadOfAll(rig, -100.0);  // negative preload
       events.push_back({t1 + 0.7 * dt, std::nullopt, bad});
-      RigEvent after_loss{t1 + 0.8 * dt, mean, {}};                 // 3 torque messages lost on the way
+      RigEvent after_loss{t1 + 0.8 * dt, mean, {}};  // 3 torque messages lost on the way
       after_loss.lost_before = 3;
       events.push_back(after_loss);
-      RigEvent wrong_frame{t1 + 0.9 * dt, mean, {}};                // torque about the gear's axis
+      RigEvent wrong_frame{t1 + 0.9 * dt, mean, {}};  // torque about the gear's axis
       wrong_frame.frame_id = "gear";
       events.push_back(wrong_frame);
-      // From 3/4 on, the stamps run 0.6 duration behind (a recording that looped; more than the default
-      // ~stamp_jump_back of 1 s for durations over 1.7 s): one reset, then accepted.
+      // From 3/4 on, the stamps run 0.6 duration behind (a recording that looped; more than the
+      // default ~stamp_jump_back of 1 s for durations over 1.7 s): one reset, then accepted.
       for (RigEvent& e : events) {
         if (e.t >= 0.75 * spec.duration && !e.zero_stamp) e.stamp_offset -= 0.6 * spec.duration;
       }
@@ -157,7 +183,8 @@ std::vector<RigEvent> makeScenario(const RigConfig& rig, const ScenarioSpec& spe
     const long every = std::max(1L, std::lround(spec.torque_rate / 10.0));
     for (long k = 0; k < n; ++k) {
       const double t = k * dt;
-      if (k % every == 0) events.push_back({t, std::nullopt, preloadOfAll(rig, 200.0 + 1800.0 * t / spec.duration)});
+      if (k % every == 0)
+        events.push_back({t, std::nullopt, preloadOfAll(rig, 200.0 + 1800.0 * t / spec.duration)});
       events.push_back({t, mean, {}});
     }
   } else if (s == "speed_sweep") {
@@ -174,12 +201,15 @@ std::vector<RigEvent> makeScenario(const RigConfig& rig, const ScenarioSpec& spe
     events.push_back({0.0, std::nullopt, preloadOfAll(rig, configuredAxial(rig))});
     for (long k = 0; k < n; ++k) events.push_back({k * dt, mean, {}});
   } else if (s == "load_sweep") {
-    throw InvalidInput("scenario = 'load_sweep': made by makeLoadSweep (load_sweep.hpp), which takes a seed and a speed");
+    throw InvalidInput(
+        "scenario = 'load_sweep': made by makeLoadSweep (load_sweep.hpp), which takes a seed and a "
+        "speed");
   } else {
     throw InvalidInput("scenario = '" + s + "': unknown; one of:\n" + scenarioHelp());
   }
   // In send order, as a rig numbers its messages (header.seq) and rosbag::View plays them.
-  std::stable_sort(events.begin(), events.end(), [](const RigEvent& a, const RigEvent& b) { return a.t < b.t; });
+  std::stable_sort(events.begin(), events.end(),
+                   [](const RigEvent& a, const RigEvent& b) { return a.t < b.t; });
   return events;
 }
 

@@ -14,7 +14,8 @@ namespace drivetrain_stiffness {
 namespace {
 
 ros::Time fromNanoseconds(std::int64_t ns) {
-  return ros::Time(static_cast<std::uint32_t>(ns / 1000000000LL), static_cast<std::uint32_t>(ns % 1000000000LL));
+  return ros::Time(static_cast<std::uint32_t>(ns / 1000000000LL),
+                   static_cast<std::uint32_t>(ns % 1000000000LL));
 }
 
 void requireName(const std::string& field, const std::string& value) {
@@ -23,8 +24,10 @@ void requireName(const std::string& field, const std::string& value) {
 
 }  // namespace
 
-ScenarioBagCounts writeScenarioBag(const std::vector<RigEvent>& events, const ScenarioBagOptions& o, const std::string& path) {
-  if (!(o.epoch >= 1.0 && o.epoch < 4e9)) throw InvalidInput("epoch = " + formatValue(o.epoch) + ": must be in [1, 4e9) s");
+ScenarioBagCounts writeScenarioBag(const std::vector<RigEvent>& events, const ScenarioBagOptions& o,
+                                   const std::string& path) {
+  if (!(o.epoch >= 1.0 && o.epoch < 4e9))
+    throw InvalidInput("epoch = " + formatValue(o.epoch) + ": must be in [1, 4e9) s");
   requireName("torque_topic", o.torque_topic);
   requireName("preload_topic", o.preload_topic);
   requireName("joint_topic", o.joint_topic);
@@ -33,12 +36,15 @@ ScenarioBagCounts writeScenarioBag(const std::vector<RigEvent>& events, const Sc
   const std::int64_t epoch_ns = std::llround(o.epoch * 1e9);
   rosbag::Bag bag(path, rosbag::bagmode::Write);
   ScenarioBagCounts counts;
-  // header.seq numbers each stream from 0, as roscpp and rospy do; a gap is a message lost on the way.
+  // header.seq numbers each stream from 0, as roscpp and rospy do; a gap is a message lost on the
+  // way.
   std::uint32_t seq = 0, preload_seq = 0, joint_seq = 0;
   for (const RigEvent& e : events) {
-    const std::int64_t ns = epoch_ns + std::llround(e.t * 1e9);  // record time: when the rig sent it
+    const std::int64_t ns =
+        epoch_ns + std::llround(e.t * 1e9);  // record time: when the rig sent it
     const ros::Time record = fromNanoseconds(ns);
-    const ros::Time stamp = e.zero_stamp ? ros::Time(0, 0) : fromNanoseconds(ns + std::llround(e.stamp_offset * 1e9));
+    const ros::Time stamp =
+        e.zero_stamp ? ros::Time(0, 0) : fromNanoseconds(ns + std::llround(e.stamp_offset * 1e9));
     if (e.torque) {
       geometry_msgs::WrenchStamped w;
       seq += e.lost_before;
@@ -83,7 +89,9 @@ ScenarioBagCounts writeScenarioBag(const std::vector<RigEvent>& events, const Sc
         j.velocity.push_back(*e.motion->pinion_velocity);
         if (e.motion->gear_angle) {
           // JointState's arrays are all as long as name, or empty.
-          if (!e.gear_velocity) throw InvalidInput("event at t = " + formatValue(e.t) + ": a pinion velocity without gear_velocity");
+          if (!e.gear_velocity)
+            throw InvalidInput("event at t = " + formatValue(e.t) +
+                               ": a pinion velocity without gear_velocity");
           j.velocity.push_back(*e.gear_velocity);
         }
       }

@@ -13,7 +13,8 @@
 namespace drivetrain_stiffness {
 
 struct ScenarioBagOptions {
-  double epoch = 1767225600.0;  ///< [s] stamp of the scenario start: 2026-01-01T00:00:00Z (1e9-second stamps)
+  double epoch =
+      1767225600.0;  ///< [s] stamp of the scenario start: 2026-01-01T00:00:00Z (1e9-second stamps)
   std::string torque_topic = "/torque";
   std::string preload_topic = "/preload";
   std::string joint_topic = "/joint_states";
@@ -27,7 +28,7 @@ struct ScenarioBagCounts {
 
 /// Writes `events` in their order to a new bag at `path` (overwritten). Throws InvalidInput for an
 /// epoch outside [1, 4e9) s or empty topic or joint names.
-ScenarioBagCounts writeScenarioBag(const std::vector<RigEvent>& events, const ScenarioBagOptions& options,
-                                   const std::string& path);
+ScenarioBagCounts writeScenarioBag(const std::vector<RigEvent>& events,
+                                   const ScenarioBagOptions& options, const std::string& path);
 
 }  // namespace drivetrain_stiffness

@@ -78,10 +78,11 @@ TEST(NoAllocation, TorqueAndEncoderInputsThroughARunUp) {
   EXPECT_STREQ(pipeline.phaseSource(), "encoders");
 }
 
-// The live calibration (the calibration rule) on the per-reading path: torque at 1 kHz and joint_states with
-// both joints at 5 kHz, 120 rpm, the gear angle carrying the static model's TE (so loaded windows
-// pass the gate and run the whole update: fit, iterated EKF, bands, modal analyses). Warmed up
-// through a baseline and the first loaded windows, then 2 s (two gear turns, two updates) counted.
+// The live calibration (the calibration rule) on the per-reading path: torque at 1 kHz and
+// joint_states with both joints at 5 kHz, 120 rpm, the gear angle carrying the static model's TE
+// (so loaded windows pass the gate and run the whole update: fit, iterated EKF, bands, modal
+// analyses). Warmed up through a baseline and the first loaded windows, then 2 s (two gear turns,
+// two updates) counted.
 TEST(NoAllocation, EncoderReadingsThroughCalibrationUpdates) {
   RigConfig rig = test::seedServo();
   rig.calibration.present = true;
@@ -93,7 +94,8 @@ TEST(NoAllocation, EncoderReadingsThroughCalibrationUpdates) {
   auto step = [&](int k) {  // k: 5 kHz ticks
     const double t = 2e-4 * k, torque = t < 1.5 ? 0.0 : 2.0;
     if (k % 5 == 0) pipeline.torque(Stamp{test::kEpoch + 200000LL * k}, torque, sink);
-    pipeline.motion(Stamp{test::kEpoch + 200000LL * k + 100000LL}, encoder.reading(w * t, w, torque), sink);
+    pipeline.motion(Stamp{test::kEpoch + 200000LL * k + 100000LL},
+                    encoder.reading(w * t, w, torque), sink);
   };
   for (int k = 0; k < 25000; ++k) step(k);  // 5 s: baseline, then loaded windows
   const std::uint64_t updates_before = pipeline.calibrator()->estimate().updates;
@@ -124,7 +126,8 @@ TEST(NoAllocation, CalibrationProgressThroughDroppedWindows) {
       const double t = 2e-4 * k, theta = w * t;
       const double torque = static_cast<long>(t / 1.5) % 2 == 0 ? 0.0 : 2.0;
       if (k % 3500 == 0) calibrator.interrupt();
-      calibrator.reading(t, theta, encoder.gearAngle(theta, torque), encoder.phase(theta), w, torque, supports, sample);
+      calibrator.reading(t, theta, encoder.gearAngle(theta, torque), encoder.phase(theta), w,
+                         torque, supports, sample);
       longest = std::max(longest, calibrator.progress().loaded.duration);
     }
   };
@@ -156,10 +159,10 @@ TEST(NoAllocation, CalibrationProgressThroughDroppedWindows) {
 // propagator's parameters changed; the cycle's stiffnesses come back to the same values of the
 // dynamics' 1 % grid, whose slices are kept since 2026-11-26, so here they are taken back; the
 // decomposition of values never met before is BearingChangesToNewValuesInSteadyState below) and
-// one that does not, and the resonance estimate each time; never the number of balls in contact (the
-// per-ball storage is sized by the bearing's ball count, not by the balls in contact, but a step
-// that changes the count is not what this case claims). The preload vectors are the caller's (the
-// ROS message conversion builds them), made before counting. Before the fix this counted 1618
+// one that does not, and the resonance estimate each time; never the number of balls in contact
+// (the per-ball storage is sized by the bearing's ball count, not by the balls in contact, but a
+// step that changes the count is not what this case claims). The preload vectors are the caller's
+// (the ROS message conversion builds them), made before counting. Before the fix this counted 1618
 // allocations (81 per preload input: name strings in the checks, a copy of the supports, new
 // Hertz models, a new estimate, a new model over the sliced mesh).
 TEST(NoAllocation, PreloadInputsInSteadyState) {
@@ -184,7 +187,8 @@ TEST(NoAllocation, PreloadInputsInSteadyState) {
   std::vector<std::vector<PreloadSetting>> messages;
   for (const Step& s : cycle) {
     std::vector<PreloadSetting> m;
-    for (const BearingSupportConfig& b : rig.bearings) m.push_back({b.name, s.axial, s.radial, s.inner, s.outer});
+    for (const BearingSupportConfig& b : rig.bearings)
+      m.push_back({b.name, s.axial, s.radial, s.inner, s.outer});
     messages.push_back(std::move(m));
   }
   std::vector<int> balls;  // balls in contact per support at the last preload input
@@ -193,18 +197,21 @@ TEST(NoAllocation, PreloadInputsInSteadyState) {
   // k: 10 kHz ticks; with `preloads`, a preload input 50 us after every 500th torque input.
   auto step = [&](long k, bool preloads) {
     const double t = 1e-4 * static_cast<double>(k);
-    pipeline.torque(Stamp{test::kEpoch + 100000LL * k}, 0.1 * (1.0 + 0.1 * std::sin(2.0 * M_PI * 100.0 * t)), sink);
+    pipeline.torque(Stamp{test::kEpoch + 100000LL * k},
+                    0.1 * (1.0 + 0.1 * std::sin(2.0 * M_PI * 100.0 * t)), sink);
     if (!preloads || k % 500 != 0) return;
     pipeline.preload(Stamp{test::kEpoch + 100000LL * k + 50000LL}, messages[next_message], sink);
     next_message = (next_message + 1) % messages.size();
     const StiffnessEstimate& e = pipeline.estimator().current();
     for (std::size_t i = 0; i < e.supports.size(); ++i) {
-      if (i < balls.size()) same_balls = same_balls && e.supports[i].solution.balls_in_contact == balls[i];
+      if (i < balls.size())
+        same_balls = same_balls && e.supports[i].solution.balls_in_contact == balls[i];
     }
     balls.resize(e.supports.size());  // sized at the first preload input (warm-up), never after
-    for (std::size_t i = 0; i < e.supports.size(); ++i) balls[i] = e.supports[i].solution.balls_in_contact;
+    for (std::size_t i = 0; i < e.supports.size(); ++i)
+      balls[i] = e.supports[i].solution.balls_in_contact;
   };
-  for (long k = 0; k < 20000; ++k) step(k, false);       // 2 s of torque
+  for (long k = 0; k < 20000; ++k) step(k, false);  // 2 s of torque
   ASSERT_NE(pipeline.dynamics(), nullptr);
   ASSERT_FALSE(pipeline.dynamics()->followingMotion());  // on the periodic propagators until...
   for (long k = 20000; k < 23000; ++k) step(k, true);    // ...one preload cycle (6 inputs at 20 Hz)
@@ -212,9 +219,11 @@ TEST(NoAllocation, PreloadInputsInSteadyState) {
   const PipelineCounters before_counters = pipeline.counters();
   const long dynamics_changes_before = pipeline.dynamics()->rebuilds();
   const long before = allocationCount();
-  for (long k = 23000; k < 33000; ++k) step(k, true);  // 1 s: 20 preload inputs, 10000 torque inputs
+  for (long k = 23000; k < 33000; ++k)
+    step(k, true);  // 1 s: 20 preload inputs, 10000 torque inputs
   const long n = allocationCount() - before;
-  EXPECT_EQ(n, 0) << n / 20.0 << " heap allocations per preload input (with 500 torque inputs each)";
+  EXPECT_EQ(n, 0) << n / 20.0
+                  << " heap allocations per preload input (with 500 torque inputs each)";
   const PipelineCounters& c = pipeline.counters();
   EXPECT_EQ(c.accepted_preload - before_counters.accepted_preload, 20u);
   EXPECT_EQ(c.accepted_torque - before_counters.accepted_torque, 10000u);
@@ -246,7 +255,8 @@ TEST(NoAllocation, BearingChangesToNewValuesInSteadyState) {
   };
   long change = 0;
   auto newStiffness = [&] {
-    const double k = 1.2e8 * std::pow(1.02, static_cast<double>(++change % 40) - 20.0);  // 40 values, 2 % apart
+    const double k =
+        1.2e8 * std::pow(1.02, static_cast<double>(++change % 40) - 20.0);  // 40 values, 2 % apart
     est.advanceTo(t, nullptr);
     est.setBearingStiffness({k, k}, t);
   };
@@ -264,5 +274,6 @@ TEST(NoAllocation, BearingChangesToNewValuesInSteadyState) {
   }
   const long n = allocationCount() - before;
   EXPECT_EQ(n, 0) << n / 20.0 << " heap allocations per bearing change";
-  EXPECT_GT(prop.decompositions() - decompositions_before, 20 * 100) << "the changes did not decompose slices";
+  EXPECT_GT(prop.decompositions() - decompositions_before, 20 * 100)
+      << "the changes did not decompose slices";
 }

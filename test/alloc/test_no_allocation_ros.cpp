@@ -18,7 +18,8 @@ using test::allocationCount;
 
 namespace {
 
-drivetrain_stiffness::Preload preloadMessage(const RigConfig& rig, double axial, double radial, double interference) {
+drivetrain_stiffness::Preload preloadMessage(const RigConfig& rig, double axial, double radial,
+                                             double interference) {
   drivetrain_stiffness::Preload m;
   for (const BearingSupportConfig& b : rig.bearings) {
     drivetrain_stiffness::BearingPreload p;
@@ -42,28 +43,34 @@ TEST(NoAllocation, PreloadMessagesConvertedIntoTheCallersBuffer) {
   const std::vector<drivetrain_stiffness::Preload> messages = {
       preloadMessage(rig, 1100.0, 1000.0, 5e-6), preloadMessage(rig, 1100.0, 1050.0, 5e-6),
       preloadMessage(rig, 1200.0, 950.0, 6e-6), preloadMessage(rig, 1000.0, 1000.0, 5e-6)};
-  std::vector<PreloadSetting> buffer;  // the caller's, as StiffnessEstimatorRos and drivetrain_replay keep one
+  std::vector<PreloadSetting>
+      buffer;  // the caller's, as StiffnessEstimatorRos and drivetrain_replay keep one
   std::size_t next = 0;
-  auto step = [&](long k, bool preloads) {  // k: 10 kHz ticks; a preload 50 us after every 500th torque
+  auto step = [&](long k,
+                  bool preloads) {  // k: 10 kHz ticks; a preload 50 us after every 500th torque
     const double t = 1e-4 * static_cast<double>(k);
-    pipeline.torque(Stamp{test::kEpoch + 100000LL * k}, 0.1 * (1.0 + 0.1 * std::sin(2.0 * M_PI * 100.0 * t)), sink);
+    pipeline.torque(Stamp{test::kEpoch + 100000LL * k},
+                    0.1 * (1.0 + 0.1 * std::sin(2.0 * M_PI * 100.0 * t)), sink);
     if (!preloads || k % 500 != 0) return;
     const drivetrain_stiffness::Preload& msg = messages[next];
     next = (next + 1) % messages.size();
     toPreloadSettings(msg, buffer);
-    pipeline.preload(Stamp{test::kEpoch + 100000LL * k + 50000LL}, buffer, sink);  // checked by the counters below
+    pipeline.preload(Stamp{test::kEpoch + 100000LL * k + 50000LL}, buffer,
+                     sink);  // checked by the counters below
   };
-  for (long k = 0; k < 20000; ++k) step(k, false);  // 2 s of torque
+  for (long k = 0; k < 20000; ++k) step(k, false);     // 2 s of torque
   for (long k = 20000; k < 22000; ++k) step(k, true);  // one pass of the cycle (4 preload inputs)
   const std::uint64_t accepted_before = pipeline.counters().accepted_preload;
   const long before = allocationCount();
   for (long k = 22000; k < 32000; ++k) step(k, true);  // 1 s: 20 preload inputs
   const long n = allocationCount() - before;
-  EXPECT_EQ(n, 0) << n / 20.0 << " heap allocations per preload message (with 500 torque inputs each)";
+  EXPECT_EQ(n, 0) << n / 20.0
+                  << " heap allocations per preload message (with 500 torque inputs each)";
   EXPECT_EQ(pipeline.counters().accepted_preload - accepted_before, 20u);
   EXPECT_EQ(pipeline.counters().rejected_preload, 0u) << pipeline.counters().last_event;
   // The conversion is the message's: every field, in order.
-  const drivetrain_stiffness::Preload& last = messages[(next + messages.size() - 1) % messages.size()];
+  const drivetrain_stiffness::Preload& last =
+      messages[(next + messages.size() - 1) % messages.size()];
   ASSERT_EQ(buffer.size(), last.bearings.size());
   for (std::size_t i = 0; i < buffer.size(); ++i) {
     EXPECT_EQ(buffer[i].name, last.bearings[i].name);

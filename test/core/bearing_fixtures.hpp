@@ -12,14 +12,14 @@ namespace test {
 inline BallBearingSpec acbb7013() {
   BallBearingSpec s;
   s.type = BearingType::kAngularContact;
-  s.balls = 19;                    // seed 003 Table 1
-  s.ball_diameter = 11.1e-3;       // seed 003 Table 1
-  s.pitch_diameter = 82.5e-3;      // d_i + D = 71.4 + 11.1 mm (seed 003 Table 1)
+  s.balls = 19;                       // seed 003 Table 1
+  s.ball_diameter = 11.1e-3;          // seed 003 Table 1
+  s.pitch_diameter = 82.5e-3;         // d_i + D = 71.4 + 11.1 mm (seed 003 Table 1)
   s.inner_groove_conformity = 0.515;  // r_i = 5.7165 mm / 11.1 mm
   s.outer_groove_conformity = 0.515;
   s.contact_angle = 25.0 * M_PI / 180.0;
   s.width = 18e-3;
-  s.material = {207e9, 0.29};      // seed 003 section 3
+  s.material = {207e9, 0.29};  // seed 003 section 3
   FitGeometry g;
   g.bore_diameter = 65e-3;
   g.outside_diameter = 100e-3;

@@ -161,11 +161,12 @@ TEST(BearingSupport, RejectsBadLoadsWithClearMessages) {
   Vector5d moment = Vector5d::Zero();
   moment[kThetaY] = 3.0;
   expectMessage(moment, "load.moment_y = 3", false);
-  expectMessage(load(0.0, -2000.0), "missing shoulder", true);     // thrust against the open side
+  expectMessage(load(0.0, -2000.0), "missing shoulder", true);  // thrust against the open side
   expectMessage(load(1e6, 0.0), "exceeds max_contact_pressure", true);  // absurd load
   EXPECT_THROW(BearingSupport(test::acbb7013(), Arrangement::kBackToBack, 0.0), InvalidInput);
   EXPECT_THROW(BearingSupport(test::acbb7013(), Arrangement::kSingle, -5.0), InvalidInput);
-  EXPECT_THROW(BearingSupport(test::deepGroove(12, 0.0), Arrangement::kFaceToFace, 100.0), InvalidInput);
+  EXPECT_THROW(BearingSupport(test::deepGroove(12, 0.0), Arrangement::kFaceToFace, 100.0),
+               InvalidInput);
 }
 
 // Seed 003 section 4 (Fig 12): at fixed axial preload the radial stiffness falls as the radial
@@ -197,17 +198,19 @@ TEST(BearingSupport, Seed003TrendsFor7013AC) {
 // the two rings act alike.
 TEST(BearingSupport, Seed000ShrinkRangeTrend) {
   auto kr = [](double inner, double outer) {
-    return BearingSupport(test::acbb7013(), Arrangement::kSingle, 1000.0, Interference{inner, outer})
-        .solve(load(1000.0, 0.0)).radialStiffness();
+    return BearingSupport(test::acbb7013(), Arrangement::kSingle, 1000.0,
+                          Interference{inner, outer})
+        .solve(load(1000.0, 0.0))
+        .radialStiffness();
   };
   const double k_lo = kr(2e-6, 2e-6), k_mid = kr(5e-6, 2e-6), k_hi = kr(8e-6, 2e-6);
   EXPECT_GT(k_mid, k_lo);
   EXPECT_GT(k_hi, k_mid);
-  EXPECT_LT((k_hi - k_lo) / k_lo, 0.05);                                  // slight
+  EXPECT_LT((k_hi - k_lo) / k_lo, 0.05);                                   // slight
   EXPECT_LT(std::abs(k_mid - 0.5 * (k_lo + k_hi)), 0.05 * (k_hi - k_lo));  // almost linear
   const double k_outer = kr(2e-6, 8e-6);
   EXPECT_GT(k_outer, k_lo);
-  EXPECT_NEAR((k_outer - k_lo) / (k_hi - k_lo), 1.0, 0.5);                 // inner and outer alike
+  EXPECT_NEAR((k_outer - k_lo) / (k_hi - k_lo), 1.0, 0.5);  // inner and outer alike
 }
 
 // Seed 000 section 4.1 (Fig 5) on the servo-size bearing shipped for its gearbox, loads in the
@@ -216,17 +219,22 @@ TEST(BearingSupport, Seed000ShrinkRangeTrend) {
 // regime; in the preload-dominated regime it falls instead, as seed 003 reports: see
 // docs/bearing_model.md for why both seeds are right in their own regime).
 TEST(BearingSupport, Seed000PreloadTrendsForServoBearing) {
-  const BearingSupportConfig c = loadBearingFile(std::string(DRIVETRAIN_SOURCE_DIR) + "/config/bearings/servo_7000ac.yaml");
+  const BearingSupportConfig c =
+      loadBearingFile(std::string(DRIVETRAIN_SOURCE_DIR) + "/config/bearings/servo_7000ac.yaml");
   auto kr = [&](double fa, double fr) {
-    return BearingSupport(c.spec, c.arrangement, fa, c.interference, c.tilt).solve(load(fr, 0.0)).radialStiffness();
+    return BearingSupport(c.spec, c.arrangement, fa, c.interference, c.tilt)
+        .solve(load(fr, 0.0))
+        .radialStiffness();
   };
   for (double fr : {400.0, 800.0, 1200.0}) {
     EXPECT_LT(kr(400.0, fr), kr(1000.0, fr)) << fr;
     EXPECT_LT(kr(1000.0, fr), kr(2000.0, fr)) << fr;
   }
   double previous = 0.0;
-  for (double fr = 800.0; fr <= 2000.0; fr += 400.0) {  // Fa = 400 N: balls lifted off from 800 N on
-    const BearingSolution sol = BearingSupport(c.spec, c.arrangement, 400.0, c.interference, c.tilt).solve(load(fr, 0.0));
+  for (double fr = 800.0; fr <= 2000.0;
+       fr += 400.0) {  // Fa = 400 N: balls lifted off from 800 N on
+    const BearingSolution sol =
+        BearingSupport(c.spec, c.arrangement, 400.0, c.interference, c.tilt).solve(load(fr, 0.0));
     EXPECT_LT(sol.balls_in_contact, c.spec.balls);
     EXPECT_GT(sol.radialStiffness(), previous) << fr;
     previous = sol.radialStiffness();

@@ -32,8 +32,8 @@ BlockTriangular<P, Q> randomWithNorm(std::mt19937& rng, double norm) {
 
 }  // namespace
 
-// exp([[a, b], [0, c]]) = [[e^a, b (e^a - e^c) / (a - c)], [0, e^c]] (the 2x2 upper-triangular case;
-// e.g. Higham, Functions of Matrices, SIAM 2008, eq. 4.16 with f = exp), on each Pade branch.
+// exp([[a, b], [0, c]]) = [[e^a, b (e^a - e^c) / (a - c)], [0, e^c]] (the 2x2 upper-triangular
+// case; e.g. Higham, Functions of Matrices, SIAM 2008, eq. 4.16 with f = exp), on each Pade branch.
 TEST(BlockTriangularExp, ScalarBlocksMatchTheClosedForm) {
   for (const double scale : {1e-3, 0.1, 0.5, 1.5, 4.0, 40.0}) {
     const double a = -0.7 * scale, b = 0.9 * scale, c = 0.25 * scale;
@@ -96,8 +96,10 @@ TEST(BlockTriangularExp, InverseIsTheExponentialOfMinusM) {
     m.z = -m.z;
     const BlockTriangular<6, 5> f = blockTriangularExp(m);
     const Eigen::Matrix<double, 11, 11> product = (e * f).dense();
-    const double bound = 1e-13 * e.dense().cwiseAbs().colwise().sum().maxCoeff() * f.dense().cwiseAbs().colwise().sum().maxCoeff();
-    EXPECT_LT((product - Eigen::Matrix<double, 11, 11>::Identity()).cwiseAbs().maxCoeff(), bound) << norm;
+    const double bound = 1e-13 * e.dense().cwiseAbs().colwise().sum().maxCoeff() *
+                         f.dense().cwiseAbs().colwise().sum().maxCoeff();
+    EXPECT_LT((product - Eigen::Matrix<double, 11, 11>::Identity()).cwiseAbs().maxCoeff(), bound)
+        << norm;
   }
 }
 
@@ -111,13 +113,16 @@ template <int N, int C>
 void checkLuSolve(std::mt19937& rng) {
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   for (int trial = 0; trial < 200; ++trial) {
-    const Eigen::Matrix<double, N, N> a = Eigen::Matrix<double, N, N>::NullaryExpr([&] { return u(rng); });
-    const Eigen::Matrix<double, N, C> b = Eigen::Matrix<double, N, C>::NullaryExpr([&] { return u(rng); });
+    const Eigen::Matrix<double, N, N> a =
+        Eigen::Matrix<double, N, N>::NullaryExpr([&] { return u(rng); });
+    const Eigen::Matrix<double, N, C> b =
+        Eigen::Matrix<double, N, C>::NullaryExpr([&] { return u(rng); });
     const Eigen::PartialPivLU<Eigen::Matrix<double, N, N>> lu(a);
     const Eigen::Matrix<double, N, C> x = luSolve(lu, b);
     // Residual relative to |A| |x| + |b| (a backward-stable solve: a small multiple of eps).
     const double scale = (a.cwiseAbs() * x.cwiseAbs() + b.cwiseAbs()).maxCoeff();
-    EXPECT_LT((a * x - b).cwiseAbs().maxCoeff(), 1e-13 * scale) << N << "x" << C << " trial " << trial;
+    EXPECT_LT((a * x - b).cwiseAbs().maxCoeff(), 1e-13 * scale)
+        << N << "x" << C << " trial " << trial;
 #ifndef EIGEN_VECTORIZE_FMA
 #ifdef EIGEN_VECTORIZE_AVX
     constexpr bool comparable = N <= kTriangularPanel;
@@ -126,7 +131,8 @@ void checkLuSolve(std::mt19937& rng) {
 #endif
     if (comparable) {
       const Eigen::Matrix<double, N, C> eigen = lu.solve(b);
-      EXPECT_EQ(0, std::memcmp(x.data(), eigen.data(), sizeof(double) * N * C)) << N << "x" << C << " trial " << trial;
+      EXPECT_EQ(0, std::memcmp(x.data(), eigen.data(), sizeof(double) * N * C))
+          << N << "x" << C << " trial " << trial;
     }
 #endif
   }

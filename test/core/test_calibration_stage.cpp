@@ -66,7 +66,8 @@ TEST(CalibrationStage, WithACalibrationTheBandsAreTheCalibratorsAndReadingsReach
   PipelineSink sink;
   // Readings before any baseline publish nothing and fail nothing.
   for (int k = 0; k < 10; ++k) {
-    stage.reading(test::stampAt(k * 2e-4), 0.01 * k, -0.01 * k * 20 / 40.0, 0.0, 50.0, 0.0, k > 0, sink);
+    stage.reading(test::stampAt(k * 2e-4), 0.01 * k, -0.01 * k * 20 / 40.0, 0.0, 50.0, 0.0, k > 0,
+                  sink);
   }
   EXPECT_EQ(counters.calibration_errors, 0u) << counters.last_event;
   EXPECT_EQ(counters.measured_te_out, 0u);

@@ -48,8 +48,9 @@ GearRotorModel slicedModel(double k, double f, double torque) {
   static const auto table = std::make_shared<const AntiBacklashMesh>(rig());
   static const auto slices = std::make_shared<const SlicedMesh>(table, 256);
   const GearRotorParameters p = rigRotorParameters(rig(), *table, {k, k});
-  GearRotorModel m(p, std::make_shared<const SlicedExcitation>(slices, rig().dynamics.transmission_error_amplitude,
-                                                               rig().dynamics.backlash, 1.0 / p.pinion_base_radius, 0.0));
+  GearRotorModel m(p, std::make_shared<const SlicedExcitation>(
+                          slices, rig().dynamics.transmission_error_amplitude,
+                          rig().dynamics.backlash, 1.0 / p.pinion_base_radius, 0.0));
   m.setMotionInput(MeshMotion{0.0, 0.0, f});
   m.setTorqueInput(torque);
   return m;
@@ -70,9 +71,9 @@ TEST(DynamicsEstimator, GridAndSteadyState) {
   // Samples 1 ms apart at a 3 ms mesh period step the phase by 1/3 each.
   EXPECT_NEAR(std::fmod(out[10].phase - out[9].phase + 1.0, 1.0), 1.0 / 3.0, 1e-6);
   // Every third sample lands on the period's tooth switch: its phase is the switch, 0 exactly, from
-  // either side of it to rounding (until the night of 2026-11-26 a phase a few ulps past it was published as
-  // 1e-6, the point meshForSample looks at for the right limit, which jittered the mesh-period
-  // statistics' mesh frequency by 2.5e-7 of itself).
+  // either side of it to rounding (until the night of 2026-11-26 a phase a few ulps past it was
+  // published as 1e-6, the point meshForSample looks at for the right limit, which jittered the
+  // mesh-period statistics' mesh frequency by 2.5e-7 of itself).
   for (std::size_t i = 2; i < out.size(); i += 3) EXPECT_EQ(out[i].phase, 0.0) << i;
   for (const DynamicsSample& s : out) {
     EXPECT_TRUE(s.state.allFinite());
@@ -87,7 +88,8 @@ TEST(DynamicsEstimator, GridAndSteadyState) {
 // model across a torque change, and a rerun is bit-identical.
 TEST(DynamicsEstimator, MatchesOfflineDopri5AcrossATorqueChange) {
   auto runOnline = [](std::vector<DynamicsSample>& out) {
-    auto est = std::make_unique<DynamicsEstimator>(rig(), std::array<double, 2>{1.2e8, 1.2e8}, 1000.0);
+    auto est =
+        std::make_unique<DynamicsEstimator>(rig(), std::array<double, 2>{1.2e8, 1.2e8}, 1000.0);
     est->reset(0.0, 0.1);
     auto keep = [&](const DynamicsSample& s) { out.push_back(s); };
     est->advanceTo(0.03, keep);
@@ -99,7 +101,8 @@ TEST(DynamicsEstimator, MatchesOfflineDopri5AcrossATorqueChange) {
   const auto est = runOnline(online);
   runOnline(again);
   ASSERT_EQ(online.size(), 60u);
-  for (std::size_t i = 0; i < online.size(); ++i) EXPECT_EQ(online[i].dynamic_te, again[i].dynamic_te);
+  for (std::size_t i = 0; i < online.size(); ++i)
+    EXPECT_EQ(online[i].dynamic_te, again[i].dynamic_te);
 
   // Offline: the same model, dopri5 at rtol 1e-11, torque 0.1 then 0.4 N m (the live value the
   // model reads is shared with the estimator, so set it through the estimator).
@@ -110,12 +113,18 @@ TEST(DynamicsEstimator, MatchesOfflineDopri5AcrossATorqueChange) {
   o.absolute_tolerance = 1e-17;
   o.max_step = 1e-4;
   std::vector<double> reference;
-  auto keep = [&](double t, const State6& y) { if (t > 0.0) reference.push_back(offline.model().forces(t, y).delta); };
-  const State6 mid = integrate(offline.model(), IntegratorMethod::kDopri5, o, 0.0, offline.state(), 0.03, 1e-3, keep);
+  auto keep = [&](double t, const State6& y) {
+    if (t > 0.0) reference.push_back(offline.model().forces(t, y).delta);
+  };
+  const State6 mid = integrate(offline.model(), IntegratorMethod::kDopri5, o, 0.0, offline.state(),
+                               0.03, 1e-3, keep);
   offline.setTorque(0.4);
   bool first = true;
   integrate(offline.model(), IntegratorMethod::kDopri5, o, 0.03, mid, 0.06, 1e-3,
-            [&](double t, const State6& y) { if (!first) keep(t, y); first = false; });
+            [&](double t, const State6& y) {
+              if (!first) keep(t, y);
+              first = false;
+            });
   ASSERT_EQ(reference.size(), online.size());
   double e = 0.0, r = 0.0;
   for (std::size_t i = 0; i < online.size(); ++i) {
@@ -130,10 +139,10 @@ TEST(DynamicsEstimator, MatchesOfflineDopri5AcrossATorqueChange) {
   EXPECT_NEAR(after / before, 4.0, 0.2);
 }
 
-// The own-stamp rule at the nominal phase: torque inputs stamped inside an output interval take effect at
-// their stamps, not at the sample before. Two inputs 0.4 and 0.7 ms into a 1 ms interval; the
-// reference is dopri5 at rtol 1e-11 switching the torque exactly there. The same run switching at
-// the sample instead differs from it by far more than the tolerance, so the check can fail.
+// The own-stamp rule at the nominal phase: torque inputs stamped inside an output interval take
+// effect at their stamps, not at the sample before. Two inputs 0.4 and 0.7 ms into a 1 ms interval;
+// the reference is dopri5 at rtol 1e-11 switching the torque exactly there. The same run switching
+// at the sample instead differs from it by far more than the tolerance, so the check can fail.
 TEST(DynamicsEstimator, TorqueTakesEffectAtItsStampInsideAnInterval) {
   DynamicsEstimator est(rig(), {1.2e8, 1.2e8}, 1000.0);
   est.reset(0.0, 0.1);
@@ -163,7 +172,8 @@ TEST(DynamicsEstimator, TorqueTakesEffectAtItsStampInsideAnInterval) {
       // Output on the 1 ms grid: integrate between grid points and the switching instants.
       double t = from;
       while (t < to - 1e-12) {
-        const double grid = std::floor(t * 1000.0 + 1e-9) / 1000.0 + 1e-3, next = std::min(grid, to);
+        const double grid = std::floor(t * 1000.0 + 1e-9) / 1000.0 + 1e-3,
+                     next = std::min(grid, to);
         y = integrate(offline.model(), IntegratorMethod::kDopri5, o, t, y, next, next - t, nullptr);
         if (std::abs(next - grid) < 1e-12) out.push_back(offline.model().forces(next, y).delta);
         t = next;
@@ -176,10 +186,13 @@ TEST(DynamicsEstimator, TorqueTakesEffectAtItsStampInsideAnInterval) {
   const std::vector<double> at_stamps = reference({{0.0304, 0.4}, {0.0307, 0.25}});
   const std::vector<double> at_sample = reference({{0.030, 0.25}});
   ASSERT_EQ(at_stamps.size(), online.size());
-  std::printf("TE against dopri5 switching at the stamps: %.3g (RMS, relative); held from the sample: %.3g\n",
-              rmsRelative(online, at_stamps), rmsRelative(at_sample, at_stamps));
+  std::printf(
+      "TE against dopri5 switching at the stamps: %.3g (RMS, relative); held from the sample: "
+      "%.3g\n",
+      rmsRelative(online, at_stamps), rmsRelative(at_sample, at_stamps));
   EXPECT_LT(rmsRelative(online, at_stamps), 1e-7);
-  EXPECT_GT(rmsRelative(at_sample, at_stamps), 1e-4);  // holding from the sample would be this far off
+  EXPECT_GT(rmsRelative(at_sample, at_stamps),
+            1e-4);  // holding from the sample would be this far off
 }
 
 // More torque inputs inside one output interval than it keeps stamps for: the last kept input
@@ -230,8 +243,8 @@ TEST(DynamicsEstimator, TorqueStampsSurviveTheMoveOntoTheSlicedPropagation) {
   EXPECT_EQ(pending, moved);
 }
 
-// The own-stamp rule for a bearing-stiffness input: stamped 0.4 ms into an output interval at the nominal
-// phase, it takes effect at its stamp. The dynamics move onto the sliced propagation at the
+// The own-stamp rule for a bearing-stiffness input: stamped 0.4 ms into an output interval at the
+// nominal phase, it takes effect at its stamp. The dynamics move onto the sliced propagation at the
 // interval's start (sample 30), with the old stiffness up to the stamp and the new one after it.
 // Reference: dopri5 at rtol 1e-12 on the phase table up to sample 30 (the periodic propagators'
 // model), then on the sliced model with the old and the new stiffness switching at the stamp. The
@@ -257,10 +270,11 @@ TEST(DynamicsEstimator, BearingStiffnessTakesEffectAtItsStamp) {
   auto reference = [&](double change) {
     std::vector<double> out;
     State6 y = start;
-    integrate(est.model(), IntegratorMethod::kDopri5, o, 0.0, y, 0.030, 1e-3, [&](double t, const State6& s) {
-      if (t > 0.0) out.push_back(est.model().forces(t, s).delta);
-      y = s;
-    });
+    integrate(est.model(), IntegratorMethod::kDopri5, o, 0.0, y, 0.030, 1e-3,
+              [&](double t, const State6& s) {
+                if (t > 0.0) out.push_back(est.model().forces(t, s).delta);
+                y = s;
+              });
     double t = 0.030;
     for (int k = 31; k <= 60; ++k) {
       const double grid = 1e-3 * k;
@@ -278,9 +292,12 @@ TEST(DynamicsEstimator, BearingStiffnessTakesEffectAtItsStamp) {
   const std::vector<double> at_stamp = reference(stamp);
   ASSERT_EQ(at_stamp.size(), online.size());
   const double off = rmsRelative(online, at_stamp);
-  const double at_sample = rmsRelative(reference(0.030), at_stamp), at_next = rmsRelative(reference(0.031), at_stamp);
-  std::printf("TE against dopri5 switching the bearings at the stamp: %.3g; at the sample before: %.3g; after: %.3g\n", off,
-              at_sample, at_next);
+  const double at_sample = rmsRelative(reference(0.030), at_stamp),
+               at_next = rmsRelative(reference(0.031), at_stamp);
+  std::printf(
+      "TE against dopri5 switching the bearings at the stamp: %.3g; at the sample before: %.3g; "
+      "after: %.3g\n",
+      off, at_sample, at_next);
   EXPECT_LT(off, 1e-7);
   EXPECT_GT(at_sample, 100.0 * off);
   EXPECT_GT(at_next, 100.0 * off);
@@ -313,20 +330,23 @@ TEST(DynamicsEstimator, NearTheKneeEveryFlankChangeIsIntegrated) {
     const GearRotorModel sliced = slicedModel(1.2e8, f, torque);
     const GearRotorModel& model = moved ? sliced : est.model();
     integrate(model, IntegratorMethod::kDopri5, o, 0.0, start, 0.02, est.outputInterval(),
-              [&](double t, const State6& y) { if (t > 0.0) reference.push_back(model.forces(t, y).delta); });
+              [&](double t, const State6& y) {
+                if (t > 0.0) reference.push_back(model.forces(t, y).delta);
+              });
     ASSERT_EQ(online.size(), reference.size());
     double e = 0.0, r = 0.0;
     for (std::size_t i = 0; i < online.size(); ++i) {
       e += (online[i] - reference[i]) * (online[i] - reference[i]);
       r += reference[i] * reference[i];
     }
-    // At 4 N m the back path barely lifts after some switches (21 changes in 20 ms): at such grazing
-    // contacts the motion follows the last digits, and the two solutions differ by 1.05e-7 (the
-    // same with the reference at rtol 1e-13 and 2 us steps); 1.8e-11 at 5 N m (157 changes) and
-    // 8.8e-12 at -1 N m. A missed change is 3.4e-4 and more (above).
+    // At 4 N m the back path barely lifts after some switches (21 changes in 20 ms): at such
+    // grazing contacts the motion follows the last digits, and the two solutions differ by 1.05e-7
+    // (the same with the reference at rtol 1e-13 and 2 us steps); 1.8e-11 at 5 N m (157 changes)
+    // and 8.8e-12 at -1 N m. A missed change is 3.4e-4 and more (above).
     EXPECT_LT(std::sqrt(e / r), moved ? 1e-6 : 1e-7) << torque << " N m";
     if (moved && torque > 0.0) {
-      EXPECT_GT(est.slicedPropagator()->regimeChanges(), 0) << torque << " N m";  // the back path's lifts and landings
+      EXPECT_GT(est.slicedPropagator()->regimeChanges(), 0)
+          << torque << " N m";  // the back path's lifts and landings
     }
   }
 }
@@ -397,13 +417,15 @@ TEST(DynamicsEstimator, StiffnessUpdateKeepsThePhase) {
   EXPECT_EQ(est.rebuilds(), 2);
   est.advanceTo(0.0035, keep);
   ASSERT_EQ(phases.size(), 3u);
-  for (std::size_t i = 1; i < phases.size(); ++i) EXPECT_NEAR(std::fmod(phases[i] - phases[i - 1] + 1.0, 1.0), 1.0 / 3.0, 1e-9);
+  for (std::size_t i = 1; i < phases.size(); ++i)
+    EXPECT_NEAR(std::fmod(phases[i] - phases[i - 1] + 1.0, 1.0), 1.0 / 3.0, 1e-9);
 }
 
 // An ordinary gear (no anti-backlash spring) with backlash starts loaded on its drive flank, stays
 // on the exact path, and its deflection carries the backlash: delta = F / k_s + b.
 TEST(DynamicsEstimator, OrdinaryGearWithBacklash) {
-  const RigConfig ordinary = loadRigFile(std::string(DRIVETRAIN_SOURCE_DIR) + "/test/data/ordinary_servo.yaml");
+  const RigConfig ordinary =
+      loadRigFile(std::string(DRIVETRAIN_SOURCE_DIR) + "/test/data/ordinary_servo.yaml");
   DynamicsEstimator est(ordinary, {1.2e8, 1.2e8}, 1000.0);
   est.reset(0.0, 0.1);
   std::vector<DynamicsSample> out;
@@ -421,15 +443,16 @@ TEST(DynamicsEstimator, OrdinaryGearWithBacklash) {
   EXPECT_NEAR(off_switch.dynamic_te - 5e-6, off_switch.static_te, 0.3 * off_switch.static_te);
   // The torque reversed: the backlash opens (no linear regime), and those intervals go to dopri5 on
   // the periodic propagators' model, which stay for the rest: an ordinary gear does not move onto
-  // the sliced propagation (no interval maps for it, and dopri5 there too while the backlash is open).
+  // the sliced propagation (no interval maps for it, and dopri5 there too while the backlash is
+  // open).
   est.setTorque(-0.1);
   est.advanceTo(0.08, [&](const DynamicsSample& s) { EXPECT_TRUE(s.state.allFinite()); });
   EXPECT_GT(est.fallbackIntervals(), 0);
   EXPECT_FALSE(est.followingMotion());
 }
 
-// A slow mesh on a fine output grid (node parameters ~pinion_speed_rpm, ~output_rate) used to set up
-// exact propagators for hours and gigabytes (fuzz finding: 12 rpm at 1 MHz, 8 s and 200 MB; 1e-3
+// A slow mesh on a fine output grid (node parameters ~pinion_speed_rpm, ~output_rate) used to set
+// up exact propagators for hours and gigabytes (fuzz finding: 12 rpm at 1 MHz, 8 s and 200 MB; 1e-3
 // rpm, hours): refused up front, naming the two settings.
 TEST(DynamicsEstimator, RefusesASetUpTooLargeNamingSpeedAndRate) {
   const auto expectRefused = [](double rpm, double rate) {
@@ -444,8 +467,8 @@ TEST(DynamicsEstimator, RefusesASetUpTooLargeNamingSpeedAndRate) {
       EXPECT_NE(m.find("output_rate = " + formatValue(rate)), std::string::npos) << m;
     }
   };
-  expectRefused(20.0, 1e6);   // 150000 propagators per mesh period
-  expectRefused(0.1, 1000.0);  // 1.7e7 Magnus steps per mesh period
+  expectRefused(20.0, 1e6);       // 150000 propagators per mesh period
+  expectRefused(0.1, 1000.0);     // 1.7e7 Magnus steps per mesh period
   expectRefused(5e-324, 1000.0);  // a subnormal speed: no mesh period at all
   // The set-up bound leaves ordinary slow speeds alone.
   RigConfig r = rig();
@@ -463,8 +486,8 @@ TEST(DynamicsEstimator, RefusesAMeshTooSlowForTheOutputGrid) {
 }
 
 // Following the measured motion: a run-up whose encoder readings (every 1 ms, off the 1 kHz output
-// grid by 0.4 ms) re-anchor phase and speed. The samples equal a tight dopri5 run of the same sliced
-// model along the same motion, and the state at each reading is the one at its stamp.
+// grid by 0.4 ms) re-anchor phase and speed. The samples equal a tight dopri5 run of the same
+// sliced model along the same motion, and the state at each reading is the one at its stamp.
 TEST(DynamicsEstimator, FollowsAMeasuredRunUpExactly) {
   DynamicsEstimator est(rig(), {1.2e8, 1.2e8}, 1000.0);
   est.reset(0.0, 0.1);
@@ -486,9 +509,12 @@ TEST(DynamicsEstimator, FollowsAMeasuredRunUpExactly) {
   EXPECT_EQ(est.fallbackIntervals(), 0);
   // Reference: the sliced model re-anchored at the same readings, dopri5 at rtol 1e-12.
   auto slices = std::make_shared<const SlicedMesh>(
-      std::make_shared<const AntiBacklashMesh>(rig().gears, rig().anti_backlash, rig().mesh_model, rig().mesh_samples), 256);
+      std::make_shared<const AntiBacklashMesh>(rig().gears, rig().anti_backlash, rig().mesh_model,
+                                               rig().mesh_samples),
+      256);
   const GearRotorParameters p = est.model().parameters();
-  GearRotorModel model(p, std::make_shared<const SlicedExcitation>(slices, 1e-6, 0.0, 1.0 / p.pinion_base_radius, 0.0));
+  GearRotorModel model(p, std::make_shared<const SlicedExcitation>(
+                              slices, 1e-6, 0.0, 1.0 / p.pinion_base_radius, 0.0));
   model.setTorqueInput(0.1);
   IntegratorOptions o;
   o.relative_tolerance = 1e-12;
@@ -496,26 +522,38 @@ TEST(DynamicsEstimator, FollowsAMeasuredRunUpExactly) {
   o.max_step = 2e-5;
   // Up to the first reading the nominal phase (1000 rpm from 0) drives it.
   model.setMotionInput(MeshMotion{0.0, 0.0, 20.0 * 1000.0 / 60.0});
-  State6 y = staticEquilibrium(GearRotorModel(p, std::make_shared<RigExcitation>(
-                                   std::make_shared<const AntiBacklashMesh>(rig().gears, rig().anti_backlash,
-                                                                            rig().mesh_model, rig().mesh_samples),
-                                   p, [] { RigExcitationSpec s; s.speed = 1000.0 * kTwoPi / 60.0; s.te_amplitude = 1e-6;
-                                           s.balanced_load = true; s.torque.mean = 0.1; return s; }())), 0.0);
+  State6 y = staticEquilibrium(
+      GearRotorModel(p, std::make_shared<RigExcitation>(std::make_shared<const AntiBacklashMesh>(
+                                                            rig().gears, rig().anti_backlash,
+                                                            rig().mesh_model, rig().mesh_samples),
+                                                        p,
+                                                        [] {
+                                                          RigExcitationSpec s;
+                                                          s.speed = 1000.0 * kTwoPi / 60.0;
+                                                          s.te_amplitude = 1e-6;
+                                                          s.balanced_load = true;
+                                                          s.torque.mean = 0.1;
+                                                          return s;
+                                                        }())),
+      0.0);
   double t = 0.0;
   std::size_t next = 0;
   for (std::size_t r = 0; r <= readings.size(); ++r) {
     const double end = r < readings.size() ? readings[r] : 0.04;
     while (next < online.size() && online[next].t <= end + 1e-12) {
-      y = integrate(model, IntegratorMethod::kDopri5, o, t, y, online[next].t, online[next].t - t, nullptr);
+      y = integrate(model, IntegratorMethod::kDopri5, o, t, y, online[next].t, online[next].t - t,
+                    nullptr);
       t = online[next].t;
-      EXPECT_NEAR(online[next].dynamic_te, y[0] - y[1] + y[2] - 1e-6 * std::sin(kTwoPi * model.motionInput().phaseAt(t)),
+      EXPECT_NEAR(online[next].dynamic_te,
+                  y[0] - y[1] + y[2] - 1e-6 * std::sin(kTwoPi * model.motionInput().phaseAt(t)),
                   1e-8 * 3e-7)
           << "sample " << next;
       ++next;
     }
     if (end > t) y = integrate(model, IntegratorMethod::kDopri5, o, t, y, end, end - t, nullptr);
     t = end;
-    if (r < readings.size()) model.setMotionInput(MeshMotion{end, 20.0 * angle(end) / kTwoPi, 20.0 * speed(end) / kTwoPi});
+    if (r < readings.size())
+      model.setMotionInput(MeshMotion{end, 20.0 * angle(end) / kTwoPi, 20.0 * speed(end) / kTwoPi});
   }
   EXPECT_EQ(next, online.size());
 }
@@ -524,8 +562,8 @@ TEST(DynamicsEstimator, FollowsAMeasuredRunUpExactly) {
 // 10 N m, above the seed rig's knee of 6.95 N m (docs/calibration.md section 5), so the back path
 // lifts. The exact propagation locates each change (the back path's damper clipping at zero as it
 // opens, the gap opening, the landings of the ringing after it) and goes on in the regime the state
-// is in, each linear (sliced_modal_propagator.hpp, FlankState): no dopri5 at all. The samples equal a
-// tight dopri5 run (rtol 1e-12) of the same sliced model through the whole advance to 1e-8 of the
+// is in, each linear (sliced_modal_propagator.hpp, FlankState): no dopri5 at all. The samples equal
+// a tight dopri5 run (rtol 1e-12) of the same sliced model through the whole advance to 1e-8 of the
 // largest TE (1.8e-10 measured; 7.2e-9 while the clipped moments were dopri5's at rtol 1e-8).
 TEST(DynamicsEstimator, FollowsTheMotionThroughAFlankThatLifts) {
   const double f = 20.0 * 1000.0 / 60.0;  // mesh frequency at 1000 rpm, z_p = 20
@@ -542,12 +580,16 @@ TEST(DynamicsEstimator, FollowsTheMotionThroughAFlankThatLifts) {
   ASSERT_NE(est.slicedPropagator(), nullptr);
   EXPECT_GT(est.slicedPropagator()->regimeChanges(), 0) << "the lift was not located";
   EXPECT_EQ(est.fallbackIntervals(), 0) << "a dopri5 stretch: some moment was in no linear regime";
-  std::printf("regime changes %ld, dopri5 stretches %ld\n", est.slicedPropagator()->regimeChanges(), est.fallbackIntervals());
+  std::printf("regime changes %ld, dopri5 stretches %ld\n", est.slicedPropagator()->regimeChanges(),
+              est.fallbackIntervals());
   // Reference: the same sliced model (256 slices) at 10 N m from the state at 5 ms.
   auto slices = std::make_shared<const SlicedMesh>(
-      std::make_shared<const AntiBacklashMesh>(rig().gears, rig().anti_backlash, rig().mesh_model, rig().mesh_samples), 256);
+      std::make_shared<const AntiBacklashMesh>(rig().gears, rig().anti_backlash, rig().mesh_model,
+                                               rig().mesh_samples),
+      256);
   const GearRotorParameters p = est.model().parameters();
-  GearRotorModel model(p, std::make_shared<const SlicedExcitation>(slices, 1e-6, 0.0, 1.0 / p.pinion_base_radius, 0.0));
+  GearRotorModel model(p, std::make_shared<const SlicedExcitation>(
+                              slices, 1e-6, 0.0, 1.0 / p.pinion_base_radius, 0.0));
   model.setTorqueInput(10.0);
   model.setMotionInput(MeshMotion{0.0, 0.0, f});
   IntegratorOptions o;
@@ -566,7 +608,8 @@ TEST(DynamicsEstimator, FollowsTheMotionThroughAFlankThatLifts) {
     lifted |= !s.back_flank_loaded;
   }
   EXPECT_TRUE(lifted) << "the back path never lifted: the test does not test the change";
-  std::printf("worst TE difference against dopri5 at rtol 1e-12: %.3g of the largest TE\n", worst / scale);
+  std::printf("worst TE difference against dopri5 at rtol 1e-12: %.3g of the largest TE\n",
+              worst / scale);
   EXPECT_LT(worst, 1e-8 * scale) << "worst TE difference " << worst << " m of " << scale << " m";
 }
 
@@ -583,7 +626,8 @@ TEST(DynamicsEstimator, BearingChangeWhileRunningBuildsNothingInTheCall) {
   std::vector<DynamicsSample> out;
   est.advanceTo(0.05, [&](const DynamicsSample& s) { out.push_back(s); });
   ASSERT_EQ(out.size(), 40u);
-  for (const DynamicsSample& s : out) EXPECT_TRUE(s.state.allFinite() && s.drive_flank_loaded && s.back_flank_loaded);
+  for (const DynamicsSample& s : out)
+    EXPECT_TRUE(s.state.allFinite() && s.drive_flank_loaded && s.back_flank_loaded);
   // One decomposition per slice crossed, each once.
   EXPECT_LE(est.slicedPropagator()->decompositions(), 300);
   // Stiffer bearings, same torque: the mean mesh force stays T / r_b (17.7 N, seed 000 eq 14).
@@ -621,7 +665,8 @@ TEST(DynamicsEstimator, TheNominalPhaseAfterABearingChangeStreamsIntervalMaps) {
     return te;
   };
   long mapped = 0, crossed = 0, mapped_ref = 0, crossed_ref = 0;
-  const std::vector<double> maps = run(false, 0.1, &mapped, &crossed), ref = run(true, 0.1, &mapped_ref, &crossed_ref);
+  const std::vector<double> maps = run(false, 0.1, &mapped, &crossed),
+                            ref = run(true, 0.1, &mapped_ref, &crossed_ref);
   ASSERT_EQ(maps.size(), ref.size());
   ASSERT_EQ(maps.size(), 70u);
   double largest = 0.0, diff = 0.0;
@@ -630,11 +675,15 @@ TEST(DynamicsEstimator, TheNominalPhaseAfterABearingChangeStreamsIntervalMaps) {
     diff = std::max(diff, std::abs(maps[i] - ref[i]));
   }
   EXPECT_LT(diff, 1e-10 * largest);
-  std::printf("maps: %ld mapped, %ld crossed; one by one: %ld crossed; largest TE difference %.3g of the largest TE\n", mapped,
-              crossed, crossed_ref, diff / largest);
+  std::printf(
+      "maps: %ld mapped, %ld crossed; one by one: %ld crossed; largest TE difference %.3g of the "
+      "largest TE\n",
+      mapped, crossed, crossed_ref, diff / largest);
   EXPECT_EQ(mapped_ref, 0);
-  EXPECT_GE(mapped, 100);               // a tail and a head per input, whole intervals between
-  EXPECT_LT(crossed, crossed_ref / 5);  // the first period's, and the pieces from a stamp to the next boundary
+  EXPECT_GE(mapped, 100);  // a tail and a head per input, whole intervals between
+  EXPECT_LT(
+      crossed,
+      crossed_ref / 5);  // the first period's, and the pieces from a stamp to the next boundary
   // Near the knee the slices are crossed one by one, each with its bound.
   run(false, 5.0, &mapped, &crossed);
   EXPECT_EQ(mapped, 0);
@@ -645,15 +694,17 @@ TEST(DynamicsEstimator, TheNominalPhaseAfterABearingChangeStreamsIntervalMaps) {
   DynamicsEstimator est(rig(), {1.2e8, 1.2e8}, 1000.0);
   est.reset(0.0, 0.1);
   est.advanceTo(0.010, nullptr);
-  est.setDamping(est.damping().mesh, est.damping().bearing);  // onto the sliced model, parameters unchanged
+  est.setDamping(est.damping().mesh,
+                 est.damping().bearing);  // onto the sliced model, parameters unchanged
   const PeriodicExponentialPropagator table(est.model(), 0.0, est.outputInterval(), 1.0, true);
   ASSERT_GT(table.settleGain(), 0.0);
   EXPECT_NEAR(est.slicedPropagator()->loadedSwingGain() / table.settleGain(), 1.0, 0.05);
 }
 
-// The dynamics take up a bearing-stiffness change on a 1 % grid (DynamicsEstimator::bearingGridValue):
-// the grid point nearest in ratio, so within a factor 1.005 either way; a grid point maps to
-// itself; two stiffnesses between the same two midpoints give the same bits.
+// The dynamics take up a bearing-stiffness change on a 1 % grid
+// (DynamicsEstimator::bearingGridValue): the grid point nearest in ratio, so within a factor 1.005
+// either way; a grid point maps to itself; two stiffnesses between the same two midpoints give the
+// same bits.
 TEST(DynamicsEstimator, BearingStiffnessMovesOnAOnePercentGrid) {
   for (double k : {3.7, 1.2e8, 1.2345e8, 1.5e8, 7.77e9, 2.0e11}) {
     const double g = DynamicsEstimator::bearingGridValue(k);
@@ -683,9 +734,11 @@ TEST(DynamicsEstimator, BearingStiffnessMovesOnAOnePercentGrid) {
 // once per value: without the grid every change is a new value, without the kept sets every change
 // decomposes the slices crossed. A second estimator through the same inputs gives the same bits
 // (the kept slices depend on the inputs only: a replay is the live run); that the kept slices
-// propagate as fresh ones do is KeptParameterSetsAreTakenBackAsTheyWere in test_sliced_propagation.cpp.
+// propagate as fresh ones do is KeptParameterSetsAreTakenBackAsTheyWere in
+// test_sliced_propagation.cpp.
 TEST(DynamicsEstimator, ARipplingBearingStiffnessKeepsItsSlices) {
-  const std::array<double, 3> values{1.2e8, 1.2e8 * 1.0201, 1.2e8 * 1.0406};  // two and four grid steps apart
+  const std::array<double, 3> values{1.2e8, 1.2e8 * 1.0201,
+                                     1.2e8 * 1.0406};  // two and four grid steps apart
   auto run = [&](DynamicsEstimator& est) {
     est.reset(0.0, 0.1);
     est.advanceTo(0.01, nullptr);
@@ -693,8 +746,10 @@ TEST(DynamicsEstimator, ARipplingBearingStiffnessKeepsItsSlices) {
     for (int i = 0; i < 200; ++i) {
       const double t = 0.01 + 1e-3 * i;
       est.advanceTo(t, [&](const DynamicsSample& s) { out.push_back(s); });
-      // 0, 1, 2, 1, 0, ... with the estimator's noise: never the same number twice, the same grid value
-      const double k = values[static_cast<std::size_t>(i % 4 == 3 ? 1 : i % 4)] * (1.0 + 1e-4 * std::sin(1.0 + i));
+      // 0, 1, 2, 1, 0, ... with the estimator's noise: never the same number twice, the same grid
+      // value
+      const double k = values[static_cast<std::size_t>(i % 4 == 3 ? 1 : i % 4)] *
+                       (1.0 + 1e-4 * std::sin(1.0 + i));
       est.setBearingStiffness({k, k}, t);
     }
     est.advanceTo(0.21, [&](const DynamicsSample& s) { out.push_back(s); });
@@ -703,13 +758,16 @@ TEST(DynamicsEstimator, ARipplingBearingStiffnessKeepsItsSlices) {
   DynamicsEstimator est(rig(), {1.2e8, 1.2e8}, 1000.0);
   const std::vector<DynamicsSample> first = run(est);
   const SlicedModalPropagator& prop = *est.slicedPropagator();
-  std::printf("%ld slices crossed, %ld decompositions, %ld kept sets taken back, %ld model updates\n",
-              prop.slicesCrossed(), prop.decompositions(), prop.keptSetsReused(), est.rebuilds());
+  std::printf(
+      "%ld slices crossed, %ld decompositions, %ld kept sets taken back, %ld model updates\n",
+      prop.slicesCrossed(), prop.decompositions(), prop.keptSetsReused(), est.rebuilds());
   EXPECT_GE(est.rebuilds(), 150);
   EXPECT_GT(prop.slicesCrossed(), 15000);
-  EXPECT_LE(prop.decompositions(), 3 * 259 + 10) << "the slices of a value met before were decomposed again";
+  EXPECT_LE(prop.decompositions(), 3 * 259 + 10)
+      << "the slices of a value met before were decomposed again";
   EXPECT_GE(prop.keptSetsReused(), 140);
-  for (const DynamicsSample& s : first) ASSERT_TRUE(s.state.allFinite() && s.drive_flank_loaded && s.back_flank_loaded);
+  for (const DynamicsSample& s : first)
+    ASSERT_TRUE(s.state.allFinite() && s.drive_flank_loaded && s.back_flank_loaded);
   DynamicsEstimator again(rig(), {1.2e8, 1.2e8}, 1000.0);
   const std::vector<DynamicsSample> second = run(again);
   ASSERT_EQ(first.size(), second.size());
@@ -744,9 +802,11 @@ TEST(DynamicsEstimator, QuasiStaticFollowsTheMeasuredMotion) {
     const State6& b = nominal[i + 1];  // the nominal run's first call is the start state
     EXPECT_NEAR(a[0], b[0], 1e-9 * std::abs(b[0])) << "x_p at sample " << i;
     EXPECT_NEAR(a[1], b[1], 1e-9 * std::abs(b[1])) << "x_g at sample " << i;
-    EXPECT_NEAR(a[3], b[3], 1e-9 * std::abs(b[0]) * 5e4) << "v_p at sample " << i;  // velocities against x w_n
+    EXPECT_NEAR(a[3], b[3], 1e-9 * std::abs(b[0]) * 5e4)
+        << "v_p at sample " << i;  // velocities against x w_n
     // The mesh deflection: static at both (slicing error of the stiffness, docs/model.md: ~1e-5).
-    EXPECT_NEAR(online[i].dynamic_te, est.model().forces(online[i].t, b).delta, 2e-3 * std::abs(online[i].dynamic_te));
+    EXPECT_NEAR(online[i].dynamic_te, est.model().forces(online[i].t, b).delta,
+                2e-3 * std::abs(online[i].dynamic_te));
   }
   // Standing still: the static equilibrium of the full model at that phase (K y = F, closed form).
   const double t_stop = 0.04, phase = f * t_stop;
@@ -754,12 +814,15 @@ TEST(DynamicsEstimator, QuasiStaticFollowsTheMeasuredMotion) {
   est.followMotion(t_stop, phase, 0.0);
   est.advanceTo(0.5, nullptr);
   auto slices = std::make_shared<const SlicedMesh>(
-      std::make_shared<const AntiBacklashMesh>(rig().gears, rig().anti_backlash, rig().mesh_model, rig().mesh_samples), 256);
+      std::make_shared<const AntiBacklashMesh>(rig().gears, rig().anti_backlash, rig().mesh_model,
+                                               rig().mesh_samples),
+      256);
   const GearRotorParameters p = est.model().parameters();
-  const auto standing = std::make_shared<const SlicedExcitation>(slices, 1e-6, 0.0, 1.0 / p.pinion_base_radius, 0.0,
-                                                                 MeshMotion{0.0, phase, 0.0}, 0.1);
+  const auto standing = std::make_shared<const SlicedExcitation>(
+      slices, 1e-6, 0.0, 1.0 / p.pinion_base_radius, 0.0, MeshMotion{0.0, phase, 0.0}, 0.1);
   const State6 eq = staticEquilibrium(GearRotorModel(p, standing), 0.0);
-  for (int i = 0; i < 3; ++i) EXPECT_NEAR(est.state()[i], eq[i], 1e-9 * eq.head<3>().cwiseAbs().maxCoeff()) << i;
+  for (int i = 0; i < 3; ++i)
+    EXPECT_NEAR(est.state()[i], eq[i], 1e-9 * eq.head<3>().cwiseAbs().maxCoeff()) << i;
   for (int i = 3; i < 6; ++i) EXPECT_NEAR(est.state()[i], 0.0, 1e-9) << i;
 }
 
@@ -793,14 +856,16 @@ TEST(DynamicsEstimator, LinearModalFollowsTheMeasuredMotion) {
     values[i] = steady[i].second;
   }
   const Eigen::Vector3d fit = basis.colPivHouseholderQr().solve(values);
-  const double residual = (basis * fit - values).norm() / std::sqrt(static_cast<double>(steady.size()));
+  const double residual =
+      (basis * fit - values).norm() / std::sqrt(static_cast<double>(steady.size()));
   EXPECT_LT(residual, 1e-6 * std::hypot(fit[0], fit[1])) << "harmonics in a time-invariant model";
   // The mean is the period mean of the composite stiffness k1 + k_c (seed 000 eq 1, both flanks
   // loaded at 0.1 N m), taken here independently of the library's mean (the trapezoid over the
   // table's nodes, AntiBacklashMesh::periodMeans): a midpoint rule of the phase table on each piece
   // between two switching phases, where the table is continuous (linear between its nodes), so
   // the steps are placed exactly and 4096 midpoints per piece leave only the kinks' O(h^2).
-  const AntiBacklashMesh table(rig().gears, rig().anti_backlash, rig().mesh_model, rig().mesh_samples);
+  const AntiBacklashMesh table(rig().gears, rig().anti_backlash, rig().mesh_model,
+                               rig().mesh_samples);
   std::vector<double> cuts{0.0, 1.0};
   for (double s : table.switchingPhases()) cuts.push_back(s - std::floor(s));
   std::sort(cuts.begin(), cuts.end());

@@ -63,7 +63,8 @@ TEST(DynamicsStage, SamplesReachEveryConsumerInOrderOnExactStamps) {
     EXPECT_EQ(f.log[2 * k], "a");
     EXPECT_EQ(f.log[2 * k + 1], "b");
   }
-  // At the nominal phase the state sits on the last sample before the input: that much was integrated.
+  // At the nominal phase the state sits on the last sample before the input: that much was
+  // integrated.
   EXPECT_NEAR(f.counters.simulated_s, 0.010, 1e-12);
   // Already past a stamp: nothing to do.
   EXPECT_FALSE(f.stage.advanceTo(at(1.005), f.sink));
@@ -106,7 +107,9 @@ TEST(TeOutput, EachSampleCarriesTheEncoderAngleAndTheLastResonance) {
   TeOutput out(phase, resonance, counters);
   struct Seen : PipelineSink {
     SampleContext context;
-    void transmissionError(Stamp, const DynamicsSample&, const SampleContext& c) override { context = c; }
+    void transmissionError(Stamp, const DynamicsSample&, const SampleContext& c) override {
+      context = c;
+    }
   } sink;
   out.sample(at(0.01), DynamicsSample{}, 0.0, sink);
   EXPECT_NEAR(sink.context.pinion_angle, 0.2 + 0.1, 1e-12);  // the encoder's angle, no offset

@@ -11,7 +11,8 @@
 using namespace drivetrain_stiffness;
 
 TEST(FrequencySweep, LinearPeaksMatchModalFrequencies) {
-  const RigConfig rig = loadRigFile(std::string(DRIVETRAIN_SOURCE_DIR) + "/config/gearboxes/seed_servo.yaml");
+  const RigConfig rig =
+      loadRigFile(std::string(DRIVETRAIN_SOURCE_DIR) + "/config/gearboxes/seed_servo.yaml");
   SweepSpec spec;
   spec.start = 6000.0;
   spec.stop = 11000.0;
@@ -25,14 +26,17 @@ TEST(FrequencySweep, LinearPeaksMatchModalFrequencies) {
   StiffnessEstimator estimator(rig);
   const StiffnessEstimate& e = estimator.setTorque(rig.dynamics.torque);
   std::array<double, 2> kb{{0.0, 0.0}};
-  for (std::size_t i = 0; i < e.supports.size(); ++i) kb[rig.bearings[i].shaft] += e.supports[i].solution.radialStiffness();
-  const auto modes = modalAnalysis(rigRotorParameters(rig, estimator.mesh(), kb), meanMeshStiffness(estimator.mesh()));
+  for (std::size_t i = 0; i < e.supports.size(); ++i)
+    kb[rig.bearings[i].shaft] += e.supports[i].solution.radialStiffness();
+  const auto modes = modalAnalysis(rigRotorParameters(rig, estimator.mesh(), kb),
+                                   meanMeshStiffness(estimator.mesh()));
   for (int m : {0, 1}) {  // the two transverse modes inside the sweep
     const double f = modes[m].damped_frequency;
     bool found = false;
     for (const auto& coordinate : sweep.peaks)
       for (const SpectralPeak& p : coordinate) found |= std::abs(p.frequency - f) < spec.step;
-    EXPECT_TRUE(found) << "no sweep peak within " << spec.step << " Hz of mode " << m << " at " << f << " Hz";
+    EXPECT_TRUE(found) << "no sweep peak within " << spec.step << " Hz of mode " << m << " at " << f
+                       << " Hz";
   }
 }
 
@@ -41,7 +45,8 @@ TEST(FrequencySweep, LinearPeaksMatchModalFrequencies) {
 // unsettled transients would show here). The nonlinear anti-backlash model keeps both flanks in
 // contact at this amplitude, so it has no jump either.
 TEST(FrequencySweep, UpAndDownAgreeWithoutJumps) {
-  const RigConfig rig = loadRigFile(std::string(DRIVETRAIN_SOURCE_DIR) + "/config/gearboxes/seed_servo.yaml");
+  const RigConfig rig =
+      loadRigFile(std::string(DRIVETRAIN_SOURCE_DIR) + "/config/gearboxes/seed_servo.yaml");
   for (Fidelity fidelity : {Fidelity::kLinearModal, Fidelity::kFull}) {
     SweepSpec spec;
     spec.start = 300.0;
@@ -63,7 +68,8 @@ TEST(FrequencySweep, UpAndDownAgreeWithoutJumps) {
 // f_mesh = z_p n / 60 = 20 * 1000 / 60 = 333.33 Hz (seed 000 Table 1: z_p = 20, 1000 rpm) as its
 // strongest line, within one bin.
 TEST(FrequencySweep, RecordSpectrumShowsMeshFrequency) {
-  const RigConfig rig = loadRigFile(std::string(DRIVETRAIN_SOURCE_DIR) + "/config/gearboxes/seed_servo.yaml");
+  const RigConfig rig =
+      loadRigFile(std::string(DRIVETRAIN_SOURCE_DIR) + "/config/gearboxes/seed_servo.yaml");
   SweepSpec spec;
   spec.start = 600.0;
   spec.stop = 1200.0;
@@ -71,7 +77,8 @@ TEST(FrequencySweep, RecordSpectrumShowsMeshFrequency) {
   spec.fidelity = Fidelity::kLinearModal;
   const SweepOutput sweep = torqueSweep(rig, spec);
   ASSERT_FALSE(sweep.spectrum_peaks[2].empty());
-  EXPECT_NEAR(sweep.spectrum_peaks[2][0].frequency, 20.0 * 1000.0 / 60.0, sweep.spectrum_resolution);
+  EXPECT_NEAR(sweep.spectrum_peaks[2][0].frequency, 20.0 * 1000.0 / 60.0,
+              sweep.spectrum_resolution);
 }
 
 // A stepped sweep must not kick the system at each step: retuning keeps the torque and its sign of
@@ -89,13 +96,15 @@ TEST(FrequencySweep, RetuneKeepsTorqueContinuous) {
       EXPECT_NEAR(next.at(t), torque.at(t), 1e-12) << t << " " << f_new;
       EXPECT_EQ(next.frequency, f_new);
       const double h = 1e-7;  // the new sine continues in the same direction
-      EXPECT_GT((next.at(t + h) - next.at(t)) * (torque.at(t) - torque.at(t - h)), 0.0) << t << " " << f_new;
+      EXPECT_GT((next.at(t + h) - next.at(t)) * (torque.at(t) - torque.at(t - h)), 0.0)
+          << t << " " << f_new;
     }
   }
 }
 
 TEST(FrequencySweep, RejectsBadRanges) {
-  const RigConfig rig = loadRigFile(std::string(DRIVETRAIN_SOURCE_DIR) + "/config/gearboxes/seed_servo.yaml");
+  const RigConfig rig =
+      loadRigFile(std::string(DRIVETRAIN_SOURCE_DIR) + "/config/gearboxes/seed_servo.yaml");
   SweepSpec spec;
   spec.stop = 10.0;  // below start
   EXPECT_THROW(torqueSweep(rig, spec), InvalidInput);
@@ -107,7 +116,8 @@ TEST(FrequencySweep, RejectsBadRanges) {
 // --direction reads the enum's one name table (core/enum_names.hpp): names round-trip, and a
 // refusal names the field, the text and every accepted name.
 TEST(FrequencySweep, DirectionNamesRoundTrip) {
-  for (const SweepDirection d : {SweepDirection::kUp, SweepDirection::kDown, SweepDirection::kBoth}) {
+  for (const SweepDirection d :
+       {SweepDirection::kUp, SweepDirection::kDown, SweepDirection::kBoth}) {
     EXPECT_EQ(parseSweepDirection("--direction", toString(d)), d);
   }
   EXPECT_STREQ(toString(SweepDirection::kBoth), "both");
@@ -128,8 +138,9 @@ TEST(FrequencySweep, GridPointsComeFromTheirIndex) {
   const std::vector<double> hz = frequencyGrid("f", 6000, 11000, 250);
   ASSERT_EQ(hz.size(), 21u);
   EXPECT_EQ(hz.back(), 11000.0);
-  EXPECT_EQ(frequencyGrid("f", 60, 3000, 60).size(), 50u);  // seed 000 section 4.2: 60 Hz to 3 kHz in 60 Hz steps
-  EXPECT_EQ(frequencyGrid("f", 1, 1.9, 0.5).size(), 2u);   // stop between points: not reached
+  EXPECT_EQ(frequencyGrid("f", 60, 3000, 60).size(),
+            50u);  // seed 000 section 4.2: 60 Hz to 3 kHz in 60 Hz steps
+  EXPECT_EQ(frequencyGrid("f", 1, 1.9, 0.5).size(), 2u);  // stop between points: not reached
   EXPECT_THROW(frequencyGrid("f", 1, 2, 0.0), InvalidInput);
   EXPECT_THROW(frequencyGrid("f", 2, 1, 0.1), InvalidInput);
 }

@@ -8,12 +8,14 @@ using namespace drivetrain_stiffness;
 
 namespace {
 // Textbook transverse contact ratio of external spur gears (Niemann & Winter, Maschinenelemente II;
-// Shigley): eps = [sqrt(ra1^2 - rb1^2) + sqrt(ra2^2 - rb2^2) - a_w sin(alpha_w)] / (pi m cos(alpha)).
+// Shigley): eps = [sqrt(ra1^2 - rb1^2) + sqrt(ra2^2 - rb2^2) - a_w sin(alpha_w)] / (pi m
+// cos(alpha)).
 double textbookContactRatio(const SpurGearGeometry& g) {
   const double m = g.spec().module, a = g.spec().pressure_angle;
   return (std::sqrt(g.tipRadius(0) * g.tipRadius(0) - g.baseRadius(0) * g.baseRadius(0)) +
           std::sqrt(g.tipRadius(1) * g.tipRadius(1) - g.baseRadius(1) * g.baseRadius(1)) -
-          g.centerDistance() * std::sin(g.operatingPressureAngle())) / (M_PI * m * std::cos(a));
+          g.centerDistance() * std::sin(g.operatingPressureAngle())) /
+         (M_PI * m * std::cos(a));
 }
 }  // namespace
 
@@ -21,17 +23,18 @@ TEST(GearGeometry, SeedPairRadiiAndContactRatio) {
   const SpurGearGeometry g(test::seedPair());
   EXPECT_NEAR(g.referenceRadius(0), 6e-3, 1e-15);
   EXPECT_NEAR(g.baseRadius(0), 6e-3 * std::cos(20.0 * M_PI / 180), 1e-15);
-  EXPECT_NEAR(g.tipRadius(0), 6.6e-3, 1e-15);         // r + m h_a
+  EXPECT_NEAR(g.tipRadius(0), 6.6e-3, 1e-15);            // r + m h_a
   EXPECT_NEAR(g.rootRadius(1), 12e-3 - 0.75e-3, 1e-15);  // r - 1.25 m
   EXPECT_NEAR(g.centerDistance(), 18e-3, 1e-15);
   EXPECT_NEAR(g.contactRatio(), textbookContactRatio(g), 1e-12);
-  EXPECT_NEAR(g.contactRatio(), 1.635, 0.001);  // 20/40, 20 deg, full depth: 1.635 (textbook formula, evaluated by hand)
+  EXPECT_NEAR(g.contactRatio(), 1.635,
+              0.001);  // 20/40, 20 deg, full depth: 1.635 (textbook formula, evaluated by hand)
   EXPECT_NEAR(g.backlash(), 0.0, 1e-15);
   EXPECT_NEAR(g.backFlankPhaseOffset(), 0.5, 1e-12);  // unshifted teeth: thickness = half the pitch
 }
 
-// Shifted gears in a tight mesh: inv(alpha_w) = inv(alpha) + 2 tan(alpha)(x1+x2)/(z1+z2) must close the
-// backlash exactly (tooth thicknesses on the operating circle add up to the pitch).
+// Shifted gears in a tight mesh: inv(alpha_w) = inv(alpha) + 2 tan(alpha)(x1+x2)/(z1+z2) must close
+// the backlash exactly (tooth thicknesses on the operating circle add up to the pitch).
 TEST(GearGeometry, ProfileShiftTightMeshHasNoBacklash) {
   GearPairSpec s = test::seedPair();
   s.teeth = {14, 33};
@@ -85,11 +88,24 @@ TEST(GearGeometry, RejectsImpossibleGearsNamingTheField) {
     }
   };
   GearPairSpec s = test::seedPair();
-  s.teeth = {12, 40};                      expectMessage(s, "gears.teeth[0] = 12 with gears.profile_shift[0] = 0: undercut");
-  s.profile_shift = {0.3, 0.0};            EXPECT_NO_THROW(SpurGearGeometry{s});  // 1 - 12 sin^2(20)/2 = 0.298
-  s = test::seedPair(); s.center_distance = 17.9e-3;  expectMessage(s, "gears.center_distance = 0.0179");
-  s = test::seedPair(); s.center_distance = 18.6e-3;  expectMessage(s, "contact ratio");
-  s = test::seedPair(); s.module = NAN;    expectMessage(s, "gears.module = nan");
-  s = test::seedPair(); s.teeth = {10, 40}; s.profile_shift = {1.2, 0.0};  expectMessage(s, "pointed teeth");
-  s = test::seedPair(); s.pressure_angle = 50 * M_PI / 180;  expectMessage(s, "gears.pressure_angle_deg = 50");
+  s.teeth = {12, 40};
+  expectMessage(s, "gears.teeth[0] = 12 with gears.profile_shift[0] = 0: undercut");
+  s.profile_shift = {0.3, 0.0};
+  EXPECT_NO_THROW(SpurGearGeometry{s});  // 1 - 12 sin^2(20)/2 = 0.298
+  s = test::seedPair();
+  s.center_distance = 17.9e-3;
+  expectMessage(s, "gears.center_distance = 0.0179");
+  s = test::seedPair();
+  s.center_distance = 18.6e-3;
+  expectMessage(s, "contact ratio");
+  s = test::seedPair();
+  s.module = NAN;
+  expectMessage(s, "gears.module = nan");
+  s = test::seedPair();
+  s.teeth = {10, 40};
+  s.profile_shift = {1.2, 0.0};
+  expectMessage(s, "pointed teeth");
+  s = test::seedPair();
+  s.pressure_angle = 50 * M_PI / 180;
+  expectMessage(s, "gears.pressure_angle_deg = 50");
 }

@@ -45,9 +45,11 @@ GearRotorModel linearModel(const MeshInstant& m, double mesh_damping = 0.0) {
 }
 
 // Generalised eigenproblem K v = w^2 M v of docs/model.md.
-Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::Matrix3d> modes(const GearRotorModel& model, double ks) {
+Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::Matrix3d> modes(const GearRotorModel& model,
+                                                                double ks) {
   const GearRotorParameters& p = model.parameters();
-  Eigen::Matrix3d m = Eigen::Vector3d(p.pinion_mass, p.gear_mass, model.equivalentMass()).asDiagonal();
+  Eigen::Matrix3d m =
+      Eigen::Vector3d(p.pinion_mass, p.gear_mass, model.equivalentMass()).asDiagonal();
   Eigen::Matrix3d k;
   k << p.bearing_stiffness[0] + ks, -ks, ks, -ks, p.bearing_stiffness[1] + ks, -ks, ks, -ks, ks;
   return Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::Matrix3d>(k, m);
@@ -55,11 +57,13 @@ Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::Matrix3d> modes(const GearRotorM
 }  // namespace
 
 TEST(DynamicsModel, EquivalentMassOfSeedTable1) {
-  // 1/m_s = r_p^2/I_p + r_g^2/I_g = 617.3 + 492.8 kg^-1 (seed 000 eq 14 with Table 1): m_s = 0.901 g.
+  // 1/m_s = r_p^2/I_p + r_g^2/I_g = 617.3 + 492.8 kg^-1 (seed 000 eq 14 with Table 1): m_s = 0.901
+  // g.
   EXPECT_NEAR(seedParameters().equivalentMass(), 0.901e-3, 0.001e-3);
 }
 
-// dE/dt equals the power of the external drive force on x (docs/model.md "Energy"), at random states.
+// dE/dt equals the power of the external drive force on x (docs/model.md "Energy"), at random
+// states.
 TEST(DynamicsModel, EnergyRateIsPowerOfExternalForces) {
   MeshInstant m = linearMesh();
   m.drive_force = 17.7;
@@ -72,15 +76,17 @@ TEST(DynamicsModel, EnergyRateIsPowerOfExternalForces) {
     State6 f;
     model.rhs(0.0, y, f);
     const double eps = 1e-9;
-    const double rate = (model.energy(0.0, y + eps * f) - model.energy(0.0, y - eps * f)) / (2 * eps);
+    const double rate =
+        (model.energy(0.0, y + eps * f) - model.energy(0.0, y - eps * f)) / (2 * eps);
     EXPECT_NEAR(rate, m.drive_force * y[5], 1e-6 * std::abs(m.drive_force * y[5]) + 1e-12);
   }
 }
 
 // Undamped, unforced, constant stiffness: the trapezoidal rule conserves the quadratic energy of a
-// linear system exactly (to round-off) over 1e6 steps. RK4 does not: started in one mode, its energy
-// after N steps is |R(i w h)|^(2N) E0 with R(z) = 1 + z + z^2/2 + z^3/6 + z^4/24, the method's
-// stability function (Hairer & Wanner, Solving ODEs II, sec. IV.2) - a closed form for the drift.
+// linear system exactly (to round-off) over 1e6 steps. RK4 does not: started in one mode, its
+// energy after N steps is |R(i w h)|^(2N) E0 with R(z) = 1 + z + z^2/2 + z^3/6 + z^4/24, the
+// method's stability function (Hairer & Wanner, Solving ODEs II, sec. IV.2) - a closed form for the
+// drift.
 TEST(DynamicsModel, EnergyConservation) {
   const MeshInstant m = linearMesh();
   const GearRotorModel model = linearModel(m);
@@ -91,17 +97,20 @@ TEST(DynamicsModel, EnergyConservation) {
   const double e0 = model.energy(0.0, y0);
   IntegratorOptions o;
   o.step = 2 * M_PI / w_max / 20;
-  const State6 yt = integrate(model, IntegratorMethod::kTrapezoidal, o, 0.0, y0, 1e6 * o.step, 1e6 * o.step, nullptr);
+  const State6 yt = integrate(model, IntegratorMethod::kTrapezoidal, o, 0.0, y0, 1e6 * o.step,
+                              1e6 * o.step, nullptr);
   EXPECT_NEAR(model.energy(1e6 * o.step, yt) / e0, 1.0, 1e-9);
 
   State6 mode = State6::Zero();
   mode.head<3>() = es.eigenvectors().col(2).normalized() * 1e-6;
   const long n = 100000;
-  const State6 yr = integrate(model, IntegratorMethod::kRk4, o, 0.0, mode, n * o.step, n * o.step, nullptr);
+  const State6 yr =
+      integrate(model, IntegratorMethod::kRk4, o, 0.0, mode, n * o.step, n * o.step, nullptr);
   const std::complex<double> z(0.0, w_max * o.step);
   const double r = std::abs(1.0 + z + z * z / 2.0 + z * z * z / 6.0 + z * z * z * z / 24.0);
   EXPECT_NEAR(model.energy(n * o.step, yr) / model.energy(0.0, mode), std::pow(r, 2.0 * n), 1e-6);
-  EXPECT_LT(std::pow(r, 2.0 * n), 0.5);  // and the drift is large: 20 steps per period is too coarse for RK4 here
+  EXPECT_LT(std::pow(r, 2.0 * n),
+            0.5);  // and the drift is large: 20 steps per period is too coarse for RK4 here
 }
 
 // Linear limit: an initial displacement along mode i oscillates as v_i cos(w_i t).
@@ -119,9 +128,11 @@ TEST(DynamicsModel, LinearLimitMatchesModalSolution) {
     y0.head<3>() = v;
     const double t_end = 5 * 2 * M_PI / w;
     double worst = 0.0;
-    integrate(model, IntegratorMethod::kDopri5, o, 0.0, y0, t_end, t_end / 200, [&](double t, const State6& y) {
-      worst = std::max(worst, (y.head<3>() - v * std::cos(w * t)).cwiseAbs().maxCoeff() / 1e-6);
-    });
+    integrate(model, IntegratorMethod::kDopri5, o, 0.0, y0, t_end, t_end / 200,
+              [&](double t, const State6& y) {
+                worst = std::max(worst,
+                                 (y.head<3>() - v * std::cos(w * t)).cwiseAbs().maxCoeff() / 1e-6);
+              });
     EXPECT_LT(worst, 1e-7) << "mode " << i << " at " << w / (2 * M_PI) << " Hz";
   }
   // Frequencies (docs/model.md): the torsional mode near 60 kHz for k_s = 1.29e8 N/m.
@@ -138,7 +149,8 @@ TEST(DynamicsModel, OrdersOfConvergence) {
   IntegratorOptions ref;
   ref.relative_tolerance = 1e-13;
   ref.absolute_tolerance = 1e-20;
-  const State6 exact = integrate(model, IntegratorMethod::kDopri5, ref, 0.0, y0, t_end, t_end, nullptr);
+  const State6 exact =
+      integrate(model, IntegratorMethod::kDopri5, ref, 0.0, y0, t_end, t_end, nullptr);
   auto error = [&](IntegratorMethod method, double step) {
     IntegratorOptions o;
     o.step = step;
@@ -146,9 +158,14 @@ TEST(DynamicsModel, OrdersOfConvergence) {
     o.relative_tolerance = 1e10;  // dopri5 with every step accepted: a fixed-step order test
     o.absolute_tolerance = 1e10;
     o.locate_events = false;
-    return (integrate(model, method, o, 0.0, y0, t_end, t_end, nullptr) - exact).head<3>().cwiseAbs().maxCoeff();
+    return (integrate(model, method, o, 0.0, y0, t_end, t_end, nullptr) - exact)
+        .head<3>()
+        .cwiseAbs()
+        .maxCoeff();
   };
-  auto order = [&](IntegratorMethod method, double step) { return std::log2(error(method, step) / error(method, step / 2)); };
+  auto order = [&](IntegratorMethod method, double step) {
+    return std::log2(error(method, step) / error(method, step / 2));
+  };
   EXPECT_NEAR(order(IntegratorMethod::kRk4, h), 4.0, 0.3);
   EXPECT_NEAR(order(IntegratorMethod::kTrapezoidal, h), 2.0, 0.2);
   EXPECT_NEAR(order(IntegratorMethod::kDopri5, 4 * h), 5.0, 0.6);
@@ -171,13 +188,14 @@ TEST(DynamicsModel, EventLocationOnClearanceOscillator) {
     o.relative_tolerance = 1e-10;
     o.absolute_tolerance = 1e-17;
     o.locate_events = events;
-    return integrate(model, IntegratorMethod::kDopri5, o, 0.0, y0, 10 * period, 10 * period, nullptr, st)[0];
+    return integrate(model, IntegratorMethod::kDopri5, o, 0.0, y0, 10 * period, 10 * period,
+                     nullptr, st)[0];
   };
   IntegrationStats with, without;
   const double x_events = positionAfter(true, &with);
   const double x_plain = positionAfter(false, &without);
   EXPECT_NEAR(x_events, u + a, 1e-6 * a);  // back at the release point after 10 periods
-  EXPECT_GE(with.events, 40);               // 4 contact changes per period
+  EXPECT_GE(with.events, 40);              // 4 contact changes per period
   EXPECT_LT(std::abs(x_events - (u + a)), std::abs(x_plain - (u + a)) + 1e-12);
 }
 
@@ -197,8 +215,9 @@ TEST(DynamicsModel, StabilityLimits) {
   }
   o.step = 1e-4;  // seed 000's fixed step: 38 rad per step of the 60 kHz mode
   double worst = 0.0;
-  const State6 y = integrate(model, IntegratorMethod::kTrapezoidal, o, 0.0, State6::Zero(), 0.1, 1e-4,
-                             [&](double, const State6& s) { worst = std::max(worst, std::abs(s[2] + s[0] - s[1])); });
+  const State6 y = integrate(
+      model, IntegratorMethod::kTrapezoidal, o, 0.0, State6::Zero(), 0.1, 1e-4,
+      [&](double, const State6& s) { worst = std::max(worst, std::abs(s[2] + s[0] - s[1])); });
   EXPECT_TRUE(y.allFinite());
   // A-stable, so bounded: never beyond the undamped step response's 2x static deflection. It is not
   // L-stable, so the unresolved 60 kHz transient is not damped numerically (docs/model.md).
@@ -210,13 +229,17 @@ TEST(DynamicsModel, DeterministicAndValidated) {
   m.drive_force = 17.7;
   const GearRotorModel model = linearModel(m, 3.0);
   IntegratorOptions o;
-  const State6 a = integrate(model, IntegratorMethod::kDopri5, o, 0.0, State6::Zero(), 1e-3, 1e-3, nullptr);
-  const State6 b = integrate(model, IntegratorMethod::kDopri5, o, 0.0, State6::Zero(), 1e-3, 1e-3, nullptr);
+  const State6 a =
+      integrate(model, IntegratorMethod::kDopri5, o, 0.0, State6::Zero(), 1e-3, 1e-3, nullptr);
+  const State6 b =
+      integrate(model, IntegratorMethod::kDopri5, o, 0.0, State6::Zero(), 1e-3, 1e-3, nullptr);
   EXPECT_EQ(a, b);
-  EXPECT_THROW(integrate(model, IntegratorMethod::kRk4, o, 1.0, State6::Zero(), 0.5, 0.1, nullptr), InvalidInput);
+  EXPECT_THROW(integrate(model, IntegratorMethod::kRk4, o, 1.0, State6::Zero(), 0.5, 0.1, nullptr),
+               InvalidInput);
   State6 bad = State6::Zero();
   bad[3] = NAN;
-  EXPECT_THROW(integrate(model, IntegratorMethod::kRk4, o, 0.0, bad, 1e-3, 1e-3, nullptr), InvalidInput);
+  EXPECT_THROW(integrate(model, IntegratorMethod::kRk4, o, 0.0, bad, 1e-3, 1e-3, nullptr),
+               InvalidInput);
   GearRotorParameters p = seedParameters();
   p.pinion_mass = -1.0;
   EXPECT_THROW(GearRotorModel(p, std::make_shared<ConstantExcitation>(m)), InvalidInput);

@@ -38,7 +38,8 @@ TEST(HertzContact, ExactEllipticitySatisfiesDefiningRelation) {
     const double k = p.ellipticity;
     const double m = std::sqrt(1.0 - 1.0 / (k * k));
     const double first = std::comp_ellint_1(m), second = std::comp_ellint_2(m);
-    EXPECT_NEAR(((k * k + 1.0) * second - 2.0 * first) / ((k * k - 1.0) * second), f_rho, 1e-10) << f_rho;
+    EXPECT_NEAR(((k * k + 1.0) * second - 2.0 * first) / ((k * k - 1.0) * second), f_rho, 1e-10)
+        << f_rho;
     EXPECT_NEAR(p.elliptic_first, first, 1e-12);
     EXPECT_NEAR(p.elliptic_second, second, 1e-12);
   }
@@ -55,23 +56,29 @@ TEST(HertzContact, HamrockDowsonFitsWithinThreePercentOfExactInBearingRange) {
     const double rx = 5e-3, ry = ratio * rx;
     const HertzPointContact exact(rx, ry, e_prime, EllipticityMethod::kExact);
     const HertzPointContact fit(rx, ry, e_prime, EllipticityMethod::kHamrockDowson);
-    EXPECT_NEAR(fit.ellipticity().ellipticity / exact.ellipticity().ellipticity, 1.0, 0.03) << ratio;
+    EXPECT_NEAR(fit.ellipticity().ellipticity / exact.ellipticity().ellipticity, 1.0, 0.03)
+        << ratio;
     EXPECT_NEAR(fit.loadDeflectionConstant() / exact.loadDeflectionConstant(), 1.0, 0.03) << ratio;
   }
 }
 
 // Harris's steel form K = 2.15e5 sum_rho^(-1/2) delta*^(-3/2) N/mm^1.5 with
 // delta* = (2F/pi) (pi / (2 k^2 E))^(1/3) (Harris & Kotzalas, Rolling Bearing Analysis 5th ed.,
-// Essential Concepts, contact stress and deformation chapter). The constant corresponds to E = 2.075e5 N/mm^2, nu = 0.3 for both
-// bodies (bearing.md section 3; (2.79e-4)^-1.5 = 2.146e5). Exact to the 3 digits printed.
+// Essential Concepts, contact stress and deformation chapter). The constant corresponds to E
+// = 2.075e5 N/mm^2, nu = 0.3 for both bodies (bearing.md section 3; (2.79e-4)^-1.5 = 2.146e5).
+// Exact to the 3 digits printed.
 TEST(HertzContact, MatchesHarrisSteelConstant) {
-  const double rx = 5.109e-3, ry = 165.1e-3;  // 209 bearing inner contact, bearing.md / helper arithmetic
-  const HertzPointContact c(rx, ry, reducedModulus(2.075e11, 0.3, 2.075e11, 0.3), EllipticityMethod::kExact);
+  const double rx = 5.109e-3,
+               ry = 165.1e-3;  // 209 bearing inner contact, bearing.md / helper arithmetic
+  const HertzPointContact c(rx, ry, reducedModulus(2.075e11, 0.3, 2.075e11, 0.3),
+                            EllipticityMethod::kExact);
   const auto& p = c.ellipticity();
-  const double delta_star = 2.0 * p.elliptic_first / kPi *
-                            std::cbrt(kPi / (2.0 * p.ellipticity * p.ellipticity * p.elliptic_second));
+  const double delta_star =
+      2.0 * p.elliptic_first / kPi *
+      std::cbrt(kPi / (2.0 * p.ellipticity * p.ellipticity * p.elliptic_second));
   const double sum_rho_per_mm = (1.0 / rx + 1.0 / ry) * 1e-3;
-  const double k_harris = 2.15e5 * std::pow(sum_rho_per_mm, -0.5) * std::pow(delta_star, -1.5);  // N/mm^1.5
+  const double k_harris =
+      2.15e5 * std::pow(sum_rho_per_mm, -0.5) * std::pow(delta_star, -1.5);  // N/mm^1.5
   EXPECT_NEAR(c.loadDeflectionConstant() / (k_harris * std::pow(1000.0, 1.5)), 1.0, 0.003);
 }
 
@@ -84,11 +91,13 @@ TEST(HertzContact, SeedEquationSevenIsTheSeriesCombination) {
   const HertzPointContact out(7.591e-3, 165.1e-3, e_prime, EllipticityMethod::kExact);
   auto term = [](const HertzPointContact& c) {
     const auto& p = c.ellipticity();
-    const double ds = 2.0 * p.elliptic_first / kPi * std::cbrt(kPi / (2.0 * p.ellipticity * p.ellipticity * p.elliptic_second));
+    const double ds = 2.0 * p.elliptic_first / kPi *
+                      std::cbrt(kPi / (2.0 * p.ellipticity * p.ellipticity * p.elliptic_second));
     return ds * std::cbrt((1.0 / c.rx() + 1.0 / c.ry()) * 1e-3);
   };
   const double kn_seed = 2.1343e5 * std::pow(term(in) + term(out), -1.5) * std::pow(1000.0, 1.5);
-  const double kn = combinedLoadDeflectionConstant(in.loadDeflectionConstant(), out.loadDeflectionConstant());
+  const double kn =
+      combinedLoadDeflectionConstant(in.loadDeflectionConstant(), out.loadDeflectionConstant());
   EXPECT_NEAR(kn / kn_seed, 1.0, 0.002);
 }
 

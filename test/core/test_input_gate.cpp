@@ -54,10 +54,13 @@ TEST(InputGate, TheFrameRuleIgnoresALeadingSlash) {
   EXPECT_FALSE(f.gate.isWrongFrame("/rig"));
   EXPECT_TRUE(f.gate.isWrongFrame("base_link"));
   EXPECT_TRUE(f.gate.isWrongFrame(""));
-  EXPECT_EQ(f.gate.checkFrame(at(1.0), InputOrigin{"pub", 0, "base_link"}), InputOutcome::kWrongFrame);
+  EXPECT_EQ(f.gate.checkFrame(at(1.0), InputOrigin{"pub", 0, "base_link"}),
+            InputOutcome::kWrongFrame);
   EXPECT_EQ(f.counters.wrong_frames, 1u);
   EXPECT_EQ(f.counters.rejected_torque, 1u);
-  EXPECT_EQ(f.gate.refusals().entry(InputStream::kTorque, InputOutcome::kWrongFrame).found.at(0).value, "base_link");
+  EXPECT_EQ(
+      f.gate.refusals().entry(InputStream::kTorque, InputOutcome::kWrongFrame).found.at(0).value,
+      "base_link");
   PipelineOptions any;
   PipelineCounters counters;
   EXPECT_FALSE(InputGate(any, counters).isWrongFrame("anything"));
@@ -72,7 +75,8 @@ TEST(InputGate, EachStreamKeepsItsOwnStamps) {
   EXPECT_EQ(f.gate.checkStamp(InputStream::kTorque, at(9.5)), InputOutcome::kOutOfOrder);
   EXPECT_EQ(f.gate.checkStamp(InputStream::kPreload, at(9.5)), InputOutcome::kAccepted);
   EXPECT_FALSE(f.gate.noteSourceRestart(InputStream::kTorque, at(9.5)));
-  const std::optional<std::string> restart = f.gate.noteSourceRestart(InputStream::kTorque, at(5.0));
+  const std::optional<std::string> restart =
+      f.gate.noteSourceRestart(InputStream::kTorque, at(5.0));
   ASSERT_TRUE(restart);
   EXPECT_NE(restart->find("torque stamp went back by 5"), std::string::npos) << *restart;
   EXPECT_EQ(f.counters.stamp_resets, 1u);
@@ -82,12 +86,14 @@ TEST(InputGate, EachStreamKeepsItsOwnStamps) {
 
 TEST(InputGate, ARefusalIsCountedByStreamAndReasonWithWhy) {
   Fixture f;
-  EXPECT_EQ(f.gate.reject(InputOutcome::kInvalidValue, InputStream::kJointStates, at(1.0), "no pinion joint", "a,b"),
+  EXPECT_EQ(f.gate.reject(InputOutcome::kInvalidValue, InputStream::kJointStates, at(1.0),
+                          "no pinion joint", "a,b"),
             InputOutcome::kInvalidValue);
   EXPECT_EQ(f.counters.rejected_motion, 1u);
   EXPECT_EQ(f.counters.invalid_values, 1u);
   EXPECT_EQ(f.counters.last_event, "joint_states rejected (invalid value): no pinion joint");
-  const RefusalTally::Entry& e = f.gate.refusals().entry(InputStream::kJointStates, InputOutcome::kInvalidValue);
+  const RefusalTally::Entry& e =
+      f.gate.refusals().entry(InputStream::kJointStates, InputOutcome::kInvalidValue);
   EXPECT_EQ(e.count, 1u);
   EXPECT_EQ(e.first_reason, "no pinion joint");
   f.gate.reject(InputOutcome::kOutOfOrder, InputStream::kPreload, at(1.0), "late");
@@ -97,7 +103,8 @@ TEST(InputGate, ARefusalIsCountedByStreamAndReasonWithWhy) {
 
 TEST(InputGate, DropsAreCountedFromTheSequenceNumbers) {
   Fixture f;
-  for (std::uint32_t seq : {1u, 2u, 5u}) f.gate.countDrops(InputStream::kPreload, InputOrigin{"pub", seq, ""});
+  for (std::uint32_t seq : {1u, 2u, 5u})
+    f.gate.countDrops(InputStream::kPreload, InputOrigin{"pub", seq, ""});
   EXPECT_EQ(f.counters.dropped_preload, 2u);
   EXPECT_EQ(f.counters.dropped_torque, 0u);
   f.gate.countDrops(InputStream::kTorque, InputOrigin{"quiet", 0, ""});
@@ -121,8 +128,10 @@ TEST(InputGate, TheClockJumpRuleAndASourceRestartThatCameFirst) {
 }
 
 TEST(InputGate, TheReadingsValueRules) {
-  EXPECT_THROW(InputGate::validateReading(MotionInput{std::nan(""), std::nullopt, std::nullopt}), InvalidInput);
-  EXPECT_THROW(InputGate::validateReading(MotionInput{0.0, 2e4, std::nullopt}), InvalidInput);  // beyond 1e5 rpm
+  EXPECT_THROW(InputGate::validateReading(MotionInput{std::nan(""), std::nullopt, std::nullopt}),
+               InvalidInput);
+  EXPECT_THROW(InputGate::validateReading(MotionInput{0.0, 2e4, std::nullopt}),
+               InvalidInput);  // beyond 1e5 rpm
   EXPECT_THROW(InputGate::validateReading(MotionInput{0.0, 10.0, INFINITY}), InvalidInput);
   EXPECT_NO_THROW(InputGate::validateReading(MotionInput{1e9, -1e4, 3.0}));
 }

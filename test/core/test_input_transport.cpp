@@ -24,7 +24,9 @@ Stamp at(double seconds) { return Stamp{kEpoch + std::llround(seconds * 1e9)}; }
 struct Counting : PipelineSink {
   int stiffness_out = 0;
   std::vector<std::pair<Stamp, double>> te;  // stamp, dynamic TE
-  void stiffness(Stamp, const StiffnessEstimate&, const CalibrationBands&) override { ++stiffness_out; }
+  void stiffness(Stamp, const StiffnessEstimate&, const CalibrationBands&) override {
+    ++stiffness_out;
+  }
   void transmissionError(Stamp stamp, const DynamicsSample& s, const SampleContext&) override {
     ASSERT_TRUE(std::isfinite(s.dynamic_te));
     te.emplace_back(stamp, s.dynamic_te);
@@ -37,7 +39,7 @@ TEST(SequenceGaps, CountsWhatANumberingPublisherLost) {
   SequenceGaps gaps;
   EXPECT_EQ(gaps.observe("/rig", 10), 0u);  // first message: nothing known before it
   EXPECT_EQ(gaps.observe("/rig", 11), 0u);
-  EXPECT_EQ(gaps.observe("/rig", 15), 3u);  // 12, 13, 14 never arrived
+  EXPECT_EQ(gaps.observe("/rig", 15), 3u);   // 12, 13, 14 never arrived
   EXPECT_EQ(gaps.observe("/other", 0), 0u);  // another publisher numbers on its own
   EXPECT_EQ(gaps.observe("/other", 2), 1u);
   EXPECT_EQ(gaps.observe("/rig", 16), 0u);
@@ -60,7 +62,8 @@ TEST(SequenceGaps, WrapsRestartsAndUnnumberedPublishers) {
 
 TEST(SequenceGaps, PublisherTableIsBounded) {
   SequenceGaps gaps;
-  for (std::size_t i = 0; i < SequenceGaps::kMaxPublishers + 10; ++i) gaps.observe("/p" + std::to_string(i), 0);
+  for (std::size_t i = 0; i < SequenceGaps::kMaxPublishers + 10; ++i)
+    gaps.observe("/p" + std::to_string(i), 0);
   EXPECT_EQ(gaps.untracked(), 10u);
 }
 
@@ -88,12 +91,14 @@ TEST(RigPipeline, TorqueInAnotherFrameIsRefused) {
   RigPipeline p(rig(), o);
   Counting sink;
   EXPECT_EQ(p.torque(at(0.0), 0.1, sink, {"/rig", 0, "pinion"}), InputOutcome::kAccepted);
-  EXPECT_EQ(p.torque(at(0.001), 0.1, sink, {"/rig", 1, "/pinion"}), InputOutcome::kAccepted);  // tf2 strips the '/'
+  EXPECT_EQ(p.torque(at(0.001), 0.1, sink, {"/rig", 1, "/pinion"}),
+            InputOutcome::kAccepted);  // tf2 strips the '/'
   EXPECT_EQ(p.torque(at(0.002), -0.1, sink, {"/rig", 2, "gear"}), InputOutcome::kWrongFrame);
   EXPECT_EQ(p.torque(at(0.003), 0.1, sink, {"/rig", 3, ""}), InputOutcome::kWrongFrame);
   EXPECT_EQ(p.counters().wrong_frames, 2u);
   EXPECT_EQ(p.counters().rejected_torque, 2u);
-  EXPECT_NE(p.counters().last_event.find("header.frame_id = ''"), std::string::npos) << p.counters().last_event;
+  EXPECT_NE(p.counters().last_event.find("header.frame_id = ''"), std::string::npos)
+      << p.counters().last_event;
   EXPECT_EQ(sink.stiffness_out, 2);
   o.torque_frame = "/pinion";
   EXPECT_THROW(RigPipeline(rig(), o), InvalidInput);
@@ -106,7 +111,8 @@ TEST(RigPipeline, StampsOutsideRosTimeAreRefused) {
   Counting sink;
   EXPECT_EQ(p.torque(Stamp{-5}, 0.1, sink), InputOutcome::kStampRange);
   EXPECT_EQ(p.torque(Stamp{Stamp::kMaxRosNs + 1}, 0.1, sink), InputOutcome::kStampRange);
-  EXPECT_EQ(p.torque(Stamp{Stamp::kMaxRosNs}, 0.1, sink), InputOutcome::kAccepted);  // 2106-02-07T06:28:15.999999999
+  EXPECT_EQ(p.torque(Stamp{Stamp::kMaxRosNs}, 0.1, sink),
+            InputOutcome::kAccepted);  // 2106-02-07T06:28:15.999999999
   EXPECT_EQ(p.counters().stamps_out_of_range, 2u);
 }
 

@@ -17,7 +17,8 @@ InnerRingFit innerFit(double interference, double shaft_bore) {
 }  // namespace
 
 // Solid shaft of the ring's material: the raceway grows by I d / d_i (bearing.md section 3,
-// derived from Lame; SKF's "clearance reduction caused by interference fits" has the same d/d_i factor).
+// derived from Lame; SKF's "clearance reduction caused by interference fits" has the same d/d_i
+// factor).
 TEST(InterferenceFit, SolidShaftSameMaterialClosedForm) {
   const double interference = 20e-6;
   const FitResult r = innerRingFit(innerFit(interference, 0.0));
@@ -38,7 +39,8 @@ TEST(InterferenceFit, PressureMatchesShigleyEqualMaterials) {
   const double a = 20e-3 / 2, b = 65e-3 / 2, c = 71.4e-3 / 2, interference = 30e-6;
   const double p_shigley = kSteel.youngs_modulus * (interference / 2.0) / (2.0 * b * b * b) *
                            ((c * c - b * b) * (b * b - a * a) / (c * c - a * a));
-  EXPECT_NEAR(innerRingFit(innerFit(interference, 2.0 * a)).contact_pressure / p_shigley, 1.0, 1e-12);
+  EXPECT_NEAR(innerRingFit(innerFit(interference, 2.0 * a)).contact_pressure / p_shigley, 1.0,
+              1e-12);
 }
 
 TEST(InterferenceFit, LinearInInterferenceAndSofterWithHollowShaft) {
@@ -63,7 +65,19 @@ TEST(InterferenceFit, RejectsImpossibleGeometryNamingTheField) {
   };
   expectMessage([] { innerRingFit(innerFit(-1e-6, 0.0)); }, "inner_interference = -1e-06");
   expectMessage([] { innerRingFit(innerFit(1e-6, 70e-3)); }, "shaft_bore_diameter = 0.07");
-  expectMessage([] { innerRingFit({1e-6, 72e-3, 71.4e-3, 0.0, kSteel, kSteel}); }, "bore_diameter = 0.072");
-  expectMessage([] { outerRingFit({1e-6, 100e-3, 93.6e-3, 99e-3, kSteel, kSteel}); }, "outside_diameter = 0.1");
-  expectMessage([] { outerRingFit({1e-6, 100e-3, 93.6e-3, NAN, kSteel, kSteel}); }, "housing_outside_diameter = nan");
+  expectMessage(
+      [] {
+        innerRingFit({1e-6, 72e-3, 71.4e-3, 0.0, kSteel, kSteel});
+      },
+      "bore_diameter = 0.072");
+  expectMessage(
+      [] {
+        outerRingFit({1e-6, 100e-3, 93.6e-3, 99e-3, kSteel, kSteel});
+      },
+      "outside_diameter = 0.1");
+  expectMessage(
+      [] {
+        outerRingFit({1e-6, 100e-3, 93.6e-3, NAN, kSteel, kSteel});
+      },
+      "housing_outside_diameter = nan");
 }

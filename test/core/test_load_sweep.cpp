@@ -1,6 +1,7 @@
 // The load_sweep scenario (src/tools/load_sweep.hpp) on a perturbed rig whose truth is known
 // (test/data/perturbed_servo.yaml: mesh scale 0.8, pinion support 0.7, gear support 1.3, T_p 1.2):
-//  - the gear encoder carries the static TE of the true rig: per hold, the mean over the hold's last
+//  - the gear encoder carries the static TE of the true rig: per hold, the mean over the hold's
+//  last
 //    gear turn of x_enc = r_b,p theta_p + r_b,g theta_g (from the quantised readings, mounting
 //    errors included) minus the same mean at zero torque equals StaticTeModel::features (the
 //    calibration's model at the true parameters) within 1 %, and a closed form built from other
@@ -30,7 +31,8 @@ using namespace drivetrain_stiffness;
 namespace {
 
 const RigConfig& trueRig() {
-  static const RigConfig r = loadRigFile(std::string(DRIVETRAIN_SOURCE_DIR) + "/test/data/perturbed_servo.yaml");
+  static const RigConfig r =
+      loadRigFile(std::string(DRIVETRAIN_SOURCE_DIR) + "/test/data/perturbed_servo.yaml");
   return r;
 }
 
@@ -84,15 +86,16 @@ Window measured(std::size_t i) {
     const double x = rb[0] * readings().pinion[k] + rb[1] * readings().gear[k];
     const double phase = 20.0 * omega * readings().t[k] / kTwoPi;
     w.mean += x / n;
-    for (int h = 0; h < 2; ++h) w.harmonic[h] += 2.0 * x * std::polar(1.0, -kTwoPi * (h + 1) * phase) / n;
+    for (int h = 0; h < 2; ++h)
+      w.harmonic[h] += 2.0 * x * std::polar(1.0, -kTwoPi * (h + 1) * phase) / n;
   }
   return w;
 }
 
 /// The mean TE at pinion torque T above zero torque, from parts the calibration's model does not
-/// use: the mesh's phase table (AntiBacklashMesh::at, the true scale) averaged over 4000 phases with
-/// the flank state of each, and each support's exact solution (BearingSupport::solve) at its radial
-/// preload and with its share of |F| added, the difference divided by its stiffness_scale.
+/// use: the mesh's phase table (AntiBacklashMesh::at, the true scale) averaged over 4000 phases
+/// with the flank state of each, and each support's exact solution (BearingSupport::solve) at its
+/// radial preload and with its share of |F| added, the difference divided by its stiffness_scale.
 double closedForm(double torque) {
   const RigConfig& rig = trueRig();
   const AntiBacklashMesh mesh(rig);
@@ -102,9 +105,12 @@ double closedForm(double torque) {
   for (int i = 0; i < n; ++i) {
     const CompositeMesh c = mesh.at((i + 0.5) / n, force);
     const double k1 = c.k1, kc = c.k_chain;
-    if (force * kc > fp * (k1 + kc)) delta += (force - fp) / k1;        // drive flank only
-    else if (force * k1 < -fp * (k1 + kc)) delta += (force + fp) / kc;  // back flank only
-    else delta += force / (k1 + kc);                                     // both
+    if (force * kc > fp * (k1 + kc))
+      delta += (force - fp) / k1;  // drive flank only
+    else if (force * k1 < -fp * (k1 + kc))
+      delta += (force + fp) / kc;  // back flank only
+    else
+      delta += force / (k1 + kc);  // both
   }
   delta /= n;
   double bearings = 0.0;
@@ -115,7 +121,8 @@ double closedForm(double torque) {
     const BearingSolution free = support.solve(load);
     load[kUx] += b.mesh_load_share * std::abs(force);
     const BearingSolution loaded = support.solve(load);
-    bearings += b.mesh_load_share * (loaded.displacement[kUx] - free.displacement[kUx]) / b.stiffness_scale;
+    bearings +=
+        b.mesh_load_share * (loaded.displacement[kUx] - free.displacement[kUx]) / b.stiffness_scale;
   }
   return delta + std::copysign(bearings, force);
 }
@@ -133,7 +140,8 @@ TEST(LoadSweep, StaircaseCrossesBothKneesWithHoldsOfWholeGearTurns) {
   StaticTeModel model(trueRig());
   EXPECT_DOUBLE_EQ(t.knee_torque, model.kneeTorque(t.parameters()));
   const double fp = t.preload_torque / model.baseRadius()[1] * model.baseRadius()[0];
-  EXPECT_NEAR((t.knee_torque / fp - 1.0) * (-t.reverse_knee_torque / fp - 1.0), 1.0, 1e-12);  // (k1/kc)(kc/k1)
+  EXPECT_NEAR((t.knee_torque / fp - 1.0) * (-t.reverse_knee_torque / fp - 1.0), 1.0,
+              1e-12);               // (k1/kc)(kc/k1)
   ASSERT_EQ(t.levels.size(), 19u);  // 0, 10 up, 0, 6 down, 0
   EXPECT_EQ(t.levels.front().t0, 0.0);
   EXPECT_EQ(t.levels.front().t1, 3.0);  // 3 gear turns unloaded
@@ -144,7 +152,8 @@ TEST(LoadSweep, StaircaseCrossesBothKneesWithHoldsOfWholeGearTurns) {
     EXPECT_NEAR(t.levels[i].t1 - t.levels[i].t0, 2.5, 1e-12);
     // No level within 5 % of a knee.
     EXPECT_GT(std::abs(t.levels[i].torque - t.knee_torque), 0.05 * t.knee_torque) << i;
-    EXPECT_GT(std::abs(t.levels[i].torque - t.reverse_knee_torque), -0.05 * t.reverse_knee_torque) << i;
+    EXPECT_GT(std::abs(t.levels[i].torque - t.reverse_knee_torque), -0.05 * t.reverse_knee_torque)
+        << i;
     above += t.levels[i].torque > t.knee_torque;
     below += t.levels[i].torque < t.reverse_knee_torque;
   }
@@ -173,20 +182,27 @@ TEST(LoadSweep, GearEncoderCarriesTheTrueStaticTe) {
     const FeatureVector predicted = model.features(p, torque, d, 0.0, none);
     const Window w = measured(i);
     const double mean = w.mean - base.mean, closed = closedForm(torque);
-    const double c1 = std::abs(w.harmonic[0] - base.harmonic[0]), c2 = std::abs(w.harmonic[1] - base.harmonic[1]);
+    const double c1 = std::abs(w.harmonic[0] - base.harmonic[0]),
+                 c2 = std::abs(w.harmonic[1] - base.harmonic[1]);
     if (torque == 0.0) {
-      // Back at zero: the baseline again, to the readings' quantisation (a count is 34 nm at r_b,p).
+      // Back at zero: the baseline again, to the readings' quantisation (a count is 34 nm at
+      // r_b,p).
       std::printf("hold %2zu, T = 0: mean TE %+.1e m above the first zero hold\n", i, mean);
       EXPECT_NEAR(mean, 0.0, 2e-9) << i;
       continue;
     }
-    std::printf("hold %2zu, T = %+8.4f N*m: mean TE %+.5e m, model %+.3f %%, closed form %+.3f %%; |C1| %.4e m, model "
-                "%+.2f %%; |C2| %.4e m, model %+.2f %%\n", i, torque, mean, 100.0 * (mean / predicted[0] - 1.0),
-                100.0 * (mean / closed - 1.0), c1, 100.0 * (c1 / predicted[1] - 1.0), c2, 100.0 * (c2 / predicted[2] - 1.0));
+    std::printf(
+        "hold %2zu, T = %+8.4f N*m: mean TE %+.5e m, model %+.3f %%, closed form %+.3f %%; |C1| "
+        "%.4e m, model "
+        "%+.2f %%; |C2| %.4e m, model %+.2f %%\n",
+        i, torque, mean, 100.0 * (mean / predicted[0] - 1.0), 100.0 * (mean / closed - 1.0), c1,
+        100.0 * (c1 / predicted[1] - 1.0), c2, 100.0 * (c2 / predicted[2] - 1.0));
     // Measured: within 0.11 % of both at every hold (the sampled mesh steps and the 256-slice mesh
     // of the truth dynamics).
-    EXPECT_NEAR(mean, predicted[0], 0.01 * std::abs(predicted[0])) << "hold " << i << " at " << torque << " N*m";
-    EXPECT_NEAR(mean, closed, 0.02 * std::abs(closed)) << "hold " << i << " at " << torque << " N*m";
+    EXPECT_NEAR(mean, predicted[0], 0.01 * std::abs(predicted[0]))
+        << "hold " << i << " at " << torque << " N*m";
+    EXPECT_NEAR(mean, closed, 0.02 * std::abs(closed))
+        << "hold " << i << " at " << torque << " N*m";
     // The mesh harmonics too, within the error of sampling a TE with steps (the tooth-pair
     // switches) at 125 fixed phases per mesh period (5000 Hz / 40 Hz): measured within 0.6 % (C1)
     // and 4.6 % (C2); the exact waveform sampled so gives +-3 % on |C2| depending on where the
@@ -217,7 +233,8 @@ TEST(LoadSweep, EncoderMountingErrorsAreInRangeAndInTheReadings) {
       b += 2.0 * residual * std::cos(theta) / n;
     }
     EXPECT_NEAR(std::hypot(a, b), t.eccentricity[shaft], 0.01 * t.eccentricity[shaft]) << shaft;
-    EXPECT_NEAR(std::remainder(std::atan2(b, a) - t.eccentricity_phase[shaft], kTwoPi), 0.0, 0.02) << shaft;
+    EXPECT_NEAR(std::remainder(std::atan2(b, a) - t.eccentricity_phase[shaft], kTwoPi), 0.0, 0.02)
+        << shaft;
   }
 }
 
@@ -243,8 +260,8 @@ TEST(LoadSweep, StampJitterAndTorqueNoiseAsSpecified) {
     ++n;
   }
   ASSERT_EQ(n, 48000);
-  EXPECT_NEAR(sum / n, 0.0, 0.03);                 // 5 sigma of the mean of 48000
-  EXPECT_NEAR(std::sqrt(sum2 / n), 1.0, 0.02);     // about 6 sigma of the RMS
+  EXPECT_NEAR(sum / n, 0.0, 0.03);              // 5 sigma of the mean of 48000
+  EXPECT_NEAR(std::sqrt(sum2 / n), 1.0, 0.02);  // about 6 sigma of the RMS
 }
 
 TEST(LoadSweep, SameSeedSameEventsOtherSeedOnlyOtherNoise) {

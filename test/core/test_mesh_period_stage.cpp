@@ -21,10 +21,10 @@ struct Blocks : PipelineSink {
   }
 };
 
-constexpr double kRate = 1000.0;         // [Hz] output samples
+constexpr double kRate = 1000.0;        // [Hz] output samples
 constexpr double kMesh = 1000.0 / 3.0;  // [Hz] three samples per period: phases 0, 1/3, 2/3
-constexpr double kBaseRadius = 0.02;     // [m]
-constexpr double kTorque = 0.1;          // [N*m]
+constexpr double kBaseRadius = 0.02;    // [m]
+constexpr double kTorque = 0.1;         // [N*m]
 
 struct Fixture {
   DynamicsEstimator dynamics{test::seedServo(), {1e8, 1e8}, kRate};
@@ -51,7 +51,8 @@ TEST(MeshPeriodStage, ABlockOfWholePeriodsClosesWhereThePhaseSays) {
   Fixture f;
   ASSERT_DOUBLE_EQ(f.dynamics.outputInterval(), 1.0 / kRate);
   for (int k = 0; k <= 24; ++k) f.feed(k);
-  // periods = ceil(10 x 1 ms x 333 Hz) = 4: 12 samples a block, the first starting on the switch at k = 0.
+  // periods = ceil(10 x 1 ms x 333 Hz) = 4: 12 samples a block, the first starting on the switch at
+  // k = 0.
   ASSERT_EQ(f.sink.out.size(), 2u);
   const MeshPeriodStatistics& b = f.sink.out[0];
   EXPECT_EQ(b.periods, 4u);

@@ -1,8 +1,8 @@
-// Per-mesh-period statistics of the dynamic TE and the mesh force (RigPipeline, MeshPeriodStatistics):
-// at 1000 rpm the 1 kHz output grid samples the 333 Hz mesh of the seed (20 teeth) at three
-// phases, one of them on the tooth switch, so the samples' mean of the mesh force is far off the
-// true mean T / r_b,p; the per-period mean is not. Periods are counted from the mesh phase, also
-// through a reversal.
+// Per-mesh-period statistics of the dynamic TE and the mesh force (RigPipeline,
+// MeshPeriodStatistics): at 1000 rpm the 1 kHz output grid samples the 333 Hz mesh of the seed (20
+// teeth) at three phases, one of them on the tooth switch, so the samples' mean of the mesh force
+// is far off the true mean T / r_b,p; the per-period mean is not. Periods are counted from the mesh
+// phase, also through a reversal.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -18,7 +18,8 @@ using namespace drivetrain_stiffness;
 
 namespace {
 
-// Its calibration: block plays no part here (no encoders but in the reversal, which has no gear joint).
+// Its calibration: block plays no part here (no encoders but in the reversal, which has no gear
+// joint).
 const RigConfig& rig() { return test::seedServo(); }
 Stamp at(double seconds) { return test::stampAt(seconds); }
 constexpr double kTorque = 0.1;  // [N*m] seed 000 Table 1
@@ -28,7 +29,9 @@ struct Recorder : PipelineSink {
   std::vector<DynamicsSample> te;
   std::vector<MeshPeriodStatistics> blocks;
   std::vector<Stamp> stamps;
-  void transmissionError(Stamp, const DynamicsSample& s, const SampleContext&) override { te.push_back(s); }
+  void transmissionError(Stamp, const DynamicsSample& s, const SampleContext&) override {
+    te.push_back(s);
+  }
   void meshPeriod(Stamp stamp, const MeshPeriodStatistics& s) override {
     EXPECT_TRUE(stamp == s.end);
     stamps.push_back(stamp);
@@ -39,7 +42,8 @@ struct Recorder : PipelineSink {
 /// Constant torque inputs every millisecond for `duration` at the nominal speed (no encoders).
 void runNominal(RigPipeline& p, Recorder& r, double duration) {
   for (int k = 0; k * 1e-3 <= duration + 1e-12; ++k) {
-    ASSERT_EQ(p.torque(at(1e-3 * k), kTorque, r), InputOutcome::kAccepted) << p.counters().last_event;
+    ASSERT_EQ(p.torque(at(1e-3 * k), kTorque, r), InputOutcome::kAccepted)
+        << p.counters().last_event;
   }
 }
 
@@ -61,7 +65,7 @@ TEST(MeshPeriodStatistics, MeshForceMeanIsTOverBaseRadiusWhereTheSampleMeanIsNot
   runNominal(p, r, 1.3);
   const double r_b = p.estimator().mesh().geometry().baseRadius(0);
   EXPECT_NEAR(r_b, 5.638e-3, 1e-3 * 5.638e-3);  // seed 000: r_b,p = r_p cos(20 deg)
-  const double truth = kTorque / r_b;             // 17.7 N
+  const double truth = kTorque / r_b;           // 17.7 N
   EXPECT_NEAR(truth, 0.1 / 5.638e-3, 2e-3 * truth);
 
   // The samples' mean over whole periods after the transient (3 samples per mesh period).
@@ -75,7 +79,8 @@ TEST(MeshPeriodStatistics, MeshForceMeanIsTOverBaseRadiusWhereTheSampleMeanIsNot
   }
   ASSERT_EQ(n, 900);
   const double sample_mean = sum / n;
-  EXPECT_GT(std::abs(sample_mean / truth - 1.0), 0.05) << "the grid no longer aliases the tooth switch";
+  EXPECT_GT(std::abs(sample_mean / truth - 1.0), 0.05)
+      << "the grid no longer aliases the tooth switch";
 
   const double mesh_frequency = kZp * 1000.0 / 60.0;  // 333.3 Hz
   int checked = 0;
@@ -99,17 +104,20 @@ TEST(MeshPeriodStatistics, MeshForceMeanIsTOverBaseRadiusWhereTheSampleMeanIsNot
   }
   EXPECT_GT(checked, 75);  // 1 s / 12 ms
   EXPECT_LT(worst, 0.01);
-  std::printf("mesh force [N]: T/r_b = %.4f, plain mean of %d samples = %.4f (%+.1f %%), per-period means within "
-              "%.3f %% (average %.4f) over %d blocks\n",
-              truth, n, sample_mean, 100.0 * (sample_mean / truth - 1.0), 100.0 * worst, sum_block / checked, checked);
+  std::printf(
+      "mesh force [N]: T/r_b = %.4f, plain mean of %d samples = %.4f (%+.1f %%), per-period means "
+      "within "
+      "%.3f %% (average %.4f) over %d blocks\n",
+      truth, n, sample_mean, 100.0 * (sample_mean / truth - 1.0), 100.0 * worst,
+      sum_block / checked, checked);
 }
 
 TEST(MeshPeriodStatistics, TeMeanConvergesToAFineGridsMean) {
-  // The reference: the samples' mean over 90 whole periods of a 90-samples-per-period grid (30 kHz).
-  // The trapezoid of the dynamic TE converges with the samples per period; at 3 per period (1 kHz)
-  // it is off by ~14 % of this small mean (the TE settles within a fraction of a sample interval
-  // after each tooth switch, a near-jump that 3 phases cannot place): the documented limit of
-  // te_mean. The per-period mesh force mean is exact at any grid (momentum balance), while the
+  // The reference: the samples' mean over 90 whole periods of a 90-samples-per-period grid (30
+  // kHz). The trapezoid of the dynamic TE converges with the samples per period; at 3 per period (1
+  // kHz) it is off by ~14 % of this small mean (the TE settles within a fraction of a sample
+  // interval after each tooth switch, a near-jump that 3 phases cannot place): the documented limit
+  // of te_mean. The per-period mesh force mean is exact at any grid (momentum balance), while the
   // fine grid's own sample mean of the force is still biased by its samples on the switch.
   auto run = [](double rate, Recorder& r) {
     PipelineOptions o;
@@ -153,10 +161,14 @@ TEST(MeshPeriodStatistics, TeMeanConvergesToAFineGridsMean) {
   EXPECT_LT(te_30k, 5e-3);
   EXPECT_LT(te_10k, 0.05);
   EXPECT_LT(te_1k, 0.2);
-  for (const Recorder* r : {&coarse, &medium, &fine}) EXPECT_LT(worst(*r, &MeshPeriodStatistics::mesh_force_mean, truth), 1e-3);
-  std::printf("dynamic TE mean [m]: 30 kHz samples %.6e; per-period te_mean off by at most %.2f %% (1 kHz), %.2f %% "
-              "(10 kHz), %.3f %% (30 kHz); 30 kHz samples' mesh force mean %.4f N (%+.2f %%), per-period exact\n",
-              te, 100.0 * te_1k, 100.0 * te_10k, 100.0 * te_30k, force, 100.0 * (force / truth - 1.0));
+  for (const Recorder* r : {&coarse, &medium, &fine})
+    EXPECT_LT(worst(*r, &MeshPeriodStatistics::mesh_force_mean, truth), 1e-3);
+  std::printf(
+      "dynamic TE mean [m]: 30 kHz samples %.6e; per-period te_mean off by at most %.2f %% (1 "
+      "kHz), %.2f %% "
+      "(10 kHz), %.3f %% (30 kHz); 30 kHz samples' mesh force mean %.4f N (%+.2f %%), per-period "
+      "exact\n",
+      te, 100.0 * te_1k, 100.0 * te_10k, 100.0 * te_30k, force, 100.0 * (force / truth - 1.0));
 }
 
 TEST(MeshPeriodStatistics, ReversalGivesFiniteStatsInBothDirections) {
@@ -190,7 +202,8 @@ TEST(MeshPeriodStatistics, ReversalGivesFiniteStatsInBothDirections) {
   // The last blocks run at -1000 rpm: -333 Hz, 4 periods each.
   EXPECT_NEAR(r.blocks.back().mesh_frequency, -kZp * 1000.0 / 60.0, 1e-3 * kZp * 1000.0 / 60.0);
   EXPECT_EQ(r.blocks.back().periods, 4u);
-  for (const DynamicsSample& s : r.te) ASSERT_TRUE(std::isfinite(s.dynamic_te) && std::isfinite(s.mesh_force));
+  for (const DynamicsSample& s : r.te)
+    ASSERT_TRUE(std::isfinite(s.dynamic_te) && std::isfinite(s.mesh_force));
 }
 
 TEST(MeshPeriodStatistics, ResetRestartsTheAccumulation) {
@@ -201,7 +214,8 @@ TEST(MeshPeriodStatistics, ResetRestartsTheAccumulation) {
   ASSERT_GT(before, 0u);
   p.reset("test");
   // The dynamics restart at the next input, 0.5 s on: no block spans the reset.
-  for (int k = 0; k < 100; ++k) ASSERT_EQ(p.torque(at(0.6 + 1e-3 * k), kTorque, r), InputOutcome::kAccepted);
+  for (int k = 0; k < 100; ++k)
+    ASSERT_EQ(p.torque(at(0.6 + 1e-3 * k), kTorque, r), InputOutcome::kAccepted);
   ASSERT_GT(r.blocks.size(), before);
   for (std::size_t i = before; i < r.blocks.size(); ++i) {
     EXPECT_GE(r.blocks[i].start.toSec(), at(0.6).toSec() - 1e-9);

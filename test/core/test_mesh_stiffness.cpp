@@ -24,11 +24,12 @@ double simpson(F f, double a, double b, int n = 20000) {
 }  // namespace
 
 // Tian (2004) writes the three energy integrals over the base-circle angle alpha in [-a1, a2]:
-//   1/kb = int 3{1 + cos a1[(a2 - a) sin a - cos a]}^2 (a2 - a) cos a / (2 E L [sin a + (a2 - a) cos a]^3)
-//   1/ks = int 1.2 (1 + nu)(a2 - a) cos a cos^2 a1 / (E L [sin a + (a2 - a) cos a])
-//   1/ka = int (a2 - a) cos a sin^2 a1 / (2 E L [sin a + (a2 - a) cos a])
+//   1/kb = int 3{1 + cos a1[(a2 - a) sin a - cos a]}^2 (a2 - a) cos a / (2 E L [sin a + (a2 - a)
+//   cos a]^3) 1/ks = int 1.2 (1 + nu)(a2 - a) cos a cos^2 a1 / (E L [sin a + (a2 - a) cos a]) 1/ka
+//   = int (a2 - a) cos a sin^2 a1 / (2 E L [sin a + (a2 - a) cos a])
 // (as cited in the mesh-stiffness literature, e.g. Chaari et al. 2009). Our integration along the
-// centre line with the exact involute must give the same numbers for a tooth clamped at the base circle.
+// centre line with the exact involute must give the same numbers for a tooth clamped at the base
+// circle.
 TEST(MeshStiffness, EnergyIntegralsMatchTianForm) {
   const double e = 2.1e11, nu = 0.3, l = 6.5e-3, z = 20, a0 = 20 * M_PI / 180, m = 0.6e-3;
   const double rb = m * z / 2 * std::cos(a0), a2 = M_PI / (2 * z) + involute(a0);
@@ -36,11 +37,23 @@ TEST(MeshStiffness, EnergyIntegralsMatchTianForm) {
     const double a1 = std::tan(ac) - a2;
     auto t = [&](double a) { return a2 - a; };
     auto den = [&](double a) { return std::sin(a) + t(a) * std::cos(a); };
-    const double kb = simpson([&](double a) {
-      const double n = 1 + std::cos(a1) * (t(a) * std::sin(a) - std::cos(a));
-      return 3 * n * n * t(a) * std::cos(a) / (2 * e * l * std::pow(den(a), 3)); }, -a1, a2);
-    const double ks = simpson([&](double a) { return 1.2 * (1 + nu) * t(a) * std::cos(a) * std::cos(a1) * std::cos(a1) / (e * l * den(a)); }, -a1, a2);
-    const double ka = simpson([&](double a) { return t(a) * std::cos(a) * std::sin(a1) * std::sin(a1) / (2 * e * l * den(a)); }, -a1, a2);
+    const double kb = simpson(
+        [&](double a) {
+          const double n = 1 + std::cos(a1) * (t(a) * std::sin(a) - std::cos(a));
+          return 3 * n * n * t(a) * std::cos(a) / (2 * e * l * std::pow(den(a), 3));
+        },
+        -a1, a2);
+    const double ks = simpson(
+        [&](double a) {
+          return 1.2 * (1 + nu) * t(a) * std::cos(a) * std::cos(a1) * std::cos(a1) /
+                 (e * l * den(a));
+        },
+        -a1, a2);
+    const double ka = simpson(
+        [&](double a) {
+          return t(a) * std::cos(a) * std::sin(a1) * std::sin(a1) / (2 * e * l * den(a));
+        },
+        -a1, a2);
     const ToothCompliance c = toothBeamCompliance(rb, a2, rb * std::cos(a2), ac, e, nu, l);
     EXPECT_NEAR(c.bending / kb, 1.0, 1e-6) << ac;
     EXPECT_NEAR(c.shear / ks, 1.0, 1e-6) << ac;
@@ -56,7 +69,9 @@ TEST(MeshStiffness, EqualGearsAreSymmetricAboutThePitchPoint) {
   for (auto model : {MeshStiffnessModel::kPotentialEnergy, MeshStiffnessModel::kKuangYang}) {
     const auto k = makeToothPairStiffness(model, g, s.face_width);
     for (double d : {0.1e-3, 0.5e-3, 0.8e-3}) {
-      EXPECT_NEAR(k->pairStiffness(g.contactAt(g.pitchPoint() + d)) / k->pairStiffness(g.contactAt(g.pitchPoint() - d)), 1.0, 1e-9)
+      EXPECT_NEAR(k->pairStiffness(g.contactAt(g.pitchPoint() + d)) /
+                      k->pairStiffness(g.contactAt(g.pitchPoint() - d)),
+                  1.0, 1e-9)
           << toString(model) << " " << d;
     }
   }
@@ -70,10 +85,12 @@ TEST(MeshStiffness, StepsAtTheSingleDoubleTransitions) {
   const MeshStiffnessTable t(g, *model, 512);
   const double eps = g.contactRatio(), h = 1e-9;
   // Leaving pair at s_E: drive(eps - 1 - h) - drive(eps - 1 + h) = pair(s_E).
-  EXPECT_NEAR(t.drive(eps - 1 - h) - t.drive(eps - 1 + h), t.pair(g.pathEnd()), 1e-3 * t.pair(g.pathEnd()));
+  EXPECT_NEAR(t.drive(eps - 1 - h) - t.drive(eps - 1 + h), t.pair(g.pathEnd()),
+              1e-3 * t.pair(g.pathEnd()));
   // Entering pair at s_A: drive(0 + h) - drive(1 - h) = pair(s_A).
   EXPECT_NEAR(t.drive(h) - t.drive(1 - h), t.pair(g.pathStart()), 1e-3 * t.pair(g.pathStart()));
-  for (double phi : {0.05, 0.3, 0.8}) EXPECT_NEAR(t.drive(g.phase(2 * M_PI / 20 * (7 + phi))), t.drive(phi), 1e-6 * t.drive(phi));
+  for (double phi : {0.05, 0.3, 0.8})
+    EXPECT_NEAR(t.drive(g.phase(2 * M_PI / 20 * (7 + phi))), t.drive(phi), 1e-6 * t.drive(phi));
   EXPECT_GT(t.drive(0.3), 1.3 * t.drive(0.8));
 }
 
@@ -98,14 +115,16 @@ TEST(MeshStiffness, ThreeModelsAgreeOnTheSeedPair) {
   const Iso6336Stiffness iso = iso6336Stiffness(s);
   std::array<double, 3> means{};
   int i = 0;
-  for (auto model : {MeshStiffnessModel::kPotentialEnergy, MeshStiffnessModel::kKuangYang, MeshStiffnessModel::kIso6336}) {
+  for (auto model : {MeshStiffnessModel::kPotentialEnergy, MeshStiffnessModel::kKuangYang,
+                     MeshStiffnessModel::kIso6336}) {
     const auto k = makeToothPairStiffness(model, g, s.face_width);
     const MeshStiffnessTable t(g, *k, 256);
     for (int j = 0; j < 2000; ++j) means[i] += t.drive((j + 0.5) / 2000) / 2000;
     EXPECT_NEAR(means[i] / (iso.mesh_stiffness * s.face_width), 1.0, 0.15) << toString(model);
     ++i;
   }
-  EXPECT_NEAR(means[2] / (iso.mesh_stiffness * s.face_width), 1.0, 1e-3);  // the ISO table averages to c_gamma b
+  EXPECT_NEAR(means[2] / (iso.mesh_stiffness * s.face_width), 1.0,
+              1e-3);  // the ISO table averages to c_gamma b
   const auto pe = makeToothPairStiffness(MeshStiffnessModel::kPotentialEnergy, g, s.face_width);
   const double single_per_width = pe->pairStiffness(g.contactAt(g.pitchPoint())) / s.face_width;
   EXPECT_GT(single_per_width, 0.9 * iso.single_stiffness);
@@ -118,16 +137,19 @@ TEST(MeshStiffness, Iso6336MethodBRelations) {
   GearPairSpec s = test::seedPair();
   const Iso6336Stiffness spur = iso6336Stiffness(s);
   EXPECT_NEAR(spur.c_b, 0.975, 1e-12);
-  EXPECT_NEAR(spur.mesh_stiffness / spur.single_stiffness, 0.75 * spur.transverse_contact_ratio + 0.25, 1e-12);
+  EXPECT_NEAR(spur.mesh_stiffness / spur.single_stiffness,
+              0.75 * spur.transverse_contact_ratio + 0.25, 1e-12);
   EXPECT_NEAR(spur.transverse_contact_ratio, SpurGearGeometry(s).contactRatio(), 1e-12);
   s.material.youngs_modulus = 1.03e11;
-  EXPECT_NEAR(iso6336Stiffness(s).single_stiffness / spur.single_stiffness, 1.03e11 / 2.1e11, 1e-12);
+  EXPECT_NEAR(iso6336Stiffness(s).single_stiffness / spur.single_stiffness, 1.03e11 / 2.1e11,
+              1e-12);
 }
 
 namespace {
-// ISO/TR 6336-30:2017, Example 1 (helical pair, rack type D: h_fP = 1.4 m_n, h_aP = 1.0 m_n), inputs
-// as transcribed with the TR's reference results in gfsReboucas/Drivetrain, ISO_6336.m, example_01:
-// m_n 8 mm, alpha_n 20 deg, beta 15.8 deg, z 17/103, x 0.145/0, b 100 mm, a_w 500 mm, steel.
+// ISO/TR 6336-30:2017, Example 1 (helical pair, rack type D: h_fP = 1.4 m_n, h_aP = 1.0 m_n),
+// inputs as transcribed with the TR's reference results in gfsReboucas/Drivetrain, ISO_6336.m,
+// example_01: m_n 8 mm, alpha_n 20 deg, beta 15.8 deg, z 17/103, x 0.145/0, b 100 mm, a_w 500 mm,
+// steel.
 GearPairSpec isoTr6336Example1() {
   GearPairSpec h;
   h.module = 8e-3;
@@ -144,10 +166,10 @@ GearPairSpec isoTr6336Example1() {
 }  // namespace
 
 // Published reference values (ISO/TR 6336-30 Example 1, printed exactly, via the transcription
-// above): c'_th = 17.85584, c' = 12.37047, c_gamma_alpha = 17.46485, c_gamma_beta = 14.84512 N/(mm um).
-// c'_th and c' agree to all printed digits. c_gamma depends on eps_alpha: ours is 1.5480 from the
-// nominal tip diameters; the printed c_gamma_alpha implies 1.5491 (the example's tip diameters are
-// not in the transcription), hence 0.1 %.
+// above): c'_th = 17.85584, c' = 12.37047, c_gamma_alpha = 17.46485, c_gamma_beta = 14.84512 N/(mm
+// um). c'_th and c' agree to all printed digits. c_gamma depends on eps_alpha: ours is 1.5480 from
+// the nominal tip diameters; the printed c_gamma_alpha implies 1.5491 (the example's tip diameters
+// are not in the transcription), hence 0.1 %.
 TEST(MeshStiffness, Iso6336MatchesIsoTr6336Example1) {
   const Iso6336Stiffness iso = iso6336Stiffness(isoTr6336Example1());
   EXPECT_NEAR(iso.single_stiffness_theoretical / 1e9, 17.85584, 2e-5);
@@ -182,7 +204,8 @@ TEST(AntiBacklashMesh, FlankCriterionBothSides) {
   const AntiBacklashMesh mesh(test::seedPair(), spec, MeshStiffnessModel::kPotentialEnergy);
   EXPECT_NEAR(mesh.preloadForce(), 1.0 / mesh.geometry().baseRadius(1), 1e-12);
   const double phi = 0.8;
-  const CompositeMesh nominal = mesh.exactAt(phi, 17.7);  // seed 000: 0.1 N m on a 5.64 mm base radius
+  const CompositeMesh nominal =
+      mesh.exactAt(phi, 17.7);  // seed 000: 0.1 N m on a 5.64 mm base radius
   EXPECT_EQ(nominal.contact, FlankContact::kBoth);
   EXPECT_NEAR(nominal.composite, nominal.k1 + nominal.k_chain, 1e-6);  // seed 000 eq 1
   EXPECT_NEAR(nominal.k_chain, 1e7 * nominal.k2 / (1e7 + nominal.k2), 1e-6);
@@ -195,13 +218,17 @@ TEST(AntiBacklashMesh, FlankCriterionBothSides) {
   EXPECT_EQ(mesh.exactAt(phi, lower * 0.999).contact, FlankContact::kBoth);
   EXPECT_EQ(mesh.exactAt(phi, lower * 1.001).contact, FlankContact::kBackOnly);
   EXPECT_NEAR(mesh.exactAt(phi, lower * 1.001).composite, nominal.k_chain, 1e-6);
-  // At the bounds the unloading flank's force is zero: F2 = F_p - k_c x, F1 = F_p + k1 x, x = F_m / (k1 + k_c).
-  const double x_up = upper / (nominal.k1 + nominal.k_chain), x_lo = lower / (nominal.k1 + nominal.k_chain);
+  // At the bounds the unloading flank's force is zero: F2 = F_p - k_c x, F1 = F_p + k1 x, x = F_m /
+  // (k1 + k_c).
+  const double x_up = upper / (nominal.k1 + nominal.k_chain),
+               x_lo = lower / (nominal.k1 + nominal.k_chain);
   EXPECT_NEAR(mesh.preloadForce() - nominal.k_chain * x_up, 0.0, 1e-9);
   EXPECT_NEAR(mesh.preloadForce() + nominal.k1 * x_lo, 0.0, 1e-9);
   EXPECT_THROW(mesh.at(phi, NAN), InvalidInput);
   EXPECT_THROW(mesh.exactAt(phi, NAN), InvalidInput);
-  EXPECT_THROW(AntiBacklashMesh(test::seedPair(), AntiBacklashSpec{-1.0, 1.0, 0.0}, MeshStiffnessModel::kIso6336), InvalidInput);
+  EXPECT_THROW(AntiBacklashMesh(test::seedPair(), AntiBacklashSpec{-1.0, 1.0, 0.0},
+                                MeshStiffnessModel::kIso6336),
+               InvalidInput);
 }
 
 TEST(MeshStiffness, KuangYangIsLabelledUnverified) {
@@ -215,7 +242,8 @@ TEST(MeshStiffness, KuangYangIsLabelledUnverified) {
 // The phase table reproduces the direct evaluation, pair counts included, and keeps the steps at
 // the switching phases sharp (no smearing across a step).
 TEST(AntiBacklashMesh, PhaseTableMatchesDirectEvaluation) {
-  const AntiBacklashMesh mesh(test::seedPair(), AntiBacklashSpec{1e7, 1.0, 0.0}, MeshStiffnessModel::kPotentialEnergy);
+  const AntiBacklashMesh mesh(test::seedPair(), AntiBacklashSpec{1e7, 1.0, 0.0},
+                              MeshStiffnessModel::kPotentialEnergy);
   EXPECT_EQ(mesh.switchingPhases().size(), 4u);  // drive: 0, eps - 1; back: entry and exit
   std::mt19937 rng(11);
   std::uniform_real_distribution<double> u(0.0, 1.0);
@@ -242,9 +270,11 @@ TEST(AntiBacklashMesh, PhaseTableMatchesDirectEvaluation) {
 // midpoint rule over 2^22 phases of at() (its error is at most the sum of the steps at the
 // switching phases over 2^22: ~1e-6 relative), and Simpson's rule on the pair tables themselves
 // (exactAt) between the switching phases, where they are smooth: the true mean of the model, from
-// which the table's linear interpolation may differ by its own 1e-4 (PhaseTableMatchesDirectEvaluation).
+// which the table's linear interpolation may differ by its own 1e-4
+// (PhaseTableMatchesDirectEvaluation).
 TEST(AntiBacklashMesh, PeriodMeansAreTheExactIntegralsOfThePhaseTable) {
-  const AntiBacklashMesh mesh(test::seedPair(), AntiBacklashSpec{1e7, 1.0, 0.0}, MeshStiffnessModel::kPotentialEnergy);
+  const AntiBacklashMesh mesh(test::seedPair(), AntiBacklashSpec{1e7, 1.0, 0.0},
+                              MeshStiffnessModel::kPotentialEnergy);
   const AntiBacklashMesh::PeriodMeans& m = mesh.periodMeans();
   const int n = 1 << 22;
   double k1 = 0.0, k2 = 0.0, kc = 0.0;
@@ -263,8 +293,10 @@ TEST(AntiBacklashMesh, PeriodMeansAreTheExactIntegralsOfThePhaseTable) {
   double e1 = 0.0, e2 = 0.0;
   for (std::size_t i = 0; i + 1 < breaks.size(); ++i) {
     const double a = breaks[i], b = breaks[i + 1], inset = 1e-9 * (b - a);
-    e1 += simpson([&](double phi) { return mesh.exactAt(phi, 0.0).k1; }, a + inset, b - inset, 2000);
-    e2 += simpson([&](double phi) { return mesh.exactAt(phi, 0.0).k2; }, a + inset, b - inset, 2000);
+    e1 +=
+        simpson([&](double phi) { return mesh.exactAt(phi, 0.0).k1; }, a + inset, b - inset, 2000);
+    e2 +=
+        simpson([&](double phi) { return mesh.exactAt(phi, 0.0).k2; }, a + inset, b - inset, 2000);
   }
   EXPECT_NEAR(m.k1 / e1, 1.0, 1e-4);
   EXPECT_NEAR(m.k2 / e2, 1.0, 1e-4);
@@ -273,7 +305,7 @@ TEST(AntiBacklashMesh, PeriodMeansAreTheExactIntegralsOfThePhaseTable) {
   for (const int samples : {256, 512}) {
     double k = 0.0;
     for (int i = 0; i < samples; ++i) k += mesh.at((i + 0.5) / samples, 0.0).k1 / samples;
-    std::cout << "[          ] k1 mean, midpoint over " << samples << " phases: relative to the exact "
-              << (k - m.k1) / m.k1 << "\n";
+    std::cout << "[          ] k1 mean, midpoint over " << samples
+              << " phases: relative to the exact " << (k - m.k1) / m.k1 << "\n";
   }
 }

@@ -28,18 +28,21 @@ GearRotorParameters seedParameters() {  // seed 000 Table 1 masses and inertias
 // zeta = c / (2 sqrt(k m)); the torsional coordinate is free (0 Hz).
 TEST(ModalAnalysis, DecoupledLimit) {
   GearRotorParameters p = seedParameters();
-  p.bearing_damping = {2 * 0.03 * std::sqrt(1.0e8 * 33.95e-3), 2 * 0.05 * std::sqrt(1.3e8 * 48.27e-3)};
+  p.bearing_damping = {2 * 0.03 * std::sqrt(1.0e8 * 33.95e-3),
+                       2 * 0.05 * std::sqrt(1.3e8 * 48.27e-3)};
   const auto modes = modalAnalysis(p, 0.0);
   EXPECT_NEAR(modes[0].natural_frequency, 0.0, 1e-3);
   EXPECT_EQ(modes[0].dominant, "x");
-  const double f_p = std::sqrt(1.0e8 / 33.95e-3) / (2 * M_PI), f_g = std::sqrt(1.3e8 / 48.27e-3) / (2 * M_PI);
+  const double f_p = std::sqrt(1.0e8 / 33.95e-3) / (2 * M_PI),
+               f_g = std::sqrt(1.3e8 / 48.27e-3) / (2 * M_PI);
   // Sorted: gear shaft (8.26 kHz) below pinion shaft (8.64 kHz).
   EXPECT_NEAR(modes[1].natural_frequency / std::min(f_p, f_g), 1.0, 1e-9);
   EXPECT_NEAR(modes[2].natural_frequency / std::max(f_p, f_g), 1.0, 1e-9);
   EXPECT_EQ(modes[1].dominant, "x_g");
   EXPECT_NEAR(modes[1].damping_ratio, 0.05, 1e-9);
   EXPECT_NEAR(modes[2].damping_ratio, 0.03, 1e-9);
-  EXPECT_NEAR(modes[2].damped_frequency / (modes[2].natural_frequency * std::sqrt(1 - 0.03 * 0.03)), 1.0, 1e-9);
+  EXPECT_NEAR(modes[2].damped_frequency / (modes[2].natural_frequency * std::sqrt(1 - 0.03 * 0.03)),
+              1.0, 1e-9);
 }
 
 // Coupled: each mode satisfies K v = w^2 M v, and sum w_i^2 = trace(M^-1 K) (a solver-free check).
@@ -53,7 +56,8 @@ TEST(ModalAnalysis, CoupledSeedModes) {
   double sum = 0.0;
   for (const Mode& m : modes) {
     const double w2 = std::pow(2 * M_PI * m.natural_frequency, 2);
-    EXPECT_LT((k * m.shape - w2 * mass.asDiagonal() * m.shape).norm(), 1e-6 * w2 * (mass.asDiagonal() * m.shape).norm());
+    EXPECT_LT((k * m.shape - w2 * mass.asDiagonal() * m.shape).norm(),
+              1e-6 * w2 * (mass.asDiagonal() * m.shape).norm());
     sum += w2;
   }
   EXPECT_NEAR(sum / (mass.cwiseInverse().asDiagonal() * k).trace(), 1.0, 1e-12);
@@ -64,8 +68,8 @@ TEST(ModalAnalysis, CoupledSeedModes) {
 }
 
 namespace {
-// x'' + k(t) x = 0 with k = 1 + eps cos(W t) on a unit equivalent mass (r = 1, I = 2); the shafts are
-// heavy, stiff and damped so that their own multipliers sit well inside the unit circle.
+// x'' + k(t) x = 0 with k = 1 + eps cos(W t) on a unit equivalent mass (r = 1, I = 2); the shafts
+// are heavy, stiff and damped so that their own multipliers sit well inside the unit circle.
 class MathieuExcitation : public GearExcitation {
  public:
   MathieuExcitation(double w, double eps) : w_(w), eps_(eps) {}
@@ -102,9 +106,9 @@ GearRotorModel mathieuModel(double w, double eps) {
 }  // namespace
 
 // Mathieu equation x'' + (a - 2q cos 2tau) x = 0: the first instability tongue is a = 1 -/+ q to
-// first order (Abramowitz & Stegun 20.2.25). With tau = W t / 2: a = 4/W^2, q = -2 eps / W^2, so the
-// undamped system is unstable for W in (2 sqrt(1 - eps/2), 2 sqrt(1 + eps/2)) = (1.949, 2.049) at
-// eps = 0.1 (second-order corrections ~3e-4). Points 0.02 inside and outside the tongue:
+// first order (Abramowitz & Stegun 20.2.25). With tau = W t / 2: a = 4/W^2, q = -2 eps / W^2, so
+// the undamped system is unstable for W in (2 sqrt(1 - eps/2), 2 sqrt(1 + eps/2)) = (1.949, 2.049)
+// at eps = 0.1 (second-order corrections ~3e-4). Points 0.02 inside and outside the tongue:
 TEST(Floquet, MathieuFirstTongue) {
   const double eps = 0.1;
   for (double w : {1.93, 1.97, 2.03, 2.07}) {
@@ -137,10 +141,11 @@ TEST(Floquet, AgreesWithDirectIntegration) {
   o.divergence_limit = 1e3;
   const int n = 40;
   double peak_early = 0.0, peak_late = 0.0;
-  integrate(model, IntegratorMethod::kDopri5, o, 0.0, y, n * period, period / 100, [&](double t, const State6& s) {
-    if (t < 2 * period) peak_early = std::max(peak_early, std::abs(s[2]));
-    if (t >= (n - 2) * period) peak_late = std::max(peak_late, std::abs(s[2]));
-  });
+  integrate(model, IntegratorMethod::kDopri5, o, 0.0, y, n * period, period / 100,
+            [&](double t, const State6& s) {
+              if (t < 2 * period) peak_early = std::max(peak_early, std::abs(s[2]));
+              if (t >= (n - 2) * period) peak_late = std::max(peak_late, std::abs(s[2]));
+            });
   const double growth_per_period = std::pow(peak_late / peak_early, 1.0 / (n - 2));
   EXPECT_NEAR(growth_per_period, r.max_modulus, 0.01 * r.max_modulus);
 }

@@ -69,15 +69,16 @@ TEST(ModelErrorScale, FindsTheTrueModelErrorBelowAndAboveTheAllowance) {
     for (int j = 0; j < kFeatureSize; ++j) {
       // 3000 windows: the ML estimate's relative spread is about sqrt(2 / 3000) = 2.6 % where the
       // model error dominates each innovation, more where the noise does (c = 0.04: 1/1 of it).
-      EXPECT_NEAR(t.scale.scale()[j] / c_true, 1.0, 0.2) << "feature " << j << ", true c " << c_true;
+      EXPECT_NEAR(t.scale.scale()[j] / c_true, 1.0, 0.2)
+          << "feature " << j << ", true c " << c_true;
     }
   }
 }
 
 TEST(ModelErrorScale, ReportsTheEstimatesRealCovariance) {
   // 400 independent rigs of 60 windows each with a true model error of 4 % of the allowance: the
-  // errors over the reported std have unit variance (chi^2 with 400 dof: mean 1 +- 0.07 at 1 sigma),
-  // the filter's own std is far too wide (its R holds the whole allowance).
+  // errors over the reported std have unit variance (chi^2 with 400 dof: mean 1 +- 0.07 at 1
+  // sigma), the filter's own std is far too wide (its R holds the whole allowance).
   std::mt19937_64 rng(5);
   const int trials = 400;
   double reported = 0.0, filter = 0.0;
@@ -94,9 +95,11 @@ TEST(ModelErrorScale, ReportsTheEstimatesRealCovariance) {
   }
   reported /= count;
   filter /= count;
-  std::cout << "mean (error / std)^2 over " << count << ": reported " << reported << ", filter's own " << filter << "\n";
-  EXPECT_NEAR(reported, 1.0, 0.25);  // c is estimated per rig from 60 windows: a little wider than 0.07
-  EXPECT_LT(filter, 0.3);            // the allowance's bands (R holds 25x the true model error): far too wide
+  std::cout << "mean (error / std)^2 over " << count << ": reported " << reported
+            << ", filter's own " << filter << "\n";
+  EXPECT_NEAR(reported, 1.0,
+              0.25);       // c is estimated per rig from 60 windows: a little wider than 0.07
+  EXPECT_LT(filter, 0.3);  // the allowance's bands (R holds 25x the true model error): far too wide
 }
 
 TEST(ModelErrorScale, IsTheFiltersOwnCovarianceUntilItHasEnoughWindows) {

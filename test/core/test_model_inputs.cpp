@@ -41,7 +41,8 @@ std::shared_ptr<RigExcitation> excitation(TorqueProfile::Kind kind, double mean)
 }  // namespace
 
 // The drive force of a held torque: F = T / r_p with the load following the input (seed 000 eq 14
-// with T_g = T_p r_g / r_p, docs/model.md), r_p = 5.638 mm for the seed pair (m 0.6 mm, 20 teeth, 20 deg).
+// with T_g = T_p r_g / r_p, docs/model.md), r_p = 5.638 mm for the seed pair (m 0.6 mm, 20 teeth,
+// 20 deg).
 TEST(ModelInputs, TorqueInputGivesTheBalancedDriveForce) {
   GearRotorModel model(params(), excitation(TorqueProfile::Kind::kInput, 0.1));
   ASSERT_NE(model.rigExcitation(), nullptr);
@@ -92,7 +93,9 @@ TEST(ModelInputs, RefusalsWithoutATorqueInputOrARigExcitation) {
   const GearRotorModel constant(params(), std::make_shared<ConstantExcitation>(m));
   EXPECT_EQ(constant.rigExcitation(), nullptr);
   EXPECT_THROW(PeriodicExponentialPropagator(constant, 0.0, 1e-3), InvalidInput);
-  EXPECT_THROW(integrateReduced(constant, Fidelity::kLinearModal, 0.0, State6::Zero(), 1e-3, 1e-3, nullptr), InvalidInput);
+  EXPECT_THROW(
+      integrateReduced(constant, Fidelity::kLinearModal, 0.0, State6::Zero(), 1e-3, 1e-3, nullptr),
+      InvalidInput);
 
   // Parameters that overflow the system matrix (a mesh damping of 1e307 N s/m over the equivalent
   // mass's 0.9 g: -Inf) are refused by name, not carried into NaN propagators or a logic error
@@ -111,7 +114,8 @@ TEST(ModelInputs, RefusalsWithoutATorqueInputOrARigExcitation) {
 // The propagator keeps its own model: the caller's model changing its input or going away (what a
 // rebuild does) leaves it as it was built.
 TEST(ModelInputs, PropagatorOwnsItsModel) {
-  auto model = std::make_unique<GearRotorModel>(params(), excitation(TorqueProfile::Kind::kInput, 0.1));
+  auto model =
+      std::make_unique<GearRotorModel>(params(), excitation(TorqueProfile::Kind::kInput, 0.1));
   model->setTorqueInput(0.1);
   const State6 y0 = staticEquilibrium(*model, 0.0);
   const PeriodicExponentialPropagator kept(*model, 0.0, 1e-3);
@@ -119,11 +123,14 @@ TEST(ModelInputs, PropagatorOwnsItsModel) {
   model.reset();
   std::vector<double> a, b;
   IntegratorOptions o;
-  kept.run(y0, 0.03, [&](double, const State6& y) { a.push_back(y[2]); }, o);
+  kept.run(
+      y0, 0.03, [&](double, const State6& y) { a.push_back(y[2]); }, o);
   ASSERT_EQ(a.size(), 31u);
   GearRotorModel again(params(), excitation(TorqueProfile::Kind::kInput, 0.1));
   again.setTorqueInput(0.1);
-  PeriodicExponentialPropagator(again, 0.0, 1e-3).run(y0, 0.03, [&](double, const State6& y) { b.push_back(y[2]); }, o);
+  PeriodicExponentialPropagator(again, 0.0, 1e-3)
+      .run(
+          y0, 0.03, [&](double, const State6& y) { b.push_back(y[2]); }, o);
   EXPECT_EQ(a, b);
 }
 
@@ -152,8 +159,9 @@ TEST(ModelInputs, EstimatorTorqueReachesTheReducedFidelities) {
 
 // The measured motion is the input of the model, not a setting of the excitation it shares: two
 // models over one immutable SlicedExcitation, each at its own motion and torque, see each its own
-// mesh phase (phi = phi_0 + f (t - t_0), sliced_mesh.hpp), its own TE rate (e' = 2 pi f A cos 2 pi phi)
-// and its own drive force (T / r_p), and the same as an excitation built with that motion alone.
+// mesh phase (phi = phi_0 + f (t - t_0), sliced_mesh.hpp), its own TE rate (e' = 2 pi f A cos 2 pi
+// phi) and its own drive force (T / r_p), and the same as an excitation built with that motion
+// alone.
 TEST(ModelInputs, MotionInputBelongsToTheModel) {
   const auto slices = std::make_shared<const SlicedMesh>(mesh(), 64);
   const double a = 1e-6, r_p = params().pinion_base_radius;
@@ -172,9 +180,12 @@ TEST(ModelInputs, MotionInputBelongsToTheModel) {
   EXPECT_NEAR(r.te_rate, kTwoPi * -100.0 * a * std::cos(kTwoPi * 0.78), 1e-12);
   EXPECT_NEAR(f.drive_force, 0.4 / r_p, 1e-9);
   EXPECT_NEAR(r.drive_force, -0.2 / r_p, 1e-9);
-  // Each model's next slice boundary is along its own motion: forward past 0.6496, backward below 0.78.
-  const SlicedExcitation alone_f(slices, a, 0.0, 1.0 / r_p, 0.0, MeshMotion{0.01, 0.25, 333.0}, 0.4);
-  const SlicedExcitation alone_r(slices, a, 0.0, 1.0 / r_p, 0.0, MeshMotion{0.0, 0.9, -100.0}, -0.2);
+  // Each model's next slice boundary is along its own motion: forward past 0.6496, backward below
+  // 0.78.
+  const SlicedExcitation alone_f(slices, a, 0.0, 1.0 / r_p, 0.0, MeshMotion{0.01, 0.25, 333.0},
+                                 0.4);
+  const SlicedExcitation alone_r(slices, a, 0.0, 1.0 / r_p, 0.0, MeshMotion{0.0, 0.9, -100.0},
+                                 -0.2);
   EXPECT_EQ(forward.nextSwitch(0.0112), alone_f.nextSwitch(0.0112));
   EXPECT_EQ(reversed.nextSwitch(0.0112), alone_r.nextSwitch(0.0112));
   EXPECT_GT(forward.nextSwitch(0.0112), 0.0112);

@@ -16,21 +16,26 @@
 using namespace drivetrain_stiffness;
 
 namespace {
-RigConfig rigFile(const std::string& relative) { return loadRigFile(std::string(DRIVETRAIN_SOURCE_DIR) + "/" + relative); }
+RigConfig rigFile(const std::string& relative) {
+  return loadRigFile(std::string(DRIVETRAIN_SOURCE_DIR) + "/" + relative);
+}
 
 // Seed 000 Table 1 (config/gearboxes/seed_servo.yaml): m = 0.6 mm, z = 20 / 40, alpha = 20 deg,
 // h_a = 1, masses and inertias; speed 1000 rpm; damping ratios 0.05 (mesh) and 0.02 (bearings).
 constexpr double kModule = 0.6e-3, kMp = 33.95e-3, kMg = 48.27e-3, kIp = 0.0515e-6, kIg = 0.258e-6;
 const double kAlpha = 20.0 * M_PI / 180.0;
-const double kRbp = kModule * 20 / 2 * std::cos(kAlpha), kRbg = kModule * 40 / 2 * std::cos(kAlpha);  // r_b = m z cos(alpha) / 2
-// Seed 000 eq 14: the torsional coordinate x = r_p theta_p - r_g theta_g carries m_s = 1 / (r_p^2/I_p + r_g^2/I_g).
+const double kRbp = kModule * 20 / 2 * std::cos(kAlpha),
+             kRbg = kModule * 40 / 2 * std::cos(kAlpha);  // r_b = m z cos(alpha) / 2
+// Seed 000 eq 14: the torsional coordinate x = r_p theta_p - r_g theta_g carries m_s = 1 /
+// (r_p^2/I_p + r_g^2/I_g).
 const double kMs = 1.0 / (kRbp * kRbp / kIp + kRbg * kRbg / kIg);
 
 // ISO 21771 transverse contact ratio of a standard spur pair at the standard centre distance:
 // eps = [sqrt(ra1^2 - rb1^2) + sqrt(ra2^2 - rb2^2) - a sin(alpha)] / (pi m cos(alpha)).
 double contactRatio() {
   const double r1 = kModule * 10, r2 = kModule * 20, ra1 = r1 + kModule, ra2 = r2 + kModule;
-  return (std::sqrt(ra1 * ra1 - kRbp * kRbp) + std::sqrt(ra2 * ra2 - kRbg * kRbg) - (r1 + r2) * std::sin(kAlpha)) /
+  return (std::sqrt(ra1 * ra1 - kRbp * kRbp) + std::sqrt(ra2 * ra2 - kRbg * kRbg) -
+          (r1 + r2) * std::sin(kAlpha)) /
          (M_PI * kModule * std::cos(kAlpha));
 }
 
@@ -38,9 +43,7 @@ double contactRatio() {
 // force k delta acts on x_p and x with +, on x_g with -; each bearing holds its shaft.
 Eigen::Matrix3d stiffnessMatrix(double k, double kp, double kg) {
   Eigen::Matrix3d m;
-  m << k + kp, -k, k,
-       -k, k + kg, -k,
-       k, -k, k;
+  m << k + kp, -k, k, -k, k + kg, -k, k, -k, k;
   return m;
 }
 }  // namespace
@@ -60,15 +63,18 @@ TEST(OperatingPointModes, MeshRangeIsOneAndTwoIsoPairs) {
   const MeshStiffnessRange r = meshStiffnessRange(mesh, 0.1 / kRbp);
   EXPECT_NEAR(r.min / pair, 1.0, 1e-6);
   EXPECT_NEAR(r.max / (2.0 * pair), 1.0, 1e-6);
-  // One sample lands in the single-pair zone only if that zone (2 - eps of the period) is wider than a sample.
-  EXPECT_NEAR(meshStiffnessRange(mesh, 0.1 / kRbp, 1).max / (2.0 * pair), 1.0, 1e-6);  // phase 0.5: two pairs
+  // One sample lands in the single-pair zone only if that zone (2 - eps of the period) is wider
+  // than a sample.
+  EXPECT_NEAR(meshStiffnessRange(mesh, 0.1 / kRbp, 1).max / (2.0 * pair), 1.0,
+              1e-6);  // phase 0.5: two pairs
   EXPECT_THROW(meshStiffnessRange(mesh, 0.0, 0), InvalidInput);
 }
 
 // The seed rig at its Table 1 torque: the natural frequencies at the mean, single- and double-pair
 // mesh stiffness are the roots of det(K - w^2 M) = 0 with K and M assembled here.
 TEST(OperatingPointModes, SeedRigModesSolveTheEigenproblem) {
-  const OperatingPointModes r = operatingPointModes(rigFile("config/gearboxes/seed_servo.yaml"), 0.1);
+  const OperatingPointModes r =
+      operatingPointModes(rigFile("config/gearboxes/seed_servo.yaml"), 0.1);
   EXPECT_NEAR(r.parameters.equivalentMass() / kMs, 1.0, 1e-12);
   // Both shafts carry the same bearing, preloads and the same |mesh force|: the same stiffness.
   EXPECT_NEAR(r.bearing_stiffness[0] / r.bearing_stiffness[1], 1.0, 1e-12);
@@ -77,12 +83,16 @@ TEST(OperatingPointModes, SeedRigModesSolveTheEigenproblem) {
   EXPECT_LT(r.mesh_mean, r.mesh_range.max);
   const Eigen::Matrix3d mass = Eigen::Vector3d(kMp, kMg, kMs).asDiagonal();
   const std::pair<double, const std::array<Mode, 3>*> cases[] = {
-      {r.mesh_mean, &r.modes_mean}, {r.mesh_range.min, &r.modes_single_pair}, {r.mesh_range.max, &r.modes_double_pair}};
+      {r.mesh_mean, &r.modes_mean},
+      {r.mesh_range.min, &r.modes_single_pair},
+      {r.mesh_range.max, &r.modes_double_pair}};
   for (const auto& [k, modes] : cases) {
     const Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::Matrix3d> eig(
         stiffnessMatrix(k, r.bearing_stiffness[0], r.bearing_stiffness[1]), mass);
     for (int i = 0; i < 3; ++i) {
-      EXPECT_NEAR((*modes)[i].natural_frequency / (std::sqrt(eig.eigenvalues()[i]) / (2 * M_PI)), 1.0, 1e-9) << k << " mode " << i;
+      EXPECT_NEAR((*modes)[i].natural_frequency / (std::sqrt(eig.eigenvalues()[i]) / (2 * M_PI)),
+                  1.0, 1e-9)
+          << k << " mode " << i;
     }
   }
 }
@@ -105,7 +115,8 @@ TEST(OperatingPointModes, FloquetMultipliersObeyLiouville) {
   EXPECT_NEAR(r.floquet->mesh_frequency, 20 * 20000.0 / 60.0, 1e-9);
   const double period = 60.0 / (20 * 20000.0);
   const double cs = 2 * 0.05 * std::sqrt(r.mesh_mean * kMs);
-  const double cp = 2 * 0.02 * std::sqrt(r.bearing_stiffness[0] * kMp), cg = 2 * 0.02 * std::sqrt(r.bearing_stiffness[1] * kMg);
+  const double cp = 2 * 0.02 * std::sqrt(r.bearing_stiffness[0] * kMp),
+               cg = 2 * 0.02 * std::sqrt(r.bearing_stiffness[1] * kMg);
   const double trace = (cs + cp) / kMp + (cs + cg) / kMg + cs / kMs;
   double product = 1.0, largest = 0.0;
   for (int i = 0; i < 6; ++i) {

@@ -14,7 +14,9 @@ namespace ds = drivetrain_stiffness;
 
 namespace {
 
-ds::RigConfig seedRig() { return ds::loadRigFile(DRIVETRAIN_SOURCE_DIR "/config/gearboxes/seed_servo.yaml"); }
+ds::RigConfig seedRig() {
+  return ds::loadRigFile(DRIVETRAIN_SOURCE_DIR "/config/gearboxes/seed_servo.yaml");
+}
 
 /// Column by name.
 std::vector<double> column(const ds::StudyTable& t, const std::string& name) {
@@ -28,7 +30,9 @@ std::vector<double> column(const ds::StudyTable& t, const std::string& name) {
   return out;
 }
 
-double spread(const std::vector<double>& v) { return *std::max_element(v.begin(), v.end()) - *std::min_element(v.begin(), v.end()); }
+double spread(const std::vector<double>& v) {
+  return *std::max_element(v.begin(), v.end()) - *std::min_element(v.begin(), v.end());
+}
 
 }  // namespace
 
@@ -81,7 +85,8 @@ TEST(ParameterStudies, RadialStiffnessMinimumAtFullComplementLimit) {
       if (t.rows[a * n + r][2] < t.rows[a * n + best][2]) best = r;
     if (best == 0 || best == n - 1) continue;  // minimum outside the seed's range
     ++interior;
-    const double ratio = t.rows[a * n + best][1] * std::tan(25.0 * M_PI / 180.0) / t.rows[a * n + best][0];
+    const double ratio =
+        t.rows[a * n + best][1] * std::tan(25.0 * M_PI / 180.0) / t.rows[a * n + best][0];
     EXPECT_GT(ratio, 0.5) << "F_a = " << t.rows[a * n][0];
     EXPECT_LT(ratio, 0.75) << "F_a = " << t.rows[a * n][0];
   }

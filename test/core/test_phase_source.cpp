@@ -79,7 +79,8 @@ TEST(PhaseSource, AnEncoderJumpIsRefusedWithNothingChanged) {
   f.read(0.0, 0.0, 10.0);
   bool continuous = false;
   // 3 rad in 10 us: 3e5 rad/s, beyond 1e5 rpm.
-  EXPECT_THROW(f.phase.unwrap(at(1e-5), MotionInput{3.0, std::nullopt, std::nullopt}, continuous), InvalidInput);
+  EXPECT_THROW(f.phase.unwrap(at(1e-5), MotionInput{3.0, std::nullopt, std::nullopt}, continuous),
+               InvalidInput);
   EXPECT_NEAR(f.phase.anchor()->angle, kOffsetAngle, 1e-15);
   EXPECT_NEAR(f.phase.anchor()->speed, 10.0, 1e-15);
 }

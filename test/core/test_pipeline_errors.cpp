@@ -56,7 +56,8 @@ TEST(PipelineErrors, TheLibrarysOwnErrorInTheDynamicsIsCountedAndTheModelRestart
   // good), the dynamics restart at it, counted once with the reason.
   EXPECT_EQ(p.torque(at(0.010), 0.1, sink), InputOutcome::kAccepted);
   EXPECT_EQ(p.counters().dynamics_errors, 1u);
-  EXPECT_NE(p.counters().last_event.find("injected divergence"), std::string::npos) << p.counters().last_event;
+  EXPECT_NE(p.counters().last_event.find("injected divergence"), std::string::npos)
+      << p.counters().last_event;
   EXPECT_TRUE(p.dynamics()->started());
   // And it goes on: the next 10 ms give their samples.
   const int before = sink.samples;
@@ -92,14 +93,16 @@ TEST(PipelineErrors, TheLibrarysOwnErrorInTheResonanceIsCounted) {
   sink.on_resonance = [] { throw InvalidInput("resonance: injected refusal"); };
   EXPECT_EQ(p.torque(at(0.0), 0.1, sink), InputOutcome::kAccepted);
   EXPECT_EQ(p.counters().dynamics_errors, 1u);
-  EXPECT_NE(p.counters().last_event.find("injected refusal"), std::string::npos) << p.counters().last_event;
+  EXPECT_NE(p.counters().last_event.find("injected refusal"), std::string::npos)
+      << p.counters().last_event;
 }
 
 // A stiffness message the sink refuses (the ROS sink refuses a non-finite field, InvalidInput):
 // the input was taken (its stiffness is in the estimator and reaches the dynamics), so it is
 // counted accepted once and not also rejected, and the refusal has a count of its own.
 TEST(PipelineErrors, ARefusedStiffnessMessageLeavesTheInputAcceptedOnce) {
-  RigPipeline p(rig(), PipelineOptions{});  // stiffness_rate 0 (RuntimeSettings): a message per input
+  RigPipeline p(rig(),
+                PipelineOptions{});  // stiffness_rate 0 (RuntimeSettings): a message per input
   ASSERT_EQ(p.settings().stiffness_rate, 0.0);
   InjectingSink sink;
   int refusals = 0;
@@ -113,7 +116,8 @@ TEST(PipelineErrors, ARefusedStiffnessMessageLeavesTheInputAcceptedOnce) {
   EXPECT_EQ(p.counters().invalid_values, 0u);
   EXPECT_EQ(p.counters().stiffness_refused, 2u);
   EXPECT_EQ(p.counters().stiffness_out, 0u);
-  EXPECT_NE(p.counters().last_event.find("not published"), std::string::npos) << p.counters().last_event;
+  EXPECT_NE(p.counters().last_event.find("not published"), std::string::npos)
+      << p.counters().last_event;
   // The input's stiffness went on to the dynamics and the resonance (pushStiffness, after the
   // refused message): the first input's modal analysis was run and published.
   EXPECT_GE(p.counters().modal_updates, 1u);

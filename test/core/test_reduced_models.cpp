@@ -17,15 +17,21 @@ using namespace drivetrain_stiffness;
 namespace {
 const RigConfig& rig() { return test::seedServo(); }
 
-std::vector<double> deltas(const GearRotorModel& m, const Scene& s, const std::function<void(const Observer&)>& run) {
+std::vector<double> deltas(const GearRotorModel& m, const Scene& s,
+                           const std::function<void(const Observer&)>& run) {
   std::vector<double> d;
-  run([&](double t, const State6& y) { if (t >= s.transient) d.push_back(m.forces(t, y).delta); });
+  run([&](double t, const State6& y) {
+    if (t >= s.transient) d.push_back(m.forces(t, y).delta);
+  });
   return d;
 }
 
 double relErr(const std::vector<double>& a, const std::vector<double>& b) {
   double e = 0, r = 0;
-  for (std::size_t i = 0; i < b.size(); ++i) { e += (a[i] - b[i]) * (a[i] - b[i]); r += b[i] * b[i]; }
+  for (std::size_t i = 0; i < b.size(); ++i) {
+    e += (a[i] - b[i]) * (a[i] - b[i]);
+    r += b[i] * b[i];
+  }
   return std::sqrt(e / r);
 }
 
@@ -50,8 +56,13 @@ TEST(ReducedModels, QuasiStaticIsTheLightTorsionLimit) {
   auto errorFor = [&](double scale) {
     const auto model = withInertiaScale(s, scale);
     const State6 y0 = staticEquilibrium(*model, 0.0);
-    const auto full = deltas(*model, s, [&](const Observer& ob) { integrate(*model, IntegratorMethod::kExponential, o, 0.0, y0, s.duration, s.output_interval, ob); });
-    const auto qs = deltas(*model, s, [&](const Observer& ob) { integrateReduced(*model, Fidelity::kQuasiStatic, 0.0, y0, s.duration, s.output_interval, ob); });
+    const auto full = deltas(*model, s, [&](const Observer& ob) {
+      integrate(*model, IntegratorMethod::kExponential, o, 0.0, y0, s.duration, s.output_interval,
+                ob);
+    });
+    const auto qs = deltas(*model, s, [&](const Observer& ob) {
+      integrateReduced(*model, Fidelity::kQuasiStatic, 0.0, y0, s.duration, s.output_interval, ob);
+    });
     return relErr(qs, full);
   };
   const double coarse = errorFor(1.0), fine = errorFor(1e-2);
@@ -61,7 +72,8 @@ TEST(ReducedModels, QuasiStaticIsTheLightTorsionLimit) {
 
 // Linear modal (mean stiffness, LTI): its steady-state response to the TE at the mesh frequency
 // equals the analytic frequency response q = (K - w^2 M + i w C)^-1 f of docs/model.md's matrices,
-// with the TE entering the mesh force as -(k_s + i w c_s) A on (x_p, x_g, x) with signs (-1, +1, -1).
+// with the TE entering the mesh force as -(k_s + i w c_s) A on (x_p, x_g, x) with signs (-1, +1,
+// -1).
 TEST(ReducedModels, LinearModalMatchesAnalyticFrequencyResponse) {
   const Scene s = makeScene("nominal", rig());
   const RigExcitation& e = *s.model->rigExcitation();
@@ -70,21 +82,26 @@ TEST(ReducedModels, LinearModalMatchesAnalyticFrequencyResponse) {
   // (checked against two independent quadratures in test_mesh_stiffness.cpp,
   // AntiBacklashMesh.PeriodMeansAreTheExactIntegralsOfThePhaseTable).
   const double ks = e.mesh().periodMeans().k1 + e.mesh().periodMeans().k_chain;
-  const double w = 2 * M_PI * e.meshFrequency(), a = e.spec().te_amplitude, cs = p.mesh_damping, ms = s.model->equivalentMass();
+  const double w = 2 * M_PI * e.meshFrequency(), a = e.spec().te_amplitude, cs = p.mesh_damping,
+               ms = s.model->equivalentMass();
   using C = std::complex<double>;
   Eigen::Matrix3cd d;
   const C kc(ks, w * cs);
   d << C(p.bearing_stiffness[0] - w * w * p.pinion_mass, w * p.bearing_damping[0]) + kc, -kc, kc,
-       -kc, C(p.bearing_stiffness[1] - w * w * p.gear_mass, w * p.bearing_damping[1]) + kc, -kc,
-       kc, -kc, -w * w * ms + kc;
-  const Eigen::Vector3cd f = kc * a * Eigen::Vector3cd(1.0, -1.0, 1.0);  // e(t) = A sin(w t) = Im(A e^{iwt})
+      -kc, C(p.bearing_stiffness[1] - w * w * p.gear_mass, w * p.bearing_damping[1]) + kc, -kc, kc,
+      -kc, -w * w * ms + kc;
+  const Eigen::Vector3cd f =
+      kc * a * Eigen::Vector3cd(1.0, -1.0, 1.0);  // e(t) = A sin(w t) = Im(A e^{iwt})
   const Eigen::Vector3cd q = d.partialPivLu().solve(f);
   const C delta_amp = q[2] + q[0] - q[1] - a;  // delta = x + x_p - x_g - e
-  // Simulate long enough for the transient to decay and fit A sin + B cos + mean over the last periods.
+  // Simulate long enough for the transient to decay and fit A sin + B cos + mean over the last
+  // periods.
   const double period = 1.0 / e.meshFrequency();
   std::vector<std::pair<double, double>> samples;
-  integrateReduced(*s.model, Fidelity::kLinearModal, 0.0, s.initial, 200 * period, s.output_interval,
-                   [&](double t, const State6& y) { if (t > 190 * period) samples.emplace_back(t, s.model->forces(t, y).delta); });
+  integrateReduced(*s.model, Fidelity::kLinearModal, 0.0, s.initial, 200 * period,
+                   s.output_interval, [&](double t, const State6& y) {
+                     if (t > 190 * period) samples.emplace_back(t, s.model->forces(t, y).delta);
+                   });
   Eigen::MatrixXd basis(samples.size(), 3);
   Eigen::VectorXd values(samples.size());
   for (std::size_t i = 0; i < samples.size(); ++i) {
@@ -103,13 +120,16 @@ TEST(ReducedModels, LinearModalMatchesAnalyticFrequencyResponse) {
 TEST(ReducedModels, AutomaticChoiceIsTheCheapestThatMeetsTheBound) {
   const Scene s = makeScene("nominal", rig());
   const double pilot = 4.0 / (1000.0 / 60 * 20);
-  EXPECT_EQ(chooseAutomatically(*s.model, 0.0, s.initial, s.output_interval, pilot, 0.5).fidelity, Fidelity::kQuasiStatic);
-  const AutoChoice tight = chooseAutomatically(*s.model, 0.0, s.initial, s.output_interval, pilot, 1e-6);
+  EXPECT_EQ(chooseAutomatically(*s.model, 0.0, s.initial, s.output_interval, pilot, 0.5).fidelity,
+            Fidelity::kQuasiStatic);
+  const AutoChoice tight =
+      chooseAutomatically(*s.model, 0.0, s.initial, s.output_interval, pilot, 1e-6);
   EXPECT_EQ(tight.fidelity, Fidelity::kFull);
   EXPECT_EQ(tight.method, IntegratorMethod::kExponential);
   EXPECT_FALSE(tight.reason.empty());
   const Scene rattle = makeScene("bearing_rattle", rig());
-  const AutoChoice r = chooseAutomatically(*rattle.model, 0.0, rattle.initial, rattle.output_interval, pilot, 1e-3);
+  const AutoChoice r =
+      chooseAutomatically(*rattle.model, 0.0, rattle.initial, rattle.output_interval, pilot, 1e-3);
   EXPECT_EQ(r.method, IntegratorMethod::kDopri5);  // clearance: no exact propagation
   EXPECT_NEAR(r.relative_tolerance, 1e-5, 1e-18);
 }
@@ -119,24 +139,26 @@ TEST(ReducedModels, AutomaticChoiceIsTheCheapestThatMeetsTheBound) {
 // near_rigid_bearings scene (bearings 100x stiffer: omega_max about 10x the nominal one, so about
 // 10x the Magnus steps) a 3 ms run is cheaper with dopri5, a long one with the exponential method.
 // Whatever it picks must meet its bound against an independent dopri5 at rtol 1e-12 over the
-// run (after the scene's start transient, as the bench's err_rms_rel), and a chosen exponential method must give exactly what a fresh one gives (its
-// propagators are the pilot's, built once).
+// run (after the scene's start transient, as the bench's err_rms_rel), and a chosen exponential
+// method must give exactly what a fresh one gives (its propagators are the pilot's, built once).
 TEST(ReducedModels, AutoWeighsTheSetUpAgainstTheRunAndMeetsItsBound) {
   for (const char* name : {"nominal", "near_rigid_bearings", "low_preload"}) {
     const Scene s = makeScene(name, rig());
     const double pilot = defaultPilotDuration(s.duration, s.output_interval), bound = 1e-6;
-    const AutoChoice c = chooseAutomatically(*s.model, 0.0, s.initial, s.output_interval, pilot, bound, s.duration);
+    const AutoChoice c =
+        chooseAutomatically(*s.model, 0.0, s.initial, s.output_interval, pilot, bound, s.duration);
     // The error as the bench measures it (err_rms_rel: delta after the scene's start transient).
     std::vector<double> chosen, reference;
-    integrateChoice(*s.model, c, 0.0, s.initial, s.duration, s.output_interval, [&](double t, const State6& y) {
-      if (t >= s.transient) chosen.push_back(s.model->forces(t, y).delta);
-    });
+    integrateChoice(*s.model, c, 0.0, s.initial, s.duration, s.output_interval,
+                    [&](double t, const State6& y) {
+                      if (t >= s.transient) chosen.push_back(s.model->forces(t, y).delta);
+                    });
     IntegratorOptions tight;
     tight.relative_tolerance = 1e-12;
     tight.absolute_tolerance = 1e-18;
     tight.max_step = 1e-4;
-    integrate(*s.model, IntegratorMethod::kDopri5, tight, 0.0, s.initial, s.duration, s.output_interval,
-              [&](double t, const State6& y) {
+    integrate(*s.model, IntegratorMethod::kDopri5, tight, 0.0, s.initial, s.duration,
+              s.output_interval, [&](double t, const State6& y) {
                 if (t >= s.transient) reference.push_back(s.model->forces(t, y).delta);
               });
     ASSERT_EQ(chosen.size(), reference.size()) << name;
@@ -149,8 +171,8 @@ TEST(ReducedModels, AutoWeighsTheSetUpAgainstTheRunAndMeetsItsBound) {
     if (c.method == IntegratorMethod::kExponential) {
       ASSERT_TRUE(c.exponential) << name;
       std::vector<double> fresh;
-      integrate(*s.model, IntegratorMethod::kExponential, IntegratorOptions{}, 0.0, s.initial, s.duration, s.output_interval,
-                [&](double t, const State6& y) {
+      integrate(*s.model, IntegratorMethod::kExponential, IntegratorOptions{}, 0.0, s.initial,
+                s.duration, s.output_interval, [&](double t, const State6& y) {
                   if (t >= s.transient) fresh.push_back(s.model->forces(t, y).delta);
                 });
       EXPECT_EQ(fresh, chosen) << name;
@@ -171,29 +193,34 @@ TEST(ReducedModels, AutoWeighsTheSetUpAgainstTheRunAndMeetsItsBound) {
                         Case{"nominal", 1e-7, false, true}}) {
     const Scene s = makeScene(k.scene, rig());
     const double pilot = defaultPilotDuration(s.duration, s.output_interval);
-    const AutoChoice c = chooseAutomatically(*s.model, 0.0, s.initial, s.output_interval, pilot, k.bound, s.duration);
+    const AutoChoice c = chooseAutomatically(*s.model, 0.0, s.initial, s.output_interval, pilot,
+                                             k.bound, s.duration);
     const IntegratorOptions dopri = autoOptions(IntegratorMethod::kDopri5, c.relative_tolerance);
     IntegrationStats count, whole;
-    integrate(*s.model, IntegratorMethod::kDopri5, dopri, 0.0, s.initial, kDopriCountSamples * s.output_interval,
-              s.output_interval, nullptr, &count);
-    integrate(*s.model, IntegratorMethod::kDopri5, dopri, 0.0, s.initial, c.pilot_duration, s.output_interval, nullptr, &whole);
+    integrate(*s.model, IntegratorMethod::kDopri5, dopri, 0.0, s.initial,
+              kDopriCountSamples * s.output_interval, s.output_interval, nullptr, &count);
+    integrate(*s.model, IntegratorMethod::kDopri5, dopri, 0.0, s.initial, c.pilot_duration,
+              s.output_interval, nullptr, &whole);
     ASSERT_LT(count.steps, whole.steps) << k.scene;
     EXPECT_EQ(c.dopri_pilot_steps, (k.count ? count.steps : 0) + (k.whole ? whole.steps : 0))
         << k.scene << " at " << k.bound << ": " << c.reason;
   }
   const Scene stiff = makeScene("near_rigid_bearings", rig());
   const double pilot = 10 * stiff.output_interval;
-  const AutoChoice short_run = chooseAutomatically(*stiff.model, 0.0, stiff.initial, stiff.output_interval, pilot, 1e-6, 3e-3);
+  const AutoChoice short_run = chooseAutomatically(*stiff.model, 0.0, stiff.initial,
+                                                   stiff.output_interval, pilot, 1e-6, 3e-3);
   EXPECT_EQ(short_run.method, IntegratorMethod::kDopri5) << short_run.reason;
   EXPECT_FALSE(short_run.exponential);
-  const AutoChoice long_run = chooseAutomatically(*stiff.model, 0.0, stiff.initial, stiff.output_interval, pilot, 1e-6, 10.0);
+  const AutoChoice long_run = chooseAutomatically(*stiff.model, 0.0, stiff.initial,
+                                                  stiff.output_interval, pilot, 1e-6, 10.0);
   EXPECT_EQ(long_run.method, IntegratorMethod::kExponential) << long_run.reason;
 }
 
 // Review findings: the backlash offset of an ordinary gear in both reduced models (and its sign
 // under a reversed load), and a pilot too short to compare anything.
 TEST(ReducedModels, OrdinaryGearBacklashOffset) {
-  const RigConfig ordinary = loadRigFile(std::string(DRIVETRAIN_SOURCE_DIR) + "/test/data/ordinary_servo.yaml");
+  const RigConfig ordinary =
+      loadRigFile(std::string(DRIVETRAIN_SOURCE_DIR) + "/test/data/ordinary_servo.yaml");
   for (double torque : {0.1, -0.1}) {
     RigConfig r = ordinary;
     r.dynamics.torque = torque;
@@ -205,20 +232,26 @@ TEST(ReducedModels, OrdinaryGearBacklashOffset) {
     for (Fidelity f : {Fidelity::kQuasiStatic, Fidelity::kLinearModal}) {
       double mean = 0.0;
       long n = 0;
-      integrateReduced(*s.model, f, 0.0, s.initial, s.duration, s.output_interval, [&](double t, const State6& y) {
-        if (t >= s.transient) { mean += s.model->forces(t, y).delta; ++n; }
-      });
+      integrateReduced(*s.model, f, 0.0, s.initial, s.duration, s.output_interval,
+                       [&](double t, const State6& y) {
+                         if (t >= s.transient) {
+                           mean += s.model->forces(t, y).delta;
+                           ++n;
+                         }
+                       });
       mean /= n;
       // Mean deflection: the backlash plus the elastic part (k_s between single and double pair).
       EXPECT_GT(mean * b, 0.0) << toString(f) << " torque " << torque;
-      EXPECT_NEAR(mean - b, m.drive_force / 1.2e8, 0.5 * std::abs(m.drive_force / 1.2e8)) << toString(f) << " " << torque;
+      EXPECT_NEAR(mean - b, m.drive_force / 1.2e8, 0.5 * std::abs(m.drive_force / 1.2e8))
+          << toString(f) << " " << torque;
     }
   }
 }
 
 TEST(ReducedModels, ShortPilotStillCompares) {
   const Scene s = makeScene("nominal", rig());
-  const AutoChoice c = chooseAutomatically(*s.model, 0.0, s.initial, s.output_interval, 0.3 * s.output_interval, 1e-9);
+  const AutoChoice c = chooseAutomatically(*s.model, 0.0, s.initial, s.output_interval,
+                                           0.3 * s.output_interval, 1e-9);
   EXPECT_NE(c.fidelity, Fidelity::kQuasiStatic);  // once chosen on the start state alone
   EXPECT_GE(c.pilot_duration, 4 * s.output_interval * (1 - 1e-12));
 }
@@ -247,14 +280,17 @@ TEST(ReducedModels, AutoOnTheDimensionlessOscillatorRunsInItsUnits) {
   const double pilot = defaultPilotDuration(s.duration, s.output_interval), bound = 1e-6;
   EXPECT_THROW(
       {
-        const AutoChoice si = chooseAutomatically(*s.model, 0.0, s.initial, s.output_interval, pilot, bound, s.duration);
+        const AutoChoice si = chooseAutomatically(*s.model, 0.0, s.initial, s.output_interval,
+                                                  pilot, bound, s.duration);
         integrateChoice(*s.model, si, 0.0, s.initial, s.duration, s.output_interval, nullptr);
       },
       UnstableIntegration)
       << "the SI defaults should not fit this scene (else this test shows nothing)";
-  const AutoChoice c = chooseAutomatically(*s.model, 0.0, s.initial, s.output_interval, pilot, bound, s.duration, s.scale());
+  const AutoChoice c = chooseAutomatically(*s.model, 0.0, s.initial, s.output_interval, pilot,
+                                           bound, s.duration, s.scale());
   EXPECT_EQ(c.fidelity, Fidelity::kFull);
-  EXPECT_EQ(c.method, IntegratorMethod::kDopri5) << "no rig excitation: neither reduced nor exponential applies";
+  EXPECT_EQ(c.method, IntegratorMethod::kDopri5)
+      << "no rig excitation: neither reduced nor exponential applies";
   EXPECT_EQ(c.scale.divergence_limit, IntegratorScale::dimensionless().divergence_limit);
   const std::vector<double> chosen = deltas(*s.model, s, [&](const Observer& o) {
     integrateChoice(*s.model, c, 0.0, s.initial, s.duration, s.output_interval, o);
@@ -265,7 +301,8 @@ TEST(ReducedModels, AutoOnTheDimensionlessOscillatorRunsInItsUnits) {
   tight.max_step = s.scale().max_step;
   tight.divergence_limit = s.scale().divergence_limit;
   const std::vector<double> reference = deltas(*s.model, s, [&](const Observer& o) {
-    integrate(*s.model, IntegratorMethod::kDopri5, tight, 0.0, s.initial, s.duration, s.output_interval, o);
+    integrate(*s.model, IntegratorMethod::kDopri5, tight, 0.0, s.initial, s.duration,
+              s.output_interval, o);
   });
   ASSERT_EQ(chosen.size(), reference.size());
   ASSERT_GT(reference.size(), 100u);

@@ -51,7 +51,8 @@ TEST(ResonanceTracker, TheFirstUpdatePublishesTheModesOfTheOperatingPoint) {
   ASSERT_EQ(f.sink.out.size(), 1u);
   ASSERT_TRUE(f.tracker.last().has_value());
   const auto modes = modalAnalysis(
-      rigRotorParameters(*f.rig, f.estimator.mesh(), f.estimator.shaftRadialStiffness(), f.damping), e.mesh.mean);
+      rigRotorParameters(*f.rig, f.estimator.mesh(), f.estimator.shaftRadialStiffness(), f.damping),
+      e.mesh.mean);
   for (std::size_t i = 0; i < modes.size(); ++i) {
     EXPECT_EQ(f.sink.out[0].modes[i].natural_frequency, modes[i].natural_frequency);
     // Without a calibration the bands are the estimate's frequencies, of zero width.

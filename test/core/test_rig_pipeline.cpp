@@ -34,7 +34,8 @@ struct Recorder : PipelineSink {
   std::vector<std::pair<Stamp, ResonanceEstimate>> resonance_out;
   int spectra = 0;
   void stiffness(Stamp s, const StiffnessEstimate& e, const CalibrationBands&) override {
-    for (const SupportEstimate& b : e.supports) EXPECT_TRUE(std::isfinite(b.solution.radialStiffness()));
+    for (const SupportEstimate& b : e.supports)
+      EXPECT_TRUE(std::isfinite(b.solution.radialStiffness()));
     EXPECT_TRUE(std::isfinite(e.mesh.current.composite));
     stiffness_out.emplace_back(s, e);
   }
@@ -46,7 +47,8 @@ struct Recorder : PipelineSink {
   }
   void spectrum(Stamp, const SpectrumPeaks&) override { ++spectra; }
   void resonance(Stamp s, const ResonanceEstimate& r, const CalibrationBands&) override {
-    for (const Mode& m : r.modes) EXPECT_TRUE(std::isfinite(m.natural_frequency) && std::isfinite(m.damping_ratio));
+    for (const Mode& m : r.modes)
+      EXPECT_TRUE(std::isfinite(m.natural_frequency) && std::isfinite(m.damping_ratio));
     resonance_out.emplace_back(s, r);
   }
 };
@@ -77,20 +79,23 @@ TEST(RigPipeline, OptionsAreValidatedWithTheFieldNamed) {
   EXPECT_THROW(RigPipeline(rig(), o), InvalidInput);
 }
 
-// The zero-stamp and value rules: a zero stamp, NaN, Inf and absurd torques, a negative preload and an
-// unknown bearing are rejected and counted by reason; the next good input is answered exactly as if
-// they had never come (the state is not poisoned).
+// The zero-stamp and value rules: a zero stamp, NaN, Inf and absurd torques, a negative preload and
+// an unknown bearing are rejected and counted by reason; the next good input is answered exactly as
+// if they had never come (the state is not poisoned).
 TEST(RigPipeline, BadInputsAreCountedAndDoNotPoisonTheState) {
   RigPipeline clean(rig(), PipelineOptions{}), dirty(rig(), PipelineOptions{});
   Recorder a, b;
   ASSERT_EQ(clean.torque(at(0.0), 0.1, a), InputOutcome::kAccepted);
   ASSERT_EQ(dirty.torque(at(0.0), 0.1, b), InputOutcome::kAccepted);
   EXPECT_EQ(dirty.torque(Stamp{0}, 0.1, b), InputOutcome::kZeroStamp);
-  EXPECT_EQ(dirty.torque(at(0.01), std::numeric_limits<double>::quiet_NaN(), b), InputOutcome::kInvalidValue);
-  EXPECT_EQ(dirty.torque(at(0.02), std::numeric_limits<double>::infinity(), b), InputOutcome::kInvalidValue);
+  EXPECT_EQ(dirty.torque(at(0.01), std::numeric_limits<double>::quiet_NaN(), b),
+            InputOutcome::kInvalidValue);
+  EXPECT_EQ(dirty.torque(at(0.02), std::numeric_limits<double>::infinity(), b),
+            InputOutcome::kInvalidValue);
   EXPECT_EQ(dirty.torque(at(0.03), 1e9, b), InputOutcome::kInvalidValue);
   EXPECT_EQ(dirty.preload(at(0.04), preloads(-5.0), b), InputOutcome::kInvalidValue);
-  EXPECT_EQ(dirty.preload(at(0.05), {{"no_such_bearing", 100.0, 0.0, 0.0, 0.0}}, b), InputOutcome::kInvalidValue);
+  EXPECT_EQ(dirty.preload(at(0.05), {{"no_such_bearing", 100.0, 0.0, 0.0, 0.0}}, b),
+            InputOutcome::kInvalidValue);
   const PipelineCounters& c = dirty.counters();
   EXPECT_EQ(c.zero_stamps, 1u);
   EXPECT_EQ(c.invalid_values, 5u);
@@ -100,14 +105,15 @@ TEST(RigPipeline, BadInputsAreCountedAndDoNotPoisonTheState) {
   ASSERT_EQ(clean.torque(at(0.1), 0.2, a), InputOutcome::kAccepted);
   ASSERT_EQ(dirty.torque(at(0.1), 0.2, b), InputOutcome::kAccepted);
   ASSERT_EQ(a.te.size(), b.te.size());
-  for (std::size_t i = 0; i < a.te.size(); ++i) EXPECT_EQ(a.te[i].dynamic_te, b.te[i].dynamic_te) << i;
+  for (std::size_t i = 0; i < a.te.size(); ++i)
+    EXPECT_EQ(a.te[i].dynamic_te, b.te[i].dynamic_te) << i;
   EXPECT_EQ(a.stiffness_out.back().second.supports[0].solution.radialStiffness(),
             b.stiffness_out.back().second.supports[0].solution.radialStiffness());
 }
 
-// The out-of-order and burst rules: a late stamp within ~stamp_jump_back is rejected (the dynamics cannot go back);
-// equal stamps are accepted without releasing samples and the last torque is the one held; a stamp
-// further back restarts everything and is then accepted.
+// The out-of-order and burst rules: a late stamp within ~stamp_jump_back is rejected (the dynamics
+// cannot go back); equal stamps are accepted without releasing samples and the last torque is the
+// one held; a stamp further back restarts everything and is then accepted.
 TEST(RigPipeline, OutOfOrderBurstAndStampJumpBack) {
   RigPipeline p(rig(), PipelineOptions{});
   Recorder r;
@@ -117,7 +123,8 @@ TEST(RigPipeline, OutOfOrderBurstAndStampJumpBack) {
   EXPECT_EQ(p.torque(at(1.005), 0.1, r), InputOutcome::kOutOfOrder);
   EXPECT_EQ(p.counters().out_of_order, 1u);
   const std::size_t before = r.te.size();
-  for (double torque : {0.11, 0.12, 0.13}) ASSERT_EQ(p.torque(at(1.010), torque, r), InputOutcome::kAccepted);
+  for (double torque : {0.11, 0.12, 0.13})
+    ASSERT_EQ(p.torque(at(1.010), torque, r), InputOutcome::kAccepted);
   EXPECT_EQ(r.te.size(), before);  // no time passed
   ASSERT_EQ(p.torque(at(1.012), 0.2, r), InputOutcome::kAccepted);
   ASSERT_EQ(r.te.size(), before + 2);
@@ -145,36 +152,42 @@ TEST(RigPipeline, LongGapRestartsTheDynamics) {
   EXPECT_EQ(r.te.size(), before + 3);
 }
 
-// The gap rule before the own-stamp rule: after a gap the dynamics restart before a stiffness stamped after it is
-// taken up. The last torque before the gap lies off the 1 ms output grid (the dynamics stand on the
-// sample before it, its torque change pending), and the first after it moves a bearing stiffness by more than the 1 %
-// at which the dynamics take a change up: applied at the time before the gap, that change reached
-// the dynamics as "before the current time" (a dynamics error) and the restart kept the old
-// stiffness. Each input is also tried as a preload, which takes the same path without a torque.
+// The gap rule before the own-stamp rule: after a gap the dynamics restart before a stiffness
+// stamped after it is taken up. The last torque before the gap lies off the 1 ms output grid (the
+// dynamics stand on the sample before it, its torque change pending), and the first after it moves
+// a bearing stiffness by more than the 1 % at which the dynamics take a change up: applied at the
+// time before the gap, that change reached the dynamics as "before the current time" (a dynamics
+// error) and the restart kept the old stiffness. Each input is also tried as a preload, which takes
+// the same path without a torque.
 TEST(RigPipeline, AStiffnessChangeAfterAGapRestartsWithTheNewStiffness) {
   for (const bool by_preload : {false, true}) {
     RigPipeline p(rig(), PipelineOptions{});
     Recorder r;
     // A light preload, so that the mesh force moves the bearings' stiffness.
-    const std::vector<PreloadSetting> light = {{"pinion_bearing", 100.0, 0.0, 0.0, 0.0}, {"gear_bearing", 100.0, 0.0, 0.0, 0.0}};
+    const std::vector<PreloadSetting> light = {{"pinion_bearing", 100.0, 0.0, 0.0, 0.0},
+                                               {"gear_bearing", 100.0, 0.0, 0.0, 0.0}};
     ASSERT_EQ(p.preload(at(0.0), light, r), InputOutcome::kAccepted);
     ASSERT_EQ(p.torque(at(0.0), 0.1, r), InputOutcome::kAccepted);
     ASSERT_EQ(p.torque(at(0.50041192), 0.1, r), InputOutcome::kAccepted);  // off the grid
-    ASSERT_EQ(p.dynamics()->time(), 0.5);  // on the sample before the stamp, the torque change pending
+    ASSERT_EQ(p.dynamics()->time(),
+              0.5);  // on the sample before the stamp, the torque change pending
     const std::array<double, 2> before = p.dynamics()->bearingStiffness();
     // 1.5 s later (more than ~max_gap = 1 s), a load that moves the bearings by more than 1 %.
-    const InputOutcome outcome = by_preload ? p.preload(at(2.0), preloads(3000.0), r) : p.torque(at(2.0), 8.0, r);
+    const InputOutcome outcome =
+        by_preload ? p.preload(at(2.0), preloads(3000.0), r) : p.torque(at(2.0), 8.0, r);
     ASSERT_EQ(outcome, InputOutcome::kAccepted);
     if (by_preload) {
       ASSERT_EQ(p.torque(at(2.001), 0.1, r), InputOutcome::kAccepted);
     }
     const std::array<double, 2> k = p.estimator().shaftRadialStiffness();
     ASSERT_GT(std::max(std::abs(k[0] / before[0] - 1.0), std::abs(k[1] / before[1] - 1.0)), 0.01)
-        << "the case needs a change the dynamics take up: " << k[0] / before[0] << ", " << k[1] / before[1];
+        << "the case needs a change the dynamics take up: " << k[0] / before[0] << ", "
+        << k[1] / before[1];
     EXPECT_EQ(p.counters().dynamics_errors, 0u) << p.counters().last_event;
     EXPECT_EQ(p.counters().gap_restarts, 1u);
     // The restarted dynamics run on the new stiffness (on the dynamics' 1 % grid).
-    for (int i = 0; i < 2; ++i) EXPECT_NEAR(p.dynamics()->bearingStiffness()[i] / k[i], 1.0, 0.006) << i;
+    for (int i = 0; i < 2; ++i)
+      EXPECT_NEAR(p.dynamics()->bearingStiffness()[i] / k[i], 1.0, 0.006) << i;
     ASSERT_EQ(p.torque(at(2.010), 0.1, r), InputOutcome::kAccepted);
     EXPECT_EQ(p.counters().dynamics_errors, 0u) << p.counters().last_event;
   }
@@ -191,12 +204,15 @@ TEST(RigPipeline, RefusalsAreTalliedByStreamAndReason) {
   for (int i = 0; i < 5; ++i) p.torque(at(0.001 * (i + 1)), 0.1, r, {"/rig", 0, "base_link"});
   p.torque(at(0.010), 0.1, r, {"/rig", 0, bad_utf8});
   p.torque(at(0.011), std::numeric_limits<double>::quiet_NaN(), r, {"/rig", 0, "pinion"});
-  p.motionRefused(at(0.012), "no joint named 'pinion' (~pinion_joint)", {}, "joints 'motor', 'output'");
+  p.motionRefused(at(0.012), "no joint named 'pinion' (~pinion_joint)", {},
+                  "joints 'motor', 'output'");
   const RefusalTally& t = p.refusals();
   const RefusalTally::Entry& frame = t.entry(InputStream::kTorque, InputOutcome::kWrongFrame);
   EXPECT_EQ(frame.count, 6u);
   EXPECT_EQ(frame.first_stamp, at(0.001));
-  EXPECT_NE(frame.first_reason.find("'base_link', expected ~torque_frame = 'pinion'"), std::string::npos) << frame.first_reason;
+  EXPECT_NE(frame.first_reason.find("'base_link', expected ~torque_frame = 'pinion'"),
+            std::string::npos)
+      << frame.first_reason;
   ASSERT_EQ(frame.found.size(), 2u);
   EXPECT_EQ(frame.found[0].value, "base_link");
   EXPECT_EQ(frame.found[0].count, 5u);
@@ -204,7 +220,8 @@ TEST(RigPipeline, RefusalsAreTalliedByStreamAndReason) {
   EXPECT_EQ(t.entry(InputStream::kTorque, InputOutcome::kInvalidValue).count, 1u);
   EXPECT_EQ(t.total(InputStream::kTorque), 7u);
   EXPECT_EQ(t.total(InputStream::kTorque), p.counters().rejected_torque);
-  const RefusalTally::Entry& joints = t.entry(InputStream::kJointStates, InputOutcome::kInvalidValue);
+  const RefusalTally::Entry& joints =
+      t.entry(InputStream::kJointStates, InputOutcome::kInvalidValue);
   EXPECT_EQ(joints.count, 1u);
   ASSERT_EQ(joints.found.size(), 1u);
   EXPECT_EQ(joints.found[0].value, "joints 'motor', 'output'");
@@ -212,12 +229,13 @@ TEST(RigPipeline, RefusalsAreTalliedByStreamAndReason) {
   for (std::size_t i = 0; i < RefusalTally::kMaxFound + 3; ++i) {
     p.torque(at(0.1 + 0.001 * i), 0.1, r, {"/rig", 0, "frame" + std::to_string(i)});
   }
-  EXPECT_EQ(t.entry(InputStream::kTorque, InputOutcome::kWrongFrame).found.size(), RefusalTally::kMaxFound);
+  EXPECT_EQ(t.entry(InputStream::kTorque, InputOutcome::kWrongFrame).found.size(),
+            RefusalTally::kMaxFound);
   EXPECT_EQ(t.entry(InputStream::kTorque, InputOutcome::kWrongFrame).found_other, 5u);
 }
 
-// The clock-jump rule: the caller's clock going back (a looping bag) resets estimator and dynamics: the
-// configured preloads return, and the replayed inputs are accepted again; a clock that only
+// The clock-jump rule: the caller's clock going back (a looping bag) resets estimator and dynamics:
+// the configured preloads return, and the replayed inputs are accepted again; a clock that only
 // repeats itself does not reset.
 TEST(RigPipeline, ClockJumpBackResetsEverything) {
   PipelineOptions o;
@@ -231,10 +249,12 @@ TEST(RigPipeline, ClockJumpBackResetsEverything) {
   p.observeClock(at(0.5), r);
   p.torque(at(0.5), 0.1, r);
   EXPECT_FALSE(p.observeClock(at(0.5), r));
-  EXPECT_GT(std::abs(p.estimator().current().supports[0].solution.radialStiffness() - configured_k), 1e-3 * configured_k);
+  EXPECT_GT(std::abs(p.estimator().current().supports[0].solution.radialStiffness() - configured_k),
+            1e-3 * configured_k);
   EXPECT_TRUE(p.observeClock(at(0.0), r));
   EXPECT_EQ(p.counters().clock_resets, 1u);
-  EXPECT_NEAR(p.estimator().current().supports[0].solution.radialStiffness(), configured_k, 1e-9 * configured_k);
+  EXPECT_NEAR(p.estimator().current().supports[0].solution.radialStiffness(), configured_k,
+              1e-9 * configured_k);
   EXPECT_FALSE(p.dynamics()->started());
   EXPECT_EQ(p.torque(at(0.0), 0.1, r), InputOutcome::kAccepted);  // the loop's first input again
   EXPECT_EQ(p.counters().out_of_order, 0u);
@@ -258,7 +278,7 @@ TEST(RigPipeline, DefaultClockRuleTellsAnNtpStepFromALoopingBag) {
   EXPECT_EQ(p.counters().clock_resets, 0u);
   EXPECT_EQ(p.counters().out_of_order, 1u);
   EXPECT_EQ(p.torque(at(2.001), 0.1, r), InputOutcome::kAccepted);  // caught up
-  EXPECT_TRUE(p.observeClock(at(0.0), r));  // the bag looped
+  EXPECT_TRUE(p.observeClock(at(0.0), r));                          // the bag looped
   EXPECT_EQ(p.counters().clock_resets, 1u);
   EXPECT_FALSE(p.dynamics()->started());
 }
@@ -298,13 +318,16 @@ TEST(RigPipeline, ResonanceShortcutPublishesExactlyWhenTheFullRuleWould) {
   std::vector<double> published;
   auto check = [&](Stamp s, const StiffnessEstimate& e) {
     const std::array<double, 2> kb = reference.shaftRadialStiffness();
-    const std::array<Mode, 3> modes = modalAnalysis(rigRotorParameters(rig(), reference.mesh(), kb), e.mesh.mean);
+    const std::array<Mode, 3> modes =
+        modalAnalysis(rigRotorParameters(rig(), reference.mesh(), kb), e.mesh.mean);
     bool moved = published.empty();
     for (std::size_t i = 0; !moved && i < 3; ++i) {
-      moved = std::abs(modes[i].natural_frequency - published[i]) > o.resonance_threshold * published[i];
+      moved = std::abs(modes[i].natural_frequency - published[i]) >
+              o.resonance_threshold * published[i];
     }
     if (!moved) return;
-    published = {modes[0].natural_frequency, modes[1].natural_frequency, modes[2].natural_frequency};
+    published = {modes[0].natural_frequency, modes[1].natural_frequency,
+                 modes[2].natural_frequency};
     expected.push_back(s);
   };
   const double omega = 1000.0 * 2.0 * M_PI / 60.0;
@@ -315,13 +338,15 @@ TEST(RigPipeline, ResonanceShortcutPublishesExactlyWhenTheFullRuleWould) {
       ASSERT_EQ(p.preload(at(t), preloads(axial), r), InputOutcome::kAccepted);
       check(at(t), reference.setPreloads(preloads(axial)));
     }
-    const double torque = 0.1 + 0.4 * std::sin(0.05 * k);  // large swings: the bearing load moves too
+    const double torque =
+        0.1 + 0.4 * std::sin(0.05 * k);  // large swings: the bearing load moves too
     ASSERT_EQ(p.torque(at(t), torque, r), InputOutcome::kAccepted);
     check(at(t), reference.setTorque(torque, omega * t));
   }
   ASSERT_EQ(r.resonance_out.size(), expected.size());
   EXPECT_GE(expected.size(), 5u);  // the ramp moves f1 by several per cent
-  for (std::size_t i = 0; i < expected.size(); ++i) EXPECT_EQ(r.resonance_out[i].first.ns, expected[i].ns) << i;
+  for (std::size_t i = 0; i < expected.size(); ++i)
+    EXPECT_EQ(r.resonance_out[i].first.ns, expected[i].ns) << i;
   EXPECT_LT(p.counters().modal_updates, 400u);  // and it did skip analyses (400 accepted inputs)
   // Nor is it much more cautious than it must be: springs within (1 -+ tau)^2 bound the frequencies
   // within 1 -+ tau, so an analysis seldom finds nothing to publish (15 for 15 here; the factors
@@ -345,7 +370,8 @@ TEST(RigPipeline, BearingLoadToleranceBoundsTheStiffnessLag) {
     skipped += s.supports[0].radial_load != exact.current().supports[0].radial_load;
     worst = std::max(worst, std::abs(s.supports[0].solution.radialStiffness() - ke) / ke);
     // The shortcut (updated in place when every support's solution stands) skips only the bearing
-    // solves: torque, mesh force and mesh do not depend on the tolerance and must equal the exact ones.
+    // solves: torque, mesh force and mesh do not depend on the tolerance and must equal the exact
+    // ones.
     const StiffnessEstimate& e = exact.current();
     ASSERT_EQ(s.torque, e.torque) << k;
     ASSERT_EQ(s.mesh_force, e.mesh_force) << k;
@@ -359,7 +385,8 @@ TEST(RigPipeline, BearingLoadToleranceBoundsTheStiffnessLag) {
 }
 
 // Fidelities switch at run time on the same grid; quasi-static means the torsional mode is in
-// equilibrium, so the predicted deflection equals the static one F / k_s exactly (reduced_models.hpp).
+// equilibrium, so the predicted deflection equals the static one F / k_s exactly
+// (reduced_models.hpp).
 TEST(RigPipeline, FidelityAndDampingSwitchAtRunTime) {
   RigPipeline p(rig(), PipelineOptions{});
   Recorder r;
@@ -406,7 +433,8 @@ TEST(RigPipeline, FidelityAndDampingSwitchAtRunTime) {
   }
   // A damping change republishes the resonance at the next input with the new ratios.
   ASSERT_EQ(r.resonance_out.size(), published + 1);
-  EXPECT_NEAR(r.resonance_out.back().second.modes[2].damping_ratio, 0.1, 0.02);  // the torsional mode
+  EXPECT_NEAR(r.resonance_out.back().second.modes[2].damping_ratio, 0.1,
+              0.02);  // the torsional mode
 }
 
 // The run-time settings are checked in one place with the ranges of cfg/Estimator.cfg, naming the
@@ -452,16 +480,20 @@ TEST(RigPipeline, StiffnessRateCoalescesOnStamps) {
 TEST(RigPipeline, BadValuesNeverActThroughTheirStamps) {
   RigPipeline p(rig(), PipelineOptions{}), fresh(rig(), PipelineOptions{});
   Recorder r, f;
-  EXPECT_EQ(p.torque(at(5.0), std::numeric_limits<double>::quiet_NaN(), r), InputOutcome::kInvalidValue);
+  EXPECT_EQ(p.torque(at(5.0), std::numeric_limits<double>::quiet_NaN(), r),
+            InputOutcome::kInvalidValue);
   ASSERT_EQ(p.torque(at(5.7), 0.1, r), InputOutcome::kAccepted);
   ASSERT_EQ(fresh.torque(at(5.7), 0.1, f), InputOutcome::kAccepted);
-  EXPECT_EQ(r.stiffness_out.back().second.mesh.phase, f.stiffness_out.back().second.mesh.phase);  // origin 5.7, not 5.0
+  EXPECT_EQ(r.stiffness_out.back().second.mesh.phase,
+            f.stiffness_out.back().second.mesh.phase);  // origin 5.7, not 5.0
   p.preload(at(5.8), preloads(1500.0), r);
   const double k = p.estimator().current().supports[0].solution.radialStiffness();
-  EXPECT_EQ(p.torque(at(2.0), std::numeric_limits<double>::infinity(), r), InputOutcome::kInvalidValue);  // 3.7 s back
+  EXPECT_EQ(p.torque(at(2.0), std::numeric_limits<double>::infinity(), r),
+            InputOutcome::kInvalidValue);  // 3.7 s back
   EXPECT_EQ(p.preload(at(2.0), preloads(-1.0), r), InputOutcome::kInvalidValue);
   EXPECT_EQ(p.counters().stamp_resets, 0u);
-  EXPECT_EQ(p.estimator().current().supports[0].solution.radialStiffness(), k);  // preloads not reset
+  EXPECT_EQ(p.estimator().current().supports[0].solution.radialStiffness(),
+            k);  // preloads not reset
 }
 
 // ~pinion_speed_rpm drives the dynamics too (one speed for both mesh phases): at 2000 rpm the
@@ -522,7 +554,8 @@ std::string gearboxWith(const std::string& key, const std::string& value) {
   const std::string source = DRIVETRAIN_SOURCE_DIR;
   std::ifstream in(source + "/config/gearboxes/seed_servo.yaml");
   std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  for (std::size_t at; (at = text.find("../bearings/")) != std::string::npos;) text.replace(at, 12, source + "/config/bearings/");
+  for (std::size_t at; (at = text.find("../bearings/")) != std::string::npos;)
+    text.replace(at, 12, source + "/config/bearings/");
   const std::size_t line = text.find("  " + key + ":");
   EXPECT_NE(line, std::string::npos) << key;
   text.replace(line, text.find('\n', line) - line, "  " + key + ": " + value);
@@ -537,7 +570,8 @@ std::string gearboxWith(const std::string& key, const std::string& value) {
 // run-time settings (parameters, dynamic_reconfigure, replay) and DynamicsEstimator::setDamping.
 TEST(OneRule, DampingRatioIsTheSameFromEveryEntry) {
   for (const std::string field : {"mesh_damping_ratio", "bearing_damping_ratio"}) {
-    const std::pair<const char*, double> refused[] = {{"-0.01", -0.01}, {"1.000001", 1.000001}, {"1.5", 1.5}};
+    const std::pair<const char*, double> refused[] = {
+        {"-0.01", -0.01}, {"1.000001", 1.000001}, {"1.5", 1.5}};
     for (const auto& [text, value] : refused) {
       const std::string named = field + " = " + formatValue(value);
       const std::string path = gearboxWith(field, text);
@@ -553,22 +587,29 @@ TEST(OneRule, DampingRatioIsTheSameFromEveryEntry) {
       EXPECT_EQ(settings.rfind(named + ": must ", 0), 0u) << settings;
       DynamicsEstimator est(rig(), {1.2e8, 1.2e8}, 1000.0);
       const std::string set = refusalOf(
-          [&] { field == "mesh_damping_ratio" ? est.setDamping(value, 0.02) : est.setDamping(0.05, value); }, "setDamping " + named);
+          [&] {
+            field == "mesh_damping_ratio" ? est.setDamping(value, 0.02)
+                                          : est.setDamping(0.05, value);
+          },
+          "setDamping " + named);
       EXPECT_EQ(set, settings);
     }
     // The edges pass everywhere; 1 (critical damping of the mode the ratio is defined on) runs:
-    // the exact propagation hands an ill-conditioned eigenbasis to dopri5, and the samples stay finite.
+    // the exact propagation hands an ill-conditioned eigenbasis to dopri5, and the samples stay
+    // finite.
     for (const double value : {0.0, 1.0}) {
       const std::string text = value == 0.0 ? "0" : "1";
       const RigConfig loaded = loadRigFile(gearboxWith(field, text));
       RuntimeSettings s = RuntimeSettings::forRig(loaded);
-      EXPECT_EQ(field == "mesh_damping_ratio" ? s.mesh_damping_ratio : s.bearing_damping_ratio, value);
+      EXPECT_EQ(field == "mesh_damping_ratio" ? s.mesh_damping_ratio : s.bearing_damping_ratio,
+                value);
       EXPECT_NO_THROW(s.validate());
       DynamicsEstimator est(rig(), {1.2e8, 1.2e8}, 1000.0);
       est.reset(0.0, 0.1);
       std::size_t samples = 0;
       est.advanceTo(0.05, [&](const DynamicsSample&) {});
-      EXPECT_NO_THROW(field == "mesh_damping_ratio" ? est.setDamping(value, 0.02) : est.setDamping(0.05, value));
+      EXPECT_NO_THROW(field == "mesh_damping_ratio" ? est.setDamping(value, 0.02)
+                                                    : est.setDamping(0.05, value));
       est.advanceTo(0.1, [&](const DynamicsSample& d) {
         ++samples;
         EXPECT_TRUE(d.state.allFinite()) << field << " " << value;
@@ -588,7 +629,9 @@ TEST(OneRule, LoadToleranceIsTheSameFromEveryEntry) {
     const std::string options = refusalOf([&] { o.validate(); }, "options " + v);
     EXPECT_EQ(options.rfind("bearing_load_tolerance = " + v + ": must ", 0), 0u) << options;
     // The same refusal, under the estimator's own name for the field.
-    EXPECT_EQ("bearing_" + refusalOf([&] { (void)StiffnessEstimator(rig(), o.limits); }, "estimator " + v), options);
+    EXPECT_EQ("bearing_" +
+                  refusalOf([&] { (void)StiffnessEstimator(rig(), o.limits); }, "estimator " + v),
+              options);
   }
   for (const double value : {0.0, 0.1}) {
     PipelineOptions o;
@@ -602,17 +645,21 @@ TEST(OneRule, LoadToleranceIsTheSameFromEveryEntry) {
 // (EstimatorLimits::validate) from the options and from the estimator, with the same refusal.
 TEST(OneRule, InputLimitsAreTheSameFromEveryEntry) {
   using Field = double EstimatorLimits::*;
-  const std::pair<const char*, Field> fields[] = {{"max_abs_torque", &EstimatorLimits::max_abs_torque},
-                                                  {"max_preload", &EstimatorLimits::max_preload},
-                                                  {"max_interference", &EstimatorLimits::max_interference}};
+  const std::pair<const char*, Field> fields[] = {
+      {"max_abs_torque", &EstimatorLimits::max_abs_torque},
+      {"max_preload", &EstimatorLimits::max_preload},
+      {"max_interference", &EstimatorLimits::max_interference}};
   for (const auto& [name, field] : fields) {
     for (const double value : {0.0, -1.0, std::nan(""), std::numeric_limits<double>::infinity()}) {
       PipelineOptions o;
       o.limits.*field = value;
       const std::string v = formatValue(value);
-      const std::string options = refusalOf([&] { o.validate(); }, std::string("options ") + name + " " + v);
+      const std::string options =
+          refusalOf([&] { o.validate(); }, std::string("options ") + name + " " + v);
       EXPECT_EQ(options.rfind(std::string(name) + " = " + v + ": must ", 0), 0u) << options;
-      EXPECT_EQ(refusalOf([&] { (void)StiffnessEstimator(rig(), o.limits); }, std::string("estimator ") + name), options);
+      EXPECT_EQ(refusalOf([&] { (void)StiffnessEstimator(rig(), o.limits); },
+                          std::string("estimator ") + name),
+                options);
     }
   }
 }

@@ -1,8 +1,9 @@
 // The rig scenarios' encoder readings (src/tools/rig_scenarios.hpp): joint events at their rate, on
 // the 2^20-count grid, the gear at -(z_p / z_g) of the pinion (motion.hpp's sign convention), the
-// speed scenarios' speeds and angles against their closed forms (ramp: omega = s0 + (s1 - s0) t / T,
-// theta = s0 t + (s1 - s0) t^2 / (2 T); reversal: omega = s cos(2 pi t / T), theta = s T sin(2 pi t /
-// T) / (2 pi)), and the older scenarios' torque and preload events unchanged by the readings.
+// speed scenarios' speeds and angles against their closed forms (ramp: omega = s0 + (s1 - s0) t /
+// T, theta = s0 t + (s1 - s0) t^2 / (2 T); reversal: omega = s cos(2 pi t / T), theta = s T sin(2
+// pi t / T) / (2 pi)), and the older scenarios' torque and preload events unchanged by the
+// readings.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -21,15 +22,17 @@ using namespace drivetrain_stiffness;
 namespace {
 
 const RigConfig& rig() {  // seed 000 Table 1: z_p = 20, z_g = 40, 1000 rpm, 0.1 N*m
-  static const RigConfig r = loadRigFile(std::string(DRIVETRAIN_SOURCE_DIR) + "/config/gearboxes/seed_servo.yaml");
+  static const RigConfig r =
+      loadRigFile(std::string(DRIVETRAIN_SOURCE_DIR) + "/config/gearboxes/seed_servo.yaml");
   return r;
 }
 
-constexpr double kRpm = kTwoPi / 60.0;          // 1 rpm in rad/s
-constexpr double kCount = kTwoPi / 1048576.0;   // one encoder count: 2 pi / 2^20 rad
-constexpr double kRatio = 20.0 / 40.0;          // z_p / z_g of the seed pair
+constexpr double kRpm = kTwoPi / 60.0;         // 1 rpm in rad/s
+constexpr double kCount = kTwoPi / 1048576.0;  // one encoder count: 2 pi / 2^20 rad
+constexpr double kRatio = 20.0 / 40.0;         // z_p / z_g of the seed pair
 
-std::vector<RigEvent> scenario(const std::string& name, double joint_rate = 1000.0, bool velocity = true) {
+std::vector<RigEvent> scenario(const std::string& name, double joint_rate = 1000.0,
+                               bool velocity = true) {
   ScenarioSpec spec;
   spec.name = name;
   spec.joint_rate = joint_rate;
@@ -71,7 +74,9 @@ void expectReadings(const std::string& name, Theta theta, Omega omega) {
     ASSERT_LE(std::abs(m.pinion_angle - theta(e.t)), 0.5 * kCount + 1e-9) << e.t;
     ASSERT_LE(std::abs(*m.gear_angle + kRatio * theta(e.t)), 0.5 * kCount + 1e-9) << e.t;
     // Both quantised: theta_g + (z_p / z_g) theta_p within half a count of each.
-    ASSERT_LE(std::abs(*m.gear_angle + kRatio * m.pinion_angle), 0.5 * kCount * (1.0 + kRatio) + 1e-12) << e.t;
+    ASSERT_LE(std::abs(*m.gear_angle + kRatio * m.pinion_angle),
+              0.5 * kCount * (1.0 + kRatio) + 1e-12)
+        << e.t;
     ASSERT_NEAR(*m.pinion_velocity, omega(e.t), 1e-9 * (1.0 + std::abs(omega(e.t)))) << e.t;
     ASSERT_EQ(*e.gear_velocity, -kRatio * *m.pinion_velocity) << e.t;
   }
@@ -103,20 +108,25 @@ TEST(RigScenarios, EncoderQuantisationIsOnTheGridWithinHalfACount) {
 
 TEST(RigScenarios, RunUpGoesFrom0To6000Rpm) {
   const double T = 2.0, s1 = 6000.0 * kRpm;  // 628.3185 rad/s
-  expectReadings("run_up", [&](double t) { return s1 * t * t / (2.0 * T); }, [&](double t) { return s1 * t / T; });
+  expectReadings(
+      "run_up", [&](double t) { return s1 * t * t / (2.0 * T); },
+      [&](double t) { return s1 * t / T; });
   const std::vector<RigEvent> j = joints(scenario("run_up"));
   EXPECT_EQ(*j.front().motion->pinion_velocity, 0.0);
-  EXPECT_NEAR(*j.back().motion->pinion_velocity, 628.3185307179587 * 1.999 / 2.0, 1e-9);  // last sample at T - 1 ms
+  EXPECT_NEAR(*j.back().motion->pinion_velocity, 628.3185307179587 * 1.999 / 2.0,
+              1e-9);  // last sample at T - 1 ms
   EXPECT_NEAR(*j.back().motion->pinion_velocity, 628.3185, 628.3185 * 1e-3 / T + 1e-4);
 }
 
 TEST(RigScenarios, CoastDownGoesFrom6000RpmTo0) {
   const double T = 2.0, s0 = 6000.0 * kRpm;
-  expectReadings("coast_down", [&](double t) { return s0 * t - s0 * t * t / (2.0 * T); },
-                 [&](double t) { return s0 - s0 * t / T; });
+  expectReadings(
+      "coast_down", [&](double t) { return s0 * t - s0 * t * t / (2.0 * T); },
+      [&](double t) { return s0 - s0 * t / T; });
   const std::vector<RigEvent> j = joints(scenario("coast_down"));
   EXPECT_NEAR(*j.front().motion->pinion_velocity, 628.3185307179587, 1e-12);
-  EXPECT_NEAR(*j.back().motion->pinion_velocity, 628.3185307179587 * 1e-3 / T, 1e-9);  // last sample at T - 1 ms
+  EXPECT_NEAR(*j.back().motion->pinion_velocity, 628.3185307179587 * 1e-3 / T,
+              1e-9);  // last sample at T - 1 ms
   // Nearly stopped: the angle approaches s0 T / 2 = 628.3 rad (100 revolutions).
   EXPECT_NEAR(j.back().motion->pinion_angle, s0 * T / 2.0, s0 * 1e-6 / T + kCount);
 }
@@ -128,12 +138,15 @@ TEST(RigScenarios, SpeedStepsDwellAtEachLevelWith50msRamps) {
     double w = levels[0];
     for (int i = 1; i < 4; ++i) {
       const double start = 0.5 * i;
-      if (t >= start + r) w = levels[i];
-      else if (t >= start) w = levels[i - 1] + (levels[i] - levels[i - 1]) * (t - start) / r;
+      if (t >= start + r)
+        w = levels[i];
+      else if (t >= start)
+        w = levels[i - 1] + (levels[i] - levels[i - 1]) * (t - start) / r;
     }
     return w * kRpm;
   };
-  // theta by hand: each finished dwell, each finished ramp at its mean speed, then the part in progress.
+  // theta by hand: each finished dwell, each finished ramp at its mean speed, then the part in
+  // progress.
   auto theta = [&](double t) {
     double a = 0.0, last = 0.0;
     for (int i = 1; i < 4 && t >= 0.5 * i; ++i) {
@@ -149,7 +162,7 @@ TEST(RigScenarios, SpeedStepsDwellAtEachLevelWith50msRamps) {
   expectReadings("speed_steps", theta, omega);
   const std::vector<RigEvent> j = joints(scenario("speed_steps"));
   EXPECT_NEAR(*j[250].motion->pinion_velocity, 500.0 * kRpm, 1e-9);
-  EXPECT_NEAR(*j[525].motion->pinion_velocity, 750.0 * kRpm, 1e-9);   // mid-ramp
+  EXPECT_NEAR(*j[525].motion->pinion_velocity, 750.0 * kRpm, 1e-9);  // mid-ramp
   EXPECT_NEAR(*j[800].motion->pinion_velocity, 1000.0 * kRpm, 1e-9);
   EXPECT_NEAR(*j[1300].motion->pinion_velocity, 2000.0 * kRpm, 1e-9);
   EXPECT_NEAR(*j[1999].motion->pinion_velocity, 4000.0 * kRpm, 1e-9);
@@ -157,8 +170,9 @@ TEST(RigScenarios, SpeedStepsDwellAtEachLevelWith50msRamps) {
 
 TEST(RigScenarios, ReverseCrossesZeroTo1000RpmBackwardsAndBack) {
   const double T = 2.0, s = 1000.0 * kRpm;
-  expectReadings("reverse", [&](double t) { return s * T * std::sin(kTwoPi * t / T) / kTwoPi; },
-                 [&](double t) { return s * std::cos(kTwoPi * t / T); });
+  expectReadings(
+      "reverse", [&](double t) { return s * T * std::sin(kTwoPi * t / T) / kTwoPi; },
+      [&](double t) { return s * std::cos(kTwoPi * t / T); });
   const std::vector<RigEvent> j = joints(scenario("reverse"));
   EXPECT_NEAR(*j[0].motion->pinion_velocity, s, 1e-12);
   EXPECT_NEAR(*j[1000].motion->pinion_velocity, -1000.0 * kRpm, 1e-9);  // -104.72 rad/s at T/2
@@ -172,7 +186,8 @@ TEST(RigScenarios, ReverseCrossesZeroTo1000RpmBackwardsAndBack) {
   }
   // The angle turns back where the speed crosses zero: its peak s T / (2 pi) = 33.33 rad at T/4.
   EXPECT_NEAR(j[500].motion->pinion_angle, s * T / kTwoPi, kCount);
-  EXPECT_LT(j[499].motion->pinion_angle, j[500].motion->pinion_angle);  // 1 ms off the peak: 1.6e-4 rad (27 counts) lower
+  EXPECT_LT(j[499].motion->pinion_angle,
+            j[500].motion->pinion_angle);  // 1 ms off the peak: 1.6e-4 rad (27 counts) lower
   EXPECT_LT(j[501].motion->pinion_angle, j[500].motion->pinion_angle);
   // The torque keeps its sign (constant 0.1 N*m) while the speed reverses.
   for (const RigEvent& e : scenario("reverse")) {
@@ -208,7 +223,8 @@ TEST(RigScenarios, OlderScenariosTurnAtTheNominalSpeed) {
 }
 
 TEST(RigScenarios, TheReadingsLeaveTheTorqueAndPreloadEventsAsTheyWere) {
-  for (const char* name : {"torque_ripple", "torque_steps", "preload_ramp", "speed_sweep", "faults"}) {
+  for (const char* name :
+       {"torque_ripple", "torque_steps", "preload_ramp", "speed_sweep", "faults"}) {
     SCOPED_TRACE(name);
     const std::vector<RigEvent> without = scenario(name, 0.0);
     for (const RigEvent& e : without) ASSERT_FALSE(e.motion);
@@ -241,13 +257,16 @@ TEST(RigScenarios, TheReadingsLeaveTheTorqueAndPreloadEventsAsTheyWere) {
   EXPECT_EQ(scenario("faults", 0.0).size(), 2015u);
   const std::vector<RigEvent> ripple = torqueAndPreload(scenario("torque_ripple"));
   EXPECT_EQ(*ripple[1].torque, 0.1);  // t = 0: sin 0 = 0, the mean
-  // t = 1 ms: 0.1 (1 + 0.05 sin(2 pi 100 Hz t) + 0.02 sin(2 pi 200 Hz t)), 6th and 12th order of 1000 rpm.
-  EXPECT_NEAR(*ripple[2].torque, 0.1 * (1 + 0.05 * std::sin(kTwoPi * 0.1) + 0.02 * std::sin(kTwoPi * 0.2)), 1e-15);
+  // t = 1 ms: 0.1 (1 + 0.05 sin(2 pi 100 Hz t) + 0.02 sin(2 pi 200 Hz t)), 6th and 12th order of
+  // 1000 rpm.
+  EXPECT_NEAR(*ripple[2].torque,
+              0.1 * (1 + 0.05 * std::sin(kTwoPi * 0.1) + 0.02 * std::sin(kTwoPi * 0.2)), 1e-15);
   const std::vector<RigEvent> steps = torqueAndPreload(scenario("torque_steps"));
   EXPECT_EQ(*steps[1 + 1000].torque, 0.1 * 2.0);   // t = 1 s: the third of five levels
   EXPECT_EQ(*steps[1 + 1300].torque, 0.1 * -1.0);  // t = 1.3 s: the reversal
   const std::vector<RigEvent> ramp = torqueAndPreload(scenario("preload_ramp"));
-  EXPECT_NEAR(ramp[1010].preload.at(0).axial_preload, 200.0 + 1800.0 * 0.5, 1e-9);  // t = 1 s: 1100 N
+  EXPECT_NEAR(ramp[1010].preload.at(0).axial_preload, 200.0 + 1800.0 * 0.5,
+              1e-9);  // t = 1 s: 1100 N
 }
 
 TEST(RigScenarios, FaultsMoveTheReadingsWithTheLoopedStamps) {

@@ -36,19 +36,20 @@ SceneRun run(const Scene& s, IntegratorMethod m) {
   SceneRun r;
   ContactRegime last;
   bool first = true;
-  integrate(*s.model, m, optionsFor(s, m), 0.0, s.initial, s.duration, s.output_interval, [&](double t, const State6& y) {
-    r.finite &= y.allFinite();
-    const GearRotorForces f = s.model->forces(t, y);
-    if (t >= s.transient) r.peak_delta = std::max(r.peak_delta, std::abs(f.delta));
-    if (!first) {
-      r.drive_opened += last.code[0] == 1 && f.regime.code[0] == 0;
-      r.back_opened += last.code[1] == 1 && f.regime.code[1] == 0;
-      r.back_reclosed += last.code[1] == 0 && f.regime.code[1] == 1;
-      r.bearing_changes += last.code[2] != f.regime.code[2];
-    }
-    last = f.regime;
-    first = false;
-  });
+  integrate(*s.model, m, optionsFor(s, m), 0.0, s.initial, s.duration, s.output_interval,
+            [&](double t, const State6& y) {
+              r.finite &= y.allFinite();
+              const GearRotorForces f = s.model->forces(t, y);
+              if (t >= s.transient) r.peak_delta = std::max(r.peak_delta, std::abs(f.delta));
+              if (!first) {
+                r.drive_opened += last.code[0] == 1 && f.regime.code[0] == 0;
+                r.back_opened += last.code[1] == 1 && f.regime.code[1] == 0;
+                r.back_reclosed += last.code[1] == 0 && f.regime.code[1] == 1;
+                r.bearing_changes += last.code[2] != f.regime.code[2];
+              }
+              last = f.regime;
+              first = false;
+            });
   return r;
 }
 }  // namespace
@@ -60,7 +61,8 @@ TEST(Scenes, EveryMethodBoundedOrRefusesOnEveryScene) {
     const bool motion = std::find(moving.begin(), moving.end(), name) != moving.end();
     const Scene s = makeScene(name, rig(), motion ? 0.05 : 0.0);
     double reference = 0.0;
-    for (auto m : {IntegratorMethod::kDopri5, IntegratorMethod::kRk4, IntegratorMethod::kTrapezoidal}) {
+    for (auto m :
+         {IntegratorMethod::kDopri5, IntegratorMethod::kRk4, IntegratorMethod::kTrapezoidal}) {
       try {
         const SceneRun r = run(s, m);
         EXPECT_TRUE(r.finite) << name << " " << toString(m);
@@ -74,7 +76,8 @@ TEST(Scenes, EveryMethodBoundedOrRefusesOnEveryScene) {
           EXPECT_NEAR(r.peak_delta / reference, 1.0, 0.02) << name << " " << toString(m);
         }
       } catch (const UnstableIntegration& e) {
-        ADD_FAILURE() << name << " " << toString(m) << " refused at its own suggested step: " << e.what();
+        ADD_FAILURE() << name << " " << toString(m)
+                      << " refused at its own suggested step: " << e.what();
       }
     }
   }
@@ -100,8 +103,10 @@ TEST(Scenes, ExplicitMethodRefusesBeyondItsLimitOnNearRigidBearings) {
   const Scene s = makeScene("near_rigid_bearings", rig());
   IntegratorOptions o = optionsFor(s, IntegratorMethod::kRk4);
   o.step = 1e-5;  // 200x the suggested step: far beyond 2.79 / omega_max
-  EXPECT_THROW(integrate(*s.model, IntegratorMethod::kRk4, o, 0.0, s.initial, 1e-3, 1e-5, nullptr), UnstableIntegration);
-  const State6 y = integrate(*s.model, IntegratorMethod::kTrapezoidal, o, 0.0, s.initial, 1e-3, 1e-5, nullptr);
+  EXPECT_THROW(integrate(*s.model, IntegratorMethod::kRk4, o, 0.0, s.initial, 1e-3, 1e-5, nullptr),
+               UnstableIntegration);
+  const State6 y =
+      integrate(*s.model, IntegratorMethod::kTrapezoidal, o, 0.0, s.initial, 1e-3, 1e-5, nullptr);
   EXPECT_TRUE(y.allFinite());
 }
 
@@ -120,20 +125,26 @@ TEST(Scenes, ExponentialMethod) {
   IntegratorOptions ref = optionsFor(s, IntegratorMethod::kDopri5);
   ref.relative_tolerance = 1e-12;
   ref.absolute_tolerance = 1e-18;
-  auto deltas = [&](const Scene& scene, IntegratorMethod m, const IntegratorOptions& o, IntegrationStats* st) {
+  auto deltas = [&](const Scene& scene, IntegratorMethod m, const IntegratorOptions& o,
+                    IntegrationStats* st) {
     std::vector<double> d;
-    integrate(*scene.model, m, o, 0.0, scene.initial, scene.duration, scene.output_interval,
-              [&](double t, const State6& y) { d.push_back(scene.model->forces(t, y).delta); }, st);
+    integrate(
+        *scene.model, m, o, 0.0, scene.initial, scene.duration, scene.output_interval,
+        [&](double t, const State6& y) { d.push_back(scene.model->forces(t, y).delta); }, st);
     return d;
   };
   auto relErr = [](const std::vector<double>& a, const std::vector<double>& b) {
     double e = 0, r = 0;
-    for (std::size_t i = 0; i < b.size(); ++i) { e += (a[i] - b[i]) * (a[i] - b[i]); r += b[i] * b[i]; }
+    for (std::size_t i = 0; i < b.size(); ++i) {
+      e += (a[i] - b[i]) * (a[i] - b[i]);
+      r += b[i] * b[i];
+    }
     return std::sqrt(e / r);
   };
   const std::vector<double> reference = deltas(s, IntegratorMethod::kDopri5, ref, nullptr);
   IntegrationStats st;
-  const std::vector<double> exact = deltas(s, IntegratorMethod::kExponential, IntegratorOptions{}, &st);
+  const std::vector<double> exact =
+      deltas(s, IntegratorMethod::kExponential, IntegratorOptions{}, &st);
   ASSERT_EQ(exact.size(), reference.size());
   EXPECT_LT(relErr(exact, reference), 1e-7);
   EXPECT_EQ(st.fallbacks, 0);
@@ -154,7 +165,8 @@ TEST(Scenes, ExponentialMethod) {
   // each step.
   const Scene steps = makeScene("torque_steps", rig());
   const std::vector<double> steps_ref = deltas(steps, IntegratorMethod::kDopri5, ref, nullptr);
-  const std::vector<double> steps_exp = deltas(steps, IntegratorMethod::kExponential, handover, &st);
+  const std::vector<double> steps_exp =
+      deltas(steps, IntegratorMethod::kExponential, handover, &st);
   ASSERT_EQ(steps_exp.size(), steps_ref.size());
   EXPECT_EQ(st.fallbacks, 0);
   EXPECT_EQ(st.events, 3);
@@ -162,10 +174,12 @@ TEST(Scenes, ExponentialMethod) {
   EXPECT_LT(relErr(steps_exp, steps_ref), 1e-7);
 
   const Scene rattle = makeScene("bearing_rattle", rig());
-  EXPECT_THROW(integrate(*rattle.model, IntegratorMethod::kExponential, IntegratorOptions{}, 0.0, rattle.initial,
-                         rattle.duration, rattle.output_interval, nullptr), InvalidInput);
-  EXPECT_THROW(integrate(*s.model, IntegratorMethod::kExponential, IntegratorOptions{}, 0.0, s.initial, s.duration,
-                         s.output_interval * 1.37, nullptr), InvalidInput);
+  EXPECT_THROW(integrate(*rattle.model, IntegratorMethod::kExponential, IntegratorOptions{}, 0.0,
+                         rattle.initial, rattle.duration, rattle.output_interval, nullptr),
+               InvalidInput);
+  EXPECT_THROW(integrate(*s.model, IntegratorMethod::kExponential, IntegratorOptions{}, 0.0,
+                         s.initial, s.duration, s.output_interval * 1.37, nullptr),
+               InvalidInput);
 }
 
 // Every output sample is delivered through crowded events. Regression: on low_preload a step shrunk
@@ -179,7 +193,10 @@ TEST(Scenes, Dopri5DeliversEverySampleThroughFlankImpacts) {
   long samples = 0;
   double last = -1.0;
   integrate(*s.model, IntegratorMethod::kDopri5, o, 0.0, s.initial, s.duration, s.output_interval,
-            [&](double t, const State6&) { ++samples; last = t; });
+            [&](double t, const State6&) {
+              ++samples;
+              last = t;
+            });
   EXPECT_EQ(samples, std::lround(s.duration / s.output_interval) + 1);
   EXPECT_NEAR(last, s.duration, 1e-9 * s.duration);
 }
@@ -206,7 +223,8 @@ TEST(Scenes, KahramanSinghSweepShowsJumpHysteresis) {
   EXPECT_NEAR(at(u, 1.1).peak_to_peak / at(d, 1.1).peak_to_peak, 1.0, 0.01);
   // The up-sweep jumps somewhere in the window: a rise of at least 2x between neighbours.
   bool jump = false;
-  for (std::size_t i = 1; i < u.size(); ++i) jump |= u[i].peak_to_peak > 2.0 * u[i - 1].peak_to_peak;
+  for (std::size_t i = 1; i < u.size(); ++i)
+    jump |= u[i].peak_to_peak > 2.0 * u[i - 1].peak_to_peak;
   EXPECT_TRUE(jump);
 }
 
@@ -223,8 +241,11 @@ TEST(Scenes, ChaoticSceneHasSensitiveDependence) {
     State6 b = s.initial;
     b[2] += 1e-9;
     std::vector<double> xa, xb, t;
-    integrate(*s.model, IntegratorMethod::kDopri5, o, 0.0, s.initial, s.duration, s.output_interval * 10,
-              [&](double tt, const State6& y) { xa.push_back(y[2]); t.push_back(tt); });
+    integrate(*s.model, IntegratorMethod::kDopri5, o, 0.0, s.initial, s.duration,
+              s.output_interval * 10, [&](double tt, const State6& y) {
+                xa.push_back(y[2]);
+                t.push_back(tt);
+              });
     integrate(*s.model, IntegratorMethod::kDopri5, o, 0.0, b, s.duration, s.output_interval * 10,
               [&](double, const State6& y) { xb.push_back(y[2]); });
     double worst = 0.0;

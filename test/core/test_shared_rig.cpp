@@ -11,7 +11,8 @@ using namespace drivetrain_stiffness;
 namespace {
 
 const RigConfig& rig() {  // with dynamics and calibration blocks
-  static const RigConfig r = loadRigFile(std::string(DRIVETRAIN_SOURCE_DIR) + "/config/gearboxes/seed_servo.yaml");
+  static const RigConfig r =
+      loadRigFile(std::string(DRIVETRAIN_SOURCE_DIR) + "/config/gearboxes/seed_servo.yaml");
   return r;
 }
 
@@ -33,7 +34,8 @@ ResonanceEstimate resonanceAfterOneTorque(RigPipeline& p) {
 }  // namespace
 
 TEST(SharedRig, OneRigAndOneMeshTableForThePipeline) {
-  ASSERT_TRUE(rig().calibration.present && rig().dynamics.present && rig().mesh_stiffness_scale == 1.0);
+  ASSERT_TRUE(rig().calibration.present && rig().dynamics.present &&
+              rig().mesh_stiffness_scale == 1.0);
   RigPipeline p(rig(), PipelineOptions{});
   ASSERT_NE(p.dynamics(), nullptr);
   ASSERT_NE(p.calibrator(), nullptr);
@@ -43,7 +45,8 @@ TEST(SharedRig, OneRigAndOneMeshTableForThePipeline) {
   // The calibration's drawing-scale table is the estimator's (scale 1), as is the dynamics'.
   EXPECT_EQ(&p.calibrator()->model().unitMesh(), &p.estimator().mesh());
   EXPECT_EQ(&p.dynamics()->mesh(), &p.estimator().mesh());
-  EXPECT_EQ(p.rig().dynamics.speed_rpm, PipelineOptions{}.pinion_speed_rpm);  // the options' speed, set once
+  EXPECT_EQ(p.rig().dynamics.speed_rpm,
+            PipelineOptions{}.pinion_speed_rpm);  // the options' speed, set once
 }
 
 TEST(SharedRig, RunTimeDampingActsAsIfGivenAtStartAndLeavesTheRigAlone) {
@@ -67,6 +70,7 @@ TEST(SharedRig, RunTimeDampingActsAsIfGivenAtStartAndLeavesTheRigAlone) {
   }
   // And the change is seen: the torsional mode's damping moved with the mesh's ratio.
   bool moved = false;
-  for (int i = 0; i < 3; ++i) moved = moved || after.modes[i].damping_ratio != before.modes[i].damping_ratio;
+  for (int i = 0; i < 3; ++i)
+    moved = moved || after.modes[i].damping_ratio != before.modes[i].damping_ratio;
   EXPECT_TRUE(moved);
 }

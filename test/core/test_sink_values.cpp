@@ -16,7 +16,8 @@ using namespace drivetrain_stiffness;
 namespace {
 
 RigConfig seedServo(bool calibration) {
-  RigConfig r = loadRigFile(std::string(DRIVETRAIN_SOURCE_DIR) + "/config/gearboxes/seed_servo.yaml");
+  RigConfig r =
+      loadRigFile(std::string(DRIVETRAIN_SOURCE_DIR) + "/config/gearboxes/seed_servo.yaml");
   r.calibration.present = calibration;
   return r;
 }
@@ -36,10 +37,14 @@ struct Recorder : PipelineSink {
     te.push_back(s.dynamic_te);
     te_stamps.push_back(stamp);
     angles.push_back(c.pinion_angle);
-    resonance_f1.push_back(c.resonance ? std::optional<double>(c.resonance->modes[0].natural_frequency) : std::nullopt);
+    resonance_f1.push_back(c.resonance
+                               ? std::optional<double>(c.resonance->modes[0].natural_frequency)
+                               : std::nullopt);
   }
   void spectrum(Stamp, const SpectrumPeaks& p) override { spectra.push_back(p); }
-  void stiffness(Stamp, const StiffnessEstimate& e, const CalibrationBands& b) override { stiffness_out.emplace_back(e, b); }
+  void stiffness(Stamp, const StiffnessEstimate& e, const CalibrationBands& b) override {
+    stiffness_out.emplace_back(e, b);
+  }
 };
 
 }  // namespace
@@ -50,7 +55,8 @@ TEST(SinkValues, SpectrumPeaksAreTheSlidingWindowsOwn) {
   o.spectrum_hop = 16;
   RigPipeline p(seedServo(false), o);
   Recorder r;
-  for (int i = 0; i <= 20; ++i) ASSERT_EQ(p.torque(at(0.01 * i), 0.1 + 0.02 * (i % 3), r), InputOutcome::kAccepted);
+  for (int i = 0; i <= 20; ++i)
+    ASSERT_EQ(p.torque(at(0.01 * i), 0.1 + 0.02 * (i % 3), r), InputOutcome::kAccepted);
   ASSERT_GE(r.te.size(), 150u);
   // The same samples through a window of the same size: the same lines, bit for bit.
   SlidingSpectrum reference(64, 16, p.dynamics()->outputInterval(), SpectrumPeaks::kMaxPeaks);
@@ -111,7 +117,8 @@ TEST(SinkValues, StiffnessBandsAreTheDrawingsWithoutCalibrationAndTheCalibrators
     EXPECT_EQ(b.mesh_stiffness_low, e.mesh.mean);
     EXPECT_EQ(b.mesh_stiffness_high, e.mesh.mean);
     EXPECT_TRUE(b.bearing_stiffness == p.estimator().shaftRadialStiffness());
-    EXPECT_TRUE(b.bearing_stiffness_low == b.bearing_stiffness && b.bearing_stiffness_high == b.bearing_stiffness);
+    EXPECT_TRUE(b.bearing_stiffness_low == b.bearing_stiffness &&
+                b.bearing_stiffness_high == b.bearing_stiffness);
     EXPECT_FALSE(b.calibrated);
   }
   {
@@ -125,7 +132,8 @@ TEST(SinkValues, StiffnessBandsAreTheDrawingsWithoutCalibrationAndTheCalibrators
     EXPECT_EQ(b.mesh_stiffness, expected.mesh_stiffness);
     EXPECT_EQ(b.mesh_stiffness_low, expected.mesh_stiffness_low);
     EXPECT_EQ(b.mesh_stiffness_high, expected.mesh_stiffness_high);
-    EXPECT_LT(b.mesh_stiffness_low, b.mesh_stiffness_high);  // the prior's 95 % band, not zero width
+    EXPECT_LT(b.mesh_stiffness_low,
+              b.mesh_stiffness_high);  // the prior's 95 % band, not zero width
     EXPECT_TRUE(b.bearing_stiffness == expected.bearing_stiffness);
   }
 }

@@ -25,8 +25,8 @@ using namespace drivetrain_stiffness;
 namespace {
 const RigConfig& rig() { return test::seedServo(); }
 std::shared_ptr<const AntiBacklashMesh> mesh() {
-  static const auto m = std::make_shared<const AntiBacklashMesh>(rig().gears, rig().anti_backlash, rig().mesh_model,
-                                                                 rig().mesh_samples);
+  static const auto m = std::make_shared<const AntiBacklashMesh>(
+      rig().gears, rig().anti_backlash, rig().mesh_model, rig().mesh_samples);
   return m;
 }
 GearRotorParameters params() { return rigRotorParameters(rig(), *mesh(), {1.2e8, 1.2e8}); }
@@ -45,14 +45,18 @@ struct Harness {
   double drive_force;
   explicit Harness(int n, double torque = 0.1)
       : slices(std::make_shared<const SlicedMesh>(mesh(), n)),
-        excitation(std::make_shared<const SlicedExcitation>(slices, kTe, 0.0, 1.0 / params().pinion_base_radius, 0.0)),
+        excitation(std::make_shared<const SlicedExcitation>(
+            slices, kTe, 0.0, 1.0 / params().pinion_base_radius, 0.0)),
         model(params(), excitation),
         exact(params(), slices, kTe, 0.0),
         drive_force(torque / params().pinion_base_radius) {
     model.setTorqueInput(torque);
   }
-  /// dopri5 at rtol 1e-12 through the pieces (the motion input re-anchored at each, as the node does).
-  State6 reference(State6 y, double phase, const std::vector<Piece>& pieces) { return reference(model, y, phase, pieces); }
+  /// dopri5 at rtol 1e-12 through the pieces (the motion input re-anchored at each, as the node
+  /// does).
+  State6 reference(State6 y, double phase, const std::vector<Piece>& pieces) {
+    return reference(model, y, phase, pieces);
+  }
   State6 reference(GearRotorModel on, State6 y, double phase, const std::vector<Piece>& pieces) {
     IntegratorOptions o;
     o.relative_tolerance = 1e-12;
@@ -68,7 +72,8 @@ struct Harness {
     return y;
   }
   State6 propagated(State6 y, double phase, const std::vector<Piece>& pieces) {
-    for (const Piece& p : pieces) EXPECT_TRUE(exact.propagate(y, phase, p.f, p.duration, drive_force));
+    for (const Piece& p : pieces)
+      EXPECT_TRUE(exact.propagate(y, phase, p.f, p.duration, drive_force));
     return y;
   }
   State6 equilibrium(double phase) {
@@ -79,8 +84,10 @@ struct Harness {
 
 double relativeError(const State6& a, const State6& ref) {
   // Displacements against the largest displacement, velocities against the largest velocity.
-  const double dx = (a.head<3>() - ref.head<3>()).cwiseAbs().maxCoeff() / ref.head<3>().cwiseAbs().maxCoeff();
-  const double dv = (a.tail<3>() - ref.tail<3>()).cwiseAbs().maxCoeff() / ref.tail<3>().cwiseAbs().maxCoeff();
+  const double dx =
+      (a.head<3>() - ref.head<3>()).cwiseAbs().maxCoeff() / ref.head<3>().cwiseAbs().maxCoeff();
+  const double dv =
+      (a.tail<3>() - ref.tail<3>()).cwiseAbs().maxCoeff() / ref.tail<3>().cwiseAbs().maxCoeff();
   return std::max(dx, dv);
 }
 
@@ -111,7 +118,8 @@ TEST(SlicedMesh, KeepsEverySwitchAndTheMeanStiffness) {
   EXPECT_EQ(mean->k1(0), mesh()->periodMeans().k1);
   EXPECT_EQ(mean->kChain(0), mesh()->periodMeans().k_chain);
   EXPECT_EQ(mean->k1(0) + mean->kChain(0), meanMeshStiffness(*mesh()));
-  EXPECT_NEAR((mean->k1(0) + mean->kChain(0)) / table, 1.0, 1e-4);  // and the 4096-point quadrature above
+  EXPECT_NEAR((mean->k1(0) + mean->kChain(0)) / table, 1.0,
+              1e-4);  // and the 4096-point quadrature above
 }
 
 TEST(SlicedModalPropagator, SystemMatrixIsTheModelsJacobian) {
@@ -129,7 +137,8 @@ TEST(SlicedModalPropagator, SystemMatrixIsTheModelsJacobian) {
     h.model.rhs(0.0, y + dy, fp);
     h.model.rhs(0.0, y - dy, fm);
     const State6 column = (fp - fm) / (2.0 * dy[c]);
-    for (int r = 0; r < 6; ++r) EXPECT_NEAR(column[r], jac(r, c), 1e-6 * std::max(1.0, std::abs(jac(r, c))));
+    for (int r = 0; r < 6; ++r)
+      EXPECT_NEAR(column[r], jac(r, c), 1e-6 * std::max(1.0, std::abs(jac(r, c))));
   }
 }
 
@@ -171,7 +180,8 @@ TEST(SlicedIntervalMaps, AreTheSliceBySliceSolutionAsAMatrix) {
     EXPECT_GT(end, 80) << i;
     EXPECT_EQ(maps.offset(i, 0), 0.0);
     EXPECT_NEAR(maps.offset(i, end), 1.0 / 3.0, 1e-15);
-    const State6 y0 = h.equilibrium(q0) + (State6() << 1e-8, -2e-8, 3e-9, 1e-5, 2e-5, -1e-5).finished();
+    const State6 y0 =
+        h.equilibrium(q0) + (State6() << 1e-8, -2e-8, 3e-9, 1e-5, 2e-5, -1e-5).finished();
     State6 sliced = y0;
     double phase = q0;
     ASSERT_TRUE(h.exact.propagate(sliced, phase, f, 1e-3, h.drive_force));
@@ -221,7 +231,8 @@ TEST(SlicedModalPropagator, ThroughStandstillAndReversal) {
   // +1000 rpm down through 0 to -1000 rpm and back, pieces of 0.7 ms (not a divisor of anything).
   Harness h(128);
   std::vector<Piece> pieces;
-  for (int k = 0; k <= 40; ++k) pieces.push_back({7e-4, meshHz(1000.0 * std::cos(kTwoPi * k / 40.0))});
+  for (int k = 0; k <= 40; ++k)
+    pieces.push_back({7e-4, meshHz(1000.0 * std::cos(kTwoPi * k / 40.0))});
   pieces.push_back({2e-3, 0.0});  // standing still
   for (int k = 0; k <= 20; ++k) pieces.push_back({7e-4, -meshHz(500.0 * k / 20.0)});
   const State6 y0 = h.equilibrium(0.9);
@@ -234,8 +245,8 @@ TEST(SlicedModalPropagator, OneFlankAboveTheKneeAndPastTheReverseKnee) {
   // the drive flank lifted): each is linear with its own stiffness, damping share and the preload
   // force as a constant, so the exact propagation holds there too (no dopri5), through a run-up and
   // at standstill. 20 N*m, not 10: at 10 N*m the transients at the tooth switches during this
-  // run-up briefly reload the back path (dopri5 shows the flank force dipping from 1773 N to 957 N),
-  // a real change of regime that the propagation rightly hands back.
+  // run-up briefly reload the back path (dopri5 shows the flank force dipping from 1773 N to 957
+  // N), a real change of regime that the propagation rightly hands back.
   for (double torque : {20.0, -1.0}) {
     Harness h(128, torque);
     std::vector<Piece> pieces;
@@ -247,35 +258,40 @@ TEST(SlicedModalPropagator, OneFlankAboveTheKneeAndPastTheReverseKnee) {
     if (torque > 0.0) {
       EXPECT_LT(fp - kc * delta, 0.0) << "the back path should be lifted at " << torque << " N*m";
     } else {
-      EXPECT_LT(fp + h.slices->k1(h.slices->sliceAt(0.1, false)) * delta, 0.0) << "the drive flank should be lifted";
+      EXPECT_LT(fp + h.slices->k1(h.slices->sliceAt(0.1, false)) * delta, 0.0)
+          << "the drive flank should be lifted";
     }
-    EXPECT_LT(relativeError(h.propagated(y0, 0.1, pieces), h.reference(y0, 0.1, pieces)), 1e-8) << torque << " N*m";
+    EXPECT_LT(relativeError(h.propagated(y0, 0.1, pieces), h.reference(y0, 0.1, pieces)), 1e-8)
+        << torque << " N*m";
   }
 }
 
-/// Along dopri5 on the model (rtol 1e-12) from y0 at mesh frequency f, every `dt` [s] for `duration`,
-/// the samples where a closed flank's damper is clipped, from the model's own forces alone
-/// (GearRotorModel::forces, which shares no code with the propagator): the mesh slope dF/d(delta)
-/// is the sum of the closed flanks' stiffnesses unless a damper clips, at zero force (that flank's
-/// slope 0: `low`) or at twice the spring force (2 k: `high`).
+/// Along dopri5 on the model (rtol 1e-12) from y0 at mesh frequency f, every `dt` [s] for
+/// `duration`, the samples where a closed flank's damper is clipped, from the model's own forces
+/// alone (GearRotorModel::forces, which shares no code with the propagator): the mesh slope
+/// dF/d(delta) is the sum of the closed flanks' stiffnesses unless a damper clips, at zero force
+/// (that flank's slope 0: `low`) or at twice the spring force (2 k: `high`).
 struct Clipped {
   int low = 0, high = 0;
 };
-Clipped clippedAlong(GearRotorModel model, State6 y, double phase, double f, double duration, double dt) {
+Clipped clippedAlong(GearRotorModel model, State6 y, double phase, double f, double duration,
+                     double dt) {
   model.setMotionInput(MeshMotion{0.0, phase, f});
   IntegratorOptions o;
   o.relative_tolerance = 1e-12;
   o.absolute_tolerance = 1e-20;
   o.max_step = dt;
   Clipped out;
-  integrate(model, IntegratorMethod::kDopri5, o, 0.0, y, duration, dt, [&](double t, const State6& z) {
-    const GearRotorForces forces = model.forces(t, z);
-    MeshInstant m;
-    model.meshAt(t, m);
-    const double closed = (forces.regime.code[0] ? m.k_drive : 0.0) + (forces.regime.code[1] ? m.k_back : 0.0);
-    if (forces.mesh_slope < closed * (1.0 - 1e-9)) ++out.low;
-    if (forces.mesh_slope > closed * (1.0 + 1e-9)) ++out.high;
-  });
+  integrate(
+      model, IntegratorMethod::kDopri5, o, 0.0, y, duration, dt, [&](double t, const State6& z) {
+        const GearRotorForces forces = model.forces(t, z);
+        MeshInstant m;
+        model.meshAt(t, m);
+        const double closed =
+            (forces.regime.code[0] ? m.k_drive : 0.0) + (forces.regime.code[1] ? m.k_back : 0.0);
+        if (forces.mesh_slope < closed * (1.0 - 1e-9)) ++out.low;
+        if (forces.mesh_slope > closed * (1.0 + 1e-9)) ++out.high;
+      });
   return out;
 }
 
@@ -297,10 +313,13 @@ TEST(SlicedModalPropagator, ChatterAroundTheKneeIsPropagatedExactly) {
     const State6 y0 = h.equilibrium(0.1);
     State6 y = y0;
     double phase = 0.1;
-    const auto dopri5 = [&](double, double, State6&, double&) { ++stretches; };  // counted: none expected
+    const auto dopri5 = [&](double, double, State6&, double&) {
+      ++stretches;
+    };  // counted: none expected
     std::vector<Piece> pieces;
     for (int k = 0; k < 20; ++k) {
-      propagateMeasured(h.exact, y, phase, f, k * interval, (k + 1) * interval, h.drive_force, dopri5);
+      propagateMeasured(h.exact, y, phase, f, k * interval, (k + 1) * interval, h.drive_force,
+                        dopri5);
       pieces.push_back({interval, f});
       ASSERT_TRUE(y.allFinite());
     }
@@ -332,16 +351,20 @@ TEST(SlicedModalPropagator, ChatterAroundTheKneeIsPropagatedExactly) {
     State6 r = y0;
     double worst = 0.0, largest = 0.0;
     for (int k = 0; k < 500; ++k) {
-      propagateMeasured(h.exact, y, phase, f, k * interval, (k + 1) * interval, h.drive_force, dopri5);
-      r = integrate(h.model, IntegratorMethod::kDopri5, o, k * interval, r, (k + 1) * interval, interval, nullptr);
+      propagateMeasured(h.exact, y, phase, f, k * interval, (k + 1) * interval, h.drive_force,
+                        dopri5);
+      r = integrate(h.model, IntegratorMethod::kDopri5, o, k * interval, r, (k + 1) * interval,
+                    interval, nullptr);
       worst = std::max(worst, std::abs((y[2] + y[0] - y[1]) - (r[2] + r[0] - r[1])));
       largest = std::max(largest, std::abs(r[2] + r[0] - r[1]));
     }
     changes += h.exact.regimeChanges();
     EXPECT_LT(worst, 1e-8 * largest) << "torque " << torque << " at 120 rpm";
   }
-  std::printf("contact changes located: %ld; dopri5 samples every 0.5 us with a damper clipped: %d at zero, %d at twice the spring\n",
-              changes, clipped.low, clipped.high);
+  std::printf(
+      "contact changes located: %ld; dopri5 samples every 0.5 us with a damper clipped: %d at "
+      "zero, %d at twice the spring\n",
+      changes, clipped.low, clipped.high);
   EXPECT_EQ(stretches, 0);
   // The test reaches what it is about: both clipped states occur along the reference.
   EXPECT_GT(clipped.low, 0);
@@ -365,14 +388,20 @@ TEST(SlicedModalPropagator, AFlankThatLiftsInsideAnAdvanceIsLocatedAndGoneThroug
   EXPECT_EQ(h.exact.propagateLinear(y, phase, f, duration, force), duration);
   EXPECT_GT(h.exact.regimeChanges(), 0) << "the back path's lift was not seen";
   const Clipped c = clippedAlong(lifted, y0, 0.3, f, duration, 1e-7);
-  EXPECT_GT(c.low, 0) << "no damper clipped at zero: the test does not reach the opening flank's clipped moment";
-  std::printf("regime changes located: %ld; dopri5 samples with a damper clipped: %d at zero, %d at twice the spring\n",
-              h.exact.regimeChanges(), c.low, c.high);
+  EXPECT_GT(c.low, 0)
+      << "no damper clipped at zero: the test does not reach the opening flank's clipped moment";
+  std::printf(
+      "regime changes located: %ld; dopri5 samples with a damper clipped: %d at zero, %d at twice "
+      "the spring\n",
+      h.exact.regimeChanges(), c.low, c.high);
   const State6 ref = h.reference(lifted, y0, 0.3, {Piece{duration, f}});
   EXPECT_LT(relativeError(y, ref), 1e-8);
   // Independent: at the end the back path is lifted in the reference (s2 = F_p - k_c delta < 0).
   const double delta = ref[2] + ref[0] - ref[1] - kTe * std::sin(kTwoPi * (0.3 + f * duration));
-  EXPECT_LT(mesh()->preloadForce() - h.slices->kChain(h.slices->sliceAt(std::fmod(0.3 + f * duration, 1.0), false)) * delta, 0.0);
+  EXPECT_LT(
+      mesh()->preloadForce() -
+          h.slices->kChain(h.slices->sliceAt(std::fmod(0.3 + f * duration, 1.0), false)) * delta,
+      0.0);
   // propagate, all or nothing, takes the same advance whole and gives the same bits.
   Harness again(128, 1.0);
   State6 z = y0;
@@ -383,22 +412,24 @@ TEST(SlicedModalPropagator, AFlankThatLiftsInsideAnAdvanceIsLocatedAndGoneThroug
 }
 
 // An ordinary gear (no anti-backlash spring) with 20 um of backlash, its mesh started 3 um back
-// from its loaded place, off the drive flank: it flies free in the backlash (both flanks unloaded, no mesh stiffness, a free mass whose
-// double zero eigenvalue has no eigenbasis), which the exact propagation hands back, and
-// propagateMeasured's dopri5 stretches carry it until the drive flank lands again; the landing
-// (through the stiffened moment) and what follows are exact again. Checked against dopri5 at rtol
-// 1e-12 on the same model.
+// from its loaded place, off the drive flank: it flies free in the backlash (both flanks unloaded,
+// no mesh stiffness, a free mass whose double zero eigenvalue has no eigenbasis), which the exact
+// propagation hands back, and propagateMeasured's dopri5 stretches carry it until the drive flank
+// lands again; the landing (through the stiffened moment) and what follows are exact again. Checked
+// against dopri5 at rtol 1e-12 on the same model.
 TEST(SlicedModalPropagator, FreeFlightInTheBacklashGoesToDopri5StretchesUntilAFlankLands) {
   RigConfig ordinary = rig();
   ordinary.anti_backlash.spring_stiffness = 0.0;
   ordinary.anti_backlash.preload_torque = 0.0;
-  const auto plain = std::make_shared<const AntiBacklashMesh>(ordinary.gears, ordinary.anti_backlash,
-                                                              ordinary.mesh_model, ordinary.mesh_samples);
+  const auto plain = std::make_shared<const AntiBacklashMesh>(
+      ordinary.gears, ordinary.anti_backlash, ordinary.mesh_model, ordinary.mesh_samples);
   const GearRotorParameters p = rigRotorParameters(ordinary, *plain, {1.2e8, 1.2e8});
-  const double backlash = 20e-6, torque = 1.0, force = torque / p.pinion_base_radius, f = meshHz(1000);
+  const double backlash = 20e-6, torque = 1.0, force = torque / p.pinion_base_radius,
+               f = meshHz(1000);
   const auto slices = std::make_shared<const SlicedMesh>(plain, 128);
   ASSERT_FALSE(slices->antiBacklash());
-  const auto excitation = std::make_shared<const SlicedExcitation>(slices, kTe, backlash, 1.0 / p.pinion_base_radius, 0.0);
+  const auto excitation = std::make_shared<const SlicedExcitation>(slices, kTe, backlash,
+                                                                   1.0 / p.pinion_base_radius, 0.0);
   GearRotorModel model(p, excitation);
   model.setTorqueInput(torque);
   const SlicedModalPropagator exact(p, slices, kTe, backlash);
@@ -427,38 +458,42 @@ TEST(SlicedModalPropagator, FreeFlightInTheBacklashGoesToDopri5StretchesUntilAFl
   EXPECT_EQ(p0, 0.2);
   State6 y = y0;
   double phase = 0.2;
-  for (int k = 0; k < 4; ++k) propagateMeasured(exact, y, phase, f, k * 1e-3, (k + 1) * 1e-3, force, dopri5);
+  for (int k = 0; k < 4; ++k)
+    propagateMeasured(exact, y, phase, f, k * 1e-3, (k + 1) * 1e-3, force, dopri5);
   model.setMotionInput(MeshMotion{0.0, 0.2, f});
   const State6 ref = integrate(model, IntegratorMethod::kDopri5, o, 0.0, y0, 4e-3, 4e-3, nullptr);
-  std::printf("dopri5 stretches: %ld over %.3g us, contact changes located: %ld\n", stretches, stretched * 1e6,
-              exact.regimeChanges());
+  std::printf("dopri5 stretches: %ld over %.3g us, contact changes located: %ld\n", stretches,
+              stretched * 1e6, exact.regimeChanges());
   EXPECT_GT(stretches, 0) << "the free flight should be handed to dopri5";
   // Independent: the free flight's length along the reference (both flanks open: 0.1 us samples),
   // which the stretches must cover, doubling, by less than twice; the rest of the 4 ms is the
   // exact propagation's.
   double flight = 0.0;
   model.setMotionInput(MeshMotion{0.0, 0.2, f});
-  integrate(model, IntegratorMethod::kDopri5, o, 0.0, y0, 4e-3, 1e-7, [&](double t, const State6& z) {
-    const GearRotorForces g = model.forces(t, z);
-    if (g.regime.code[0] == 0 && g.regime.code[1] == 0) flight += 1e-7;
-  });
+  integrate(model, IntegratorMethod::kDopri5, o, 0.0, y0, 4e-3, 1e-7,
+            [&](double t, const State6& z) {
+              const GearRotorForces g = model.forces(t, z);
+              if (g.regime.code[0] == 0 && g.regime.code[1] == 0) flight += 1e-7;
+            });
   std::printf("free flight along the reference: %.3g us\n", flight * 1e6);
   EXPECT_GE(stretched, flight - 2e-7);
-  EXPECT_LT(stretched, 2.0 * flight + 2.0 * exact.fastestPeriodBound()) << "the exact propagation should resume after the landing";
+  EXPECT_LT(stretched, 2.0 * flight + 2.0 * exact.fastestPeriodBound())
+      << "the exact propagation should resume after the landing";
   EXPECT_GT(exact.regimeChanges(), 0) << "the landing should be located on the exact solution";
   EXPECT_LT(relativeError(y, ref), 1e-7);
   // Independent: along the reference the mesh does fly free (both flanks open) for a while.
   int free_samples = 0;
   model.setMotionInput(MeshMotion{0.0, 0.2, f});
-  integrate(model, IntegratorMethod::kDopri5, o, 0.0, y0, 4e-3, 1e-6, [&](double t, const State6& z) {
-    const GearRotorForces g = model.forces(t, z);
-    free_samples += g.regime.code[0] == 0 && g.regime.code[1] == 0;
-  });
+  integrate(model, IntegratorMethod::kDopri5, o, 0.0, y0, 4e-3, 1e-6,
+            [&](double t, const State6& z) {
+              const GearRotorForces g = model.forces(t, z);
+              free_samples += g.regime.code[0] == 0 && g.regime.code[1] == 0;
+            });
   EXPECT_GT(free_samples, 0);
 }
 
-// A state recorded from the node's replay of the 48 s load_sweep bag (docs/calibration.md section 7),
-// 13.2498 s into it: 5.33 N m at 120 rpm, 211 us to the next output sample, across the tooth
+// A state recorded from the node's replay of the 48 s load_sweep bag (docs/calibration.md section
+// 7), 13.2498 s into it: 5.33 N m at 120 rpm, 211 us to the next output sample, across the tooth
 // switch at phase 0 where the back path lands (parameters and state as the estimator held them).
 // Within one 1.9 us step the state leaves the both-flank regime, comes back and leaves again; a
 // search over the whole step converged on the second change and measured 1e-6 of the deflection
@@ -466,15 +501,19 @@ TEST(SlicedModalPropagator, FreeFlightInTheBacklashGoesToDopri5StretchesUntilAFl
 // find the first. The old path, dopri5 stretches through every clipped damper, missed a landing
 // 0.43 s later by 2.8e-4 of that sample's TE.
 TEST(SlicedModalPropagator, ALeaveAndReturnInsideAStepIsTakenAtTheFirstChange) {
-  GearRotorParameters p = rigRotorParameters(rig(), *mesh(), {108737127.15110265, 108737127.15110265});
+  GearRotorParameters p =
+      rigRotorParameters(rig(), *mesh(), {108737127.15110265, 108737127.15110265});
   p.bearing_damping = {76.85441266998204, 91.64052490101723};
   p.mesh_damping = 33.898072824498264;
   const auto slices = std::make_shared<const SlicedMesh>(mesh(), 256);
-  const auto excitation = std::make_shared<const SlicedExcitation>(slices, kTe, 0.0, 1.0 / p.pinion_base_radius, 0.0);
+  const auto excitation =
+      std::make_shared<const SlicedExcitation>(slices, kTe, 0.0, 1.0 / p.pinion_base_radius, 0.0);
   const double torque = 5.3310678105797678, f = 39.999999999999993, phase = 0.99219894409179688;
   const double duration = 13.25 - 13.249789270999999;
-  const State6 y0 = (State6() << -8.691466041753754e-06, 8.6978623985479104e-06, 2.786766491654544e-05,
-                     0.00043240893594604073, 0.00062322605655164547, 4.540223838771229e-06).finished();
+  const State6 y0 =
+      (State6() << -8.691466041753754e-06, 8.6978623985479104e-06, 2.786766491654544e-05,
+       0.00043240893594604073, 0.00062322605655164547, 4.540223838771229e-06)
+          .finished();
   const SlicedModalPropagator exact(p, slices, kTe, 0.0);
   State6 y = y0;
   double ph = phase;
@@ -486,9 +525,11 @@ TEST(SlicedModalPropagator, ALeaveAndReturnInsideAStepIsTakenAtTheFirstChange) {
   o.relative_tolerance = 1e-13;
   o.absolute_tolerance = 1e-21;
   o.max_step = 1e-7;
-  const State6 ref = integrate(model, IntegratorMethod::kDopri5, o, 0.0, y0, duration, duration, nullptr);
+  const State6 ref =
+      integrate(model, IntegratorMethod::kDopri5, o, 0.0, y0, duration, duration, nullptr);
   const double delta = y[2] + y[0] - y[1], delta_ref = ref[2] + ref[0] - ref[1];
-  std::printf("contact changes: %ld, deflection %.10e against dopri5's %.10e\n", exact.regimeChanges(), delta, delta_ref);
+  std::printf("contact changes: %ld, deflection %.10e against dopri5's %.10e\n",
+              exact.regimeChanges(), delta, delta_ref);
   EXPECT_GE(exact.regimeChanges(), 5);
   EXPECT_LT(std::abs(delta - delta_ref), 1e-8 * std::abs(delta_ref));
 }
@@ -496,8 +537,8 @@ TEST(SlicedModalPropagator, ALeaveAndReturnInsideAStepIsTakenAtTheFirstChange) {
 TEST(SlicedModalPropagator, StandingStillSettlesOnTheClosedFormEquilibrium) {
   // At f = 0 the model is LTI with constant forcing: y(inf) = static equilibrium at that phase,
   // whatever the start (here displaced by 0.2 um and moving). A 1 um push, as this test had, clips
-  // a flank's damper in the first 10 us (the drive flank's force swings from 246 N to 29 N, dopri5),
-  // which the exact propagation now sees inside its step and hands back.
+  // a flank's damper in the first 10 us (the drive flank's force swings from 246 N to 29 N,
+  // dopri5), which the exact propagation now sees inside its step and hands back.
   Harness h(64);
   const double phase = 0.37;
   const State6 eq = h.equilibrium(phase);
@@ -507,17 +548,18 @@ TEST(SlicedModalPropagator, StandingStillSettlesOnTheClosedFormEquilibrium) {
   double p = phase;
   ASSERT_TRUE(h.exact.propagate(y, p, 0.0, 0.5, h.drive_force));
   EXPECT_EQ(p, phase);
-  EXPECT_LT((y.head<3>() - eq.head<3>()).cwiseAbs().maxCoeff(), 1e-10 * eq.head<3>().cwiseAbs().maxCoeff());
+  EXPECT_LT((y.head<3>() - eq.head<3>()).cwiseAbs().maxCoeff(),
+            1e-10 * eq.head<3>().cwiseAbs().maxCoeff());
 }
 
 TEST(SlicedModalPropagator, AContactChangeInsideAStepIsSeen) {
   // Standing, pushed by 1 um and moving: the transient clips a flank's damper within the first
   // 10 us and has died out long before the step's end, where the contacts look as they began. The
-  // check at the ends alone accepted this 0.5 s step whole in the both-flank law; the bound over the
-  // step (regimeMargin) must cut it so that the changes are seen and located. Independent evidence
-  // that the contacts do leave that law: along dopri5's trajectory the model's mesh force departs
-  // from (k1 + k_c) delta + c delta'. The state 20 us on, past the clipped moment, must match
-  // dopri5's, which the both-flank law alone misses by far more.
+  // check at the ends alone accepted this 0.5 s step whole in the both-flank law; the bound over
+  // the step (regimeMargin) must cut it so that the changes are seen and located. Independent
+  // evidence that the contacts do leave that law: along dopri5's trajectory the model's mesh force
+  // departs from (k1 + k_c) delta + c delta'. The state 20 us on, past the clipped moment, must
+  // match dopri5's, which the both-flank law alone misses by far more.
   Harness h(64);
   const double phase = 0.37;
   State6 y = h.equilibrium(phase);
@@ -531,13 +573,16 @@ TEST(SlicedModalPropagator, AContactChangeInsideAStepIsSeen) {
   double worst = 0.0;
   h.model.setMotionInput(MeshMotion{0.0, phase, 0.0});
   for (int i = 0; i < 200; ++i) {
-    r = integrate(h.model, IntegratorMethod::kDopri5, o, i * 1e-7, r, (i + 1) * 1e-7, 1e-7, nullptr);
+    r = integrate(h.model, IntegratorMethod::kDopri5, o, i * 1e-7, r, (i + 1) * 1e-7, 1e-7,
+                  nullptr);
     const GearRotorForces f = h.model.forces((i + 1) * 1e-7, r);
     const int j = h.slices->sliceAt(phase, false);
-    const double linear = (h.slices->k1(j) + h.slices->kChain(j)) * f.delta + params().mesh_damping * f.delta_rate;
+    const double linear =
+        (h.slices->k1(j) + h.slices->kChain(j)) * f.delta + params().mesh_damping * f.delta_rate;
     worst = std::max(worst, std::abs(f.mesh - linear));
   }
-  EXPECT_GT(worst, 1.0) << "the push should clip a damper (a mesh force off the linear law by more than 1 N)";
+  EXPECT_GT(worst, 1.0)
+      << "the push should clip a damper (a mesh force off the linear law by more than 1 N)";
   State6 z = y;
   double p = phase;
   ASSERT_TRUE(h.exact.propagate(z, p, 0.0, 2e-5, h.drive_force));
@@ -549,16 +594,21 @@ TEST(SlicedModalPropagator, AContactChangeInsideAStepIsSeen) {
   const int j = h.slices->sliceAt(phase, false);
   Matrix6 a = Matrix6::Zero();
   a.topRightCorner<3, 3>().setIdentity();
-  const Eigen::Vector3d m_inv(1.0 / params().pinion_mass, 1.0 / params().gear_mass, 1.0 / params().equivalentMass());
-  a.bottomLeftCorner<3, 3>() = -(m_inv.asDiagonal() * meshBearingMatrix(h.slices->k1(j) + h.slices->kChain(j), params().bearing_stiffness));
-  a.bottomRightCorner<3, 3>() = -(m_inv.asDiagonal() * meshBearingMatrix(params().mesh_damping, params().bearing_damping));
+  const Eigen::Vector3d m_inv(1.0 / params().pinion_mass, 1.0 / params().gear_mass,
+                              1.0 / params().equivalentMass());
+  a.bottomLeftCorner<3, 3>() =
+      -(m_inv.asDiagonal() *
+        meshBearingMatrix(h.slices->k1(j) + h.slices->kChain(j), params().bearing_stiffness));
+  a.bottomRightCorner<3, 3>() =
+      -(m_inv.asDiagonal() * meshBearingMatrix(params().mesh_damping, params().bearing_damping));
   const State6 eq = h.equilibrium(phase);
   const State6 unclipped = eq + (a * 2e-5).exp() * (y - eq);
   EXPECT_GT(relativeError(unclipped, r), 1e-4);
   // And the whole 0.5 s, on to rest.
   p = phase;
   ASSERT_TRUE(h.exact.propagate(y, p, 0.0, 0.5, h.drive_force));
-  EXPECT_LT((y.head<3>() - eq.head<3>()).cwiseAbs().maxCoeff(), 1e-10 * eq.head<3>().cwiseAbs().maxCoeff());
+  EXPECT_LT((y.head<3>() - eq.head<3>()).cwiseAbs().maxCoeff(),
+            1e-10 * eq.head<3>().cwiseAbs().maxCoeff());
 }
 
 TEST(SlicedModalPropagator, SlicingErrorAgainstThePhaseTableFallsWithTheSliceCount) {
@@ -586,7 +636,8 @@ TEST(SlicedModalPropagator, SlicingErrorAgainstThePhaseTableFallsWithTheSliceCou
     State6 y = y0;
     double phase = 0.0;
     ASSERT_TRUE(h.exact.propagate(y, phase, meshHz(1000), 0.03, h.drive_force));
-    errors.push_back((y.head<3>() - ref.head<3>()).cwiseAbs().maxCoeff() / ref.head<3>().cwiseAbs().maxCoeff());
+    errors.push_back((y.head<3>() - ref.head<3>()).cwiseAbs().maxCoeff() /
+                     ref.head<3>().cwiseAbs().maxCoeff());
     std::printf("slices %d: displacement error against the phase table %.3g\n", n, errors.back());
   }
   EXPECT_GT(errors[0] / errors[1], 4.0);
@@ -618,7 +669,8 @@ TEST(SlicedModalPropagator, SeededModesGiveTheMonodromyOfTheJacobians) {
     Eigen::Matrix<double, 6, 1> d;
     d << 1.0, 1.0, 1.0, 1e5, 1e5, 1e5;
     const Matrix6 a_b = d.cwiseInverse().asDiagonal() * a * d.asDiagonal();
-    const Matrix6 step = d.asDiagonal() * Matrix6((a_b * ((h.slices->end(j) - h.slices->start(j)) / f)).exp()) *
+    const Matrix6 step = d.asDiagonal() *
+                         Matrix6((a_b * ((h.slices->end(j) - h.slices->start(j)) / f)).exp()) *
                          d.cwiseInverse().asDiagonal();
     reference = step * reference;
   }
@@ -636,7 +688,8 @@ TEST(SlicedModalPropagator, SeededModesGiveTheMonodromyOfTheJacobians) {
 // regime (GearRotorModel::forces decides the contacts there, sharing no code with the propagator's
 // regime test), and shown to differ from the both-flank map it replaced.
 TEST(SlicedModalPropagator, MonodromyIsTheRegimeTheStateIsIn) {
-  const double torque = 20.0;  // N*m: well above the seed rig's knee of 6.95 N*m (docs/calibration.md section 5)
+  const double torque =
+      20.0;  // N*m: well above the seed rig's knee of 6.95 N*m (docs/calibration.md section 5)
   Harness h(256, torque);
   const double f = meshHz(1000);
   Eigen::Matrix<double, 6, 1> d;  // balanced units, as above
@@ -646,18 +699,23 @@ TEST(SlicedModalPropagator, MonodromyIsTheRegimeTheStateIsIn) {
     const double mid = 0.5 * (h.slices->start(j) + h.slices->end(j));
     const State6 y = h.equilibrium(mid);
     h.model.setMotionInput(MeshMotion{0.0, mid, f});
-    ASSERT_EQ(h.model.forces(0.0, y).regime.code[1], 0) << "the back path should be lifted at slice " << j;
+    ASSERT_EQ(h.model.forces(0.0, y).regime.code[1], 0)
+        << "the back path should be lifted at slice " << j;
     const Matrix6 a_b = d.cwiseInverse().asDiagonal() * h.model.jacobian(0.0, y) * d.asDiagonal();
-    reference = d.asDiagonal() * Matrix6((a_b * ((h.slices->end(j) - h.slices->start(j)) / f)).exp()) *
+    reference = d.asDiagonal() *
+                Matrix6((a_b * ((h.slices->end(j) - h.slices->start(j)) / f)).exp()) *
                 d.cwiseInverse().asDiagonal() * reference;
   }
   const std::optional<Matrix6> fast = h.exact.monodromy(f, h.equilibrium(0.1), 0.1);
   ASSERT_TRUE(fast.has_value());
-  const auto balanced = [&](const Matrix6& m) { return Matrix6(d.cwiseInverse().asDiagonal() * m * d.asDiagonal()); };
+  const auto balanced = [&](const Matrix6& m) {
+    return Matrix6(d.cwiseInverse().asDiagonal() * m * d.asDiagonal());
+  };
   const double scale = balanced(reference).cwiseAbs().maxCoeff();
   EXPECT_LT((balanced(*fast) - balanced(reference)).cwiseAbs().maxCoeff(), 1e-11 * scale);
   // The both-flank map (the mesh about twice as stiff) is a different motion.
-  EXPECT_GT((balanced(h.exact.monodromy(f)) - balanced(reference)).cwiseAbs().maxCoeff(), 1e-3 * scale);
+  EXPECT_GT((balanced(h.exact.monodromy(f)) - balanced(reference)).cwiseAbs().maxCoeff(),
+            1e-3 * scale);
   // A state in no linear regime has no period map: the mesh closing so fast that the drive
   // flank's damper force would exceed its spring force (clipped: |F_d| <= F_s, the regime rule).
   State6 slamming = h.equilibrium(0.1);
@@ -677,8 +735,10 @@ TEST(SlicedModalPropagator, MonodromyIsTheRegimeTheStateIsIn) {
   const GearRotorForces at_rest = near.model.forces(0.0, opening);
   MeshInstant m;
   near.model.meshAt(0.0, m);
-  const double c1 = params().mesh_damping * m.k_drive / (m.k_drive + m.k_back), c2 = params().mesh_damping - c1;
-  const double s1 = mesh()->preloadForce() + m.k_drive * at_rest.delta, s2 = mesh()->preloadForce() - m.k_back * at_rest.delta;
+  const double c1 = params().mesh_damping * m.k_drive / (m.k_drive + m.k_back),
+               c2 = params().mesh_damping - c1;
+  const double s1 = mesh()->preloadForce() + m.k_drive * at_rest.delta,
+               s2 = mesh()->preloadForce() - m.k_back * at_rest.delta;
   ASSERT_LT(s2 / c2, s1 / c1) << "no opening rate clips the back path's damper alone";
   opening[5] += 0.5 * (s2 / c2 + s1 / c1);  // delta' up by this much: the mesh opening
   const GearRotorForces clipped = near.model.forces(0.0, opening);
@@ -691,12 +751,12 @@ TEST(SlicedModalPropagator, MonodromyIsTheRegimeTheStateIsIn) {
 
 TEST(SlicedModalPropagator, APhaseJustBelowAWholeTurnIsThePeriodsFirstSlice) {
   // phase - floor(phase) rounds to 1.0 for a phase of -1e-17; the regime of the state must then be
-  // judged on the period's first slice, where the mesh is (phase 0), not on its last (sliceAt clamps
-  // 1.0 to it). Across the tooth switch the drive flank's stiffness jumps and with it the share of
-  // the mesh damping each path carries (c1 = c_m k_drive / (k_drive + k_back)), so a mesh opening
-  // at a rate between the two slices' clipping rates is in a linear regime on one and in none on the
-  // other (the damper rule of MonodromyIsTheRegimeTheStateIsIn above): the answer at -1e-17
-  // must be the one at phase 0, matrix for matrix.
+  // judged on the period's first slice, where the mesh is (phase 0), not on its last (sliceAt
+  // clamps 1.0 to it). Across the tooth switch the drive flank's stiffness jumps and with it the
+  // share of the mesh damping each path carries (c1 = c_m k_drive / (k_drive + k_back)), so a mesh
+  // opening at a rate between the two slices' clipping rates is in a linear regime on one and in
+  // none on the other (the damper rule of MonodromyIsTheRegimeTheStateIsIn above): the answer at
+  // -1e-17 must be the one at phase 0, matrix for matrix.
   const double f = meshHz(1000);
   ASSERT_EQ(-1e-17 - std::floor(-1e-17), 1.0) << "the rounding this test is about";
   Harness h(256, 3.0);
@@ -727,7 +787,8 @@ TEST(SlicedModalPropagator, ABearingChangeIsReseededAndStaysExact) {
     Harness h(128);
     State6 y = h.equilibrium(0.2);
     double phase = 0.2;
-    ASSERT_TRUE(h.exact.propagate(y, phase, meshHz(1000), 4e-3, h.drive_force));  // every slice decomposed
+    ASSERT_TRUE(
+        h.exact.propagate(y, phase, meshHz(1000), 4e-3, h.drive_force));  // every slice decomposed
     GearRotorParameters changed = params();
     changed.bearing_stiffness = {1.2e8 * factor, 1.3e8 * factor};
     h.exact.setParameters(changed);
@@ -740,7 +801,8 @@ TEST(SlicedModalPropagator, ABearingChangeIsReseededAndStaysExact) {
     const State6 got = h.propagated(y0, 0.2, pieces), ref = h.reference(stiffer, y0, 0.2, pieces);
     EXPECT_LT(relativeError(got, ref), 1e-8) << "factor " << factor;
     if (factor < 2.0) {
-      EXPECT_EQ(h.exact.generalDecompositions(), general) << "a 10 % change needed the general solver";
+      EXPECT_EQ(h.exact.generalDecompositions(), general)
+          << "a 10 % change needed the general solver";
     }
     std::printf("bearing stiffness x%g: %ld of %ld decompositions by the general solver\n", factor,
                 h.exact.generalDecompositions() - general, h.exact.decompositions());
@@ -758,7 +820,8 @@ TEST(SlicedModalPropagator, AMeshDampingChangeRemakesTheContactRules) {
     Harness h(128, torque);
     State6 y = h.equilibrium(0.2);
     double phase = 0.2;
-    ASSERT_TRUE(h.exact.propagate(y, phase, meshHz(1000), 4e-3, h.drive_force));  // every slice decomposed
+    ASSERT_TRUE(
+        h.exact.propagate(y, phase, meshHz(1000), 4e-3, h.drive_force));  // every slice decomposed
     GearRotorParameters changed = params();
     changed.mesh_damping *= 3.0;
     h.exact.setParameters(changed);
@@ -813,7 +876,8 @@ TEST(SlicedModalPropagator, KeptParameterSetsAreTakenBackAsTheyWere) {
   long before = h.exact.decompositions();
   h.exact.setParameters(a);
   h.propagated(y0, 0.2, pieces);
-  EXPECT_EQ(h.exact.decompositions(), before) << "a new set emptied A while a set had never been used";
+  EXPECT_EQ(h.exact.decompositions(), before)
+      << "a new set emptied A while a set had never been used";
   h.exact.setParameters(other(10));  // B, last used before the four, is the longest unused
   h.propagated(y0, 0.2, short_piece);
   h.exact.setParameters(a);
@@ -822,7 +886,8 @@ TEST(SlicedModalPropagator, KeptParameterSetsAreTakenBackAsTheyWere) {
   EXPECT_EQ(h.exact.decompositions(), before) << "A was emptied, not the longest unused set";
   h.exact.setParameters(b);
   h.propagated(y0, 0.2, pieces);
-  EXPECT_EQ(h.exact.decompositions() - before, h.slices->size()) << "B's set should have been emptied";
+  EXPECT_EQ(h.exact.decompositions() - before, h.slices->size())
+      << "B's set should have been emptied";
   // Taken back as they were only where they are that set's: a set emptied and made again is
   // decomposed afresh (other seeds: the same answer to rounding, not bit for bit).
   h.exact.setParameters(a);
@@ -833,7 +898,8 @@ TEST(SlicedModalPropagator, KeptParameterSetsAreTakenBackAsTheyWere) {
   h.exact.setParameters(a);
   before = h.exact.decompositions();
   const State6 evicted = h.propagated(y0, 0.2, pieces);
-  EXPECT_EQ(h.exact.decompositions() - before, h.slices->size()) << "A's set should have been emptied";
+  EXPECT_EQ(h.exact.decompositions() - before, h.slices->size())
+      << "A's set should have been emptied";
   EXPECT_LT(relativeError(evicted, first), 1e-12);
 }
 

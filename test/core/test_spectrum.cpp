@@ -18,7 +18,9 @@ TEST(Spectrum, FindsTwoOffBinSines) {
   const double df = 1.0 / (n * dt);  // 2.44 Hz
   const double f1 = 103.3 * df, f2 = 250.7 * df, a1 = 2.0, a2 = 0.5;
   std::vector<double> x;
-  for (int i = 0; i < n; ++i) x.push_back(3.0 + a1 * std::sin(2 * M_PI * f1 * i * dt) + a2 * std::cos(2 * M_PI * f2 * i * dt));
+  for (int i = 0; i < n; ++i)
+    x.push_back(3.0 + a1 * std::sin(2 * M_PI * f1 * i * dt) +
+                a2 * std::cos(2 * M_PI * f2 * i * dt));
   const Spectrum s = amplitudeSpectrum(x, dt);
   EXPECT_NEAR(s.resolution, df, 1e-12);
   const auto peaks = topPeaks(s, 3);
@@ -88,9 +90,11 @@ TEST(SpectrumAnalyzer, ReusedPlanEqualsAFreshSpectrumAndPlansOnManyThreads) {
     const drivetrain_stiffness::Spectrum fresh = drivetrain_stiffness::amplitudeSpectrum(x, dt);
     const drivetrain_stiffness::Spectrum& reused = analyzer.compute(x);
     ASSERT_EQ(reused.amplitude.size(), fresh.amplitude.size());
-    for (std::size_t k = 0; k < fresh.amplitude.size(); ++k) EXPECT_EQ(reused.amplitude[k], fresh.amplitude[k]) << f << " " << k;
+    for (std::size_t k = 0; k < fresh.amplitude.size(); ++k)
+      EXPECT_EQ(reused.amplitude[k], fresh.amplitude[k]) << f << " " << k;
   }
-  EXPECT_THROW(analyzer.compute(std::vector<double>(n - 1, 0.0)), drivetrain_stiffness::InvalidInput);
+  EXPECT_THROW(analyzer.compute(std::vector<double>(n - 1, 0.0)),
+               drivetrain_stiffness::InvalidInput);
   std::vector<std::thread> threads;
   std::atomic<int> good{0};
   for (int t = 0; t < 8; ++t) {

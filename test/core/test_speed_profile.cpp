@@ -58,15 +58,18 @@ TEST(SpeedProfile, RunUpMatchesTheClosedFormAndTheNumericalIntegral) {
     EXPECT_NEAR(p.speed(t), s0 + (s1 - s0) * t / T, 1e-12);
     EXPECT_NEAR(p.angle(t), s0 * t + (s1 - s0) * t * t / (2.0 * T), 1e-10);
   }
-  for (double t : {0.3, 1.1, 2.0, 2.6}) EXPECT_NEAR(p.angle(t), trapezoid(p, t), 1e-7) << "t = " << t;
-  // Held after the ramp: theta(T) + s1 (t - T), theta(T) = (s0 + s1) T / 2 = 200 pi rad (100 revolutions).
+  for (double t : {0.3, 1.1, 2.0, 2.6})
+    EXPECT_NEAR(p.angle(t), trapezoid(p, t), 1e-7) << "t = " << t;
+  // Held after the ramp: theta(T) + s1 (t - T), theta(T) = (s0 + s1) T / 2 = 200 pi rad (100
+  // revolutions).
   EXPECT_NEAR(p.angle(T), 200.0 * kPi, 1e-10);
   EXPECT_NEAR(p.angle(3.0), 200.0 * kPi + s1 * 1.0, 1e-10);
   EXPECT_EQ(p.speed(5.0), s1);
 }
 
 TEST(SpeedProfile, CoastDownWithALateRampMatchesTheClosedForm) {
-  // 6000 -> 0 rpm over [0.5, 1.5] s: s0 t before, then s0 t0 + s0 tau + (s1 - s0) tau^2 / (2 T), tau = t - t0.
+  // 6000 -> 0 rpm over [0.5, 1.5] s: s0 t before, then s0 t0 + s0 tau + (s1 - s0) tau^2 / (2 T),
+  // tau = t - t0.
   const double s0 = 6000.0 * kRpm, s1 = 0.0, t0 = 0.5, t1 = 1.5, T = t1 - t0;
   const SpeedProfile p(SpeedRamp{s0, s1, t0, t1});
   EXPECT_NEAR(p.angle(0.25), s0 * 0.25, 1e-12);
@@ -105,20 +108,22 @@ TEST(SpeedProfile, StepsRampBetweenLevelsAndIntegrateExactly) {
   steps.ramp_duration = 0.05;
   const SpeedProfile p(steps);
   EXPECT_NEAR(p.speed(0.25), 500.0 * kRpm, 1e-12);
-  EXPECT_NEAR(p.speed(0.525), 750.0 * kRpm, 1e-9);   // mid-ramp: the mean of the two levels
-  EXPECT_NEAR(p.speed(0.55), 1000.0 * kRpm, 1e-9);   // ramp done after 50 ms
+  EXPECT_NEAR(p.speed(0.525), 750.0 * kRpm, 1e-9);  // mid-ramp: the mean of the two levels
+  EXPECT_NEAR(p.speed(0.55), 1000.0 * kRpm, 1e-9);  // ramp done after 50 ms
   EXPECT_NEAR(p.speed(1.3), 2000.0 * kRpm, 1e-12);
   EXPECT_NEAR(p.speed(1.9), 4000.0 * kRpm, 1e-12);
   // By hand: each level's dwell plus each ramp's mean speed times 50 ms.
   const double r = 0.05, w = kRpm;
-  const double at2 = 500 * w * 0.5 + 750 * w * r + 1000 * w * (0.5 - r) + 1500 * w * r + 2000 * w * (0.5 - r) +
-                     3000 * w * r + 4000 * w * (0.5 - r);
+  const double at2 = 500 * w * 0.5 + 750 * w * r + 1000 * w * (0.5 - r) + 1500 * w * r +
+                     2000 * w * (0.5 - r) + 3000 * w * r + 4000 * w * (0.5 - r);
   EXPECT_NEAR(p.angle(2.0), at2, 1e-10);
-  for (double t : {0.52, 0.9, 1.53, 2.0}) EXPECT_NEAR(p.angle(t), trapezoid(p, t), 1e-7) << "t = " << t;
+  for (double t : {0.52, 0.9, 1.53, 2.0})
+    EXPECT_NEAR(p.angle(t), trapezoid(p, t), 1e-7) << "t = " << t;
   // C1 at every ramp end.
   for (double knot : {0.5, 0.55, 1.0, 1.05, 1.5, 1.55}) {
     const double eps = 1e-7;
-    EXPECT_NEAR((p.angle(knot + eps) - p.angle(knot - eps)) / (2.0 * eps), p.speed(knot), 1e-3) << knot;
+    EXPECT_NEAR((p.angle(knot + eps) - p.angle(knot - eps)) / (2.0 * eps), p.speed(knot), 1e-3)
+        << knot;
   }
 }
 
@@ -136,7 +141,8 @@ TEST(SpeedProfile, StepsWithAnotherRampDurationAndBackToBackRamps) {
 }
 
 TEST(SpeedProfile, ReversalCrossesZeroAtTheQuarterPeriodsAndIntegratesExactly) {
-  // +1000 rpm -> 0 at P/4 -> -1000 rpm at P/2 -> 0 at 3P/4 -> +1000 rpm at P: omega = s cos(2 pi t / P).
+  // +1000 rpm -> 0 at P/4 -> -1000 rpm at P/2 -> 0 at 3P/4 -> +1000 rpm at P: omega = s cos(2 pi t
+  // / P).
   const double s = 1000.0 * kRpm, P = 2.0;
   const SpeedProfile p(SpeedReversal{s, 0.0, P});
   EXPECT_NEAR(p.speed(0.0), s, 1e-12);
@@ -167,7 +173,8 @@ TEST(SpeedProfile, DelayedReversalIsContinuousAtItsEnds) {
   for (double knot : {t0, t0 + P / 2, t0 + P}) {
     const double eps = 1e-6;
     EXPECT_NEAR(p.speed(knot - eps), p.speed(knot + eps), 1e-6 * s) << knot;
-    EXPECT_NEAR((p.angle(knot + eps) - p.angle(knot - eps)) / (2 * eps), p.speed(knot), 1e-5 * s) << knot;
+    EXPECT_NEAR((p.angle(knot + eps) - p.angle(knot - eps)) / (2 * eps), p.speed(knot), 1e-5 * s)
+        << knot;
   }
 }
 
@@ -177,9 +184,21 @@ TEST(SpeedProfile, RefusesBadInputNamingTheField) {
   expectRefusal([] { SpeedProfile p(SpeedRamp{0.0, 100.0, 1.0, 1.0}); }, "speed_ramp.end");
   expectRefusal([] { SpeedProfile p(SpeedRamp{0.0, INFINITY, 0.0, 1.0}); }, "speed_ramp.to");
   expectRefusal([] { SpeedProfile p(SpeedRamp{0.0, 1.0, std::nan(""), 1.0}); }, "speed_ramp.start");
-  expectRefusal([] { SpeedProfile p(SpeedSteps{0.0, {{0.0, 1.0}}, 0.0}); }, "speed_steps.ramp_duration");
-  expectRefusal([] { SpeedProfile p(SpeedSteps{0.0, {{0.0, 1.0}, {0.04, 2.0}}, 0.05}); }, "speed_steps.steps[1].time");
-  expectRefusal([] { SpeedProfile p(SpeedSteps{0.0, {{0.0, 1.0}, {0.5, NAN}}, 0.05}); }, "speed_steps.steps[1].speed");
+  expectRefusal(
+      [] {
+        SpeedProfile p(SpeedSteps{0.0, {{0.0, 1.0}}, 0.0});
+      },
+      "speed_steps.ramp_duration");
+  expectRefusal(
+      [] {
+        SpeedProfile p(SpeedSteps{0.0, {{0.0, 1.0}, {0.04, 2.0}}, 0.05});
+      },
+      "speed_steps.steps[1].time");
+  expectRefusal(
+      [] {
+        SpeedProfile p(SpeedSteps{0.0, {{0.0, 1.0}, {0.5, NAN}}, 0.05});
+      },
+      "speed_steps.steps[1].speed");
   expectRefusal([] { SpeedProfile p(SpeedReversal{-1.0, 0.0, 1.0}); }, "speed_reversal.speed");
   expectRefusal([] { SpeedProfile p(SpeedReversal{1.0, 0.0, 0.0}); }, "speed_reversal.period");
   expectRefusal([] { SpeedProfile p(SpeedReversal{1.0, 1e300, 1.0}); }, "speed_reversal.start");

@@ -32,8 +32,10 @@ void expectSame(const StiffnessEstimate& a, const StiffnessEstimate& b) {
   for (std::size_t i = 0; i < a.supports.size(); ++i) {
     EXPECT_EQ(a.supports[i].radial_load, b.supports[i].radial_load);
     EXPECT_EQ(a.supports[i].axial_load, b.supports[i].axial_load);
-    EXPECT_TRUE(a.supports[i].solution.stiffness == b.supports[i].solution.stiffness) << a.supports[i].name;
-    EXPECT_TRUE(a.supports[i].solution.displacement == b.supports[i].solution.displacement) << a.supports[i].name;
+    EXPECT_TRUE(a.supports[i].solution.stiffness == b.supports[i].solution.stiffness)
+        << a.supports[i].name;
+    EXPECT_TRUE(a.supports[i].solution.displacement == b.supports[i].solution.displacement)
+        << a.supports[i].name;
   }
 }
 
@@ -45,7 +47,8 @@ TEST(StiffnessEstimator, ResetEstimatorBehavesAsAFreshOne) {
   // reports the phase (and, on a switch, the mesh stiffness) of the run before it.
   const double angle = 1.234;  // [rad] not a whole number of pinion pitches (20 teeth: 0.314 rad)
   StiffnessEstimator used(rig());
-  ASSERT_NE(used.mesh().geometry().phase(angle), used.mesh().geometry().phase(0.0)) << "the test needs a phase that moves";
+  ASSERT_NE(used.mesh().geometry().phase(angle), used.mesh().geometry().phase(0.0))
+      << "the test needs a phase that moves";
   used.setTorque(0.08, angle);
   used.setPreloads(preloads(1500.0));
   used.reset();

@@ -25,7 +25,9 @@ struct Spectra : PipelineSink {
 };
 
 constexpr double kDt = 1e-3;  // [s]
-double te(int k) { return 1e-6 * std::sin(kTwoPi * 125.0 * k * kDt) + 3e-7 * std::sin(kTwoPi * 250.0 * k * kDt); }
+double te(int k) {
+  return 1e-6 * std::sin(kTwoPi * 125.0 * k * kDt) + 3e-7 * std::sin(kTwoPi * 250.0 * k * kDt);
+}
 
 void feed(TeSpectrumStage& stage, Spectra& sink, int from, int to) {
   for (int k = from; k < to; ++k) {

@@ -50,7 +50,7 @@ TEST(YamlConfig, ShippedFilesLoad) {
   ASSERT_EQ(rig.bearings.size(), 2u);
   EXPECT_EQ(rig.bearings[0].name, "pinion_bearing");
   EXPECT_EQ(rig.bearings[1].shaft, 1);
-  EXPECT_DOUBLE_EQ(rig.bearings[0].radial_preload, 1000.0);   // entry overrides the bearing file
+  EXPECT_DOUBLE_EQ(rig.bearings[0].radial_preload, 1000.0);    // entry overrides the bearing file
   EXPECT_DOUBLE_EQ(rig.bearings[0].interference.inner, 5e-6);  // inherited from the bearing file
   // Seed 000 Table 1: r_b = m z cos(20 deg) / 2 = 0.6 mm * 20 * 0.93969 / 2 = 5.638 mm.
   EXPECT_NEAR(baseRadius(rig.gears, 0), 5.6382e-3, 1e-7);
@@ -66,10 +66,14 @@ TEST(YamlConfig, GoodMinimalBearing) {
 TEST(YamlConfig, ErrorsNameTheKeyAndValue) {
   std::string text = kGood;
   expectLoadError(text + "  colour: blue\n", "bearing.colour: unknown key");
-  expectLoadError(std::string(kGood).replace(text.find("19"), 2, "abc"), "bearing.balls = 'abc': not a number");
-  expectLoadError(std::string(kGood).replace(text.find("19"), 2, "2.5"), "bearing.balls = 2.5: must be an integer");
-  expectLoadError(std::string(kGood).replace(text.find("11.1e-3"), 7, "-11.1e-3"), "ball_diameter = -0.0111");
-  expectLoadError(std::string(kGood).replace(text.find("11.1e-3"), 7, ".nan"), "ball_diameter = nan");
+  expectLoadError(std::string(kGood).replace(text.find("19"), 2, "abc"),
+                  "bearing.balls = 'abc': not a number");
+  expectLoadError(std::string(kGood).replace(text.find("19"), 2, "2.5"),
+                  "bearing.balls = 2.5: must be an integer");
+  expectLoadError(std::string(kGood).replace(text.find("11.1e-3"), 7, "-11.1e-3"),
+                  "ball_diameter = -0.0111");
+  expectLoadError(std::string(kGood).replace(text.find("11.1e-3"), 7, ".nan"),
+                  "ball_diameter = nan");
   expectLoadError(text + "  diametral_clearance: 1e-5\n", "not both");
   expectLoadError(text + "  arrangement: tandem\n", "bearing.arrangement = 'tandem'");
   expectLoadError(text + "  inner_interference: 5e-6\n", "needs the fit geometry");
@@ -84,8 +88,10 @@ TEST(YamlConfig, ErrorsNameTheKeyAndValue) {
 TEST(YamlConfig, RigErrors) {
   const std::string rig = R"(gears: {module: 0.6e-3, pressure_angle_deg: 20, teeth: [20, 40]}
 bearings:
-  - {name: a, file: )" + kSource + R"(/config/bearings/7013ac.yaml}
-  - {name: a, file: )" + kSource + R"(/config/bearings/7013ac.yaml}
+  - {name: a, file: )" + kSource +
+                          R"(/config/bearings/7013ac.yaml}
+  - {name: a, file: )" + kSource +
+                          R"(/config/bearings/7013ac.yaml}
 )";
   std::string path = writeTemp("rig.yaml", rig);
   try {
@@ -94,12 +100,14 @@ bearings:
   } catch (const InvalidInput& e) {
     EXPECT_NE(std::string(e.what()).find("duplicate name"), std::string::npos) << e.what();
   }
-  const std::string bad_gear = "gears: {module: 0.6e-3, pressure_angle_deg: 60, teeth: [20, 40]}\nbearings: []\n";
+  const std::string bad_gear =
+      "gears: {module: 0.6e-3, pressure_angle_deg: 60, teeth: [20, 40]}\nbearings: []\n";
   try {
     loadRigFile(writeTemp("rig2.yaml", bad_gear));
     FAIL();
   } catch (const InvalidInput& e) {
-    EXPECT_NE(std::string(e.what()).find("gears.pressure_angle_deg = 60"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("gears.pressure_angle_deg = 60"), std::string::npos)
+        << e.what();
   }
 }
 
@@ -108,7 +116,8 @@ bearings:
 // exception type escape.
 namespace {
 
-const char* kGears = "gears: {module: 0.6e-3, pressure_angle_deg: 20, teeth: [20, 40], face_width: 6.5e-3}\n";
+const char* kGears =
+    "gears: {module: 0.6e-3, pressure_angle_deg: 20, teeth: [20, 40], face_width: 6.5e-3}\n";
 
 // The refusal's message, or a failure if the load is accepted or something else is thrown.
 template <typename Exception = InvalidInput, typename Load>
@@ -148,10 +157,13 @@ TEST(YamlConfig, BlockRefusalsNameTheFile) {
   expectNames(refusal(loadGearFile, path), path, "mesh.samples = 8");
   path = writeTemp("mesh_model.yaml", std::string(kGears) + "mesh: {model: [1]}\n");
   expectNames(refusal(loadGearFile, path), path, "mesh.model: must be a string");
-  path = writeTemp("ab.yaml", std::string(kGears) + "anti_backlash: {spring_stiffness: 0, preload_torque: 1}\n");
+  path = writeTemp(
+      "ab.yaml", std::string(kGears) + "anti_backlash: {spring_stiffness: 0, preload_torque: 1}\n");
   expectNames(refusal(loadGearFile, path), path, "anti_backlash.spring_stiffness = 0");
-  path = writeTemp("dyn.yaml", std::string(kGears) +
-                                   "dynamics: {pinion_mass: 0, gear_mass: 1, pinion_inertia: 1, gear_inertia: 1}\n");
+  path = writeTemp(
+      "dyn.yaml",
+      std::string(kGears) +
+          "dynamics: {pinion_mass: 0, gear_mass: 1, pinion_inertia: 1, gear_inertia: 1}\n");
   expectNames(refusal(loadGearFile, path), path, "dynamics.pinion_mass = 0");
   path = writeTemp("name.yaml", std::string(kGood) + "  name: [1]\n");
   expectNames(refusal(loadBearingFile, path), path, "bearing.name: must be a string");
@@ -159,30 +171,36 @@ TEST(YamlConfig, BlockRefusalsNameTheFile) {
 
 TEST(YamlConfig, ContactAngleIsRefusedInDegrees) {
   // Used to be refused as "contact_angle = 1.745" (radians, a name the file does not have).
-  const std::string path = writeTemp("angle.yaml", std::string(kGood).replace(std::string(kGood).find("25"), 2, "100"));
+  const std::string path =
+      writeTemp("angle.yaml", std::string(kGood).replace(std::string(kGood).find("25"), 2, "100"));
   expectNames(refusal(loadBearingFile, path), path, "bearing.contact_angle_deg = 100");
 }
 
 TEST(YamlConfig, ReferencedFileRefusalsNameTheEntry) {
   // A missing file, a directory (used to escape as std::ios_base::failure) and a file that is not
   // a bearing file: each names the entry's file: key, then the file.
-  for (const std::string& name : {std::string("no_such.yaml"), testing::TempDir(), writeTemp("scalar.yaml", "just text\n"),
-                                  writeTemp("scalar_bearing.yaml", "bearing: 7\n")}) {
-    const std::string path = writeTemp("ref.yaml", std::string(kGears) + "bearings:\n  - {name: a, file: '" + name + "'}\n");
+  for (const std::string& name :
+       {std::string("no_such.yaml"), testing::TempDir(), writeTemp("scalar.yaml", "just text\n"),
+        writeTemp("scalar_bearing.yaml", "bearing: 7\n")}) {
+    const std::string path = writeTemp(
+        "ref.yaml", std::string(kGears) + "bearings:\n  - {name: a, file: '" + name + "'}\n");
     expectNames(refusal(loadRigFile, path), path, "bearings[0].file = '" + name + "': ");
   }
 }
 
 TEST(YamlConfig, UnreachablePreloadNamesFileAndKey) {
   // A duplex preload no geometry carries used to be refused as "axial_load = ..." with no file.
-  const std::string path = writeTemp("pair.yaml", std::string(kGood) + "  arrangement: back_to_back\n  axial_preload: 1e300\n");
-  expectNames(refusal<UnreachableLoad>(loadBearingFile, path), path, "bearing: axial_preload = 1e+300");
+  const std::string path = writeTemp(
+      "pair.yaml", std::string(kGood) + "  arrangement: back_to_back\n  axial_preload: 1e300\n");
+  expectNames(refusal<UnreachableLoad>(loadBearingFile, path), path,
+              "bearing: axial_preload = 1e+300");
 }
 
 TEST(YamlConfig, AbsurdMagnitudesAreRefusedNotNaN) {
   // Each passed every sign check and then overflowed into a NaN stiffness (fuzz findings).
   const std::string bearing_file = kSource + "/config/bearings/servo_7000ac.yaml";
-  const std::string rig = std::string(kGears) + "bearings:\n  - {name: a, file: '" + bearing_file + "'}\n";
+  const std::string rig =
+      std::string(kGears) + "bearings:\n  - {name: a, file: '" + bearing_file + "'}\n";
   struct Case {
     std::string from, to, named;
   };
@@ -200,7 +218,8 @@ TEST(YamlConfig, AbsurdMagnitudesAreRefusedNotNaN) {
       {"name: a,", "name: a, shaft_youngs_modulus: 1e308,", "youngs_modulus = 1e+308"},
   };
   for (const Case& c : cases) {
-    const std::string path = writeTemp("absurd.yaml", std::string(rig).replace(rig.find(c.from), c.from.size(), c.to));
+    const std::string path =
+        writeTemp("absurd.yaml", std::string(rig).replace(rig.find(c.from), c.from.size(), c.to));
     expectNames(refusal(loadRigFile, path), path, c.named);
   }
 }
@@ -230,7 +249,9 @@ TEST(EnumNames, RoundTripAndRefusalListsEveryName) {
     parseArrangement("bearings[0].arrangement", "tandem");
     FAIL() << "accepted 'tandem'";
   } catch (const InvalidInput& e) {
-    EXPECT_STREQ(e.what(), "bearings[0].arrangement = 'tandem': must be 'single', 'back_to_back' or 'face_to_face'");
+    EXPECT_STREQ(
+        e.what(),
+        "bearings[0].arrangement = 'tandem': must be 'single', 'back_to_back' or 'face_to_face'");
   }
   try {
     parseEllipticityMethod("ellipticity", "x");

@@ -20,7 +20,8 @@ namespace {
 const std::string& caseFile() {
   static const std::string path = [] {
     namespace fs = std::filesystem;
-    const fs::path dir = fs::is_directory("/dev/shm") ? fs::path("/dev/shm") : fs::temp_directory_path();
+    const fs::path dir =
+        fs::is_directory("/dev/shm") ? fs::path("/dev/shm") : fs::temp_directory_path();
     return (dir / ("drivetrain_fuzz_bag_" + std::to_string(::getpid()) + ".bag")).string();
   }();
   static const struct Remove {
@@ -37,14 +38,15 @@ void require(bool property, const std::string& what) {
 
 CaseStats fuzzBag(const std::uint8_t* data, std::size_t size) {
   const std::string& path = caseFile();
-  std::ofstream(path, std::ios::binary | std::ios::trunc).write(reinterpret_cast<const char*>(data),
-                                                                static_cast<std::streamsize>(size));
+  std::ofstream(path, std::ios::binary | std::ios::trunc)
+      .write(reinterpret_cast<const char*>(data), static_cast<std::streamsize>(size));
   CaseStats stats;
   std::unique_ptr<ReplayInput> input;
   try {
     input = std::make_unique<ReplayInput>(path, "torque", "preload", "joint_states");
   } catch (const InvalidInput& e) {
-    require(std::string(e.what()).rfind("--bag = '" + path + "'", 0) == 0, std::string("refusal without the path: ") + e.what());
+    require(std::string(e.what()).rfind("--bag = '" + path + "'", 0) == 0,
+            std::string("refusal without the path: ") + e.what());
     stats.refuse(e.what());
     return stats;
   }
@@ -52,12 +54,14 @@ CaseStats fuzzBag(const std::uint8_t* data, std::size_t size) {
     for (const ReplayMessage& m : *input) {
       ++stats.accepted;
       std::size_t held = printableText(m.getTopic()).size() + printableText(m.getDataType()).size();
-      if (const auto t = m.instantiate<geometry_msgs::WrenchStamped>()) held += t->header.frame_id.size();
+      if (const auto t = m.instantiate<geometry_msgs::WrenchStamped>())
+        held += t->header.frame_id.size();
       if (const auto j = m.instantiate<sensor_msgs::JointState>()) {
         for (const std::string& name : j->name) held += 4 + printableText(name).size() / 4;
         held += 8 * (j->position.size() + j->velocity.size() + j->effort.size());
       }
-      if (const auto p = m.instantiate<drivetrain_stiffness::Preload>()) held += 36 * p->bearings.size();
+      if (const auto p = m.instantiate<drivetrain_stiffness::Preload>())
+        held += 36 * p->bearings.size();
       require(held <= 4 * size + 64, "a message holds " + std::to_string(held) + " bytes from a " +
                                          std::to_string(size) + "-byte file");
     }

@@ -17,8 +17,12 @@ class ByteReader {
   bool empty() const { return pos_ >= size_; }
   std::uint8_t u8() { return empty() ? 0 : data_[pos_++]; }
   std::uint16_t u16() { return static_cast<std::uint16_t>(u8() | (u8() << 8)); }
-  std::uint32_t u32() { return static_cast<std::uint32_t>(u16()) | (static_cast<std::uint32_t>(u16()) << 16); }
-  std::uint64_t u64() { return static_cast<std::uint64_t>(u32()) | (static_cast<std::uint64_t>(u32()) << 32); }
+  std::uint32_t u32() {
+    return static_cast<std::uint32_t>(u16()) | (static_cast<std::uint32_t>(u16()) << 16);
+  }
+  std::uint64_t u64() {
+    return static_cast<std::uint64_t>(u32()) | (static_cast<std::uint64_t>(u32()) << 32);
+  }
   /// Any bit pattern: NaNs with payloads, infinities, subnormals, -0.
   double rawDouble() {
     const std::uint64_t bits = u64();

@@ -18,7 +18,8 @@ CaseFiles& CaseFiles::instance() {
 
 CaseFiles::CaseFiles() {
   std::string pattern = (fs::temp_directory_path() / "drivetrain_fuzz.XXXXXX").string();
-  if (!mkdtemp(pattern.data())) throw std::runtime_error("cannot create a temporary directory " + pattern);
+  if (!mkdtemp(pattern.data()))
+    throw std::runtime_error("cannot create a temporary directory " + pattern);
   root_ = pattern;
   fs::create_directories(fs::path(root_) / "gearboxes");
   fs::create_directories(fs::path(root_) / "bearings");
@@ -32,7 +33,8 @@ CaseFiles::~CaseFiles() {
   fs::remove_all(root_, ignored);
 }
 
-std::string CaseFiles::write(const std::string& subdir, const std::uint8_t* data, std::size_t size) const {
+std::string CaseFiles::write(const std::string& subdir, const std::uint8_t* data,
+                             std::size_t size) const {
   const std::string path = root_ + "/" + subdir + "/case.yaml";
   std::ofstream out(path, std::ios::binary | std::ios::trunc);
   out.write(reinterpret_cast<const char*>(data), static_cast<std::streamsize>(size));

@@ -21,8 +21,10 @@ using namespace drivetrain_stiffness::fuzz;
 namespace {
 
 int usage(const std::string& why) {
-  std::cerr << why << "\nusage: drivetrain_fuzz [--target NAME|all] [--cases N] [--seed S] [--timeout SECONDS]"
-            << " [--findings DIR] [--show-refusals] | --target NAME --replay FILE...\ntargets:";
+  std::cerr
+      << why
+      << "\nusage: drivetrain_fuzz [--target NAME|all] [--cases N] [--seed S] [--timeout SECONDS]"
+      << " [--findings DIR] [--show-refusals] | --target NAME --replay FILE...\ntargets:";
   for (const FuzzTarget& t : fuzzTargets()) std::cerr << " " << t.name;
   std::cerr << "\n";
   return 2;
@@ -60,14 +62,22 @@ int main(int argc, char** argv) {
       return argv[++i];
     };
     try {
-      if (arg == "--target") target_name = value();
-      else if (arg == "--cases") options.cases = std::stoull(value());
-      else if (arg == "--seed") options.seed = std::stoull(value());
-      else if (arg == "--timeout") options.case_timeout_s = std::stod(value());
-      else if (arg == "--findings") options.findings_dir = value();
-      else if (arg == "--show-refusals") options.collect_refusals = true;
-      else if (arg == "--replay") while (i + 1 < argc) replay_files.push_back(argv[++i]);
-      else return usage("unknown option " + arg);
+      if (arg == "--target")
+        target_name = value();
+      else if (arg == "--cases")
+        options.cases = std::stoull(value());
+      else if (arg == "--seed")
+        options.seed = std::stoull(value());
+      else if (arg == "--timeout")
+        options.case_timeout_s = std::stod(value());
+      else if (arg == "--findings")
+        options.findings_dir = value();
+      else if (arg == "--show-refusals")
+        options.collect_refusals = true;
+      else if (arg == "--replay")
+        while (i + 1 < argc) replay_files.push_back(argv[++i]);
+      else
+        return usage("unknown option " + arg);
     } catch (const std::exception& e) {
       return usage(arg + ": " + e.what());
     }
@@ -88,18 +98,22 @@ int main(int argc, char** argv) {
   for (const FuzzTarget* t : targets) {
     const RunStats s = runTarget(*t, options);
     for (const Finding& f : s.findings) {
-      std::cerr << t->name << " case " << f.case_number << ": " << f.what << "\n  input: " << hexDump(f.input) << "\n";
+      std::cerr << t->name << " case " << f.case_number << ": " << f.what
+                << "\n  input: " << hexDump(f.input) << "\n";
     }
     if (options.collect_refusals) {
-      for (const auto& [shape, count] : s.refusal_shapes) std::cerr << t->name << " refusal x" << count << ": " << shape << "\n";
+      for (const auto& [shape, count] : s.refusal_shapes)
+        std::cerr << t->name << " refusal x" << count << ": " << shape << "\n";
     }
     std::printf(
-        "{\"target\": \"%s\", \"seed\": %llu, \"cases\": %llu, \"seed_files\": %llu, \"inputs_accepted\": %llu, "
-        "\"inputs_refused\": %llu, \"findings\": %zu, \"slowest_case_s\": %.3f, \"slowest_case\": %llu}\n",
-        t->name, static_cast<unsigned long long>(options.seed), static_cast<unsigned long long>(s.cases),
-        static_cast<unsigned long long>(s.corpus_cases), static_cast<unsigned long long>(s.accepted),
-        static_cast<unsigned long long>(s.refused), s.findings.size(), s.slowest_case_s,
-        static_cast<unsigned long long>(s.slowest_case));
+        "{\"target\": \"%s\", \"seed\": %llu, \"cases\": %llu, \"seed_files\": %llu, "
+        "\"inputs_accepted\": %llu, "
+        "\"inputs_refused\": %llu, \"findings\": %zu, \"slowest_case_s\": %.3f, \"slowest_case\": "
+        "%llu}\n",
+        t->name, static_cast<unsigned long long>(options.seed),
+        static_cast<unsigned long long>(s.cases), static_cast<unsigned long long>(s.corpus_cases),
+        static_cast<unsigned long long>(s.accepted), static_cast<unsigned long long>(s.refused),
+        s.findings.size(), s.slowest_case_s, static_cast<unsigned long long>(s.slowest_case));
     std::fflush(stdout);
     findings += s.findings.size();
   }

@@ -15,12 +15,13 @@ const std::vector<std::string>& schemaKeys() {
       // blocks
       "bearing", "bearings", "gears", "anti_backlash", "mesh", "dynamics",
       // bearing:
-      "type", "balls", "ball_diameter", "pitch_diameter", "inner_groove_conformity", "outer_groove_conformity",
-      "diametral_clearance", "contact_angle_deg", "youngs_modulus", "poisson_ratio", "width", "ellipticity",
-      "max_contact_pressure", "bore_diameter", "outside_diameter", "inner_raceway_diameter",
-      "outer_raceway_diameter", "shaft_bore_diameter", "housing_outside_diameter", "shaft_youngs_modulus",
-      "shaft_poisson_ratio", "housing_youngs_modulus", "housing_poisson_ratio", "inner_interference",
-      "outer_interference", "arrangement", "tilt", "axial_preload", "radial_preload",
+      "type", "balls", "ball_diameter", "pitch_diameter", "inner_groove_conformity",
+      "outer_groove_conformity", "diametral_clearance", "contact_angle_deg", "youngs_modulus",
+      "poisson_ratio", "width", "ellipticity", "max_contact_pressure", "bore_diameter",
+      "outside_diameter", "inner_raceway_diameter", "outer_raceway_diameter", "shaft_bore_diameter",
+      "housing_outside_diameter", "shaft_youngs_modulus", "shaft_poisson_ratio",
+      "housing_youngs_modulus", "housing_poisson_ratio", "inner_interference", "outer_interference",
+      "arrangement", "tilt", "axial_preload", "radial_preload",
       // bearings[i] of a gearbox file
       "name", "shaft", "mesh_load_share", "file",
       // gears:
@@ -30,8 +31,8 @@ const std::vector<std::string>& schemaKeys() {
       "spring_stiffness", "preload_torque", "loaded_gear_face_width", "model", "samples",
       // dynamics:
       "pinion_mass", "gear_mass", "pinion_inertia", "gear_inertia", "mesh_damping_ratio",
-      "bearing_damping_ratio", "bearing_clearance", "speed_rpm", "transmission_error_amplitude", "backlash",
-      "torque"};
+      "bearing_damping_ratio", "bearing_clearance", "speed_rpm", "transmission_error_amplitude",
+      "backlash", "torque"};
   return keys;
 }
 
@@ -67,23 +68,28 @@ std::string firstAssignedField(const std::string& text) {
 bool containsWord(const std::string& text, const std::string& word) {
   for (auto pos = text.find(word); pos != std::string::npos; pos = text.find(word, pos + 1)) {
     const bool left = pos == 0 || !isIdentifierChar(text[pos - 1]);
-    const bool right = pos + word.size() == text.size() || !isIdentifierChar(text[pos + word.size()]);
+    const bool right =
+        pos + word.size() == text.size() || !isIdentifierChar(text[pos + word.size()]);
     if (left && right) return true;
   }
   return false;
 }
 
 void requireNamesYamlField(const std::string& message, const std::string& path) {
-  if (message.rfind(path + ": ", 0) != 0) fail("does not begin with the file path " + path, message);
+  if (message.rfind(path + ": ", 0) != 0)
+    fail("does not begin with the file path " + path, message);
   const std::string rest = message.substr(path.size() + 2);
   if (rest.find("YAML syntax error at line ") != std::string::npos) return;
   // First: the quoted key of an unknown-key refusal is the document's, and may contain " = ".
   for (const std::string tail : {": unknown key", ": unknown top-level key"}) {
-    if (rest.size() > tail.size() && rest.compare(rest.size() - tail.size(), tail.size(), tail) == 0) return;
+    if (rest.size() > tail.size() &&
+        rest.compare(rest.size() - tail.size(), tail.size(), tail) == 0)
+      return;
   }
   const std::string assigned = firstAssignedField(rest);
   if (!assigned.empty()) {
-    if (!isSchemaKey(assigned)) fail("assigns '" + assigned + "', not a key of the schema", message);
+    if (!isSchemaKey(assigned))
+      fail("assigns '" + assigned + "', not a key of the schema", message);
     return;
   }
   for (const std::string& key : schemaKeys()) {
@@ -97,12 +103,33 @@ void requireNamesSchemaKey(const std::string& message) {
 }
 
 const std::vector<std::string>& nodeParameterNames() {
-  static const std::vector<std::string> names = {
-      "max_abs_torque", "max_preload", "max_interference", "bearing_load_tolerance", "dynamics", "fidelity",
-      "output_rate", "max_gap", "stamp_jump_back", "clock_jump_back", "resonance_threshold", "spectrum_window",
-      "spectrum_hop", "pinion_speed_rpm", "stiffness_rate", "rig_frame", "pinion_frame", "gear_frame",
-      "exaggeration", "tf_rate", "mesh_phase_offset", "motion_timeout", "gear_ratio_tolerance", "motion_slices",
-      "pinion_joint", "gear_joint", "calibrate"};
+  static const std::vector<std::string> names = {"max_abs_torque",
+                                                 "max_preload",
+                                                 "max_interference",
+                                                 "bearing_load_tolerance",
+                                                 "dynamics",
+                                                 "fidelity",
+                                                 "output_rate",
+                                                 "max_gap",
+                                                 "stamp_jump_back",
+                                                 "clock_jump_back",
+                                                 "resonance_threshold",
+                                                 "spectrum_window",
+                                                 "spectrum_hop",
+                                                 "pinion_speed_rpm",
+                                                 "stiffness_rate",
+                                                 "rig_frame",
+                                                 "pinion_frame",
+                                                 "gear_frame",
+                                                 "exaggeration",
+                                                 "tf_rate",
+                                                 "mesh_phase_offset",
+                                                 "motion_timeout",
+                                                 "gear_ratio_tolerance",
+                                                 "motion_slices",
+                                                 "pinion_joint",
+                                                 "gear_joint",
+                                                 "calibrate"};
   return names;
 }
 
@@ -113,7 +140,8 @@ void requireNamesParameter(const std::string& message) {
   fail("names no node parameter", message);
 }
 
-void requireNamesOneOf(const std::string& message, const std::vector<std::string>& fields, const std::string& what) {
+void requireNamesOneOf(const std::string& message, const std::vector<std::string>& fields,
+                       const std::string& what) {
   for (const std::string& field : fields) {
     if (containsWord(message, field)) return;
   }

@@ -6,7 +6,8 @@
 //     of the first one (indices and dotted prefixes stripped: gears.teeth[0] -> teeth) is a key of
 //     the schema; otherwise the message contains a key or block of the schema as a whole word, or
 //     says "unknown key" (it then quotes the key as written), or gives the line of a syntax error.
-//  The schema is the list in field_rule.cpp: the keys the loaders document (README, "Config files").
+//  The schema is the list in field_rule.cpp: the keys the loaders document (README, "Config
+//  files").
 //
 // Node parameters (requireNamesParameter): the message names, as a whole word, a parameter the
 // node reads (with or without the leading ~).
@@ -27,7 +28,8 @@ void requireNamesSchemaKey(const std::string& message);
 /// Throws FuzzFinding unless `message` names one of the node's parameters.
 void requireNamesParameter(const std::string& message);
 /// Throws FuzzFinding unless `message` names one of `fields`; `what` says where it came from.
-void requireNamesOneOf(const std::string& message, const std::vector<std::string>& fields, const std::string& what);
+void requireNamesOneOf(const std::string& message, const std::vector<std::string>& fields,
+                       const std::string& what);
 
 /// The node's parameter names (config/stiffness_estimator.yaml and the pipeline's options).
 const std::vector<std::string>& nodeParameterNames();

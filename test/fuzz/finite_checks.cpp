@@ -9,7 +9,8 @@ namespace drivetrain_stiffness::fuzz {
 namespace {
 
 void check(const std::string& field, double value) {
-  if (!std::isfinite(value)) throw FuzzFinding("non-finite output " + field + " = " + std::to_string(value));
+  if (!std::isfinite(value))
+    throw FuzzFinding("non-finite output " + field + " = " + std::to_string(value));
 }
 
 template <typename Matrix>
@@ -75,7 +76,8 @@ void requireAllFinite(const ResonanceEstimate& r) {
 }
 
 void requireAllFinite(const SpectrumPeaks& peaks) {
-  if (peaks.count > SpectrumPeaks::kMaxPeaks) throw FuzzFinding("spectrum.count beyond its storage");
+  if (peaks.count > SpectrumPeaks::kMaxPeaks)
+    throw FuzzFinding("spectrum.count beyond its storage");
   for (std::size_t i = 0; i < peaks.count; ++i) {
     check("spectrum.peak.frequency", peaks.peaks[i].frequency);
     check("spectrum.peak.amplitude", peaks.peaks[i].amplitude);
@@ -85,21 +87,28 @@ void requireAllFinite(const SpectrumPeaks& peaks) {
 }
 
 void requireAllFinite(const CalibrationBands& b) {
-  for (double v : {b.mesh_stiffness, b.mesh_stiffness_low, b.mesh_stiffness_high}) check("bands.mesh_stiffness", v);
+  for (double v : {b.mesh_stiffness, b.mesh_stiffness_low, b.mesh_stiffness_high})
+    check("bands.mesh_stiffness", v);
   for (int i = 0; i < 2; ++i) {
-    for (double v : {b.bearing_stiffness[i], b.bearing_stiffness_low[i], b.bearing_stiffness_high[i]}) check("bands.bearing_stiffness", v);
+    for (double v :
+         {b.bearing_stiffness[i], b.bearing_stiffness_low[i], b.bearing_stiffness_high[i]})
+      check("bands.bearing_stiffness", v);
   }
   for (int i = 0; i < 3; ++i) {
-    for (double v : {b.natural_frequency[i], b.natural_frequency_low[i], b.natural_frequency_high[i]}) check("bands.natural_frequency", v);
+    for (double v :
+         {b.natural_frequency[i], b.natural_frequency_low[i], b.natural_frequency_high[i]})
+      check("bands.natural_frequency", v);
   }
 }
 
-void FiniteSink::stiffness(Stamp, const StiffnessEstimate& estimate, const CalibrationBands& bands) {
+void FiniteSink::stiffness(Stamp, const StiffnessEstimate& estimate,
+                           const CalibrationBands& bands) {
   requireAllFinite(estimate);
   requireAllFinite(bands);
   ++outputs;
 }
-void FiniteSink::transmissionError(Stamp stamp, const DynamicsSample& sample, const SampleContext& context) {
+void FiniteSink::transmissionError(Stamp stamp, const DynamicsSample& sample,
+                                   const SampleContext& context) {
   requireAllFinite(sample);
   check("te.context.pinion_angle", context.pinion_angle);
   if (context.resonance) requireAllFinite(*context.resonance);
@@ -111,13 +120,15 @@ void FiniteSink::spectrum(Stamp, const SpectrumPeaks& peaks) {
   requireAllFinite(peaks);
   ++outputs;
 }
-void FiniteSink::resonance(Stamp, const ResonanceEstimate& estimate, const CalibrationBands& bands) {
+void FiniteSink::resonance(Stamp, const ResonanceEstimate& estimate,
+                           const CalibrationBands& bands) {
   requireAllFinite(estimate);
   requireAllFinite(bands);
   ++outputs;
 }
-// The calibration's and the mesh-period outputs (the calibration rule, the per-period statistics): every number
-// a message would carry, so "never a NaN on a topic" holds for them under hostile input too.
+// The calibration's and the mesh-period outputs (the calibration rule, the per-period statistics):
+// every number a message would carry, so "never a NaN on a topic" holds for them under hostile
+// input too.
 void FiniteSink::measuredTe(Stamp, const MeasuredTeSample& s) {
   check("measured_te.te", s.te);
   check("measured_te.predicted", s.predicted);
@@ -132,8 +143,9 @@ void FiniteSink::calibration(Stamp, const CalibrationEstimate& e) {
   checkMatrix("calibration.measured", e.measured);
   checkMatrix("calibration.predicted", e.predicted);
   checkMatrix("calibration.feature_std", e.feature_std);
-  for (double v : {e.nis, e.window_torque, e.window_speed, e.series_compliance, e.series_compliance_std, e.mesh_stiffness,
-                   e.mesh_stiffness_low, e.mesh_stiffness_high, e.knee_torque}) {
+  for (double v :
+       {e.nis, e.window_torque, e.window_speed, e.series_compliance, e.series_compliance_std,
+        e.mesh_stiffness, e.mesh_stiffness_low, e.mesh_stiffness_high, e.knee_torque}) {
     check("calibration.scalar", v);
   }
   for (int i = 0; i < 2; ++i) {
@@ -149,8 +161,8 @@ void FiniteSink::calibration(Stamp, const CalibrationEstimate& e) {
   ++outputs;
 }
 void FiniteSink::meshPeriod(Stamp, const MeshPeriodStatistics& s) {
-  for (double v : {s.duration, s.te_mean, s.te_rms, s.te_peak_to_peak, s.mesh_force_mean, s.mesh_force_rms,
-                   s.mesh_force_peak_to_peak, s.mesh_frequency, s.torque}) {
+  for (double v : {s.duration, s.te_mean, s.te_rms, s.te_peak_to_peak, s.mesh_force_mean,
+                   s.mesh_force_rms, s.mesh_force_peak_to_peak, s.mesh_frequency, s.torque}) {
     check("mesh_period_stats", v);
   }
   ++outputs;

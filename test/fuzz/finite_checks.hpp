@@ -15,10 +15,13 @@ void requireAllFinite(const CalibrationBands& bands);
 /// A sink that checks every output and counts them.
 class FiniteSink : public PipelineSink {
  public:
-  void stiffness(Stamp stamp, const StiffnessEstimate& estimate, const CalibrationBands& bands) override;
-  void transmissionError(Stamp stamp, const DynamicsSample& sample, const SampleContext& context) override;
+  void stiffness(Stamp stamp, const StiffnessEstimate& estimate,
+                 const CalibrationBands& bands) override;
+  void transmissionError(Stamp stamp, const DynamicsSample& sample,
+                         const SampleContext& context) override;
   void spectrum(Stamp stamp, const SpectrumPeaks& spectrum) override;
-  void resonance(Stamp stamp, const ResonanceEstimate& estimate, const CalibrationBands& bands) override;
+  void resonance(Stamp stamp, const ResonanceEstimate& estimate,
+                 const CalibrationBands& bands) override;
   void measuredTe(Stamp stamp, const MeasuredTeSample& sample) override;
   void calibration(Stamp stamp, const CalibrationEstimate& estimate) override;
   void meshPeriod(Stamp stamp, const MeshPeriodStatistics& stats) override;

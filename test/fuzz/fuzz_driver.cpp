@@ -25,7 +25,8 @@ constexpr std::size_t kPoolSize = 256;
 
 void writeFile(const std::string& path, const Bytes& bytes) {
   std::ofstream out(path, std::ios::binary | std::ios::trunc);
-  out.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+  out.write(reinterpret_cast<const char*>(bytes.data()),
+            static_cast<std::streamsize>(bytes.size()));
 }
 
 // Numbers masked, so that refusals of one kind count as one shape.
@@ -66,8 +67,9 @@ class Watchdog {
   void watch() {
     std::unique_lock<std::mutex> lock(mutex_);
     while (!wake_.wait_for(lock, std::chrono::milliseconds(100), [this] { return done_; })) {
-      const double running =
-          std::chrono::duration<double>(Clock::now().time_since_epoch() - Clock::duration(started_.load())).count();
+      const double running = std::chrono::duration<double>(Clock::now().time_since_epoch() -
+                                                           Clock::duration(started_.load()))
+                                 .count();
       if (running > timeout_) {
         std::fprintf(stderr, "HANG: %s case %llu ran longer than %.1f s\n", target_.c_str(),
                      static_cast<unsigned long long>(case_number_.load()), timeout_);
@@ -79,7 +81,8 @@ class Watchdog {
   double timeout_;
   std::string target_;
   std::atomic<std::uint64_t> case_number_{0};
-  std::atomic<Clock::rep> started_{Clock::now().time_since_epoch().count()};  ///< of the running case
+  std::atomic<Clock::rep> started_{
+      Clock::now().time_since_epoch().count()};  ///< of the running case
   std::mutex mutex_;
   std::condition_variable wake_;
   bool done_ = false;
@@ -90,26 +93,56 @@ class Watchdog {
 
 std::vector<SeedFile> loadCorpusFiles(const FuzzTarget& target) {
   std::vector<fs::path> files;
-  for (const auto& entry : fs::directory_iterator(fs::path(sourceDir()) / "test" / "data" / "fuzz" / target.corpus)) {
+  for (const auto& entry :
+       fs::directory_iterator(fs::path(sourceDir()) / "test" / "data" / "fuzz" / target.corpus)) {
     if (entry.is_regular_file()) files.push_back(entry.path());
   }
   std::sort(files.begin(), files.end());
   std::vector<SeedFile> corpus;
   for (const fs::path& f : files) {
     std::ifstream in(f, std::ios::binary);
-    corpus.push_back({f.filename().string(), Bytes(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>())});
+    corpus.push_back({f.filename().string(),
+                      Bytes(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>())});
   }
   return corpus;
 }
 
 std::vector<std::string> fuzzDictionary() {
-  std::vector<std::string> words = {"bearing", "bearings", "gears", "anti_backlash", "mesh", "dynamics", "name",
-                                    "shaft", "mesh_load_share", "file", "balls", "ball_diameter", "pitch_diameter",
-                                    "inner_groove_conformity", "contact_angle_deg", "diametral_clearance", "teeth",
-                                    "profile_shift", "module", "pressure_angle_deg", "samples", "model",
-                                    "axial_preload", "radial_preload", "arrangement", "tilt", "bore_diameter",
-                                    "outside_diameter", "inner_interference", "bearing_clearance", "speed_rpm",
-                                    "spring_stiffness", "preload_torque", "center_distance", "face_width"};
+  std::vector<std::string> words = {"bearing",
+                                    "bearings",
+                                    "gears",
+                                    "anti_backlash",
+                                    "mesh",
+                                    "dynamics",
+                                    "name",
+                                    "shaft",
+                                    "mesh_load_share",
+                                    "file",
+                                    "balls",
+                                    "ball_diameter",
+                                    "pitch_diameter",
+                                    "inner_groove_conformity",
+                                    "contact_angle_deg",
+                                    "diametral_clearance",
+                                    "teeth",
+                                    "profile_shift",
+                                    "module",
+                                    "pressure_angle_deg",
+                                    "samples",
+                                    "model",
+                                    "axial_preload",
+                                    "radial_preload",
+                                    "arrangement",
+                                    "tilt",
+                                    "bore_diameter",
+                                    "outside_diameter",
+                                    "inner_interference",
+                                    "bearing_clearance",
+                                    "speed_rpm",
+                                    "spring_stiffness",
+                                    "preload_torque",
+                                    "center_distance",
+                                    "face_width"};
   for (const std::string& p : nodeParameterNames()) words.push_back(p);
   return words;
 }
@@ -133,7 +166,8 @@ RunStats runTarget(const FuzzTarget& target, const RunOptions& options) {
       ++stats.corpus_cases;
     } else {
       const bool from_pool = !pool.empty() && mutator.below(2) == 0;
-      const Bytes& parent = from_pool ? pool[mutator.below(pool.size())] : corpus[mutator.below(corpus.size())];
+      const Bytes& parent =
+          from_pool ? pool[mutator.below(pool.size())] : corpus[mutator.below(corpus.size())];
       input = mutator.mutate(parent, corpus[mutator.below(corpus.size())], target.text, max_size);
     }
     if (!running_file.empty()) writeFile(running_file, input);
@@ -147,13 +181,17 @@ RunStats runTarget(const FuzzTarget& target, const RunOptions& options) {
         for (const std::string& r : c.refusals) ++stats.refusal_shapes[shapeOf(r)];
       }
       if (c.accepted > 0 && n >= corpus.size()) {
-        if (pool.size() < kPoolSize) pool.push_back(input);
-        else pool[mutator.below(kPoolSize)] = input;
+        if (pool.size() < kPoolSize)
+          pool.push_back(input);
+        else
+          pool[mutator.below(kPoolSize)] = input;
       }
     } catch (const std::exception& e) {  // FuzzFinding, or anything fuzzOne let through
       stats.findings.push_back({n, e.what(), input});
       if (!options.findings_dir.empty()) {
-        writeFile(options.findings_dir + "/finding-" + target.name + "-" + std::to_string(n) + ".bin", input);
+        writeFile(
+            options.findings_dir + "/finding-" + target.name + "-" + std::to_string(n) + ".bin",
+            input);
       }
     }
     const double seconds = std::chrono::duration<double>(Clock::now() - started).count();

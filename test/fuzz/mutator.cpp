@@ -10,23 +10,83 @@ namespace drivetrain_stiffness::fuzz {
 namespace {
 
 // Values a hostile or careless file puts where a number, a string or a block goes.
-const char* const kHostileValues[] = {
-    "nan", ".nan", ".NaN", ".inf", "-.inf", "+.inf", "inf", "1e999", "-1e999", "1e-999", "4.9e-324", "-0", "0",
-    "-1", "1e308", "1.7976931348623157e308", "2147483648", "-2147483649", "99999999999999999999", "0x7fffffff",
-    "0o777", "1_000", "~", "null", "", "''", "\"\"", "[]", "{}", "[1, 2]", "[1, 2, 3]", "[.nan, 1]", "[[1]]",
-    "{a: 1}", "true", "yes", "&a 1", "*a", "*b", "!!binary aGVsbG8=", "!!str 12", "!!float nan", "!!int 7",
-    "|\n  1", ">\n  2", "1.0e5", "1.0e+5", "12abc", "0.5", "1", "12", "1e6", "1000001", "-1e6", "0.999999",
-    "1.0000001", "[0.0, 0.0]", "[1e-3, -1e-3]", "\"\\x00\"", "'a: b'", "- 1", "? a", "<<: *a"};
+const char* const kHostileValues[] = {"nan",
+                                      ".nan",
+                                      ".NaN",
+                                      ".inf",
+                                      "-.inf",
+                                      "+.inf",
+                                      "inf",
+                                      "1e999",
+                                      "-1e999",
+                                      "1e-999",
+                                      "4.9e-324",
+                                      "-0",
+                                      "0",
+                                      "-1",
+                                      "1e308",
+                                      "1.7976931348623157e308",
+                                      "2147483648",
+                                      "-2147483649",
+                                      "99999999999999999999",
+                                      "0x7fffffff",
+                                      "0o777",
+                                      "1_000",
+                                      "~",
+                                      "null",
+                                      "",
+                                      "''",
+                                      "\"\"",
+                                      "[]",
+                                      "{}",
+                                      "[1, 2]",
+                                      "[1, 2, 3]",
+                                      "[.nan, 1]",
+                                      "[[1]]",
+                                      "{a: 1}",
+                                      "true",
+                                      "yes",
+                                      "&a 1",
+                                      "*a",
+                                      "*b",
+                                      "!!binary aGVsbG8=",
+                                      "!!str 12",
+                                      "!!float nan",
+                                      "!!int 7",
+                                      "|\n  1",
+                                      ">\n  2",
+                                      "1.0e5",
+                                      "1.0e+5",
+                                      "12abc",
+                                      "0.5",
+                                      "1",
+                                      "12",
+                                      "1e6",
+                                      "1000001",
+                                      "-1e6",
+                                      "0.999999",
+                                      "1.0000001",
+                                      "[0.0, 0.0]",
+                                      "[1e-3, -1e-3]",
+                                      "\"\\x00\"",
+                                      "'a: b'",
+                                      "- 1",
+                                      "? a",
+                                      "<<: *a"};
 // Tokens that change the structure.
-const std::string kTokens[] = {"{", "}", "[", "]", "&a ", "*a", "!!str ", "!!map ", "? ", "- ", "'", "\"", "#",
-                                "\t", "\\", ":", ": ", ",", "%YAML 1.2\n", "---\n", "...\n", "<<: *a\n", "\xff",
-                                std::string(1, '\0'), "\r", "\n  ", "|", ">"};
+const std::string kTokens[] = {
+    "{",  "}",    "[",           "]",     "&a ",   "*a",       "!!str ", "!!map ",
+    "? ", "- ",   "'",           "\"",    "#",     "\t",       "\\",     ":",
+    ": ", ",",    "%YAML 1.2\n", "---\n", "...\n", "<<: *a\n", "\xff",   std::string(1, '\0'),
+    "\r", "\n  ", "|",           ">"};
 
 std::vector<std::string> splitLines(const Bytes& b) {
   std::vector<std::string> lines(1);
   for (std::uint8_t c : b) {
-    if (c == '\n') lines.emplace_back();
-    else lines.back().push_back(static_cast<char>(c));
+    if (c == '\n')
+      lines.emplace_back();
+    else
+      lines.back().push_back(static_cast<char>(c));
   }
   return lines;
 }
@@ -55,8 +115,10 @@ Bytes Mutator::mutate(const Bytes& input, const Bytes& other, bool text, std::si
   Bytes b = input;
   const int edits = 1 + static_cast<int>(below(6));
   for (int i = 0; i < edits; ++i) {
-    if (text && below(4) != 0) textEdit(b);
-    else byteEdit(b, other);
+    if (text && below(4) != 0)
+      textEdit(b);
+    else
+      byteEdit(b, other);
   }
   if (b.size() > max_size) b.resize(max_size);
   return b;
@@ -85,21 +147,27 @@ void Mutator::byteEdit(Bytes& b, const Bytes& other) {
     }
     case 4: {  // delete a range
       if (b.empty()) break;
-      const std::size_t from = below(b.size()), n = 1 + below(std::min<std::size_t>(b.size() - from, 32));
-      b.erase(b.begin() + static_cast<std::ptrdiff_t>(from), b.begin() + static_cast<std::ptrdiff_t>(from + n));
+      const std::size_t from = below(b.size()),
+                        n = 1 + below(std::min<std::size_t>(b.size() - from, 32));
+      b.erase(b.begin() + static_cast<std::ptrdiff_t>(from),
+              b.begin() + static_cast<std::ptrdiff_t>(from + n));
       break;
     }
     case 5: {  // duplicate a range
       if (b.empty()) break;
-      const std::size_t from = below(b.size()), n = 1 + below(std::min<std::size_t>(b.size() - from, 64));
-      const Bytes slice(b.begin() + static_cast<std::ptrdiff_t>(from), b.begin() + static_cast<std::ptrdiff_t>(from + n));
+      const std::size_t from = below(b.size()),
+                        n = 1 + below(std::min<std::size_t>(b.size() - from, 64));
+      const Bytes slice(b.begin() + static_cast<std::ptrdiff_t>(from),
+                        b.begin() + static_cast<std::ptrdiff_t>(from + n));
       b.insert(b.begin() + static_cast<std::ptrdiff_t>(at()), slice.begin(), slice.end());
       break;
     }
     case 6: {  // splice in a slice of another seed
       if (other.empty()) break;
-      const std::size_t from = below(other.size()), n = 1 + below(std::min<std::size_t>(other.size() - from, 128));
-      b.insert(b.begin() + static_cast<std::ptrdiff_t>(at()), other.begin() + static_cast<std::ptrdiff_t>(from),
+      const std::size_t from = below(other.size()),
+                        n = 1 + below(std::min<std::size_t>(other.size() - from, 128));
+      b.insert(b.begin() + static_cast<std::ptrdiff_t>(at()),
+               other.begin() + static_cast<std::ptrdiff_t>(from),
                other.begin() + static_cast<std::ptrdiff_t>(from + n));
       break;
     }
@@ -117,45 +185,52 @@ void Mutator::textEdit(Bytes& b) {
     case 0:
     case 1: {  // the value after "key:" or "- " becomes a hostile one (the comment goes with it)
       auto pos = line.find(": ");
-      if (pos != std::string::npos) pos += 2;
-      else if ((pos = line.find("- ")) != std::string::npos) pos += 2;
-      else pos = line.size();
+      if (pos != std::string::npos)
+        pos += 2;
+      else if ((pos = line.find("- ")) != std::string::npos)
+        pos += 2;
+      else
+        pos = line.size();
       line = line.substr(0, pos) + kHostileValues[below(std::size(kHostileValues))];
       break;
     }
     case 2: {  // the key becomes another key of the schema (or a parameter name)
       const auto colon = line.find(':');
       const auto indent = line.find_first_not_of(" -");
-      if (colon == std::string::npos || indent == std::string::npos || indent > colon || dictionary_.empty()) break;
+      if (colon == std::string::npos || indent == std::string::npos || indent > colon ||
+          dictionary_.empty())
+        break;
       line = line.substr(0, indent) + dictionary_[below(dictionary_.size())] + line.substr(colon);
       break;
     }
-    case 3:
-      lines.erase(lines.begin() + static_cast<std::ptrdiff_t>(below(lines.size())));
-      break;
+    case 3: lines.erase(lines.begin() + static_cast<std::ptrdiff_t>(below(lines.size()))); break;
     case 4: {
       const std::string copy = line;
       lines.insert(lines.begin() + static_cast<std::ptrdiff_t>(below(lines.size() + 1)), copy);
       break;
     }
-    case 5:
-      std::swap(line, lines[below(lines.size())]);
-      break;
+    case 5: std::swap(line, lines[below(lines.size())]); break;
     case 6:  // re-indent
-      if (below(2)) line.insert(0, below(4) ? "  " : "\t");
-      else if (line.rfind("  ", 0) == 0) line.erase(0, 2);
+      if (below(2))
+        line.insert(0, below(4) ? "  " : "\t");
+      else if (line.rfind("  ", 0) == 0)
+        line.erase(0, 2);
       break;
     case 7: {  // a new "key: value" line, indented like this one
       if (dictionary_.empty()) break;
-      const std::string indent = line.substr(0, line.find_first_not_of(' ') == std::string::npos ? 0 : line.find_first_not_of(' '));
+      const std::string indent = line.substr(
+          0, line.find_first_not_of(' ') == std::string::npos ? 0 : line.find_first_not_of(' '));
       lines.insert(lines.begin() + static_cast<std::ptrdiff_t>(below(lines.size() + 1)),
-                   indent + dictionary_[below(dictionary_.size())] + ": " + kHostileValues[below(std::size(kHostileValues))]);
+                   indent + dictionary_[below(dictionary_.size())] + ": " +
+                       kHostileValues[below(std::size(kHostileValues))]);
       break;
     }
     default: {  // a structural token, or deep nesting, somewhere in the line
       const std::size_t at = below(line.size() + 1);
-      if (below(16) == 0) line.insert(at, std::string(1 + below(3000), below(2) ? '[' : '{'));
-      else line.insert(at, kTokens[below(std::size(kTokens))]);
+      if (below(16) == 0)
+        line.insert(at, std::string(1 + below(3000), below(2) ? '[' : '{'));
+      else
+        line.insert(at, kTokens[below(std::size(kTokens))]);
       break;
     }
   }

@@ -5,7 +5,8 @@
 // Text (YAML) cases get edits that keep them YAML-like, so the loaders' checks are reached and not
 // only the parser: a value replaced by a hostile one (nan, .inf, 1e999, -0, huge integers, a
 // sequence or map where a number goes, an alias, a tag), a key replaced by another key of the
-// schema, lines deleted, duplicated, swapped or re-indented. Every case also may get raw byte edits.
+// schema, lines deleted, duplicated, swapped or re-indented. Every case also may get raw byte
+// edits.
 #pragma once
 
 #include <cstdint>
@@ -18,9 +19,11 @@ using Bytes = std::vector<std::uint8_t>;
 
 class Mutator {
  public:
-  Mutator(std::uint64_t seed, std::vector<std::string> dictionary) : state_(seed), dictionary_(std::move(dictionary)) {}
+  Mutator(std::uint64_t seed, std::vector<std::string> dictionary)
+      : state_(seed), dictionary_(std::move(dictionary)) {}
 
-  /// 1 to 6 stacked edits of `input`; `other` is spliced in by some of them. At most max_size bytes.
+  /// 1 to 6 stacked edits of `input`; `other` is spliced in by some of them. At most max_size
+  /// bytes.
   Bytes mutate(const Bytes& input, const Bytes& other, bool text, std::size_t max_size);
   /// A draw in [0, n); n > 0.
   std::uint64_t below(std::uint64_t n);

@@ -39,27 +39,37 @@ CaseStats fuzzNodeParameters(const std::uint8_t* data, std::size_t size) {
   PipelineOptions options;
   RuntimeSettings runtime;
   OutputSettings settings;
-  if (!acceptOrRefuse(stats, [&] { options = readPipelineOptions(get, seedServo()); }, &requireNamesParameter) ||
-      !acceptOrRefuse(stats, [&] { runtime = readRuntimeSettings(get, seedServo()); }, &requireNamesParameter) ||
-      !acceptOrRefuse(stats, [&] { settings = readOutputSettings(get); }, &requireNamesParameter) ||
-      !acceptOrRefuse(stats, [&] { readJointNames(get); }, &requireNamesParameter)) {
+  if (!acceptOrRefuse(
+          stats, [&] { options = readPipelineOptions(get, seedServo()); },
+          &requireNamesParameter) ||
+      !acceptOrRefuse(
+          stats, [&] { runtime = readRuntimeSettings(get, seedServo()); },
+          &requireNamesParameter) ||
+      !acceptOrRefuse(
+          stats, [&] { settings = readOutputSettings(get); }, &requireNamesParameter) ||
+      !acceptOrRefuse(
+          stats, [&] { readJointNames(get); }, &requireNamesParameter)) {
     return stats;
   }
   // Accepted options must make a working pipeline (or be refused there, naming the parameter).
-  acceptOrRefuse(stats, [&] {
-    RigPipeline pipeline(seedServo(), options, runtime);
-    FiniteSink sink;
-    const std::int64_t epoch = 1767225600LL * 1000000000LL;
-    for (int i = 0; i < 3; ++i) {
-      feedTorque(pipeline, Stamp{epoch + i * 1000000LL}, 0.1, sink);
-      // An encoder reading half-way: the measured-motion dynamics (~motion_slices, ~mesh_phase_offset).
-      MotionInput reading;
-      reading.pinion_angle = 0.1 * i;
-      reading.pinion_velocity = 100.0;
-      feedMotion(pipeline, Stamp{epoch + i * 1000000LL + 500000LL}, reading, false, sink, {});
-    }
-    ++stats.accepted;
-  }, &requireNamesParameter);
+  acceptOrRefuse(
+      stats,
+      [&] {
+        RigPipeline pipeline(seedServo(), options, runtime);
+        FiniteSink sink;
+        const std::int64_t epoch = 1767225600LL * 1000000000LL;
+        for (int i = 0; i < 3; ++i) {
+          feedTorque(pipeline, Stamp{epoch + i * 1000000LL}, 0.1, sink);
+          // An encoder reading half-way: the measured-motion dynamics (~motion_slices,
+          // ~mesh_phase_offset).
+          MotionInput reading;
+          reading.pinion_angle = 0.1 * i;
+          reading.pinion_velocity = 100.0;
+          feedMotion(pipeline, Stamp{epoch + i * 1000000LL + 500000LL}, reading, false, sink, {});
+        }
+        ++stats.accepted;
+      },
+      &requireNamesParameter);
   return stats;
 }
 

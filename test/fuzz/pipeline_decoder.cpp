@@ -17,7 +17,8 @@ constexpr std::int64_t kEpoch = 1767225600LL * 1000000000LL;  // 2026-01-01, a w
 }  // namespace
 
 Fidelity decodeFidelity(std::uint8_t byte) {
-  static const Fidelity kFidelities[] = {Fidelity::kFull, Fidelity::kQuasiStatic, Fidelity::kLinearModal, Fidelity::kFull};
+  static const Fidelity kFidelities[] = {Fidelity::kFull, Fidelity::kQuasiStatic,
+                                         Fidelity::kLinearModal, Fidelity::kFull};
   return pick(kFidelities, byte);
 }
 
@@ -61,9 +62,13 @@ Stamp decodeStamp(ByteReader& in, Stamp last) {
   const Stamp base = last.isZero() ? Stamp{kEpoch} : last;
   switch (in.u8() % 8) {
     case 0:
-    case 1: return Stamp{base.ns + static_cast<std::int64_t>(in.u16()) * 16};     // forward, up to 1 ms: kHz inputs
-    case 2: return Stamp{base.ns + static_cast<std::int64_t>(in.u16()) * 10000};  // forward, up to 0.65 s: gaps
-    case 3: return Stamp{base.ns + in.u8()};                                      // a burst: 0 to 255 ns on
+    case 1:
+      return Stamp{base.ns +
+                   static_cast<std::int64_t>(in.u16()) * 16};  // forward, up to 1 ms: kHz inputs
+    case 2:
+      return Stamp{base.ns +
+                   static_cast<std::int64_t>(in.u16()) * 10000};  // forward, up to 0.65 s: gaps
+    case 3: return Stamp{base.ns + in.u8()};                      // a burst: 0 to 255 ns on
     case 4: {  // back, up to 0.65 s, but not before 0: ROS stamps are unsigned
       const std::int64_t back = static_cast<std::int64_t>(in.u16()) * 10000;
       return Stamp{base.ns > back ? base.ns - back : 0};
@@ -80,13 +85,13 @@ Stamp decodeStamp(ByteReader& in, Stamp last) {
 
 double decodeValue(ByteReader& in, double typical) {
   static const double kInteresting[] = {
-      0.0, -0.0, 1.0, -1.0, std::numeric_limits<double>::quiet_NaN(), -std::numeric_limits<double>::quiet_NaN(),
-      std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity(),
-      std::numeric_limits<double>::denorm_min(), -std::numeric_limits<double>::denorm_min(), DBL_MIN, DBL_MAX,
-      -DBL_MAX, 1e-300, 1e300,
+      0.0, -0.0, 1.0, -1.0, std::numeric_limits<double>::quiet_NaN(),
+      -std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::infinity(),
+      -std::numeric_limits<double>::infinity(), std::numeric_limits<double>::denorm_min(),
+      -std::numeric_limits<double>::denorm_min(), DBL_MIN, DBL_MAX, -DBL_MAX, 1e-300, 1e300,
       // the default limits (max_abs_torque, max_preload, max_interference) and just past them
-      100.0, std::nextafter(100.0, 1e9), -std::nextafter(100.0, 1e9), 1e5, std::nextafter(1e5, 1e9), 1e-3,
-      std::nextafter(1e-3, 1.0),
+      100.0, std::nextafter(100.0, 1e9), -std::nextafter(100.0, 1e9), 1e5, std::nextafter(1e5, 1e9),
+      1e-3, std::nextafter(1e-3, 1.0),
       // damping ratio bounds
       1.0 - 1e-16, std::nextafter(1.0, 2.0)};
   switch (in.u8() % 4) {
@@ -101,8 +106,9 @@ MotionCase decodeMotion(ByteReader& in) {
   MotionCase m;
   m.missing_pinion = (flags & 0x07) == 0x07;
   m.numbering = flags & 0xF8;
-  m.reading.pinion_angle = decodeValue(in, 10.0);          // [rad]: several turns, wrapped or not
-  if (flags & 1) m.reading.pinion_velocity = decodeValue(in, 700.0);  // [rad/s]: 6700 rpm at full scale
+  m.reading.pinion_angle = decodeValue(in, 10.0);  // [rad]: several turns, wrapped or not
+  if (flags & 1)
+    m.reading.pinion_velocity = decodeValue(in, 700.0);  // [rad/s]: 6700 rpm at full scale
   if (flags & 2) m.reading.gear_angle = decodeValue(in, 10.0);
   return m;
 }

@@ -4,16 +4,15 @@
 //   3 header bytes: the rig and the options, each picked from a few values (decodeOptions)
 //   then operations until the bytes run out (at most kMaxOperations), each an opcode byte:
 //     0     torque:        stamp, value (no origin: any frame, unnumbered, not backlogged)
-//     7     torque:        stamp, value, origin byte (frame, header.seq gaps or restarts, publisher, shed)
-//     1     preload:       stamp, count (0..3), per setting: name, 4 values
-//     2     observeClock:  stamp
-//     3     damping ratios (RigPipeline::apply): 2 values
-//     4     fidelity (apply): 1 byte
-//     5     stiffness rate (apply): value
-//     6     reset
-//     >= 0xF0  joint_states (RigPipeline::motion): stamp, flags byte (velocity, gear angle, a missing
-//              pinion joint, header.seq numbering as opcode 7), pinion angle, [velocity], [gear angle]
-//              (opcode bytes below 0xF0 keep their meaning modulo 8, so older seeds still mean the same)
+//     7     torque:        stamp, value, origin byte (frame, header.seq gaps or restarts,
+//     publisher, shed) 1     preload:       stamp, count (0..3), per setting: name, 4 values 2
+//     observeClock:  stamp 3     damping ratios (RigPipeline::apply): 2 values 4     fidelity
+//     (apply): 1 byte 5     stiffness rate (apply): value 6     reset
+//     >= 0xF0  joint_states (RigPipeline::motion): stamp, flags byte (velocity, gear angle, a
+//     missing
+//              pinion joint, header.seq numbering as opcode 7), pinion angle, [velocity], [gear
+//              angle] (opcode bytes below 0xF0 keep their meaning modulo 8, so older seeds still
+//              mean the same)
 //   stamp: 1 mode byte, then 0 to 8 bytes: forward by up to 1 ms or 0.65 s, back by up to 0.65 s,
 //          a burst (same stamp, or 1 ns steps), zero, or any (sec, nsec) pair a ROS header carries
 //   value: 1 mode byte, then an "interesting" double (NaN, +-Inf, subnormals, limits and their
@@ -41,9 +40,11 @@ struct MotionCase {
 MotionCase decodeMotion(ByteReader& in);
 
 struct PipelineSetup {
-  int rig = 0;  ///< 0: config/gearboxes/seed_servo.yaml (anti-backlash); 1: test/data/ordinary_servo.yaml (backlash)
+  int rig = 0;  ///< 0: config/gearboxes/seed_servo.yaml (anti-backlash); 1:
+                ///< test/data/ordinary_servo.yaml (backlash)
   PipelineOptions options;
-  RuntimeSettings settings;  ///< the damping ratios: the rig's (RuntimeSettings::forRig), set by the caller
+  RuntimeSettings
+      settings;  ///< the damping ratios: the rig's (RuntimeSettings::forRig), set by the caller
 };
 
 PipelineSetup decodeSetup(ByteReader& in);

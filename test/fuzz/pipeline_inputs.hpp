@@ -8,19 +8,21 @@
 
 namespace drivetrain_stiffness::fuzz {
 
-inline InputOutcome feedTorque(RigPipeline& pipeline, Stamp stamp, double torque, PipelineSink& sink,
-                               const InputOrigin& origin = {}, Backlog backlog = Backlog::kNone) {
+inline InputOutcome feedTorque(RigPipeline& pipeline, Stamp stamp, double torque,
+                               PipelineSink& sink, const InputOrigin& origin = {},
+                               Backlog backlog = Backlog::kNone) {
   return pipeline.torque(stamp, torque, sink, origin, backlog);
 }
 
-inline InputOutcome feedMotion(RigPipeline& pipeline, Stamp stamp, const MotionInput& reading, bool missing_pinion,
-                               PipelineSink& sink, const InputOrigin& origin) {
-  return missing_pinion ? pipeline.motionRefused(stamp, "no joint named 'pinion' (~pinion_joint)", origin)
-                        : pipeline.motion(stamp, reading, sink, origin);
+inline InputOutcome feedMotion(RigPipeline& pipeline, Stamp stamp, const MotionInput& reading,
+                               bool missing_pinion, PipelineSink& sink, const InputOrigin& origin) {
+  return missing_pinion
+             ? pipeline.motionRefused(stamp, "no joint named 'pinion' (~pinion_joint)", origin)
+             : pipeline.motion(stamp, reading, sink, origin);
 }
 
-inline InputOutcome feedPreload(RigPipeline& pipeline, Stamp stamp, const std::vector<PreloadSetting>& settings,
-                                PipelineSink& sink) {
+inline InputOutcome feedPreload(RigPipeline& pipeline, Stamp stamp,
+                                const std::vector<PreloadSetting>& settings, PipelineSink& sink) {
   return pipeline.preload(stamp, settings, sink);
 }
 

@@ -23,36 +23,43 @@ const RigConfig& rigConfig(int index) {
 // What a value refusal of each input must name: the input's fields, or for a load no bearing
 // equilibrium carries (UnreachableLoad), the support it concerns.
 const std::vector<std::string> kTorqueFields = {"torque", "pinion_bearing", "gear_bearing"};
-const std::vector<std::string> kMotionFields = {"pinion position", "pinion velocity", "gear position",
-                                                "~pinion_joint", "pinion_bearing", "gear_bearing"};
-const std::vector<std::string> kPreloadFields = {"name", "axial_preload", "radial_preload", "inner_interference",
-                                                 "outer_interference", "pinion_bearing", "gear_bearing"};
+const std::vector<std::string> kMotionFields = {"pinion position", "pinion velocity",
+                                                "gear position",   "~pinion_joint",
+                                                "pinion_bearing",  "gear_bearing"};
+const std::vector<std::string> kPreloadFields = {
+    "name",           "axial_preload", "radial_preload", "inner_interference", "outer_interference",
+    "pinion_bearing", "gear_bearing"};
 
 // A value refusal's reason is counters().last_event after "<topic> rejected (<why>): ".
-void checkOutcome(InputOutcome outcome, const RigPipeline& pipeline, const std::vector<std::string>& fields,
-                  CaseStats& stats) {
+void checkOutcome(InputOutcome outcome, const RigPipeline& pipeline,
+                  const std::vector<std::string>& fields, CaseStats& stats) {
   if (outcome == InputOutcome::kAccepted) {
     ++stats.accepted;
     return;
   }
   const std::string& event = pipeline.counters().last_event;
   stats.refuse(event);
-  if (outcome != InputOutcome::kInvalidValue && outcome != InputOutcome::kUnreachableLoad) return;  // a stamp rule
+  if (outcome != InputOutcome::kInvalidValue && outcome != InputOutcome::kUnreachableLoad)
+    return;  // a stamp rule
   const auto colon = event.find("): ");
   if (colon == std::string::npos) throw FuzzFinding("refusal without a reason: \"" + event + "\"");
   requireNamesOneOf(event.substr(colon + 3), fields, "value refusal names no input field");
 }
 
-void checkCounts(const RigPipeline& pipeline, std::uint64_t torques, std::uint64_t preloads, std::uint64_t motions) {
+void checkCounts(const RigPipeline& pipeline, std::uint64_t torques, std::uint64_t preloads,
+                 std::uint64_t motions) {
   const PipelineCounters& c = pipeline.counters();
   if (c.accepted_motion + c.rejected_motion != motions) {
-    throw FuzzFinding("a joint_states message was not counted: " + std::to_string(motions) + " sent, counters " +
-                      std::to_string(c.accepted_motion) + "+" + std::to_string(c.rejected_motion));
+    throw FuzzFinding("a joint_states message was not counted: " + std::to_string(motions) +
+                      " sent, counters " + std::to_string(c.accepted_motion) + "+" +
+                      std::to_string(c.rejected_motion));
   }
-  if (c.accepted_torque + c.rejected_torque != torques || c.accepted_preload + c.rejected_preload != preloads) {
+  if (c.accepted_torque + c.rejected_torque != torques ||
+      c.accepted_preload + c.rejected_preload != preloads) {
     throw FuzzFinding("an input was not counted: " + std::to_string(torques) + " torques, " +
-                      std::to_string(preloads) + " preloads, counters " + std::to_string(c.accepted_torque) + "+" +
-                      std::to_string(c.rejected_torque) + ", " + std::to_string(c.accepted_preload) + "+" +
+                      std::to_string(preloads) + " preloads, counters " +
+                      std::to_string(c.accepted_torque) + "+" + std::to_string(c.rejected_torque) +
+                      ", " + std::to_string(c.accepted_preload) + "+" +
                       std::to_string(c.rejected_preload));
   }
 }
@@ -64,20 +71,24 @@ CaseStats fuzzPipeline(const std::uint8_t* data, std::size_t size) {
   ByteReader in(data, size);
   const PipelineSetup setup = decodeSetup(in);
   std::unique_ptr<RigPipeline> pipeline;
-  const bool built = acceptOrRefuse(stats, [&] {
-    RuntimeSettings settings = RuntimeSettings::forRig(rigConfig(setup.rig));
-    settings.fidelity = setup.settings.fidelity;
-    settings.stiffness_rate = setup.settings.stiffness_rate;
-    pipeline = std::make_unique<RigPipeline>(rigConfig(setup.rig), setup.options, settings);
-  },
-                                    &requireNamesParameter);
+  const bool built = acceptOrRefuse(
+      stats,
+      [&] {
+        RuntimeSettings settings = RuntimeSettings::forRig(rigConfig(setup.rig));
+        settings.fidelity = setup.settings.fidelity;
+        settings.stiffness_rate = setup.settings.stiffness_rate;
+        pipeline = std::make_unique<RigPipeline>(rigConfig(setup.rig), setup.options, settings);
+      },
+      &requireNamesParameter);
   if (!built) return stats;  // the decoder only picks valid options: the rule above says why not
   FiniteSink sink;
   Stamp now{0};
   std::uint64_t torques = 0, preloads = 0, motions = 0;
   std::uint32_t seq = 0, motion_seq = 0;
   const auto setter = [&](const std::vector<std::string>& fields, auto call) {
-    if (acceptOrRefuse(stats, call, [&](const std::string& m) { requireNamesOneOf(m, fields, "setter refusal"); })) {
+    if (acceptOrRefuse(stats, call, [&](const std::string& m) {
+          requireNamesOneOf(m, fields, "setter refusal");
+        })) {
       ++stats.accepted;
     }
   };
@@ -86,13 +97,20 @@ CaseStats fuzzPipeline(const std::uint8_t* data, std::size_t size) {
     if (op_byte >= 0xF0) {
       now = decodeStamp(in, now);
       const MotionCase m = decodeMotion(in);
-      motion_seq = (m.numbering & 0x18) == 0x18 ? static_cast<std::uint32_t>(m.numbering >> 5)
-                                                : motion_seq + 1 + ((m.numbering & 0x18) == 0x10 ? m.numbering >> 5 : 0u);
+      motion_seq = (m.numbering & 0x18) == 0x18
+                       ? static_cast<std::uint32_t>(m.numbering >> 5)
+                       : motion_seq + 1 + ((m.numbering & 0x18) == 0x10 ? m.numbering >> 5 : 0u);
       ++motions;
-      acceptOrRefuse(stats, [&] {
-        checkOutcome(feedMotion(*pipeline, now, m.reading, m.missing_pinion, sink, {"/encoders", motion_seq, ""}), *pipeline,
-                     kMotionFields, stats);
-      }, [](const std::string& msg) { throw FuzzFinding("motion() threw instead of refusing: " + msg); });
+      acceptOrRefuse(
+          stats,
+          [&] {
+            checkOutcome(feedMotion(*pipeline, now, m.reading, m.missing_pinion, sink,
+                                    {"/encoders", motion_seq, ""}),
+                         *pipeline, kMotionFields, stats);
+          },
+          [](const std::string& msg) {
+            throw FuzzFinding("motion() threw instead of refusing: " + msg);
+          });
       checkCounts(*pipeline, torques, preloads, motions);
       continue;
     }
@@ -110,27 +128,43 @@ CaseStats fuzzPipeline(const std::uint8_t* data, std::size_t size) {
         if (with_origin) {
           const std::uint8_t meta = in.u8();
           static const char* kFrames[] = {"pinion", "pinion", "gear", ""};
-          seq = (meta & 0x18) == 0x18 ? static_cast<std::uint32_t>(meta >> 5) : seq + 1 + ((meta & 0x18) == 0x10 ? meta >> 5 : 0u);
+          seq = (meta & 0x18) == 0x18 ? static_cast<std::uint32_t>(meta >> 5)
+                                      : seq + 1 + ((meta & 0x18) == 0x10 ? meta >> 5 : 0u);
           origin = InputOrigin{(meta & 0x80) ? "/b" : "/a", seq, kFrames[meta & 3]};
           backlog = (meta & 4) ? Backlog::kShed : Backlog::kNone;
         }
         ++torques;
-        acceptOrRefuse(stats, [&] { checkOutcome(feedTorque(*pipeline, now, torque, sink, origin, backlog), *pipeline, kTorqueFields, stats); },
-                       [](const std::string& m) { throw FuzzFinding("torque() threw instead of refusing: " + m); });
+        acceptOrRefuse(
+            stats,
+            [&] {
+              checkOutcome(feedTorque(*pipeline, now, torque, sink, origin, backlog), *pipeline,
+                           kTorqueFields, stats);
+            },
+            [](const std::string& m) {
+              throw FuzzFinding("torque() threw instead of refusing: " + m);
+            });
         break;
       }
       case 1: {
         now = decodeStamp(in, now);
         const std::vector<PreloadSetting> settings = decodePreloads(in);
         ++preloads;
-        acceptOrRefuse(stats, [&] { checkOutcome(feedPreload(*pipeline, now, settings, sink), *pipeline, kPreloadFields, stats); },
-                       [](const std::string& m) { throw FuzzFinding("preload() threw instead of refusing: " + m); });
+        acceptOrRefuse(
+            stats,
+            [&] {
+              checkOutcome(feedPreload(*pipeline, now, settings, sink), *pipeline, kPreloadFields,
+                           stats);
+            },
+            [](const std::string& m) {
+              throw FuzzFinding("preload() threw instead of refusing: " + m);
+            });
         break;
       }
       case 2: {
         now = decodeStamp(in, now);
-        acceptOrRefuse(stats, [&] { pipeline->observeClock(now, sink); },
-                       [](const std::string& m) { throw FuzzFinding("observeClock() threw: " + m); });
+        acceptOrRefuse(
+            stats, [&] { pipeline->observeClock(now, sink); },
+            [](const std::string& m) { throw FuzzFinding("observeClock() threw: " + m); });
         break;
       }
       case 3: {
@@ -161,9 +195,7 @@ CaseStats fuzzPipeline(const std::uint8_t* data, std::size_t size) {
         });
         break;
       }
-      default:
-        setter({}, [&] { pipeline->reset("fuzz"); });
-        break;
+      default: setter({}, [&] { pipeline->reset("fuzz"); }); break;
     }
     checkCounts(*pipeline, torques, preloads, motions);
   }

@@ -11,7 +11,8 @@ namespace drivetrain_stiffness::fuzz {
 std::string describeException(const std::exception& e) {
   const char* mangled = typeid(e).name();
   int status = 0;
-  std::unique_ptr<char, void (*)(void*)> demangled(abi::__cxa_demangle(mangled, nullptr, nullptr, &status), std::free);
+  std::unique_ptr<char, void (*)(void*)> demangled(
+      abi::__cxa_demangle(mangled, nullptr, nullptr, &status), std::free);
   return std::string(status == 0 && demangled ? demangled.get() : mangled) + ": " + e.what();
 }
 

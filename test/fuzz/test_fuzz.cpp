@@ -27,14 +27,16 @@ TEST_P(FuzzTargetTest, SeededCasesFindNothing) {
   const RunStats stats = runTarget(*target, options);
   EXPECT_EQ(stats.cases, stats.corpus_cases + kCases);
   for (const Finding& f : stats.findings) {
-    ADD_FAILURE() << target->name << " case " << f.case_number << ": " << f.what << "\n  input: " << hexDump(f.input);
+    ADD_FAILURE() << target->name << " case " << f.case_number << ": " << f.what
+                  << "\n  input: " << hexDump(f.input);
   }
   EXPECT_GT(stats.accepted, 0u) << "no input accepted: the cases never get past the checks";
   EXPECT_GT(stats.refused, 0u) << "no input refused: the cases never exercise the checks";
-  std::printf("%s: %llu cases (%llu seeds), %llu inputs accepted, %llu refused, %zu findings\n", target->name,
-              static_cast<unsigned long long>(stats.cases), static_cast<unsigned long long>(stats.corpus_cases),
-              static_cast<unsigned long long>(stats.accepted), static_cast<unsigned long long>(stats.refused),
-              stats.findings.size());
+  std::printf("%s: %llu cases (%llu seeds), %llu inputs accepted, %llu refused, %zu findings\n",
+              target->name, static_cast<unsigned long long>(stats.cases),
+              static_cast<unsigned long long>(stats.corpus_cases),
+              static_cast<unsigned long long>(stats.accepted),
+              static_cast<unsigned long long>(stats.refused), stats.findings.size());
 }
 
 // The seed corpus is what its file names say: each valid_* seed is accepted whole (no input of
@@ -48,7 +50,8 @@ TEST_P(FuzzTargetTest, SeedsAreWhatTheirNamesSay) {
     const CaseStats c = target->fuzzOne(seed.bytes.data(), seed.bytes.size());
     if (seed.name.rfind("valid_", 0) == 0) {
       EXPECT_GT(c.accepted, 0u) << seed.name;
-      EXPECT_EQ(c.refused, 0u) << seed.name << (c.refusals.empty() ? "" : ": " + c.refusals.front());
+      EXPECT_EQ(c.refused, 0u) << seed.name
+                               << (c.refusals.empty() ? "" : ": " + c.refusals.front());
     } else if (seed.name.rfind("invalid_", 0) == 0) {
       EXPECT_GT(c.refused, 0u) << seed.name;
     }
@@ -62,6 +65,8 @@ std::vector<std::string> targetNames() {
 }
 
 INSTANTIATE_TEST_SUITE_P(Targets, FuzzTargetTest, testing::ValuesIn(targetNames()),
-                         [](const testing::TestParamInfo<std::string>& info) { return info.param; });
+                         [](const testing::TestParamInfo<std::string>& info) {
+                           return info.param;
+                         });
 
 }  // namespace

@@ -34,7 +34,8 @@ TEST(NodeParameters, AFrameRefusalNamesTheFrame) {
         readOutputSettings(StringParams{{{name, bad}}});
         ADD_FAILURE() << name << " = '" << bad << "' accepted";
       } catch (const InvalidInput& e) {
-        EXPECT_NE(std::string(e.what()).find("~" + name + " = '" + bad + "'"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("~" + name + " = '" + bad + "'"), std::string::npos)
+            << e.what();
       }
     }
   }

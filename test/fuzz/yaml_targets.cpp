@@ -19,7 +19,9 @@ template <typename Load>
 CaseStats loadCase(const char* subdir, const std::uint8_t* data, std::size_t size, Load load) {
   CaseStats stats;
   const std::string path = CaseFiles::instance().write(subdir, data, size);
-  if (acceptOrRefuse(stats, [&] { load(path); }, [&](const std::string& m) { requireNamesYamlField(m, path); })) {
+  if (acceptOrRefuse(
+          stats, [&] { load(path); },
+          [&](const std::string& m) { requireNamesYamlField(m, path); })) {
     ++stats.accepted;
   }
   return stats;
@@ -42,11 +44,16 @@ CaseStats fuzzRigFile(const std::uint8_t* data, std::size_t size) {
     rig = loadRigFile(path);
     loaded = true;
   });
-  // A rig the loader accepted goes on to the estimator (what the node does next, with its limits): it may still be
-  // refused (a preload no bearing equilibrium carries), naming the field, but never with a crash,
-  // another exception type or a non-finite initial estimate.
+  // A rig the loader accepted goes on to the estimator (what the node does next, with its limits):
+  // it may still be refused (a preload no bearing equilibrium carries), naming the field, but never
+  // with a crash, another exception type or a non-finite initial estimate.
   if (loaded && rig.mesh_samples <= kMaxSamplesForEstimator) {
-    acceptOrRefuse(stats, [&] { requireAllFinite(StiffnessEstimator(rig, PipelineOptions::onlineLimits()).current()); }, &requireNamesSchemaKey);
+    acceptOrRefuse(
+        stats,
+        [&] {
+          requireAllFinite(StiffnessEstimator(rig, PipelineOptions::onlineLimits()).current());
+        },
+        &requireNamesSchemaKey);
   }
   return stats;
 }

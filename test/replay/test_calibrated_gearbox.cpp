@@ -24,7 +24,8 @@ const std::string kConfig = kSource + "/test/data/calibration_servo.yaml";
 CalibrationEstimate fitted() {
   CalibrationEstimate e;
   // Values with all 17 digits, so that a lossy number format would show.
-  e.value << 0.83123456789012345, 1.2345678901234567, 0.67890123456789012, 0.76543210987654321, 3.2109876543210987e-7;
+  e.value << 0.83123456789012345, 1.2345678901234567, 0.67890123456789012, 0.76543210987654321,
+      3.2109876543210987e-7;
   e.std << 0.051234567890123456, 0.11, 0.29, 0.031, 1.7e-8;
   e.prior_std << 0.2, 0.3, 0.3, 0.2, 1e-6;
   e.identified = {true, true, false, true, true};
@@ -37,7 +38,9 @@ CalibrationEstimate fitted() {
   return e;
 }
 
-CalibrationProvenance provenance() { return {"/data/rig_run.bag", "2026-01-01T00:00:00Z to 2026-01-01T00:00:02Z", "now", "ok"}; }
+CalibrationProvenance provenance() {
+  return {"/data/rig_run.bag", "2026-01-01T00:00:00Z to 2026-01-01T00:00:02Z", "now", "ok"};
+}
 
 fs::path scratch(const std::string& name) {
   const fs::path dir = fs::path(testing::TempDir()) / ("calibrated_gearbox_" + name);
@@ -53,7 +56,8 @@ std::string read(const fs::path& p) {
   return s.str();
 }
 
-void expectPrior(const CalibrationPrior& prior, const CalibrationEstimate& e, int i, const CalibrationPrior& drawing) {
+void expectPrior(const CalibrationPrior& prior, const CalibrationEstimate& e, int i,
+                 const CalibrationPrior& drawing) {
   EXPECT_EQ(prior.mean, e.value[i]) << calibrationName(i);
   // The drawing's spread, for a bearing scale kept in compliance (the filter's c = 1/s: std(c) =
   // std(s) / s^2), so read at the calibrated mean s' as std(s) (s' / s)^2.
@@ -62,16 +66,19 @@ void expectPrior(const CalibrationPrior& prior, const CalibrationEstimate& e, in
   const double reference = bearing ? drawing.reference() * ratio * ratio : drawing.reference();
   if (bearing) {
     const double in_compliance = drawing.reference() / (drawing.mean * drawing.mean);
-    EXPECT_NEAR(reference / (e.value[i] * e.value[i]) / in_compliance, 1.0, 1e-14) << calibrationName(i) << ": the same spread in compliance";
+    EXPECT_NEAR(reference / (e.value[i] * e.value[i]) / in_compliance, 1.0, 1e-14)
+        << calibrationName(i) << ": the same spread in compliance";
   }
   // Identified: the posterior std; not: the drawing's spread (the file holds no covariance).
-  EXPECT_EQ(prior.std, e.identified[static_cast<std::size_t>(i)] ? e.std[i] : reference) << calibrationName(i);
+  EXPECT_EQ(prior.std, e.identified[static_cast<std::size_t>(i)] ? e.std[i] : reference)
+      << calibrationName(i);
   // The drawing's spread stays what `identified` and the drift are judged against.
   EXPECT_EQ(prior.reference_std, reference) << calibrationName(i) << ": written out";
 }
 
 TEST(CalibratedGearbox, RoundTripsThroughLoadRigFile) {
-  const fs::path out = scratch("round_trip") / "sub" / "calibrated.yaml";  // another directory, created
+  const fs::path out =
+      scratch("round_trip") / "sub" / "calibrated.yaml";  // another directory, created
   const CalibrationEstimate e = fitted();
   writeCalibratedGearbox(kConfig, e, out.string(), provenance());
   const RigConfig before = loadRigFile(kConfig);
@@ -81,19 +88,23 @@ TEST(CalibratedGearbox, RoundTripsThroughLoadRigFile) {
   EXPECT_EQ(after.mesh_stiffness_scale, e.value[kMeshScale]);
   ASSERT_EQ(after.bearings.size(), before.bearings.size());
   for (const BearingSupportConfig& b : after.bearings) {
-    EXPECT_EQ(b.stiffness_scale, e.value[b.shaft == 0 ? kPinionBearingScale : kGearBearingScale]) << b.name;
+    EXPECT_EQ(b.stiffness_scale, e.value[b.shaft == 0 ? kPinionBearingScale : kGearBearingScale])
+        << b.name;
   }
   EXPECT_EQ(after.anti_backlash.preload_torque, e.value[kPreloadTorque]);
   ASSERT_TRUE(after.calibration.present);
   const CalibrationConfig& c = before.calibration;
   expectPrior(after.calibration.mesh_stiffness_scale, e, kMeshScale, c.mesh_stiffness_scale);
-  expectPrior(after.calibration.pinion_bearing_scale, e, kPinionBearingScale, c.pinion_bearing_scale);
+  expectPrior(after.calibration.pinion_bearing_scale, e, kPinionBearingScale,
+              c.pinion_bearing_scale);
   expectPrior(after.calibration.gear_bearing_scale, e, kGearBearingScale, c.gear_bearing_scale);
   expectPrior(after.calibration.preload_torque, e, kPreloadTorque, c.preload_torque);
   expectPrior(after.calibration.te_offset, e, kTeOffset, c.te_offset);
-  EXPECT_LT(c.mesh_stiffness_scale.reference_std, 0.0) << "the source file should not set reference_std (else this shows nothing)";
+  EXPECT_LT(c.mesh_stiffness_scale.reference_std, 0.0)
+      << "the source file should not set reference_std (else this shows nothing)";
 
-  // Everything else as before: gears, spring, dynamics, the bearings (from their files), the data rules.
+  // Everything else as before: gears, spring, dynamics, the bearings (from their files), the data
+  // rules.
   EXPECT_EQ(after.gears.teeth, before.gears.teeth);
   EXPECT_EQ(after.gears.module, before.gears.module);
   EXPECT_EQ(after.gears.face_width, before.gears.face_width);
@@ -119,11 +130,13 @@ TEST(CalibratedGearbox, RoundTripsThroughLoadRigFile) {
   const std::string text = read(out);
   EXPECT_NE(text.find("/data/rig_run.bag"), std::string::npos) << text;
   EXPECT_NE(text.find("recorded 2026-01-01T00:00:00Z"), std::string::npos) << text;
-  EXPECT_NE(text.find("Not identified (posterior std not below half the drawing's spread; the value stays near its prior): "
+  EXPECT_NE(text.find("Not identified (posterior std not below half the drawing's spread; the "
+                      "value stays near its prior): "
                       "gear_bearing_scale\n"),
             std::string::npos)
       << text;
-  const std::string bearing_file = fs::weakly_canonical(kSource + "/config/bearings/servo_7000ac.yaml").string();
+  const std::string bearing_file =
+      fs::weakly_canonical(kSource + "/config/bearings/servo_7000ac.yaml").string();
   EXPECT_NE(text.find("file: " + bearing_file), std::string::npos) << text;
   EXPECT_EQ(text.find("../../config/bearings"), std::string::npos) << text;
 
@@ -136,19 +149,23 @@ TEST(CalibratedGearbox, RoundTripsThroughLoadRigFile) {
   EXPECT_EQ(twice.calibration.mesh_stiffness_scale.reference_std, c.mesh_stiffness_scale.std);
   EXPECT_EQ(twice.calibration.preload_torque.reference_std, c.preload_torque.reference());
   // The bearing scale not identified, as the first file (the same mean): the same converted spread.
-  EXPECT_EQ(twice.calibration.gear_bearing_scale.reference_std, after.calibration.gear_bearing_scale.reference_std);
+  EXPECT_EQ(twice.calibration.gear_bearing_scale.reference_std,
+            after.calibration.gear_bearing_scale.reference_std);
 }
 
 TEST(CalibratedGearbox, KeepsRelativeFilesInTheSameDirectory) {
   const fs::path dir = scratch("same_dir");
   fs::copy_file(kSource + "/config/bearings/servo_7000ac.yaml", dir / "servo_7000ac.yaml");
   std::string text = read(kConfig);
-  for (std::size_t at; (at = text.find("../../config/bearings/servo_7000ac.yaml")) != std::string::npos;) {
-    text.replace(at, std::string("../../config/bearings/servo_7000ac.yaml").size(), "servo_7000ac.yaml");
+  for (std::size_t at;
+       (at = text.find("../../config/bearings/servo_7000ac.yaml")) != std::string::npos;) {
+    text.replace(at, std::string("../../config/bearings/servo_7000ac.yaml").size(),
+                 "servo_7000ac.yaml");
   }
   std::ofstream(dir / "gearbox.yaml") << text;
   const CalibrationEstimate e = fitted();
-  writeCalibratedGearbox((dir / "gearbox.yaml").string(), e, (dir / "calibrated.yaml").string(), provenance());
+  writeCalibratedGearbox((dir / "gearbox.yaml").string(), e, (dir / "calibrated.yaml").string(),
+                         provenance());
   EXPECT_NE(read(dir / "calibrated.yaml").find("file: servo_7000ac.yaml"), std::string::npos);
   const RigConfig rig = loadRigFile((dir / "calibrated.yaml").string());
   EXPECT_EQ(rig.bearings[0].stiffness_scale, e.value[kPinionBearingScale]);
@@ -160,16 +177,19 @@ TEST(CalibratedGearbox, AnOrdinaryGearGetsNoPreload) {
   const fs::path dir = scratch("ordinary");
   std::string text = read(kSource + "/test/data/ordinary_servo.yaml");
   const std::string rel = "../../config/bearings/servo_7000ac.yaml";
-  for (std::size_t at; (at = text.find(rel)) != std::string::npos;) text.replace(at, rel.size(), kSource + "/config/bearings/servo_7000ac.yaml");
+  for (std::size_t at; (at = text.find(rel)) != std::string::npos;)
+    text.replace(at, rel.size(), kSource + "/config/bearings/servo_7000ac.yaml");
   std::ofstream(dir / "ordinary.yaml") << text << "calibration: {}\n";
   CalibrationEstimate e = fitted();
   e.value[kPreloadTorque] = 0.0;
   e.std[kPreloadTorque] = e.prior_std[kPreloadTorque] = 0.0;
   e.identified[kPreloadTorque] = false;
-  writeCalibratedGearbox((dir / "ordinary.yaml").string(), e, (dir / "calibrated.yaml").string(), provenance());
+  writeCalibratedGearbox((dir / "ordinary.yaml").string(), e, (dir / "calibrated.yaml").string(),
+                         provenance());
   const std::string out = read(dir / "calibrated.yaml");
   EXPECT_EQ(out.find("anti_backlash"), std::string::npos) << out;
-  EXPECT_NE(out.find("# Held (prior std 0, not estimated): preload_torque\n"), std::string::npos) << out;
+  EXPECT_NE(out.find("# Held (prior std 0, not estimated): preload_torque\n"), std::string::npos)
+      << out;
   const RigConfig rig = loadRigFile((dir / "calibrated.yaml").string());
   EXPECT_EQ(rig.anti_backlash.spring_stiffness, 0.0);
   EXPECT_EQ(rig.mesh_stiffness_scale, e.value[kMeshScale]);
@@ -180,10 +200,12 @@ TEST(CalibratedGearbox, RefusesWithoutACalibration) {
   const fs::path dir = scratch("refusals");
   const fs::path out = dir / "calibrated.yaml";
   try {
-    writeCalibratedGearbox(kSource + "/test/data/perturbed_servo.yaml", fitted(), out.string(), provenance());  // no calibration: block
+    writeCalibratedGearbox(kSource + "/test/data/perturbed_servo.yaml", fitted(), out.string(),
+                           provenance());  // no calibration: block
     ADD_FAILURE() << "a gearbox without a calibration block: accepted";
   } catch (const InvalidInput& e) {
-    EXPECT_NE(std::string(e.what()).find("has no calibration: block"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("has no calibration: block"), std::string::npos)
+        << e.what();
   }
   CalibrationEstimate none = fitted();
   none.updates = 0;
@@ -192,8 +214,9 @@ TEST(CalibratedGearbox, RefusesWithoutACalibration) {
     writeCalibratedGearbox(kConfig, none, out.string(), provenance());
     ADD_FAILURE() << "no window updated: accepted";
   } catch (const InvalidInput& e) {
-    EXPECT_NE(std::string(e.what()).find("no window of the bag updated the calibration (12 windows: 3 baseline, 1 gated, "
-                                          "1 not excited; last: no baseline yet"),
+    EXPECT_NE(std::string(e.what()).find(
+                  "no window of the bag updated the calibration (12 windows: 3 baseline, 1 gated, "
+                  "1 not excited; last: no baseline yet"),
               std::string::npos)
         << e.what();
   }

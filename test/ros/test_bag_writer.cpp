@@ -68,7 +68,8 @@ std::map<std::string, int> writeStream(Writer& out) {
     }
     if (i % 7 == 0) {
       std_msgs::String text;
-      text.data = "op=" + std::string(static_cast<std::size_t>(i % 300), 'x') + std::string("\n\0=", 3);
+      text.data =
+          "op=" + std::string(static_cast<std::size_t>(i % 300), 'x') + std::string("\n\0=", 3);
       out.write("/notes", t, text);
       ++counts["/notes"];
     }
@@ -93,7 +94,9 @@ std::string fileBytes(const std::string& path) {
   return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
 }
 
-std::string tempPath(const std::string& name) { return ::testing::TempDir() + "bag_writer_" + name + ".bag"; }
+std::string tempPath(const std::string& name) {
+  return ::testing::TempDir() + "bag_writer_" + name + ".bag";
+}
 
 struct Case {
   ds::BagCompression ours;
@@ -106,7 +109,8 @@ class SameBytesAsRosbag : public ::testing::TestWithParam<Case> {};
 
 TEST_P(SameBytesAsRosbag, ForTheSameStream) {
   const Case c = GetParam();
-  const std::string reference = tempPath(std::string(c.name) + "_rosbag"), ours = tempPath(std::string(c.name) + "_ours");
+  const std::string reference = tempPath(std::string(c.name) + "_rosbag"),
+                    ours = tempPath(std::string(c.name) + "_ours");
   {
     rosbag::Bag bag(reference, rosbag::bagmode::Write);
     bag.setCompression(c.theirs);
@@ -125,14 +129,18 @@ TEST_P(SameBytesAsRosbag, ForTheSameStream) {
 
 INSTANTIATE_TEST_SUITE_P(
     CompressionAndChunking, SameBytesAsRosbag,
-    ::testing::Values(Case{ds::BagCompression::Lz4, rosbag::compression::LZ4, 768 * 1024, "lz4_one_chunk"},
-                      Case{ds::BagCompression::Lz4, rosbag::compression::LZ4, 4096, "lz4_many_chunks"},
-                      Case{ds::BagCompression::None, rosbag::compression::Uncompressed, 768 * 1024, "none_one_chunk"},
-                      Case{ds::BagCompression::None, rosbag::compression::Uncompressed, 4096, "none_many_chunks"}),
+    ::testing::Values(
+        Case{ds::BagCompression::Lz4, rosbag::compression::LZ4, 768 * 1024, "lz4_one_chunk"},
+        Case{ds::BagCompression::Lz4, rosbag::compression::LZ4, 4096, "lz4_many_chunks"},
+        Case{ds::BagCompression::None, rosbag::compression::Uncompressed, 768 * 1024,
+             "none_one_chunk"},
+        Case{ds::BagCompression::None, rosbag::compression::Uncompressed, 4096,
+             "none_many_chunks"}),
     [](const ::testing::TestParamInfo<Case>& info) { return std::string(info.param.name); });
 
 TEST(BagWriter, ChunkSizeChangesTheFile) {  // so the many-chunk cases above test chunking
-  ds::BagWriter one(tempPath("one"), ds::BagCompression::None), many(tempPath("many"), ds::BagCompression::None, 4096);
+  ds::BagWriter one(tempPath("one"), ds::BagCompression::None),
+      many(tempPath("many"), ds::BagCompression::None, 4096);
   writeStream(one);
   writeStream(many);
   one.close();
@@ -162,7 +170,8 @@ TEST(BagWriter, RosbagViewReadsItBackByIndex) {
   for (int i = 0; i < 3000; ++i) {
     if (recordTime(i) >= from && recordTime(i) <= to) ++expected_values[10.0 + 0.25 * i];
   }
-  for (const rosbag::MessageInstance& m : rosbag::View(bag, rosbag::TopicQuery("/torque"), from, to)) {
+  for (const rosbag::MessageInstance& m :
+       rosbag::View(bag, rosbag::TopicQuery("/torque"), from, to)) {
     auto w = m.instantiate<geometry_msgs::WrenchStamped>();
     ASSERT_TRUE(w);
     EXPECT_EQ(w->header.stamp, m.getTime());
@@ -198,20 +207,28 @@ TEST(BagWriter, BadUseGetsAClearError) {
   geometry_msgs::WrenchStamped torque;
   std_msgs::String text;
   writer.write("/torque", kStart, torque);
-  const std::string conflict = errorOf<std::invalid_argument>([&] { writer.write("/torque", kStart, text); });
+  const std::string conflict =
+      errorOf<std::invalid_argument>([&] { writer.write("/torque", kStart, text); });
   EXPECT_NE(conflict.find("'/torque'"), std::string::npos) << conflict;
   EXPECT_NE(conflict.find("geometry_msgs/WrenchStamped"), std::string::npos) << conflict;
   EXPECT_NE(conflict.find("std_msgs/String"), std::string::npos) << conflict;
-  const std::string zero = errorOf<std::invalid_argument>([&] { writer.write("/torque", ros::Time(), torque); });
+  const std::string zero =
+      errorOf<std::invalid_argument>([&] { writer.write("/torque", ros::Time(), torque); });
   EXPECT_NE(zero.find("time 0 on topic '/torque'"), std::string::npos) << zero;
   writer.close();
-  EXPECT_NE(errorOf<std::logic_error>([&] { writer.write("/torque", kStart, torque); }).find("after close"), std::string::npos);
+  EXPECT_NE(errorOf<std::logic_error>([&] {
+              writer.write("/torque", kStart, torque);
+            }).find("after close"),
+            std::string::npos);
 
   const std::string missing = "/nonexistent_directory_for_bag_writer/out.bag";
-  const std::string open_error = errorOf<std::runtime_error>([&] { ds::BagWriter w(missing, ds::BagCompression::None); });
+  const std::string open_error =
+      errorOf<std::runtime_error>([&] { ds::BagWriter w(missing, ds::BagCompression::None); });
   EXPECT_NE(open_error.find(missing), std::string::npos) << open_error;
-  EXPECT_NE(errorOf<std::invalid_argument>([&] { ds::BagWriter w(tempPath("zero_chunk"), ds::BagCompression::None, 0); })
-                .find("chunk size = 0"), std::string::npos);
+  EXPECT_NE(errorOf<std::invalid_argument>([&] {
+              ds::BagWriter w(tempPath("zero_chunk"), ds::BagCompression::None, 0);
+            }).find("chunk size = 0"),
+            std::string::npos);
 }
 
 // A refused write (time 0, here on a topic not seen before) changes nothing: rosbag checks the time

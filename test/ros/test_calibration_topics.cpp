@@ -1,11 +1,12 @@
-// The node's live calibration (docs/ros_api.md, the calibration rule) on the graph: with a gearbox that has a
-// calibration block (test/data/calibration_servo.yaml), torque steps at 1000 rpm and the encoders'
-// joint_states at 5 kHz (the first step at the baseline torque), the node publishes `measured_te`
-// and `calibration`, and with them the encoder-driven dynamics' `transmission_error` and
-// `mesh_period_stats`; every message equals, bit for bit (header.seq aside, which roscpp numbers
-// itself), what the same RigPipeline and message conversion give in-process for the same inputs in
-// the same order (what drivetrain_replay runs): the node against the replay with joint states. /diagnostics carries the calibration's outcome,
-// counts and identified parameters, and calibration_published / measured_te_published match.
+// The node's live calibration (docs/ros_api.md, the calibration rule) on the graph: with a gearbox
+// that has a calibration block (test/data/calibration_servo.yaml), torque steps at 1000 rpm and the
+// encoders' joint_states at 5 kHz (the first step at the baseline torque), the node publishes
+// `measured_te` and `calibration`, and with them the encoder-driven dynamics' `transmission_error`
+// and `mesh_period_stats`; every message equals, bit for bit (header.seq aside, which roscpp
+// numbers itself), what the same RigPipeline and message conversion give in-process for the same
+// inputs in the same order (what drivetrain_replay runs): the node against the replay with joint
+// states. /diagnostics carries the calibration's outcome, counts and identified parameters, and
+// calibration_published / measured_te_published match.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -30,9 +31,10 @@ namespace drivetrain_stiffness {
 namespace {
 
 const std::uint32_t kT0 = 1767225600;  // the stamps' epoch [s]
-constexpr double kRate = 5000.0;       // [Hz] joint_states: the second mesh harmonic (667 Hz) needs more than 1 kHz
+constexpr double kRate =
+    5000.0;  // [Hz] joint_states: the second mesh harmonic (667 Hz) needs more than 1 kHz
 constexpr double kSpeed = 1000.0 * kTwoPi / 60.0;  // [rad/s] pinion, the middle of the run-up
-constexpr double kSegment = 0.37;      // [s] per torque step: three gear turns (0.12 s each)
+constexpr double kSegment = 0.37;  // [s] per torque step: three gear turns (0.12 s each)
 
 bool waitWall(const std::function<bool()>& done, double seconds) {
   const ros::WallTime end = ros::WallTime::now() + ros::WallDuration(seconds);
@@ -50,10 +52,18 @@ struct CollectingSink : PipelineSink {
   std::vector<drivetrain_stiffness::MeasuredTe> measured_tes;
   std::vector<drivetrain_stiffness::TransmissionError> tes;
   std::vector<drivetrain_stiffness::MeshPeriodStats> periods;
-  void transmissionError(Stamp stamp, const DynamicsSample& s, const SampleContext&) override { tes.push_back(toTransmissionErrorMsg(stamp, pinion_frame, s)); }
-  void meshPeriod(Stamp stamp, const MeshPeriodStatistics& s) override { periods.push_back(toMeshPeriodStatsMsg(stamp, pinion_frame, s)); }
-  void measuredTe(Stamp stamp, const MeasuredTeSample& s) override { measured_tes.push_back(toMeasuredTeMsg(stamp, pinion_frame, s)); }
-  void calibration(Stamp stamp, const CalibrationEstimate& e) override { calibrations.push_back(toCalibrationMsg(stamp, rig_frame, e)); }
+  void transmissionError(Stamp stamp, const DynamicsSample& s, const SampleContext&) override {
+    tes.push_back(toTransmissionErrorMsg(stamp, pinion_frame, s));
+  }
+  void meshPeriod(Stamp stamp, const MeshPeriodStatistics& s) override {
+    periods.push_back(toMeshPeriodStatsMsg(stamp, pinion_frame, s));
+  }
+  void measuredTe(Stamp stamp, const MeasuredTeSample& s) override {
+    measured_tes.push_back(toMeasuredTeMsg(stamp, pinion_frame, s));
+  }
+  void calibration(Stamp stamp, const CalibrationEstimate& e) override {
+    calibrations.push_back(toCalibrationMsg(stamp, rig_frame, e));
+  }
 };
 
 struct Input {
@@ -67,16 +77,30 @@ class CalibrationTopicsTest : public testing::Test {
   void SetUp() override {
     torque_pub_ = nh_.advertise<geometry_msgs::WrenchStamped>("torque", 100);
     joints_pub_ = nh_.advertise<sensor_msgs::JointState>("joint_states", 1000);
-    calibration_sub_ = nh_.subscribe<drivetrain_stiffness::Calibration>("calibration", 1000,
-        [this](const drivetrain_stiffness::Calibration::ConstPtr& m) { std::lock_guard<std::mutex> l(m_); calibration_.push_back(*m); });
-    measured_te_sub_ = nh_.subscribe<drivetrain_stiffness::MeasuredTe>("measured_te", 100000,
-        [this](const drivetrain_stiffness::MeasuredTe::ConstPtr& m) { std::lock_guard<std::mutex> l(m_); measured_te_.push_back(*m); });
-    te_sub_ = nh_.subscribe<drivetrain_stiffness::TransmissionError>("transmission_error", 100000,
-        [this](const drivetrain_stiffness::TransmissionError::ConstPtr& m) { std::lock_guard<std::mutex> l(m_); te_.push_back(*m); });
-    period_sub_ = nh_.subscribe<drivetrain_stiffness::MeshPeriodStats>("mesh_period_stats", 100000,
-        [this](const drivetrain_stiffness::MeshPeriodStats::ConstPtr& m) { std::lock_guard<std::mutex> l(m_); periods_.push_back(*m); });
-    diag_sub_ = nh_.subscribe<diagnostic_msgs::DiagnosticArray>("/diagnostics", 100,
-        [this](const diagnostic_msgs::DiagnosticArray::ConstPtr& a) {
+    calibration_sub_ = nh_.subscribe<drivetrain_stiffness::Calibration>(
+        "calibration", 1000, [this](const drivetrain_stiffness::Calibration::ConstPtr& m) {
+          std::lock_guard<std::mutex> l(m_);
+          calibration_.push_back(*m);
+        });
+    measured_te_sub_ = nh_.subscribe<drivetrain_stiffness::MeasuredTe>(
+        "measured_te", 100000, [this](const drivetrain_stiffness::MeasuredTe::ConstPtr& m) {
+          std::lock_guard<std::mutex> l(m_);
+          measured_te_.push_back(*m);
+        });
+    te_sub_ = nh_.subscribe<drivetrain_stiffness::TransmissionError>(
+        "transmission_error", 100000,
+        [this](const drivetrain_stiffness::TransmissionError::ConstPtr& m) {
+          std::lock_guard<std::mutex> l(m_);
+          te_.push_back(*m);
+        });
+    period_sub_ = nh_.subscribe<drivetrain_stiffness::MeshPeriodStats>(
+        "mesh_period_stats", 100000,
+        [this](const drivetrain_stiffness::MeshPeriodStats::ConstPtr& m) {
+          std::lock_guard<std::mutex> l(m_);
+          periods_.push_back(*m);
+        });
+    diag_sub_ = nh_.subscribe<diagnostic_msgs::DiagnosticArray>(
+        "/diagnostics", 100, [this](const diagnostic_msgs::DiagnosticArray::ConstPtr& a) {
           std::lock_guard<std::mutex> l(m_);
           for (const auto& s : a->status)
             if (s.name.find("stiffness_estimator") != std::string::npos) {
@@ -85,11 +109,15 @@ class CalibrationTopicsTest : public testing::Test {
             }
         });
     spinner_.start();
-    ASSERT_TRUE(waitWall([this] {
-      return torque_pub_.getNumSubscribers() > 0 && joints_pub_.getNumSubscribers() > 0 &&
-             calibration_sub_.getNumPublishers() > 0 && measured_te_sub_.getNumPublishers() > 0 &&
-             te_sub_.getNumPublishers() > 0 && period_sub_.getNumPublishers() > 0;
-    }, 30.0)) << "the node did not come up";
+    ASSERT_TRUE(waitWall(
+        [this] {
+          return torque_pub_.getNumSubscribers() > 0 && joints_pub_.getNumSubscribers() > 0 &&
+                 calibration_sub_.getNumPublishers() > 0 &&
+                 measured_te_sub_.getNumPublishers() > 0 && te_sub_.getNumPublishers() > 0 &&
+                 period_sub_.getNumPublishers() > 0;
+        },
+        30.0))
+        << "the node did not come up";
     ros::WallDuration(0.5).sleep();  // the TCP links settle after the master reports them
   }
   std::string diagnostic(const std::string& key) {
@@ -120,7 +148,9 @@ TEST_F(CalibrationTopicsTest, NodePublishesWhatThePipelineGivesInProcess) {
   const ros::NodeHandle node("/stiffness_estimator");
   std::string gearbox;
   ASSERT_TRUE(node.getParam("gearbox_config", gearbox));
-  const auto get = [&node](const std::string& name, const auto& fallback) { return readParam(node, name, fallback); };
+  const auto get = [&node](const std::string& name, const auto& fallback) {
+    return readParam(node, name, fallback);
+  };
   const RigConfig rig = loadRigFile(gearbox);
   ASSERT_TRUE(rig.calibration.present);
   RigPipeline pipeline(rig, readPipelineOptions(get, rig), readRuntimeSettings(get, rig));
@@ -154,7 +184,8 @@ TEST_F(CalibrationTopicsTest, NodePublishesWhatThePipelineGivesInProcess) {
       j.joints.name = {joints.pinion, joints.gear};
       // omega = kSpeed (0.7 + 0.6 t / T), T the three segments; the angle its integral.
       const double span = 3.0 * kSegment;
-      const double angle = kSpeed * (0.7 * time + 0.3 * time * time / span), speed = kSpeed * (0.7 + 0.6 * time / span);
+      const double angle = kSpeed * (0.7 * time + 0.3 * time * time / span),
+                   speed = kSpeed * (0.7 + 0.6 * time / span);
       j.joints.position = {angle, -ratio * angle};
       j.joints.velocity = {speed, -ratio * speed};
       inputs.push_back(j);
@@ -167,9 +198,11 @@ TEST_F(CalibrationTopicsTest, NodePublishesWhatThePipelineGivesInProcess) {
   for (const auto& segment : segments) {
     for (const Input& in : segment) {
       if (in.torque) {
-        pipeline.torque(fromRosTime(in.wrench.header.stamp), in.wrench.wrench.torque.z, sink, {"", 0, in.wrench.header.frame_id});
+        pipeline.torque(fromRosTime(in.wrench.header.stamp), in.wrench.wrench.torque.z, sink,
+                        {"", 0, in.wrench.header.frame_id});
       } else {
-        pipeline.motion(fromRosTime(in.joints.header.stamp), *toMotionInput(in.joints, joints, why), sink);
+        pipeline.motion(fromRosTime(in.joints.header.stamp), *toMotionInput(in.joints, joints, why),
+                        sink);
       }
     }
   }
@@ -180,8 +213,10 @@ TEST_F(CalibrationTopicsTest, NodePublishesWhatThePipelineGivesInProcess) {
 
   // Before any input the calibration says it waits for its first reading; no WARN for that (a rig
   // without the gear encoder would warn every second).
-  const std::string no_reading = "no encoder reading with the gear angle has reached the calibration";
-  EXPECT_TRUE(waitWall([&] { return diagnostic("calibration_waiting") == no_reading; }, 5.0)) << diagnostic("calibration_waiting");
+  const std::string no_reading =
+      "no encoder reading with the gear angle has reached the calibration";
+  EXPECT_TRUE(waitWall([&] { return diagnostic("calibration_waiting") == no_reading; }, 5.0))
+      << diagnostic("calibration_waiting");
   {
     std::lock_guard<std::mutex> l(m_);
     EXPECT_EQ(status_message_.find("calibration waiting"), std::string::npos) << status_message_;
@@ -194,21 +229,26 @@ TEST_F(CalibrationTopicsTest, NodePublishesWhatThePipelineGivesInProcess) {
     for (std::size_t i = 0; i < segment.size(); ++i) {
       if (segment[i].torque) {
         torque_pub_.publish(segment[i].wrench);
-        ASSERT_TRUE(accepted("accepted_torque", ++torques)) << "torque " << torques << ": " << diagnostic("last_event");
+        ASSERT_TRUE(accepted("accepted_torque", ++torques))
+            << "torque " << torques << ": " << diagnostic("last_event");
         continue;
       }
       joints_pub_.publish(segment[i].joints);
       ++readings;
       if (readings % 500 == 0 || i + 1 == segment.size()) {
-        ASSERT_TRUE(accepted("accepted_joint_states", readings)) << readings << ": " << diagnostic("last_event");
+        ASSERT_TRUE(accepted("accepted_joint_states", readings))
+            << readings << ": " << diagnostic("last_event");
       }
     }
   }
-  ASSERT_TRUE(waitWall([&] {
-    std::lock_guard<std::mutex> l(m_);
-    return calibration_.size() >= sink.calibrations.size() && measured_te_.size() >= sink.measured_tes.size() &&
-           te_.size() >= sink.tes.size() && periods_.size() >= sink.periods.size();
-  }, 20.0));
+  ASSERT_TRUE(waitWall(
+      [&] {
+        std::lock_guard<std::mutex> l(m_);
+        return calibration_.size() >= sink.calibrations.size() &&
+               measured_te_.size() >= sink.measured_tes.size() && te_.size() >= sink.tes.size() &&
+               periods_.size() >= sink.periods.size();
+      },
+      20.0));
 
   {
     std::lock_guard<std::mutex> l(m_);
@@ -217,14 +257,17 @@ TEST_F(CalibrationTopicsTest, NodePublishesWhatThePipelineGivesInProcess) {
     for (std::size_t i = 0; i < calibration_.size(); ++i) {
       drivetrain_stiffness::Calibration got = calibration_[i];
       got.header.seq = sink.calibrations[i].header.seq;
-      EXPECT_TRUE(got == sink.calibrations[i]) << "calibration[" << i << "]: " << got << "\nin-process:\n" << sink.calibrations[i];
+      EXPECT_TRUE(got == sink.calibrations[i])
+          << "calibration[" << i << "]: " << got << "\nin-process:\n"
+          << sink.calibrations[i];
     }
     std::size_t differ = 0;
     for (std::size_t i = 0; i < measured_te_.size(); ++i) {
       drivetrain_stiffness::MeasuredTe got = measured_te_[i];
       got.header.seq = sink.measured_tes[i].header.seq;
       if (!(got == sink.measured_tes[i]) && differ++ < 3) {
-        ADD_FAILURE() << "measured_te[" << i << "]: " << got << "\nin-process:\n" << sink.measured_tes[i];
+        ADD_FAILURE() << "measured_te[" << i << "]: " << got << "\nin-process:\n"
+                      << sink.measured_tes[i];
       }
     }
     EXPECT_EQ(differ, 0u);
@@ -235,23 +278,32 @@ TEST_F(CalibrationTopicsTest, NodePublishesWhatThePipelineGivesInProcess) {
     for (std::size_t i = 0; i < te_.size(); ++i) {
       drivetrain_stiffness::TransmissionError got = te_[i];
       got.header.seq = sink.tes[i].header.seq;
-      if (!(got == sink.tes[i]) && differ++ < 3) ADD_FAILURE() << "transmission_error[" << i << "]: " << got << "\nin-process:\n" << sink.tes[i];
+      if (!(got == sink.tes[i]) && differ++ < 3)
+        ADD_FAILURE() << "transmission_error[" << i << "]: " << got << "\nin-process:\n"
+                      << sink.tes[i];
     }
     for (std::size_t i = 0; i < periods_.size(); ++i) {
       drivetrain_stiffness::MeshPeriodStats got = periods_[i];
       got.header.seq = sink.periods[i].header.seq;
-      if (!(got == sink.periods[i]) && differ++ < 6) ADD_FAILURE() << "mesh_period_stats[" << i << "]: " << got << "\nin-process:\n" << sink.periods[i];
+      if (!(got == sink.periods[i]) && differ++ < 6)
+        ADD_FAILURE() << "mesh_period_stats[" << i << "]: " << got << "\nin-process:\n"
+                      << sink.periods[i];
     }
     EXPECT_EQ(differ, 0u);
     std::map<std::string, int> seen;
     for (const auto& m : calibration_) ++seen[m.outcome];
-    for (const auto& [outcome, n] : seen) std::cout << "calibration outcome '" << outcome << "': " << n << "\n";
+    for (const auto& [outcome, n] : seen)
+      std::cout << "calibration outcome '" << outcome << "': " << n << "\n";
     EXPECT_GT(seen["baseline"], 0);
   }
 
   // /diagnostics: the counters and the calibration's state.
   const CalibrationEstimate& e = pipeline.calibrator()->estimate();
-  EXPECT_TRUE(waitWall([&] { return diagnostic("calibration_published") == std::to_string(sink.calibrations.size()); }, 5.0))
+  EXPECT_TRUE(waitWall(
+      [&] {
+        return diagnostic("calibration_published") == std::to_string(sink.calibrations.size());
+      },
+      5.0))
       << diagnostic("calibration_published");
   EXPECT_EQ(diagnostic("measured_te_published"), std::to_string(sink.measured_tes.size()));
   EXPECT_EQ(diagnostic("calibration_errors"), "0");
@@ -268,24 +320,32 @@ TEST_F(CalibrationTopicsTest, NodePublishesWhatThePipelineGivesInProcess) {
   std::cout << "calibration_waiting: " << waiting << "\n";
   EXPECT_NE(waiting.find("gated"), std::string::npos) << waiting;
   EXPECT_EQ(diagnostic("calibration_waiting"), waiting);
-  EXPECT_TRUE(waitWall([&] {
-    std::lock_guard<std::mutex> l(m_);
-    return status_message_.find("calibration waiting: " + waiting) != std::string::npos;
-  }, 5.0)) << status_message_;
+  EXPECT_TRUE(waitWall(
+      [&] {
+        std::lock_guard<std::mutex> l(m_);
+        return status_message_.find("calibration waiting: " + waiting) != std::string::npos;
+      },
+      5.0))
+      << status_message_;
   EXPECT_NE(diagnostic("calibration.te_offset [m]"), "");
   // Every input has stopped with the encoders driving the phase: the time-out waits for the next
   // input's stamp, and /diagnostics says how old the last reading is on the node's clock. The
   // readings are stamped from kT0 (2026-01-01), so on this wall clock that is far beyond
   // ~motion_timeout: the key and the WARN both show.
   EXPECT_EQ(diagnostic("phase_source"), "encoders");
-  const double silence = std::stod(diagnostic("encoder_silence [s]").empty() ? "nan" : diagnostic("encoder_silence [s]"));
-  const double expected = (ros::Time::now() - (ros::Time(kT0, 0) + ros::Duration(3.0 * kSegment))).toSec();
+  const double silence = std::stod(
+      diagnostic("encoder_silence [s]").empty() ? "nan" : diagnostic("encoder_silence [s]"));
+  const double expected =
+      (ros::Time::now() - (ros::Time(kT0, 0) + ros::Duration(3.0 * kSegment))).toSec();
   // (diagnostic_updater prints about six significant digits: some 50 s at this age)
   EXPECT_NEAR(silence / expected, 1.0, 1e-5) << "the age of the last reading, 3 segments after kT0";
-  EXPECT_TRUE(waitWall([&] {
-    std::lock_guard<std::mutex> l(m_);
-    return status_message_.find("no joint_states for") != std::string::npos;
-  }, 5.0)) << status_message_;
+  EXPECT_TRUE(waitWall(
+      [&] {
+        std::lock_guard<std::mutex> l(m_);
+        return status_message_.find("no joint_states for") != std::string::npos;
+      },
+      5.0))
+      << status_message_;
 }
 
 }  // namespace

@@ -40,23 +40,35 @@ class GraphTest : public testing::Test {
     // As rosbag play publishes a recording (has_header false): roscpp then sends header.seq as we
     // set it instead of numbering the messages itself, so the test can make a gap.
     ros::AdvertiseOptions options = ros::AdvertiseOptions::create<geometry_msgs::WrenchStamped>(
-        "torque", 100, ros::SubscriberStatusCallback(), ros::SubscriberStatusCallback(), ros::VoidConstPtr(), nullptr);
+        "torque", 100, ros::SubscriberStatusCallback(), ros::SubscriberStatusCallback(),
+        ros::VoidConstPtr(), nullptr);
     options.has_header = false;
     torque_pub_ = nh_.advertise(options);
-    stiffness_sub_ = nh_.subscribe<drivetrain_stiffness::Stiffness>("stiffness", 1000,
-        [this](const drivetrain_stiffness::Stiffness::ConstPtr& m) { std::lock_guard<std::mutex> l(m_); stiffness_.push_back(*m); });
-    te_sub_ = nh_.subscribe<drivetrain_stiffness::TransmissionError>("transmission_error", 100000,
-        [this](const drivetrain_stiffness::TransmissionError::ConstPtr& m) { std::lock_guard<std::mutex> l(m_); te_.push_back(*m); });
-    diag_sub_ = nh_.subscribe<diagnostic_msgs::DiagnosticArray>("/diagnostics", 100,
-        [this](const diagnostic_msgs::DiagnosticArray::ConstPtr& a) {
+    stiffness_sub_ = nh_.subscribe<drivetrain_stiffness::Stiffness>(
+        "stiffness", 1000, [this](const drivetrain_stiffness::Stiffness::ConstPtr& m) {
+          std::lock_guard<std::mutex> l(m_);
+          stiffness_.push_back(*m);
+        });
+    te_sub_ = nh_.subscribe<drivetrain_stiffness::TransmissionError>(
+        "transmission_error", 100000,
+        [this](const drivetrain_stiffness::TransmissionError::ConstPtr& m) {
+          std::lock_guard<std::mutex> l(m_);
+          te_.push_back(*m);
+        });
+    diag_sub_ = nh_.subscribe<diagnostic_msgs::DiagnosticArray>(
+        "/diagnostics", 100, [this](const diagnostic_msgs::DiagnosticArray::ConstPtr& a) {
           std::lock_guard<std::mutex> l(m_);
           for (const auto& s : a->status)
             if (s.name.find("stiffness_estimator") != std::string::npos)
               for (const auto& kv : s.values) diagnostics_[kv.key] = kv.value;
         });
     spinner_.start();
-    ASSERT_TRUE(waitWall([this] { return torque_pub_.getNumSubscribers() > 0 && stiffness_sub_.getNumPublishers() > 0 &&
-                                         te_sub_.getNumPublishers() > 0; }, 30.0))
+    ASSERT_TRUE(waitWall(
+        [this] {
+          return torque_pub_.getNumSubscribers() > 0 && stiffness_sub_.getNumPublishers() > 0 &&
+                 te_sub_.getNumPublishers() > 0;
+        },
+        30.0))
         << "the nodelet did not come up";
     // getNumPublishers() counts a publisher once the master reports it, before the TCP link is up:
     // messages sent in between are lost. Let the links settle (as the load generator does).
@@ -64,7 +76,8 @@ class GraphTest : public testing::Test {
   }
   // Stamp = the epoch plus `offset` seconds, exact to the nanosecond (ros::Time(1.7e9 + 0.05) would
   // round 0.05 to 0.049999952 s: one grid sample short). offset < -1e9 gives the zero stamp.
-  void send(double offset, double torque, const std::string& frame = "pinion", std::uint32_t skip = 0) {
+  void send(double offset, double torque, const std::string& frame = "pinion",
+            std::uint32_t skip = 0) {
     geometry_msgs::WrenchStamped w;
     w.header.stamp = offset < -1e9 ? ros::Time(0, 0) : ros::Time(kT0, 0) + ros::Duration(offset);
     w.header.frame_id = frame;  // ~torque_frame (pinion)
@@ -74,7 +87,10 @@ class GraphTest : public testing::Test {
     torque_pub_.publish(w);
   }
   std::uint32_t seq_ = 0;
-  std::size_t answers() { std::lock_guard<std::mutex> l(m_); return stiffness_.size(); }
+  std::size_t answers() {
+    std::lock_guard<std::mutex> l(m_);
+    return stiffness_.size();
+  }
   std::string diagnostic(const std::string& key) {
     std::lock_guard<std::mutex> l(m_);
     auto it = diagnostics_.find(key);
@@ -103,11 +119,13 @@ TEST_F(GraphTest, NodeletAnswersAndAppliesTheStampRules) {
     std::lock_guard<std::mutex> l(m_);
     EXPECT_EQ(stiffness_.back().header.stamp, ros::Time(kT0, 0));  // stamped with the input's time
   }
-  // The zero-stamp rule: a zero stamp is rejected; out of order: 0.5 s late (within ~stamp_jump_back) is rejected.
-  send(-2e9, 0.1);     // zero stamp
-  send(0.1, 0.1);      // accepted (answer 2)
-  send(-0.4, 0.1);     // 0.5 s before the last one: out of order
-  // The burst rule: a burst of five equal stamps is accepted (answers 3-7) and releases no extra samples.
+  // The zero-stamp rule: a zero stamp is rejected; out of order: 0.5 s late (within
+  // ~stamp_jump_back) is rejected.
+  send(-2e9, 0.1);  // zero stamp
+  send(0.1, 0.1);   // accepted (answer 2)
+  send(-0.4, 0.1);  // 0.5 s before the last one: out of order
+  // The burst rule: a burst of five equal stamps is accepted (answers 3-7) and releases no extra
+  // samples.
   for (int i = 0; i < 5; ++i) send(0.2, 0.1 + 0.01 * i);
   send(0.203, 0.1);  // answer 8: three samples with the last torque of the burst held
   // Transport rules on the graph: a torque in the gear's frame is refused, and a gap of 4 in the
@@ -120,7 +138,12 @@ TEST_F(GraphTest, NodeletAnswersAndAppliesTheStampRules) {
   EXPECT_TRUE(diagnosticIs("rejected_wrong_frame", "1"));
   EXPECT_TRUE(diagnosticIs("dropped_torque", "4"));
   EXPECT_TRUE(diagnosticIs("accepted_torque", "9"));
-  ASSERT_TRUE(waitWall([this] { std::lock_guard<std::mutex> l(m_); return te_.size() >= 203; }, 5.0));
+  ASSERT_TRUE(waitWall(
+      [this] {
+        std::lock_guard<std::mutex> l(m_);
+        return te_.size() >= 203;
+      },
+      5.0));
   std::lock_guard<std::mutex> l(m_);
   EXPECT_EQ(te_.size(), 203u);  // (kT0, kT0 + 0.203] on the 1 ms grid
   EXPECT_DOUBLE_EQ(te_.back().torque, 0.14);
@@ -143,12 +166,15 @@ TEST_F(GraphTest, DynamicReconfigureSwitchesFidelityAndDamping) {
   const double t = kT0 + 100.0;  // well after the other test's inputs: a gap restart, then samples
   send(100.0, 0.1);
   send(100.05, 0.1);
-  ASSERT_TRUE(waitWall([this, t] {
-    std::lock_guard<std::mutex> l(m_);
-    return !te_.empty() && te_.back().header.stamp.toSec() >= t + 0.05 - 1e-6;
-  }, 5.0)) << "last event: " << diagnostic("last_event") << "; dynamics errors " << diagnostic("dynamics_errors")
-           << "; accepted " << diagnostic("accepted_torque") << "; te " << diagnostic("transmission_error_published")
-           << "; received " << te_.size();
+  ASSERT_TRUE(waitWall(
+      [this, t] {
+        std::lock_guard<std::mutex> l(m_);
+        return !te_.empty() && te_.back().header.stamp.toSec() >= t + 0.05 - 1e-6;
+      },
+      5.0))
+      << "last event: " << diagnostic("last_event") << "; dynamics errors "
+      << diagnostic("dynamics_errors") << "; accepted " << diagnostic("accepted_torque") << "; te "
+      << diagnostic("transmission_error_published") << "; received " << te_.size();
   std::lock_guard<std::mutex> l(m_);
   int checked = 0;
   for (const auto& m : te_) {
@@ -172,9 +198,11 @@ TEST(StartupValidation, EveryBadParameterIsNamed) {
   const std::vector<Case> cases = {
       {"output_rate", XmlRpc::XmlRpcValue(-1.0), "~output_rate"},
       {"output_rate", XmlRpc::XmlRpcValue("fast"), "~output_rate: has the wrong type"},
-      {"max_preload", XmlRpc::XmlRpcValue("1.0e5"), "~max_preload: has the wrong type"},  // YAML 1.1 reads 1.0e5 as text
+      {"max_preload", XmlRpc::XmlRpcValue("1.0e5"),
+       "~max_preload: has the wrong type"},  // YAML 1.1 reads 1.0e5 as text
       {"spectrum_hop", XmlRpc::XmlRpcValue(0), "~spectrum_hop"},
-      {"spectrum_window", XmlRpc::XmlRpcValue(4.2), "~spectrum_window"},  // roscpp rounds to 4: out of range
+      {"spectrum_window", XmlRpc::XmlRpcValue(4.2),
+       "~spectrum_window"},  // roscpp rounds to 4: out of range
       {"fidelity", XmlRpc::XmlRpcValue("exact"), "fidelity"},
       {"exaggeration", XmlRpc::XmlRpcValue(0.5), "~exaggeration"},
       {"tf_rate", XmlRpc::XmlRpcValue(-1.0), "~tf_rate"},
@@ -207,12 +235,14 @@ TEST(StartupValidation, EveryBadParameterIsNamed) {
       drivetrain_stiffness::StiffnessEstimatorRos estimator(ros::NodeHandle(ns + "_public"), pnh);
       ADD_FAILURE() << c.name << ": accepted";
     } catch (const std::exception& e) {
-      EXPECT_NE(std::string(e.what()).find(c.expected), std::string::npos) << c.name << ": " << e.what();
+      EXPECT_NE(std::string(e.what()).find(c.expected), std::string::npos)
+          << c.name << ": " << e.what();
     }
   }
   // And the required parameter missing altogether.
   try {
-    drivetrain_stiffness::StiffnessEstimatorRos estimator(ros::NodeHandle("/empty_public"), ros::NodeHandle("/empty"));
+    drivetrain_stiffness::StiffnessEstimatorRos estimator(ros::NodeHandle("/empty_public"),
+                                                          ros::NodeHandle("/empty"));
     ADD_FAILURE() << "no gearbox_config: accepted";
   } catch (const InvalidInput& e) {
     EXPECT_NE(std::string(e.what()).find("~gearbox_config"), std::string::npos) << e.what();

@@ -26,13 +26,16 @@ LoadResult runPhase(const char* name, double rate_hz, double duration_s) {
   options.rate_hz = rate_hz;
   options.duration_s = duration_s;
   options.warmup_s = 0.5 * duration_s;
-  options.settle_timeout_s = 60.0;  // a busy machine drains slowly; waiting longer changes no verdict
+  options.settle_timeout_s =
+      60.0;  // a busy machine drains slowly; waiting longer changes no verdict
   LoadGenerator generator(ros::NodeHandle(), options);
-  EXPECT_TRUE(generator.connect()) << "no stiffness_estimator on torque, stiffness and /diagnostics";
+  EXPECT_TRUE(generator.connect())
+      << "no stiffness_estimator on torque, stiffness and /diagnostics";
   const LoadResult r = generator.run();
   const nlohmann::json report = toJson(r);
   std::cout << name << " figures: " << report.dump() << std::endl;
-  for (const auto& [key, value] : report.items()) testing::Test::RecordProperty(std::string(name) + "_" + key, value.dump());
+  for (const auto& [key, value] : report.items())
+    testing::Test::RecordProperty(std::string(name) + "_" + key, value.dump());
   return r;
 }
 
@@ -44,14 +47,16 @@ TEST(LoadAccounting, NothingLostUncountedPacedThenOutrun) {
   const double paced = readParam(pnh, "paced_duration", 10.0);
   const double burst = readParam(pnh, "burst_duration", 1.0);  // 1e5 inputs per second of burst
 
-  // One publication of `torque` for the whole test, held by this handle while each phase's generator
-  // comes and goes: roscpp numbers header.seq per publication, so the numbers run on across the
-  // phases and a loss at the end of one phase or the start of the next is a gap the node counts.
-  // With a publication per phase, the next phase restarted the numbers at 0 and the node (rightly)
-  // took that as a renumbering, not a gap: 216 inputs lost at a burst's edge went uncounted once
-  // (a clean-clone CI run, 2026-11-24). Its queue: the phases' largest (a burst and its settle).
+  // One publication of `torque` for the whole test, held by this handle while each phase's
+  // generator comes and goes: roscpp numbers header.seq per publication, so the numbers run on
+  // across the phases and a loss at the end of one phase or the start of the next is a gap the node
+  // counts. With a publication per phase, the next phase restarted the numbers at 0 and the node
+  // (rightly) took that as a renumbering, not a gap: 216 inputs lost at a burst's edge went
+  // uncounted once (a clean-clone CI run, 2026-11-24). Its queue: the phases' largest (a burst and
+  // its settle).
   ros::NodeHandle nh;
-  const ros::Publisher one_publication = nh.advertise<geometry_msgs::WrenchStamped>("torque", 6200000);
+  const ros::Publisher one_publication =
+      nh.advertise<geometry_msgs::WrenchStamped>("torque", 6200000);
 
   const LoadResult a = runPhase("paced", rate, paced);
   // The counters are the node's totals since it started: each phase's include the earlier ones'.
@@ -61,27 +66,32 @@ TEST(LoadAccounting, NothingLostUncountedPacedThenOutrun) {
   // burst's end shows as a gap too (nothing follows the last input sent to reveal one).
   const LoadResult d = runPhase("tail", 1000.0, 0.2);
   const std::uint64_t sent = a.sent + b.sent + c.sent + d.sent;
-  SCOPED_TRACE("paced: " + toJson(a).dump() + "\nburst: " + toJson(b).dump() + "\nburst_again: " + toJson(c).dump() +
-               "\ntail: " + toJson(d).dump());
+  SCOPED_TRACE("paced: " + toJson(a).dump() + "\nburst: " + toJson(b).dump() +
+               "\nburst_again: " + toJson(c).dump() + "\ntail: " + toJson(d).dump());
 
   ASSERT_TRUE(d.diagnostics_seen);
   // Every input: accepted, rejected (none here: all valid) or dropped on the way (seq gaps). The
   // newest input always arrives (roscpp's queues drop the oldest), so no gap goes unseen.
   EXPECT_EQ(d.rejected_torque, 0u);
   EXPECT_EQ(d.accepted_torque + d.rejected_torque + d.dropped_torque, sent);
-  // Every accepted input: a stiffness answer, or shed under backlog, or coalesced (~stiffness_rate 0: none).
+  // Every accepted input: a stiffness answer, or shed under backlog, or coalesced (~stiffness_rate
+  // 0: none).
   EXPECT_EQ(d.stiffness_coalesced, 0u);
   EXPECT_EQ(d.stiffness_published + d.stiffness_shed, d.accepted_torque);
   // Every answer published reached us or is seen missing in the answers' own numbering.
-  EXPECT_EQ(a.answered + a.answers_lost + b.answered + b.answers_lost + c.answered + c.answers_lost + d.answered + d.answers_lost,
+  EXPECT_EQ(a.answered + a.answers_lost + b.answered + b.answers_lost + c.answered +
+                c.answers_lost + d.answered + d.answers_lost,
             d.stiffness_published);
-  EXPECT_EQ(a.te_received + a.te_lost + b.te_received + b.te_lost + c.te_received + c.te_lost + d.te_received + d.te_lost,
+  EXPECT_EQ(a.te_received + a.te_lost + b.te_received + b.te_lost + c.te_received + c.te_lost +
+                d.te_received + d.te_lost,
             d.te_published);
   EXPECT_GT(a.te_received, 0u);
-  EXPECT_EQ(a.non_finite + b.non_finite + c.non_finite + d.non_finite, 0u) << "a NaN or Inf on stiffness or transmission_error";
+  EXPECT_EQ(a.non_finite + b.non_finite + c.non_finite + d.non_finite, 0u)
+      << "a NaN or Inf on stiffness or transmission_error";
   // The burst outran the node: publish() costs ~3 us, an input ~15 us of the node's time, so it
   // must have shed or dropped (the count proves the overload path ran, not how fast it was).
-  EXPECT_GT(b.stiffness_shed + b.dropped_torque, a.stiffness_shed + a.dropped_torque) << "the burst never overloaded the node";
+  EXPECT_GT(b.stiffness_shed + b.dropped_torque, a.stiffness_shed + a.dropped_torque)
+      << "the burst never overloaded the node";
   // Memory: the live heap once the queues have drained. The resident set is no measure here: the
   // allocator keeps the pages of a queue that was full once (+30 MB seen under two CPU hogs, when
   // the stalled generator left 10000 answers queued). The live heap rises once, with the deepest

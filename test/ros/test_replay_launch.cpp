@@ -1,8 +1,8 @@
 // replay.launch end to end: rosbag play --clock -l feeds the bundled torque-ripple bag (2 s, stamps
 // from 2026-01-01T00:00:00, drivetrain_rig_sim) into the node on sim time. The outputs carry the
 // bag's stamps (not wall time), and when the loop restarts the ROS clock jumps back: the node must
-// reset (clock_jump_resets, or stamp_jump_resets when the loop's first messages beat the clock jump,
-// on /diagnostics) and then answer the replayed inputs again.
+// reset (clock_jump_resets, or stamp_jump_resets when the loop's first messages beat the clock
+// jump, on /diagnostics) and then answer the replayed inputs again.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -43,12 +43,19 @@ TEST(ReplayLaunch, OutputsCarryBagStampsAndTheLoopResets) {
   ros::NodeHandle nh;
   Outputs out;
   std::mutex mutex;
-  auto te_sub = nh.subscribe<drivetrain_stiffness::TransmissionError>("transmission_error", 100000,
-      [&](const drivetrain_stiffness::TransmissionError::ConstPtr& m) { std::lock_guard<std::mutex> l(mutex); out.te.push_back(*m); });
-  auto st_sub = nh.subscribe<drivetrain_stiffness::Stiffness>("stiffness", 100000,
-      [&](const drivetrain_stiffness::Stiffness::ConstPtr& m) { std::lock_guard<std::mutex> l(mutex); out.stiffness.push_back(*m); });
-  auto diag_sub = nh.subscribe<diagnostic_msgs::DiagnosticArray>("/diagnostics", 100,
-      [&](const diagnostic_msgs::DiagnosticArray::ConstPtr& a) {
+  auto te_sub = nh.subscribe<drivetrain_stiffness::TransmissionError>(
+      "transmission_error", 100000,
+      [&](const drivetrain_stiffness::TransmissionError::ConstPtr& m) {
+        std::lock_guard<std::mutex> l(mutex);
+        out.te.push_back(*m);
+      });
+  auto st_sub = nh.subscribe<drivetrain_stiffness::Stiffness>(
+      "stiffness", 100000, [&](const drivetrain_stiffness::Stiffness::ConstPtr& m) {
+        std::lock_guard<std::mutex> l(mutex);
+        out.stiffness.push_back(*m);
+      });
+  auto diag_sub = nh.subscribe<diagnostic_msgs::DiagnosticArray>(
+      "/diagnostics", 100, [&](const diagnostic_msgs::DiagnosticArray::ConstPtr& a) {
         std::lock_guard<std::mutex> l(mutex);
         for (const auto& s : a->status)
           if (s.name.find("stiffness_estimator") != std::string::npos)
@@ -62,11 +69,21 @@ TEST(ReplayLaunch, OutputsCarryBagStampsAndTheLoopResets) {
     return it == out.diagnostics.end() ? -1L : std::stol(it->second);
   };
   // The first pass (1 s at rate 2 plus the start delay) and the loop's restart: the clock jump
-  // resets (the clock-jump rule), or, when the loop's first messages beat the /clock jump, the stamps do (source restarted).
-  ASSERT_TRUE(waitWall([&] { return counter("clock_jump_resets") + counter("stamp_jump_resets") >= 1; }, 60.0))
+  // resets (the clock-jump rule), or, when the loop's first messages beat the /clock jump, the
+  // stamps do (source restarted).
+  ASSERT_TRUE(waitWall(
+      [&] { return counter("clock_jump_resets") + counter("stamp_jump_resets") >= 1; }, 60.0))
       << "no reset when the bag looped";
-  const std::size_t te_at_reset = [&] { std::lock_guard<std::mutex> l(mutex); return out.te.size(); }();
-  ASSERT_TRUE(waitWall([&] { std::lock_guard<std::mutex> l(mutex); return out.te.size() > te_at_reset + 200; }, 30.0))
+  const std::size_t te_at_reset = [&] {
+    std::lock_guard<std::mutex> l(mutex);
+    return out.te.size();
+  }();
+  ASSERT_TRUE(waitWall(
+      [&] {
+        std::lock_guard<std::mutex> l(mutex);
+        return out.te.size() > te_at_reset + 200;
+      },
+      30.0))
       << "no transmission error after the reset";
   // A snapshot of what arrived, then the diagnostics are given time to catch up with it: a loop's
   // first samples can reach us before the next /diagnostics report counts that loop's reset (the
@@ -80,8 +97,10 @@ TEST(ReplayLaunch, OutputsCarryBagStampsAndTheLoopResets) {
     te = out.te;
   }
   int backwards = 0;
-  for (std::size_t i = 1; i < te.size(); ++i) backwards += te[i].header.stamp < te[i - 1].header.stamp ? 1 : 0;
-  waitWall([&] { return counter("clock_jump_resets") + counter("stamp_jump_resets") >= backwards; }, 10.0);
+  for (std::size_t i = 1; i < te.size(); ++i)
+    backwards += te[i].header.stamp < te[i - 1].header.stamp ? 1 : 0;
+  waitWall([&] { return counter("clock_jump_resets") + counter("stamp_jump_resets") >= backwards; },
+           10.0);
   spinner.stop();
   const long resets = counter("clock_jump_resets") + counter("stamp_jump_resets");
   const long invalid = counter("rejected_invalid_value");
@@ -105,7 +124,8 @@ TEST(ReplayLaunch, OutputsCarryBagStampsAndTheLoopResets) {
   EXPECT_GE(backwards, 1);
   EXPECT_LE(backwards, resets);
   EXPECT_EQ(invalid, 0);
-  std::cout << "replay.launch: " << stiffness.size() << " stiffness, " << te.size() << " transmission_error; "
+  std::cout << "replay.launch: " << stiffness.size() << " stiffness, " << te.size()
+            << " transmission_error; "
             << "clock_jump_resets " << out.diagnostics["clock_jump_resets"] << ", out of order "
             << out.diagnostics["rejected_out_of_order"] << std::endl;
 }

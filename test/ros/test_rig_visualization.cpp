@@ -33,10 +33,12 @@ std::string settingsRefusal(double exaggeration) {
 }  // namespace
 
 TEST(RigVisualizer, ExaggerationFollowsTheSettingsRule) {
-  const RigConfig rig = loadRigFile(std::string(DRIVETRAIN_SOURCE_DIR) + "/config/gearboxes/seed_servo.yaml");
+  const RigConfig rig =
+      loadRigFile(std::string(DRIVETRAIN_SOURCE_DIR) + "/config/gearboxes/seed_servo.yaml");
   const AntiBacklashMesh mesh(rig);
   const auto make = [&](double exaggeration) {
-    return RigVisualizer(mesh.geometry(), rig.gears.face_width, 17.7, VisualizationFrames{}, exaggeration);
+    return RigVisualizer(mesh.geometry(), rig.gears.face_width, 17.7, VisualizationFrames{},
+                         exaggeration);
   };
   RigVisualizer v = make(2e4);
   for (const double value : {0.999, 1.0000001e8, -1.0, 0.0, std::nan(""), HUGE_VAL}) {
@@ -73,28 +75,36 @@ TEST(RigVisualizer, FramesTurnAsTheGearsDo) {
   // The pinion frame at the angle given (the encoders', RigPipeline::encoderPinionAngle); the gear
   // the other way at z_p / z_g (seed 000 Table 1: 20 / 40), lagging by the torsional deflection
   // x = r_b1 theta_p - r_b2 theta_g (seed 000 eq 12) scaled for display: exaggeration x / r_b2.
-  const RigConfig rig = loadRigFile(std::string(DRIVETRAIN_SOURCE_DIR) + "/config/gearboxes/seed_servo.yaml");
+  const RigConfig rig =
+      loadRigFile(std::string(DRIVETRAIN_SOURCE_DIR) + "/config/gearboxes/seed_servo.yaml");
   const AntiBacklashMesh mesh(rig);
   const double exaggeration = 2e4;
-  const RigVisualizer v(mesh.geometry(), rig.gears.face_width, 17.7, VisualizationFrames{}, exaggeration);
+  const RigVisualizer v(mesh.geometry(), rig.gears.face_width, 17.7, VisualizationFrames{},
+                        exaggeration);
   DynamicsSample s;
   s.state.setZero();
   for (const double angle : {0.0, 0.7, -2.5, 3.0}) {
     const auto tf = v.transforms(ros::Time(1.0), s, angle);
     ASSERT_EQ(tf.size(), 2u);
-    EXPECT_NEAR(std::remainder(yaw(tf[0].transform.rotation) - angle, 2.0 * M_PI), 0.0, 1e-12) << angle;
-    EXPECT_NEAR(std::remainder(yaw(tf[1].transform.rotation) + 20.0 / 40.0 * angle, 2.0 * M_PI), 0.0, 1e-12) << angle;
+    EXPECT_NEAR(std::remainder(yaw(tf[0].transform.rotation) - angle, 2.0 * M_PI), 0.0, 1e-12)
+        << angle;
+    EXPECT_NEAR(std::remainder(yaw(tf[1].transform.rotation) + 20.0 / 40.0 * angle, 2.0 * M_PI),
+                0.0, 1e-12)
+        << angle;
   }
   s.state[2] = 1e-6;  // [m] the pinion 1 um ahead along the line of action
   const auto tf = v.transforms(ros::Time(1.0), s, 0.0);
-  EXPECT_NEAR(yaw(tf[1].transform.rotation), exaggeration * 1e-6 / mesh.geometry().baseRadius(1), 1e-12);
-  EXPECT_EQ(yaw(tf[0].transform.rotation), 0.0) << "the deflection turns the gear's frame, not the pinion's";
+  EXPECT_NEAR(yaw(tf[1].transform.rotation), exaggeration * 1e-6 / mesh.geometry().baseRadius(1),
+              1e-12);
+  EXPECT_EQ(yaw(tf[0].transform.rotation), 0.0)
+      << "the deflection turns the gear's frame, not the pinion's";
 }
 
 TEST(MessageConversion, JointStatesAreReadByTheConfiguredNames) {
   // The pinion's position and velocity and the gear's position by name, in any order; velocity
-  // may be absent (then differentiated: the encoders rule), the gear may be absent (no ratio check); without
-  // the pinion's position the message is refused, saying why (counted by the pipeline).
+  // may be absent (then differentiated: the encoders rule), the gear may be absent (no ratio
+  // check); without the pinion's position the message is refused, saying why (counted by the
+  // pipeline).
   const JointNames names{"motor", "output"};
   sensor_msgs::JointState m;
   m.name = {"output", "spindle", "motor"};

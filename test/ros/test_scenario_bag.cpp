@@ -1,8 +1,9 @@
 // drivetrain_rig_sim's bag (src/tools/scenario_bag.hpp) read back by rosbag::View: the encoders'
-// joint_states are sensor_msgs/JointState with the type's md5sum and definition (ros::message_traits),
-// names [pinion, gear], positions equal to the scenario's readings and within half a count of the
-// run-up's closed form theta = s1 t^2 / (2 T), velocities or none, no effort, an empty frame_id,
-// header.seq from 0 and stamps = record times = epoch + t; the torque and preload beside them.
+// joint_states are sensor_msgs/JointState with the type's md5sum and definition
+// (ros::message_traits), names [pinion, gear], positions equal to the scenario's readings and
+// within half a count of the run-up's closed form theta = s1 t^2 / (2 T), velocities or none, no
+// effort, an empty frame_id, header.seq from 0 and stamps = record times = epoch + t; the torque
+// and preload beside them.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -29,14 +30,17 @@ using namespace drivetrain_stiffness;
 namespace {
 
 const RigConfig& rig() {  // z_p = 20, z_g = 40 (seed 000 Table 1)
-  static const RigConfig r = loadRigFile(std::string(DRIVETRAIN_SOURCE_DIR) + "/config/gearboxes/seed_servo.yaml");
+  static const RigConfig r =
+      loadRigFile(std::string(DRIVETRAIN_SOURCE_DIR) + "/config/gearboxes/seed_servo.yaml");
   return r;
 }
 
 constexpr double kCount = kTwoPi / 1048576.0;  // one count of a 2^20-count encoder [rad]
 
 std::string tempBag(const std::string& name) {
-  return (std::filesystem::temp_directory_path() / ("scenario_bag_test_" + std::to_string(::getpid()) + "_" + name + ".bag")).string();
+  return (std::filesystem::temp_directory_path() /
+          ("scenario_bag_test_" + std::to_string(::getpid()) + "_" + name + ".bag"))
+      .string();
 }
 
 std::vector<RigEvent> scenario(const std::string& name, double duration, bool velocity = true) {
@@ -73,8 +77,10 @@ TEST(ScenarioBag, JointStatesAreReadableByRosbagWithTheRightNamesAndPositions) {
   std::size_t k = 0;
   for (const rosbag::MessageInstance& m : view) {
     EXPECT_EQ(m.getDataType(), "sensor_msgs/JointState");
-    EXPECT_EQ(m.getMD5Sum(), std::string(ros::message_traits::MD5Sum<sensor_msgs::JointState>::value()));
-    EXPECT_EQ(m.getMessageDefinition(), std::string(ros::message_traits::Definition<sensor_msgs::JointState>::value()));
+    EXPECT_EQ(m.getMD5Sum(),
+              std::string(ros::message_traits::MD5Sum<sensor_msgs::JointState>::value()));
+    EXPECT_EQ(m.getMessageDefinition(),
+              std::string(ros::message_traits::Definition<sensor_msgs::JointState>::value()));
     const sensor_msgs::JointState::ConstPtr j = m.instantiate<sensor_msgs::JointState>();
     ASSERT_TRUE(j);
     const double t = k * 1e-3;
@@ -135,7 +141,8 @@ TEST(ScenarioBag, JointRateZeroWritesNoJointStatesConnection) {
   spec.name = "torque_ripple";
   spec.duration = 0.1;
   spec.joint_rate = 0.0;
-  const ScenarioBagCounts n = writeScenarioBag(makeScenario(rig(), spec), ScenarioBagOptions{}, path);
+  const ScenarioBagCounts n =
+      writeScenarioBag(makeScenario(rig(), spec), ScenarioBagOptions{}, path);
   EXPECT_EQ(n.joint_states, 0u);
   rosbag::Bag bag(path, rosbag::bagmode::Read);
   rosbag::View all(bag);

@@ -26,19 +26,30 @@ class NodeTest : public testing::Test {
     ros::NodeHandle pnh("~");
     ASSERT_TRUE(pnh.getParam("gearbox_config", path_));
     reference_ = std::make_unique<StiffnessEstimator>(loadRigFile(path_));
-    stiffness_sub_ = nh_.subscribe<Stiffness>("stiffness", 100, [this](const Stiffness::ConstPtr& m) { received_.push_back(*m); });
-    diag_sub_ = nh_.subscribe<diagnostic_msgs::DiagnosticArray>("/diagnostics", 100,
-        [this](const diagnostic_msgs::DiagnosticArray::ConstPtr& m) { diagnostics_.push_back(*m); });
-    spectrum_sub_ = nh_.subscribe<SpectralPeaks>("te_spectrum", 100, [this](const SpectralPeaks::ConstPtr& m) { spectra_.push_back(*m); });
-    resonance_sub_ = nh_.subscribe<Resonance>("resonance", 100, [this](const Resonance::ConstPtr& m) { resonance_.push_back(*m); });
-    te_sub_ = nh_.subscribe<TransmissionError>("transmission_error", 10000,
+    stiffness_sub_ = nh_.subscribe<Stiffness>(
+        "stiffness", 100, [this](const Stiffness::ConstPtr& m) { received_.push_back(*m); });
+    diag_sub_ = nh_.subscribe<diagnostic_msgs::DiagnosticArray>(
+        "/diagnostics", 100, [this](const diagnostic_msgs::DiagnosticArray::ConstPtr& m) {
+          diagnostics_.push_back(*m);
+        });
+    spectrum_sub_ = nh_.subscribe<SpectralPeaks>(
+        "te_spectrum", 100, [this](const SpectralPeaks::ConstPtr& m) { spectra_.push_back(*m); });
+    resonance_sub_ = nh_.subscribe<Resonance>(
+        "resonance", 100, [this](const Resonance::ConstPtr& m) { resonance_.push_back(*m); });
+    te_sub_ = nh_.subscribe<TransmissionError>(
+        "transmission_error", 10000,
         [this](const TransmissionError::ConstPtr& m) { te_.push_back(*m); });
-    mesh_period_sub_ = nh_.subscribe<MeshPeriodStats>("mesh_period_stats", 1000,
+    mesh_period_sub_ = nh_.subscribe<MeshPeriodStats>(
+        "mesh_period_stats", 1000,
         [this](const MeshPeriodStats::ConstPtr& m) { mesh_periods_.push_back(*m); });
     torque_pub_ = nh_.advertise<geometry_msgs::WrenchStamped>("torque", 10);
     preload_pub_ = nh_.advertise<Preload>("preload", 10);
-    ASSERT_TRUE(waitFor([&] { return torque_pub_.getNumSubscribers() > 0 && preload_pub_.getNumSubscribers() > 0 &&
-                                     stiffness_sub_.getNumPublishers() > 0; }, 20.0));
+    ASSERT_TRUE(waitFor(
+        [&] {
+          return torque_pub_.getNumSubscribers() > 0 && preload_pub_.getNumSubscribers() > 0 &&
+                 stiffness_sub_.getNumPublishers() > 0;
+        },
+        20.0));
   }
 
   template <typename F>
@@ -78,7 +89,8 @@ class NodeTest : public testing::Test {
   // Expects exactly one new stiffness message, stamped `stamp`, equal to the reference estimate.
   void expectAnswer(double stamp, const StiffnessEstimate& expected) {
     const std::size_t before = received_.size();
-    ASSERT_TRUE(waitFor([&] { return received_.size() > before; }, 60.0)) << "no stiffness for stamp " << stamp;
+    ASSERT_TRUE(waitFor([&] { return received_.size() > before; }, 60.0))
+        << "no stiffness for stamp " << stamp;
     const Stiffness& s = received_.back();
     EXPECT_DOUBLE_EQ(s.header.stamp.toSec(), stamp);
     ASSERT_EQ(s.bearings.size(), expected.supports.size());
@@ -89,7 +101,8 @@ class NodeTest : public testing::Test {
       for (double v : s.bearings[i].stiffness_matrix) EXPECT_TRUE(std::isfinite(v));
     }
     EXPECT_NEAR(s.mesh_phase, expected.mesh.phase, 1e-9);
-    EXPECT_NEAR(s.mesh_stiffness, expected.mesh.current.composite, 1e-6 * expected.mesh.current.composite);
+    EXPECT_NEAR(s.mesh_stiffness, expected.mesh.current.composite,
+                1e-6 * expected.mesh.current.composite);
     EXPECT_NEAR(s.mesh_stiffness_mean, expected.mesh.mean, 1e-6 * expected.mesh.mean);
     EXPECT_TRUE(s.drive_flank_loaded);
     EXPECT_TRUE(s.back_flank_loaded);  // 0.5 N m is far inside the anti-backlash preload window
@@ -98,13 +111,15 @@ class NodeTest : public testing::Test {
 
   // Waits for a diagnostics status whose key `key` reaches at least `count`.
   bool diagnosticCountAtLeast(const std::string& key, int count) {
-    return waitFor([&] {
-      for (const auto& array : diagnostics_)
-        for (const auto& status : array.status)
-          for (const auto& kv : status.values)
-            if (kv.key == key && std::stoi(kv.value) >= count) return true;
-      return false;
-    }, 60.0);
+    return waitFor(
+        [&] {
+          for (const auto& array : diagnostics_)
+            for (const auto& status : array.status)
+              for (const auto& kv : status.values)
+                if (kv.key == key && std::stoi(kv.value) >= count) return true;
+          return false;
+        },
+        60.0);
   }
 
   bool noMessageFor(double seconds) {
@@ -137,10 +152,12 @@ class NodeTest : public testing::Test {
 TEST_F(NodeTest, AnswersGoodInputAndSurvivesBadInput) {
   // 1. Preload then torque: the node's answer equals the core library's.
   preload_pub_.publish(preload(10.0, 1200.0, 800.0, 5e-6, 5e-6));
-  reference_->setPreloads({{"pinion_bearing", 1200.0, 800.0, 5e-6, 5e-6}, {"gear_bearing", 1200.0, 800.0, 5e-6, 5e-6}});
+  reference_->setPreloads(
+      {{"pinion_bearing", 1200.0, 800.0, 5e-6, 5e-6}, {"gear_bearing", 1200.0, 800.0, 5e-6, 5e-6}});
   expectAnswer(10.0, reference_->current());
   std::vector<std::array<double, 2>> stiffness_after_input = {shaftStiffness(*reference_)};
-  // The node's pinion angle is omega (t - t0), t0 = the first torque stamp, omega = ~pinion_speed_rpm.
+  // The node's pinion angle is omega (t - t0), t0 = the first torque stamp, omega =
+  // ~pinion_speed_rpm.
   const double omega = 1000.0 * 2 * M_PI / 60;
   sendTorque(0.5, 11.0);
   expectAnswer(11.0, reference_->setTorque(0.5, 0.0));
@@ -171,7 +188,8 @@ TEST_F(NodeTest, AnswersGoodInputAndSurvivesBadInput) {
   bool warned = false;
   for (const auto& array : diagnostics_)
     for (const auto& status : array.status)
-      warned |= status.level == diagnostic_msgs::DiagnosticStatus::WARN && status.message.find("rejected") != std::string::npos;
+      warned |= status.level == diagnostic_msgs::DiagnosticStatus::WARN &&
+                status.message.find("rejected") != std::string::npos;
   EXPECT_TRUE(warned);
 
   // 3. The next good input is answered correctly: state was not poisoned.
@@ -204,8 +222,12 @@ TEST_F(NodeTest, AnswersGoodInputAndSurvivesBadInput) {
   replay.advanceTo(13.0137, [&](const DynamicsSample& d) { expected.push_back(d); });
   ASSERT_EQ(expected.size(), te_.size());
   for (std::size_t i = 0; i < te_.size(); ++i) {
-    EXPECT_NEAR(te_[i].dynamic_te, expected[i].dynamic_te, 1e-12 * std::abs(expected[i].dynamic_te) + 1e-18) << i;
-    EXPECT_NEAR(te_[i].mesh_force, expected[i].mesh_force, 1e-9 * std::abs(expected[i].mesh_force) + 1e-12) << i;
+    EXPECT_NEAR(te_[i].dynamic_te, expected[i].dynamic_te,
+                1e-12 * std::abs(expected[i].dynamic_te) + 1e-18)
+        << i;
+    EXPECT_NEAR(te_[i].mesh_force, expected[i].mesh_force,
+                1e-9 * std::abs(expected[i].mesh_force) + 1e-12)
+        << i;
   }
   EXPECT_TRUE(diagnosticCountAtLeast("transmission_error_published", 2013));
   // Sliding spectrum of the predicted TE (1024-sample window, hop 256): updates after 1024, 1280,
@@ -214,7 +236,8 @@ TEST_F(NodeTest, AnswersGoodInputAndSurvivesBadInput) {
   ASSERT_TRUE(waitFor([&] { return spectra_.size() >= 4; }, 60.0)) << spectra_.size();
   EXPECT_EQ(spectra_.size(), 4u);
   bool mesh_peak = false;
-  for (double f : spectra_.back().frequencies_hz) mesh_peak |= std::abs(f - 1000.0 * 20 / 60) < spectra_.back().resolution_hz;
+  for (double f : spectra_.back().frequencies_hz)
+    mesh_peak |= std::abs(f - 1000.0 * 20 / 60) < spectra_.back().resolution_hz;
   EXPECT_TRUE(mesh_peak);
   // Per-mesh-period statistics: from the first sample on a tooth switch (11.003 s) blocks of 4
   // periods (12 samples, 12 ms) up to 13.013 s: 167 blocks; the mean mesh force T / r_b,p.
@@ -227,15 +250,17 @@ TEST_F(NodeTest, AnswersGoodInputAndSurvivesBadInput) {
     EXPECT_EQ(b.periods, 4u);
     EXPECT_EQ(b.samples, 12u);
     EXPECT_NEAR(b.mesh_frequency, 1000.0 * 20 / 60, 1e-3 * 1000.0 * 20 / 60);
-    EXPECT_TRUE(std::isfinite(b.te_mean) && std::isfinite(b.te_rms) && std::isfinite(b.mesh_force_rms));
+    EXPECT_TRUE(std::isfinite(b.te_mean) && std::isfinite(b.te_rms) &&
+                std::isfinite(b.mesh_force_rms));
     if (b.header.stamp.toSec() > 11.3) {
       EXPECT_NEAR(b.mesh_force_mean, mean_force, 1e-2 * mean_force) << i;
     }
   }
   EXPECT_TRUE(diagnosticCountAtLeast("mesh_period_stats_published", 167));
 
-  // 5. A gap beyond ~max_gap (5 s here) restarts the dynamics instead of integrating it: the stiffness
-  // answer still comes, no transmission_error sample is released, and the restart is counted.
+  // 5. A gap beyond ~max_gap (5 s here) restarts the dynamics instead of integrating it: the
+  // stiffness answer still comes, no transmission_error sample is released, and the restart is
+  // counted.
   const std::size_t te_before = te_.size();
   sendTorque(0.3, 23.5);
   expectAnswer(23.5, reference_->setTorque(0.3, omega * 12.5));

@@ -12,8 +12,12 @@ namespace drivetrain_stiffness {
 
 struct ReadingSink : PipelineSink {
   double sum = 0.0;
-  void stiffness(Stamp, const StiffnessEstimate& e, const CalibrationBands&) override { sum += e.mesh.current.composite; }
-  void transmissionError(Stamp, const DynamicsSample& s, const SampleContext&) override { sum += s.dynamic_te; }
+  void stiffness(Stamp, const StiffnessEstimate& e, const CalibrationBands&) override {
+    sum += e.mesh.current.composite;
+  }
+  void transmissionError(Stamp, const DynamicsSample& s, const SampleContext&) override {
+    sum += s.dynamic_te;
+  }
 };
 
 class RippleTorqueFeed {
@@ -24,7 +28,8 @@ class RippleTorqueFeed {
   void next(Backlog backlog = Backlog::kNone) {
     const double t = kInterval * static_cast<double>(k_);
     const double torque = 0.1 * (1.0 + 0.1 * std::sin(2.0 * M_PI * 100.0 * t));
-    pipeline_.torque(Stamp{kEpoch + 100000 * k_}, torque, sink_, {"/rig", static_cast<std::uint32_t>(k_), "pinion"}, backlog);
+    pipeline_.torque(Stamp{kEpoch + 100000 * k_}, torque, sink_,
+                     {"/rig", static_cast<std::uint32_t>(k_), "pinion"}, backlog);
     ++k_;
   }
   double checksum() const { return sink_.sum; }

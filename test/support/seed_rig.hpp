@@ -13,7 +13,8 @@ namespace drivetrain_stiffness::test {
 
 /// The seed gearbox, loaded once.
 inline const RigConfig& seedServo() {
-  static const RigConfig r = loadRigFile(std::string(DRIVETRAIN_SOURCE_DIR) + "/config/gearboxes/seed_servo.yaml");
+  static const RigConfig r =
+      loadRigFile(std::string(DRIVETRAIN_SOURCE_DIR) + "/config/gearboxes/seed_servo.yaml");
   return r;
 }
 

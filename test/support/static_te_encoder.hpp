@@ -19,7 +19,10 @@ class StaticTeEncoder {
   /// `loaded_torque` [N*m]: the only nonzero torque the readings will carry; `manufacturing` [m]:
   /// amplitude of a sine at the mesh frequency added at every torque.
   StaticTeEncoder(const RigConfig& rig, double loaded_torque, double manufacturing = 0.0)
-      : model_(rig), loaded_torque_(loaded_torque), manufacturing_(manufacturing), teeth_(rig.gears.teeth[0]) {
+      : model_(rig),
+        loaded_torque_(loaded_torque),
+        manufacturing_(manufacturing),
+        teeth_(rig.gears.teeth[0]) {
     p_ << 1.0, 1.0, 1.0, rig.anti_backlash.preload_torque, 0.0;
     const StiffnessEstimator supports(rig);
     model_.shaftDeflection(0.0, supports, zero_);
@@ -34,8 +37,9 @@ class StaticTeEncoder {
   /// loaded torque): x = r_b,p theta + r_b,g theta_g.
   double gearAngle(double theta, double torque) const {
     const double ph = phase(theta);
-    const double x = (torque == 0.0 ? 0.0 : model_.at(p_, ph, loaded_torque_, loaded_, 0.0, zero_)) +
-                     manufacturing_ * std::sin(kTwoPi * ph);
+    const double x =
+        (torque == 0.0 ? 0.0 : model_.at(p_, ph, loaded_torque_, loaded_, 0.0, zero_)) +
+        manufacturing_ * std::sin(kTwoPi * ph);
     return (x - model_.baseRadius()[0] * theta) / model_.baseRadius()[1];
   }
   /// The reading at pinion angle theta and speed w, angles reduced to a turn and, with `count` >

@@ -38,7 +38,17 @@ namespace drivetrain_stiffness {
 class StiffnessEstimator;
 
 /// Why the last window did or did not update the estimate.
-enum class WindowOutcome { kNone, kBaseline, kUpdated, kGated, kNoBaseline, kTooSlow, kNotQuasiStatic, kTooSparse, kIllConditioned };
+enum class WindowOutcome {
+  kNone,
+  kBaseline,
+  kUpdated,
+  kGated,
+  kNoBaseline,
+  kTooSlow,
+  kNotQuasiStatic,
+  kTooSparse,
+  kIllConditioned
+};
 constexpr int kWindowOutcomes = static_cast<int>(WindowOutcome::kIllConditioned) + 1;
 const char* toString(WindowOutcome outcome);
 
@@ -49,38 +59,46 @@ struct CalibrationEstimate {
   CalibrationVector prior_std = CalibrationVector::Zero();
   std::array<bool, kCalibrationSize> identified{};  ///< posterior std below half the prior's
   WindowOutcome outcome = WindowOutcome::kNone;
-  bool excited = false;      ///< the last window's excitation sufficed (Calibrator::excitation, a conditioned fit); `outcome` says whether it updated
-  bool baseline = false;     ///< a baseline exists
-  double nis = 0.0;          ///< normalised innovation squared of the last loaded window (3 dof)
+  bool excited = false;   ///< the last window's excitation sufficed (Calibrator::excitation, a
+                          ///< conditioned fit); `outcome` says whether it updated
+  bool baseline = false;  ///< a baseline exists
+  double nis = 0.0;       ///< normalised innovation squared of the last loaded window (3 dof)
   /// Per feature (mean TE, |C_1|, |C_2|): the model-error variance the windows show, as a multiple
   /// of the configured allowance (model_error_scale.hpp); the reported std and bands use it.
   FeatureVector model_error_scale = FeatureVector::Ones();
   std::uint64_t windows = 0, baseline_windows = 0, updates = 0, gated = 0, not_excited = 0;
   double window_torque = 0.0;  ///< [N·m] mean torque of the last window
   double window_speed = 0.0;   ///< [rad/s] mean pinion speed of the last window
-  FeatureVector measured = FeatureVector::Zero(), predicted = FeatureVector::Zero(), feature_std = FeatureVector::Zero();
-  double series_compliance = 0.0, series_compliance_std = 0.0;  ///< [m/N] mean TE / F at ~reference_torque
-  double mesh_stiffness = 0.0, mesh_stiffness_low = 0.0, mesh_stiffness_high = 0.0;  ///< [N/m] at the window torque, 95 %
-  std::array<double, 2> bearing_stiffness{}, bearing_stiffness_low{}, bearing_stiffness_high{};  ///< [N/m] per shaft
-  std::array<double, 3> natural_frequency{}, natural_frequency_low{}, natural_frequency_high{};  ///< [Hz]
+  FeatureVector measured = FeatureVector::Zero(), predicted = FeatureVector::Zero(),
+                feature_std = FeatureVector::Zero();
+  double series_compliance = 0.0,
+         series_compliance_std = 0.0;  ///< [m/N] mean TE / F at ~reference_torque
+  double mesh_stiffness = 0.0, mesh_stiffness_low = 0.0,
+         mesh_stiffness_high = 0.0;  ///< [N/m] at the window torque, 95 %
+  std::array<double, 2> bearing_stiffness{}, bearing_stiffness_low{},
+      bearing_stiffness_high{};  ///< [N/m] per shaft
+  std::array<double, 3> natural_frequency{}, natural_frequency_low{},
+      natural_frequency_high{};  ///< [Hz]
   double knee_torque = 0.0;  ///< [N·m] pinion torque where the back half lifts, at the estimate
 };
 
 /// A stretch of readings at a steady torque (the window rule's) that did not become a window: it
-/// was dropped when the filtered torque left its band or the readings broke off, or it is still open.
+/// was dropped when the filtered torque left its band or the readings broke off, or it is still
+/// open.
 struct SteadyStretch {
   long readings = 0;
   double duration = 0.0;  ///< [s] from its first reading to its last
-  double angle = 0.0;     ///< [rad] of pinion angle spanned (a window needs CalibrationProgress::window_angle)
-  double torque = 0.0;    ///< [N·m] mean held torque
-  double speed = 0.0;     ///< [rad/s] mean pinion speed
+  double angle =
+      0.0;  ///< [rad] of pinion angle spanned (a window needs CalibrationProgress::window_angle)
+  double torque = 0.0;  ///< [N·m] mean held torque
+  double speed = 0.0;   ///< [rad/s] mean pinion speed
 };
 
 /// What the calibration has seen, for saying why no window has updated it
 /// (Calibrator::waitingReason). Fixed size: kept on the per-reading path without allocation.
 struct CalibrationProgress {
-  std::uint64_t readings = 0;   ///< encoder readings with the gear angle given to the calibration
-  double window_angle = 0.0;    ///< [rad] of pinion angle a window spans: one gear turn
+  std::uint64_t readings = 0;  ///< encoder readings with the gear angle given to the calibration
+  double window_angle = 0.0;   ///< [rad] of pinion angle a window spans: one gear turn
   /// The longest stretch (by angle, then by time) that did not become a window, at a mean
   /// |torque| <= ~baseline_torque (unloaded) and above it (loaded). readings == 0: none seen.
   SteadyStretch unloaded, loaded;
@@ -101,12 +119,17 @@ struct CalibrationProgress {
 };
 
 /// The calibrated stiffness and natural frequencies at an operating point with their 95 % bounds
-/// (first-order propagation of the parameters' covariance), for the stiffness and resonance outputs.
+/// (first-order propagation of the parameters' covariance), for the stiffness and resonance
+/// outputs.
 struct CalibrationBands {
-  bool calibrated = false;  ///< at least one window updated the parameters (else: the prior's bounds)
-  double mesh_stiffness = 0.0, mesh_stiffness_low = 0.0, mesh_stiffness_high = 0.0;  ///< [N/m] period mean
-  std::array<double, 2> bearing_stiffness{}, bearing_stiffness_low{}, bearing_stiffness_high{};  ///< [N/m] per shaft
-  std::array<double, 3> natural_frequency{}, natural_frequency_low{}, natural_frequency_high{};  ///< [Hz] (with_modes)
+  bool calibrated =
+      false;  ///< at least one window updated the parameters (else: the prior's bounds)
+  double mesh_stiffness = 0.0, mesh_stiffness_low = 0.0,
+         mesh_stiffness_high = 0.0;  ///< [N/m] period mean
+  std::array<double, 2> bearing_stiffness{}, bearing_stiffness_low{},
+      bearing_stiffness_high{};  ///< [N/m] per shaft
+  std::array<double, 3> natural_frequency{}, natural_frequency_low{},
+      natural_frequency_high{};  ///< [Hz] (with_modes)
 };
 
 /// One processed reading: measured TE with the baseline and the shaft orders removed, and the
@@ -124,7 +147,8 @@ class Calibrator {
   /// if given, is the rig's own mesh table (AntiBacklashMesh(rig), read only, shared with the
   /// stiffness estimator), which the static TE model uses instead of building its own when it
   /// holds the drawing's stiffness (StaticTeModel).
-  explicit Calibrator(std::shared_ptr<const RigConfig> rig, std::shared_ptr<const AntiBacklashMesh> mesh = nullptr);
+  explicit Calibrator(std::shared_ptr<const RigConfig> rig,
+                      std::shared_ptr<const AntiBacklashMesh> mesh = nullptr);
   /// The same on a copy of `rig`.
   explicit Calibrator(const RigConfig& rig);
 
@@ -173,8 +197,9 @@ class Calibrator {
   bool inBand(double torque) const;
   void outputs(double torque, const StiffnessEstimator& supports);
   /// sqrt(g' P g) of a scalar function of the parameters, g by central differences at the estimate
-  /// (a template, not std::function: a capturing lambda would allocate on the per-window path), over
-  /// the parameters whose bits (1 << index) are set in depends_on (the others' g_i are exactly 0).
+  /// (a template, not std::function: a capturing lambda would allocate on the per-window path),
+  /// over the parameters whose bits (1 << index) are set in depends_on (the others' g_i are exactly
+  /// 0).
   template <typename F>
   double spreadOf(F&& f, std::uint32_t depends_on = ~0u) const;
   FeatureVector predict(const CalibrationVector& p, double torque) const;
@@ -185,7 +210,8 @@ class Calibrator {
   OrderRegression regression_;
   int teeth_[2] = {0, 0};
   double lattice_ = 0.0;  ///< [m] the TE's ambiguity from the encoders' whole turns
-  double gear_turn_ = 0.0;  ///< [rad] of pinion angle a window spans: one gear turn (at least one pinion turn)
+  double gear_turn_ =
+      0.0;  ///< [rad] of pinion angle a window spans: one gear turn (at least one pinion turn)
 
   // The filter's state: the parameters with each bearing scale s as its compliance factor c = 1/s.
   // The mean TE is linear in c (u/s = u c), so the direction the encoders cannot see (the pinion's
@@ -193,12 +219,14 @@ class Calibrator {
   // updates move both factors alike and leave that direction at its prior. With s itself the
   // linearisation at s_p != s_g leaks into it and the two scales drift apart (measured: 0.65 and
   // 0.93 for a truth of 0.74 and 0.85).
-  CalibrationVector state_ = CalibrationVector::Zero(), state_prior_std_ = CalibrationVector::Zero();
+  CalibrationVector state_ = CalibrationVector::Zero(),
+                    state_prior_std_ = CalibrationVector::Zero();
   /// The drawing's spread (CalibrationPrior::reference) in the state's coordinates: what
   /// `identified` and the drift are judged against.
   CalibrationVector state_reference_std_ = CalibrationVector::Zero();
   CalibrationMatrix state_covariance_ = CalibrationMatrix::Zero();
-  CalibrationMatrix covariance_ = CalibrationMatrix::Zero();  ///< of the parameters (scales), by linearisation
+  CalibrationMatrix covariance_ =
+      CalibrationMatrix::Zero();  ///< of the parameters (scales), by linearisation
   /// The estimate's covariance under the model error the windows show (state coordinates); the
   /// filter's own state_covariance_ keeps the configured allowance and drives the gains.
   ModelErrorScale model_error_;

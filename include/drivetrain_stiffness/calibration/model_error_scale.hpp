@@ -55,8 +55,8 @@ class ModelErrorScale {
   FeatureVector innovationVariance(const FeatureRows& H, const FeatureVector& noise) const;
   /// One accepted window: its innovation, the variance above for it (before the update), N and M
   /// (diagonals), the gain and the Jacobian the update used (state coordinates).
-  void update(const FeatureVector& nu, const FeatureVector& variance, const FeatureVector& noise, const FeatureVector& model,
-              const Gain& K, const FeatureRows& H);
+  void update(const FeatureVector& nu, const FeatureVector& variance, const FeatureVector& noise,
+              const FeatureVector& model, const Gain& K, const FeatureRows& H);
   /// c per feature (1 before kMinWindows windows).
   FeatureVector scale() const;
   /// P_true at max(scale(), min_scale) per feature: the calibrator passes 1 (bands only widen).
@@ -65,8 +65,8 @@ class ModelErrorScale {
  private:
   static double gridValue(int k);
   std::array<std::array<double, kGrid>, kFeatureSize> score_{};
-  CalibrationMatrix noise_part_ = CalibrationMatrix::Zero();                 ///< P_N (the prior included)
-  std::array<CalibrationMatrix, kFeatureSize> model_part_{};                 ///< P_Mj
+  CalibrationMatrix noise_part_ = CalibrationMatrix::Zero();  ///< P_N (the prior included)
+  std::array<CalibrationMatrix, kFeatureSize> model_part_{};  ///< P_Mj
   std::array<std::uint64_t, kFeatureSize> scored_{};  ///< windows with an allowance, per feature
   std::uint64_t windows_ = 0;
 };

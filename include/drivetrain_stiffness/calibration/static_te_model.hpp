@@ -1,20 +1,22 @@
 // The quasi-static transmission error the rig's encoders see, as a function of the calibrated
 // parameters (docs/calibration.md, "What the encoders see"). With the 3-DOF model of seed 000
 // section 3 at rest under a mesh force F (docs/model.md), the encoder TE along the line of action,
-//   x = r_b,p theta_p + r_b,g theta_g   (joint_states angles; the gear's falls when the pinion's rises)
+//   x = r_b,p theta_p + r_b,g theta_g   (joint_states angles; the gear's falls when the pinion's
+//   rises)
 // is the model's torsional coordinate x = delta - x_p + x_g + e, with
 //  - delta the mesh deflection of the scissor gear (anti_backlash_mesh.hpp, docs/model.md):
 //      both flanks:  delta = F / (k1 + k_c)       for -F_p (1 + k_c/k1) <= F <= F_p (1 + k1/k_c)
 //      drive only:   delta = (F - F_p) / k1        above (the back half g2 has lifted)
-//      back only:    delta = (F + F_p) / k_c       below (the reversed load runs through the spring)
+//      back only:    delta = (F + F_p) / k_c       below (the reversed load runs through the
+//      spring)
 //    with k1 = s_m k1', k2 = s_m k2', k_c = k_te k2 / (k_te + k2), F_p = T_p / r_b,gear;
 //  - -x_p + x_g the shafts' displacements along the line of action, from each support's exact
 //    static solution (the secant u(F_0 + |F|) - u(F_0), not F / k_tangent: bearing.md, last
 //    section), weighted by the support's mesh_load_share (the lever rule of a rigid shaft), divided
 //    by the shaft's scale and signed with F;
 //  - e the manufacturing TE, which does not depend on load and leaves with the baseline.
-// The mesh period is integrated exactly between the switching phases (the stiffness jumps there), so
-// the mean and the mesh harmonics carry no sampling error from the steps.
+// The mesh period is integrated exactly between the switching phases (the stiffness jumps there),
+// so the mean and the mesh harmonics carry no sampling error from the steps.
 #pragma once
 
 #include <array>
@@ -37,7 +39,14 @@ namespace drivetrain_stiffness {
 class StiffnessEstimator;
 
 /// The calibrated parameters, in this order.
-enum CalibrationIndex { kMeshScale = 0, kPinionBearingScale, kGearBearingScale, kPreloadTorque, kTeOffset, kCalibrationSize };
+enum CalibrationIndex {
+  kMeshScale = 0,
+  kPinionBearingScale,
+  kGearBearingScale,
+  kPreloadTorque,
+  kTeOffset,
+  kCalibrationSize
+};
 using CalibrationVector = Eigen::Matrix<double, kCalibrationSize, 1>;
 using CalibrationMatrix = Eigen::Matrix<double, kCalibrationSize, kCalibrationSize>;
 /// Field names of the parameters (message fields, CSV columns, YAML keys of the calibration block).
@@ -51,11 +60,13 @@ using FeatureVector = Eigen::Matrix<double, kFeatureSize, 1>;
 
 class StaticTeModel {
  public:
-  /// Tabulates the drawing's tooth stiffness (scale 1) over one mesh period. Throws InvalidInput for
-  /// an invalid rig. `rig_mesh`, if given, must be the rig's own mesh table (AntiBacklashMesh(rig):
-  /// its gears, anti_backlash, mesh model and samples); when its mesh.stiffness_scale is 1 it is the
-  /// drawing's table and is used read only (one table per rig) instead of a copy built here.
-  explicit StaticTeModel(const RigConfig& rig, std::shared_ptr<const AntiBacklashMesh> rig_mesh = nullptr);
+  /// Tabulates the drawing's tooth stiffness (scale 1) over one mesh period. Throws InvalidInput
+  /// for an invalid rig. `rig_mesh`, if given, must be the rig's own mesh table
+  /// (AntiBacklashMesh(rig): its gears, anti_backlash, mesh model and samples); when its
+  /// mesh.stiffness_scale is 1 it is the drawing's table and is used read only (one table per rig)
+  /// instead of a copy built here.
+  explicit StaticTeModel(const RigConfig& rig,
+                         std::shared_ptr<const AntiBacklashMesh> rig_mesh = nullptr);
   /// The table of the drawing's tooth stiffness this model reads (shared or its own).
   const AntiBacklashMesh& unitMesh() const { return *unit_; }
 
@@ -63,22 +74,25 @@ class StaticTeModel {
   /// supports' exact static solutions at their current settings in `supports`, at scale 1 (divide
   /// by the shaft's scale), signed with the torque: x_g - x_p split as {-x_p, x_g} [m].
   /// Allocation-free after the first call for the same supports.
-  void shaftDeflection(double torque, const StiffnessEstimator& supports, std::array<double, 2>& out);
+  void shaftDeflection(double torque, const StiffnessEstimator& supports,
+                       std::array<double, 2>& out);
 
   /// The period mean and the complex mesh harmonics C_k = 2 <x e^{-i 2 pi k phase}> of the encoder
   /// TE at pinion torque `torque` for parameters `p`, without e, with shaft deflections `shafts`
   /// (shaftDeflection at the same torque, scale 1) and without the TE offset.
-  void waveform(const CalibrationVector& p, double torque, const std::array<double, 2>& shafts, double& mean,
-                std::array<std::complex<double>, kFeatureHarmonics>& harmonics) const;
+  void waveform(const CalibrationVector& p, double torque, const std::array<double, 2>& shafts,
+                double& mean, std::array<std::complex<double>, kFeatureHarmonics>& harmonics) const;
   /// The mesh deflection delta at grid point j (flank state from F).
   double meshDeflection(const CalibrationVector& p, double mesh_force, int j) const;
   /// Features at `torque` against the baseline at `baseline_torque` (see FeatureVector).
-  FeatureVector features(const CalibrationVector& p, double torque, const std::array<double, 2>& shafts,
-                         double baseline_torque, const std::array<double, 2>& baseline_shafts) const;
+  FeatureVector features(const CalibrationVector& p, double torque,
+                         const std::array<double, 2>& shafts, double baseline_torque,
+                         const std::array<double, 2>& baseline_shafts) const;
   /// The encoder TE at mesh phase `phase` minus the baseline's, offset included (the per-reading
   /// prediction the measured TE is compared with).
-  double at(const CalibrationVector& p, double phase, double torque, const std::array<double, 2>& shafts,
-            double baseline_torque, const std::array<double, 2>& baseline_shafts) const;
+  double at(const CalibrationVector& p, double phase, double torque,
+            const std::array<double, 2>& shafts, double baseline_torque,
+            const std::array<double, 2>& baseline_shafts) const;
   /// Phase bins of a window's readings (kPhaseBins per mesh period): how often the encoder sampled
   /// each phase. Readings at a fixed rate often hit the same few phases every period (5 kHz on a
   /// 40 Hz mesh: 125 phases), and the mesh stiffness jumps at the switching phases, so the sampled
@@ -120,8 +134,9 @@ class StaticTeModel {
   /// Fills `out` from a window's histogram (`count` readings in it).
   void prepare(const PhaseHistogram& histogram, long count, SampledPhases& out) const;
   /// features() as the window's readings sample and fit the mesh period.
-  FeatureVector sampledFeatures(const CalibrationVector& p, double torque, const std::array<double, 2>& shafts,
-                                double baseline_torque, const std::array<double, 2>& baseline_shafts,
+  FeatureVector sampledFeatures(const CalibrationVector& p, double torque,
+                                const std::array<double, 2>& shafts, double baseline_torque,
+                                const std::array<double, 2>& baseline_shafts,
                                 const SampledPhases& sampled) const;
 
   /// Whether `phase` lies within `guard` (fraction of a period) of a switching phase, where the TE
@@ -141,13 +156,14 @@ class StaticTeModel {
 
  private:
   struct GridPoint {
-    double weight = 0.0;  ///< share of the period
+    double weight = 0.0;        ///< share of the period
     double k1 = 0.0, k2 = 0.0;  ///< tooth stiffness at scale 1 [N/m]
     std::array<std::complex<double>, kFeatureHarmonics> basis;  ///< 2 e^{-i 2 pi k phase}
     double phase = 0.0;
   };
   std::vector<GridPoint> grid_;
-  std::shared_ptr<const AntiBacklashMesh> unit_;  ///< the drawing's mesh (scale 1): k1', k2' at any phase
+  std::shared_ptr<const AntiBacklashMesh>
+      unit_;                      ///< the drawing's mesh (scale 1): k1', k2' at any phase
   std::vector<double> switches_;  ///< switching phases in [0, 1)
   /// The flank state at tooth stiffness k1', k2' (scale 1) for p and F: k1, k_c, F_p and the
   /// contact by AntiBacklashMesh's criterion.
@@ -184,11 +200,12 @@ class StaticTeModel {
   /// -F_p (1 + k_c/k1). Infinite where the point never changes state on that side.
   struct FlankPoint {
     double k1 = 0.0, kc = 0.0;
-    double above = std::numeric_limits<double>::infinity(), below = -std::numeric_limits<double>::infinity();
+    double above = std::numeric_limits<double>::infinity(),
+           below = -std::numeric_limits<double>::infinity();
   };
   struct BothFlankMean {
-    double scale = std::numeric_limits<double>::quiet_NaN(), preload = 0.0, mean = 0.0, force_low = 0.0,
-           force_high = -1.0;
+    double scale = std::numeric_limits<double>::quiet_NaN(), preload = 0.0, mean = 0.0,
+           force_low = 0.0, force_high = -1.0;
     double fp = 0.0;  ///< F_p [N] at this entry's preload torque
     /// The grid's flank stiffnesses at this entry's parameters: meanMeshStiffness at a force
     /// outside [force_low, force_high] (above or near the knee) reads its flank states from them.

@@ -24,9 +24,9 @@ namespace drivetrain_stiffness {
 struct RigConfig;
 
 struct AntiBacklashSpec {
-  double spring_stiffness = 0.0;   ///< k_te along the line of action [N/m] (seed 000 Table 1: 1e4 N/mm);
-                                   ///< 0 = an ordinary gear (drive flank only)
-  double preload_torque = 0.0;     ///< T_p about the gear axis [N·m] (seed 000 Table 1: 1000 N·mm)
+  /// k_te along the line of action [N/m] (seed 000 Table 1: 1e4 N/mm); 0 = an ordinary gear
+  double spring_stiffness = 0.0;
+  double preload_torque = 0.0;  ///< T_p about the gear axis [N·m] (seed 000 Table 1: 1000 N·mm)
   double loaded_gear_face_width = 0.0;  ///< face width of g2 [m]; 0 = the pair's face width
 };
 /// The spec's own checks (InvalidInput naming anti_backlash.<key>), also run by the YAML loader.
@@ -36,10 +36,10 @@ enum class FlankContact { kBoth, kDriveOnly, kBackOnly };
 const char* toString(FlankContact contact);
 
 struct CompositeMesh {
-  double k1 = 0.0;          ///< drive flank (pinion-g1) [N/m]
-  double k2 = 0.0;          ///< back flank (pinion-g2) [N/m]
-  double k_chain = 0.0;     ///< k_te k2 / (k_te + k2) [N/m]
-  double composite = 0.0;   ///< stiffness of the mesh for this flank state [N/m]
+  double k1 = 0.0;         ///< drive flank (pinion-g1) [N/m]
+  double k2 = 0.0;         ///< back flank (pinion-g2) [N/m]
+  double k_chain = 0.0;    ///< k_te k2 / (k_te + k2) [N/m]
+  double composite = 0.0;  ///< stiffness of the mesh for this flank state [N/m]
   FlankContact contact = FlankContact::kBoth;
   int drive_pairs = 0, back_pairs = 0;
 };
@@ -49,8 +49,8 @@ class AntiBacklashMesh {
   /// Builds the drive and back tables (potential-energy etc. per `model`) with `samples` points.
   /// `stiffness_scale` multiplies every tooth pair's stiffness (k1 and k2, not the spring k_te):
   /// the rig's `mesh.stiffness_scale`, 1 for the drawing's gear (docs/calibration.md).
-  AntiBacklashMesh(const GearPairSpec& gears, const AntiBacklashSpec& spec, MeshStiffnessModel model, int samples = 256,
-                   double stiffness_scale = 1.0);
+  AntiBacklashMesh(const GearPairSpec& gears, const AntiBacklashSpec& spec,
+                   MeshStiffnessModel model, int samples = 256, double stiffness_scale = 1.0);
   /// The same for a rig: its gears, anti_backlash, mesh model, samples and stiffness scale.
   explicit AntiBacklashMesh(const RigConfig& rig);
   double stiffnessScale() const { return scale_; }
@@ -70,7 +70,8 @@ class AntiBacklashMesh {
     return flankContact(mesh_force, k1, k_chain, preload_force_);
   }
   /// The same criterion at preload force F_p [N] (the calibration's estimated T_p / r_b,gear).
-  static FlankContact flankContact(double mesh_force, double k1, double k_chain, double preload_force);
+  static FlankContact flankContact(double mesh_force, double k1, double k_chain,
+                                   double preload_force);
   /// Composite stiffness at mesh phase `phase` in [0, 1) under mesh force F_m [N], from the phase
   /// table: segments between the exact switching phases of both flanks, each sampled uniformly, so
   /// the single/double steps stay sharp and the lookup needs no division.

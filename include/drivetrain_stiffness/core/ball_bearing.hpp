@@ -38,32 +38,34 @@ const char* toString(BearingType type);
 
 /// Dimensions and materials of the fitted parts; only needed when an interference is applied.
 struct FitGeometry {
-  double bore_diameter = 0.0;                ///< d [m]
-  double outside_diameter = 0.0;             ///< D [m]
-  double inner_raceway_diameter = 0.0;       ///< d_i [m]
-  double outer_raceway_diameter = 0.0;       ///< d_o [m]
-  double shaft_bore_diameter = 0.0;          ///< [m], 0 = solid shaft
+  double bore_diameter = 0.0;           ///< d [m]
+  double outside_diameter = 0.0;        ///< D [m]
+  double inner_raceway_diameter = 0.0;  ///< d_i [m]
+  double outer_raceway_diameter = 0.0;  ///< d_o [m]
+  double shaft_bore_diameter = 0.0;     ///< [m], 0 = solid shaft
   double housing_outside_diameter = std::numeric_limits<double>::infinity();  ///< [m]
-  ElasticMaterial shaft;                     ///< defaults to the ring material when not given
+  ElasticMaterial shaft;  ///< defaults to the ring material when not given
   ElasticMaterial housing;
 };
 
 /// Everything that defines one bearing. Exactly one of diametral_clearance / contact_angle is set.
 struct BallBearingSpec {
   BearingType type = BearingType::kAngularContact;
-  int balls = 0;                              ///< Z
-  double ball_diameter = 0.0;                 ///< D [m]
-  double pitch_diameter = 0.0;                ///< d_m [m]
-  double inner_groove_conformity = 0.0;       ///< f_i = r_i / D, > 0.5
-  double outer_groove_conformity = 0.0;       ///< f_o = r_o / D, > 0.5
-  std::optional<double> diametral_clearance;  ///< unmounted Pd [m] (may be negative: radial preload)
-  std::optional<double> contact_angle;        ///< unmounted free contact angle [rad]
-  double width = 0.0;                         ///< B [m], ball-plane spacing of a duplex pair (optional)
-  ElasticMaterial material;                   ///< balls and rings (steel: 2.07e11 Pa, 0.3)
+  int balls = 0;                         ///< Z
+  double ball_diameter = 0.0;            ///< D [m]
+  double pitch_diameter = 0.0;           ///< d_m [m]
+  double inner_groove_conformity = 0.0;  ///< f_i = r_i / D, > 0.5
+  double outer_groove_conformity = 0.0;  ///< f_o = r_o / D, > 0.5
+  std::optional<double>
+      diametral_clearance;              ///< unmounted Pd [m] (may be negative: radial preload)
+  std::optional<double> contact_angle;  ///< unmounted free contact angle [rad]
+  double width = 0.0;                   ///< B [m], ball-plane spacing of a duplex pair (optional)
+  ElasticMaterial material;             ///< balls and rings (steel: 2.07e11 Pa, 0.3)
   EllipticityMethod ellipticity = EllipticityMethod::kExact;
-  std::optional<FitGeometry> fit;             ///< required when an interference is non-zero
-  /// Largest admissible contact pressure [Pa]; ISO 76:2006 uses 4.2 GPa for the static load rating of
-  /// ball bearings (other than self-aligning), beyond which permanent deformation is not negligible.
+  std::optional<FitGeometry> fit;  ///< required when an interference is non-zero
+  /// Largest admissible contact pressure [Pa]; ISO 76:2006 uses 4.2 GPa for the static load rating
+  /// of ball bearings (other than self-aligning), beyond which permanent deformation is not
+  /// negligible.
   double max_contact_pressure = 4.2e9;
 };
 
@@ -85,9 +87,10 @@ struct BallState {
 
 /// Result of evaluating the bearing at one position.
 struct BearingEvaluation {
-  double energy = 0.0;          ///< U [J]
-  Vector5d force = Vector5d::Zero();   ///< f = dU/dq, load on the inner ring from the balls, sign-flipped
-  Matrix5d stiffness = Matrix5d::Zero(); ///< K = d2U/dq2 (tangent)
+  double energy = 0.0;  ///< U [J]
+  Vector5d force =
+      Vector5d::Zero();  ///< f = dU/dq, load on the inner ring from the balls, sign-flipped
+  Matrix5d stiffness = Matrix5d::Zero();  ///< K = d2U/dq2 (tangent)
 };
 
 class BallBearing {
@@ -107,7 +110,7 @@ class BallBearing {
   double mountedClearance() const { return d_.pd_mounted; }      ///< Pd' [m]
   double freeContactAngle() const { return d_.alpha_free; }      ///< mounted, 0 if Pd' <= 0 [rad]
   double innerGrooveCentreRadius() const { return d_.ri; }       ///< R_i [m] (seed 003 eq 8)
-  double loadDeflectionConstant() const { return kn_; }        ///< Kn [N/m^1.5]
+  double loadDeflectionConstant() const { return kn_; }          ///< Kn [N/m^1.5]
   const HertzPointContact& innerContact() const { return inner_; }
   const HertzPointContact& outerContact() const { return outer_; }
 

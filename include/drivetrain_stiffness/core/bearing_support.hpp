@@ -38,8 +38,8 @@ const char* toString(TiltCondition tilt);
 
 struct SolverOptions {
   int max_iterations = 60;
-  double relative_tolerance = 1e-10;   ///< on the force residual, relative to the load scale
-  double absolute_tolerance = 1e-9;    ///< [N] (moments divided by R_i)
+  double relative_tolerance = 1e-10;  ///< on the force residual, relative to the load scale
+  double absolute_tolerance = 1e-9;   ///< [N] (moments divided by R_i)
 };
 
 struct BearingSolution {
@@ -50,12 +50,12 @@ struct BearingSolution {
   std::vector<std::vector<BallState>> rows;  ///< per row, per ball
   bool converged = false;
   int iterations = 0;
-  double residual = 0.0;                     ///< largest force residual [N]
+  double residual = 0.0;  ///< largest force residual [N]
   int balls_in_contact = 0;
-  double max_contact_pressure = 0.0;         ///< [Pa]
+  double max_contact_pressure = 0.0;  ///< [Pa]
 
-  double radialStiffness() const { return stiffness(kUx, kUx); }   ///< tangent dF_x/du_x [N/m]
-  double axialStiffness() const { return stiffness(kUz, kUz); }    ///< tangent dF_z/du_z [N/m]
+  double radialStiffness() const { return stiffness(kUx, kUx); }        ///< tangent dF_x/du_x [N/m]
+  double axialStiffness() const { return stiffness(kUz, kUz); }         ///< tangent dF_z/du_z [N/m]
   double tiltStiffness() const { return stiffness(kThetaY, kThetaY); }  ///< dM_y/dtheta_y [N·m/rad]
 };
 
@@ -64,14 +64,16 @@ class BearingSupport {
   /// axial_preload [N] >= 0: spring force (single) or assembly preload (pairs; must be > 0).
   BearingSupport(const BallBearingSpec& spec, Arrangement arrangement, double axial_preload,
                  const Interference& interference = {},
-                 TiltCondition tilt = TiltCondition::kConstrained, const SolverOptions& options = {});
-  /// Becomes BearingSupport(spec, arrangement, ...) in place, reusing the bearing's per-ball storage
-  /// (no allocation for the same number of balls): the stiffness estimator rebuilds a support for
-  /// new preload settings on its per-input path. Throws what the constructor throws; after a throw
-  /// the support is unusable until an assign succeeds (the estimator assigns only a spare).
+                 TiltCondition tilt = TiltCondition::kConstrained,
+                 const SolverOptions& options = {});
+  /// Becomes BearingSupport(spec, arrangement, ...) in place, reusing the bearing's per-ball
+  /// storage (no allocation for the same number of balls): the stiffness estimator rebuilds a
+  /// support for new preload settings on its per-input path. Throws what the constructor throws;
+  /// after a throw the support is unusable until an assign succeeds (the estimator assigns only a
+  /// spare).
   void assign(const BallBearingSpec& spec, Arrangement arrangement, double axial_preload,
-              const Interference& interference = {}, TiltCondition tilt = TiltCondition::kConstrained,
-              const SolverOptions& options = {});
+              const Interference& interference = {},
+              TiltCondition tilt = TiltCondition::kConstrained, const SolverOptions& options = {});
 
   const BallBearing& bearing() const { return bearing_; }
   Arrangement arrangement() const { return arrangement_; }
@@ -81,9 +83,10 @@ class BearingSupport {
   int rows() const { return arrangement_ == Arrangement::kSingle ? 1 : 2; }
 
   /// Equilibrium under an external load [F_x, F_y, F_z, M_x, M_y] on the shaft (with constrained
-  /// tilt the moments must be 0: they are reactions). Throws InvalidInput for a non-finite load and UnreachableLoad when no admissible equilibrium exists (contact
-  /// pressure above spec.max_contact_pressure, an angular-contact bearing loaded against its
-  /// missing shoulder, or no convergence).
+  /// tilt the moments must be 0: they are reactions). Throws InvalidInput for a non-finite load and
+  /// UnreachableLoad when no admissible equilibrium exists (contact pressure above
+  /// spec.max_contact_pressure, an angular-contact bearing loaded against its missing shoulder, or
+  /// no convergence).
   BearingSolution solve(const Vector5d& external_load, const Vector5d* warm_start = nullptr) const;
   /// The same into `out`, reusing its ball-state storage: no allocation once `out` has held a
   /// solution of this support (the stiffness estimator's per-input path). On a throw `out` is
@@ -97,7 +100,8 @@ class BearingSupport {
 
  private:
   /// The constructor's checks and derived geometry once bearing_ is set.
-  void configure(Arrangement arrangement, double axial_preload, TiltCondition tilt, const SolverOptions& options);
+  void configure(Arrangement arrangement, double axial_preload, TiltCondition tilt,
+                 const SolverOptions& options);
   Vector5d coldStart(const Vector5d& load) const;
   bool newton(const Vector5d& load, Vector5d& q, int& iterations, double& residual) const;
   void finish(BearingSolution& sol) const;
@@ -116,7 +120,8 @@ class BearingSupport {
 /// (solved: `at_load`) and the same load with F_x = 0 (F0, solved here): what a static deflection
 /// measurement from no radial load to F_x sees. Null when F_x = 0. By the mean value theorem it is
 /// the tangent dF_x/du_x somewhere between the two (test_bearing_support.cpp).
-std::optional<double> radialSecantStiffness(const BearingSupport& support, const Vector5d& external_load,
+std::optional<double> radialSecantStiffness(const BearingSupport& support,
+                                            const Vector5d& external_load,
                                             const BearingSolution& at_load);
 
 }  // namespace drivetrain_stiffness

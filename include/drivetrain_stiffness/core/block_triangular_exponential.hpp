@@ -42,9 +42,11 @@ struct BlockTriangular {
     return {Eigen::Matrix<double, P, P>::Identity(), Eigen::Matrix<double, P, Q>::Zero(),
             Eigen::Matrix<double, Q, Q>::Identity()};
   }
-  /// The blocks of a dense matrix whose lower-left Q x P block is ignored (the caller knows it is zero).
+  /// The blocks of a dense matrix whose lower-left Q x P block is ignored (the caller knows it is
+  /// zero).
   static BlockTriangular fromDense(const Eigen::Matrix<double, P + Q, P + Q>& m) {
-    return {m.template topLeftCorner<P, P>(), m.template topRightCorner<P, Q>(), m.template bottomRightCorner<Q, Q>()};
+    return {m.template topLeftCorner<P, P>(), m.template topRightCorner<P, Q>(),
+            m.template bottomRightCorner<Q, Q>()};
   }
   Eigen::Matrix<double, P + Q, P + Q> dense() const {
     Eigen::Matrix<double, P + Q, P + Q> m;
@@ -71,8 +73,10 @@ BlockTriangular<P, Q> operator*(const BlockTriangular<P, Q>& a, const BlockTrian
 
 /// c0 I + c1 A + c2 B + ... as blocks (the even and odd polynomials of the Pade approximants).
 template <int P, int Q>
-BlockTriangular<P, Q> combine(double c0, std::initializer_list<std::pair<double, const BlockTriangular<P, Q>*>> terms) {
-  BlockTriangular<P, Q> r{c0 * Eigen::Matrix<double, P, P>::Identity(), Eigen::Matrix<double, P, Q>::Zero(),
+BlockTriangular<P, Q> combine(
+    double c0, std::initializer_list<std::pair<double, const BlockTriangular<P, Q>*>> terms) {
+  BlockTriangular<P, Q> r{c0 * Eigen::Matrix<double, P, P>::Identity(),
+                          Eigen::Matrix<double, P, Q>::Zero(),
                           c0 * Eigen::Matrix<double, Q, Q>::Identity()};
   for (const auto& t : terms) {
     r.x += t.first * t.second->x;
@@ -84,10 +88,10 @@ BlockTriangular<P, Q> combine(double c0, std::initializer_list<std::pair<double,
 
 /// The width of the triangular panels Eigen's solver takes: max(mr, nr) of its product kernel's
 /// register blocking (TriangularSolverMatrix.h, SmallPanelWidth): 4 with SSE2 alone.
-inline constexpr int kTriangularPanel =
-    Eigen::internal::gebp_traits<double, double>::mr > Eigen::internal::gebp_traits<double, double>::nr
-        ? Eigen::internal::gebp_traits<double, double>::mr
-        : Eigen::internal::gebp_traits<double, double>::nr;
+inline constexpr int kTriangularPanel = Eigen::internal::gebp_traits<double, double>::mr >
+                                                Eigen::internal::gebp_traits<double, double>::nr
+                                            ? Eigen::internal::gebp_traits<double, double>::mr
+                                            : Eigen::internal::gebp_traits<double, double>::nr;
 
 /// lu.solve(b) for a small fixed size, in the order of Eigen 3.4's own solve (PartialPivLU's
 /// _solve_impl, then triangular_solve_matrix in TriangularSolverMatrix.h): the rows permuted, then
@@ -104,8 +108,8 @@ inline constexpr int kTriangularPanel =
 /// test_block_triangular_exponential.cpp (which fails with another panel width). A vector or a
 /// dynamic right-hand side goes to lu.solve itself (Eigen solves a vector by another path).
 template <int N, typename Rhs>
-Eigen::Matrix<double, N, Rhs::ColsAtCompileTime> luSolve(const Eigen::PartialPivLU<Eigen::Matrix<double, N, N>>& lu,
-                                                         const Eigen::MatrixBase<Rhs>& b) {
+Eigen::Matrix<double, N, Rhs::ColsAtCompileTime> luSolve(
+    const Eigen::PartialPivLU<Eigen::Matrix<double, N, N>>& lu, const Eigen::MatrixBase<Rhs>& b) {
   constexpr int C = Rhs::ColsAtCompileTime, W = kTriangularPanel;
   const Eigen::Matrix<double, N, C> rhs = b;  // evaluated once, as solve() evaluates it
   if constexpr (C == 1 || C == Eigen::Dynamic) {
@@ -145,14 +149,16 @@ Eigen::Matrix<double, N, Rhs::ColsAtCompileTime> luSolve(const Eigen::PartialPiv
   }
 }
 
-/// exp(M) for M = [[X, Y], [0, Z]]: Eigen's scaling and squaring (see the file comment) block by block.
+/// exp(M) for M = [[X, Y], [0, Z]]: Eigen's scaling and squaring (see the file comment) block by
+/// block.
 template <int P, int Q>
 BlockTriangular<P, Q> blockTriangularExp(BlockTriangular<P, Q> a) {
   using B = BlockTriangular<P, Q>;
   const double l1 = a.l1Norm();
   int squarings = 0;
   B u, v;
-  if (l1 < 9.504178996162932e-001) {  // theta_3, theta_5, theta_7: degree 3, 5 or 7 (Higham Table 2.3)
+  if (l1 <
+      9.504178996162932e-001) {  // theta_3, theta_5, theta_7: degree 3, 5 or 7 (Higham Table 2.3)
     const B a2 = a * a;
     if (l1 < 1.495585217958292e-002) {
       static constexpr double b[] = {120.0, 60.0, 12.0, 1.0};
@@ -166,25 +172,36 @@ BlockTriangular<P, Q> blockTriangularExp(BlockTriangular<P, Q> a) {
       u = a * tmp;
       v = combine<P, Q>(b[0], {{b[4], &a4}, {b[2], &a2}});
     } else {
-      static constexpr double b[] = {17297280.0, 8648640.0, 1995840.0, 277200.0, 25200.0, 1512.0, 56.0, 1.0};
+      static constexpr double b[] = {17297280.0, 8648640.0, 1995840.0, 277200.0,
+                                     25200.0,    1512.0,    56.0,      1.0};
       const B a4 = a2 * a2, a6 = a4 * a2;
       const B tmp = combine<P, Q>(b[1], {{b[7], &a6}, {b[5], &a4}, {b[3], &a2}});
       u = a * tmp;
       v = combine<P, Q>(b[0], {{b[6], &a6}, {b[4], &a4}, {b[2], &a2}});
     }
   } else if (l1 < 2.097847961257068e+000) {  // theta_9
-    static constexpr double b[] = {17643225600.0, 8821612800.0, 2075673600.0, 302702400.0, 30270240.0,
-                                   2162160.0,     110880.0,     3960.0,       90.0,        1.0};
+    static constexpr double b[] = {17643225600.0, 8821612800.0, 2075673600.0, 302702400.0,
+                                   30270240.0,    2162160.0,    110880.0,     3960.0,
+                                   90.0,          1.0};
     const B a2 = a * a, a4 = a2 * a2, a6 = a4 * a2, a8 = a6 * a2;
     const B tmp = combine<P, Q>(b[1], {{b[9], &a8}, {b[7], &a6}, {b[5], &a4}, {b[3], &a2}});
     u = a * tmp;
     v = combine<P, Q>(b[0], {{b[8], &a8}, {b[6], &a6}, {b[4], &a4}, {b[2], &a2}});
   } else {  // degree 13 on M / 2^s with |M / 2^s|_1 below theta_13
-    static constexpr double b[] = {64764752532480000.0, 32382376266240000.0, 7771770303897600.0,
-                                   1187353796428800.0,  129060195264000.0,   10559470521600.0,
-                                   670442572800.0,      33522128640.0,       1323241920.0,
-                                   40840800.0,          960960.0,            16380.0,
-                                   182.0,               1.0};
+    static constexpr double b[] = {64764752532480000.0,
+                                   32382376266240000.0,
+                                   7771770303897600.0,
+                                   1187353796428800.0,
+                                   129060195264000.0,
+                                   10559470521600.0,
+                                   670442572800.0,
+                                   33522128640.0,
+                                   1323241920.0,
+                                   40840800.0,
+                                   960960.0,
+                                   16380.0,
+                                   182.0,
+                                   1.0};
     std::frexp(l1 / 5.371920351148152, &squarings);
     if (squarings < 0) squarings = 0;
     // M / 2^s as a product with 2^-s: the same correctly rounded x 2^-s as ldexp (which Eigen's

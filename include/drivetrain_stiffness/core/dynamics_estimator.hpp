@@ -7,8 +7,9 @@
 // the exact-exponential propagators while the contacts stay closed; at the first interval in which
 // they do not, or might open and close again unseen at the samples (a torque near an anti-backlash
 // knee: PeriodicExponentialPropagator::contactsSettle), the dynamics move onto the sliced
-// propagation below at the nominal phase (with bearing clearance: dopri5 for that interval). Times are absolute seconds of the caller's clock; internally they are taken
-// relative to the reset time so that 1e9-second epochs keep full phase resolution.
+// propagation below at the nominal phase (with bearing clearance: dopri5 for that interval). Times
+// are absolute seconds of the caller's clock; internally they are taken relative to the reset time
+// so that 1e9-second epochs keep full phase resolution.
 //
 // Two ways to drive the mesh phase (docs/model.md "Following the rig's motion"):
 //  - nominal: the phase counts from the last reset at the nominal speed (dynamics.speed_rpm), and
@@ -37,32 +38,34 @@
 namespace drivetrain_stiffness {
 
 struct DynamicsSample {
-  double t = 0.0;               ///< absolute time of the sample [s]
+  double t = 0.0;  ///< absolute time of the sample [s]
   State6 state = State6::Zero();
-  double dynamic_te = 0.0;      ///< mesh deflection delta along the LOA [m]
-  double static_te = 0.0;       ///< quasi-static deflection F_m / k_s(phase) [m]
-  double mesh_force = 0.0;      ///< [N]
-  double phase = 0.0;           ///< mesh phase [-]
-  double torque = 0.0;          ///< held pinion torque [N·m]
+  double dynamic_te = 0.0;  ///< mesh deflection delta along the LOA [m]
+  double static_te = 0.0;   ///< quasi-static deflection F_m / k_s(phase) [m]
+  double mesh_force = 0.0;  ///< [N]
+  double phase = 0.0;       ///< mesh phase [-]
+  double torque = 0.0;      ///< held pinion torque [N·m]
   bool drive_flank_loaded = false, back_flank_loaded = false;
 };
 
 class DynamicsEstimator {
  public:
   /// rig needs a dynamics block; bearing stiffness [N/m] per shaft; output rate [Hz].
-  DynamicsEstimator(const RigConfig& rig, const std::array<double, 2>& bearing_stiffness, double output_rate);
+  DynamicsEstimator(const RigConfig& rig, const std::array<double, 2>& bearing_stiffness,
+                    double output_rate);
   /// The same with the rig shared read only (the pipeline's) and its mesh table already built (the
   /// stiffness estimator's, shared): it must be the table of rig.gears, rig.anti_backlash,
   /// rig.mesh_model and rig.mesh_samples. The damping ratios start as the rig's (setDamping).
-  DynamicsEstimator(std::shared_ptr<const RigConfig> rig, const std::array<double, 2>& bearing_stiffness,
-                    double output_rate, std::shared_ptr<const AntiBacklashMesh> mesh);
+  DynamicsEstimator(std::shared_ptr<const RigConfig> rig,
+                    const std::array<double, 2>& bearing_stiffness, double output_rate,
+                    std::shared_ptr<const AntiBacklashMesh> mesh);
 
   /// Restart at static equilibrium under `torque` at absolute time t.
   void reset(double t, double torque);
   /// Integrates to absolute time t (>= time(), else InvalidInput: reset on time jumps), calling
   /// sink for each output sample. A gap of more than kMaxSamplesPerAdvance samples is refused
-  /// (InvalidInput) rather than integrated: the caller resets (a stamp of 0 followed by a wall-clock
-  /// stamp would otherwise ask for 1e12 samples).
+  /// (InvalidInput) rather than integrated: the caller resets (a stamp of 0 followed by a
+  /// wall-clock stamp would otherwise ask for 1e12 samples).
   static constexpr double kMaxSamplesPerAdvance = 1e7;
   /// Following the measured motion, the work is one step per slice crossed (plus 41 per change of
   /// the contacts located inside a step, and the dopri5 stretches through moments in no linear
@@ -130,20 +133,26 @@ class DynamicsEstimator {
   Fidelity fidelity() const { return fidelity_; }
 
   bool started() const { return started_; }
-  double time() const { return origin_ + (following_ ? t_state_ : k_ * interval_); }  ///< time of the current state
+  double time() const {
+    return origin_ + (following_ ? t_state_ : k_ * interval_);
+  }  ///< time of the current state
   double outputInterval() const { return interval_; }
   long rebuilds() const { return rebuilds_; }
   long fallbackIntervals() const { return fallback_intervals_; }
   /// Stretches propagated by the interval maps of the nominal phase on the sliced model (after a
-  /// parameter change or a torque near a knee; SlicedIntervalMaps: whole intervals, and the parts of
-  /// intervals from or to an input's stamp).
+  /// parameter change or a torque near a knee; SlicedIntervalMaps: whole intervals, and the parts
+  /// of intervals from or to an input's stamp).
   long mappedStretches() const { return mapped_stretches_; }
   /// The interval maps (null until the nominal phase first runs on the sliced model).
   const SlicedIntervalMaps* intervalMaps() const { return interval_maps_.get(); }
-  bool exact() const { return following_ ? full_.exact != nullptr : propagator_ != nullptr; }  ///< exact propagation available
+  bool exact() const {
+    return following_ ? full_.exact != nullptr : propagator_ != nullptr;
+  }  ///< exact propagation available
   const RigConfig& rig() const { return *rig_; }
   const AntiBacklashMesh& mesh() const { return *mesh_; }
-  const GearRotorModel& model() const { return *model_; }  ///< nominal phase; time relative to the last reset
+  const GearRotorModel& model() const {
+    return *model_;
+  }  ///< nominal phase; time relative to the last reset
   /// 1 - max |Floquet multiplier| of the current model over one mesh period, from the exact
   /// propagators (a few 6x6 products); false if there is no linear regime (bearing clearance).
   /// Following the measured motion: at the measured speed held, in the contact regime the state is
@@ -192,12 +201,14 @@ class DynamicsEstimator {
   /// false, nothing done, where the contacts may change in it and slicedInsteadOfDopri5().
   bool advanceIntervalWithTorqueChanges();
   /// At the nominal phase an interval whose contacts may change goes onto the sliced propagation
-  /// (startFollowing) rather than to dopri5 on the phase table: full fidelity, no bearing clearance.
+  /// (startFollowing) rather than to dopri5 on the phase table: full fidelity, no bearing
+  /// clearance.
   bool slicedInsteadOfDopri5() const;
   GearRotorParameters currentParameters() const;
   /// After a bearing-stiffness or damping change (see the class comment).
   void parametersChanged();
-  /// Onto the measured-motion propagation, the state at absolute time t (>= time(), no sample before).
+  /// Onto the measured-motion propagation, the state at absolute time t (>= time(), no sample
+  /// before).
   void moveTo(double t);
   double nominalMeshFrequency() const;  ///< [Hz]
   /// The drive force of the held torque, F_d = T / r_b,p [N] (the live load follows the input).
@@ -236,11 +247,15 @@ class DynamicsEstimator {
     std::shared_ptr<const SlicedMesh> slices;
     std::unique_ptr<GearRotorModel> model;
     std::unique_ptr<SlicedModalPropagator> exact;
-    void build(std::shared_ptr<const SlicedMesh> mesh_slices, const GearRotorParameters& p, const DynamicsConfig& d);
-    void setParameters(const GearRotorParameters& p);  ///< in place: on the per-input path (allocation_tests)
+    void build(std::shared_ptr<const SlicedMesh> mesh_slices, const GearRotorParameters& p,
+               const DynamicsConfig& d);
+    void setParameters(
+        const GearRotorParameters& p);  ///< in place: on the per-input path (allocation_tests)
   };
   /// The one the fidelity runs along the measured motion: full_, or mean_ for linear_modal.
-  const SlicedDynamics& moving() const { return fidelity_ == Fidelity::kLinearModal ? mean_ : full_; }
+  const SlicedDynamics& moving() const {
+    return fidelity_ == Fidelity::kLinearModal ? mean_ : full_;
+  }
   /// Refuses (InvalidInput, the caller resets) an advance to t_rel that would cross more than
   /// kMaxSlicesPerAdvance slices at the present mesh frequency.
   void requireSliceBound(double t_rel) const;
@@ -255,11 +270,14 @@ class DynamicsEstimator {
   SlicedDynamics mean_;  ///< linear_modal: one slice holding the period's mean stiffness
   // The state's own time, phase and mesh frequency.
   bool following_ = false;
-  bool measured_ = false;  ///< the phase comes from the encoders (followMotion since the last reset)
+  bool measured_ =
+      false;  ///< the phase comes from the encoders (followMotion since the last reset)
   std::unique_ptr<SlicedIntervalMaps> interval_maps_;
-  int maps_settle_ = -1;  ///< the settling table holds for the parameters now: 1 yes, 0 no, -1 not yet asked
+  int maps_settle_ =
+      -1;  ///< the settling table holds for the parameters now: 1 yes, 0 no, -1 not yet asked
   long mapped_stretches_ = 0;
-  bool periodic_stale_ = false;  ///< parameters changed while following: rebuild the periodic ones at reset
+  bool periodic_stale_ =
+      false;  ///< parameters changed while following: rebuild the periodic ones at reset
   double t_state_ = 0.0, phase_ = 0.0, mesh_frequency_ = 0.0;
   Fidelity fidelity_ = Fidelity::kFull;
   long rebuilds_ = 0, fallback_intervals_ = 0;

@@ -21,7 +21,8 @@ class InvalidInput : public Error {
   using Error::Error;
 };
 
-/// Thrown when a well-formed input has no admissible solution (e.g. a load the bearing cannot carry).
+/// Thrown when a well-formed input has no admissible solution (e.g. a load the bearing cannot
+/// carry).
 class UnreachableLoad : public Error {
  public:
   using Error::Error;

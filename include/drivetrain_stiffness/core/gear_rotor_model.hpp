@@ -23,13 +23,13 @@ using State6 = Eigen::Matrix<double, 6, 1>;
 using Matrix6 = Eigen::Matrix<double, 6, 6>;
 
 struct GearRotorParameters {
-  double pinion_mass = 0.0, gear_mass = 0.0;            ///< m_p, m_g [kg]
-  double pinion_inertia = 0.0, gear_inertia = 0.0;      ///< I_p, I_g [kg m^2]
+  double pinion_mass = 0.0, gear_mass = 0.0;                ///< m_p, m_g [kg]
+  double pinion_inertia = 0.0, gear_inertia = 0.0;          ///< I_p, I_g [kg m^2]
   double pinion_base_radius = 0.0, gear_base_radius = 0.0;  ///< r_p, r_g [m]
-  std::array<double, 2> bearing_stiffness{{0.0, 0.0}};  ///< k_r1, k_r2 [N/m]
-  std::array<double, 2> bearing_damping{{0.0, 0.0}};    ///< c_b1, c_b2 [N s/m]
-  std::array<double, 2> bearing_clearance{{0.0, 0.0}};  ///< radial half-gap u_r [m]
-  double mesh_damping = 0.0;                            ///< c_s [N s/m]
+  std::array<double, 2> bearing_stiffness{{0.0, 0.0}};      ///< k_r1, k_r2 [N/m]
+  std::array<double, 2> bearing_damping{{0.0, 0.0}};        ///< c_b1, c_b2 [N s/m]
+  std::array<double, 2> bearing_clearance{{0.0, 0.0}};      ///< radial half-gap u_r [m]
+  double mesh_damping = 0.0;                                ///< c_s [N s/m]
 
   /// Throws InvalidInput naming the field for non-positive masses/inertias/radii or negative
   /// stiffness, damping or clearance.
@@ -46,14 +46,14 @@ Eigen::Matrix3d meshBearingMatrix(double mesh, const std::array<double, 2>& bear
 
 /// Mesh and load state at one instant, supplied by the excitation.
 struct MeshInstant {
-  double k_drive = 0.0;          ///< k1 [N/m]
-  double k_back = 0.0;           ///< k_c = k_te k2 / (k_te + k2) [N/m]; 0 for an ordinary gear
-  double preload_force = 0.0;    ///< F_p [N] (anti-backlash); 0 for an ordinary gear
-  double backlash = 0.0;         ///< half gap b [m] of an ordinary gear (seed 000 eq 17)
-  double te = 0.0;               ///< static transmission error e [m]
-  double te_rate = 0.0;          ///< de/dt [m/s]
-  double drive_force = 0.0;      ///< F_m + F_d: m_s (r_p T_p / I_p + r_g T_g / I_g) [N]
-  double phase = 0.0;            ///< mesh phase [-]
+  double k_drive = 0.0;        ///< k1 [N/m]
+  double k_back = 0.0;         ///< k_c = k_te k2 / (k_te + k2) [N/m]; 0 for an ordinary gear
+  double preload_force = 0.0;  ///< F_p [N] (anti-backlash); 0 for an ordinary gear
+  double backlash = 0.0;       ///< half gap b [m] of an ordinary gear (seed 000 eq 17)
+  double te = 0.0;             ///< static transmission error e [m]
+  double te_rate = 0.0;        ///< de/dt [m/s]
+  double drive_force = 0.0;    ///< F_m + F_d: m_s (r_p T_p / I_p + r_g T_g / I_g) [N]
+  double phase = 0.0;          ///< mesh phase [-]
 };
 
 /// The rig's measured motion over one reading interval: mesh phase phi(t) = phase0 + frequency
@@ -62,7 +62,9 @@ struct MeshMotion {
   double t0 = 0.0;         ///< [s]
   double phase0 = 0.0;     ///< [turns] at t0, not wrapped
   double frequency = 0.0;  ///< [Hz]
-  double phaseAt(double t) const { return phase0 + frequency * (t - t0); }  ///< [turns], not wrapped
+  double phaseAt(double t) const {
+    return phase0 + frequency * (t - t0);
+  }  ///< [turns], not wrapped
   /// InvalidInput naming the field for a non-finite one.
   void validate() const;
 };
@@ -85,7 +87,7 @@ struct ContactRegime {
 };
 
 struct GearRotorForces {
-  double mesh = 0.0;       ///< F on the gear along n [N]
+  double mesh = 0.0;                           ///< F on the gear along n [N]
   double drive_flank = 0.0, back_flank = 0.0;  ///< flank forces F1, F2 [N] (anti-backlash)
   double bearing[2] = {0.0, 0.0};
   double delta = 0.0, delta_rate = 0.0;
@@ -129,7 +131,9 @@ class GearRotorModel {
   /// force is RigExcitation::driveForce(u). Its owner sets it; nothing else holds it. InvalidInput
   /// for a model without a torque input (its torque is a function of time) or a non-finite u.
   void setTorqueInput(double torque);
-  double torqueInput() const { return torque_input_; }  ///< [N·m]; 0 (a sliced excitation's own) until set
+  double torqueInput() const {
+    return torque_input_;
+  }  ///< [N·m]; 0 (a sliced excitation's own) until set
   /// The measured motion input of a model over a SlicedExcitation: from now on the mesh phase is
   /// motion.phaseAt(t). Its owner re-anchors it at each encoder reading. InvalidInput for any
   /// other model or a non-finite field.
@@ -156,7 +160,8 @@ class GearRotorModel {
  private:
   GearRotorParameters p_;
   std::shared_ptr<const GearExcitation> excitation_;
-  std::shared_ptr<const RigExcitation> rig_;  ///< the same object as excitation_, by type; null if not a rig's
+  std::shared_ptr<const RigExcitation>
+      rig_;  ///< the same object as excitation_, by type; null if not a rig's
   std::shared_ptr<const SlicedExcitation> sliced_;  ///< the same, by type; null if not sliced
   MeshMotion motion_input_;                         ///< used with sliced_
   double m_s_ = 0.0;

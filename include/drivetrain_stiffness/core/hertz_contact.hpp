@@ -26,14 +26,15 @@ enum class EllipticityMethod {
 EllipticityMethod parseEllipticityMethod(const std::string& field, const std::string& text);
 const char* toString(EllipticityMethod method);
 
-/// Reduced (effective) modulus E' = 2 / [(1-nu_a^2)/E_a + (1-nu_b^2)/E_b] (Hamrock & Brewe 1983, J. Lubr. Technol. 105:171).
+/// Reduced (effective) modulus E' = 2 / [(1-nu_a^2)/E_a + (1-nu_b^2)/E_b] (Hamrock & Brewe 1983, J.
+/// Lubr. Technol. 105:171).
 double reducedModulus(double youngs_a, double poisson_a, double youngs_b, double poisson_b);
 
 /// Ellipticity parameters of a contact.
 struct EllipticityParameters {
-  double ellipticity = 1.0;             ///< kappa = a/b
-  double elliptic_first = 0.0;          ///< script F, complete elliptic integral of the first kind
-  double elliptic_second = 0.0;         ///< script E, complete elliptic integral of the second kind
+  double ellipticity = 1.0;      ///< kappa = a/b
+  double elliptic_first = 0.0;   ///< script F, complete elliptic integral of the first kind
+  double elliptic_second = 0.0;  ///< script E, complete elliptic integral of the second kind
 };
 
 /// Exact ellipticity from the curvature difference F(rho) in [0, 1).
@@ -50,19 +51,19 @@ class HertzPointContact {
 
   double rx() const { return rx_; }
   double ry() const { return ry_; }
-  double curvatureSumRadius() const { return r_; }           ///< R [m]
-  double curvatureDifference() const { return f_rho_; }      ///< F(rho) [-]
+  double curvatureSumRadius() const { return r_; }       ///< R [m]
+  double curvatureDifference() const { return f_rho_; }  ///< F(rho) [-]
   const EllipticityParameters& ellipticity() const { return ellipticity_; }
 
   /// K in Q = K delta^1.5 [N/m^1.5]: K = pi kappa E' sqrt(2 E R / (9 F^3)), the Hamrock-Brewe
   /// deflection delta = F [9/(2 E R) (Q/(pi kappa E'))^2]^(1/3) solved for Q; it reduces to Hertz's
   /// (4/3) E* sqrt(R_sphere) for two spheres (Johnson, Contact Mechanics, 1985, eq 4.23).
   double loadDeflectionConstant() const { return k_; }
-  double load(double deflection) const;        ///< Q [N] for approach delta [m] (0 for delta <= 0)
-  double deflection(double load) const;        ///< delta [m] for Q [N] >= 0
-  double semiMajorAxis(double load) const;     ///< a = (6 kappa^2 E Q R / (pi E'))^(1/3) [m]
-  double semiMinorAxis(double load) const;     ///< b = (6 E Q R / (pi kappa E'))^(1/3) [m]
-  double maxPressure(double load) const;       ///< p_max = 3 Q / (2 pi a b) [Pa]
+  double load(double deflection) const;     ///< Q [N] for approach delta [m] (0 for delta <= 0)
+  double deflection(double load) const;     ///< delta [m] for Q [N] >= 0
+  double semiMajorAxis(double load) const;  ///< a = (6 kappa^2 E Q R / (pi E'))^(1/3) [m]
+  double semiMinorAxis(double load) const;  ///< b = (6 E Q R / (pi kappa E'))^(1/3) [m]
+  double maxPressure(double load) const;    ///< p_max = 3 Q / (2 pi a b) [Pa]
 
  private:
   double rx_, ry_, reduced_modulus_, r_, f_rho_;

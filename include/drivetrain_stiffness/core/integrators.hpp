@@ -32,13 +32,14 @@ class UnstableIntegration : public Error {
 };
 
 struct IntegratorOptions {
-  double step = 1e-6;              ///< fixed step h [s] (rk4, trapezoidal); initial step for dopri5
+  double step = 1e-6;  ///< fixed step h [s] (rk4, trapezoidal); initial step for dopri5
   double relative_tolerance = 1e-8;  ///< dopri5
-  double absolute_tolerance = 1e-12; ///< dopri5, on displacements [m] (velocities scaled by omega_ref)
-  double max_step = 1e-3;          ///< dopri5 [s]
-  double divergence_limit = 1e-2;  ///< |displacement| beyond this [m] counts as blow-up
-  bool locate_events = true;       ///< dopri5: locate contact changes
-  double magnus_step_factor = 1.0; ///< exponential: Magnus step <= factor / omega_max
+  double absolute_tolerance =
+      1e-12;               ///< dopri5, on displacements [m] (velocities scaled by omega_ref)
+  double max_step = 1e-3;  ///< dopri5 [s]
+  double divergence_limit = 1e-2;   ///< |displacement| beyond this [m] counts as blow-up
+  bool locate_events = true;        ///< dopri5: locate contact changes
+  double magnus_step_factor = 1.0;  ///< exponential: Magnus step <= factor / omega_max
   /// dopri5: more accepted plus rejected steps than this in one call throw UnstableIntegration
   /// (0: no bound). The online estimator bounds its fallback so that no input stalls the caller.
   long max_steps = 0;
@@ -59,9 +60,9 @@ struct IntegratorScale {
 
 struct IntegrationStats {
   long steps = 0, rejected = 0, rhs_evaluations = 0, events = 0, newton_iterations = 0;
-  long fallbacks = 0;              ///< exponential: runs handed to dopri5 when a contact opened
-  long newton_failures = 0;        ///< trapezoidal: steps whose Newton iteration did not converge
-  double fallback_from = -1.0;     ///< time of that hand-over [s], -1 if none
+  long fallbacks = 0;           ///< exponential: runs handed to dopri5 when a contact opened
+  long newton_failures = 0;     ///< trapezoidal: steps whose Newton iteration did not converge
+  double fallback_from = -1.0;  ///< time of that hand-over [s], -1 if none
 };
 
 /// Called at each output time with the state.
@@ -70,8 +71,9 @@ using Observer = std::function<void(double t, const State6& y)>;
 /// Integrates from (t0, y0) to t_end, calling `observe` at t0 and at every multiple of
 /// output_interval after t0 (the fixed-step methods need output_interval to be a multiple of
 /// their step). Returns the final state.
-State6 integrate(const GearRotorModel& model, IntegratorMethod method, const IntegratorOptions& options,
-                 double t0, const State6& y0, double t_end, double output_interval, const Observer& observe,
+State6 integrate(const GearRotorModel& model, IntegratorMethod method,
+                 const IntegratorOptions& options, double t0, const State6& y0, double t_end,
+                 double output_interval, const Observer& observe,
                  IntegrationStats* stats = nullptr);
 
 }  // namespace drivetrain_stiffness

@@ -6,7 +6,8 @@
 // the diametral clearance: Pd' = Pd - delta_i - delta_e (seed 000 eq 10; bearing.md section 3).
 // Contact pressure from the compatibility of radial displacements of two Lame cylinders
 // (Shigley's Mechanical Engineering Design, 10th ed., eq 3-56, written with diameters):
-//   p = (I/d) / { [(d_i^2 + d^2)/(d_i^2 - d^2) + nu_r]/E_r + [(d^2 + d_s^2)/(d^2 - d_s^2) - nu_s]/E_s }
+//   p = (I/d) / { [(d_i^2 + d^2)/(d_i^2 - d^2) + nu_r]/E_r + [(d^2 + d_s^2)/(d^2 - d_s^2) -
+//   nu_s]/E_s }
 // Raceway (outer surface of the inner ring) diametral growth under internal pressure p
 // (Timoshenko & Goodier, Theory of Elasticity, sec. 28, u(b) = 2 p a^2 b / (E (b^2 - a^2))):
 //   delta_i = 2 p d^2 d_i / (E_r (d_i^2 - d^2))
@@ -24,27 +25,27 @@ struct ElasticMaterial {
 
 /// Inner ring on a shaft.
 struct InnerRingFit {
-  double interference = 0.0;          ///< diametral interference I [m], >= 0 (0: loose or line fit)
-  double bore_diameter = 0.0;         ///< d [m]
-  double raceway_diameter = 0.0;      ///< d_i, inner raceway (groove bottom) diameter [m]
-  double shaft_bore_diameter = 0.0;   ///< d_s [m], 0 for a solid shaft
+  double interference = 0.0;         ///< diametral interference I [m], >= 0 (0: loose or line fit)
+  double bore_diameter = 0.0;        ///< d [m]
+  double raceway_diameter = 0.0;     ///< d_i, inner raceway (groove bottom) diameter [m]
+  double shaft_bore_diameter = 0.0;  ///< d_s [m], 0 for a solid shaft
   ElasticMaterial ring;
   ElasticMaterial shaft;
 };
 
 /// Outer ring in a housing.
 struct OuterRingFit {
-  double interference = 0.0;          ///< diametral interference I [m], >= 0
-  double outside_diameter = 0.0;      ///< D [m]
-  double raceway_diameter = 0.0;      ///< d_o, outer raceway (groove bottom) diameter [m]
+  double interference = 0.0;      ///< diametral interference I [m], >= 0
+  double outside_diameter = 0.0;  ///< D [m]
+  double raceway_diameter = 0.0;  ///< d_o, outer raceway (groove bottom) diameter [m]
   double housing_outside_diameter = std::numeric_limits<double>::infinity();  ///< D_h [m]
   ElasticMaterial ring;
   ElasticMaterial housing;
 };
 
 struct FitResult {
-  double contact_pressure = 0.0;   ///< p at the fitted surface [Pa]
-  double raceway_change = 0.0;     ///< diametral growth (inner) or shrink (outer) of the raceway [m]
+  double contact_pressure = 0.0;  ///< p at the fitted surface [Pa]
+  double raceway_change = 0.0;    ///< diametral growth (inner) or shrink (outer) of the raceway [m]
 };
 
 /// Validates the geometry (d_s < d < d_i; d_o < D < D_h) and returns pressure and raceway growth.

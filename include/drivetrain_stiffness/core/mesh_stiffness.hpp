@@ -37,25 +37,27 @@ struct ToothCompliance {
 
 /// Bending, shear and axial compliance of a tooth (base radius r_b, half tooth angle on the base
 /// circle alpha2) loaded at the involute point of pressure angle alpha_c, the cantilever clamped at
-/// radius x_root along the centre line (the root circle; a constant-thickness segment 2 r_b sin(alpha2)
-/// spans x_root..r_b cos(alpha2) when the root is below the base circle, after Chen & Shao 2011).
-/// Gauss-Legendre quadrature of the energy-method integrals (docs/gear_model.md section 2).
+/// radius x_root along the centre line (the root circle; a constant-thickness segment 2 r_b
+/// sin(alpha2) spans x_root..r_b cos(alpha2) when the root is below the base circle, after Chen &
+/// Shao 2011). Gauss-Legendre quadrature of the energy-method integrals (docs/gear_model.md section
+/// 2).
 ToothCompliance toothBeamCompliance(double rb, double alpha2, double x_root, double alpha_c,
                                     double youngs, double poisson, double width);
 
 /// Fillet-foundation compliance (Sainsot, Velex & Duverger 2004, eq. 4 and Table 1 fits).
-double filletFoundationCompliance(double rf, double theta_f, double r_int, double u_f, double load_angle,
-                                  double youngs, double width);
+double filletFoundationCompliance(double rf, double theta_f, double r_int, double u_f,
+                                  double load_angle, double youngs, double width);
 
 /// ISO 6336-1 method B (as implemented in python-gearbox iso.py and gfsReboucas/Drivetrain, whose
 /// coefficients agree): per unit face width, in N/m^2 (1 N/(mm um) = 1e9 N/m^2).
 struct Iso6336Stiffness {
   double single_stiffness_theoretical = 0.0;  ///< c'_th = 1/q'
   double single_stiffness = 0.0;              ///< c' = c'_th C_M C_R C_B cos(beta) E/E_st
-  double mesh_stiffness = 0.0;                ///< c_gamma_alpha = c' (0.75 eps_alpha + 0.25) (x 0.9 if eps_alpha < 1.2)
-  double mesh_stiffness_helical = 0.0;        ///< c_gamma_beta = 0.85 c_gamma_alpha
-  double transverse_contact_ratio = 0.0;      ///< eps_alpha used
-  double c_m = 0.8, c_r = 1.0, c_b = 1.0;     ///< correction factors used
+  double mesh_stiffness =
+      0.0;  ///< c_gamma_alpha = c' (0.75 eps_alpha + 0.25) (x 0.9 if eps_alpha < 1.2)
+  double mesh_stiffness_helical = 0.0;     ///< c_gamma_beta = 0.85 c_gamma_alpha
+  double transverse_contact_ratio = 0.0;   ///< eps_alpha used
+  double c_m = 0.8, c_r = 1.0, c_b = 1.0;  ///< correction factors used
 };
 Iso6336Stiffness iso6336Stiffness(const GearPairSpec& spec);
 
@@ -68,7 +70,8 @@ class ToothPairStiffness {
 };
 
 /// Builds one of the three models for the geometry and a face width b [m] (> 0).
-std::unique_ptr<ToothPairStiffness> makeToothPairStiffness(MeshStiffnessModel model, const SpurGearGeometry& geometry,
+std::unique_ptr<ToothPairStiffness> makeToothPairStiffness(MeshStiffnessModel model,
+                                                           const SpurGearGeometry& geometry,
                                                            double face_width);
 
 /// Pair stiffness sampled uniformly over the path of contact [s_A, s_E] at start-up (or when a
@@ -76,9 +79,10 @@ std::unique_ptr<ToothPairStiffness> makeToothPairStiffness(MeshStiffnessModel mo
 /// at a mesh phase is the sum over the pairs in contact, so the single/double steps stay sharp.
 class MeshStiffnessTable {
  public:
-  MeshStiffnessTable(const SpurGearGeometry& geometry, const ToothPairStiffness& model, int samples = 256);
-  double pair(double s) const;                ///< one pair at LOA position s [N/m]
-  double drive(double phase) const;           ///< drive-flank mesh stiffness at phase [N/m]
+  MeshStiffnessTable(const SpurGearGeometry& geometry, const ToothPairStiffness& model,
+                     int samples = 256);
+  double pair(double s) const;       ///< one pair at LOA position s [N/m]
+  double drive(double phase) const;  ///< drive-flank mesh stiffness at phase [N/m]
   const SpurGearGeometry& geometry() const { return geometry_; }
   int samples() const { return static_cast<int>(values_.size()); }
 

@@ -3,8 +3,8 @@
 //
 //  - modes: K v = w^2 M v with the matrices of docs/model.md (undamped natural frequencies, mass-
 //    normalised shapes), and the eigenvalues lambda of the 6x6 state matrix [[0, I], [-M^-1 K,
-//    -M^-1 C]] (damped frequency |Im lambda| / 2 pi, damping ratio -Re lambda / |lambda|). Each mode
-//    is labelled by the coordinate holding most of its kinetic energy (m_i |v_i|^2).
+//    -M^-1 C]] (damped frequency |Im lambda| / 2 pi, damping ratio -Re lambda / |lambda|). Each
+//    mode is labelled by the coordinate holding most of its kinetic energy (m_i |v_i|^2).
 //  - Floquet: the monodromy matrix Phi(T) of the homogeneous linearised system over one mesh
 //    period T; the system is asymptotically stable iff every multiplier |mu| < 1. The margin
 //    1 - max |mu| is positive when stable, negative when a parametric resonance grows.
@@ -21,10 +21,10 @@
 namespace drivetrain_stiffness {
 
 struct Mode {
-  double natural_frequency = 0.0;  ///< undamped [Hz]
-  double damped_frequency = 0.0;   ///< [Hz]
-  double damping_ratio = 0.0;      ///< [-]
-  std::string dominant;            ///< "x_p", "x_g" or "x"
+  double natural_frequency = 0.0;                   ///< undamped [Hz]
+  double damped_frequency = 0.0;                    ///< [Hz]
+  double damping_ratio = 0.0;                       ///< [-]
+  std::string dominant;                             ///< "x_p", "x_g" or "x"
   Eigen::Vector3d shape = Eigen::Vector3d::Zero();  ///< mass-normalised, largest entry positive
 };
 
@@ -41,6 +41,7 @@ struct FloquetResult {
 /// Floquet multipliers of the model linearised about y_ref (contacts closed), over `period` from
 /// t0: for a RigExcitation the exact product of the exponential propagators (output_interval must
 /// divide the period), otherwise classical RK4 on Phi' = J(t) Phi with `steps` steps.
-FloquetResult floquet(const GearRotorModel& model, const State6& y_ref, double t0, double period, int steps = 4000);
+FloquetResult floquet(const GearRotorModel& model, const State6& y_ref, double t0, double period,
+                      int steps = 4000);
 
 }  // namespace drivetrain_stiffness

@@ -12,7 +12,8 @@
 namespace drivetrain_stiffness {
 
 struct MotionInput {
-  double pinion_angle = 0.0;              ///< [rad] (wrapped or not: only its changes and the mesh phase are used)
+  double pinion_angle =
+      0.0;  ///< [rad] (wrapped or not: only its changes and the mesh phase are used)
   std::optional<double> pinion_velocity;  ///< [rad/s]; absent: differentiated from the angle
   std::optional<double> gear_angle;       ///< [rad]; absent: no ratio (slip) check
 };

@@ -30,7 +30,8 @@ struct MeshStiffnessRange {
 /// signed mesh force [N] that sets the flank state; samples >= 1 (InvalidInput otherwise). A zone
 /// shorter than a sample spacing can be missed: 1024 resolve the seed pair's zones (0.37 and 0.63
 /// of the period) with room to spare.
-MeshStiffnessRange meshStiffnessRange(const AntiBacklashMesh& mesh, double mesh_force, int samples = 1024);
+MeshStiffnessRange meshStiffnessRange(const AntiBacklashMesh& mesh, double mesh_force,
+                                      int samples = 1024);
 
 /// Floquet stability over one mesh period at the rig's nominal speed.
 struct MeshPeriodFloquet {
@@ -41,11 +42,11 @@ struct MeshPeriodFloquet {
 struct OperatingPointModes {
   double torque = 0.0;                                  ///< pinion torque [N·m]
   std::array<double, 2> bearing_stiffness{{0.0, 0.0}};  ///< radial, per shaft (pinion, gear) [N/m]
-  GearRotorParameters parameters;                       ///< masses, radii, stiffness, damping of the model
-  double mesh_mean = 0.0;                               ///< period mean of the composite [N/m]
-  MeshStiffnessRange mesh_range;                        ///< single pair (min), double pair (max) [N/m]
+  GearRotorParameters parameters;  ///< masses, radii, stiffness, damping of the model
+  double mesh_mean = 0.0;          ///< period mean of the composite [N/m]
+  MeshStiffnessRange mesh_range;   ///< single pair (min), double pair (max) [N/m]
   std::array<Mode, 3> modes_mean, modes_single_pair, modes_double_pair;
-  std::optional<MeshPeriodFloquet> floquet;             ///< none with bearing clearance
+  std::optional<MeshPeriodFloquet> floquet;  ///< none with bearing clearance
 };
 
 /// The modes of `rig` (which needs a dynamics block: InvalidInput naming the file's block

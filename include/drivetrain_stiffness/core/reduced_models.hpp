@@ -12,7 +12,8 @@
 //    whose relative RMS error of delta meets half the bound against the reference: the
 //    exponential method where it was built and kept its contacts closed (bound >= 1e-6), dopri5 at
 //    rtol = bound / 100 otherwise. The exponential method is built only where its set-up is
-//    predicted cheaper than dopri5's work over the run, and then only once, for the pilot and the run.
+//    predicted cheaper than dopri5's work over the run, and then only once, for the pilot and the
+//    run.
 #pragma once
 
 #include <memory>
@@ -30,21 +31,23 @@ const char* toString(Fidelity f);
 Fidelity parseFidelity(const std::string& field, const std::string& text);
 
 /// Integrates a reduced fidelity (the model must use a RigExcitation) on the output grid.
-State6 integrateReduced(const GearRotorModel& model, Fidelity fidelity, double t0, const State6& y0, double t_end,
-                        double output_interval, const Observer& observe);
+State6 integrateReduced(const GearRotorModel& model, Fidelity fidelity, double t0, const State6& y0,
+                        double t_end, double output_interval, const Observer& observe);
 
 struct AutoChoice {
   Fidelity fidelity = Fidelity::kFull;
   IntegratorMethod method = IntegratorMethod::kDopri5;
-  double relative_tolerance = 0.0;   ///< for dopri5
-  double pilot_duration = 0.0;       ///< [s]
-  std::vector<std::pair<std::string, double>> pilot_errors;  ///< candidate, relative RMS error of delta
+  double relative_tolerance = 0.0;  ///< for dopri5
+  double pilot_duration = 0.0;      ///< [s]
+  std::vector<std::pair<std::string, double>>
+      pilot_errors;  ///< candidate, relative RMS error of delta
   /// dopri5 steps the choice itself took: the count over kDopriCountSamples, plus the whole pilot
-  /// where dopri5 was the reference after all, or the whole pilot alone where the exponential method
-  /// could not be the reference (a count, not a clock, of what the choice cost in dopri5).
+  /// where dopri5 was the reference after all, or the whole pilot alone where the exponential
+  /// method could not be the reference (a count, not a clock, of what the choice cost in dopri5).
   long dopri_pilot_steps = 0;
   std::string reason;
-  /// The units the choice was made in (chooseAutomatically's `scale`): integrateChoice runs in them.
+  /// The units the choice was made in (chooseAutomatically's `scale`): integrateChoice runs in
+  /// them.
   IntegratorScale scale;
   /// The exponential method's propagators built for the pilot (time origin t0, the pilot's output
   /// interval): integrateChoice reuses them, so their setup is paid once.
@@ -66,13 +69,15 @@ constexpr int kDopriCountSamples = 8;
 /// pilot, serves as the reference (built at Magnus step 1/omega_max, its err_rms_rel against dopri5
 /// at rtol 1e-12 is at most 1.2e-8 on the bench scenes: 40x below half this bound). Not step
 /// 2/omega_max, although it sets up in 0.65 of the time: that step gives 7.4e-7
-/// to 2.4e-6 on the seed rig at 2,490-2,505 rpm with mesh damping ratios 0.05-0.01, where each table
-/// piece just fits in one step (1.3e-7 at most at step 1), which would break the bound unseen.
+/// to 2.4e-6 on the seed rig at 2,490-2,505 rpm with mesh damping ratios 0.05-0.01, where each
+/// table piece just fits in one step (1.3e-7 at most at step 1), which would break the bound
+/// unseen.
 constexpr double kExponentialReferenceBound = 1e-6;
 
-/// The options auto runs `method` with, in its pilot and in the run (dopri5 at `relative_tolerance`),
-/// in the model's units (`scale`: SI by default).
-IntegratorOptions autoOptions(IntegratorMethod method, double relative_tolerance, const IntegratorScale& scale = {});
+/// The options auto runs `method` with, in its pilot and in the run (dopri5 at
+/// `relative_tolerance`), in the model's units (`scale`: SI by default).
+IntegratorOptions autoOptions(IntegratorMethod method, double relative_tolerance,
+                              const IntegratorScale& scale = {});
 
 /// The pilot auto is given by the CLI, the bench and the tests: a sample of the run, at most a
 /// quarter of it (a pilot as long as the run would be the run itself, paid twice) and at most 40
@@ -84,12 +89,13 @@ double defaultPilotDuration(double run_duration, double output_interval);
 /// choice will run (it weighs the exponential method's set-up against dopri5's work; 0: unknown,
 /// taken as long, so the set-up is worth paying). `scale`: the units of the model's state (SI by
 /// default; Scene::scale() gives a scene's), kept in the choice for integrateChoice.
-AutoChoice chooseAutomatically(const GearRotorModel& model, double t0, const State6& y0, double output_interval,
-                               double pilot_duration, double error_bound, double run_duration = 0.0,
-                               const IntegratorScale& scale = {});
+AutoChoice chooseAutomatically(const GearRotorModel& model, double t0, const State6& y0,
+                               double output_interval, double pilot_duration, double error_bound,
+                               double run_duration = 0.0, const IntegratorScale& scale = {});
 
 /// Runs `choice` (from chooseAutomatically) over the whole span.
-State6 integrateChoice(const GearRotorModel& model, const AutoChoice& choice, double t0, const State6& y0, double t_end,
-                       double output_interval, const Observer& observe, IntegrationStats* stats = nullptr);
+State6 integrateChoice(const GearRotorModel& model, const AutoChoice& choice, double t0,
+                       const State6& y0, double t_end, double output_interval,
+                       const Observer& observe, IntegrationStats* stats = nullptr);
 
 }  // namespace drivetrain_stiffness

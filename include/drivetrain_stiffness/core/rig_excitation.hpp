@@ -20,10 +20,10 @@ struct TorqueProfile {
   /// measurement), given by whoever owns that model rather than read from a shared value.
   enum class Kind { kConstant, kSine, kSteps, kChirp, kInput };
   Kind kind = Kind::kConstant;
-  double mean = 0.0;             ///< [N·m]; also sets the balancing load torque T_g = mean r_g / r_p
-  double amplitude = 0.0;        ///< sine / chirp amplitude [N·m]
-  double frequency = 0.0;        ///< sine frequency [Hz]
-  double phase = 0.0;            ///< sine phase at t = 0 [rad] (a stepped sweep keeps the sine continuous)
+  double mean = 0.0;       ///< [N·m]; also sets the balancing load torque T_g = mean r_g / r_p
+  double amplitude = 0.0;  ///< sine / chirp amplitude [N·m]
+  double frequency = 0.0;  ///< sine frequency [Hz]
+  double phase = 0.0;  ///< sine phase at t = 0 [rad] (a stepped sweep keeps the sine continuous)
   double chirp_start = 0.0, chirp_end = 0.0, chirp_duration = 1.0;  ///< linear chirp [Hz, Hz, s]
   std::vector<std::pair<double, double>> steps;  ///< (time [s], torque [N·m]) from that time on
   /// The torque at t; 0 for kInput (the model adds its input: RigExcitation::driveForce).
@@ -36,13 +36,13 @@ struct TorqueProfile {
 };
 
 struct RigExcitationSpec {
-  double speed = 0.0;                 ///< pinion speed [rad/s] (sets the mesh phase)
-  double initial_phase = 0.0;         ///< mesh phase at t = 0
-  double te_amplitude = 0.0;          ///< manufacturing TE amplitude at the mesh frequency [m]
-  double backlash = 0.0;              ///< half backlash of an ordinary gear [m] (seed 000 eq 17 b)
-  /// false: the load torque is fixed at the mean input (T_g = T_pm r_g / r_p) and fluctuations act on
-  /// the pinion alone (scenes). true: the load follows the input quasi-statically (a speed-controlled
-  /// rig), so the drive force is T_p / r_p (the live node).
+  double speed = 0.0;          ///< pinion speed [rad/s] (sets the mesh phase)
+  double initial_phase = 0.0;  ///< mesh phase at t = 0
+  double te_amplitude = 0.0;   ///< manufacturing TE amplitude at the mesh frequency [m]
+  double backlash = 0.0;       ///< half backlash of an ordinary gear [m] (seed 000 eq 17 b)
+  /// false: the load torque is fixed at the mean input (T_g = T_pm r_g / r_p) and fluctuations act
+  /// on the pinion alone (scenes). true: the load follows the input quasi-statically (a
+  /// speed-controlled rig), so the drive force is T_p / r_p (the live node).
   bool balanced_load = false;
   TorqueProfile torque;
 };
@@ -58,8 +58,8 @@ class RigExcitation : public GearExcitation {
   double meshFrequency() const { return mesh_frequency_; }  ///< [Hz]
   /// d(drive force)/d(pinion torque) [1/m]: m_s r_p / I_p, or 1 / r_p with a balanced load.
   double torqueGain() const { return torque_gain_; }
-  /// Drive force F_m + F_d [N] at pinion torque T [N·m]: torqueGain() T plus the load's constant term
-  /// (seed 000 eq 14 as docs/model.md corrects it: T / r_p with a balanced load).
+  /// Drive force F_m + F_d [N] at pinion torque T [N·m]: torqueGain() T plus the load's constant
+  /// term (seed 000 eq 14 as docs/model.md corrects it: T / r_p with a balanced load).
   double driveForce(double torque) const { return torque_gain_ * torque + load_term_; }
   /// The torque comes from the model's input (TorqueProfile::Kind::kInput), not from time.
   bool takesTorqueInput() const { return spec_.torque.kind == TorqueProfile::Kind::kInput; }

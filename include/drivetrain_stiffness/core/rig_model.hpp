@@ -26,7 +26,8 @@ namespace drivetrain_stiffness {
 /// - Above 1 is refused: gear meshes and bearings damp at a few per cent; a ratio past critical
 ///   is a percentage typed for a fraction (5 for 0.05), not a rig.
 constexpr double kMaxDampingRatio = 1.0;
-/// Throws InvalidInput("<field> = <value>: ...") unless 0 <= value <= kMaxDampingRatio (NaN included).
+/// Throws InvalidInput("<field> = <value>: ...") unless 0 <= value <= kMaxDampingRatio (NaN
+/// included).
 void requireDampingRatio(std::string_view field, double value);
 
 /// Mean mesh stiffness over one period: k1, plus k_c for an anti-backlash gear [N/m]; the exact
@@ -37,14 +38,17 @@ double meanMeshStiffness(const AntiBacklashMesh& mesh);
 /// that replace them (the rig itself is read only and shared).
 struct DampingRatios {
   double mesh = 0.0, bearing = 0.0;
-  static DampingRatios of(const DynamicsConfig& d) { return {d.mesh_damping_ratio, d.bearing_damping_ratio}; }
+  static DampingRatios of(const DynamicsConfig& d) {
+    return {d.mesh_damping_ratio, d.bearing_damping_ratio};
+  }
 };
 
 /// The rotor parameters of a rig: masses and inertias from its `dynamics:` block, base radii from
 /// the gears, the given bearing stiffness per shaft, and damping from the given ratios
 /// (c_s = 2 zeta sqrt(k_mean m_s) for the torsional mode, c_b = 2 zeta sqrt(k_r m) per shaft).
 GearRotorParameters rigRotorParameters(const RigConfig& rig, const AntiBacklashMesh& mesh,
-                                       const std::array<double, 2>& bearing_stiffness, const DampingRatios& damping);
+                                       const std::array<double, 2>& bearing_stiffness,
+                                       const DampingRatios& damping);
 /// The same with the `dynamics:` block's damping ratios.
 inline GearRotorParameters rigRotorParameters(const RigConfig& rig, const AntiBacklashMesh& mesh,
                                               const std::array<double, 2>& bearing_stiffness) {

@@ -1,15 +1,16 @@
 // The sliced model's exact propagation over the output intervals of one mesh period at one constant
-// speed, as affine maps: the nominal phase after a bearing-stiffness or damping change (docs/model.md,
-// "Back to one product per sample at the nominal speed").
+// speed, as affine maps: the nominal phase after a bearing-stiffness or damping change
+// (docs/model.md, "Back to one product per sample at the nominal speed").
 //
 // At the nominal speed the output grid holds a whole number n of samples per mesh period, so the
-// interval from sample k to k + 1 always spans the same mesh phases, [i/n, (i+1)/n] with i = k mod n.
-// With the contacts in the loaded regime the sliced model is linear there, and its exact solution
-// over the interval (the product of the slices' exact maps, SlicedModalPropagator::loadedSliceMap)
-// is one affine map, y -> Phi y + d F_d + c: a 6x6 product per sample instead of crossing the ~86
-// slices of an interval one by one (at 1000 rpm and 1 kHz). The maps are products of the slices'
-// exact maps, so they hold the sliced model's solution to rounding (1e-12 of the slice-by-slice
-// propagation: SlicedIntervalMaps.AreTheSliceBySliceSolutionAsAMatrix). For inputs stamped inside an interval
+// interval from sample k to k + 1 always spans the same mesh phases, [i/n, (i+1)/n] with i = k mod
+// n. With the contacts in the loaded regime the sliced model is linear there, and its exact
+// solution over the interval (the product of the slices' exact maps,
+// SlicedModalPropagator::loadedSliceMap) is one affine map, y -> Phi y + d F_d + c: a 6x6 product
+// per sample instead of crossing the ~86 slices of an interval one by one (at 1000 rpm and 1 kHz).
+// The maps are products of the slices' exact maps, so they hold the sliced model's solution to
+// rounding (1e-12 of the slice-by-slice propagation:
+// SlicedIntervalMaps.AreTheSliceBySliceSolutionAsAMatrix). For inputs stamped inside an interval
 // each slice boundary b inside it keeps the map from the interval's start to b (head) and from b to
 // its end (tail): a stretch from an input's stamp to the interval's end is the exact propagation to
 // the next boundary and that boundary's tail, a stretch from the start to a stamp the head of the
@@ -20,7 +21,8 @@
 // one at 14 us; applying the whole map then costs 7 ns: a scratch timing on the seed servo at
 // 1000 rpm), so a stiffness that changes at every interval never makes them, no input pays for the
 // whole period at once, and they depend on the inputs only, not on when the work is done (a replay
-// gives the same bytes). The storage is sized once for the grid: no allocation after the first period.
+// gives the same bytes). The storage is sized once for the grid: no allocation after the first
+// period.
 #pragma once
 
 #include <vector>
@@ -43,10 +45,15 @@ class SlicedIntervalMaps {
 
   /// Interval i's boundaries: 0 is its start, boundaries(i) its end, the slice boundaries inside
   /// it between them.
-  int boundaries(int i) const { return static_cast<int>(intervals_[static_cast<std::size_t>(i)].offset.size()) - 1; }
+  int boundaries(int i) const {
+    return static_cast<int>(intervals_[static_cast<std::size_t>(i)].offset.size()) - 1;
+  }
   /// Boundary m of interval i as a phase offset from the interval's start [turns].
-  double offset(int i, int m) const { return intervals_[static_cast<std::size_t>(i)].offset[static_cast<std::size_t>(m)]; }
-  /// The last boundary at or before the phase offset u [turns] from interval i's start (0 for u <= 0).
+  double offset(int i, int m) const {
+    return intervals_[static_cast<std::size_t>(i)].offset[static_cast<std::size_t>(m)];
+  }
+  /// The last boundary at or before the phase offset u [turns] from interval i's start (0 for u <=
+  /// 0).
   int boundaryAtOrBefore(int i, double u) const;
 
   /// y from boundary m of interval i to the interval's end (m = 0: the whole interval), with the
@@ -66,11 +73,11 @@ class SlicedIntervalMaps {
 
  private:
   struct Interval {
-    std::vector<double> offset;     ///< boundary phases from the interval's start [turns]
-    std::vector<int> slice;         ///< the slice of the piece from boundary m to m + 1
-    std::vector<AffineMap> head;    ///< start -> boundary m
-    std::vector<AffineMap> tail;    ///< boundary m -> end
-    int uses = 0;  ///< calls since the last invalidate(), until made
+    std::vector<double> offset;   ///< boundary phases from the interval's start [turns]
+    std::vector<int> slice;       ///< the slice of the piece from boundary m to m + 1
+    std::vector<AffineMap> head;  ///< start -> boundary m
+    std::vector<AffineMap> tail;  ///< boundary m -> end
+    int uses = 0;                 ///< calls since the last invalidate(), until made
     bool ready = false, usable = false;
   };
 

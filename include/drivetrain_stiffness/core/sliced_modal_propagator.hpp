@@ -14,12 +14,13 @@
 // each modal coordinate obeys eta' = lambda eta + P e^{i w s} + Q e^{-i w s} + G, whose solution is
 // closed form (variation of constants):
 //   eta(h) = e^{lambda h} eta(0) + P E(lambda, i w, h) + Q E(lambda, -i w, h) + G E(lambda, 0, h),
-//   E(lambda, mu, h) = integral_0^h e^{lambda (h - s)} e^{mu s} ds = (e^{mu h} - e^{lambda h}) / (mu - lambda)
+//   E(lambda, mu, h) = integral_0^h e^{lambda (h - s)} e^{mu s} ds = (e^{mu h} - e^{lambda h}) /
+//   (mu - lambda)
 // (phi_1 series near mu = lambda). The step length h is free: a sample, the time to the next slice
 // boundary, the time to an input's stamp. Nothing depends on the speed, so a speed that changes at
 // every encoder reading, stands still (w = 0) or reverses (w < 0) costs nothing to set up. Work per
-// slice crossed: for each conjugate pair of modes one (the other is its conjugate for a real state),
-// so three rows of V^-1 y, three complex exponentials and three columns of V back.
+// slice crossed: for each conjugate pair of modes one (the other is its conjugate for a real
+// state), so three rows of V^-1 y, three complex exponentials and three columns of V back.
 //
 // The decomposition of a slice is made the first time the slice is crossed after a change to
 // parameters whose slices are not kept (setParameters, below), so a bearing-stiffness change
@@ -52,8 +53,8 @@ namespace drivetrain_stiffness {
 class SlicedModalPropagator {
  public:
   /// Throws InvalidInput for bearing clearance (the model is then never linear) or bad parameters.
-  SlicedModalPropagator(const GearRotorParameters& p, std::shared_ptr<const SlicedMesh> slices, double te_amplitude,
-                        double backlash);
+  SlicedModalPropagator(const GearRotorParameters& p, std::shared_ptr<const SlicedMesh> slices,
+                        double te_amplitude, double backlash);
   /// New parameters (bearing stiffness, damping): every slice is decomposed again on its next use,
   /// unless the set is one of the last kKeptParameterSets met, whose slices come back as they were.
   void setParameters(const GearRotorParameters& p);
@@ -70,7 +71,8 @@ class SlicedModalPropagator {
   /// entered no linear regime (both flanks unloaded at once: no mesh stiffness), a slice had no
   /// usable eigenbasis or a call met more than kMaxChangesPerCall changes; the caller integrates on
   /// from there (dopri5) and calls again.
-  double propagateLinear(State6& y, double& phase, double f, double duration, double drive_force) const;
+  double propagateLinear(State6& y, double& phase, double f, double duration,
+                         double drive_force) const;
   /// Returns 0, y and phase untouched, for a negative or NaN duration or a non-finite f, phase or
   /// drive force.
   /// The same all or nothing: false, leaving y and phase as they were, where propagateLinear would
@@ -83,9 +85,9 @@ class SlicedModalPropagator {
   double fastestPeriodBound() const { return fastest_period_bound_; }
   /// Changes of the contacts located and gone through (inside a step or on a slice boundary).
   long regimeChanges() const { return events_; }
-  /// Homogeneous propagator over one mesh period at mesh frequency f != 0 (the monodromy matrix of the
-  /// sliced model at a constant speed) with every contact of the mesh loaded: both anti-backlash
-  /// flanks, an ordinary gear's drive flank.
+  /// Homogeneous propagator over one mesh period at mesh frequency f != 0 (the monodromy matrix of
+  /// the sliced model at a constant speed) with every contact of the mesh loaded: both
+  /// anti-backlash flanks, an ordinary gear's drive flank.
   Matrix6 monodromy(double f) const;
   /// The same in the contact regime that y is in at mesh phase `phase` [turns]: both flanks below
   /// the anti-backlash knee, the drive flank alone above it, the back path alone past the reverse
@@ -150,23 +152,35 @@ class SlicedModalPropagator {
   /// needs them; both flanks unloaded has no mesh stiffness (a free mass, no eigenbasis) and is
   /// not propagated here.
   enum class MeshRegime {
-    kNoContact = 0, kBackFlank = 1, kBackStiffened = 2,
-    kDriveFlank = 3, kBothFlanks = 4, kDriveLoadedBackStiffened = 5,
-    kDriveStiffened = 6, kDriveStiffenedBackLoaded = 7, kBothStiffened = 8
+    kNoContact = 0,
+    kBackFlank = 1,
+    kBackStiffened = 2,
+    kDriveFlank = 3,
+    kBothFlanks = 4,
+    kDriveLoadedBackStiffened = 5,
+    kDriveStiffened = 6,
+    kDriveStiffenedBackLoaded = 7,
+    kBothStiffened = 8
   };
   static constexpr int kRegimes = 9;
   static MeshRegime regimeOf(FlankState drive, FlankState back) {
     return static_cast<MeshRegime>(3 * static_cast<int>(drive) + static_cast<int>(back));
   }
-  static FlankState driveState(MeshRegime r) { return static_cast<FlankState>(static_cast<int>(r) / 3); }
-  static FlankState backState(MeshRegime r) { return static_cast<FlankState>(static_cast<int>(r) % 3); }
+  static FlankState driveState(MeshRegime r) {
+    return static_cast<FlankState>(static_cast<int>(r) / 3);
+  }
+  static FlankState backState(MeshRegime r) {
+    return static_cast<FlankState>(static_cast<int>(r) % 3);
+  }
   /// The mesh force in a regime: stiffness * delta + damping * delta' + constant.
   struct MeshTerms {
     double stiffness, damping, constant;
   };
   MeshTerms meshTerms(MeshRegime r, int j) const;
   /// Every contact of the mesh loaded: both anti-backlash flanks, an ordinary gear's drive flank.
-  MeshRegime loadedRegime() const { return slices_->antiBacklash() ? MeshRegime::kBothFlanks : MeshRegime::kDriveFlank; }
+  MeshRegime loadedRegime() const {
+    return slices_->antiBacklash() ? MeshRegime::kBothFlanks : MeshRegime::kDriveFlank;
+  }
   struct Slice {
     CMatrix v, v_inv;
     CVector lambda, force_dir, drive_dir;  ///< eigenvalues, V^-1 e_F, V^-1 e_v
@@ -183,7 +197,8 @@ class SlicedModalPropagator {
     bool ready = false, usable = false, has_upper = false;
   };
   /// One flank's contact law in slice j: spring force s = c0 + alpha delta, spring and damper
-  /// t = s + beta delta'; `exists` false where the flank has no stiffness (no tooth pair, no back path).
+  /// t = s + beta delta'; `exists` false where the flank has no stiffness (no tooth pair, no back
+  /// path).
   struct FlankLaw {
     double c0, alpha, beta;
     bool exists;
@@ -223,7 +238,8 @@ class SlicedModalPropagator {
   void tabulateRegimeConditions(MeshRegime r) const;
   const Slice& slice(MeshRegime r, int j) const;
   /// Slice j's modes by Newton on its characteristic polynomial from three seeds (the common case,
-  /// about 2 us with the eigenvectors and checks); false where that does not give a verified spectrum.
+  /// about 2 us with the eigenvectors and checks); false where that does not give a verified
+  /// spectrum.
   bool decomposeSeeded(MeshRegime r, int j, Slice& s, std::array<Complex, 3> seeds) const;
   /// Slice j's modes by Eigen's EigenSolver and a complex LU inverse (about 5 us).
   void decomposeGeneral(MeshRegime r, int j, Slice& s) const;
@@ -237,16 +253,18 @@ class SlicedModalPropagator {
     std::array<double, 6> n1{}, n2{}, nl{};  ///< |iw - lambda|^2, |-iw - lambda|^2, |lambda|^2
     std::array<bool, 6> particular{};
   };
-  void prepare(const Slice& s, MeshRegime r, int j, const State6& y, Complex e_theta0, double w, double drive_force,
-               Piece& out) const;
+  void prepare(const Slice& s, MeshRegime r, int j, const State6& y, Complex e_theta0, double w,
+               double drive_force, Piece& out) const;
   /// y over h from the prepared piece, given e^{i w h}.
-  void advance(const Slice& s, const Piece& piece, double w, double h, Complex e_mu, State6& y) const;
+  void advance(const Slice& s, const Piece& piece, double w, double h, Complex e_mu,
+               State6& y) const;
   /// Where, within a step of length h that starts in regime r (slice j, TE phasor e_theta, state
   /// `start`) and ends out of it (state `end`, TE phasor *e_hi), the state leaves r on the prepared
   /// piece's exact solution: the first length found out of r (h itself where the change is at the
   /// end to the resolution), with the TE phasor there in *e_hi (left as it was when that is h).
-  double locateChange(const Slice& s, const Piece& piece, MeshRegime r, int j, Complex e_theta, double w, double h,
-                      const State6& start, const State6& end, Complex* e_hi) const;
+  double locateChange(const Slice& s, const Piece& piece, MeshRegime r, int j, Complex e_theta,
+                      double w, double h, const State6& start, const State6& end,
+                      Complex* e_hi) const;
   /// inRegime's rules as one continuous number, >= 0 in regime r: the least rule's force over its
   /// scale (an either-clause: the larger of its two), for locateChange's false position.
   double regimeValue(MeshRegime r, int j, const State6& y, Complex e_theta, double w) const;
@@ -255,7 +273,8 @@ class SlicedModalPropagator {
   bool inRegime(MeshRegime r, int j, const State6& y, Complex e_theta, double w) const;
   /// A lower bound of regime r's contact conditions over a whole step of length h from y (scaled
   /// to the conditions' forces): > 0 proves the contacts keep their state through it.
-  double regimeMargin(const Slice& s, MeshRegime r, int j, const Piece& piece, Complex e_theta0, double w) const;
+  double regimeMargin(const Slice& s, MeshRegime r, int j, const Piece& piece, Complex e_theta0,
+                      double w) const;
   /// The linear regime y is in, if any.
   std::optional<MeshRegime> regimeAt(int j, const State6& y, Complex e_theta, double w) const;
   Matrix6 monodromyIn(MeshRegime r, double f) const;
@@ -271,8 +290,8 @@ class SlicedModalPropagator {
     double mesh_damping = 0.0, pinion_mass = 0.0, gear_mass = 0.0, mesh_mass = 0.0;
     bool operator==(const DecompositionKey& o) const {
       return bearing_stiffness == o.bearing_stiffness && bearing_damping == o.bearing_damping &&
-             mesh_damping == o.mesh_damping && pinion_mass == o.pinion_mass && gear_mass == o.gear_mass &&
-             mesh_mass == o.mesh_mass;
+             mesh_damping == o.mesh_damping && pinion_mass == o.pinion_mass &&
+             gear_mass == o.gear_mass && mesh_mass == o.mesh_mass;
     }
   };
   /// One parameter set's slices, per MeshRegime, per slice (sized when the regime is first met).
@@ -281,17 +300,21 @@ class SlicedModalPropagator {
     long last_used = 0;  ///< 0: never used (its key means nothing)
     std::array<std::vector<Slice>, kRegimes> slices;
   };
-  std::vector<Slice>& activeSlices(MeshRegime r) const { return sets_[active_].slices[static_cast<std::size_t>(r)]; }
+  std::vector<Slice>& activeSlices(MeshRegime r) const {
+    return sets_[active_].slices[static_cast<std::size_t>(r)];
+  }
   mutable std::array<KeptSet, kKeptParameterSets> sets_;
   std::size_t active_ = 0;  ///< the set of the parameters now
   int previous_ = -1;       ///< the set before the last change (seeds for the new one), -1: none
   long use_clock_ = 0, kept_sets_reused_ = 0;
-  mutable std::array<std::vector<RegimeConditions>, kRegimes> conditions_;  ///< per MeshRegime, per slice (makeConditions)
+  mutable std::array<std::vector<RegimeConditions>, kRegimes>
+      conditions_;  ///< per MeshRegime, per slice (makeConditions)
   /// The mesh damping the tables of conditions_ were made with (NaN: not yet made). The rules read
   /// nothing else that setParameters can change, so a bearing change keeps them.
   double conditions_mesh_damping_ = std::numeric_limits<double>::quiet_NaN();
   mutable Piece piece_;
-  mutable long decompositions_ = 0, general_decompositions_ = 0, crossed_ = 0, substeps_ = 0, events_ = 0;
+  mutable long decompositions_ = 0, general_decompositions_ = 0, crossed_ = 0, substeps_ = 0,
+               events_ = 0;
   double fastest_period_bound_ = 0.0;
   static constexpr int kEventHalvings = 40;
   /// locateChange first samples the step at this many equal lengths for the earliest change.
@@ -329,8 +352,8 @@ inline constexpr double kFirstNonlinearStretch = 1.0 / 16.0;
 /// ChatterAroundTheKneeIsPropagatedExactly).
 inline constexpr long kMaxNonlinearStretches = static_cast<long>(256 / kFirstNonlinearStretch);
 template <typename Nonlinear>
-long propagateMeasured(const SlicedModalPropagator& exact, State6& y, double& phase, double f, double t, double t_end,
-                       double drive_force, Nonlinear&& nonlinear) {
+long propagateMeasured(const SlicedModalPropagator& exact, State6& y, double& phase, double f,
+                       double t, double t_end, double drive_force, Nonlinear&& nonlinear) {
   long stretches = 0;
   const double first = kFirstNonlinearStretch * exact.fastestPeriodBound();
   double stretch = first;
@@ -341,7 +364,8 @@ long propagateMeasured(const SlicedModalPropagator& exact, State6& y, double& ph
     t += done;
     if (!(t < t_end)) break;
     stretch = done > 0.0 ? first : stretch;
-    const double end = ++stretches > kMaxNonlinearStretches || stretch >= t_end - t ? t_end : t + stretch;
+    const double end =
+        ++stretches > kMaxNonlinearStretches || stretch >= t_end - t ? t_end : t + stretch;
     nonlinear(t, end, y, phase);
     t = end;
     stretch *= 2.0;  // the next one, should the exact propagation still not start there

@@ -63,7 +63,7 @@ class SpeedProfile {
     double begin = 0.0, end = 0.0;  ///< [s]
     double from = 0.0, to = 0.0;    ///< [rad/s] speed at begin and end
     Shape shape = Shape::kLinear;
-    double angle_at_begin = 0.0;    ///< [rad] integral of omega from the first knot to begin
+    double angle_at_begin = 0.0;  ///< [rad] integral of omega from the first knot to begin
   };
   void addSpan(double begin, double end, double from, double to, Shape shape);
   /// Integral of omega from the first knot to t [rad].

@@ -27,9 +27,9 @@ struct PreloadSetting {
 
 /// Input plausibility limits; anything beyond is rejected as absurd.
 struct EstimatorLimits {
-  double max_abs_torque = 100.0;       ///< [N·m]
-  double max_preload = 1e5;            ///< [N]
-  double max_interference = 1e-3;      ///< [m]
+  double max_abs_torque = 100.0;   ///< [N·m]
+  double max_preload = 1e5;        ///< [N]
+  double max_interference = 1e-3;  ///< [m]
   /// [-] A support is re-solved only when its radial load moved by more than this fraction of its
   /// total load (radial + axial preload) since its last solve; 0 = every update. Ball-contact
   /// stiffness grows as Q^(1/3) (Hertz), so the stiffness lags the exact one by about tol / 3.
@@ -42,8 +42,8 @@ struct EstimatorLimits {
 };
 
 /// The bound of EstimatorLimits::load_tolerance, one rule for StiffnessEstimator and the pipeline's
-/// options (~bearing_load_tolerance): 0 <= tol <= 0.1 (past 10 % of the load the stiffness would lag
-/// the exact one by more than ~3 %, tol / 3 by Hertz).
+/// options (~bearing_load_tolerance): 0 <= tol <= 0.1 (past 10 % of the load the stiffness would
+/// lag the exact one by more than ~3 %, tol / 3 by Hertz).
 constexpr double kMaxLoadTolerance = 0.1;
 /// Throws InvalidInput("<field> = <value>: ...") outside [0, kMaxLoadTolerance] (NaN included);
 /// `field` is the name the caller's user knows (load_tolerance, bearing_load_tolerance).
@@ -60,24 +60,26 @@ struct SupportEstimate {
 };
 
 struct MeshEstimate {
-  double phase = 0.0;          ///< mesh phase in [0, 1)
-  CompositeMesh current;       ///< k1, k2, k_chain, composite and flank state at this phase and load
-  double mean = 0.0;           ///< composite stiffness averaged over a mesh period, same flank state [N/m]
+  double phase = 0.0;     ///< mesh phase in [0, 1)
+  CompositeMesh current;  ///< k1, k2, k_chain, composite and flank state at this phase and load
+  double mean = 0.0;  ///< composite stiffness averaged over a mesh period, same flank state [N/m]
 };
 
 struct StiffnessEstimate {
-  double torque = 0.0;       ///< pinion input torque [N·m]
-  double mesh_force = 0.0;   ///< |T| / r_b,pinion [N]
+  double torque = 0.0;      ///< pinion input torque [N·m]
+  double mesh_force = 0.0;  ///< |T| / r_b,pinion [N]
   std::vector<SupportEstimate> supports;
   MeshEstimate mesh;
 };
 
 class StiffnessEstimator {
  public:
-  /// Validates the rig and limits and solves the initial state (torque 0, preloads from the config).
-  /// The rig is read only, and shared: the pipeline hands the same one to the dynamics and the
-  /// calibration (the preloads that change at run time are this estimator's state, not the rig's).
-  explicit StiffnessEstimator(std::shared_ptr<const RigConfig> rig, const EstimatorLimits& limits = {});
+  /// Validates the rig and limits and solves the initial state (torque 0, preloads from the
+  /// config). The rig is read only, and shared: the pipeline hands the same one to the dynamics and
+  /// the calibration (the preloads that change at run time are this estimator's state, not the
+  /// rig's).
+  explicit StiffnessEstimator(std::shared_ptr<const RigConfig> rig,
+                              const EstimatorLimits& limits = {});
   /// The same on a copy of `rig`.
   StiffnessEstimator(const RigConfig& rig, const EstimatorLimits& limits = {});
 
@@ -121,8 +123,10 @@ class StiffnessEstimator {
     /// with `model` once every support has solved.
     std::unique_ptr<BearingSupport> spare;
   };
-  /// Solves all `supports` (new models: cold starts) for `torque`; throws without touching the state.
-  StiffnessEstimate solveAll(double torque, double pinion_angle, const std::vector<Support>& supports) const;
+  /// Solves all `supports` (new models: cold starts) for `torque`; throws without touching the
+  /// state.
+  StiffnessEstimate solveAll(double torque, double pinion_angle,
+                             const std::vector<Support>& supports) const;
   MeshEstimate meshAt(double signed_mesh_force, double pinion_angle) const;
   /// Radial load of a support: its radial preload plus its share of the mesh force [N].
   static double radialLoad(const BearingSupportConfig& c, double mesh_force);
@@ -136,7 +140,8 @@ class StiffnessEstimator {
   std::shared_ptr<const RigConfig> rig_;
   EstimatorLimits limits_;
   std::shared_ptr<const AntiBacklashMesh> mesh_;
-  std::array<double, 3> mean_k1_kchain_{};  ///< period means of k1, k_chain (for the flank state) and k1 + k_chain
+  std::array<double, 3>
+      mean_k1_kchain_{};  ///< period means of k1, k_chain (for the flank state) and k1 + k_chain
   std::vector<Support> supports_;
   StiffnessEstimate estimate_;
   /// setTorque's and setPreloads' per-support scratch (one per support, sized with supports_): a

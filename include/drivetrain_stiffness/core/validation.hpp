@@ -36,7 +36,8 @@ void requireNonNegative(std::string_view field, double value);
 /// check and then overflows the model into NaN (found by fuzzing, test/fuzz/).
 void requireAtMost(std::string_view field, double value, double limit);
 /// Plausibility bounds shared by the core's checks (an order of magnitude past anything made).
-constexpr double kMinYoungsModulus = 1e6;   ///< [Pa] below elastomers; a subnormal one underflows to 0
+constexpr double kMinYoungsModulus =
+    1e6;  ///< [Pa] below elastomers; a subnormal one underflows to 0
 constexpr double kMaxYoungsModulus = 1e13;  ///< [Pa] diamond is 1.2e12
 /// kMinYoungsModulus <= value <= kMaxYoungsModulus.
 void requireYoungsModulus(std::string_view field, double value);

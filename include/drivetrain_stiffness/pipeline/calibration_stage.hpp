@@ -16,16 +16,16 @@ class CalibrationStage {
  public:
   /// Calibrates when `enabled` and the rig has calibration and dynamics blocks. Keeps references
   /// to `estimator` (its mesh table shared) and `counters`.
-  CalibrationStage(std::shared_ptr<const RigConfig> rig, const StiffnessEstimator& estimator, bool enabled,
-                   PipelineCounters& counters);
+  CalibrationStage(std::shared_ptr<const RigConfig> rig, const StiffnessEstimator& estimator,
+                   bool enabled, PipelineCounters& counters);
   /// The live calibration, or null.
   const Calibrator* calibrator() const { return calibrator_.get(); }
   /// The readings broke off: the open window is dropped.
   void interrupt();
   /// One reading: unwrapped angles [rad], mesh phase [-], speed [rad/s], held torque [N*m];
   /// not `continuous`: a new window. Errors are counted and drop the window. Needs calibrator().
-  void reading(Stamp stamp, double pinion, double gear, double phase, double speed, double held_torque, bool continuous,
-               PipelineSink& sink);
+  void reading(Stamp stamp, double pinion, double gear, double phase, double speed,
+               double held_torque, bool continuous, PipelineSink& sink);
   /// PipelineSink::stiffness's bands.
   CalibrationBands stiffnessBands(const StiffnessEstimate& estimate) const;
   /// PipelineSink::resonance's bands, at the current torque.

@@ -19,11 +19,12 @@ namespace drivetrain_stiffness {
 
 class DynamicsStage {
  public:
-  /// The model of `rig` (with a dynamics block) on the estimator's bearing stiffness and mesh table;
-  /// ~output_rate [Hz], ~motion_slices, ~max_gap [s]. Keeps references to `estimator`, `phase`
-  /// (followed; its origin restarts with the model) and `counters`. Throws InvalidInput.
-  DynamicsStage(std::shared_ptr<const RigConfig> rig, const StiffnessEstimator& estimator, const PipelineOptions& options,
-                Fidelity fidelity, PhaseSource& phase, PipelineCounters& counters);
+  /// The model of `rig` (with a dynamics block) on the estimator's bearing stiffness and mesh
+  /// table; ~output_rate [Hz], ~motion_slices, ~max_gap [s]. Keeps references to `estimator`,
+  /// `phase` (followed; its origin restarts with the model) and `counters`. Throws InvalidInput.
+  DynamicsStage(std::shared_ptr<const RigConfig> rig, const StiffnessEstimator& estimator,
+                const PipelineOptions& options, Fidelity fidelity, PhaseSource& phase,
+                PipelineCounters& counters);
   /// Each sample goes to `consumer` after those added before (kept by reference).
   void addConsumer(SampleConsumer& consumer) { consumers_.push_back(&consumer); }
   DynamicsEstimator& model() { return model_; }

@@ -19,7 +19,8 @@ namespace drivetrain_stiffness {
 
 class InputGate {
  public:
-  /// ~stamp_jump_back, ~clock_jump_back [s], ~torque_frame of `options`; keeps `counters` by reference.
+  /// ~stamp_jump_back, ~clock_jump_back [s], ~torque_frame of `options`; keeps `counters` by
+  /// reference.
   InputGate(const PipelineOptions& options, PipelineCounters& counters);
 
   // --- The rules, pure ---
@@ -47,7 +48,8 @@ class InputGate {
   InputOutcome checkStamp(InputStream stream, Stamp stamp) const;
   /// The source-restart rule: the reason to reset everything (counted), or nullopt.
   std::optional<std::string> noteSourceRestart(InputStream stream, Stamp stamp);
-  /// The clock-jump rule at `now`: the reason to reset (counted), unless the stamps restarted first.
+  /// The clock-jump rule at `now`: the reason to reset (counted), unless the stamps restarted
+  /// first.
   std::optional<std::string> observeClock(Stamp now);
   /// Counts a refusal (stream, reason, tally with `found`), says why in last_event; returns `why`.
   InputOutcome reject(InputOutcome why, InputStream stream, Stamp stamp, const std::string& reason,

@@ -1,4 +1,5 @@
-// The vocabulary of the pipeline's inputs: stamps, where an input came from, and why one is refused.
+// The vocabulary of the pipeline's inputs: stamps, where an input came from, and why one is
+// refused.
 #pragma once
 
 #include <cstdint>
@@ -10,7 +11,9 @@ namespace drivetrain_stiffness {
 /// exact (a double at 1.7e9 s only resolves 2.4e-7 s); toSec() equals ros::Time::toSec().
 struct Stamp {
   std::int64_t ns = 0;
-  static Stamp fromSecNsec(std::int64_t sec, std::int64_t nsec) { return {sec * 1000000000LL + nsec}; }
+  static Stamp fromSecNsec(std::int64_t sec, std::int64_t nsec) {
+    return {sec * 1000000000LL + nsec};
+  }
   std::int64_t sec() const { return ns / 1000000000LL; }
   std::int64_t nsec() const { return ns % 1000000000LL; }
   double toSec() const { return static_cast<double>(sec()) + 1e-9 * static_cast<double>(nsec()); }
@@ -25,10 +28,19 @@ inline bool operator==(Stamp a, Stamp b) { return a.ns == b.ns; }
 inline double secondsBetween(Stamp a, Stamp b) { return Stamp{a.ns - b.ns}.toSec(); }
 
 /// Why an input was not accepted (kAccepted otherwise).
-enum class InputOutcome { kAccepted, kZeroStamp, kOutOfOrder, kInvalidValue, kUnreachableLoad, kWrongFrame, kStampRange };
+enum class InputOutcome {
+  kAccepted,
+  kZeroStamp,
+  kOutOfOrder,
+  kInvalidValue,
+  kUnreachableLoad,
+  kWrongFrame,
+  kStampRange
+};
 const char* toString(InputOutcome outcome);
 
-/// Where an input came from (its message header and publisher): for the drop count and the frame rule.
+/// Where an input came from (its message header and publisher): for the drop count and the frame
+/// rule.
 struct InputOrigin {
   std::string_view publisher;  ///< the publisher's caller id; messages are numbered per publisher
   std::uint32_t seq = 0;       ///< header.seq (0 throughout when the publisher does not number)

@@ -15,10 +15,12 @@ class MeshPeriodStage : public SampleConsumer {
   /// `dynamics`: the model whose samples it receives (its output interval, fidelity and equivalent
   /// mass, read at each block's start and end); `pinion_base_radius` [m] > 0; `counters`:
   /// mesh_period_stats_out and last_event. Keeps references to both.
-  MeshPeriodStage(const DynamicsEstimator& dynamics, double pinion_base_radius, PipelineCounters& counters);
+  MeshPeriodStage(const DynamicsEstimator& dynamics, double pinion_base_radius,
+                  PipelineCounters& counters);
   /// Into the running block; a closed block goes to sink.meshPeriod (a non-finite one is counted in
   /// last_event only). Samples that do not move forward in time are skipped.
-  void sample(Stamp stamp, const DynamicsSample& sample, double mesh_frequency, PipelineSink& sink) override;
+  void sample(Stamp stamp, const DynamicsSample& sample, double mesh_frequency,
+              PipelineSink& sink) override;
   /// Drops the running block; the next block starts at the next mesh-period boundary.
   void restart() override { block_ = Accumulator{}; }
 
@@ -34,14 +36,17 @@ class MeshPeriodStage : public SampleConsumer {
     Stamp start;
     double start_turns = 0.0, start_velocity = 0.0;
     double te_ref = 0.0, force_ref = 0.0;  ///< the start values: sums of x - ref (no cancellation)
-    double te_sum = 0.0, te_sq = 0.0, force_sum = 0.0, force_sq = 0.0, torque_sum = 0.0;  ///< trapezoid x dt
+    double te_sum = 0.0, te_sq = 0.0, force_sum = 0.0, force_sq = 0.0,
+           torque_sum = 0.0;  ///< trapezoid x dt
     double te_min = 0.0, te_max = 0.0, force_min = 0.0, force_max = 0.0;
   };
-  void startBlock(Stamp stamp, const DynamicsSample& s, double turns, double boundary, double mesh_frequency);
+  void startBlock(Stamp stamp, const DynamicsSample& s, double turns, double boundary,
+                  double mesh_frequency);
   /// The trapezoid from the last sample to `s` (dt [s]) into the sums, extremes and count.
   void accumulate(const DynamicsSample& s, double dt);
   /// The closed block's statistics, ending at sample `s` at `stamp`, unwrapped phase `turns`.
-  MeshPeriodStatistics close(Stamp stamp, const DynamicsSample& s, double count, double turns, bool forward) const;
+  MeshPeriodStatistics close(Stamp stamp, const DynamicsSample& s, double count, double turns,
+                             bool forward) const;
   void publish(Stamp stamp, const MeshPeriodStatistics& out, PipelineSink& sink);
 
   const DynamicsEstimator& dynamics_;

@@ -15,7 +15,8 @@ namespace drivetrain_stiffness {
 
 class PhaseSource {
  public:
-  /// One reading, unwrapped: angles [rad], speed [rad/s]; gear_reference [rad]: gear + (z_p/z_g) pinion.
+  /// One reading, unwrapped: angles [rad], speed [rad/s]; gear_reference [rad]: gear + (z_p/z_g)
+  /// pinion.
   struct Reading {
     Stamp stamp;
     double pinion = 0.0, speed = 0.0;
@@ -29,7 +30,8 @@ class PhaseSource {
 
   /// ~pinion_speed_rpm, ~mesh_phase_offset, ~motion_timeout, ~gear_ratio_tolerance of `options`;
   /// z_p, z_g > 0 teeth. Keeps a reference to `counters`.
-  PhaseSource(const PipelineOptions& options, int pinion_teeth, int gear_teeth, PipelineCounters& counters);
+  PhaseSource(const PipelineOptions& options, int pinion_teeth, int gear_teeth,
+              PipelineCounters& counters);
 
   /// [rad]: the anchor extrapolated, or the nominal angle since origin() (0 before).
   double pinionAngle(Stamp stamp) const;
@@ -54,7 +56,8 @@ class PhaseSource {
   /// `m` unwrapped against a last reading at most ~motion_timeout old (`continuous`). Changes
   /// nothing; InvalidInput for an implied speed beyond +-1e5 rpm (an encoder jump).
   Reading unwrap(Stamp stamp, const MotionInput& m, bool& continuous) const;
-  /// A gear angle off the tooth ratio by more than ~gear_ratio_tolerance: counted once, re-referenced.
+  /// A gear angle off the tooth ratio by more than ~gear_ratio_tolerance: counted once,
+  /// re-referenced.
   void checkGearRatio(Reading& reading);
   /// The encoders drive the phase from this reading on.
   void anchorTo(const Reading& reading);
@@ -66,7 +69,7 @@ class PhaseSource {
   void reset();
 
  private:
-  double ratio() const { return static_cast<double>(teeth_p_) / teeth_g_; }  ///< z_p / z_g
+  double ratio() const { return static_cast<double>(teeth_p_) / teeth_g_; }      ///< z_p / z_g
   double offsetAngle() const { return mesh_phase_offset_ * kTwoPi / teeth_p_; }  ///< [rad]
 
   int teeth_p_, teeth_g_;
@@ -74,8 +77,8 @@ class PhaseSource {
   double mesh_phase_offset_, motion_timeout_, gear_ratio_tolerance_;
   PipelineCounters& counters_;
   std::optional<Stamp> origin_;
-  std::optional<Anchor> anchor_;  ///< set by readings (and their time-out); empty: nominal
-  bool encoders_ = false;         ///< the anchor comes from a reading (not a time-out)
+  std::optional<Anchor> anchor_;    ///< set by readings (and their time-out); empty: nominal
+  bool encoders_ = false;           ///< the anchor comes from a reading (not a time-out)
   std::optional<Reading> reading_;  ///< the last one, for the next one's unwrapping and ratio check
 };
 

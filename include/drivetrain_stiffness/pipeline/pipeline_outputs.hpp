@@ -28,25 +28,28 @@ struct ResonanceEstimate {
 /// The dynamic TE and mesh force over a block of whole mesh periods (MeshPeriodStage; estimators:
 /// docs/pipeline.md, "Mesh-period statistics"). Not the message MeshPeriodStats.
 struct MeshPeriodStatistics {
-  Stamp start, end;               ///< the block's first and last output samples
-  double duration = 0.0;          ///< end - start [s]
-  std::uint32_t periods = 0;      ///< whole mesh periods in the block (net)
-  std::uint32_t samples = 0;      ///< output samples in [start, end) (the end sample starts the next block)
+  Stamp start, end;           ///< the block's first and last output samples
+  double duration = 0.0;      ///< end - start [s]
+  std::uint32_t periods = 0;  ///< whole mesh periods in the block (net)
+  std::uint32_t samples =
+      0;  ///< output samples in [start, end) (the end sample starts the next block)
   double te_mean = 0.0, te_rms = 0.0, te_peak_to_peak = 0.0;                          ///< [m]
   double mesh_force_mean = 0.0, mesh_force_rms = 0.0, mesh_force_peak_to_peak = 0.0;  ///< [N]
-  double mesh_frequency = 0.0;    ///< [Hz]
-  double torque = 0.0;            ///< [N*m]
+  double mesh_frequency = 0.0;                                                        ///< [Hz]
+  double torque = 0.0;                                                                ///< [N*m]
 };
 
 /// What a TE sample's tf frames and markers need, as values: a sink never calls the pipeline back.
 struct SampleContext {
-  double pinion_angle = 0.0;  ///< [rad] at the stamp, as the encoders count it (no mesh phase offset)
-  const ResonanceEstimate* resonance = nullptr;  ///< the last published, or null; valid during the call
+  double pinion_angle =
+      0.0;  ///< [rad] at the stamp, as the encoders count it (no mesh phase offset)
+  const ResonanceEstimate* resonance =
+      nullptr;  ///< the last published, or null; valid during the call
 };
 
 /// The TE spectrum's strongest lines over the sliding window (fixed storage).
 struct SpectrumPeaks {
-  static constexpr std::size_t kMaxPeaks = 3;  ///< the lines the pipeline keeps (te_spectrum)
+  static constexpr std::size_t kMaxPeaks = 3;   ///< the lines the pipeline keeps (te_spectrum)
   std::array<SpectralPeak, kMaxPeaks> peaks{};  ///< the first `count`, strongest first
   std::size_t count = 0;
   double resolution = 0.0;      ///< [Hz] bin spacing, 1 / window_seconds
@@ -60,14 +63,18 @@ class PipelineSink {
   virtual ~PipelineSink() = default;
   /// After an accepted input (throttled to ~stiffness_rate). `bands`: the calibrated stiffness with
   /// 95 % bounds, else the drawing's model with bounds of zero width (frequencies unfilled).
-  virtual void stiffness(Stamp /*stamp*/, const StiffnessEstimate& /*estimate*/, const CalibrationBands& /*bands*/) {}
-  /// One transmission-error sample on the output grid, at `stamp` (exact; sample.t = stamp.toSec()).
-  virtual void transmissionError(Stamp /*stamp*/, const DynamicsSample& /*sample*/, const SampleContext& /*context*/) {}
+  virtual void stiffness(Stamp /*stamp*/, const StiffnessEstimate& /*estimate*/,
+                         const CalibrationBands& /*bands*/) {}
+  /// One transmission-error sample on the output grid, at `stamp` (exact; sample.t =
+  /// stamp.toSec()).
+  virtual void transmissionError(Stamp /*stamp*/, const DynamicsSample& /*sample*/,
+                                 const SampleContext& /*context*/) {}
   /// New TE spectrum peaks; stamp of the newest sample in the window.
   virtual void spectrum(Stamp /*stamp*/, const SpectrumPeaks& /*peaks*/) {}
   /// The estimate moved by more than ~resonance_threshold (or after a reset). `bands`: calibrated
   /// stiffness and frequencies with 95 % bounds, else the estimate's frequencies of zero width.
-  virtual void resonance(Stamp /*stamp*/, const ResonanceEstimate& /*estimate*/, const CalibrationBands& /*bands*/) {}
+  virtual void resonance(Stamp /*stamp*/, const ResonanceEstimate& /*estimate*/,
+                         const CalibrationBands& /*bands*/) {}
   /// One reading's measured TE beside the calibrated model's (the calibration rule).
   virtual void measuredTe(Stamp /*stamp*/, const MeasuredTeSample& /*sample*/) {}
   /// The calibration after every closed window; stamp = the reading that closed it.
@@ -85,18 +92,21 @@ struct PipelineCounters {
   std::uint64_t dropped_torque = 0, dropped_preload = 0;  ///< numbered messages that never arrived
   std::uint64_t accepted_motion = 0, rejected_motion = 0, dropped_motion = 0;  ///< joint_states
   std::uint64_t motion_timeouts = 0, gear_ratio_mismatches = 0;
-  std::uint64_t stiffness_shed = 0;  ///< backlogged torque inputs: dynamics only, no stiffness update
+  std::uint64_t stiffness_shed =
+      0;  ///< backlogged torque inputs: dynamics only, no stiffness update
   std::uint64_t clock_resets = 0, stamp_resets = 0, gap_restarts = 0;
   std::uint64_t dynamics_errors = 0;
-  std::uint64_t stiffness_out = 0, stiffness_coalesced = 0;  ///< published, and skipped by ~stiffness_rate
-  std::uint64_t stiffness_refused = 0;  ///< stiffness messages the sink refused (its reason in last_event)
+  std::uint64_t stiffness_out = 0,
+                stiffness_coalesced = 0;  ///< published, and skipped by ~stiffness_rate
+  std::uint64_t stiffness_refused =
+      0;  ///< stiffness messages the sink refused (its reason in last_event)
   std::uint64_t te_out = 0, spectra_out = 0, resonance_out = 0;
   std::uint64_t modal_updates = 0;  ///< modal analyses run (ResonanceTracker)
   std::uint64_t measured_te_out = 0, calibration_out = 0;  ///< published (the calibration rule)
-  std::uint64_t mesh_period_stats_out = 0;  ///< MeshPeriodStatistics published
+  std::uint64_t mesh_period_stats_out = 0;                 ///< MeshPeriodStatistics published
   std::uint64_t calibration_errors = 0;  ///< windows the calibration could not evaluate
-  double simulated_s = 0.0;         ///< model time integrated
-  std::string last_event;           ///< last rejection or reset, with its reason
+  double simulated_s = 0.0;              ///< model time integrated
+  std::string last_event;                ///< last rejection or reset, with its reason
 };
 
 /// The counters by the names /diagnostics and drivetrain_replay's summary use (one list for both).

@@ -37,7 +37,8 @@ class RefusalTally {
   };
 
   /// Counts one refusal; `found` (may be empty) is the offending value for the summary.
-  void record(InputStream stream, InputOutcome why, Stamp stamp, std::string_view reason, std::string_view found = {});
+  void record(InputStream stream, InputOutcome why, Stamp stamp, std::string_view reason,
+              std::string_view found = {});
   const Entry& entry(InputStream stream, InputOutcome why) const;
   /// Refusals of `stream` for every reason.
   std::uint64_t total(InputStream stream) const;

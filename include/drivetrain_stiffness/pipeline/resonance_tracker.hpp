@@ -21,13 +21,14 @@ class ResonanceTracker {
   /// `threshold` [-] in (0, 1): the relative frequency change that republishes. Keeps references
   /// to `rig` (masses, geometry), `estimator` (bearing and mesh stiffness), `calibration` (the
   /// bands) and `counters` (modal_updates, resonance_out, dynamics_errors, last_event).
-  ResonanceTracker(const RigConfig& rig, const StiffnessEstimator& estimator, const CalibrationStage& calibration,
-                   double threshold, PipelineCounters& counters);
+  ResonanceTracker(const RigConfig& rig, const StiffnessEstimator& estimator,
+                   const CalibrationStage& calibration, double threshold,
+                   PipelineCounters& counters);
   /// The Courant-Fischer shortcut: true when every spring (bearing per shaft, mean mesh) [N/m] is
   /// within [(1 - threshold)^2, (1 + threshold)^2] (shrunk by 1e-9) of its value at the last
   /// publication, so no natural frequency can have moved by more than `threshold`.
-  static bool withinCourantFischerBounds(const std::array<double, 3>& springs, const std::array<double, 3>& at_last,
-                                         double threshold);
+  static bool withinCourantFischerBounds(const std::array<double, 3>& springs,
+                                         const std::array<double, 3>& at_last, double threshold);
   /// After a stiffness update at `stamp`: `estimate` the new one, `damping` the run-time ratios,
   /// `dynamics` for the Floquet margin. A moved estimate goes to sink.resonance; the library's own
   /// errors (a non-finite mode among them) are counted in dynamics_errors, nothing published.

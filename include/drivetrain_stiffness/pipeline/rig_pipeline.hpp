@@ -36,19 +36,22 @@ class RigPipeline {
  public:
   /// Throws InvalidInput naming the field for an invalid rig, option or setting. Without settings:
   /// RuntimeSettings::forRig.
-  RigPipeline(const RigConfig& rig, const PipelineOptions& options, const RuntimeSettings& settings);
+  RigPipeline(const RigConfig& rig, const PipelineOptions& options,
+              const RuntimeSettings& settings);
   RigPipeline(const RigConfig& rig, const PipelineOptions& options);
 
-  /// The caller's clock (ROS time, or the bag's record time); true if the clock-jump rule reset all.
+  /// The caller's clock (ROS time, or the bag's record time); true if the clock-jump rule reset
+  /// all.
   bool observeClock(Stamp now, PipelineSink& sink);
   /// Pinion torque [N*m] (torque.z in ~torque_frame). kShed: the rules and the dynamics only.
-  InputOutcome torque(Stamp stamp, double torque, PipelineSink& sink, const InputOrigin& origin = {},
-                      Backlog backlog = Backlog::kNone);
+  InputOutcome torque(Stamp stamp, double torque, PipelineSink& sink,
+                      const InputOrigin& origin = {}, Backlog backlog = Backlog::kNone);
   /// New preloads of the named supports.
   InputOutcome preload(Stamp stamp, const std::vector<PreloadSetting>& settings, PipelineSink& sink,
                        const InputOrigin& origin = {});
   /// One encoder reading (the encoders rule).
-  InputOutcome motion(Stamp stamp, const MotionInput& reading, PipelineSink& sink, const InputOrigin& origin = {});
+  InputOutcome motion(Stamp stamp, const MotionInput& reading, PipelineSink& sink,
+                      const InputOrigin& origin = {});
   /// A joint_states message the caller could not convert (no pinion joint): refused as an invalid
   /// value, `found` (its joint names) in the tally.
   InputOutcome motionRefused(Stamp stamp, const std::string& reason, const InputOrigin& origin = {},
@@ -84,9 +87,11 @@ class RigPipeline {
   double encoderPinionAngle(Stamp stamp) const;
 
  private:
-  /// `validate` (value rules), the time rules, `update` (transactional; nullptr: no stiffness message).
+  /// `validate` (value rules), the time rules, `update` (transactional; nullptr: no stiffness
+  /// message).
   template <typename Validate, typename Update>
-  InputOutcome take(InputStream stream, Stamp stamp, PipelineSink& sink, Validate validate, Update update);
+  InputOutcome take(InputStream stream, Stamp stamp, PipelineSink& sink, Validate validate,
+                    Update update);
   /// The stiffness message (throttled by ~stiffness_rate on stamps), then pushStiffness.
   void afterUpdate(Stamp stamp, const StiffnessEstimate& estimate, PipelineSink& sink);
   /// The bearing stiffness to the dynamics at `stamp`, then the resonance.

@@ -15,16 +15,20 @@ namespace drivetrain_stiffness {
 /// 100 m, past anything a gear-scale display can show).
 constexpr double kMinExaggeration = 1.0;
 constexpr double kMaxExaggeration = 1e8;
-/// Throws InvalidInput("exaggeration = <value>: ...") outside [kMinExaggeration, kMaxExaggeration] (NaN included).
+/// Throws InvalidInput("exaggeration = <value>: ...") outside [kMinExaggeration, kMaxExaggeration]
+/// (NaN included).
 void requireExaggeration(double exaggeration);
 
 struct RuntimeSettings {
-  double mesh_damping_ratio = 0.05;    ///< [-] in [0, 1] (requireDampingRatio, core/rig_model.hpp), of the torsional mesh mode
-  double bearing_damping_ratio = 0.02; ///< [-] in [0, 1], of each shaft on its bearings
+  double mesh_damping_ratio = 0.05;  ///< [-] in [0, 1] (requireDampingRatio, core/rig_model.hpp),
+                                     ///< of the torsional mesh mode
+  double bearing_damping_ratio = 0.02;  ///< [-] in [0, 1], of each shaft on its bearings
   Fidelity fidelity = Fidelity::kFull;
-  double stiffness_rate = 0.0;         ///< [Hz] in [0, 1e5]: largest stiffness rate on stamps; 0 = every input
-  double exaggeration = 2e4;           ///< [-] in [1, 1e8] (requireExaggeration): display scale of displacements in tf and markers
-  double tf_rate = 30.0;               ///< [Hz] in [0, 1000]: tf and markers on sample time; 0 = none
+  double stiffness_rate =
+      0.0;  ///< [Hz] in [0, 1e5]: largest stiffness rate on stamps; 0 = every input
+  double exaggeration = 2e4;  ///< [-] in [1, 1e8] (requireExaggeration): display scale of
+                              ///< displacements in tf and markers
+  double tf_rate = 30.0;      ///< [Hz] in [0, 1000]: tf and markers on sample time; 0 = none
 
   /// Throws InvalidInput naming the first field outside its range (NaN included).
   void validate() const;

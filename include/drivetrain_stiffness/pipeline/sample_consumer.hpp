@@ -15,7 +15,8 @@ class SampleConsumer {
   /// One output sample at `stamp` (exact; sample.t = stamp.toSec()). `mesh_frequency` [Hz]: the
   /// dynamics' over the advance that made it. May throw the library's Error (it ends the advance);
   /// must not allocate (allocation_tests).
-  virtual void sample(Stamp stamp, const DynamicsSample& sample, double mesh_frequency, PipelineSink& sink) = 0;
+  virtual void sample(Stamp stamp, const DynamicsSample& sample, double mesh_frequency,
+                      PipelineSink& sink) = 0;
   /// The dynamics stopped or restarted (or the pipeline reset): no earlier sample continues into
   /// the next one.
   virtual void restart() = 0;

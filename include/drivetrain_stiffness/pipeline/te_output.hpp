@@ -15,10 +15,12 @@ class TeOutput : public SampleConsumer {
  public:
   /// Keeps references to `phase`, `resonance` (the last published estimate, none since a reset)
   /// and `counters` (te_out).
-  TeOutput(const PhaseSource& phase, const std::optional<ResonanceEstimate>& resonance, PipelineCounters& counters)
+  TeOutput(const PhaseSource& phase, const std::optional<ResonanceEstimate>& resonance,
+           PipelineCounters& counters)
       : phase_(phase), resonance_(resonance), counters_(counters) {}
   /// Counted once the sink took it; a sink's Error passes on (it ends the advance).
-  void sample(Stamp stamp, const DynamicsSample& sample, double mesh_frequency, PipelineSink& sink) override;
+  void sample(Stamp stamp, const DynamicsSample& sample, double mesh_frequency,
+              PipelineSink& sink) override;
   void restart() override {}
 
  private:

@@ -14,7 +14,8 @@ class TeSpectrumStage : public SampleConsumer {
   /// (InvalidInput otherwise); keeps SpectrumPeaks::kMaxPeaks lines. `counters`: spectra_out.
   TeSpectrumStage(int window, int hop, double interval, PipelineCounters& counters);
   /// Throws InvalidInput for a non-finite TE (SlidingSpectrum::push).
-  void sample(Stamp stamp, const DynamicsSample& sample, double mesh_frequency, PipelineSink& sink) override;
+  void sample(Stamp stamp, const DynamicsSample& sample, double mesh_frequency,
+              PipelineSink& sink) override;
   /// Empties the window.
   void restart() override { spectrum_.reset(); }
   const SlidingSpectrum& spectrum() const { return spectrum_; }

@@ -34,7 +34,8 @@ struct JointNames {
 /// The reading of a JointState message: the pinion's position (required), its velocity and the
 /// gear's position when present. Without a pinion position: nullopt and `why` says what is missing
 /// (the pipeline counts it, RigPipeline::motionRefused).
-std::optional<MotionInput> toMotionInput(const sensor_msgs::JointState& msg, const JointNames& names, std::string& why);
+std::optional<MotionInput> toMotionInput(const sensor_msgs::JointState& msg,
+                                         const JointNames& names, std::string& why);
 /// The message's joint names for a refusal ("joints 'motor', 'output'"; printable, the first few).
 std::string jointNamesOf(const sensor_msgs::JointState& msg);
 
@@ -58,20 +59,28 @@ void toPreloadSettings(const drivetrain_stiffness::Preload& msg, std::vector<Pre
 /// message and refill it for every update (1 kHz and more) instead of allocating one per update.
 void fillStiffnessMsg(Stamp stamp, const std::string& frame_id, const StiffnessEstimate& estimate,
                       drivetrain_stiffness::Stiffness& out);
-drivetrain_stiffness::TransmissionError toTransmissionErrorMsg(Stamp stamp, const std::string& frame_id, const DynamicsSample& s);
-drivetrain_stiffness::SpectralPeaks toSpectralPeaksMsg(Stamp stamp, const std::string& frame_id, const SpectrumPeaks& peaks);
-drivetrain_stiffness::Resonance toResonanceMsg(Stamp stamp, const std::string& frame_id, const ResonanceEstimate& r);
+drivetrain_stiffness::TransmissionError toTransmissionErrorMsg(Stamp stamp,
+                                                               const std::string& frame_id,
+                                                               const DynamicsSample& s);
+drivetrain_stiffness::SpectralPeaks toSpectralPeaksMsg(Stamp stamp, const std::string& frame_id,
+                                                       const SpectrumPeaks& peaks);
+drivetrain_stiffness::Resonance toResonanceMsg(Stamp stamp, const std::string& frame_id,
+                                               const ResonanceEstimate& r);
 /// The calibrated stiffness and natural frequencies with their 95 % bounds into the stiffness and
 /// resonance messages (docs/calibration.md section 4); refuses a non-finite number, naming it.
 void fillStiffnessBands(const CalibrationBands& bands, drivetrain_stiffness::Stiffness& out);
 void fillResonanceBands(const CalibrationBands& bands, drivetrain_stiffness::Resonance& out);
-/// The calibration after a window (the calibration rule) and one reading's measured TE. Both refuse (InvalidInput
-/// naming the field) a non-finite number instead of publishing it; the pipeline counts that in
-/// calibration_errors.
-drivetrain_stiffness::Calibration toCalibrationMsg(Stamp stamp, const std::string& frame_id, const CalibrationEstimate& e);
-drivetrain_stiffness::MeasuredTe toMeasuredTeMsg(Stamp stamp, const std::string& frame_id, const MeasuredTeSample& s);
-/// One block of whole mesh periods (MeshPeriodStatistics); refuses a non-finite number as the two above.
-drivetrain_stiffness::MeshPeriodStats toMeshPeriodStatsMsg(Stamp stamp, const std::string& frame_id, const MeshPeriodStatistics& s);
+/// The calibration after a window (the calibration rule) and one reading's measured TE. Both refuse
+/// (InvalidInput naming the field) a non-finite number instead of publishing it; the pipeline
+/// counts that in calibration_errors.
+drivetrain_stiffness::Calibration toCalibrationMsg(Stamp stamp, const std::string& frame_id,
+                                                   const CalibrationEstimate& e);
+drivetrain_stiffness::MeasuredTe toMeasuredTeMsg(Stamp stamp, const std::string& frame_id,
+                                                 const MeasuredTeSample& s);
+/// One block of whole mesh periods (MeshPeriodStatistics); refuses a non-finite number as the two
+/// above.
+drivetrain_stiffness::MeshPeriodStats toMeshPeriodStatsMsg(Stamp stamp, const std::string& frame_id,
+                                                           const MeshPeriodStatistics& s);
 /// The calibration's state in words, for /diagnostics and the replay's summary: the last window's
 /// outcome, or why the pipeline runs without a calibration (no calibration block, ~calibrate false,
 /// no dynamics block).

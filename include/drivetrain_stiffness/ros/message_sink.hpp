@@ -28,10 +28,13 @@ class MessageSink : public PipelineSink {
   /// pipeline here, once; afterwards the sink works on the values each output brings.
   MessageSink(const RigPipeline& pipeline, const OutputSettings& settings);
 
-  void stiffness(Stamp stamp, const StiffnessEstimate& estimate, const CalibrationBands& bands) override;
-  void transmissionError(Stamp stamp, const DynamicsSample& sample, const SampleContext& context) override;
+  void stiffness(Stamp stamp, const StiffnessEstimate& estimate,
+                 const CalibrationBands& bands) override;
+  void transmissionError(Stamp stamp, const DynamicsSample& sample,
+                         const SampleContext& context) override;
   void spectrum(Stamp stamp, const SpectrumPeaks& peaks) override;
-  void resonance(Stamp stamp, const ResonanceEstimate& estimate, const CalibrationBands& bands) override;
+  void resonance(Stamp stamp, const ResonanceEstimate& estimate,
+                 const CalibrationBands& bands) override;
   void measuredTe(Stamp stamp, const MeasuredTeSample& sample) override;
   void calibration(Stamp stamp, const CalibrationEstimate& estimate) override;
   void meshPeriod(Stamp stamp, const MeshPeriodStatistics& stats) override;
@@ -55,16 +58,19 @@ class MessageSink : public PipelineSink {
 
  private:
   OutputSettings settings_;
-  double tf_rate_ = 0.0;       ///< [Hz] the run-time settings' (~tf_rate)
-  double exaggeration_ = 1.0;  ///< the run-time settings' (~exaggeration), taken up at the next tf output
+  double tf_rate_ = 0.0;  ///< [Hz] the run-time settings' (~tf_rate)
+  double exaggeration_ =
+      1.0;  ///< the run-time settings' (~exaggeration), taken up at the next tf output
   RigVisualizer visualizer_;
   std::optional<Stamp> last_tf_;
-  drivetrain_stiffness::Stiffness stiffness_msg_;  ///< refilled per update (publish serializes it at once)
-  // header.seq of the stiffness, transmission_error, measured_te, calibration and mesh_period_stats messages, numbered
-  // from 0: what a bag written by drivetrain_replay carries (on the live graph roscpp writes its own
-  // per-publication count, the same numbers while a subscriber listens): a reader sees from the
-  // gaps what it lost.
-  std::uint32_t stiffness_seq_ = 0, te_seq_ = 0, measured_te_seq_ = 0, calibration_seq_ = 0, mesh_period_seq_ = 0;
+  drivetrain_stiffness::Stiffness
+      stiffness_msg_;  ///< refilled per update (publish serializes it at once)
+  // header.seq of the stiffness, transmission_error, measured_te, calibration and mesh_period_stats
+  // messages, numbered from 0: what a bag written by drivetrain_replay carries (on the live graph
+  // roscpp writes its own per-publication count, the same numbers while a subscriber listens): a
+  // reader sees from the gaps what it lost.
+  std::uint32_t stiffness_seq_ = 0, te_seq_ = 0, measured_te_seq_ = 0, calibration_seq_ = 0,
+                mesh_period_seq_ = 0;
 };
 
 }  // namespace drivetrain_stiffness

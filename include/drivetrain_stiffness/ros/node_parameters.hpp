@@ -28,10 +28,12 @@ PipelineOptions readPipelineOptions(const Get& get, const RigConfig& rig) {
   o.resonance_threshold = get("resonance_threshold", o.resonance_threshold);
   o.spectrum_window = get("spectrum_window", o.spectrum_window);
   o.spectrum_hop = get("spectrum_hop", o.spectrum_hop);
-  // One speed for both mesh phases (stiffness and dynamics): the dynamics block's, unless overridden.
-  o.pinion_speed_rpm = get("pinion_speed_rpm", rig.dynamics.present ? rig.dynamics.speed_rpm : 1000.0);
-  // The torque sensor's frame: torque.z about the pinion axis (right-hand rule, REP 103). A torque in
-  // another frame has another sign convention, so it is refused unless the user names the frame.
+  // One speed for both mesh phases (stiffness and dynamics): the dynamics block's, unless
+  // overridden.
+  o.pinion_speed_rpm =
+      get("pinion_speed_rpm", rig.dynamics.present ? rig.dynamics.speed_rpm : 1000.0);
+  // The torque sensor's frame: torque.z about the pinion axis (right-hand rule, REP 103). A torque
+  // in another frame has another sign convention, so it is refused unless the user names the frame.
   o.torque_frame = get("torque_frame", std::string("pinion"));
   // joint_states (the rig's encoders): where a drive pair enters contact at pinion angle 0, how
   // long a silent encoder stream is trusted, and how far the gear may run off the tooth ratio.
@@ -39,7 +41,8 @@ PipelineOptions readPipelineOptions(const Get& get, const RigConfig& rig) {
   o.motion_timeout = get("motion_timeout", o.motion_timeout);
   o.gear_ratio_tolerance = get("gear_ratio_tolerance", o.gear_ratio_tolerance);
   o.motion_slices = get("motion_slices", o.motion_slices);
-  // The calibration rule: calibrate against the encoders' TE when the gearbox has a calibration block.
+  // The calibration rule: calibrate against the encoders' TE when the gearbox has a calibration
+  // block.
   o.calibrate = get("calibrate", o.calibrate);
   try {
     o.validate();
@@ -84,11 +87,13 @@ OutputSettings readOutputSettings(const Get& get) {
   s.frames.rig = get("rig_frame", s.frames.rig);
   s.frames.pinion = get("pinion_frame", s.frames.pinion);
   s.frames.gear = get("gear_frame", s.frames.gear);
-  const std::pair<const char*, const std::string*> frames[] = {
-      {"rig_frame", &s.frames.rig}, {"pinion_frame", &s.frames.pinion}, {"gear_frame", &s.frames.gear}};
+  const std::pair<const char*, const std::string*> frames[] = {{"rig_frame", &s.frames.rig},
+                                                               {"pinion_frame", &s.frames.pinion},
+                                                               {"gear_frame", &s.frames.gear}};
   for (const auto& [name, f] : frames) {
     if (f->empty() || f->front() == '/') {
-      throw InvalidInput(std::string("parameter ~") + name + " = '" + *f + "': must be a non-empty frame id without a leading '/'");
+      throw InvalidInput(std::string("parameter ~") + name + " = '" + *f +
+                         "': must be a non-empty frame id without a leading '/'");
     }
   }
   return s;

@@ -13,10 +13,22 @@ namespace drivetrain_stiffness {
 
 template <typename T>
 const char* parameterTypeName();
-template <> inline const char* parameterTypeName<double>() { return "a number"; }
-template <> inline const char* parameterTypeName<int>() { return "an integer"; }
-template <> inline const char* parameterTypeName<bool>() { return "true or false"; }
-template <> inline const char* parameterTypeName<std::string>() { return "a string"; }
+template <>
+inline const char* parameterTypeName<double>() {
+  return "a number";
+}
+template <>
+inline const char* parameterTypeName<int>() {
+  return "an integer";
+}
+template <>
+inline const char* parameterTypeName<bool>() {
+  return "true or false";
+}
+template <>
+inline const char* parameterTypeName<std::string>() {
+  return "a string";
+}
 
 template <typename T>
 T readParam(const ros::NodeHandle& pnh, const std::string& name, const T& fallback) {
@@ -24,7 +36,8 @@ T readParam(const ros::NodeHandle& pnh, const std::string& name, const T& fallba
   T value{};
   // getParam(double) also accepts integers (xml_castable), so "1" works where "1.0" is meant.
   if (!pnh.getParam(name, value)) {
-    throw InvalidInput("~" + name + ": has the wrong type (expected " + parameterTypeName<T>() + ")");
+    throw InvalidInput("~" + name + ": has the wrong type (expected " + parameterTypeName<T>() +
+                       ")");
   }
   return value;
 }

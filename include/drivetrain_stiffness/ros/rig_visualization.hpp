@@ -31,8 +31,9 @@ class RigVisualizer {
   double exaggeration() const { return exaggeration_; }
 
   /// rig -> pinion and rig -> gear at sample.t; pinion_angle is the nominal pinion angle [rad].
-  std::vector<geometry_msgs::TransformStamped> transforms(const ros::Time& stamp, const DynamicsSample& sample,
-                                                         double pinion_angle) const;
+  std::vector<geometry_msgs::TransformStamped> transforms(const ros::Time& stamp,
+                                                          const DynamicsSample& sample,
+                                                          double pinion_angle) const;
   /// `resonance`: the current estimate, shown as text (null: none yet).
   visualization_msgs::MarkerArray markers(const ros::Time& stamp, const DynamicsSample& sample,
                                           const ResonanceEstimate* resonance) const;
@@ -41,8 +42,8 @@ class RigVisualizer {
 
  private:
   double r_tip_[2], r_pitch_[2], r_base_[2], center_distance_, sin_aw_, cos_aw_, face_width_;
-  double ratio_;             ///< z_p / z_g
-  double arrow_scale_;       ///< [m/N] arrow length per newton of mesh force
+  double ratio_;        ///< z_p / z_g
+  double arrow_scale_;  ///< [m/N] arrow length per newton of mesh force
   VisualizationFrames frames_;
   double exaggeration_ = 1.0;
 };

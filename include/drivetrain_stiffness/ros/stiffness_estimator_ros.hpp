@@ -55,16 +55,19 @@ class StiffnessEstimatorRos {
 
   std::mutex mutex_;  // callbacks may run on several threads (nodelet, multi-threaded spinners)
   std::unique_ptr<RigPipeline> pipeline_;
-  std::vector<PreloadSetting> preload_settings_;  ///< each preload message's, converted in place (under mutex_)
+  std::vector<PreloadSetting>
+      preload_settings_;  ///< each preload message's, converted in place (under mutex_)
   std::unique_ptr<Publishers> publishers_;
   ros::Subscriber torque_sub_, preload_sub_, joint_states_sub_;
   JointNames joints_;
   std::string joint_refusal_;  ///< scratch for toMotionInput's reason
   diagnostic_updater::Updater diagnostics_;
   ros::WallTimer diagnostic_timer_;  // wall time: keeps running when sim time stops or jumps back
-  boost::recursive_mutex reconfigure_mutex_;  // dynamic_reconfigure::Server wants a boost mutex; outlives it
+  boost::recursive_mutex
+      reconfigure_mutex_;  // dynamic_reconfigure::Server wants a boost mutex; outlives it
   std::unique_ptr<dynamic_reconfigure::Server<drivetrain_stiffness::EstimatorConfig>> reconfigure_;
-  std::optional<drivetrain_stiffness::EstimatorConfig> applied_config_;  // the last accepted settings
+  std::optional<drivetrain_stiffness::EstimatorConfig>
+      applied_config_;  // the last accepted settings
   std::string gearbox_config_;
   double deadline_ = 1e-3;  // [s] processing time per input beyond which it counts as late
   std::uint64_t missed_deadlines_ = 0, missed_deadlines_cpu_ = 0, reconfigurations_ = 0;

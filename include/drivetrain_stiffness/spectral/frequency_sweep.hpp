@@ -3,9 +3,9 @@
 // RMS of each coordinate about its mean is taken over `measure` seconds. The state and time carry
 // over from one frequency to the next (a stepped-sine sweep), so an up and a down sweep can land on
 // different branches of a nonlinear response: the jumps of seed 000 section 4.2 and of Kahraman &
-// Singh. The whole up-sweep record is also transformed (FFTW) per coordinate, as the seed's Fig 8. Peaks of the RMS curves
-// are refined below the frequency step (spectrum.hpp). In the linear cases they fall on the modal
-// frequencies within the step (test_frequency_sweep.cpp).
+// Singh. The whole up-sweep record is also transformed (FFTW) per coordinate, as the seed's Fig 8.
+// Peaks of the RMS curves are refined below the frequency step (spectrum.hpp). In the linear cases
+// they fall on the modal frequencies within the step (test_frequency_sweep.cpp).
 #pragma once
 
 #include <array>
@@ -20,22 +20,24 @@ namespace drivetrain_stiffness {
 
 enum class SweepDirection { kUp, kDown, kBoth };
 const char* toString(SweepDirection d);
-/// "up", "down" or "both"; anything else throws InvalidInput naming `field` and every accepted name.
+/// "up", "down" or "both"; anything else throws InvalidInput naming `field` and every accepted
+/// name.
 SweepDirection parseSweepDirection(const std::string& field, const std::string& text);
 
 struct SweepSpec {
-  double start = 60.0, stop = 3000.0, step = 60.0;  ///< [Hz] (seed 000 section 4.2: 0-3 kHz in 60 Hz steps)
-  double torque_amplitude = 0.05;                    ///< [N·m] of the fluctuation
-  double settle = 0.01, measure = 0.05;              ///< [s]; measure is rounded up to whole periods
-  Fidelity fidelity = Fidelity::kFull;               ///< kFull integrates with dopri5 (events)
-  bool include_te = true;                            ///< keep the rig's manufacturing TE
-  SweepDirection direction = SweepDirection::kUp;    ///< kBoth: up, then down from the last state
+  double start = 60.0, stop = 3000.0,
+         step = 60.0;                    ///< [Hz] (seed 000 section 4.2: 0-3 kHz in 60 Hz steps)
+  double torque_amplitude = 0.05;        ///< [N·m] of the fluctuation
+  double settle = 0.01, measure = 0.05;  ///< [s]; measure is rounded up to whole periods
+  Fidelity fidelity = Fidelity::kFull;   ///< kFull integrates with dopri5 (events)
+  bool include_te = true;                ///< keep the rig's manufacturing TE
+  SweepDirection direction = SweepDirection::kUp;  ///< kBoth: up, then down from the last state
 };
 
 struct SweepOutput {
-  std::vector<double> frequency;                     ///< [Hz]
-  std::array<std::vector<double>, 3> rms;            ///< x_p, x_g, x about their means [m]
-  std::array<std::vector<SpectralPeak>, 3> peaks;    ///< top three per coordinate
+  std::vector<double> frequency;                   ///< [Hz]
+  std::array<std::vector<double>, 3> rms;          ///< x_p, x_g, x about their means [m]
+  std::array<std::vector<SpectralPeak>, 3> peaks;  ///< top three per coordinate
   /// Down sweep, in the same (ascending) frequency order; empty unless direction is kBoth.
   std::array<std::vector<double>, 3> rms_down;
   /// Amplitude spectrum of the whole first-direction record per coordinate (seed 000 Fig 8b, d, f):
@@ -45,7 +47,7 @@ struct SweepOutput {
   /// Empty when the record would exceed 4 Mi samples.
   std::array<std::vector<SpectralPeak>, 3> spectrum_peaks;
   double spectrum_resolution = 0.0;
-  double sample_interval = 0.0;                      ///< common output step of the record [s]
+  double sample_interval = 0.0;  ///< common output step of the record [s]
 };
 
 /// The stepped grid start, start + step, ... up to stop (included when (stop - start) / step is

@@ -55,9 +55,11 @@ struct PeakScratch {
   std::vector<std::size_t> maxima, kept;
 };
 /// The same peaks into `out`, working in `scratch` (the sliding spectrum's per-hop path).
-void topPeaks(const Spectrum& s, int n, int min_separation, PeakScratch& scratch, std::vector<SpectralPeak>& out);
+void topPeaks(const Spectrum& s, int n, int min_separation, PeakScratch& scratch,
+              std::vector<SpectralPeak>& out);
 
 /// Peaks of a sampled curve y(x) on a uniform grid (a frequency sweep's RMS), same refinement.
-std::vector<SpectralPeak> curvePeaks(const std::vector<double>& x, const std::vector<double>& y, int n);
+std::vector<SpectralPeak> curvePeaks(const std::vector<double>& x, const std::vector<double>& y,
+                                     int n);
 
 }  // namespace drivetrain_stiffness

@@ -24,8 +24,10 @@ struct ModesArgs {
 nlohmann::json modesJson(const std::array<Mode, 3>& modes) {
   nlohmann::json list = nlohmann::json::array();
   for (const Mode& m : modes) {
-    list.push_back({{"natural_frequency_hz", m.natural_frequency}, {"damped_frequency_hz", m.damped_frequency},
-                    {"damping_ratio", m.damping_ratio}, {"dominant_coordinate", m.dominant},
+    list.push_back({{"natural_frequency_hz", m.natural_frequency},
+                    {"damped_frequency_hz", m.damped_frequency},
+                    {"damping_ratio", m.damping_ratio},
+                    {"dominant_coordinate", m.dominant},
                     {"shape", {m.shape[0], m.shape[1], m.shape[2]}}});
   }
   return list;
@@ -33,7 +35,8 @@ nlohmann::json modesJson(const std::array<Mode, 3>& modes) {
 
 int runModes(const ModesArgs& args) {
   RigConfig rig = loadRigFile(args.config);
-  if (!rig.dynamics.present) throw InvalidInput(args.config + ": modes needs a 'dynamics:' block (masses, inertias)");
+  if (!rig.dynamics.present)
+    throw InvalidInput(args.config + ": modes needs a 'dynamics:' block (masses, inertias)");
   requireFinite("--torque", args.torque);
   if (args.preload) {
     requireNonNegative("--preload", *args.preload);
@@ -43,20 +46,34 @@ int runModes(const ModesArgs& args) {
   const GearRotorParameters& p = r.parameters;
   nlohmann::json floquet = nullptr;
   if (r.floquet) {
-    floquet = {{"max_multiplier_modulus", r.floquet->result.max_modulus}, {"margin", r.floquet->result.margin},
-               {"mesh_frequency_hz", r.floquet->mesh_frequency}, {"stable", r.floquet->result.margin > 0.0}};
+    floquet = {{"max_multiplier_modulus", r.floquet->result.max_modulus},
+               {"margin", r.floquet->result.margin},
+               {"mesh_frequency_hz", r.floquet->mesh_frequency},
+               {"stable", r.floquet->result.margin > 0.0}};
   }
-  const nlohmann::json out = {
-      {"masses", {{"pinion_mass", p.pinion_mass}, {"gear_mass", p.gear_mass}, {"equivalent_mass", p.equivalentMass()},
-                  {"pinion_inertia", p.pinion_inertia}, {"gear_inertia", p.gear_inertia}}},
-      {"stiffness", {{"pinion_bearing", r.bearing_stiffness[0]}, {"gear_bearing", r.bearing_stiffness[1]}, {"mesh_mean", r.mesh_mean},
-                     {"mesh_min", r.mesh_range.min}, {"mesh_max", r.mesh_range.max}}},
-      {"damping", {{"mesh", p.mesh_damping}, {"pinion_bearing", p.bearing_damping[0]}, {"gear_bearing", p.bearing_damping[1]}}},
-      {"torque", args.torque},
-      {"modes", {{"mesh_mean", modesJson(r.modes_mean)}, {"mesh_single_pair", modesJson(r.modes_single_pair)},
-                 {"mesh_double_pair", modesJson(r.modes_double_pair)}}},
-      {"floquet", floquet},
-      {"units", "Hz, N/m, kg, kg m^2, N s/m"}};
+  const nlohmann::json out = {{"masses",
+                               {{"pinion_mass", p.pinion_mass},
+                                {"gear_mass", p.gear_mass},
+                                {"equivalent_mass", p.equivalentMass()},
+                                {"pinion_inertia", p.pinion_inertia},
+                                {"gear_inertia", p.gear_inertia}}},
+                              {"stiffness",
+                               {{"pinion_bearing", r.bearing_stiffness[0]},
+                                {"gear_bearing", r.bearing_stiffness[1]},
+                                {"mesh_mean", r.mesh_mean},
+                                {"mesh_min", r.mesh_range.min},
+                                {"mesh_max", r.mesh_range.max}}},
+                              {"damping",
+                               {{"mesh", p.mesh_damping},
+                                {"pinion_bearing", p.bearing_damping[0]},
+                                {"gear_bearing", p.bearing_damping[1]}}},
+                              {"torque", args.torque},
+                              {"modes",
+                               {{"mesh_mean", modesJson(r.modes_mean)},
+                                {"mesh_single_pair", modesJson(r.modes_single_pair)},
+                                {"mesh_double_pair", modesJson(r.modes_double_pair)}}},
+                              {"floquet", floquet},
+                              {"units", "Hz, N/m, kg, kg m^2, N s/m"}};
   std::cout << out.dump(2) << std::endl;
   return 0;
 }
@@ -65,10 +82,13 @@ int runModes(const ModesArgs& args) {
 
 Subcommand addModesCommand(CLI::App& app) {
   auto args = std::make_shared<ModesArgs>();
-  CLI::App* cmd = app.add_subcommand("modes", "natural and damped frequencies, damping ratios, mode shapes, Floquet margin");
-  cmd->add_option("--config", args->config, "gearbox YAML with gears, bearings and dynamics")->required();
+  CLI::App* cmd = app.add_subcommand(
+      "modes", "natural and damped frequencies, damping ratios, mode shapes, Floquet margin");
+  cmd->add_option("--config", args->config, "gearbox YAML with gears, bearings and dynamics")
+      ->required();
   cmd->add_option("--torque", args->torque, "pinion torque [N·m] (default 0.1)");
-  cmd->add_option("--preload", args->preload, "axial preload of every bearing [N], overrides the file");
+  cmd->add_option("--preload", args->preload,
+                  "axial preload of every bearing [N], overrides the file");
   return {cmd, [args] { return runModes(*args); }};
 }
 

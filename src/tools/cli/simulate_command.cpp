@@ -25,7 +25,11 @@ namespace {
 struct SignalStats {
   double sum2 = 0.0, peak = 0.0;
   long n = 0;
-  void add(double v) { sum2 += v * v; peak = std::max(peak, std::abs(v)); ++n; }
+  void add(double v) {
+    sum2 += v * v;
+    peak = std::max(peak, std::abs(v));
+    ++n;
+  }
   nlohmann::json json() const { return {{"rms", n ? std::sqrt(sum2 / n) : 0.0}, {"peak", peak}}; }
 };
 
@@ -40,8 +44,9 @@ int runSimulate(const SimulateArgs& args) {
   }
   const bool reduced = args.method == "quasi_static" || args.method == "linear_modal";
   const bool automatic = args.method == "auto";
-  const IntegratorMethod method =
-      reduced || automatic ? IntegratorMethod::kDopri5 : parseIntegratorMethod("--method", args.method);
+  const IntegratorMethod method = reduced || automatic
+                                      ? IntegratorMethod::kDopri5
+                                      : parseIntegratorMethod("--method", args.method);
   IntegratorOptions o;
   o.step = args.step ? *args.step : scene.suggested_step;
   requirePositive("--step", o.step);
@@ -60,7 +65,8 @@ int runSimulate(const SimulateArgs& args) {
   if (args.out) {
     csv.open(*args.out);
     if (!csv) throw InvalidInput("--out = '" + *args.out + "': cannot write");
-    csv << "# scene " << scene.name << " (" << scene.units << "), method " << toString(method) << "\n";
+    csv << "# scene " << scene.name << " (" << scene.units << "), method " << toString(method)
+        << "\n";
     csv << "t,x_p,x_g,x,delta,mesh_force,drive_flank_force,back_flank_force,k_drive,k_back,phase\n";
     csv.precision(10);
   }
@@ -78,39 +84,67 @@ int runSimulate(const SimulateArgs& args) {
     if (csv.is_open()) {
       MeshInstant m;
       scene.model->excitation().at(t, m);
-      csv << t << ',' << y[0] << ',' << y[1] << ',' << y[2] << ',' << f.delta << ',' << f.mesh << ','
-          << f.drive_flank << ',' << f.back_flank << ',' << m.k_drive << ',' << m.k_back << ',' << m.phase << '\n';
+      csv << t << ',' << y[0] << ',' << y[1] << ',' << y[2] << ',' << f.delta << ',' << f.mesh
+          << ',' << f.drive_flank << ',' << f.back_flank << ',' << m.k_drive << ',' << m.k_back
+          << ',' << m.phase << '\n';
     }
   };
   nlohmann::json chosen = nullptr;
   if (reduced) {
-    integrateReduced(*scene.model, parseFidelity("--method", args.method),
-                     0.0, scene.initial, scene.duration, scene.output_interval, observe);
+    integrateReduced(*scene.model, parseFidelity("--method", args.method), 0.0, scene.initial,
+                     scene.duration, scene.output_interval, observe);
   } else if (automatic) {
     // The run's length weighs the exponential method's set-up against dopri5's work.
     const double pilot = defaultPilotDuration(scene.duration, scene.output_interval);
-    const AutoChoice c = chooseAutomatically(*scene.model, 0.0, scene.initial, scene.output_interval, pilot, args.error_bound,
-                                             scene.duration, scale);
+    const AutoChoice c =
+        chooseAutomatically(*scene.model, 0.0, scene.initial, scene.output_interval, pilot,
+                            args.error_bound, scene.duration, scale);
     nlohmann::json pilots = nlohmann::json::object();
-    for (const auto& e : c.pilot_errors) pilots[e.first] = std::isfinite(e.second) ? nlohmann::json(e.second) : nlohmann::json(nullptr);
-    chosen = {{"fidelity", toString(c.fidelity)}, {"method", toString(c.method)},
-              {"relative_tolerance", c.fidelity == Fidelity::kFull && c.method == IntegratorMethod::kDopri5 ? nlohmann::json(c.relative_tolerance) : nlohmann::json(nullptr)},
-              {"error_bound", args.error_bound}, {"pilot_s", c.pilot_duration}, {"pilot_errors", pilots}, {"reason", c.reason}};
-    integrateChoice(*scene.model, c, 0.0, scene.initial, scene.duration, scene.output_interval, observe, &stats);
+    for (const auto& e : c.pilot_errors)
+      pilots[e.first] =
+          std::isfinite(e.second) ? nlohmann::json(e.second) : nlohmann::json(nullptr);
+    chosen = {{"fidelity", toString(c.fidelity)},
+              {"method", toString(c.method)},
+              {"relative_tolerance",
+               c.fidelity == Fidelity::kFull && c.method == IntegratorMethod::kDopri5
+                   ? nlohmann::json(c.relative_tolerance)
+                   : nlohmann::json(nullptr)},
+              {"error_bound", args.error_bound},
+              {"pilot_s", c.pilot_duration},
+              {"pilot_errors", pilots},
+              {"reason", c.reason}};
+    integrateChoice(*scene.model, c, 0.0, scene.initial, scene.duration, scene.output_interval,
+                    observe, &stats);
   } else {
-    integrate(*scene.model, method, o, 0.0, scene.initial, scene.duration, scene.output_interval, observe, &stats);
+    integrate(*scene.model, method, o, 0.0, scene.initial, scene.duration, scene.output_interval,
+              observe, &stats);
   }
-  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const double wall =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   const nlohmann::json out = {
-      {"scene", scene.name}, {"description", scene.description}, {"units", scene.units},
+      {"scene", scene.name},
+      {"description", scene.description},
+      {"units", scene.units},
       {"method", reduced || automatic ? args.method : std::string(toString(method))},
       {"auto", chosen},
-      {"step", method == IntegratorMethod::kRk4 || method == IntegratorMethod::kTrapezoidal ? nlohmann::json(o.step) : nlohmann::json(nullptr)},
-      {"relative_tolerance", method == IntegratorMethod::kDopri5 ? nlohmann::json(o.relative_tolerance) : nlohmann::json(nullptr)},
-      {"sim_s", scene.duration}, {"wall_s", wall}, {"rtf", scene.duration / wall},
-      {"steps", stats.steps}, {"rejected", stats.rejected}, {"rhs_evaluations", stats.rhs_evaluations}, {"events", stats.events},
+      {"step", method == IntegratorMethod::kRk4 || method == IntegratorMethod::kTrapezoidal
+                   ? nlohmann::json(o.step)
+                   : nlohmann::json(nullptr)},
+      {"relative_tolerance", method == IntegratorMethod::kDopri5
+                                 ? nlohmann::json(o.relative_tolerance)
+                                 : nlohmann::json(nullptr)},
+      {"sim_s", scene.duration},
+      {"wall_s", wall},
+      {"rtf", scene.duration / wall},
+      {"steps", stats.steps},
+      {"rejected", stats.rejected},
+      {"rhs_evaluations", stats.rhs_evaluations},
+      {"events", stats.events},
       {"statistics_from", scene.transient},
-      {"delta", delta.json()}, {"x_p", xp.json()}, {"x_g", xg.json()}, {"x", x.json()},
+      {"delta", delta.json()},
+      {"x_p", xp.json()},
+      {"x_g", xg.json()},
+      {"x", x.json()},
       {"csv", args.out ? nlohmann::json(*args.out) : nlohmann::json(nullptr)}};
   std::cout << out.dump(2) << std::endl;
   return 0;
@@ -120,18 +154,27 @@ int runSimulate(const SimulateArgs& args) {
 
 Subcommand addSimulateCommand(CLI::App& app) {
   auto args = std::make_shared<SimulateArgs>();
-  CLI::App* cmd = app.add_subcommand("simulate", "integrate the 3-DOF transverse-torsional model on a named scene");
-  cmd->add_option("--config", args->config, "gearbox YAML with gears, bearings and dynamics")->required();
-  cmd->add_option("--scene", args->scene, "nominal, torque_steps, low_preload, bearing_rattle, near_rigid_bearings, "
-                                          "parametric_resonance, kahraman_singh, chaotic, run_up, speed_steps, reverse")->required();
-  cmd->add_option("--method", args->method, "dopri5 (default, adaptive with events), rk4, trapezoidal, exponential "
-                                            "(exact in the linear regime), quasi_static, linear_modal, auto");
-  cmd->add_option("--error-bound", args->error_bound, "auto: relative RMS error of delta to meet (default 1e-6)");
-  cmd->add_option("--step", args->step, "fixed step [s] for rk4/trapezoidal (default: the scene's, 20 per stiffest period)");
+  CLI::App* cmd = app.add_subcommand(
+      "simulate", "integrate the 3-DOF transverse-torsional model on a named scene");
+  cmd->add_option("--config", args->config, "gearbox YAML with gears, bearings and dynamics")
+      ->required();
+  cmd->add_option("--scene", args->scene,
+                  "nominal, torque_steps, low_preload, bearing_rattle, near_rigid_bearings, "
+                  "parametric_resonance, kahraman_singh, chaotic, run_up, speed_steps, reverse")
+      ->required();
+  cmd->add_option("--method", args->method,
+                  "dopri5 (default, adaptive with events), rk4, trapezoidal, exponential "
+                  "(exact in the linear regime), quasi_static, linear_modal, auto");
+  cmd->add_option("--error-bound", args->error_bound,
+                  "auto: relative RMS error of delta to meet (default 1e-6)");
+  cmd->add_option(
+      "--step", args->step,
+      "fixed step [s] for rk4/trapezoidal (default: the scene's, 20 per stiffest period)");
   cmd->add_option("--duration", args->duration, "simulated time [s] (default: the scene's)");
   cmd->add_option("--rtol", args->rtol, "dopri5 relative tolerance (default 1e-8)");
   cmd->add_option("--out", args->out, "write the time series to this CSV file");
-  cmd->add_option("--sweep", args->sweep, "kahraman_singh only: up- and down-sweep start:stop:step of the frequency W");
+  cmd->add_option("--sweep", args->sweep,
+                  "kahraman_singh only: up- and down-sweep start:stop:step of the frequency W");
   return {cmd, [args] { return runSimulate(*args); }};
 }
 
