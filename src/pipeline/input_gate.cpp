@@ -65,6 +65,7 @@ void InputGate::countDrops(InputStream s, const InputOrigin& origin) {
     case InputStream::kTorque: counters_.dropped_torque += lost; break;
     case InputStream::kPreload: counters_.dropped_preload += lost; break;
     case InputStream::kJointStates: counters_.dropped_motion += lost; break;
+    case InputStream::kVibration: counters_.dropped_vibration += lost; break;
   }
 }
 
@@ -119,6 +120,7 @@ InputOutcome InputGate::reject(InputOutcome why, InputStream s, Stamp stamp,
     case InputStream::kTorque: ++counters_.rejected_torque; break;
     case InputStream::kPreload: ++counters_.rejected_preload; break;
     case InputStream::kJointStates: ++counters_.rejected_motion; break;
+    case InputStream::kVibration: ++counters_.rejected_vibration; break;
   }
   refusals_.record(s, why, stamp, reason, found);
   switch (why) {
@@ -139,6 +141,7 @@ void InputGate::accept(InputStream s, Stamp stamp) {
     case InputStream::kTorque: ++counters_.accepted_torque; break;
     case InputStream::kPreload: ++counters_.accepted_preload; break;
     case InputStream::kJointStates: ++counters_.accepted_motion; break;
+    case InputStream::kVibration: ++counters_.accepted_vibration; break;
   }
   stream(s).last = stamp;
 }

@@ -52,6 +52,9 @@ void PipelineOptions::validate() const {
     throw InvalidInput("motion_slices = " + std::to_string(motion_slices) +
                        ": must be in [4, 65536] per mesh period");
   }
+  if (!(vibration_record > 0.0 && vibration_record <= 600.0)) {
+    throwInvalid("vibration_record", vibration_record, "must be in (0, 600] s");
+  }
   if (!torque_frame.empty() && torque_frame.front() == '/') {
     throw InvalidInput("torque_frame = '" + torque_frame +
                        "': a frame id without a leading '/' (or empty: any frame)");

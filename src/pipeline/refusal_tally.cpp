@@ -9,6 +9,7 @@ const char* toString(InputStream stream) {
     case InputStream::kTorque: return "torque";
     case InputStream::kPreload: return "preload";
     case InputStream::kJointStates: return "joint_states";
+    case InputStream::kVibration: return "vibration";
   }
   return "?";
 }

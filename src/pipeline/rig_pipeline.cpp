@@ -44,6 +44,9 @@ RigPipeline::RigPipeline(const RigConfig& rig, const PipelineOptions& options,
   resonance_ = std::make_unique<ResonanceTracker>(*rig_, *estimator_, *calibration_,
                                                   options_.resonance_threshold, counters_);
   const auto& teeth = estimator_->mesh().geometry().spec().teeth;
+  vibration_ =
+      std::make_unique<VibrationInput>(vibrationChannels(*rig_, options_.vibration_channels),
+                                       options_.vibration_record, counters_.vibration);
   phase_ = std::make_unique<PhaseSource>(options_, teeth[0], teeth[1], counters_);
   if (options_.dynamics) {
     dynamics_ = std::make_unique<DynamicsStage>(rig_, *estimator_, options_, settings_.fidelity,
@@ -69,6 +72,7 @@ void RigPipeline::reset(const std::string& reason) {
   phase_->reset();
   calibration_->interrupt();
   resonance_->forget();  // the next accepted input republishes the resonance
+  vibration_->reset();
   counters_.last_event = "reset: " + reason;
 }
 
@@ -178,6 +182,17 @@ InputOutcome RigPipeline::motionRefused(Stamp stamp, const std::string& reason,
   gate_->countDrops(InputStream::kJointStates, origin);
   return gate_->reject(InputOutcome::kInvalidValue, InputStream::kJointStates, stamp, reason,
                        found);
+}
+
+InputOutcome RigPipeline::vibration(Stamp stamp, const VibrationBlockView& block,
+                                    PipelineSink& sink, const InputOrigin& origin) {
+  gate_->countDrops(InputStream::kVibration, origin);
+  return take(
+      InputStream::kVibration, stamp, sink, [&] { vibration_->validate(block); },
+      [&]() -> const StiffnessEstimate* {
+        vibration_->append(stamp, block);
+        return nullptr;  // no stiffness message: the estimate has not changed
+      });
 }
 
 void RigPipeline::acceptMotion(Stamp stamp, const MotionInput& m, PipelineSink& sink) {

@@ -176,6 +176,9 @@ StiffnessEstimatorRos::StiffnessEstimatorRos(ros::NodeHandle nh, ros::NodeHandle
   // The rig's encoders, by the ROS convention for joint positions (sensor_msgs/JointState).
   joint_states_sub_ = nh.subscribe("joint_states", 1000, &StiffnessEstimatorRos::onJointStates,
                                    this, ros::TransportHints().tcpNoDelay());
+  // Accelerometer blocks (docs/vibration.md "Input"): 100 blocks are 2 s at 51.2 kHz and 1024.
+  vibration_sub_ = nh.subscribe("vibration", 100, &StiffnessEstimatorRos::onVibration, this,
+                                ros::TransportHints().tcpNoDelay());
   // The updater publishes at ~diagnostic_period; poll it often enough to keep that period.
   diagnostic_timer_ = nh.createWallTimer(
       ros::WallDuration(0.05), [this](const ros::WallTimerEvent&) { onDiagnosticTimer(); });
@@ -279,6 +282,23 @@ void StiffnessEstimatorRos::onJointStates(
               : pipeline_->motionRefused(fromRosTime(msg.header.stamp), joint_refusal_, origin,
                                          jointNamesOf(msg));
   if (outcome != InputOutcome::kAccepted) {
+    ROS_WARN_THROTTLE(1.0, "stiffness_estimator: %s", pipeline_->counters().last_event.c_str());
+  }
+  finishInput(start, cpu_start);
+}
+
+void StiffnessEstimatorRos::onVibration(
+    const ros::MessageEvent<const drivetrain_stiffness::VibrationBlock>& event) {
+  const ros::WallTime start = ros::WallTime::now();
+  const double cpu_start = threadCpuSeconds();
+  const drivetrain_stiffness::VibrationBlock& msg = *event.getConstMessage();
+  std::lock_guard<std::mutex> lock(mutex_);
+  observeClock();
+  const InputOrigin origin{event.getPublisherName(), msg.header.seq, msg.header.frame_id};
+  const VibrationBlockView block{msg.sample_rate, msg.channels.data(), msg.channels.size(),
+                                 msg.data.data(), msg.data.size()};
+  if (pipeline_->vibration(fromRosTime(msg.header.stamp), block, *publishers_, origin) !=
+      InputOutcome::kAccepted) {
     ROS_WARN_THROTTLE(1.0, "stiffness_estimator: %s", pipeline_->counters().last_event.c_str());
   }
   finishInput(start, cpu_start);

@@ -242,7 +242,11 @@ std::string reportMarkdown(const nlohmann::json& summary, const std::string& inp
 struct ReplayOptions {
   std::string bag_path, config, params, out_bag, csv_dir, report_dir, calibrate_out;
   std::string torque_topic = "torque", preload_topic = "preload",
-              joint_states_topic = "joint_states";
+              joint_states_topic = "joint_states", vibration_topic = "vibration";
+  /// Each stream's topic, indexed by InputStream.
+  ReplayTopics topics() const {
+    return {torque_topic, preload_topic, joint_states_topic, vibration_topic};
+  }
   std::string plot_script = DRIVETRAIN_PLOT_REPLAY_SCRIPT;
   std::string compression = "lz4";
   std::string topics_option = "all", csv_topics_option;
@@ -283,6 +287,8 @@ std::optional<int> parseOptions(int argc, char** argv, ReplayOptions& o) {
                  "--csv, --out)");
   app.add_option("--torque-topic", o.torque_topic, "geometry_msgs/WrenchStamped, torque.z [N*m]");
   app.add_option("--preload-topic", o.preload_topic, "drivetrain_stiffness/Preload");
+  app.add_option("--vibration-topic", o.vibration_topic,
+                 "drivetrain_stiffness/VibrationBlock, the accelerometers (docs/vibration.md)");
   app.add_option(
       "--joint-states-topic", o.joint_states_topic,
       "sensor_msgs/JointState, the rig's encoders (~pinion_joint, ~gear_joint from --params)");
@@ -338,6 +344,15 @@ ReadSpan replayMessages(ReplayInput& input, const ReplayOptions& o, const JointN
         } else {
           pipeline.motionRefused(stamp, joint_refusal, origin, jointNamesOf(*j));
         }
+      }
+    } else if (topicMatches(m.getTopic(), o.vibration_topic)) {
+      const auto v = m.instantiate<drivetrain_stiffness::VibrationBlock>();
+      inputs.read(InputStream::kVibration, v ? std::string() : m.getDataType());
+      if (v) {
+        const VibrationBlockView block{v->sample_rate, v->channels.data(), v->channels.size(),
+                                       v->data.data(), v->data.size()};
+        pipeline.vibration(fromRosTime(v->header.stamp), block, writer,
+                           {publisher, v->header.seq, v->header.frame_id});
       }
     } else {
       const auto p = m.instantiate<drivetrain_stiffness::Preload>();
@@ -438,7 +453,7 @@ int run(int argc, char** argv) {
 
   // Refused before anything is read: one topic for two inputs, an unknown name, or a report whose
   // plots would miss their topics.
-  ReplaySummary inputs(o.torque_topic, o.preload_topic, o.joint_states_topic);
+  ReplaySummary inputs(o.topics());
   inputs.requireDistinctTopics();
   const OutputTopics topics = OutputTopics::parse("--topics", o.topics_option);
   const OutputTopics csv_topics = o.csv_topics_option.empty()
@@ -468,7 +483,7 @@ int run(int argc, char** argv) {
 
   // Reads each message before the loop gets it: damage ends the input (input.damage()), it is
   // never thrown out of the loop, so the outputs below are always closed.
-  ReplayInput input(o.bag_path, o.torque_topic, o.preload_topic, o.joint_states_topic);
+  ReplayInput input(o.bag_path, o.topics());
   const JointNames joints = readJointNames(get);
   ReplayWriter writer(pipeline, readOutputSettings(get), o.out_bag,
                       o.compression == "none" ? BagCompression::None : BagCompression::Lz4,

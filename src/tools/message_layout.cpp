@@ -77,7 +77,8 @@ class Cursor {
 std::string checkSerializedMessage(MessageLayout layout, const std::uint8_t* data,
                                    std::size_t size) {
   // Field order and types: geometry_msgs/WrenchStamped, sensor_msgs/JointState,
-  // drivetrain_stiffness/Preload (msg/Preload.msg, msg/BearingPreload.msg).
+  // drivetrain_stiffness/Preload (msg/Preload.msg, msg/BearingPreload.msg),
+  // drivetrain_stiffness/VibrationBlock (msg/VibrationBlock.msg).
   Cursor c(data, size);
   c.header();
   switch (layout) {
@@ -91,6 +92,11 @@ std::string checkSerializedMessage(MessageLayout layout, const std::uint8_t* dat
     case MessageLayout::kPreload:
       c.array("bearings", 4 + 4 * 8,
               [](Cursor& e) { e.string("bearings[].name") && e.fixed(4 * 8, "bearings[]"); });
+      break;
+    case MessageLayout::kVibrationBlock:
+      c.fixed(8, "sample_rate");
+      c.array("channels", 4, [](Cursor& e) { e.string("channels[]"); });
+      c.fixedArray("data", 4);
       break;
   }
   return c.finish();

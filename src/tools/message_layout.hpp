@@ -10,7 +10,7 @@
 namespace drivetrain_stiffness {
 
 /// The recorded input types drivetrain_replay deserializes.
-enum class MessageLayout { kWrenchStamped, kPreload, kJointState };
+enum class MessageLayout { kWrenchStamped, kPreload, kJointState, kVibrationBlock };
 
 /// "" if [data, data + size) holds exactly one message of `layout` (ROS 1 serialization: uint32
 /// lengths before every string and variable array, little-endian), every length within the bytes

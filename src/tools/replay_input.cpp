@@ -64,6 +64,10 @@ template <>
 constexpr MessageLayout layoutOf<sensor_msgs::JointState>() {
   return MessageLayout::kJointState;
 }
+template <>
+constexpr MessageLayout layoutOf<drivetrain_stiffness::VibrationBlock>() {
+  return MessageLayout::kVibrationBlock;
+}
 
 template <class T>
 bool hasTypeOf(const BagConnection& connection) {
@@ -84,6 +88,26 @@ boost::shared_ptr<T> deserialize(const BagRecordMessage& raw) {
   return message;
 }
 
+/// The layout of T when the connection records a T, else none (the loop counts a wrong type).
+template <class T>
+std::optional<MessageLayout> layoutIfTypeOf(const BagConnection& connection) {
+  if (!hasTypeOf<T>(connection)) return std::nullopt;
+  return layoutOf<T>();
+}
+
+/// The message as T when it is on `wanted`'s topic (null otherwise, or of another type).
+template <class T>
+boost::shared_ptr<T> instantiateIf(InputStream stream, InputStream wanted,
+                                   const rosbag::MessageInstance& m) {
+  return stream == wanted ? m.instantiate<T>() : nullptr;
+}
+
+template <class T>
+boost::shared_ptr<T> deserializeIf(InputStream stream, InputStream wanted,
+                                   const BagRecordMessage& raw) {
+  return stream == wanted ? deserialize<T>(raw) : nullptr;
+}
+
 }  // namespace
 
 bool topicMatches(const std::string& topic, const std::string& wanted) {
@@ -94,12 +118,8 @@ bool topicMatches(const std::string& topic, const std::string& wanted) {
          (!w.empty() && w[0] == '/' && w.substr(1) == t);
 }
 
-ReplayInput::ReplayInput(const std::string& path, const std::string& torque_topic,
-                         const std::string& preload_topic, const std::string& joint_states_topic)
-    : path_(path),
-      torque_topic_(torque_topic),
-      preload_topic_(preload_topic),
-      joint_states_topic_(joint_states_topic) {
+ReplayInput::ReplayInput(const std::string& path, const ReplayTopics& topics)
+    : path_(path), topics_(topics) {
   const std::string version = firstLine(path);
   if (version.rfind("#ROSBAG V", 0) != 0)
     throw InvalidInput("--bag = '" + path +
@@ -133,14 +153,19 @@ ReadRule ReplayInput::readRule(const BagConnection& connection) const {
   ReadRule rule;
   rule.read = isWanted(connection.topic);
   if (!rule.read) return rule;
-  // The type follows the topic as in drivetrain_replay's loop: torque first.
-  if (isTorque(connection.topic)) {
-    if (hasTypeOf<geometry_msgs::WrenchStamped>(connection))
-      rule.layout = MessageLayout::kWrenchStamped;
-  } else if (isJointStates(connection.topic)) {
-    if (hasTypeOf<sensor_msgs::JointState>(connection)) rule.layout = MessageLayout::kJointState;
-  } else if (hasTypeOf<drivetrain_stiffness::Preload>(connection)) {
-    rule.layout = MessageLayout::kPreload;
+  switch (*streamOf(connection.topic)) {
+    case InputStream::kTorque:
+      rule.layout = layoutIfTypeOf<geometry_msgs::WrenchStamped>(connection);
+      break;
+    case InputStream::kPreload:
+      rule.layout = layoutIfTypeOf<drivetrain_stiffness::Preload>(connection);
+      break;
+    case InputStream::kJointStates:
+      rule.layout = layoutIfTypeOf<sensor_msgs::JointState>(connection);
+      break;
+    case InputStream::kVibration:
+      rule.layout = layoutIfTypeOf<drivetrain_stiffness::VibrationBlock>(connection);
+      break;
   }
   return rule;
 }
@@ -166,16 +191,12 @@ void ReplayInput::advance() {
   if (has_message_) ++read_;
 }
 
-bool ReplayInput::isTorque(const std::string& topic) const {
-  return topicMatches(topic, torque_topic_);
-}
-
-bool ReplayInput::isJointStates(const std::string& topic) const {
-  return topicMatches(topic, joint_states_topic_);
-}
-
-bool ReplayInput::isWanted(const std::string& topic) const {
-  return isTorque(topic) || topicMatches(topic, preload_topic_) || isJointStates(topic);
+std::optional<InputStream> ReplayInput::streamOf(const std::string& topic) const {
+  for (const InputStream s : {InputStream::kTorque, InputStream::kJointStates,
+                              InputStream::kVibration, InputStream::kPreload}) {
+    if (topicMatches(topic, topics_[static_cast<std::size_t>(s)])) return s;
+  }
+  return std::nullopt;
 }
 
 bool ReplayInput::nextIndexed() {
@@ -196,11 +217,14 @@ bool ReplayInput::nextIndexed() {
     message_.topic_ = &m.getTopic();
     message_.caller_id_ = &headerField(m.getConnectionHeader().get(), "callerid");
     message_.data_type_ = &m.getDataType();
-    // The type follows the topic as in drivetrain_replay's loop: torque first.
-    const bool torque = isTorque(m.getTopic()), joints = !torque && isJointStates(m.getTopic());
-    message_.torque_ = torque ? m.instantiate<geometry_msgs::WrenchStamped>() : nullptr;
-    message_.joint_states_ = joints ? m.instantiate<sensor_msgs::JointState>() : nullptr;
-    message_.preload_ = torque || joints ? nullptr : m.instantiate<drivetrain_stiffness::Preload>();
+    const InputStream stream = *streamOf(m.getTopic());
+    message_.torque_ = instantiateIf<geometry_msgs::WrenchStamped>(stream, InputStream::kTorque, m);
+    message_.preload_ =
+        instantiateIf<drivetrain_stiffness::Preload>(stream, InputStream::kPreload, m);
+    message_.joint_states_ =
+        instantiateIf<sensor_msgs::JointState>(stream, InputStream::kJointStates, m);
+    message_.vibration_ =
+        instantiateIf<drivetrain_stiffness::VibrationBlock>(stream, InputStream::kVibration, m);
     return true;
   } catch (
       const std::exception& e) {  // a chunk that does not decompress, a damaged record or message
@@ -237,11 +261,14 @@ void ReplayInput::decode(const BagRecordMessage& raw, ReplayMessage& message) co
   message.topic_ = &raw.connection->topic;
   message.caller_id_ = &headerField(&raw.connection->header, "callerid");
   message.data_type_ = &headerField(&raw.connection->header, "type");
-  const bool torque = isTorque(raw.connection->topic),
-             joints = !torque && isJointStates(raw.connection->topic);
-  message.torque_ = torque ? deserialize<geometry_msgs::WrenchStamped>(raw) : nullptr;
-  message.joint_states_ = joints ? deserialize<sensor_msgs::JointState>(raw) : nullptr;
-  message.preload_ = torque || joints ? nullptr : deserialize<drivetrain_stiffness::Preload>(raw);
+  const InputStream stream = *streamOf(raw.connection->topic);
+  message.torque_ = deserializeIf<geometry_msgs::WrenchStamped>(stream, InputStream::kTorque, raw);
+  message.preload_ =
+      deserializeIf<drivetrain_stiffness::Preload>(stream, InputStream::kPreload, raw);
+  message.joint_states_ =
+      deserializeIf<sensor_msgs::JointState>(stream, InputStream::kJointStates, raw);
+  message.vibration_ =
+      deserializeIf<drivetrain_stiffness::VibrationBlock>(stream, InputStream::kVibration, raw);
 }
 
 /// A sequential reading ends in damage: the reader's, or (every chunk read whole) the index that

@@ -27,11 +27,16 @@
 #include "bag_index_check.hpp"        // NOLINT(build/include_subdir)
 #include "bag_sequential_reader.hpp"  // NOLINT(build/include_subdir)
 #include "drivetrain_stiffness/Preload.h"
+#include "drivetrain_stiffness/VibrationBlock.h"
+#include "drivetrain_stiffness/pipeline/refusal_tally.hpp"
 
 namespace drivetrain_stiffness {
 
 /// A bag topic is the wanted one, with or without the leading '/'.
 bool topicMatches(const std::string& topic, const std::string& wanted);
+
+/// The bag topic of each input stream, indexed by InputStream.
+using ReplayTopics = std::array<std::string, kInputStreams>;
 
 /// One input message, used as the loop used rosbag::MessageInstance, but already read.
 class ReplayMessage {
@@ -58,6 +63,7 @@ class ReplayMessage {
   boost::shared_ptr<geometry_msgs::WrenchStamped> torque_;
   boost::shared_ptr<drivetrain_stiffness::Preload> preload_;
   boost::shared_ptr<sensor_msgs::JointState> joint_states_;
+  boost::shared_ptr<drivetrain_stiffness::VibrationBlock> vibration_;
 };
 
 template <>
@@ -72,14 +78,16 @@ template <>
 inline boost::shared_ptr<sensor_msgs::JointState> ReplayMessage::instantiate() const {
   return joint_states_;
 }
+template <>
+inline boost::shared_ptr<drivetrain_stiffness::VibrationBlock> ReplayMessage::instantiate() const {
+  return vibration_;
+}
 
 class ReplayInput {
  public:
   /// Throws InvalidInput ("--bag = 'PATH': ...") if the path does not exist, is a directory or
   /// another non-file, cannot be read, is not a bag, or is a bag of a format other than 2.0.
-  ReplayInput(const std::string& path, const std::string& torque_topic,
-              const std::string& preload_topic,
-              const std::string& joint_states_topic = "joint_states");
+  ReplayInput(const std::string& path, const ReplayTopics& topics);
 
   struct End {};
   class Iterator {
@@ -108,16 +116,17 @@ class ReplayInput {
   void advance();
   bool nextIndexed();
   bool nextSequential();
-  bool isTorque(const std::string& topic) const;
-  bool isJointStates(const std::string& topic) const;
-  bool isWanted(const std::string& topic) const;
+  /// The input stream `topic` feeds (torque first, as drivetrain_replay's loop), or none.
+  std::optional<InputStream> streamOf(const std::string& topic) const;
+  bool isWanted(const std::string& topic) const { return streamOf(topic).has_value(); }
   ReadRule readRule(const BagConnection& connection) const;
   void decode(const BagRecordMessage& raw, ReplayMessage& message) const;
   BagDamage endOfSequentialReading() const;
   std::string withoutIndex() const;  ///< what a sequential reading's damage says of the index
   BagDamage locateDamage(const std::string& rosbag_error) const;
 
-  std::string path_, torque_topic_, preload_topic_, joint_states_topic_;
+  std::string path_;
+  ReplayTopics topics_;
   std::unique_ptr<rosbag::Bag> bag_;
   std::unique_ptr<rosbag::View> view_;
   rosbag::View::iterator view_next_, view_end_;

@@ -10,7 +10,7 @@ namespace drivetrain_stiffness {
 namespace {
 
 constexpr InputStream kStreams[] = {InputStream::kTorque, InputStream::kPreload,
-                                    InputStream::kJointStates};
+                                    InputStream::kJointStates, InputStream::kVibration};
 constexpr InputOutcome kRefusals[] = {InputOutcome::kWrongFrame,      InputOutcome::kInvalidValue,
                                       InputOutcome::kUnreachableLoad, InputOutcome::kZeroStamp,
                                       InputOutcome::kOutOfOrder,      InputOutcome::kStampRange};
@@ -22,6 +22,7 @@ std::uint64_t acceptedOn(InputStream s, const PipelineCounters& c) {
     case InputStream::kTorque: return c.accepted_torque;
     case InputStream::kPreload: return c.accepted_preload;
     case InputStream::kJointStates: return c.accepted_motion;
+    case InputStream::kVibration: return c.accepted_vibration;
   }
   return 0;
 }
@@ -31,6 +32,7 @@ std::uint64_t droppedOn(InputStream s, const PipelineCounters& c) {
     case InputStream::kTorque: return c.dropped_torque;
     case InputStream::kPreload: return c.dropped_preload;
     case InputStream::kJointStates: return c.dropped_motion;
+    case InputStream::kVibration: return c.dropped_vibration;
   }
   return 0;
 }
@@ -144,24 +146,29 @@ std::uint64_t ReplayInputTopic::wrongType() const {
   return n;
 }
 
-ReplaySummary::ReplaySummary(const std::string& torque_topic, const std::string& preload_topic,
-                             const std::string& joint_states_topic)
+ReplaySummary::ReplaySummary(const std::array<std::string, kInputStreams>& topics)
     : inputs_{{{InputStream::kTorque,
                 "--torque-topic",
-                torque_topic,
+                topics[0],
                 "geometry_msgs/WrenchStamped",
                 0,
                 {}},
                {InputStream::kPreload,
                 "--preload-topic",
-                preload_topic,
+                topics[1],
                 "drivetrain_stiffness/Preload",
                 0,
                 {}},
                {InputStream::kJointStates,
                 "--joint-states-topic",
-                joint_states_topic,
+                topics[2],
                 "sensor_msgs/JointState",
+                0,
+                {}},
+               {InputStream::kVibration,
+                "--vibration-topic",
+                topics[3],
+                "drivetrain_stiffness/VibrationBlock",
                 0,
                 {}}}} {}
 
@@ -192,7 +199,7 @@ std::uint64_t ReplaySummary::wrongType() const {
 }
 
 std::uint64_t ReplaySummary::accepted(const PipelineCounters& c) {
-  return c.accepted_torque + c.accepted_preload + c.accepted_motion;
+  return c.accepted_torque + c.accepted_preload + c.accepted_motion + c.accepted_vibration;
 }
 
 nlohmann::json ReplaySummary::json(const RigPipeline& pipeline,

@@ -32,8 +32,8 @@ struct ReplayInputTopic {
 
 class ReplaySummary {
  public:
-  ReplaySummary(const std::string& torque_topic, const std::string& preload_topic,
-                const std::string& joint_states_topic);
+  /// Each stream's topic, indexed by InputStream.
+  explicit ReplaySummary(const std::array<std::string, kInputStreams>& topics);
   /// Throws InvalidInput naming both options when one topic is named for two inputs.
   void requireDistinctTopics() const;
   ReplayInputTopic& input(InputStream stream) { return inputs_[static_cast<std::size_t>(stream)]; }

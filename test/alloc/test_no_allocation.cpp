@@ -277,3 +277,27 @@ TEST(NoAllocation, BearingChangesToNewValuesInSteadyState) {
   EXPECT_GT(prop.decompositions() - decompositions_before, 20 * 100)
       << "the changes did not decompose slices";
 }
+
+// Vibration blocks (two channels and an unknown one, 1024 samples at 51.2 kHz) appended to the
+// record past its length (4 s: the ring wraps), between torque inputs: none may allocate.
+TEST(NoAllocation, VibrationBlocksInSteadyState) {
+  RigPipeline pipeline(test::seedServo(), PipelineOptions{});
+  PipelineSink sink;
+  const std::vector<std::string> channels{"pinion_bearing", "tacho", "gear_bearing"};
+  std::vector<float> data(1024 * channels.size());
+  for (std::size_t i = 0; i < data.size(); ++i) data[i] = static_cast<float>(std::sin(0.1 * i));
+  const VibrationBlockView block{51200.0, channels.data(), channels.size(), data.data(),
+                                 data.size()};
+  const double period = 1024 / 51200.0;
+  auto send = [&](int k) {
+    const Stamp stamp = test::stampAt(10.0 + k * period);
+    ASSERT_EQ(pipeline.vibration(stamp, block, sink), InputOutcome::kAccepted) << k;
+    ASSERT_EQ(pipeline.torque(stamp, 0.5, sink), InputOutcome::kAccepted) << k;
+  };
+  for (int k = 0; k < 250; ++k) send(k);  // 5 s: the record full, its ring wrapped
+  const long before = allocationCount();
+  for (int k = 250; k < 500; ++k) send(k);
+  const long n = allocationCount() - before;
+  EXPECT_EQ(n, 0) << n / 250.0 << " heap allocations per block and torque input";
+  EXPECT_EQ(pipeline.counters().vibration.samples, 500u * 1024u);
+}

@@ -43,7 +43,8 @@ CaseStats fuzzBag(const std::uint8_t* data, std::size_t size) {
   CaseStats stats;
   std::unique_ptr<ReplayInput> input;
   try {
-    input = std::make_unique<ReplayInput>(path, "torque", "preload", "joint_states");
+    input = std::make_unique<ReplayInput>(
+        path, ReplayTopics{"torque", "preload", "joint_states", "vibration"});
   } catch (const InvalidInput& e) {
     require(std::string(e.what()).rfind("--bag = '" + path + "'", 0) == 0,
             std::string("refusal without the path: ") + e.what());
@@ -62,6 +63,10 @@ CaseStats fuzzBag(const std::uint8_t* data, std::size_t size) {
       }
       if (const auto p = m.instantiate<drivetrain_stiffness::Preload>())
         held += 36 * p->bearings.size();
+      if (const auto v = m.instantiate<drivetrain_stiffness::VibrationBlock>()) {
+        for (const std::string& name : v->channels) held += 4 + printableText(name).size() / 4;
+        held += 4 * v->data.size();
+      }
       require(held <= 4 * size + 64, "a message holds " + std::to_string(held) + " bytes from a " +
                                          std::to_string(size) + "-byte file");
     }

@@ -295,6 +295,56 @@ def calibration_without_a_window():
     ])
 
 
+def vibration_block(t, seq, frames=1024, channels=("pinion_bearing", "gear_bearing", "tacho"), value=0.5):
+    from drivetrain_stiffness.msg import VibrationBlock
+    v = VibrationBlock()
+    v.header.stamp, v.header.seq = t, seq
+    v.sample_rate = 51200.0
+    v.channels = list(channels)
+    v.data = [value] * (frames * len(channels))
+    return v
+
+
+def vibration_on_a_rig_topic():
+    """Accelerometer blocks on the rig's own topic: 1024 samples at 51.2 kHz (20 ms) with an unknown
+    'tacho' channel; block 10 lost (a gap), block 15 with a NaN, block 20 one value short."""
+    msgs = [("/torque", wrench(at(0.001 * i), 0.1), at(0.001 * i)) for i in range(1, 601)]
+    block = 1024 / 51200.0
+    for k in range(25):
+        if k == 10:
+            continue
+        v = vibration_block(at(0.01 + k * block), k + 1)
+        if k == 15:
+            v.data[7] = float("nan")
+        if k == 20:
+            v.data = v.data[:-1]
+        msgs.append(("/daq/accel", v, at(0.01 + k * block)))
+    bag = bag_of("vibration", sorted(msgs, key=lambda m: m[2].to_nsec()))
+    p, s, md, _ = run("vibration_unnamed", bag)
+    check("vibration_topic_unnamed", [
+        (p.returncode == 0, "exit %d" % p.returncode),
+        ("'/daq/accel' holds 24 drivetrain_stiffness/VibrationBlock messages: --vibration-topic /daq/accel reads them"
+         in p.stderr, "stderr does not point at the accelerometers' topic: " + p.stderr[-400:]),
+    ])
+    p, s, md, _ = run("vibration_named", bag, "--vibration-topic", "/daq/accel")
+    c = (s or {}).get("counters", {})
+    reasons = (s or {}).get("inputs", {}).get("vibration", {}).get("refused_by_reason", {})
+    check("vibration_topic_named", [
+        (p.returncode == 0, "exit %d" % p.returncode),
+        (c.get("accepted_vibration") == 22 and c.get("rejected_vibration") == 2, "accepted/rejected %r/%r" % (
+            c.get("accepted_vibration"), c.get("rejected_vibration"))),
+        (reasons.get("invalid value", {}).get("count") == 2, "refusals %r" % reasons),
+        ("channel 'gear_bearing', sample 2) = nan" in reasons.get("invalid value", {}).get("first_reason", ""),
+         "the NaN's field not named: %r" % reasons.get("invalid value")),
+        (c.get("dropped_vibration") == 1, "dropped (header.seq) %r" % c.get("dropped_vibration")),
+        # block 10 lost; blocks 15 and 20 refused: each leaves a hole the next accepted block starts after
+        (c.get("vibration_gaps") == 3, "gaps %r" % c.get("vibration_gaps")),
+        (c.get("vibration_samples") == 22 * 1024, "samples %r" % c.get("vibration_samples")),
+        (c.get("vibration_unknown_channels") == 22, "unknown channels %r" % c.get("vibration_unknown_channels")),
+        ("22 accepted" in md or "22 accepted" in p.stderr, "the summary does not count the blocks"),
+    ])
+
+
 def main():
     shutil.rmtree(work, ignore_errors=True)
     os.makedirs(work)
@@ -310,6 +360,7 @@ def main():
     non_utf8_frame()
     encoders_barely_turn()
     calibration_without_a_window()
+    vibration_on_a_rig_topic()
     if failures:
         sys.exit("check_foreign_bags: failed: %s" % ", ".join(failures))
     print("check_foreign_bags: every foreign bag's replay says what it used, what it did not, and why")

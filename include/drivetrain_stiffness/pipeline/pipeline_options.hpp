@@ -3,8 +3,10 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include "drivetrain_stiffness/core/stiffness_estimator.hpp"
+#include "drivetrain_stiffness/pipeline/vibration_channels.hpp"
 
 namespace drivetrain_stiffness {
 
@@ -38,6 +40,9 @@ struct PipelineOptions {
       0.01;                 ///< [rad] gear angle off -(z_p/z_g) pinion angle by more: reported
   int motion_slices = 256;  ///< slices per mesh period of the measured-motion dynamics
   bool calibrate = true;    ///< the calibration rule, with a calibration block in the gearbox
+  /// Vibration channels named otherwise than a bearing support (docs/vibration.md "Input").
+  std::vector<VibrationChannelAlias> vibration_channels;
+  double vibration_record = 4.0;  ///< [s] of accelerations kept for the identification
   void validate() const;
 };
 

@@ -84,6 +84,16 @@ class PipelineSink {
 };
 
 /// Counters of everything the pipeline saw; nothing is dropped without being counted here.
+/// What the vibration block rules counted (VibrationInput).
+struct VibrationCounters {
+  std::uint64_t samples = 0;           ///< accepted samples per channel (frames)
+  std::uint64_t gaps = 0;              ///< a block later than the previous one's end: new record
+  std::uint64_t overlaps = 0;          ///< a block earlier than the previous one's end: refused
+  std::uint64_t rate_changes = 0;      ///< another sample rate: new record
+  std::uint64_t channel_changes = 0;   ///< other channel names: new record
+  std::uint64_t unknown_channels = 0;  ///< channels of accepted blocks that name no support
+};
+
 struct PipelineCounters {
   std::uint64_t accepted_torque = 0, rejected_torque = 0;
   std::uint64_t accepted_preload = 0, rejected_preload = 0;
@@ -91,6 +101,8 @@ struct PipelineCounters {
   std::uint64_t wrong_frames = 0, stamps_out_of_range = 0;
   std::uint64_t dropped_torque = 0, dropped_preload = 0;  ///< numbered messages that never arrived
   std::uint64_t accepted_motion = 0, rejected_motion = 0, dropped_motion = 0;  ///< joint_states
+  std::uint64_t accepted_vibration = 0, rejected_vibration = 0, dropped_vibration = 0;  ///< blocks
+  VibrationCounters vibration;
   std::uint64_t motion_timeouts = 0, gear_ratio_mismatches = 0;
   std::uint64_t stiffness_shed =
       0;  ///< backlogged torque inputs: dynamics only, no stiffness update

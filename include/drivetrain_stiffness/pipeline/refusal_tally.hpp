@@ -14,9 +14,9 @@
 namespace drivetrain_stiffness {
 
 /// The pipeline's input streams.
-enum class InputStream { kTorque, kPreload, kJointStates };
-constexpr std::size_t kInputStreams = 3;
-/// "torque", "preload", "joint_states": the topic names the pipeline's messages use.
+enum class InputStream { kTorque, kPreload, kJointStates, kVibration };
+constexpr std::size_t kInputStreams = 4;
+/// "torque", "preload", "joint_states", "vibration": the topic names the pipeline's messages use.
 const char* toString(InputStream stream);
 
 class RefusalTally {

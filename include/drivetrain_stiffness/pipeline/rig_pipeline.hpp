@@ -29,6 +29,7 @@
 #include "drivetrain_stiffness/pipeline/runtime_settings.hpp"
 #include "drivetrain_stiffness/pipeline/te_output.hpp"
 #include "drivetrain_stiffness/pipeline/te_spectrum_stage.hpp"
+#include "drivetrain_stiffness/pipeline/vibration_input.hpp"
 
 namespace drivetrain_stiffness {
 
@@ -56,6 +57,11 @@ class RigPipeline {
   /// value, `found` (its joint names) in the tally.
   InputOutcome motionRefused(Stamp stamp, const std::string& reason, const InputOrigin& origin = {},
                              std::string_view found = {});
+  /// One accelerometer block at `stamp` (its first sample): the vibration block rules.
+  InputOutcome vibration(Stamp stamp, const VibrationBlockView& block, PipelineSink& sink,
+                         const InputOrigin& origin = {});
+  /// The vibration record and its channel map.
+  const VibrationInput& vibrationInput() const { return *vibration_; }
   /// What drives the mesh phase (PhaseSource::name).
   const char* phaseSource() const;
   /// [s] since the last reading while the encoders drive the phase (the time-out is taken on input
@@ -113,6 +119,7 @@ class RigPipeline {
   std::unique_ptr<TeOutput> te_output_;
   std::unique_ptr<TeSpectrumStage> te_spectrum_;
   std::unique_ptr<MeshPeriodStage> mesh_periods_;
+  std::unique_ptr<VibrationInput> vibration_;
   double held_torque_ = 0.0;  ///< [N*m] paired with readings by the calibration
   std::optional<Stamp> last_stiffness_out_;
 };

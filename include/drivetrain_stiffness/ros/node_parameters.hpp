@@ -4,6 +4,7 @@
 // and throws InvalidInput naming the parameter when it has the wrong type.
 #pragma once
 
+#include <map>
 #include <string>
 #include <utility>
 
@@ -44,6 +45,10 @@ PipelineOptions readPipelineOptions(const Get& get, const RigConfig& rig) {
   // The calibration rule: calibrate against the encoders' TE when the gearbox has a calibration
   // block.
   o.calibrate = get("calibrate", o.calibrate);
+  // Accelerometers (docs/vibration.md "Input"): channels named otherwise than a bearing support.
+  o.vibration_channels =
+      parseVibrationAliases(get("vibration_channels", std::map<std::string, std::string>{}));
+  o.vibration_record = get("vibration_record", o.vibration_record);
   try {
     o.validate();
   } catch (const InvalidInput& e) {

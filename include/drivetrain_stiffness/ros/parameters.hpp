@@ -3,6 +3,7 @@
 // default), and an absent one takes the documented default.
 #pragma once
 
+#include <map>
 #include <string>
 
 #include <ros/node_handle.h>
@@ -28,6 +29,11 @@ inline const char* parameterTypeName<bool>() {
 template <>
 inline const char* parameterTypeName<std::string>() {
   return "a string";
+}
+
+template <>
+inline const char* parameterTypeName<std::map<std::string, std::string>>() {
+  return "a map of strings to strings";
 }
 
 template <typename T>

@@ -21,6 +21,7 @@
 
 #include "drivetrain_stiffness/EstimatorConfig.h"
 #include "drivetrain_stiffness/Preload.h"
+#include "drivetrain_stiffness/VibrationBlock.h"
 #include "drivetrain_stiffness/pipeline/rig_pipeline.hpp"
 #include "drivetrain_stiffness/ros/master_watch.hpp"
 #include "drivetrain_stiffness/ros/message_conversion.hpp"
@@ -39,6 +40,7 @@ class StiffnessEstimatorRos {
   void onTorque(const ros::MessageEvent<const geometry_msgs::WrenchStamped>& event);
   void onPreload(const ros::MessageEvent<const drivetrain_stiffness::Preload>& event);
   void onJointStates(const ros::MessageEvent<const sensor_msgs::JointState>& event);
+  void onVibration(const ros::MessageEvent<const drivetrain_stiffness::VibrationBlock>& event);
   /// The input waited in the subscriber queue for longer than ~shed_queue_age: shed its stiffness.
   Backlog backlogOf(const ros::Time& receipt) const;
   /// A new master knows nothing of this node: put its parameters there and exit, for roslaunch to
@@ -58,7 +60,7 @@ class StiffnessEstimatorRos {
   std::vector<PreloadSetting>
       preload_settings_;  ///< each preload message's, converted in place (under mutex_)
   std::unique_ptr<Publishers> publishers_;
-  ros::Subscriber torque_sub_, preload_sub_, joint_states_sub_;
+  ros::Subscriber torque_sub_, preload_sub_, joint_states_sub_, vibration_sub_;
   JointNames joints_;
   std::string joint_refusal_;  ///< scratch for toMotionInput's reason
   diagnostic_updater::Updater diagnostics_;
