@@ -148,6 +148,15 @@ class Calibrator {
   void noteStretch();
   SteadyStretch openStretch() const;
   void update(const FeatureVector& z, const FeatureVector& z_std, double torque);
+  /// The features' Jacobian at state p and torque [N·m]: closed-form columns for the offset and the
+  /// bearing compliances, central differences for the mesh scale and T_p; held parameters 0.
+  void jacobian(const CalibrationVector& p, double torque, ModelErrorScale::FeatureRows& H) const;
+  /// The iterated EKF's posterior mode from state_ (at most four relinearisations); H and K are
+  /// those of the last iteration.
+  CalibrationVector iteratedUpdate(const CalibrationMatrix& prior,
+                                   const Eigen::Matrix<double, kFeatureSize, kFeatureSize>& R,
+                                   const FeatureVector& z, double torque,
+                                   ModelErrorScale::FeatureRows& H, ModelErrorScale::Gain& K) const;
   /// Within ~torque_band plus 1 % of the window's first torque.
   bool inBand(double torque) const;
   void outputs(double torque, const StiffnessEstimator& supports);

@@ -70,6 +70,13 @@ class SpurGearGeometry {
   int backPairs(double phi, std::array<double, 3>& s) const;
 
  private:
+  /// The constructor's steps in order, each throwing InvalidInput naming the field: the reference,
+  /// base and root circles (undercut); the operating centre distance and pressure angle; the tips
+  /// and tooth thickness; the backlash, the path of contact and the back-flank phase.
+  void setReferenceCircles();
+  void setCentreDistance();
+  void setTips();
+  void setPathOfContact();
   GearPairSpec spec_;
   std::array<double, 2> r_{}, rb_{}, ra_{}, rf_{}, rw_{}, alpha2_{}, sw_{};
   double tip_shortening_ = 0, alpha_w_ = 0, a_w_ = 0, backlash_ = 0, pb_ = 0, t1t2_ = 0;

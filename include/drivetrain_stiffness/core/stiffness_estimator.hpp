@@ -119,6 +119,12 @@ class StiffnessEstimator {
   std::array<double, 3> mean_k1_kchain_{};  ///< period means of k1, k_chain and k1 + k_chain
   std::vector<Support> supports_;
   StiffnessEstimate estimate_;
+  /// setPreloads' steps: the settings staged in workspace_ (a changed geometry rebuilt into the
+  /// spare; throws InvalidInput or UnreachableLoad naming the support), each support solved there
+  /// at mesh force [N] (throws UnreachableLoad), then everything swapped in.
+  void stagePreloads(const std::vector<PreloadSetting>& settings);
+  void solveStaged(double mesh_force);
+  void commitStaged();
   /// Per-support scratch, swapped into estimate_ once every support has solved.
   struct Workspace {
     BearingSolution solution;
