@@ -139,7 +139,7 @@ class TruthSink : public PipelineSink {
   TruthSink(std::int64_t epoch_ns, double joint_rate, long lead, std::vector<double>& te,
             std::vector<char>& filled)
       : epoch_ns_(epoch_ns), joint_rate_(joint_rate), lead_(lead), te_(te), filled_(filled) {}
-  double correction = 0.0;  ///< [m] c(T) of the torque the dynamics hold (see makeLoadSweep)
+  double correction = 0.0;  ///< [m] c(T) of the torque the dynamics hold (encoderOffset)
 
   void transmissionError(Stamp stamp, const DynamicsSample& sample, const SampleContext&) override {
     // The output grid is the readings' grid (output_rate = joint_rate, the mesh period a whole
