@@ -173,8 +173,8 @@ class Calibrator {
   double lattice_ = 0.0;    ///< [m] the TE's ambiguity from the encoders' whole turns
   double gear_turn_ = 0.0;  ///< [rad] of pinion angle a window spans
 
-  // The filter's state: each bearing scale s as its compliance factor c = 1/s (docs/calibration.md
-  // "3. The estimator").
+  /// The filter's state: each bearing scale s as its compliance factor c = 1/s (docs/calibration.md
+  /// "3. The estimator").
   CalibrationVector state_ = CalibrationVector::Zero(),
                     state_prior_std_ = CalibrationVector::Zero();
   /// The drawing's spread in the state's coordinates.
@@ -197,7 +197,7 @@ class Calibrator {
   double last_update_t_ = 0.0;
   bool has_update_t_ = false;
 
-  // The open window.
+  /// The open window.
   struct Window {
     bool open = false;
     double t0 = 0.0, t1 = 0.0, torque0 = 0.0, angle_min = 0.0, angle_max = 0.0;
@@ -217,13 +217,13 @@ class Calibrator {
   /// "1. Measured TE").
   static constexpr double kSwitchGuard = 2e-3;
 
-  // The baseline: running means over the baseline windows.
+  /// The baseline: running means over the baseline windows.
   double base_torque_ = 0.0, base_mean_ = 0.0, base_mean_var_ = 0.0, base_harm_var_ = 0.0;
   std::array<std::complex<double>, OrderRegression::kMeshHarmonics> base_harmonics_{};
   std::uint64_t base_count_ = 0;
   std::array<double, 2> base_shafts_{};
 
-  // The last fit, whose orders later readings lose, and the shafts' deflection.
+  /// The last fit, whose orders later readings lose, and the shafts' deflection.
   OrderRegression::Fit last_fit_;
   bool has_fit_ = false;
   std::array<double, 2> shafts_{};  ///< [m] at the last loaded window's mean torque
