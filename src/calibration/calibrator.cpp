@@ -302,6 +302,53 @@ FeatureVector Calibrator::predict(const CalibrationVector& state, double torque)
                                 sampled_);
 }
 
+void Calibrator::jacobian(const CalibrationVector& p, double torque,
+                          ModelErrorScale::FeatureRows& H) const {
+  H.setZero();
+  // Closed-form columns where the features are simple in the parameter: the offset adds to the
+  // mean; a bearing scale s divides its shaft's deflection (d/ds (u/s) = -u/s^2), which is the
+  // same at every phase, so it moves the mean only. The mesh scale and T_p by central
+  // differences.
+  H(0, kTeOffset) = state_prior_std_[kTeOffset] > 0.0 ? 1.0 : 0.0;
+  for (int s = 0; s < 2; ++s) {
+    const int i = s == 0 ? kPinionBearingScale : kGearBearingScale;
+    if (state_prior_std_[i] > 0.0) H(0, i) = shafts_[s] - base_shafts_[s];  // mean TE = ... + u c
+  }
+  for (int i : {kMeshScale, kPreloadTorque}) {
+    if (!(state_prior_std_[i] > 0.0)) continue;  // held: no column
+    const double step = 1e-4 * std::max(state_prior_std_[i], std::abs(p[i]));
+    CalibrationVector a = p, b = p;
+    a[i] += step;
+    b[i] -= step;
+    H.col(i) = (predict(a, torque) - predict(b, torque)) / (2.0 * step);
+  }
+}
+
+CalibrationVector Calibrator::iteratedUpdate(
+    const CalibrationMatrix& prior, const Eigen::Matrix<double, kFeatureSize, kFeatureSize>& R,
+    const FeatureVector& z, double torque, ModelErrorScale::FeatureRows& H,
+    ModelErrorScale::Gain& K) const {
+  // Iterated EKF (Gauss-Newton on the posterior mode): relinearise at the new estimate.
+  CalibrationVector theta = state_;
+  for (int iteration = 0; iteration < 4; ++iteration) {
+    const FeatureVector h = predict(theta, torque);
+    if (iteration > 0) jacobian(theta, torque, H);
+    const Eigen::Matrix<double, kFeatureSize, kFeatureSize> Si = H * prior * H.transpose() + R;
+    K = prior * H.transpose() * Si.inverse();
+    CalibrationVector next = state_ + K * (z - h - H * (state_ - theta));
+    // Physical bounds: scales in [0.05, 20) as the YAML loader's, a preload torque >= 0.
+    next[kMeshScale] = std::clamp(next[kMeshScale], 0.05, 19.9);
+    for (int i : {kPinionBearingScale, kGearBearingScale})
+      next[i] = std::clamp(next[i], 1.0 / 19.9, 1.0 / 0.05);
+    next[kPreloadTorque] = std::max(0.0, next[kPreloadTorque]);
+    const double moved =
+        ((next - theta).cwiseQuotient(state_prior_std_.cwiseMax(1e-300))).cwiseAbs().maxCoeff();
+    theta = next;
+    if (moved < 1e-6) break;
+  }
+  return theta;
+}
+
 void Calibrator::update(const FeatureVector& z, const FeatureVector& z_std, double torque) {
   // Random walk since the last update (a preload that relaxes, wear): relative to the drawing's
   // spread (the prior's, unless a calibrated gearbox keeps the drawing's as reference_std). Held
@@ -313,27 +360,6 @@ void Calibrator::update(const FeatureVector& z, const FeatureVector& z_std, doub
       ((config_.drift * config_.drift * dt) * walk.cwiseAbs2()).asDiagonal();
   const CalibrationMatrix prior = state_covariance_ + Q;
 
-  auto jacobian = [&](const CalibrationVector& p,
-                      Eigen::Matrix<double, kFeatureSize, kCalibrationSize>& H) {
-    H.setZero();
-    // Closed-form columns where the features are simple in the parameter: the offset adds to the
-    // mean; a bearing scale s divides its shaft's deflection (d/ds (u/s) = -u/s^2), which is the
-    // same at every phase, so it moves the mean only. The mesh scale and T_p by central
-    // differences.
-    H(0, kTeOffset) = state_prior_std_[kTeOffset] > 0.0 ? 1.0 : 0.0;
-    for (int s = 0; s < 2; ++s) {
-      const int i = s == 0 ? kPinionBearingScale : kGearBearingScale;
-      if (state_prior_std_[i] > 0.0) H(0, i) = shafts_[s] - base_shafts_[s];  // mean TE = ... + u c
-    }
-    for (int i : {kMeshScale, kPreloadTorque}) {
-      if (!(state_prior_std_[i] > 0.0)) continue;  // held: no column
-      const double step = 1e-4 * std::max(state_prior_std_[i], std::abs(p[i]));
-      CalibrationVector a = p, b = p;
-      a[i] += step;
-      b[i] -= step;
-      H.col(i) = (predict(a, torque) - predict(b, torque)) / (2.0 * step);
-    }
-  };
   // Measurement noise: the window's own, the relative model error and the floor
   // (docs/calibration.md). The model error repeats at an operating point: the n-th window there
   // carries n times its variance, so a long dwell adds no more than one window's worth of model
@@ -352,8 +378,8 @@ void Calibrator::update(const FeatureVector& z, const FeatureVector& z_std, doub
     R(i, i) =
         z_std[i] * z_std[i] + model_variance[i] + config_.te_noise_floor * config_.te_noise_floor;
   }
-  Eigen::Matrix<double, kFeatureSize, kCalibrationSize> H;
-  jacobian(state_, H);
+  ModelErrorScale::FeatureRows H;
+  jacobian(state_, torque, H);
   const FeatureVector innovation = z - h0;
   const Eigen::Matrix<double, kFeatureSize, kFeatureSize> S = H * prior * H.transpose() + R;
   const double nis = innovation.dot(S.ldlt().solve(innovation));
@@ -370,25 +396,8 @@ void Calibrator::update(const FeatureVector& z, const FeatureVector& z_std, doub
   model_error_.predict(Q);
   const FeatureVector variance =
       model_error_.innovationVariance(H, noise);  // before the update, at the prior's H
-  // Iterated EKF (Gauss-Newton on the posterior mode): relinearise at the new estimate.
-  CalibrationVector theta = state_;
-  Eigen::Matrix<double, kCalibrationSize, kFeatureSize> K;
-  for (int iteration = 0; iteration < 4; ++iteration) {
-    const FeatureVector h = predict(theta, torque);
-    if (iteration > 0) jacobian(theta, H);
-    const Eigen::Matrix<double, kFeatureSize, kFeatureSize> Si = H * prior * H.transpose() + R;
-    K = prior * H.transpose() * Si.inverse();
-    CalibrationVector next = state_ + K * (z - h - H * (state_ - theta));
-    // Physical bounds: scales in [0.05, 20) as the YAML loader's, a preload torque >= 0.
-    next[kMeshScale] = std::clamp(next[kMeshScale], 0.05, 19.9);
-    for (int i : {kPinionBearingScale, kGearBearingScale})
-      next[i] = std::clamp(next[i], 1.0 / 19.9, 1.0 / 0.05);
-    next[kPreloadTorque] = std::max(0.0, next[kPreloadTorque]);
-    const double moved =
-        ((next - theta).cwiseQuotient(state_prior_std_.cwiseMax(1e-300))).cwiseAbs().maxCoeff();
-    theta = next;
-    if (moved < 1e-6) break;
-  }
+  ModelErrorScale::Gain K;
+  const CalibrationVector theta = iteratedUpdate(prior, R, z, torque, H, K);
   // Joseph form: stays symmetric positive semi-definite whatever the rounding.
   const CalibrationMatrix IKH = CalibrationMatrix::Identity() - K * H;
   state_covariance_ = IKH * prior * IKH.transpose() + K * R * K.transpose();
@@ -583,6 +592,42 @@ std::string windowsCount(std::uint64_t n) {
   return format(n == 1 ? "%llu window" : "%llu windows", static_cast<unsigned long long>(n));
 }
 
+/// Appends to `out` why each kind of closed window fell short, with the last one's numbers.
+void addOutcomeClauses(const CalibrationProgress& p, std::string& out) {
+  auto clause = [&out](const std::string& text) { out += "; " + text; };
+  auto last = [&p](WindowOutcome o, std::size_t& i) {
+    i = static_cast<std::size_t>(o);
+    return p.closed[i];
+  };
+  std::size_t i = 0;
+  if (const std::uint64_t n = last(WindowOutcome::kTooSlow, i)) {
+    clause(windowsCount(n) + format(" too slow: the last at %.3g rpm, below ~min_speed_rpm = %g",
+                                    p.value[i], p.limit[i]));
+  }
+  if (const std::uint64_t n = last(WindowOutcome::kNotQuasiStatic, i)) {
+    clause(windowsCount(n) + format(" not quasi-static: the last at a mesh frequency of %.4g Hz, "
+                                    "above ~max_mesh_to_natural x "
+                                    "the lowest natural frequency = %.4g Hz",
+                                    p.value[i], p.limit[i]));
+  }
+  if (const std::uint64_t n = last(WindowOutcome::kTooSparse, i)) {
+    clause(windowsCount(n) + format(" too sparse: the last read at %.4g Hz, and its second mesh "
+                                    "harmonic needs more than %.4g Hz",
+                                    p.value[i], p.limit[i]));
+  }
+  if (const std::uint64_t n = last(WindowOutcome::kIllConditioned, i)) {
+    clause(
+        windowsCount(n) +
+        format(" ill-conditioned: the last one's %.0f readings do not determine the shaft orders",
+               p.value[i]));
+  }
+  if (const std::uint64_t n = last(WindowOutcome::kGated, i)) {
+    clause(windowsCount(n) +
+           format(" gated: the last one's normalised innovation squared %.3g, above ~gate = %g",
+                  p.value[i], p.limit[i]));
+  }
+}
+
 }  // namespace
 
 SteadyStretch Calibrator::openStretch() const {
@@ -656,37 +701,7 @@ std::string Calibrator::waitingReason() const {
                ? "no loaded window closed: " + shortOf(p.loaded, "loaded ")
                : format("no torque above ~baseline_torque = %g N*m was held", tb));
   }
-  auto last = [&p](WindowOutcome o, std::size_t& i) {
-    i = static_cast<std::size_t>(o);
-    return p.closed[i];
-  };
-  std::size_t i = 0;
-  if (const std::uint64_t n = last(WindowOutcome::kTooSlow, i)) {
-    clause(windowsCount(n) + format(" too slow: the last at %.3g rpm, below ~min_speed_rpm = %g",
-                                    p.value[i], p.limit[i]));
-  }
-  if (const std::uint64_t n = last(WindowOutcome::kNotQuasiStatic, i)) {
-    clause(windowsCount(n) + format(" not quasi-static: the last at a mesh frequency of %.4g Hz, "
-                                    "above ~max_mesh_to_natural x "
-                                    "the lowest natural frequency = %.4g Hz",
-                                    p.value[i], p.limit[i]));
-  }
-  if (const std::uint64_t n = last(WindowOutcome::kTooSparse, i)) {
-    clause(windowsCount(n) + format(" too sparse: the last read at %.4g Hz, and its second mesh "
-                                    "harmonic needs more than %.4g Hz",
-                                    p.value[i], p.limit[i]));
-  }
-  if (const std::uint64_t n = last(WindowOutcome::kIllConditioned, i)) {
-    clause(
-        windowsCount(n) +
-        format(" ill-conditioned: the last one's %.0f readings do not determine the shaft orders",
-               p.value[i]));
-  }
-  if (const std::uint64_t n = last(WindowOutcome::kGated, i)) {
-    clause(windowsCount(n) +
-           format(" gated: the last one's normalised innovation squared %.3g, above ~gate = %g",
-                  p.value[i], p.limit[i]));
-  }
+  addOutcomeClauses(p, out);
   return out;
 }
 

@@ -66,6 +66,14 @@ double meshForce(const GearPairSpec& spec, int gear_index, double torque) {
 
 SpurGearGeometry::SpurGearGeometry(const GearPairSpec& spec) : spec_(spec) {
   validateGearPair(spec);
+  setReferenceCircles();
+  setCentreDistance();
+  setTips();
+  setPathOfContact();
+}
+
+void SpurGearGeometry::setReferenceCircles() {
+  const GearPairSpec& spec = spec_;
   const double m = spec.module, alpha = spec.pressure_angle, ha = spec.addendum_coefficient;
   for (int i = 0; i < 2; ++i) {
     const int z = spec.teeth[i];
@@ -83,6 +91,11 @@ SpurGearGeometry::SpurGearGeometry(const GearPairSpec& spec) : spec_(spec) {
     alpha2_[i] = kPi / (2.0 * z) + 2.0 * x * std::tan(alpha) / z + involute(alpha);
     if (!(rf_[i] > 0.0)) throwInvalid(gearField("teeth", i), z, "root radius is not positive");
   }
+}
+
+void SpurGearGeometry::setCentreDistance() {
+  const GearPairSpec& spec = spec_;
+  const double alpha = spec.pressure_angle;
   const double a0 = r_[0] + r_[1];
   const double x_sum = spec.profile_shift[0] + spec.profile_shift[1];
   // Tight-mesh operating pressure angle: inv(alpha_w) = inv(alpha) + 2 tan(alpha) (x1 + x2) / (z1 +
@@ -102,6 +115,13 @@ SpurGearGeometry::SpurGearGeometry(const GearPairSpec& spec) : spec_(spec) {
     a_w_ = a_tight;
     alpha_w_ = alpha_tight;
   }
+}
+
+void SpurGearGeometry::setTips() {
+  const GearPairSpec& spec = spec_;
+  const double m = spec.module, alpha = spec.pressure_angle, ha = spec.addendum_coefficient;
+  const double a0 = r_[0] + r_[1];
+  const double x_sum = spec.profile_shift[0] + spec.profile_shift[1];
   // Tip shortening keeps the bottom clearance when x1 + x2 > (a_w - a0) / m (Niemann & Winter,
   // Maschinenelemente II, sec. 21; ISO 21771 sec. 5.4 "tip alteration").
   tip_shortening_ = std::max(0.0, x_sum - (a_w_ - a0) / m);
@@ -121,6 +141,11 @@ SpurGearGeometry::SpurGearGeometry(const GearPairSpec& spec) : spec_(spec) {
                    "gives pointed teeth (negative tip thickness)");
     }
   }
+}
+
+void SpurGearGeometry::setPathOfContact() {
+  const GearPairSpec& spec = spec_;
+  const double m = spec.module, alpha = spec.pressure_angle, ha = spec.addendum_coefficient;
   backlash_ = 2.0 * kPi * rw_[0] / spec.teeth[0] - sw_[0] - sw_[1];
   pb_ = kPi * m * std::cos(alpha);
   t1t2_ = a_w_ * std::sin(alpha_w_);

@@ -3,6 +3,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
 #include "drivetrain_stiffness/core/constants.hpp"
 #include "drivetrain_stiffness/core/rig_excitation.hpp"
@@ -252,35 +253,8 @@ Scene motionScene(const std::string& name, const std::string& description, RigSc
   return s;
 }
 
-}  // namespace
-
-std::vector<std::string> sceneNames() {
-  return {"nominal",
-          "torque_steps",
-          "low_preload",
-          "bearing_rattle",
-          "near_rigid_bearings",
-          "parametric_resonance",
-          "kahraman_singh",
-          "chaotic",
-          "run_up",
-          "speed_steps",
-          "reverse"};
-}
-
-std::vector<std::string> motionSceneNames() { return {"run_up", "speed_steps", "reverse"}; }
-
-double SceneMotion::closedFormPhase(double t) const {
-  return initial_phase + pinion_teeth * pinion_speed.angle(t) / kTwoPi;
-}
-
-Scene makeScene(const std::string& name, const RigConfig& rig_in, double duration) {
-  const std::vector<std::string> moving = motionSceneNames();
-  const bool motion = std::find(moving.begin(), moving.end(), name) != moving.end();
-  if (duration != 0.0 && !motion) {
-    throwInvalid("duration", duration,
-                 "only the motion scenes (run_up, speed_steps, reverse) take a duration");
-  }
+/// The dimensionless oscillator scenes (kahraman_singh, chaotic); nullopt for any other name.
+std::optional<Scene> oscillatorSceneNamed(const std::string& name) {
   if (name == "kahraman_singh") {
     return oscillatorScene(
         name, 0.5, 0.05, 0.1, 0.01, {0.2, 0.1, 0.05}, 200,
@@ -294,8 +268,11 @@ Scene makeScene(const std::string& name, const RigConfig& rig_in, double duratio
                            "dependence on the initial state (a 1e-9 perturbation grows to O(1): "
                            "positive Lyapunov exponent)");
   }
-  if (!rig_in.dynamics.present)
-    throw InvalidInput("scene '" + name + "': the gearbox file has no 'dynamics:' block");
+  return std::nullopt;
+}
+
+/// The rig's scene setup from its dynamics block.
+RigSceneSetup sceneSetup(const RigConfig& rig_in) {
   RigSceneSetup setup;
   setup.rig = rig_in;
   const DynamicsConfig& d = rig_in.dynamics;
@@ -303,6 +280,12 @@ Scene makeScene(const std::string& name, const RigConfig& rig_in, double duratio
   setup.excitation.te_amplitude = d.transmission_error_amplitude;
   setup.excitation.backlash = d.backlash;
   setup.excitation.torque.mean = d.torque;
+  return setup;
+}
+
+/// The rig's scenes at a constant speed; nullopt for any other name.
+std::optional<Scene> constantSpeedScene(const std::string& name, RigSceneSetup setup,
+                                        const DynamicsConfig& d) {
   if (name == "nominal") {
     return rigScene(name, "seed 000 Table 1: 1000 rpm, 0.1 N m, TE at mesh frequency", setup);
   }
@@ -348,27 +331,69 @@ Scene makeScene(const std::string& name, const RigConfig& rig_in, double duratio
     setup.duration = 0.01;
     return rigScene(name, "mesh frequency at twice the lowest natural frequency", setup);
   }
-  if (motion) {
-    const double T = duration > 0.0 ? duration : 1.0;
-    const std::string held = ", torque " + formatValue(d.torque) +
-                             " N m held, sliced mesh (256 slices), encoder readings at 1 kHz";
-    if (name == "run_up")
-      return motionScene(name, "pinion 0 -> 6000 rpm linearly over the scene" + held, setup, T);
-    if (name == "speed_steps") {
-      return motionScene(
-          name,
-          "pinion 500, 1000, 2000, 4000 rpm, a quarter of the scene each, each step a ramp of "
-          "1/20 of the scene" +
-              held,
-          setup, T);
-    }
+  return std::nullopt;
+}
+
+/// The motion scenes (run_up, speed_steps, reverse) over T [s].
+Scene namedMotionScene(const std::string& name, const RigSceneSetup& setup, const DynamicsConfig& d,
+                       double T) {
+  const std::string held = ", torque " + formatValue(d.torque) +
+                           " N m held, sliced mesh (256 slices), encoder readings at 1 kHz";
+  if (name == "run_up")
+    return motionScene(name, "pinion 0 -> 6000 rpm linearly over the scene" + held, setup, T);
+  if (name == "speed_steps") {
     return motionScene(
         name,
-        "pinion 1000 rpm cos(2 pi t / T): through zero at T/4 to -1000 rpm at T/2, zero again "
-        "at 3T/4, back to +1000 rpm" +
+        "pinion 500, 1000, 2000, 4000 rpm, a quarter of the scene each, each step a ramp of "
+        "1/20 of the scene" +
             held,
         setup, T);
   }
+  return motionScene(
+      name,
+      "pinion 1000 rpm cos(2 pi t / T): through zero at T/4 to -1000 rpm at T/2, zero again "
+      "at 3T/4, back to +1000 rpm" +
+          held,
+      setup, T);
+}
+
+}  // namespace
+
+std::vector<std::string> sceneNames() {
+  return {"nominal",
+          "torque_steps",
+          "low_preload",
+          "bearing_rattle",
+          "near_rigid_bearings",
+          "parametric_resonance",
+          "kahraman_singh",
+          "chaotic",
+          "run_up",
+          "speed_steps",
+          "reverse"};
+}
+
+std::vector<std::string> motionSceneNames() { return {"run_up", "speed_steps", "reverse"}; }
+
+double SceneMotion::closedFormPhase(double t) const {
+  return initial_phase + pinion_teeth * pinion_speed.angle(t) / kTwoPi;
+}
+
+Scene makeScene(const std::string& name, const RigConfig& rig_in, double duration) {
+  const std::vector<std::string> moving = motionSceneNames();
+  const bool motion = std::find(moving.begin(), moving.end(), name) != moving.end();
+  if (duration != 0.0 && !motion) {
+    throwInvalid("duration", duration,
+                 "only the motion scenes (run_up, speed_steps, reverse) take a duration");
+  }
+  if (std::optional<Scene> s = oscillatorSceneNamed(name)) return std::move(*s);
+  if (!rig_in.dynamics.present)
+    throw InvalidInput("scene '" + name + "': the gearbox file has no 'dynamics:' block");
+  const RigSceneSetup setup = sceneSetup(rig_in);
+  if (std::optional<Scene> s = constantSpeedScene(name, setup, rig_in.dynamics))
+    return std::move(*s);
+  if (motion)
+    return namedMotionScene(name, setup, rig_in.dynamics, duration > 0.0 ? duration : 1.0);
   throw InvalidInput("scene = '" + name +
                      "': unknown (nominal, torque_steps, low_preload, bearing_rattle, "
                      "near_rigid_bearings, parametric_resonance, kahraman_singh, chaotic, run_up, "

@@ -204,6 +204,19 @@ const StiffnessEstimate& StiffnessEstimator::setPreloads(
   // swapped in. The numbers are those of building the changed supports anew and solving all: a
   // rebuilt support is cold-started, the others warm-started from their last solution, and one
   // whose model and radial preload are unchanged keeps its solution within ~load_tolerance.
+  stagePreloads(settings);
+  const double signed_force = meshForce(rig_->gears, 0, estimate_.torque);
+  const double mesh_force = std::abs(signed_force);
+  const MeshEstimate mesh = meshAt(signed_force, last_pinion_angle_);
+  solveStaged(mesh_force);
+  commitStaged();
+  supports_revision_ = nextSupportsRevision();
+  estimate_.mesh_force = mesh_force;
+  estimate_.mesh = mesh;
+  return estimate_;
+}
+
+void StiffnessEstimator::stagePreloads(const std::vector<PreloadSetting>& settings) {
   const std::size_t n = supports_.size();
   for (std::size_t i = 0; i < n; ++i) {
     const BearingSupportConfig& c = supports_[i].config;
@@ -214,7 +227,7 @@ const StiffnessEstimate& StiffnessEstimator::setPreloads(
     w.rebuilt = false;
   }
   for (const PreloadSetting& p : settings) {
-    const std::size_t i = supportIndex(p.name);  // known: validated above
+    const std::size_t i = supportIndex(p.name);  // known: setPreloads validated it
     Support& s = supports_[i];
     Workspace& w = workspace_[i];
     const bool geometry_changed = w.axial_preload != p.axial_preload ||
@@ -234,9 +247,10 @@ const StiffnessEstimate& StiffnessEstimator::setPreloads(
     }
     w.rebuilt = true;
   }
-  const double signed_force = meshForce(rig_->gears, 0, estimate_.torque);
-  const double mesh_force = std::abs(signed_force);
-  const MeshEstimate mesh = meshAt(signed_force, last_pinion_angle_);
+}
+
+void StiffnessEstimator::solveStaged(double mesh_force) {
+  const std::size_t n = supports_.size();
   for (std::size_t i = 0; i < n; ++i) {
     const Support& s = supports_[i];
     Workspace& w = workspace_[i];
@@ -257,6 +271,10 @@ const StiffnessEstimate& StiffnessEstimator::setPreloads(
     }
     w.solution.stiffness *= s.config.stiffness_scale;  // see SupportEstimate
   }
+}
+
+void StiffnessEstimator::commitStaged() {
+  const std::size_t n = supports_.size();
   for (std::size_t i = 0; i < n; ++i) {
     Support& s = supports_[i];
     Workspace& w = workspace_[i];
@@ -270,10 +288,6 @@ const StiffnessEstimate& StiffnessEstimator::setPreloads(
     e.radial_load = w.radial_load;
     e.axial_load = s.config.arrangement == Arrangement::kSingle ? s.config.axial_preload : 0.0;
   }
-  supports_revision_ = nextSupportsRevision();
-  estimate_.mesh_force = mesh_force;
-  estimate_.mesh = mesh;
-  return estimate_;
 }
 
 std::array<double, 2> StiffnessEstimator::shaftRadialStiffness() const {

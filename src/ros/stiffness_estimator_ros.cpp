@@ -120,6 +120,31 @@ StiffnessEstimatorRos::StiffnessEstimatorRos(ros::NodeHandle nh, ros::NodeHandle
                                             readRuntimeSettings(get, rig));
   publishers_ = std::make_unique<Publishers>(nh, *pipeline_, readOutputSettings(get));
   joints_ = readJointNames(get);
+  double master_check_period = 0.0;
+  const int queue = readNodeLimits(pnh, master_check_period);
+  countStart(pnh);
+  startReconfigure(pnh);
+  diagnostics_.setHardwareID("drivetrain_stiffness");
+  diagnostics_.add("stiffness_estimator", this, &StiffnessEstimatorRos::diagnose);
+  subscribe(nh, queue);
+  private_namespace_ = pnh.getNamespace();
+  pnh.getParam(private_namespace_, parameters_);
+  if (master_check_period > 0.0) {
+    master_watch_ = std::make_unique<MasterWatch>(
+        master_check_period,
+        [this](const std::string& a, const std::string& b) { onMasterRestart(a, b); });
+  }
+  ROS_INFO(
+      "stiffness_estimator: %zu bearing supports from %s; dynamics %s; calibration %s; start %d "
+      "under this master",
+      rig.bearings.size(), gearbox_config_.c_str(),
+      pipeline_->dynamics() ? toString(pipeline_->settings().fidelity) : "off",
+      pipeline_->calibrator() ? "on" : calibrationStatus(*pipeline_).c_str(), starts_);
+}
+
+StiffnessEstimatorRos::~StiffnessEstimatorRos() = default;
+
+int StiffnessEstimatorRos::readNodeLimits(const ros::NodeHandle& pnh, double& master_check_period) {
   deadline_ = readParam(pnh, "deadline", deadline_);
   requirePositive("~deadline", deadline_);
   const int queue = readParam(pnh, "torque_queue_size", 1000);
@@ -137,21 +162,27 @@ StiffnessEstimatorRos::StiffnessEstimatorRos(ros::NodeHandle nh, ros::NodeHandle
     throw InvalidInput("~shed_queue_age = " + formatValue(shed_queue_age_) +
                        ": must be in [0, 60] s (0: never shed)");
   }
-  const double master_check_period = readParam(pnh, "master_check_period", 1.0);
+  master_check_period = readParam(pnh, "master_check_period", 1.0);
   if (!(master_check_period >= 0.0 && master_check_period <= 60.0)) {
     throw InvalidInput("~master_check_period = " + formatValue(master_check_period) +
                        ": must be in [0, 60] s (0: off)");
   }
-  // Starts under this master: the parameter server outlives a respawned process, so a SIGKILL and
-  // roslaunch's respawn show up as a restart on /diagnostics. Written by the node, not a setting.
+  return queue;
+}
+
+// Starts under this master: the parameter server outlives a respawned process, so a SIGKILL and
+// roslaunch's respawn show up as a restart on /diagnostics. Written by the node, not a setting.
+void StiffnessEstimatorRos::countStart(ros::NodeHandle& pnh) {
   int previous_starts = 0;
   pnh.getParam("process_starts", previous_starts);
   starts_ = previous_starts + 1;
   pnh.setParam("process_starts", starts_);
+}
 
-  // dynamic_reconfigure starts from the parameter server: seed it with the gearbox's damping, every
-  // time (the server writes its values back, so a restart would otherwise reuse the last session's
-  // and the node would no longer match drivetrain_replay on the same files).
+// dynamic_reconfigure starts from the parameter server: seed it with the gearbox's damping, every
+// time (the server writes its values back, so a restart would otherwise reuse the last session's
+// and the node would no longer match drivetrain_replay on the same files).
+void StiffnessEstimatorRos::startReconfigure(ros::NodeHandle& pnh) {
   const RuntimeSettings& run = pipeline_->settings();
   pnh.setParam("mesh_damping_ratio", run.mesh_damping_ratio);
   pnh.setParam("bearing_damping_ratio", run.bearing_damping_ratio);
@@ -165,9 +196,9 @@ StiffnessEstimatorRos::StiffnessEstimatorRos(ros::NodeHandle nh, ros::NodeHandle
   reconfigure_->setCallback([this](drivetrain_stiffness::EstimatorConfig& c, std::uint32_t level) {
     onReconfigure(c, level);
   });
+}
 
-  diagnostics_.setHardwareID("drivetrain_stiffness");
-  diagnostics_.add("stiffness_estimator", this, &StiffnessEstimatorRos::diagnose);
+void StiffnessEstimatorRos::subscribe(ros::NodeHandle& nh, int queue) {
   // Relative topic names, so launch files can remap and namespace them (wiki.ros.org/Names).
   torque_sub_ =
       nh.subscribe("torque", static_cast<std::uint32_t>(queue), &StiffnessEstimatorRos::onTorque,
@@ -182,22 +213,7 @@ StiffnessEstimatorRos::StiffnessEstimatorRos(ros::NodeHandle nh, ros::NodeHandle
   // The updater publishes at ~diagnostic_period; poll it often enough to keep that period.
   diagnostic_timer_ = nh.createWallTimer(
       ros::WallDuration(0.05), [this](const ros::WallTimerEvent&) { onDiagnosticTimer(); });
-  private_namespace_ = pnh.getNamespace();
-  pnh.getParam(private_namespace_, parameters_);
-  if (master_check_period > 0.0) {
-    master_watch_ = std::make_unique<MasterWatch>(
-        master_check_period,
-        [this](const std::string& a, const std::string& b) { onMasterRestart(a, b); });
-  }
-  ROS_INFO(
-      "stiffness_estimator: %zu bearing supports from %s; dynamics %s; calibration %s; start %d "
-      "under this master",
-      rig.bearings.size(), gearbox_config_.c_str(),
-      pipeline_->dynamics() ? toString(pipeline_->settings().fidelity) : "off",
-      pipeline_->calibrator() ? "on" : calibrationStatus(*pipeline_).c_str(), starts_);
 }
-
-StiffnessEstimatorRos::~StiffnessEstimatorRos() = default;
 
 void StiffnessEstimatorRos::onMasterRestart(const std::string& old_run_id,
                                             const std::string& new_run_id) {
@@ -347,6 +363,15 @@ void StiffnessEstimatorRos::onDiagnosticTimer() {
 void StiffnessEstimatorRos::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) {
   std::lock_guard<std::mutex> lock(mutex_);
   const PipelineCounters& c = pipeline_->counters();
+  summarizeSinceLastReport(status, c);
+  addInputStatus(status, c);
+  addProcessStatus(status);
+  addCalibrationStatus(status);
+  addDynamicsStatus(status, c);
+}
+
+void StiffnessEstimatorRos::summarizeSinceLastReport(
+    diagnostic_updater::DiagnosticStatusWrapper& status, const PipelineCounters& c) {
   const std::uint64_t rejected = c.rejected_torque + c.rejected_preload + c.rejected_motion;
   const std::uint64_t dropped = c.dropped_torque + c.dropped_preload + c.dropped_motion;
   const std::uint64_t resets = c.clock_resets + c.stamp_resets + c.gap_restarts;
@@ -397,6 +422,10 @@ void StiffnessEstimatorRos::diagnose(diagnostic_updater::DiagnosticStatusWrapper
   resets_at_last_report_ = resets;
   dropped_at_last_report_ = dropped;
   shed_at_last_report_ = c.stiffness_shed;
+}
+
+void StiffnessEstimatorRos::addInputStatus(diagnostic_updater::DiagnosticStatusWrapper& status,
+                                           const PipelineCounters& c) {
   for (const auto& [key, count] : namedCounters(c)) status.add(key, count);
   status.add("last_event", c.last_event);
   status.add("phase_source", pipeline_->phaseSource());
@@ -413,6 +442,9 @@ void StiffnessEstimatorRos::diagnose(diagnostic_updater::DiagnosticStatusWrapper
           *silence);
     }
   }
+}
+
+void StiffnessEstimatorRos::addProcessStatus(diagnostic_updater::DiagnosticStatusWrapper& status) {
   status.add("process_restarts", starts_ - 1);
   status.add("unnumbered_publishers", pipeline_->unnumberedPublishers());
   status.add("missed_deadlines", missed_deadlines_);
@@ -433,6 +465,10 @@ void StiffnessEstimatorRos::diagnose(diagnostic_updater::DiagnosticStatusWrapper
                          static_cast<unsigned long long>(missed_deadlines_ - late_at_last_report_));
   }
   late_at_last_report_ = missed_deadlines_;
+}
+
+void StiffnessEstimatorRos::addCalibrationStatus(
+    diagnostic_updater::DiagnosticStatusWrapper& status) {
   // The live calibration (the calibration rule): the last window's outcome, its counts and what the
   // data determined.
   status.add("calibration", calibrationStatus(*pipeline_));
@@ -461,6 +497,10 @@ void StiffnessEstimatorRos::diagnose(diagnostic_updater::DiagnosticStatusWrapper
                   e.value[i], e.std[i]);
     }
   }
+}
+
+void StiffnessEstimatorRos::addDynamicsStatus(diagnostic_updater::DiagnosticStatusWrapper& status,
+                                              const PipelineCounters& c) {
   if (const DynamicsEstimator* d = pipeline_->dynamics()) {
     status.add("dynamics_fidelity", toString(d->fidelity()));
     status.add("dynamics_output_interval [s]", d->outputInterval());

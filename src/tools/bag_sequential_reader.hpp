@@ -1,24 +1,6 @@
-// SequentialBagReader: reads the message records of a ROS bag (format 2.0) from the start of the
-// file, chunk after chunk, without the index at its end, and stops at the first damage, saying
-// where (byte offset) and what. drivetrain_replay uses it for a bag that rosbag::Bag cannot open
-// (a recording cut short has no index) and to locate the damage rosbag meets in the middle of a
-// bag (rosbag's errors name no offset).
-//
-// Why a reader of our own (checked on Debian 12's rosbag 1.15.15):
-// - rosbag::Bag::open reads the index at the end of the file before anything else: an unclosed
-//   recording throws BagUnindexedException, a truncated copy of a closed bag "Error reading from
-//   file: wanted 4 bytes, read 0 bytes" (its header points past the end). rosbag::Bag has no public
-//   way to read chunks without the index (bag.h: readChunkHeader, decompressChunk etc. are
-//   private), and bagmode::Append reads the same index first (openAppend calls
-//   startReadingVersion200).
-// - `rosbag reindex` (python3-rosbag, _BagReader200.reindex) on a temporary copy would mean a
-//   Python subprocess and a copy of the whole bag, and it loses what we want to keep: on the
-//   first chunk it cannot read (truncated, unterminated, undecompressable) it drops that whole
-//   chunk and stops ("except Exception: break") without saying where or why, so the messages
-//   before the damage inside that chunk are lost and the error has no offset.
-// - The format (http://wiki.ros.org/Bags/Format/2.0) is small, the project writes it already
-//   (bag_writer.cpp), and chunks decompress with the libraries rosbag uses (roslz4, libbz2).
-// Every length read from the file is checked against the bytes that are there before it is used.
+// A ROS bag (format 2.0) read from the start of the file, chunk after chunk, without its index,
+// stopping at the first damage with its byte offset: docs/replay_exit_codes.md "How a damaged bag
+// is read".
 #pragma once
 
 #include <cstdint>
@@ -36,8 +18,7 @@ namespace drivetrain_stiffness {
 
 /// Where and why reading stopped before the end of a bag.
 struct BagDamage {
-  std::uint64_t offset =
-      0;  ///< byte offset in the file of the record or chunk where reading failed
+  std::uint64_t offset = 0;  ///< [bytes] of the record or chunk where reading failed
   std::string what;
   /// "'FILE' at byte OFFSET: WHAT"
   std::string describe(const std::string& file) const;
@@ -46,36 +27,31 @@ struct BagDamage {
 /// A connection record: the topic and the publisher's connection header.
 struct BagConnection {
   std::string topic;
-  std::map<std::string, std::string> header;  ///< type, md5sum, message_definition, callerid, ...
+  std::map<std::string, std::string> header;         ///< type, md5sum, callerid, ...
   std::string field(const std::string& name) const;  ///< empty if absent
-  std::uint64_t messages = 0;                        ///< message records read on it so far
+  std::uint64_t messages = 0;                        ///< read so far
 };
 
 /// One message record, as read.
 struct BagRecordMessage {
   const BagConnection* connection = nullptr;
   ros::Time time;                      ///< record time
-  const std::uint8_t* data = nullptr;  ///< serialized message; valid until the next call to next()
+  const std::uint8_t* data = nullptr;  ///< serialized; valid until the next next()
   std::uint32_t size = 0;
-  /// Byte offset of the record in the file in an uncompressed chunk; of its chunk in a compressed
-  /// one.
-  std::uint64_t offset = 0;
+  std::uint64_t offset = 0;  ///< [bytes] of the record, or of its chunk if compressed
 };
 
 class SequentialBagReader {
  public:
-  /// Opens `path` and reads its version line. Throws InvalidInput naming the file if it cannot be
-  /// read or is not a bag of format 2.0.
+  /// Throws InvalidInput naming the file if it cannot be read or is not a bag of format 2.0.
   explicit SequentialBagReader(const std::string& path);
 
-  /// The next message record in file order. False at the end of the bag or at the first damage
-  /// (damage() says which); a bag whose index is missing ends in damage.
+  /// The next message record in file order; false at the end or the first damage (damage()).
   bool next(BagRecordMessage& message);
   const std::optional<BagDamage>& damage() const { return damage_; }
-  /// Where the chunks end and the index begins, from the bag header; 0 if not read or never
-  /// written.
+  /// [bytes] where the index begins, from the bag header; 0 if not read or never written.
   std::uint64_t indexPosition() const { return index_position_; }
-  /// The connections read so far, by id, with the messages read on each.
+  /// The connections read so far, by id.
   const std::map<std::uint32_t, BagConnection>& connections() const { return connections_; }
 
  private:
@@ -97,15 +73,13 @@ class SequentialBagReader {
   std::uint64_t index_position_ = 0;
   std::uint32_t chunk_count_ = 0, chunk_infos_read_ = 0;
   std::map<std::uint32_t, BagConnection> connections_;
-  // The chunk being read: its uncompressed records, not value-initialized (a damaged size field
-  // may ask for gigabytes: reserved, never touched).
+  // The chunk being read, uncompressed; not value-initialized (a damaged size is never touched).
   std::unique_ptr<std::uint8_t[]> chunk_;
   std::size_t chunk_size_ = 0, chunk_next_ = 0;
-  std::uint64_t chunk_offset_ = 0;  ///< its record in the file
-  std::uint64_t chunk_data_offset_ =
-      0;  ///< of its data (uncompressed chunks: record offsets in the file)
+  std::uint64_t chunk_offset_ = 0;       ///< its record in the file
+  std::uint64_t chunk_data_offset_ = 0;  ///< of its data
   bool chunk_compressed_ = false;
-  std::string chunk_short_;  ///< why its data ends early (truncated, unfinished); empty if whole
+  std::string chunk_short_;  ///< why its data ends early; empty if whole
   std::optional<BagDamage> damage_;
 };
 

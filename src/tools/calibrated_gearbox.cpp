@@ -58,11 +58,12 @@ std::string yamlNumber(double value) {
   return exponent.empty() ? mantissa : mantissa + "e" + exponent;
 }
 
-std::string calibratedGearboxYaml(const std::string& config_path,
-                                  const CalibrationEstimate& estimate, const std::string& out_path,
-                                  const CalibrationProvenance& provenance) {
-  // The config as the node reads it (the bearings' shafts, the scissor spring), then its YAML tree.
-  const RigConfig rig = loadRigFile(config_path);
+namespace {
+
+/// Throws InvalidInput (naming --calibrate) for a rig without a calibration block, an estimate that
+/// no window updated, or a non-finite value or std.
+void requireCalibrated(const std::string& config_path, const RigConfig& rig,
+                       const CalibrationEstimate& estimate) {
   if (!rig.calibration.present) {
     throw InvalidInput("--calibrate: '" + config_path +
                        "' has no calibration: block: nothing was calibrated "
@@ -80,9 +81,12 @@ std::string calibratedGearboxYaml(const std::string& config_path,
     requireFinite(std::string("--calibrate: ") + calibrationName(i), estimate.value[i]);
     requireFinite(std::string("--calibrate: ") + calibrationName(i) + "_std", estimate.std[i]);
   }
-  YAML::Node root = YAML::LoadFile(config_path);
+}
 
-  // The model's own values: the mesh, each bearing by its shaft, the scissor preload.
+/// Sets the model's own values in `root`: the mesh, each bearing by its shaft, the scissor preload;
+/// a relative bearing `file:` becomes absolute when out_path is in another directory.
+void setModelValues(YAML::Node& root, const RigConfig& rig, const CalibrationEstimate& estimate,
+                    const std::string& config_path, const std::string& out_path) {
   if (!root["mesh"] || !root["mesh"].IsMap()) root["mesh"] = YAML::Node(YAML::NodeType::Map);
   root["mesh"]["stiffness_scale"] = number(estimate.value[kMeshScale]);
   YAML::Node bearings = root["bearings"];
@@ -103,12 +107,17 @@ std::string calibratedGearboxYaml(const std::string& config_path,
   if (rig.anti_backlash.spring_stiffness > 0.0 && root["anti_backlash"]) {
     root["anti_backlash"]["preload_torque"] = number(estimate.value[kPreloadTorque]);
   }
-  // The posterior becomes the next run's prior; the drawing's spread (this file's reference, its
-  // std unless it was calibrated before) stays the one `identified` and the drift are judged
-  // against. A parameter the data did not identify keeps the drawing's spread as its std: the file
-  // holds no covariance, and the bearing scales' posterior stds (each about half the prior's, the
-  // two strongly anti-correlated because only their compliances' sum is seen) would, as independent
-  // priors, claim to know their difference, and the next run would flag them identified.
+}
+
+/// Sets root["calibration"] to the next run's priors.
+///
+/// The posterior becomes the next run's prior; the drawing's spread (this file's reference, its
+/// std unless it was calibrated before) stays the one `identified` and the drift are judged
+/// against. A parameter the data did not identify keeps the drawing's spread as its std: the file
+/// holds no covariance, and the bearing scales' posterior stds (each about half the prior's, the
+/// two strongly anti-correlated because only their compliances' sum is seen) would, as independent
+/// priors, claim to know their difference, and the next run would flag them identified.
+void setPriors(YAML::Node& root, const RigConfig& rig, const CalibrationEstimate& estimate) {
   YAML::Node calibration = root["calibration"];
   if (!calibration.IsMap())
     calibration = YAML::Node(YAML::NodeType::Map);  // `calibration: {}` or `calibration:`
@@ -138,7 +147,13 @@ std::string calibratedGearboxYaml(const std::string& config_path,
   }
   calibration.SetStyle(YAML::EmitterStyle::Block);
   root["calibration"] = calibration;
+}
 
+/// The file's header comment: where the calibration came from, what it set, what it did not
+/// identify.
+std::string headerComment(const std::string& config_path, const RigConfig& rig,
+                          const CalibrationEstimate& estimate,
+                          const CalibrationProvenance& provenance) {
   std::string not_identified, held;
   for (int i = 0; i < kCalibrationSize; ++i) {
     if (estimate.identified[static_cast<std::size_t>(i)]) continue;
@@ -170,6 +185,22 @@ std::string calibratedGearboxYaml(const std::string& config_path,
       (not_identified.empty() ? std::string("none") : not_identified) + "\n";
   if (!held.empty()) header += "# Held (prior std 0, not estimated): " + held + "\n";
   header += "# The original file's comments are not kept (re-written by yaml-cpp).\n";
+
+  return header;
+}
+
+}  // namespace
+
+std::string calibratedGearboxYaml(const std::string& config_path,
+                                  const CalibrationEstimate& estimate, const std::string& out_path,
+                                  const CalibrationProvenance& provenance) {
+  // The config as the node reads it (the bearings' shafts, the scissor spring), then its YAML tree.
+  const RigConfig rig = loadRigFile(config_path);
+  requireCalibrated(config_path, rig, estimate);
+  YAML::Node root = YAML::LoadFile(config_path);
+  setModelValues(root, rig, estimate, config_path, out_path);
+  setPriors(root, rig, estimate);
+  const std::string header = headerComment(config_path, rig, estimate, provenance);
 
   YAML::Emitter out;
   out.SetIndent(2);

@@ -447,6 +447,38 @@ std::string writeCalibration(const ReplayOptions& o, const ReadSpan& span,
   }
 }
 
+/// --topics, refused (InvalidInput) when a report's plots would miss their topics.
+OutputTopics outputTopics(const ReplayOptions& o) {
+  const OutputTopics topics = OutputTopics::parse("--topics", o.topics_option);
+  const OutputTopics plotted =
+      OutputTopics::parse("", "transmission_error,stiffness,resonance,mesh_period_stats");
+  if (!o.report_dir.empty() && o.plots && !topics.includes(plotted)) {
+    throw InvalidInput("--topics = '" + o.topics_option + "': the report's plots read " +
+                       plotted.describe() + " from its outputs.bag; add them, or pass --no-plots");
+  }
+  return topics;
+}
+
+/// --report: summary.json, report.md and the plots; returns a failing plot script's refusal ("" if
+/// none): every other output stays written.
+std::string writeReport(const ReplayOptions& o, const nlohmann::json& summary,
+                        const ReplaySummary& inputs, const RigPipeline& pipeline,
+                        const std::vector<BagTopic>& bag_topics) {
+  writeTextFile("--report", o.report_dir + "/summary.json", jsonText(summary) + "\n");
+  writeTextFile(
+      "--report", o.report_dir + "/report.md",
+      reportMarkdown(summary, inputs.markdown(pipeline, bag_topics), pipeline, o.out_bag));
+  if (o.plots) {
+    try {
+      runPythonScript("--plot-script", findScript(o.plot_script, "plot_replay.py"),
+                      {o.out_bag, o.report_dir, o.bag_path});
+    } catch (const InvalidInput& e) {
+      return e.what();
+    }
+  }
+  return "";
+}
+
 int run(int argc, char** argv) {
   ReplayOptions o;
   if (const std::optional<int> code = parseOptions(argc, argv, o)) return *code;
@@ -455,16 +487,10 @@ int run(int argc, char** argv) {
   // plots would miss their topics.
   ReplaySummary inputs(o.topics());
   inputs.requireDistinctTopics();
-  const OutputTopics topics = OutputTopics::parse("--topics", o.topics_option);
+  const OutputTopics topics = outputTopics(o);
   const OutputTopics csv_topics = o.csv_topics_option.empty()
                                       ? topics
                                       : OutputTopics::parse("--csv-topics", o.csv_topics_option);
-  const OutputTopics plotted =
-      OutputTopics::parse("", "transmission_error,stiffness,resonance,mesh_period_stats");
-  if (!o.report_dir.empty() && o.plots && !topics.includes(plotted)) {
-    throw InvalidInput("--topics = '" + o.topics_option + "': the report's plots read " +
-                       plotted.describe() + " from its outputs.bag; add them, or pass --no-plots");
-  }
   const RigConfig rig = loadRigFile(o.config);
   const YamlParameters get = readParameterFile(o.params);
   RigPipeline pipeline(rig, readPipelineOptions(get, rig), readRuntimeSettings(get, rig));
@@ -506,18 +532,8 @@ int run(int argc, char** argv) {
       o.calibrate_out.empty() ? "" : writeCalibration(o, span, pipeline, summary);
   std::string failure = calibrate_error;  // the refusal that makes the exit code 1
   if (!o.report_dir.empty()) {
-    writeTextFile("--report", o.report_dir + "/summary.json", jsonText(summary) + "\n");
-    writeTextFile(
-        "--report", o.report_dir + "/report.md",
-        reportMarkdown(summary, inputs.markdown(pipeline, bag_topics), pipeline, o.out_bag));
-    if (o.plots) {  // a failing plot script leaves every other output written
-      try {
-        runPythonScript("--plot-script", findScript(o.plot_script, "plot_replay.py"),
-                        {o.out_bag, o.report_dir, o.bag_path});
-      } catch (const InvalidInput& e) {
-        if (failure.empty()) failure = e.what();
-      }
-    }
+    const std::string plot_failure = writeReport(o, summary, inputs, pipeline, bag_topics);
+    if (failure.empty()) failure = plot_failure;
   }
   const int code = !failure.empty()         ? kExitRefused
                    : input.damage()         ? kExitIncomplete

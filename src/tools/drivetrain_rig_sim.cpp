@@ -132,93 +132,110 @@ void writeCampaign(const drivetrain_stiffness::RigConfig& rig, const CampaignSpe
   }
 }
 
+/// The command line.
+struct RigSimArgs {
+  drivetrain_stiffness::ScenarioSpec spec;
+  drivetrain_stiffness::ScenarioBagOptions bag;
+  std::string config, out;
+  bool no_velocity = false;
+  drivetrain_stiffness::LoadSweepSpec sweep_spec;
+  CampaignSpec campaign;
+};
+
+void addOptions(CLI::App& app, RigSimArgs& a) {
+  using drivetrain_stiffness::scenarioHelp;
+  app.add_option("--scenario", a.spec.name, "Scenario:\n" + scenarioHelp())->required();
+  app.add_option("--config", a.config,
+                 "Gearbox YAML (support names, configured preloads, dynamics block, teeth)")
+      ->required();
+  auto* out_opt = app.add_option("--out", a.out, "Bag to write");
+  auto* campaign_opt = app.add_option("--campaign", a.campaign.dir,
+                                      "Directory for a campaign of --bags bags (instead of --out)");
+  out_opt->excludes(campaign_opt);
+  app.add_option("--bags", a.campaign.bags, "--campaign: number of bags")->needs(campaign_opt);
+  app.add_option("--interval", a.campaign.interval, "--campaign: [s] between bag starts (3600)")
+      ->needs(campaign_opt);
+  app.add_option("--step-at", a.campaign.step_at,
+                 "--campaign: first bag (0-based) of the changed rig")
+      ->needs(campaign_opt);
+  app.add_option("--step-mesh-scale", a.campaign.step_mesh_scale,
+                 "--campaign: factor on the mesh stiffness scale from --step-at on");
+  app.add_option("--step-bearing-scale", a.campaign.step_bearing_scale,
+                 "--campaign: factor on every bearing's stiffness scale from --step-at on");
+  app.add_option("--step-preload-scale", a.campaign.step_preload_scale,
+                 "--campaign: factor on the preload torque from --step-at on");
+  app.add_option(
+      "--duration", a.spec.duration,
+      "[s] length of the scenario (2; load_sweep: its natural length, this scales its holds)");
+  app.add_option("--rate", a.spec.torque_rate, "[Hz] torque sample rate");
+  app.add_option(
+      "--joint-rate", a.spec.joint_rate,
+      "[Hz] encoder (joint_states) sample rate, 1000 by default (load_sweep: 5000); 0: none");
+  app.add_option("--seed", a.sweep_spec.seed,
+                 "load_sweep: seed of the encoder errors, stamp jitter and torque noise (1)");
+  app.add_option("--speed-rpm", a.sweep_spec.speed_rpm,
+                 "load_sweep: [rpm] constant pinion speed (120)");
+  app.add_flag("--no-velocity", a.no_velocity,
+               "joint_states without velocity (the node differentiates the angle)");
+  app.add_option("--epoch", a.bag.epoch, "[s] stamp of the scenario start");
+  app.add_option("--torque-topic", a.bag.torque_topic);
+  app.add_option("--preload-topic", a.bag.preload_topic);
+  app.add_option("--joint-topic", a.bag.joint_topic,
+                 "sensor_msgs/JointState topic (/joint_states)");
+  app.add_option("--pinion-joint", a.bag.pinion_joint,
+                 "JointState name of the pinion shaft (pinion)");
+  app.add_option("--gear-joint", a.bag.gear_joint, "JointState name of the gear shaft (gear)");
+}
+
+/// Writes the bag (or the campaign) the arguments ask for. Throws InvalidInput naming the option.
+void runRigSim(const CLI::App& app, RigSimArgs& a) {
+  using namespace drivetrain_stiffness;
+  const RigConfig rig = loadRigFile(a.config);
+  const bool sweep = a.spec.name == "load_sweep";
+  if (!sweep && (app.count("--seed") > 0 || app.count("--speed-rpm") > 0)) {
+    throw InvalidInput("--seed and --speed-rpm: load_sweep only");
+  }
+  if (sweep) {
+    a.sweep_spec.torque_rate = a.spec.torque_rate;
+    if (app.count("--joint-rate") > 0) a.sweep_spec.joint_rate = a.spec.joint_rate;
+    if (app.count("--duration") > 0) a.sweep_spec.duration = a.spec.duration;
+    a.sweep_spec.joint_velocity = a.spec.joint_velocity;
+  }
+  if (!a.campaign.dir.empty()) {
+    writeCampaign(rig, a.campaign, a.spec, a.sweep_spec, a.bag);
+    return;
+  }
+  if (a.out.empty()) throw InvalidInput("--out or --campaign: one of them is required");
+  LoadSweep made;
+  if (sweep) {
+    a.sweep_spec.torque_rate = a.spec.torque_rate;
+    if (app.count("--joint-rate") > 0) a.sweep_spec.joint_rate = a.spec.joint_rate;
+    if (app.count("--duration") > 0) a.sweep_spec.duration = a.spec.duration;
+    a.sweep_spec.joint_velocity = a.spec.joint_velocity;
+    made = makeLoadSweep(rig, a.sweep_spec);
+  } else {
+    made.events = makeScenario(rig, a.spec);
+  }
+  const std::vector<RigEvent>& events = made.events;
+  const ScenarioBagCounts n = writeScenarioBag(events, a.bag, a.out);
+  std::cout << "{\"scenario\": \"" << a.spec.name << "\", \"events\": " << events.size()
+            << ", \"torque\": " << n.torque << ", \"preload\": " << n.preload
+            << ", \"joint_states\": " << n.joint_states << ", \"bag\": \"" << a.out << "\"";
+  if (sweep) std::cout << ", \"truth\": " << truthJson(made, a.sweep_spec).dump();
+  std::cout << "}\n";
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   using namespace drivetrain_stiffness;
   CLI::App app{"Writes a bag of rig inputs (torque, preload, encoders) for a documented scenario"};
-  ScenarioSpec spec;
-  ScenarioBagOptions bag;
-  std::string config, out;
-  bool no_velocity = false;
-  drivetrain_stiffness::LoadSweepSpec sweep_spec;
-  app.add_option("--scenario", spec.name, "Scenario:\n" + scenarioHelp())->required();
-  app.add_option("--config", config,
-                 "Gearbox YAML (support names, configured preloads, dynamics block, teeth)")
-      ->required();
-  CampaignSpec campaign;
-  auto* out_opt = app.add_option("--out", out, "Bag to write");
-  auto* campaign_opt = app.add_option("--campaign", campaign.dir,
-                                      "Directory for a campaign of --bags bags (instead of --out)");
-  out_opt->excludes(campaign_opt);
-  app.add_option("--bags", campaign.bags, "--campaign: number of bags")->needs(campaign_opt);
-  app.add_option("--interval", campaign.interval, "--campaign: [s] between bag starts (3600)")
-      ->needs(campaign_opt);
-  app.add_option("--step-at", campaign.step_at,
-                 "--campaign: first bag (0-based) of the changed rig")
-      ->needs(campaign_opt);
-  app.add_option("--step-mesh-scale", campaign.step_mesh_scale,
-                 "--campaign: factor on the mesh stiffness scale from --step-at on");
-  app.add_option("--step-bearing-scale", campaign.step_bearing_scale,
-                 "--campaign: factor on every bearing's stiffness scale from --step-at on");
-  app.add_option("--step-preload-scale", campaign.step_preload_scale,
-                 "--campaign: factor on the preload torque from --step-at on");
-  app.add_option(
-      "--duration", spec.duration,
-      "[s] length of the scenario (2; load_sweep: its natural length, this scales its holds)");
-  app.add_option("--rate", spec.torque_rate, "[Hz] torque sample rate");
-  app.add_option(
-      "--joint-rate", spec.joint_rate,
-      "[Hz] encoder (joint_states) sample rate, 1000 by default (load_sweep: 5000); 0: none");
-  app.add_option("--seed", sweep_spec.seed,
-                 "load_sweep: seed of the encoder errors, stamp jitter and torque noise (1)");
-  app.add_option("--speed-rpm", sweep_spec.speed_rpm,
-                 "load_sweep: [rpm] constant pinion speed (120)");
-  app.add_flag("--no-velocity", no_velocity,
-               "joint_states without velocity (the node differentiates the angle)");
-  app.add_option("--epoch", bag.epoch, "[s] stamp of the scenario start");
-  app.add_option("--torque-topic", bag.torque_topic);
-  app.add_option("--preload-topic", bag.preload_topic);
-  app.add_option("--joint-topic", bag.joint_topic, "sensor_msgs/JointState topic (/joint_states)");
-  app.add_option("--pinion-joint", bag.pinion_joint,
-                 "JointState name of the pinion shaft (pinion)");
-  app.add_option("--gear-joint", bag.gear_joint, "JointState name of the gear shaft (gear)");
+  RigSimArgs a;
+  addOptions(app, a);
   CLI11_PARSE(app, argc, argv);
-  spec.joint_velocity = !no_velocity;
+  a.spec.joint_velocity = !a.no_velocity;
   try {
-    const RigConfig rig = loadRigFile(config);
-    const bool sweep = spec.name == "load_sweep";
-    if (!sweep && (app.count("--seed") > 0 || app.count("--speed-rpm") > 0)) {
-      throw InvalidInput("--seed and --speed-rpm: load_sweep only");
-    }
-    if (sweep) {
-      sweep_spec.torque_rate = spec.torque_rate;
-      if (app.count("--joint-rate") > 0) sweep_spec.joint_rate = spec.joint_rate;
-      if (app.count("--duration") > 0) sweep_spec.duration = spec.duration;
-      sweep_spec.joint_velocity = spec.joint_velocity;
-    }
-    if (!campaign.dir.empty()) {
-      writeCampaign(rig, campaign, spec, sweep_spec, bag);
-      return 0;
-    }
-    if (out.empty()) throw InvalidInput("--out or --campaign: one of them is required");
-    LoadSweep made;
-    if (sweep) {
-      sweep_spec.torque_rate = spec.torque_rate;
-      if (app.count("--joint-rate") > 0) sweep_spec.joint_rate = spec.joint_rate;
-      if (app.count("--duration") > 0) sweep_spec.duration = spec.duration;
-      sweep_spec.joint_velocity = spec.joint_velocity;
-      made = makeLoadSweep(rig, sweep_spec);
-    } else {
-      made.events = makeScenario(rig, spec);
-    }
-    const std::vector<RigEvent>& events = made.events;
-    const ScenarioBagCounts n = writeScenarioBag(events, bag, out);
-    std::cout << "{\"scenario\": \"" << spec.name << "\", \"events\": " << events.size()
-              << ", \"torque\": " << n.torque << ", \"preload\": " << n.preload
-              << ", \"joint_states\": " << n.joint_states << ", \"bag\": \"" << out << "\"";
-    if (sweep) std::cout << ", \"truth\": " << truthJson(made, sweep_spec).dump();
-    std::cout << "}\n";
+    runRigSim(app, a);
   } catch (const std::exception& e) {
     std::cerr << "drivetrain_rig_sim: " << e.what() << "\n";
     return 1;

@@ -189,7 +189,6 @@ void LoadGenerator::onDiagnostics(const diagnostic_msgs::DiagnosticArray::ConstP
 LoadResult LoadGenerator::run() {
   const bool burst = options_.rate_hz <= 0.0;
   // A burst sends as many as 1e5 Hz would in duration_s, as fast as publish() returns.
-  const double period = burst ? 0.0 : 1.0 / options_.rate_hz;  // [s]
   const auto total = static_cast<std::uint64_t>(
       std::llround((burst ? 1e5 : options_.rate_hz) * options_.duration_s));
   {
@@ -205,6 +204,14 @@ LoadResult LoadGenerator::run() {
     std::lock_guard<std::mutex> lock(mutex_);
     baseline = diag_;
   }
+  const LoadResult sends = send(total);
+  settle(baseline, sends.sent);
+  return collect(sends);
+}
+
+LoadResult LoadGenerator::send(std::uint64_t total) {
+  const bool burst = options_.rate_hz <= 0.0;
+  const double period = burst ? 0.0 : 1.0 / options_.rate_hz;  // [s]
   LoadResult r;
   geometry_msgs::WrenchStamped m;
   m.header.frame_id = "pinion";
@@ -239,12 +246,14 @@ LoadResult LoadGenerator::run() {
   }
   if (r.sent > 1)
     r.send_rate_hz = static_cast<double>(r.sent - 1) / (last_send - first_send).toSec();
+  return r;
+}
 
-  // Settle on the node's own counts, not on time: first until it has accounted for every input
-  // sent (accepted, rejected or seen dropped: the newest always arrives, as roscpp's queues drop
-  // the oldest), then until every answer it published has arrived or been seen missing. Both
-  // against its counters when this run started (they are totals since the node started).
-  const std::uint64_t sent = r.sent;
+// Settles on the node's own counts, not on time: first until it has accounted for every input
+// sent (accepted, rejected or seen dropped: the newest always arrives, as roscpp's queues drop
+// the oldest), then until every answer it published has arrived or been seen missing. Both
+// against its counters when this run started (they are totals since the node started).
+void LoadGenerator::settle(const LoadResult& baseline, std::uint64_t sent) {
   const auto processed = [](const LoadResult& d) {
     return d.accepted_torque + d.rejected_torque + d.dropped_torque;
   };
@@ -262,13 +271,15 @@ LoadResult LoadGenerator::run() {
     reports = diagnostics_received_;
   }
   waitFor([&] { return diagnostics_received_ >= reports + 2; }, options_.settle_timeout_s);
+}
 
+LoadResult LoadGenerator::collect(const LoadResult& sends) {
   std::vector<double> latencies;
+  LoadResult r;
   {
     std::lock_guard<std::mutex> lock(mutex_);
     latencies = latencies_s_;
     // The node's side (diag_) plus what this generator measured itself (sends and latency).
-    const LoadResult sends = r;
     r = diag_;
     r.sent = sends.sent;
     r.late_sends = sends.late_sends;

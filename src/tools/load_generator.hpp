@@ -79,6 +79,12 @@ class LoadGenerator {
   LoadResult run();
 
  private:
+  /// run()'s parts: sends `total` torque inputs on schedule (the result holds the send counts),
+  /// waits until the node has accounted for `sent` since `baseline`, and merges the node's counts
+  /// with `sends` and the latencies.
+  LoadResult send(std::uint64_t total);
+  void settle(const LoadResult& baseline, std::uint64_t sent);
+  LoadResult collect(const LoadResult& sends);
   void onStiffness(const Stiffness::ConstPtr& msg);
   void onTransmissionError(const TransmissionError::ConstPtr& msg);
   void onDiagnostics(const diagnostic_msgs::DiagnosticArray::ConstPtr& msg);

@@ -139,7 +139,7 @@ class TruthSink : public PipelineSink {
   TruthSink(std::int64_t epoch_ns, double joint_rate, long lead, std::vector<double>& te,
             std::vector<char>& filled)
       : epoch_ns_(epoch_ns), joint_rate_(joint_rate), lead_(lead), te_(te), filled_(filled) {}
-  double correction = 0.0;  ///< [m] c(T) of the torque the dynamics hold (see makeLoadSweep)
+  double correction = 0.0;  ///< [m] c(T) of the torque the dynamics hold (encoderOffset)
 
   void transmissionError(Stamp stamp, const DynamicsSample& sample, const SampleContext&) override {
     // The output grid is the readings' grid (output_rate = joint_rate, the mesh period a whole
@@ -188,20 +188,31 @@ double loadSweepNaturalDuration(const RigConfig& rig, const LoadSweepSpec& s) {
   return (s.baseline_turns + holds * s.step_turns) * gearTurn(rig, s.speed_rpm);
 }
 
-LoadSweep makeLoadSweep(const RigConfig& rig, const LoadSweepSpec& s) {
-  const double natural = loadSweepNaturalDuration(rig, s);  // validates
-  const std::array<double, 2> scale = shaftScales(rig);
-  LoadSweep out;
-  LoadSweepTruth& truth = out.truth;
-  truth.mesh_stiffness_scale = rig.mesh_stiffness_scale;
-  truth.bearing_scale = scale;
-  truth.preload_torque = rig.anti_backlash.preload_torque;
-  truth.gear_turn = gearTurn(rig, s.speed_rpm);
+namespace {
 
-  // The knees of the TRUE rig (static_te_model.hpp): the back half lifts at F = F_p (1 + k1/k_c),
-  // the drive half at F = -F_p (1 + k_c/k1), F = T / r_b,pinion, F_p = T_p / r_b,gear, period
-  // means.
-  StaticTeModel model(rig);
+/// The largest torque [N*m] the rig's supports carry (ISO 76 contact pressure; the seed's reach it
+/// near 11.2 N*m), by 40 bisections of [0, 100] N*m.
+double carriedTorque(const RigConfig& rig) {
+  double carried = 0.0, refused = 100.0;
+  StiffnessEstimator probe(rig);
+  for (int i = 0; i < 40; ++i) {
+    const double mid = 0.5 * (carried + refused);
+    try {
+      probe.setTorque(mid);
+      carried = mid;
+    } catch (const UnreachableLoad&) {
+      refused = mid;
+    } catch (const InvalidInput&) {
+      refused = mid;
+    }
+  }
+  return carried;
+}
+
+/// Sets the knees of the TRUE rig (static_te_model.hpp): the back half lifts at F = F_p (1 +
+/// k1/k_c), the drive half at F = -F_p (1 + k_c/k1), F = T / r_b,pinion, F_p = T_p / r_b,gear,
+/// period means. Throws InvalidInput naming anti_backlash.preload_torque if there is no knee.
+void setKnees(const StaticTeModel& model, LoadSweepTruth& truth) {
   const std::array<double, 2> rb = model.baseRadius();
   const CalibrationVector p = truth.parameters();
   truth.knee_torque = model.kneeTorque(p);
@@ -212,28 +223,14 @@ LoadSweep makeLoadSweep(const RigConfig& rig, const LoadSweepSpec& s) {
   }
   const double k1_over_kc = truth.knee_torque / fp_torque - 1.0;
   truth.reverse_knee_torque = -fp_torque * (1.0 + 1.0 / k1_over_kc);
+}
 
-  // The holds, their boundaries on the torque samples' grid (the true torque steps there).
-  const double stretch = s.duration > 0.0 ? s.duration / natural : 1.0;
-  // The bearings' limit: the largest torque the true rig's supports carry (ISO 76 contact pressure;
-  // the seed's reach it near 11.2 N*m), by bisection, with 4 % left for the published torque's
-  // noise (6 sigma at 0.5 %: 3 %). Levels beyond it are left out (the sweep is then shorter than
-  // its natural duration); the knee must stay below it with at least one level above.
-  double carried = 0.0, refused = 100.0;
-  {
-    StiffnessEstimator probe(rig);
-    for (int i = 0; i < 40; ++i) {
-      const double mid = 0.5 * (carried + refused);
-      try {
-        probe.setTorque(mid);
-        carried = mid;
-      } catch (const UnreachableLoad&) {
-        refused = mid;
-      } catch (const InvalidInput&) {
-        refused = mid;
-      }
-    }
-  }
+/// Fills truth.levels and truth.duration: the holds, their boundaries on the torque samples' grid
+/// (the true torque steps there), stretched by `stretch`. Levels beyond 0.96 x `carried` (4 % left
+/// for the published torque's noise, 6 sigma at 0.5 %) are left out; the knee must stay below the
+/// limit with at least one level above. Returns the number of torque samples. Throws InvalidInput
+/// naming the field.
+long placeHolds(const LoadSweepSpec& s, double stretch, double carried, LoadSweepTruth& truth) {
   const double limit = 0.96 * carried;
   const std::vector<double> levels =
       torqueLevels(s, truth.knee_torque, truth.reverse_knee_torque, limit);
@@ -268,84 +265,119 @@ LoadSweep makeLoadSweep(const RigConfig& rig, const LoadSweepSpec& s) {
     sample = next;
   }
   truth.duration = truth.levels.back().t1;
-  const long n_torque = sample;
-  const long n_joint = std::lround(truth.duration * s.joint_rate);
-  if (n_torque > 100000000 || n_joint > 100000000) {
-    throw InvalidInput("load_sweep: " + std::to_string(n_torque) + " torque samples and " +
-                       std::to_string(n_joint) + " readings: at most 1e8 each");
-  }
+  return sample;
+}
 
-  // ---- The truth: the true rig's 3-DOF dynamics under the true torque and the exact motion ----
-  // Its output grid is the readings' grid: output_rate = joint_rate, and the nominal speed (which
-  // only sets the grid here: the measured motion drives the mesh phase from the first input on) is
-  // the scenario's, rounded so that one mesh period is a whole number n of reading intervals (the
-  // dynamics round their grid to divide the mesh period).
-  const double omega = s.speed_rpm * kTwoPi / 60.0;
-  RigConfig true_rig = rig;
-  const double per_period =
-      std::max(1.0, std::round(s.joint_rate * 60.0 / (s.speed_rpm * rig.gears.teeth[0])));
-  true_rig.dynamics.speed_rpm = 60.0 * s.joint_rate / (per_period * rig.gears.teeth[0]);
+/// The rig's configured preloads, as the recording sends them.
+std::vector<PreloadSetting> configuredPreloads(const RigConfig& rig) {
+  std::vector<PreloadSetting> preload;
+  for (const BearingSupportConfig& b : rig.bearings) {
+    preload.push_back(
+        {b.name, b.axial_preload, b.radial_preload, b.interference.inner, b.interference.outer});
+  }
+  return preload;
+}
+
+/// The truth's pipeline options: the output grid is the readings' grid (output_rate = joint_rate)
+/// and the bearings' stiffness is exact at every torque.
+PipelineOptions truthOptions(const LoadSweepSpec& s) {
   PipelineOptions options;
   options.output_rate = s.joint_rate;
   options.limits.load_tolerance = 0.0;  // exact bearing stiffness at every torque
   options.pinion_speed_rpm = s.speed_rpm;
-  RigPipeline pipeline(true_rig, options);
+  return options;
+}
+
+/// The true rig with its nominal speed rounded so that one mesh period is a whole number of
+/// reading intervals (the dynamics round their grid to divide the mesh period); the speed only
+/// sets the grid, the measured motion drives the mesh phase.
+RigConfig truthRig(const RigConfig& rig, const LoadSweepSpec& s) {
+  RigConfig true_rig = rig;
+  const double per_period =
+      std::max(1.0, std::round(s.joint_rate * 60.0 / (s.speed_rpm * rig.gears.teeth[0])));
+  true_rig.dynamics.speed_rpm = 60.0 * s.joint_rate / (per_period * rig.gears.teeth[0]);
+  return true_rig;
+}
+
+/// The encoder TE offset c(T) [m] the truth adds to the dynamics' torsional coordinate at the
+/// torque [N*m].
+///
+/// The encoder TE is x_enc = x + c(T). The dynamics' torsional coordinate x = delta - x_p + x_g + e
+/// (gear_rotor_model.hpp) carries the shafts' static deflection with the TANGENT bearing stiffness
+/// k_shaft(T) that they linearise about: F / k_shaft per shaft. That is right for the small
+/// perturbations about the operating point (the mesh-frequency motion), but a static offset from
+/// zero load needs the SECANT: the exact solution's deflection u(F_0 + |F|) - u(F_0), which a
+/// Hertzian bearing (stiffening with load) makes smaller than F / k_tangent. So
+///   c(T) = sum_shaft [ d_shaft(T) / scale_shaft - F / k_shaft(T) ],   F = T / r_b,p (signed),
+/// with d = StaticTeModel::shaftDeflection (scale-1 secant deflections {-x_p, x_g}, signed with the
+/// torque) divided by the true rig's scale of that shaft, and k_shaft the stiffness the dynamics
+/// run with (DynamicsEstimator::bearingStiffness(): it takes up a change only beyond 1 %, as its 1
+/// % grid value, so it can differ from the estimator's shaftRadialStiffness() by that much; the
+/// estimator's would leave up to 1 % of the bearing deflection in x_enc). c is constant per hold;
+/// across a step it jumps with the torque while x settles over the dynamics' transient
+/// (milliseconds).
+double encoderOffset(StaticTeModel& model, const RigPipeline& pipeline,
+                     const std::array<double, 2>& scale, double torque) {
+  std::array<double, 2> shafts{};
+  model.shaftDeflection(torque, pipeline.estimator(), shafts);
+  const std::array<double, 2>& k = pipeline.dynamics()->bearingStiffness();
+  const double force = model.meshForce(torque);
+  double c = 0.0;
+  for (int i = 0; i < 2; ++i) c += shafts[i] / scale[i] - force / k[i];
+  return c;
+}
+
+/// Throws InvalidInput if the truth dynamics were interrupted or a reading did not get exactly one
+/// truth sample.
+void checkTruth(const RigPipeline& pipeline, const std::vector<char>& filled) {
+  const PipelineCounters& counters = pipeline.counters();
+  if (counters.dynamics_errors != 0 || counters.gap_restarts != 0 ||
+      counters.motion_timeouts != 0) {
+    throw InvalidInput("load_sweep: the truth dynamics were interrupted (" + counters.last_event +
+                       ")");
+  }
+  for (std::size_t k = 0; k < filled.size(); ++k) {
+    if (filled[k] != 1) {
+      throw InvalidInput("load_sweep: reading " + std::to_string(k) + " got " +
+                         std::to_string(filled[k]) +
+                         " truth samples (the output grid missed the readings)");
+    }
+  }
+}
+
+/// Fills out.te [m]: the true rig's 3-DOF dynamics under the true torque and the exact motion,
+/// plus the encoder offset c(T), at each of the n_joint readings. The truth runs from -lead_in (a
+/// whole number of readings) on its own clock from 10 s, the dynamics starting at static
+/// equilibrium at the first torque input, on a reading.
+void runTruth(const RigConfig& rig, const LoadSweepSpec& s, StaticTeModel& model,
+              const std::array<double, 2>& scale, const std::vector<PreloadSetting>& preload,
+              long n_joint, LoadSweep& out) {
+  const LoadSweepTruth& truth = out.truth;
+  const double omega = s.speed_rpm * kTwoPi / 60.0;
+  RigPipeline pipeline(truthRig(rig, s), truthOptions(s));
 
   out.te.assign(static_cast<std::size_t>(n_joint), 0.0);
   std::vector<char> filled(static_cast<std::size_t>(n_joint), 0);
-  // The truth runs from -lead_in (a whole number of readings) on its own clock, from 10 s (any
-  // non-zero stamp): the dynamics start at the first torque input, on a reading.
   const long lead = std::max(1L, std::lround(s.lead_in * s.joint_rate));
   const std::int64_t epoch_ns = 10000000000LL;
   auto stampOf = [&](long j) {
     return Stamp{epoch_ns + nanoseconds(j / s.joint_rate)};
   };  // j: readings since -lead
   TruthSink sink(epoch_ns, s.joint_rate, lead, out.te, filled);
-
-  // The encoder TE is x_enc = x + c(T). The dynamics' torsional coordinate x = delta - x_p + x_g +
-  // e (gear_rotor_model.hpp) carries the shafts' static deflection with the TANGENT bearing
-  // stiffness k_shaft(T) that they linearise about: F / k_shaft per shaft. That is right for the
-  // small perturbations about the operating point (the mesh-frequency motion), but a static offset
-  // from zero load needs the SECANT: the exact solution's deflection u(F_0 + |F|) - u(F_0), which a
-  // Hertzian bearing (stiffening with load) makes smaller than F / k_tangent. So
-  //   c(T) = sum_shaft [ d_shaft(T) / scale_shaft - F / k_shaft(T) ],   F = T / r_b,p (signed),
-  // with d = StaticTeModel::shaftDeflection (scale-1 secant deflections {-x_p, x_g}, signed with
-  // the torque) divided by the true rig's scale of that shaft, and k_shaft the stiffness the
-  // dynamics actually run with (DynamicsEstimator::bearingStiffness(): it takes up a change only
-  // beyond 1 %, as its 1 % grid value, so it can differ from the estimator's shaftRadialStiffness()
-  // by that much; the estimator's
-  // would leave up to 1 % of the bearing deflection in x_enc). c is constant per hold; across a
-  // step it jumps with the torque while x settles over the dynamics' transient (milliseconds).
-  std::array<double, 2> shafts{};
-  auto correction = [&](double torque) {
-    model.shaftDeflection(torque, pipeline.estimator(), shafts);
-    const std::array<double, 2>& k = pipeline.dynamics()->bearingStiffness();
-    const double force = model.meshForce(torque);
-    double c = 0.0;
-    for (int i = 0; i < 2; ++i) c += shafts[i] / scale[i] - force / k[i];
-    return c;
-  };
-
-  std::vector<PreloadSetting> preload;
-  for (const BearingSupportConfig& b : rig.bearings) {
-    preload.push_back(
-        {b.name, b.axial_preload, b.radial_preload, b.interference.inner, b.interference.outer});
-  }
   auto reading = [&](long j) {
     MotionInput m;
     m.pinion_angle = omega * ((j - lead) / s.joint_rate);
     m.pinion_velocity = omega;
     return m;
   };
-  // -lead_in: the first reading, the configured preloads, the true torque (0) that starts the
-  // dynamics at static equilibrium.
+  // -lead_in: the first reading, the configured preloads, the true torque (0).
   require(pipeline.motion(stampOf(0), reading(0), sink), pipeline, "reading", -lead / s.joint_rate);
   require(pipeline.preload(stampOf(0), preload, sink), pipeline, "preload", -lead / s.joint_rate);
   require(pipeline.torque(stampOf(0), truth.levels.front().torque, sink), pipeline, "torque",
           -lead / s.joint_rate);
   if (!pipeline.dynamics() || !pipeline.dynamics()->started())
     throw InvalidInput("load_sweep: the truth dynamics did not start");
-  sink.correction = correction(truth.levels.front().torque);
+  sink.correction = encoderOffset(model, pipeline, scale, truth.levels.front().torque);
   std::size_t level = 1;  // the next step
   const long j_end = lead + n_joint;
   for (long j = 1; j < j_end; ++j) {
@@ -360,7 +392,7 @@ LoadSweep makeLoadSweep(const RigConfig& rig, const LoadSweepSpec& s) {
         const double torque = truth.levels[level].torque;
         require(pipeline.torque(Stamp{step_ns}, torque, sink), pipeline, "torque",
                 truth.levels[level].t0);
-        sink.correction = correction(torque);
+        sink.correction = encoderOffset(model, pipeline, scale, torque);
         ++level;
       }
     };
@@ -368,33 +400,23 @@ LoadSweep makeLoadSweep(const RigConfig& rig, const LoadSweepSpec& s) {
     require(pipeline.motion(at, reading(j), sink), pipeline, "reading", (j - lead) / s.joint_rate);
     stepsUpTo(true);
   }
-  const PipelineCounters& counters = pipeline.counters();
-  if (counters.dynamics_errors != 0 || counters.gap_restarts != 0 ||
-      counters.motion_timeouts != 0) {
-    throw InvalidInput("load_sweep: the truth dynamics were interrupted (" + counters.last_event +
-                       ")");
-  }
-  for (std::size_t k = 0; k < filled.size(); ++k) {
-    if (filled[k] != 1) {
-      throw InvalidInput("load_sweep: reading " + std::to_string(k) + " got " +
-                         std::to_string(filled[k]) +
-                         " truth samples (the output grid missed the readings)");
-    }
-  }
+  checkTruth(pipeline, filled);
+}
 
-  // ---- The recording ----
-  // Encoders: theta_p kinematic (exact); theta_g from the true TE, x_enc = r_b,p theta_p + r_b,g
-  // theta_g (the joint_states convention: the gear's angle falls when the pinion's rises); each
-  // with its mounting error eps sin(theta + psi), then the 2^20-count grid. Stamps: the true time
-  // plus a uniform jitter, the angles those at the true time; record time = the true time.
-  Stream encoders(s.seed, kEncoderStream), jitter(s.seed, kJitterStream),
-      noise(s.seed, kTorqueStream);
+/// Appends the n_joint encoder readings to out.events and draws truth.eccentricity{,_phase}:
+/// theta_p kinematic (exact), theta_g from the true TE (x_enc = r_b,p theta_p + r_b,g theta_g, the
+/// gear's angle falling when the pinion's rises), each with its mounting error eps sin(theta +
+/// psi), then the 2^20-count grid. Stamps: the true time plus a uniform jitter.
+void recordReadings(const RigConfig& rig, const LoadSweepSpec& s, const std::array<double, 2>& rb,
+                    long n_joint, LoadSweep& out) {
+  LoadSweepTruth& truth = out.truth;
+  const double omega = s.speed_rpm * kTwoPi / 60.0;
+  Stream encoders(s.seed, kEncoderStream), jitter(s.seed, kJitterStream);
   for (int i = 0; i < 2; ++i) {
     truth.eccentricity[i] = encoders.uniform(s.eccentricity_min, s.eccentricity_max);
     truth.eccentricity_phase[i] = encoders.uniform(0.0, kTwoPi);
   }
   const double ratio = static_cast<double>(rig.gears.teeth[0]) / rig.gears.teeth[1];
-  out.events.reserve(static_cast<std::size_t>(n_joint + n_torque + 1));
   for (long k = 0; k < n_joint; ++k) {
     RigEvent e;
     e.t = k / s.joint_rate;
@@ -413,11 +435,14 @@ LoadSweep makeLoadSweep(const RigConfig& rig, const LoadSweepSpec& s) {
     e.stamp_offset = jitter.uniform(-s.stamp_jitter, s.stamp_jitter);
     out.events.push_back(std::move(e));
   }
-  out.events.push_back({0.0, std::nullopt, preload});
-  // Torque: the true staircase sampled at torque_rate, plus Gaussian noise of sigma = torque_noise
-  // |T|
-  // + torque_noise_floor (the truth above ran on the true torque).
-  level = 0;
+}
+
+/// Appends the n_torque torque samples: the true staircase sampled at torque_rate, plus Gaussian
+/// noise of sigma = torque_noise |T| + torque_noise_floor.
+void recordTorque(const LoadSweepSpec& s, const LoadSweepTruth& truth, long n_torque,
+                  std::vector<RigEvent>& events) {
+  Stream noise(s.seed, kTorqueStream);
+  std::size_t level = 0;
   for (long k = 0; k < n_torque; ++k) {
     const double t = k / s.torque_rate;
     while (level + 1 < truth.levels.size() &&
@@ -425,8 +450,38 @@ LoadSweep makeLoadSweep(const RigConfig& rig, const LoadSweepSpec& s) {
       ++level;
     const double torque = truth.levels[level].torque;
     const double sigma = s.torque_noise * std::abs(torque) + s.torque_noise_floor;
-    out.events.push_back({t, torque + sigma * noise.normal(), {}});
+    events.push_back({t, torque + sigma * noise.normal(), {}});
   }
+}
+
+}  // namespace
+
+LoadSweep makeLoadSweep(const RigConfig& rig, const LoadSweepSpec& s) {
+  const double natural = loadSweepNaturalDuration(rig, s);  // validates
+  const std::array<double, 2> scale = shaftScales(rig);
+  LoadSweep out;
+  LoadSweepTruth& truth = out.truth;
+  truth.mesh_stiffness_scale = rig.mesh_stiffness_scale;
+  truth.bearing_scale = scale;
+  truth.preload_torque = rig.anti_backlash.preload_torque;
+  truth.gear_turn = gearTurn(rig, s.speed_rpm);
+  StaticTeModel model(rig);
+  setKnees(model, truth);
+
+  const double stretch = s.duration > 0.0 ? s.duration / natural : 1.0;
+  const long n_torque = placeHolds(s, stretch, carriedTorque(rig), truth);
+  const long n_joint = std::lround(truth.duration * s.joint_rate);
+  if (n_torque > 100000000 || n_joint > 100000000) {
+    throw InvalidInput("load_sweep: " + std::to_string(n_torque) + " torque samples and " +
+                       std::to_string(n_joint) + " readings: at most 1e8 each");
+  }
+  const std::vector<PreloadSetting> preload = configuredPreloads(rig);
+  runTruth(rig, s, model, scale, preload, n_joint, out);
+
+  out.events.reserve(static_cast<std::size_t>(n_joint + n_torque + 1));
+  recordReadings(rig, s, model.baseRadius(), n_joint, out);
+  out.events.push_back({0.0, std::nullopt, preload});
+  recordTorque(s, truth, n_torque, out.events);
   // In send order; at equal times a reading first, then the preload, then the torque.
   std::stable_sort(out.events.begin(), out.events.end(),
                    [](const RigEvent& a, const RigEvent& b) { return a.t < b.t; });

@@ -1,10 +1,5 @@
-// The load_sweep scenario (docs/tools.md): a calibration recording whose true rig is known. The
-// rig turns at a constant speed through a torque staircase that crosses the anti-backlash knee in
-// both directions, and the gear encoder carries the TRUE rig's transmission error, from the 3-DOF
-// dynamics of the true rig (a RigPipeline on it) with the bearings' static deflection made exact
-// (the secant, not the tangent: see makeLoadSweep). The true rig is the RigConfig given: its
-// mesh.stiffness_scale, bearings[].stiffness_scale and anti_backlash.preload_torque are the truth
-// the calibration (calibration/calibrator.hpp) should find. ROS-free and deterministic for a seed.
+// The load_sweep scenario: a calibration recording whose true rig is the RigConfig given
+// (docs/tools.md "load_sweep"). Deterministic for a seed.
 #pragma once
 
 #include <array>
@@ -22,30 +17,25 @@ namespace drivetrain_stiffness {
 constexpr double kArcsecond = kPi / (180.0 * 3600.0);  ///< [rad]
 
 struct LoadSweepSpec {
-  double speed_rpm = 120.0;     ///< [rpm] constant pinion speed (> 0)
-  double torque_rate = 1000.0;  ///< [Hz] torque messages
-  double joint_rate = 5000.0;   ///< [Hz] encoder readings (joint_states)
-  bool joint_velocity = true;   ///< false: the readings carry no velocity
-  /// [s] 0: the natural length (the holds below, in gear turns); > 0: every hold scaled so that the
-  /// scenario lasts this long.
-  double duration = 0.0;
+  double speed_rpm = 120.0;     ///< [rpm] > 0
+  double torque_rate = 1000.0;  ///< [Hz]
+  double joint_rate = 5000.0;   ///< [Hz]
+  bool joint_velocity = true;
+  double duration = 0.0;  ///< [s] 0: the natural length; > 0: every hold scaled to it
   std::uint64_t seed = 1;
-  double baseline_turns = 3.0;  ///< [gear turns] the unloaded hold at the start
-  double step_turns = 2.5;      ///< [gear turns] every later hold
-  int positive_levels = 10;     ///< levels above zero, the knee halfway between two of them
-  int negative_levels = 6;      ///< levels below zero, the reverse knee halfway between two of them
-  double overdrive = 1.5;       ///< [-] the top level about this times the knee (each direction)
-  double eccentricity_min = 10.0 * kArcsecond;  ///< [rad] range of each encoder's mounting error
+  double baseline_turns = 3.0;                  ///< [gear turns] the unloaded hold at the start
+  double step_turns = 2.5;                      ///< [gear turns] every later hold
+  int positive_levels = 10;                     ///< the knee halfway between two of them
+  int negative_levels = 6;                      ///< the reverse knee halfway between two of them
+  double overdrive = 1.5;                       ///< [-] the top level over the knee
+  double eccentricity_min = 10.0 * kArcsecond;  ///< [rad] encoder mounting error range
   double eccentricity_max = 20.0 * kArcsecond;
-  double stamp_jitter = 20e-6;  ///< [s] joint_states header stamps: true time + uniform(+-this)
-  double torque_noise =
-      0.005;  ///< [-] published torque: sigma = torque_noise |T| + torque_noise_floor
+  double stamp_jitter = 20e-6;       ///< [s] uniform, on the joint_states stamps
+  double torque_noise = 0.005;       ///< [-] sigma = torque_noise |T| + torque_noise_floor
   double torque_noise_floor = 1e-3;  ///< [N*m]
-  double lead_in = 0.1;              ///< [s] the truth dynamics run this long before t = 0
-  /// [s] a final hold at `dwell_torque` after the sweep, for the calibration's drift at constant
-  /// load (drivetrain_calibration_mc --dwell); 0: none. Not scaled by `duration`.
-  double dwell = 0.0;
-  double dwell_torque = 3.0;  ///< [N*m] the dwell's pinion torque (within the bearings' limit)
+  double lead_in = 0.1;              ///< [s] of truth dynamics before t = 0
+  double dwell = 0.0;                ///< [s] a final hold at `dwell_torque`, not scaled; 0: none
+  double dwell_torque = 3.0;         ///< [N*m]
 };
 
 /// One hold of the true torque: [t0, t1) [s].
@@ -71,8 +61,8 @@ struct LoadSweepTruth {
 struct LoadSweep {
   std::vector<RigEvent> events;  ///< in send order: readings, the preload at t = 0, torque
   LoadSweepTruth truth;
-  /// [m] the true encoder TE x_enc = r_b,p theta_p + r_b,g theta_g at each reading (before the
-  /// encoders' mounting error and quantisation), in reading order.
+  /// [m] the true encoder TE x_enc = r_b,p theta_p + r_b,g theta_g at each reading, before the
+  /// mounting error and quantisation.
   std::vector<double> te;
 };
 

@@ -1,8 +1,5 @@
-// A recording's per-mesh-period statistics summed over the whole bag, for drivetrain_replay's
-// summary.json and so for a campaign's row (docs/campaign.md, "What it writes"): the pinion speed
-// and torque ranges over the blocks, the TE RMS combined by time, the largest block peak-to-peak
-// and the time-weighted mean mesh force. Computed from the same values the messages carry, in
-// message order, whatever --topics writes.
+// A recording's per-mesh-period statistics summed over the bag for summary.json (docs/campaign.md
+// "What it writes").
 #pragma once
 
 #include <cstdint>
@@ -15,15 +12,14 @@ namespace drivetrain_stiffness {
 
 class MeshPeriodTotals {
  public:
-  /// pinion_teeth: z_p, for the pinion speed 2 pi f_mesh / z_p [rad/s] (signed, as f_mesh).
+  /// z_p, for the signed pinion speed 2 pi f_mesh / z_p [rad/s].
   explicit MeshPeriodTotals(int pinion_teeth) : pinion_teeth_(pinion_teeth) {}
 
   void add(const drivetrain_stiffness::MeshPeriodStats& m);
 
-  /// {"blocks", "speed_min", "speed_max" [rad/s], "torque_min", "torque_max" [N*m], "te_rms" (sqrt
-  /// of the duration-weighted mean of the blocks' te_rms^2) [m], "te_peak_to_peak" (the largest
-  /// block's) [m], "mesh_force_mean" (duration-weighted) [N]}; the figures null without a block
-  /// of positive duration.
+  /// blocks, speed_min/max [rad/s], torque_min/max [N*m], te_rms (duration-weighted) [m],
+  /// te_peak_to_peak (the largest) [m], mesh_force_mean (duration-weighted) [N]; null figures
+  /// without a block of positive duration.
   nlohmann::json json() const;
 
  private:

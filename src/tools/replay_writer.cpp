@@ -153,6 +153,32 @@ std::string OutputTopics::describe() const {
   return out;
 }
 
+namespace {
+
+/// calibration.csv's header: the Calibration message's fields in message order.
+std::string calibrationCsvHeader() {
+  std::string parameters, identified;
+  for (int i = 0; i < kCalibrationSize; ++i) {
+    parameters += std::string(",") + calibrationName(i) + "," + calibrationName(i) + "_std";
+    identified += std::string(",") + calibrationName(i) + "_identified";
+  }
+  std::string bands;
+  for (const char* f : {"mesh_stiffness", "pinion_bearing_stiffness", "gear_bearing_stiffness",
+                        "natural_frequency_1", "natural_frequency_2", "natural_frequency_3"}) {
+    bands += std::string(",") + f + "," + f + "_low," + f + "_high";
+  }
+  return "stamp" + parameters + identified +
+         ",nis,excited,baseline,outcome,windows,baseline_windows,"
+         "updates,gated,not_excited,window_torque,window_speed,"
+         "series_compliance,series_compliance_std" +
+         bands +
+         ",knee_torque,measured_mean_te,predicted_mean_te,"
+         "measured_mesh_harmonic_1,predicted_mesh_harmonic_1,"
+         "measured_mesh_harmonic_2,predicted_mesh_harmonic_2";
+}
+
+}  // namespace
+
 ReplayWriter::ReplayWriter(const RigPipeline& pipeline, const OutputSettings& settings,
                            const std::string& out_bag, BagCompression compression,
                            const std::string& csv_dir, OutputTopics bag_topics,
@@ -215,26 +241,9 @@ ReplayWriter::ReplayWriter(const RigPipeline& pipeline, const OutputSettings& se
                                   "stamp,te_mean,te_rms,te_peak_to_peak,mesh_force_mean,mesh_force_"
                                   "rms,mesh_force_peak_to_peak,mesh_frequency,torque,"
                                   "periods,samples,duration");
-  std::string parameters, identified;
-  for (int i = 0; i < kCalibrationSize; ++i) {
-    parameters += std::string(",") + calibrationName(i) + "," + calibrationName(i) + "_std";
-    identified += std::string(",") + calibrationName(i) + "_identified";
-  }
-  std::string bands;
-  for (const char* f : {"mesh_stiffness", "pinion_bearing_stiffness", "gear_bearing_stiffness",
-                        "natural_frequency_1", "natural_frequency_2", "natural_frequency_3"}) {
-    bands += std::string(",") + f + "," + f + "_low," + f + "_high";
-  }
   if (csv_topics_.has(OutputTopics::kCalibration))
-    calibration_csv_ = std::make_unique<CsvFile>(
-        csv_dir + "/calibration.csv", "stamp" + parameters + identified +
-                                          ",nis,excited,baseline,outcome,windows,baseline_windows,"
-                                          "updates,gated,not_excited,window_torque,window_speed,"
-                                          "series_compliance,series_compliance_std" +
-                                          bands +
-                                          ",knee_torque,measured_mean_te,predicted_mean_te,"
-                                          "measured_mesh_harmonic_1,predicted_mesh_harmonic_1,"
-                                          "measured_mesh_harmonic_2,predicted_mesh_harmonic_2");
+    calibration_csv_ =
+        std::make_unique<CsvFile>(csv_dir + "/calibration.csv", calibrationCsvHeader());
 }
 
 void ReplayWriter::close() {

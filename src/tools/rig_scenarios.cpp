@@ -81,6 +81,35 @@ void addEncoderEvents(const RigConfig& rig, const ScenarioSpec& spec, const Spee
   }
 }
 
+/// The faults scenario's injected inputs, each at its own time after 1/4 of the duration, so every
+/// rule is visible in the counters; from 3/4 on the stamps run 0.6 duration behind.
+void injectFaults(const RigConfig& rig, const ScenarioSpec& spec, double dt, double mean,
+                  std::vector<RigEvent>& events) {
+  const double nan = std::numeric_limits<double>::quiet_NaN(),
+               inf = std::numeric_limits<double>::infinity();
+  const double t1 = 0.25 * spec.duration;
+  events.push_back({t1 + 0.1 * dt, nan, {}});
+  events.push_back({t1 + 0.2 * dt, inf, {}});
+  events.push_back({t1 + 0.3 * dt, 1e6, {}});                // absurd (over max_abs_torque)
+  events.push_back({t1 + 0.4 * dt, mean, {}, true});         // zero stamp
+  events.push_back({t1 + 0.5 * dt, mean, {}, false, -0.5});  // 0.5 s late: out of order
+  for (int i = 0; i < 5; ++i)
+    events.push_back({t1 + 0.6 * dt, mean, {}, false, 0.0});    // burst, equal stamps
+  std::vector<PreloadSetting> bad = preloadOfAll(rig, -100.0);  // negative preload
+  events.push_back({t1 + 0.7 * dt, std::nullopt, bad});
+  RigEvent after_loss{t1 + 0.8 * dt, mean, {}};  // 3 torque messages lost on the way
+  after_loss.lost_before = 3;
+  events.push_back(after_loss);
+  RigEvent wrong_frame{t1 + 0.9 * dt, mean, {}};  // torque about the gear's axis
+  wrong_frame.frame_id = "gear";
+  events.push_back(wrong_frame);
+  // From 3/4 on, the stamps run 0.6 duration behind (a recording that looped; more than the
+  // default ~stamp_jump_back of 1 s for durations over 1.7 s): one reset, then accepted.
+  for (RigEvent& e : events) {
+    if (e.t >= 0.75 * spec.duration && !e.zero_stamp) e.stamp_offset -= 0.6 * spec.duration;
+  }
+}
+
 }  // namespace
 
 std::string scenarioHelp() {
@@ -145,33 +174,7 @@ std::vector<RigEvent> makeScenario(const RigConfig& rig, const ScenarioSpec& spe
         events.push_back({t, std::nullopt, preloadOfAll(rig, configuredAxial(rig))});
       events.push_back({t, ripple(t), {}});
     }
-    if (s == "faults") {
-      // Injected after the clean stream, each at its own time, so every rule is visible in the
-      // counters.
-      const double nan = std::numeric_limits<double>::quiet_NaN(),
-                   inf = std::numeric_limits<double>::infinity();
-      const double t1 = 0.25 * spec.duration;
-      events.push_back({t1 + 0.1 * dt, nan, {}});
-      events.push_back({t1 + 0.2 * dt, inf, {}});
-      events.push_back({t1 + 0.3 * dt, 1e6, {}});                // absurd (over max_abs_torque)
-      events.push_back({t1 + 0.4 * dt, mean, {}, true});         // zero stamp
-      events.push_back({t1 + 0.5 * dt, mean, {}, false, -0.5});  // 0.5 s late: out of order
-      for (int i = 0; i < 5; ++i)
-        events.push_back({t1 + 0.6 * dt, mean, {}, false, 0.0});    // burst, equal stamps
-      std::vector<PreloadSetting> bad = preloadOfAll(rig, -100.0);  // negative preload
-      events.push_back({t1 + 0.7 * dt, std::nullopt, bad});
-      RigEvent after_loss{t1 + 0.8 * dt, mean, {}};  // 3 torque messages lost on the way
-      after_loss.lost_before = 3;
-      events.push_back(after_loss);
-      RigEvent wrong_frame{t1 + 0.9 * dt, mean, {}};  // torque about the gear's axis
-      wrong_frame.frame_id = "gear";
-      events.push_back(wrong_frame);
-      // From 3/4 on, the stamps run 0.6 duration behind (a recording that looped; more than the
-      // default ~stamp_jump_back of 1 s for durations over 1.7 s): one reset, then accepted.
-      for (RigEvent& e : events) {
-        if (e.t >= 0.75 * spec.duration && !e.zero_stamp) e.stamp_offset -= 0.6 * spec.duration;
-      }
-    }
+    if (s == "faults") injectFaults(rig, spec, dt, mean, events);
   } else if (s == "torque_steps") {
     const double levels[] = {0.5, 1.0, 2.0, -1.0, 1.0};
     events.push_back({0.0, std::nullopt, preloadOfAll(rig, configuredAxial(rig))});

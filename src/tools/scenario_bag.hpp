@@ -1,7 +1,4 @@
-// Writes a scenario's events (rig_scenarios.hpp) to a bag as the rig would publish them: torque
-// (geometry_msgs/WrenchStamped), preload (drivetrain_stiffness/Preload) and the encoders
-// (sensor_msgs/JointState), with header stamps and record times = epoch + t, so the bags are
-// reproducible byte for byte. Used by drivetrain_rig_sim.
+// A scenario's events written to a bag as the rig publishes them, reproducible byte for byte.
 #pragma once
 
 #include <cstddef>
@@ -13,8 +10,7 @@
 namespace drivetrain_stiffness {
 
 struct ScenarioBagOptions {
-  double epoch =
-      1767225600.0;  ///< [s] stamp of the scenario start: 2026-01-01T00:00:00Z (1e9-second stamps)
+  double epoch = 1767225600.0;  ///< [s] the scenario's start (stamps and record times)
   std::string torque_topic = "/torque";
   std::string preload_topic = "/preload";
   std::string joint_topic = "/joint_states";
@@ -23,7 +19,7 @@ struct ScenarioBagOptions {
 };
 
 struct ScenarioBagCounts {
-  std::size_t torque = 0, preload = 0, joint_states = 0;  ///< messages written per topic
+  std::size_t torque = 0, preload = 0, joint_states = 0;
 };
 
 /// Writes `events` in their order to a new bag at `path` (overwritten). Throws InvalidInput for an

@@ -64,6 +64,148 @@ void checkCounts(const RigPipeline& pipeline, std::uint64_t torques, std::uint64
   }
 }
 
+/// One case's operations on a built pipeline, each checked and counted.
+class PipelineCase {
+ public:
+  PipelineCase(ByteReader& in, RigPipeline& pipeline, CaseStats& stats)
+      : in_(in), pipeline_(pipeline), stats_(stats) {}
+
+  void run() {
+    for (int op = 0; op < kMaxOperations && !in_.empty(); ++op) {
+      const std::uint8_t op_byte = in_.u8();
+      if (op_byte >= 0xF0) {
+        motion();
+      } else {
+        operation(op_byte % 8);
+      }
+      checkCounts(pipeline_, torques_, preloads_, motions_);
+    }
+  }
+
+ private:
+  template <typename Call>
+  void setter(const std::vector<std::string>& fields, Call call) {
+    if (acceptOrRefuse(stats_, call, [&](const std::string& m) {
+          requireNamesOneOf(m, fields, "setter refusal");
+        })) {
+      ++stats_.accepted;
+    }
+  }
+
+  void motion() {
+    now_ = decodeStamp(in_, now_);
+    const MotionCase m = decodeMotion(in_);
+    motion_seq_ = (m.numbering & 0x18) == 0x18
+                      ? static_cast<std::uint32_t>(m.numbering >> 5)
+                      : motion_seq_ + 1 + ((m.numbering & 0x18) == 0x10 ? m.numbering >> 5 : 0u);
+    ++motions_;
+    acceptOrRefuse(
+        stats_,
+        [&] {
+          checkOutcome(feedMotion(pipeline_, now_, m.reading, m.missing_pinion, sink_,
+                                  {"/encoders", motion_seq_, ""}),
+                       pipeline_, kMotionFields, stats_);
+        },
+        [](const std::string& msg) {
+          throw FuzzFinding("motion() threw instead of refusing: " + msg);
+        });
+  }
+
+  void operation(int op_code) {
+    switch (op_code) {
+      case 0:
+      case 7: torque(op_code == 7); break;
+      case 1: preload(); break;
+      case 2: {
+        now_ = decodeStamp(in_, now_);
+        acceptOrRefuse(
+            stats_, [&] { pipeline_.observeClock(now_, sink_); },
+            [](const std::string& m) { throw FuzzFinding("observeClock() threw: " + m); });
+        break;
+      }
+      case 3: {
+        const double mesh = decodeValue(in_, 0.1), bearing = decodeValue(in_, 0.1);
+        setter({"mesh_damping_ratio", "bearing_damping_ratio"}, [&] {
+          RuntimeSettings s = pipeline_.settings();
+          s.mesh_damping_ratio = mesh;
+          s.bearing_damping_ratio = bearing;
+          pipeline_.apply(s);
+        });
+        break;
+      }
+      case 4: {
+        const Fidelity f = decodeFidelity(in_.u8());
+        setter({"fidelity"}, [&] {
+          RuntimeSettings s = pipeline_.settings();
+          s.fidelity = f;
+          pipeline_.apply(s);
+        });
+        break;
+      }
+      case 5: {
+        const double hz = decodeValue(in_, 1000.0);
+        setter({"stiffness_rate"}, [&] {
+          RuntimeSettings s = pipeline_.settings();
+          s.stiffness_rate = hz;
+          pipeline_.apply(s);
+        });
+        break;
+      }
+      default: setter({}, [&] { pipeline_.reset("fuzz"); }); break;
+    }
+  }
+
+  void torque(bool with_origin) {
+    now_ = decodeStamp(in_, now_);
+    const double torque = decodeValue(in_, 0.3);
+    // Opcode 7 also says where it came from: frame (the rig's, the gear's, none), numbering
+    // (gaps, restarts, two publishers) and backlog (shed).
+    InputOrigin origin;
+    Backlog backlog = Backlog::kNone;
+    if (with_origin) {
+      const std::uint8_t meta = in_.u8();
+      static const char* kFrames[] = {"pinion", "pinion", "gear", ""};
+      seq_ = (meta & 0x18) == 0x18 ? static_cast<std::uint32_t>(meta >> 5)
+                                   : seq_ + 1 + ((meta & 0x18) == 0x10 ? meta >> 5 : 0u);
+      origin = InputOrigin{(meta & 0x80) ? "/b" : "/a", seq_, kFrames[meta & 3]};
+      backlog = (meta & 4) ? Backlog::kShed : Backlog::kNone;
+    }
+    ++torques_;
+    acceptOrRefuse(
+        stats_,
+        [&] {
+          checkOutcome(feedTorque(pipeline_, now_, torque, sink_, origin, backlog), pipeline_,
+                       kTorqueFields, stats_);
+        },
+        [](const std::string& m) {
+          throw FuzzFinding("torque() threw instead of refusing: " + m);
+        });
+  }
+
+  void preload() {
+    now_ = decodeStamp(in_, now_);
+    const std::vector<PreloadSetting> settings = decodePreloads(in_);
+    ++preloads_;
+    acceptOrRefuse(
+        stats_,
+        [&] {
+          checkOutcome(feedPreload(pipeline_, now_, settings, sink_), pipeline_, kPreloadFields,
+                       stats_);
+        },
+        [](const std::string& m) {
+          throw FuzzFinding("preload() threw instead of refusing: " + m);
+        });
+  }
+
+  ByteReader& in_;
+  RigPipeline& pipeline_;
+  CaseStats& stats_;
+  FiniteSink sink_;
+  Stamp now_{0};
+  std::uint64_t torques_ = 0, preloads_ = 0, motions_ = 0;
+  std::uint32_t seq_ = 0, motion_seq_ = 0;
+};
+
 }  // namespace
 
 CaseStats fuzzPipeline(const std::uint8_t* data, std::size_t size) {
@@ -81,124 +223,7 @@ CaseStats fuzzPipeline(const std::uint8_t* data, std::size_t size) {
       },
       &requireNamesParameter);
   if (!built) return stats;  // the decoder only picks valid options: the rule above says why not
-  FiniteSink sink;
-  Stamp now{0};
-  std::uint64_t torques = 0, preloads = 0, motions = 0;
-  std::uint32_t seq = 0, motion_seq = 0;
-  const auto setter = [&](const std::vector<std::string>& fields, auto call) {
-    if (acceptOrRefuse(stats, call, [&](const std::string& m) {
-          requireNamesOneOf(m, fields, "setter refusal");
-        })) {
-      ++stats.accepted;
-    }
-  };
-  for (int op = 0; op < kMaxOperations && !in.empty(); ++op) {
-    const std::uint8_t op_byte = in.u8();
-    if (op_byte >= 0xF0) {
-      now = decodeStamp(in, now);
-      const MotionCase m = decodeMotion(in);
-      motion_seq = (m.numbering & 0x18) == 0x18
-                       ? static_cast<std::uint32_t>(m.numbering >> 5)
-                       : motion_seq + 1 + ((m.numbering & 0x18) == 0x10 ? m.numbering >> 5 : 0u);
-      ++motions;
-      acceptOrRefuse(
-          stats,
-          [&] {
-            checkOutcome(feedMotion(*pipeline, now, m.reading, m.missing_pinion, sink,
-                                    {"/encoders", motion_seq, ""}),
-                         *pipeline, kMotionFields, stats);
-          },
-          [](const std::string& msg) {
-            throw FuzzFinding("motion() threw instead of refusing: " + msg);
-          });
-      checkCounts(*pipeline, torques, preloads, motions);
-      continue;
-    }
-    const int op_code = op_byte % 8;
-    switch (op_code) {
-      case 0:
-      case 7: {
-        const bool with_origin = op_code == 7;
-        now = decodeStamp(in, now);
-        const double torque = decodeValue(in, 0.3);
-        // Opcode 7 also says where it came from: frame (the rig's, the gear's, none), numbering
-        // (gaps, restarts, two publishers) and backlog (shed).
-        InputOrigin origin;
-        Backlog backlog = Backlog::kNone;
-        if (with_origin) {
-          const std::uint8_t meta = in.u8();
-          static const char* kFrames[] = {"pinion", "pinion", "gear", ""};
-          seq = (meta & 0x18) == 0x18 ? static_cast<std::uint32_t>(meta >> 5)
-                                      : seq + 1 + ((meta & 0x18) == 0x10 ? meta >> 5 : 0u);
-          origin = InputOrigin{(meta & 0x80) ? "/b" : "/a", seq, kFrames[meta & 3]};
-          backlog = (meta & 4) ? Backlog::kShed : Backlog::kNone;
-        }
-        ++torques;
-        acceptOrRefuse(
-            stats,
-            [&] {
-              checkOutcome(feedTorque(*pipeline, now, torque, sink, origin, backlog), *pipeline,
-                           kTorqueFields, stats);
-            },
-            [](const std::string& m) {
-              throw FuzzFinding("torque() threw instead of refusing: " + m);
-            });
-        break;
-      }
-      case 1: {
-        now = decodeStamp(in, now);
-        const std::vector<PreloadSetting> settings = decodePreloads(in);
-        ++preloads;
-        acceptOrRefuse(
-            stats,
-            [&] {
-              checkOutcome(feedPreload(*pipeline, now, settings, sink), *pipeline, kPreloadFields,
-                           stats);
-            },
-            [](const std::string& m) {
-              throw FuzzFinding("preload() threw instead of refusing: " + m);
-            });
-        break;
-      }
-      case 2: {
-        now = decodeStamp(in, now);
-        acceptOrRefuse(
-            stats, [&] { pipeline->observeClock(now, sink); },
-            [](const std::string& m) { throw FuzzFinding("observeClock() threw: " + m); });
-        break;
-      }
-      case 3: {
-        const double mesh = decodeValue(in, 0.1), bearing = decodeValue(in, 0.1);
-        setter({"mesh_damping_ratio", "bearing_damping_ratio"}, [&] {
-          RuntimeSettings s = pipeline->settings();
-          s.mesh_damping_ratio = mesh;
-          s.bearing_damping_ratio = bearing;
-          pipeline->apply(s);
-        });
-        break;
-      }
-      case 4: {
-        const Fidelity f = decodeFidelity(in.u8());
-        setter({"fidelity"}, [&] {
-          RuntimeSettings s = pipeline->settings();
-          s.fidelity = f;
-          pipeline->apply(s);
-        });
-        break;
-      }
-      case 5: {
-        const double hz = decodeValue(in, 1000.0);
-        setter({"stiffness_rate"}, [&] {
-          RuntimeSettings s = pipeline->settings();
-          s.stiffness_rate = hz;
-          pipeline->apply(s);
-        });
-        break;
-      }
-      default: setter({}, [&] { pipeline->reset("fuzz"); }); break;
-    }
-    checkCounts(*pipeline, torques, preloads, motions);
-  }
+  PipelineCase(in, *pipeline, stats).run();
   return stats;
 }
 

@@ -72,6 +72,58 @@ struct Input {
   sensor_msgs::JointState joints;
 };
 
+/// Torque steps: the baseline (at most calibration.baseline_torque), then two loads; the encoders
+/// run up from 700 to 1300 rpm through the three steps (a speed that changes at every reading, as a
+/// rig's run-up: the dynamics follow it on the sliced propagation), the gear at the tooth ratio (no
+/// TE: the loaded windows are gated, which is as good a test of the plumbing as an update).
+std::vector<std::vector<Input>> makeSegments(const RigConfig& rig, const JointNames& joints) {
+  const double ratio = static_cast<double>(rig.gears.teeth[0]) / rig.gears.teeth[1];
+  const double steps[] = {0.05, 0.1, 0.2};
+  std::vector<std::vector<Input>> segments;
+  std::int64_t k = 0;
+  for (std::size_t s = 0; s < 3; ++s) {
+    std::vector<Input> inputs;
+    Input t;
+    t.torque = true;
+    t.wrench.header.stamp = ros::Time(kT0, 0) + ros::Duration(static_cast<double>(k) / kRate);
+    t.wrench.header.frame_id = "pinion";
+    t.wrench.wrench.torque.z = steps[s];
+    inputs.push_back(t);
+    for (; static_cast<double>(k) < kSegment * kRate * static_cast<double>(s + 1); ++k) {
+      Input j;
+      const double time = static_cast<double>(k) / kRate;
+      j.joints.header.stamp = ros::Time(kT0, 0) + ros::Duration(time);
+      j.joints.name = {joints.pinion, joints.gear};
+      // omega = kSpeed (0.7 + 0.6 t / T), T the three segments; the angle its integral.
+      const double span = 3.0 * kSegment;
+      const double angle = kSpeed * (0.7 * time + 0.3 * time * time / span),
+                   speed = kSpeed * (0.7 + 0.6 * time / span);
+      j.joints.position = {angle, -ratio * angle};
+      j.joints.velocity = {speed, -ratio * speed};
+      inputs.push_back(j);
+    }
+    segments.push_back(inputs);
+  }
+  return segments;
+}
+
+/// The segments through `pipeline` in process, in the order the node takes them.
+void feedInProcess(RigPipeline& pipeline, const std::vector<std::vector<Input>>& segments,
+                   const JointNames& joints, PipelineSink& sink) {
+  std::string why;
+  for (const auto& segment : segments) {
+    for (const Input& in : segment) {
+      if (in.torque) {
+        pipeline.torque(fromRosTime(in.wrench.header.stamp), in.wrench.wrench.torque.z, sink,
+                        {"", 0, in.wrench.header.frame_id});
+      } else {
+        pipeline.motion(fromRosTime(in.joints.header.stamp), *toMotionInput(in.joints, joints, why),
+                        sink);
+      }
+    }
+  }
+}
+
 class CalibrationTopicsTest : public testing::Test {
  protected:
   void SetUp() override {
@@ -130,6 +182,132 @@ class CalibrationTopicsTest : public testing::Test {
     return waitWall([&] { return diagnostic(key) == std::to_string(count); }, 20.0);
   }
 
+  /// Publishes each torque step, then its readings in chunks the subscriber queue holds, each
+  /// waited for on /diagnostics, so the node sees exactly this order.
+  void publishInOrder(const std::vector<std::vector<Input>>& segments) {
+    std::size_t torques = 0, readings = 0;
+    for (const auto& segment : segments) {
+      for (std::size_t i = 0; i < segment.size(); ++i) {
+        if (segment[i].torque) {
+          torque_pub_.publish(segment[i].wrench);
+          ASSERT_TRUE(accepted("accepted_torque", ++torques))
+              << "torque " << torques << ": " << diagnostic("last_event");
+          continue;
+        }
+        joints_pub_.publish(segment[i].joints);
+        ++readings;
+        if (readings % 500 == 0 || i + 1 == segment.size()) {
+          ASSERT_TRUE(accepted("accepted_joint_states", readings))
+              << readings << ": " << diagnostic("last_event");
+        }
+      }
+    }
+  }
+
+  /// Every message the node published equals the in-process one (header.seq aside).
+  void expectSameMessages(const CollectingSink& sink) {
+    {
+      std::lock_guard<std::mutex> l(m_);
+      ASSERT_EQ(calibration_.size(), sink.calibrations.size());
+      ASSERT_EQ(measured_te_.size(), sink.measured_tes.size());
+      for (std::size_t i = 0; i < calibration_.size(); ++i) {
+        drivetrain_stiffness::Calibration got = calibration_[i];
+        got.header.seq = sink.calibrations[i].header.seq;
+        EXPECT_TRUE(got == sink.calibrations[i])
+            << "calibration[" << i << "]: " << got << "\nin-process:\n"
+            << sink.calibrations[i];
+      }
+      std::size_t differ = 0;
+      for (std::size_t i = 0; i < measured_te_.size(); ++i) {
+        drivetrain_stiffness::MeasuredTe got = measured_te_[i];
+        got.header.seq = sink.measured_tes[i].header.seq;
+        if (!(got == sink.measured_tes[i]) && differ++ < 3) {
+          ADD_FAILURE() << "measured_te[" << i << "]: " << got << "\nin-process:\n"
+                        << sink.measured_tes[i];
+        }
+      }
+      EXPECT_EQ(differ, 0u);
+      // The dynamics driven by the encoders' phase and speed: the same bytes as in-process.
+      ASSERT_EQ(te_.size(), sink.tes.size());
+      ASSERT_EQ(periods_.size(), sink.periods.size());
+      differ = 0;
+      for (std::size_t i = 0; i < te_.size(); ++i) {
+        drivetrain_stiffness::TransmissionError got = te_[i];
+        got.header.seq = sink.tes[i].header.seq;
+        if (!(got == sink.tes[i]) && differ++ < 3)
+          ADD_FAILURE() << "transmission_error[" << i << "]: " << got << "\nin-process:\n"
+                        << sink.tes[i];
+      }
+      for (std::size_t i = 0; i < periods_.size(); ++i) {
+        drivetrain_stiffness::MeshPeriodStats got = periods_[i];
+        got.header.seq = sink.periods[i].header.seq;
+        if (!(got == sink.periods[i]) && differ++ < 6)
+          ADD_FAILURE() << "mesh_period_stats[" << i << "]: " << got << "\nin-process:\n"
+                        << sink.periods[i];
+      }
+      EXPECT_EQ(differ, 0u);
+      std::map<std::string, int> seen;
+      for (const auto& m : calibration_) ++seen[m.outcome];
+      for (const auto& [outcome, n] : seen)
+        std::cout << "calibration outcome '" << outcome << "': " << n << "\n";
+      EXPECT_GT(seen["baseline"], 0);
+    }
+  }
+
+  /// /diagnostics: the counters and the calibration's state, against the in-process calibrator.
+  void expectCalibrationDiagnostics(const RigPipeline& pipeline, const CollectingSink& sink) {
+    const CalibrationEstimate& e = pipeline.calibrator()->estimate();
+    EXPECT_TRUE(waitWall(
+        [&] {
+          return diagnostic("calibration_published") == std::to_string(sink.calibrations.size());
+        },
+        5.0))
+        << diagnostic("calibration_published");
+    EXPECT_EQ(diagnostic("measured_te_published"), std::to_string(sink.measured_tes.size()));
+    EXPECT_EQ(diagnostic("calibration_errors"), "0");
+    EXPECT_EQ(diagnostic("calibration"), toString(e.outcome));
+    EXPECT_EQ(diagnostic("calibration_windows"), std::to_string(e.windows));
+    EXPECT_EQ(diagnostic("calibration_updates"), std::to_string(e.updates));
+    EXPECT_EQ(diagnostic("calibration_gated"), std::to_string(e.gated));
+    EXPECT_EQ(diagnostic("calibration_identified"), identifiedParameters(e));
+    EXPECT_NE(diagnostic("calibration.mesh_stiffness_scale [-]"), "");
+    // No window updated (the loaded ones are gated: no TE), so /diagnostics says why, the sentence
+    // the in-process calibrator gives for the same inputs, with a WARN.
+    ASSERT_EQ(e.updates, 0u);
+    const std::string waiting = pipeline.calibrator()->waitingReason();
+    std::cout << "calibration_waiting: " << waiting << "\n";
+    EXPECT_NE(waiting.find("gated"), std::string::npos) << waiting;
+    EXPECT_EQ(diagnostic("calibration_waiting"), waiting);
+    EXPECT_TRUE(waitWall(
+        [&] {
+          std::lock_guard<std::mutex> l(m_);
+          return status_message_.find("calibration waiting: " + waiting) != std::string::npos;
+        },
+        5.0))
+        << status_message_;
+    EXPECT_NE(diagnostic("calibration.te_offset [m]"), "");
+  }
+
+  /// With every input stopped and the encoders driving the phase, /diagnostics says how old the
+  /// last reading is on the node's clock.
+  void expectEncoderSilence() {
+    EXPECT_EQ(diagnostic("phase_source"), "encoders");
+    const double silence = std::stod(
+        diagnostic("encoder_silence [s]").empty() ? "nan" : diagnostic("encoder_silence [s]"));
+    const double expected =
+        (ros::Time::now() - (ros::Time(kT0, 0) + ros::Duration(3.0 * kSegment))).toSec();
+    // (diagnostic_updater prints about six significant digits: some 50 s at this age)
+    EXPECT_NEAR(silence / expected, 1.0, 1e-5)
+        << "the age of the last reading, 3 segments after kT0";
+    EXPECT_TRUE(waitWall(
+        [&] {
+          std::lock_guard<std::mutex> l(m_);
+          return status_message_.find("no joint_states for") != std::string::npos;
+        },
+        5.0))
+        << status_message_;
+  }
+
   ros::NodeHandle nh_;
   ros::AsyncSpinner spinner_{2};
   ros::Publisher torque_pub_, joints_pub_;
@@ -160,52 +338,8 @@ TEST_F(CalibrationTopicsTest, NodePublishesWhatThePipelineGivesInProcess) {
   sink.rig_frame = frames.frames.rig;
   sink.pinion_frame = frames.frames.pinion;
   const JointNames joints = readJointNames(get);
-  const double ratio = static_cast<double>(rig.gears.teeth[0]) / rig.gears.teeth[1];
-
-  // Torque steps: the baseline (at most calibration.baseline_torque), then two loads; the encoders
-  // run up from 700 to 1300 rpm through the three steps (a speed that changes at every reading, as
-  // a rig's run-up: the dynamics follow it on the sliced propagation), the gear at the tooth ratio
-  // (no TE: the loaded windows are gated, which is as good a test of the plumbing as an update).
-  const double steps[] = {0.05, 0.1, 0.2};
-  std::vector<std::vector<Input>> segments;
-  std::int64_t k = 0;
-  for (std::size_t s = 0; s < 3; ++s) {
-    std::vector<Input> inputs;
-    Input t;
-    t.torque = true;
-    t.wrench.header.stamp = ros::Time(kT0, 0) + ros::Duration(static_cast<double>(k) / kRate);
-    t.wrench.header.frame_id = "pinion";
-    t.wrench.wrench.torque.z = steps[s];
-    inputs.push_back(t);
-    for (; static_cast<double>(k) < kSegment * kRate * static_cast<double>(s + 1); ++k) {
-      Input j;
-      const double time = static_cast<double>(k) / kRate;
-      j.joints.header.stamp = ros::Time(kT0, 0) + ros::Duration(time);
-      j.joints.name = {joints.pinion, joints.gear};
-      // omega = kSpeed (0.7 + 0.6 t / T), T the three segments; the angle its integral.
-      const double span = 3.0 * kSegment;
-      const double angle = kSpeed * (0.7 * time + 0.3 * time * time / span),
-                   speed = kSpeed * (0.7 + 0.6 * time / span);
-      j.joints.position = {angle, -ratio * angle};
-      j.joints.velocity = {speed, -ratio * speed};
-      inputs.push_back(j);
-    }
-    segments.push_back(inputs);
-  }
-
-  // In-process, in the order the node will take them.
-  std::string why;
-  for (const auto& segment : segments) {
-    for (const Input& in : segment) {
-      if (in.torque) {
-        pipeline.torque(fromRosTime(in.wrench.header.stamp), in.wrench.wrench.torque.z, sink,
-                        {"", 0, in.wrench.header.frame_id});
-      } else {
-        pipeline.motion(fromRosTime(in.joints.header.stamp), *toMotionInput(in.joints, joints, why),
-                        sink);
-      }
-    }
-  }
+  const std::vector<std::vector<Input>> segments = makeSegments(rig, joints);
+  feedInProcess(pipeline, segments, joints, sink);
   ASSERT_GT(sink.calibrations.size(), 3u);
   ASSERT_GT(sink.measured_tes.size(), 100u);
   ASSERT_GT(sink.tes.size(), 1000u);  // 1.1 s at the 1 kHz output rate
@@ -222,25 +356,8 @@ TEST_F(CalibrationTopicsTest, NodePublishesWhatThePipelineGivesInProcess) {
     EXPECT_EQ(status_message_.find("calibration waiting"), std::string::npos) << status_message_;
   }
 
-  // On the graph: each torque step, then its readings in chunks the subscriber queue holds, each
-  // waited for on /diagnostics, so the node sees exactly this order.
-  std::size_t torques = 0, readings = 0;
-  for (const auto& segment : segments) {
-    for (std::size_t i = 0; i < segment.size(); ++i) {
-      if (segment[i].torque) {
-        torque_pub_.publish(segment[i].wrench);
-        ASSERT_TRUE(accepted("accepted_torque", ++torques))
-            << "torque " << torques << ": " << diagnostic("last_event");
-        continue;
-      }
-      joints_pub_.publish(segment[i].joints);
-      ++readings;
-      if (readings % 500 == 0 || i + 1 == segment.size()) {
-        ASSERT_TRUE(accepted("accepted_joint_states", readings))
-            << readings << ": " << diagnostic("last_event");
-      }
-    }
-  }
+  publishInOrder(segments);
+  ASSERT_FALSE(HasFatalFailure());
   ASSERT_TRUE(waitWall(
       [&] {
         std::lock_guard<std::mutex> l(m_);
@@ -249,103 +366,11 @@ TEST_F(CalibrationTopicsTest, NodePublishesWhatThePipelineGivesInProcess) {
                periods_.size() >= sink.periods.size();
       },
       20.0));
-
-  {
-    std::lock_guard<std::mutex> l(m_);
-    ASSERT_EQ(calibration_.size(), sink.calibrations.size());
-    ASSERT_EQ(measured_te_.size(), sink.measured_tes.size());
-    for (std::size_t i = 0; i < calibration_.size(); ++i) {
-      drivetrain_stiffness::Calibration got = calibration_[i];
-      got.header.seq = sink.calibrations[i].header.seq;
-      EXPECT_TRUE(got == sink.calibrations[i])
-          << "calibration[" << i << "]: " << got << "\nin-process:\n"
-          << sink.calibrations[i];
-    }
-    std::size_t differ = 0;
-    for (std::size_t i = 0; i < measured_te_.size(); ++i) {
-      drivetrain_stiffness::MeasuredTe got = measured_te_[i];
-      got.header.seq = sink.measured_tes[i].header.seq;
-      if (!(got == sink.measured_tes[i]) && differ++ < 3) {
-        ADD_FAILURE() << "measured_te[" << i << "]: " << got << "\nin-process:\n"
-                      << sink.measured_tes[i];
-      }
-    }
-    EXPECT_EQ(differ, 0u);
-    // The dynamics driven by the encoders' phase and speed: the same bytes as in-process.
-    ASSERT_EQ(te_.size(), sink.tes.size());
-    ASSERT_EQ(periods_.size(), sink.periods.size());
-    differ = 0;
-    for (std::size_t i = 0; i < te_.size(); ++i) {
-      drivetrain_stiffness::TransmissionError got = te_[i];
-      got.header.seq = sink.tes[i].header.seq;
-      if (!(got == sink.tes[i]) && differ++ < 3)
-        ADD_FAILURE() << "transmission_error[" << i << "]: " << got << "\nin-process:\n"
-                      << sink.tes[i];
-    }
-    for (std::size_t i = 0; i < periods_.size(); ++i) {
-      drivetrain_stiffness::MeshPeriodStats got = periods_[i];
-      got.header.seq = sink.periods[i].header.seq;
-      if (!(got == sink.periods[i]) && differ++ < 6)
-        ADD_FAILURE() << "mesh_period_stats[" << i << "]: " << got << "\nin-process:\n"
-                      << sink.periods[i];
-    }
-    EXPECT_EQ(differ, 0u);
-    std::map<std::string, int> seen;
-    for (const auto& m : calibration_) ++seen[m.outcome];
-    for (const auto& [outcome, n] : seen)
-      std::cout << "calibration outcome '" << outcome << "': " << n << "\n";
-    EXPECT_GT(seen["baseline"], 0);
-  }
-
-  // /diagnostics: the counters and the calibration's state.
-  const CalibrationEstimate& e = pipeline.calibrator()->estimate();
-  EXPECT_TRUE(waitWall(
-      [&] {
-        return diagnostic("calibration_published") == std::to_string(sink.calibrations.size());
-      },
-      5.0))
-      << diagnostic("calibration_published");
-  EXPECT_EQ(diagnostic("measured_te_published"), std::to_string(sink.measured_tes.size()));
-  EXPECT_EQ(diagnostic("calibration_errors"), "0");
-  EXPECT_EQ(diagnostic("calibration"), toString(e.outcome));
-  EXPECT_EQ(diagnostic("calibration_windows"), std::to_string(e.windows));
-  EXPECT_EQ(diagnostic("calibration_updates"), std::to_string(e.updates));
-  EXPECT_EQ(diagnostic("calibration_gated"), std::to_string(e.gated));
-  EXPECT_EQ(diagnostic("calibration_identified"), identifiedParameters(e));
-  EXPECT_NE(diagnostic("calibration.mesh_stiffness_scale [-]"), "");
-  // No window updated (the loaded ones are gated: no TE), so /diagnostics says why, the sentence
-  // the in-process calibrator gives for the same inputs, with a WARN.
-  ASSERT_EQ(e.updates, 0u);
-  const std::string waiting = pipeline.calibrator()->waitingReason();
-  std::cout << "calibration_waiting: " << waiting << "\n";
-  EXPECT_NE(waiting.find("gated"), std::string::npos) << waiting;
-  EXPECT_EQ(diagnostic("calibration_waiting"), waiting);
-  EXPECT_TRUE(waitWall(
-      [&] {
-        std::lock_guard<std::mutex> l(m_);
-        return status_message_.find("calibration waiting: " + waiting) != std::string::npos;
-      },
-      5.0))
-      << status_message_;
-  EXPECT_NE(diagnostic("calibration.te_offset [m]"), "");
-  // Every input has stopped with the encoders driving the phase: the time-out waits for the next
-  // input's stamp, and /diagnostics says how old the last reading is on the node's clock. The
-  // readings are stamped from kT0 (2026-01-01), so on this wall clock that is far beyond
-  // ~motion_timeout: the key and the WARN both show.
-  EXPECT_EQ(diagnostic("phase_source"), "encoders");
-  const double silence = std::stod(
-      diagnostic("encoder_silence [s]").empty() ? "nan" : diagnostic("encoder_silence [s]"));
-  const double expected =
-      (ros::Time::now() - (ros::Time(kT0, 0) + ros::Duration(3.0 * kSegment))).toSec();
-  // (diagnostic_updater prints about six significant digits: some 50 s at this age)
-  EXPECT_NEAR(silence / expected, 1.0, 1e-5) << "the age of the last reading, 3 segments after kT0";
-  EXPECT_TRUE(waitWall(
-      [&] {
-        std::lock_guard<std::mutex> l(m_);
-        return status_message_.find("no joint_states for") != std::string::npos;
-      },
-      5.0))
-      << status_message_;
+  expectSameMessages(sink);
+  ASSERT_FALSE(HasFatalFailure());
+  expectCalibrationDiagnostics(pipeline, sink);
+  ASSERT_FALSE(HasFatalFailure());
+  expectEncoderSilence();
 }
 
 }  // namespace

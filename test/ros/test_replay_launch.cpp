@@ -37,6 +37,33 @@ bool waitWall(const std::function<bool()>& done, double seconds) {
   return done();
 }
 
+/// How often the stamps go back from one message to the next.
+int stepsBack(const std::vector<drivetrain_stiffness::TransmissionError>& te) {
+  int backwards = 0;
+  for (std::size_t i = 1; i < te.size(); ++i)
+    backwards += te[i].header.stamp < te[i - 1].header.stamp ? 1 : 0;
+  return backwards;
+}
+
+/// Every output carries a bag stamp and finite values; the TE's torque is the bag's.
+void expectBagStamps(const std::vector<drivetrain_stiffness::Stiffness>& stiffness,
+                     const std::vector<drivetrain_stiffness::TransmissionError>& te) {
+  for (const auto& m : stiffness) {
+    const double t = m.header.stamp.toSec();
+    EXPECT_GE(t, kBagStart - 1e-6);
+    EXPECT_LE(t, kBagStart + kBagLength + 1e-6);
+    for (const auto& b : m.bearings) EXPECT_TRUE(std::isfinite(b.radial_stiffness));
+  }
+  // Transmission error: bag stamps on the 1 ms grid, finite; going back exactly once per loop.
+  for (std::size_t i = 0; i < te.size(); ++i) {
+    const double t = te[i].header.stamp.toSec();
+    EXPECT_GE(t, kBagStart - 1e-6);
+    EXPECT_LE(t, kBagStart + kBagLength + 1e-6);
+    EXPECT_TRUE(std::isfinite(te[i].dynamic_te));
+    EXPECT_NEAR(te[i].torque, 0.1, 0.1 * 0.07 + 1e-12);  // the bag's 0.1 N*m with 5 % + 2 % ripple
+  }
+}
+
 }  // namespace
 
 TEST(ReplayLaunch, OutputsCarryBagStampsAndTheLoopResets) {
@@ -96,9 +123,7 @@ TEST(ReplayLaunch, OutputsCarryBagStampsAndTheLoopResets) {
     stiffness = out.stiffness;
     te = out.te;
   }
-  int backwards = 0;
-  for (std::size_t i = 1; i < te.size(); ++i)
-    backwards += te[i].header.stamp < te[i - 1].header.stamp ? 1 : 0;
+  const int backwards = stepsBack(te);
   waitWall([&] { return counter("clock_jump_resets") + counter("stamp_jump_resets") >= backwards; },
            10.0);
   spinner.stop();
@@ -107,20 +132,7 @@ TEST(ReplayLaunch, OutputsCarryBagStampsAndTheLoopResets) {
 
   std::lock_guard<std::mutex> l(mutex);
   ASSERT_GT(stiffness.size(), 500u);
-  for (const auto& m : stiffness) {
-    const double t = m.header.stamp.toSec();
-    EXPECT_GE(t, kBagStart - 1e-6);
-    EXPECT_LE(t, kBagStart + kBagLength + 1e-6);
-    for (const auto& b : m.bearings) EXPECT_TRUE(std::isfinite(b.radial_stiffness));
-  }
-  // Transmission error: bag stamps on the 1 ms grid, finite; going back exactly once per loop.
-  for (std::size_t i = 0; i < te.size(); ++i) {
-    const double t = te[i].header.stamp.toSec();
-    EXPECT_GE(t, kBagStart - 1e-6);
-    EXPECT_LE(t, kBagStart + kBagLength + 1e-6);
-    EXPECT_TRUE(std::isfinite(te[i].dynamic_te));
-    EXPECT_NEAR(te[i].torque, 0.1, 0.1 * 0.07 + 1e-12);  // the bag's 0.1 N*m with 5 % + 2 % ripple
-  }
+  expectBagStamps(stiffness, te);
   EXPECT_GE(backwards, 1);
   EXPECT_LE(backwards, resets);
   EXPECT_EQ(invalid, 0);

@@ -135,6 +135,109 @@ class NodeTest : public testing::Test {
     return k;
   }
 
+  /// 1b. A resonance estimate came with the first answer: three finite modes, the torsional one
+  /// (dominated by x) near 60 kHz with the seed's masses, and a stable Floquet margin.
+  void expectResonance() {
+    ASSERT_TRUE(waitFor([&] { return !resonance_.empty(); }, 60.0));
+    const Resonance& res = resonance_.back();
+    ASSERT_EQ(res.frequencies_hz.size(), 3u);
+    for (double f : res.frequencies_hz) EXPECT_TRUE(std::isfinite(f) && f > 0.0);
+    EXPECT_EQ(res.dominant_coordinate[2], "x");
+    EXPECT_NEAR(res.frequencies_hz[2], 60e3, 10e3);
+    EXPECT_TRUE(res.floquet_valid);
+    EXPECT_GT(res.floquet_margin, 0.0);
+  }
+
+  /// 2. NaN torque, absurd torque, negative and NaN preload, unknown bearing: no output, counted.
+  void expectBadInputRefused() {
+    sendTorque(std::nan(""), 12.0);
+    sendTorque(1e9, 12.1);
+    preload_pub_.publish(preload(12.2, -5.0, 800.0, 5e-6, 5e-6));
+    preload_pub_.publish(preload(12.3, 1200.0, std::nan(""), 5e-6, 5e-6));
+    Preload unknown = preload(12.4, 1200.0, 800.0, 5e-6, 5e-6);
+    unknown.bearings[0].name = "no_such_bearing";
+    preload_pub_.publish(unknown);
+    EXPECT_TRUE(noMessageFor(0.5));
+    EXPECT_TRUE(diagnosticCountAtLeast("rejected_torque", 2));
+    EXPECT_TRUE(diagnosticCountAtLeast("rejected_preload", 3));
+    bool warned = false;
+    for (const auto& array : diagnostics_)
+      for (const auto& status : array.status)
+        warned |= status.level == diagnostic_msgs::DiagnosticStatus::WARN &&
+                  status.message.find("rejected") != std::string::npos;
+    EXPECT_TRUE(warned);
+  }
+
+  /// 4. Dynamics: the first torque (t = 11) started the model; the torque at 13.0137 s released
+  /// every 1 ms sample in (11, 13.0137] with the 0.5 N m held: 2013 transmission_error messages,
+  /// stamped on the grid, equal to what the core class gives when every accepted input first hands
+  /// over `stiffness_after_input` (preload at 10 s, torque 0.5 N m at 11 s, which also starts the
+  /// model, torque 0.25 N m at 13.0137 s) and then the model advances.
+  void expectDynamicsReplayed(const std::vector<std::array<double, 2>>& stiffness_after_input) {
+    ASSERT_TRUE(waitFor([&] { return te_.size() >= 2013; }, 60.0)) << te_.size();
+    EXPECT_EQ(te_.size(), 2013u);
+    EXPECT_NEAR(te_.front().header.stamp.toSec(), 11.001, 1e-6);
+    EXPECT_NEAR(te_.back().header.stamp.toSec(), 13.013, 1e-6);
+    for (const TransmissionError& m : te_) {
+      EXPECT_TRUE(std::isfinite(m.dynamic_te) && std::isfinite(m.x) && std::isfinite(m.mesh_force));
+      EXPECT_TRUE(m.drive_flank_loaded && m.back_flank_loaded);
+      EXPECT_DOUBLE_EQ(m.torque, 0.5);
+    }
+    // The core class, built with the bearing stiffness at start-up (configured preloads, no
+    // torque).
+    const RigConfig rig = loadRigFile(path_);
+    DynamicsEstimator replay(rig, shaftStiffness(StiffnessEstimator(rig)), 1000.0);
+    replay.setBearingStiffness(stiffness_after_input[0]);
+    replay.setBearingStiffness(stiffness_after_input[1]);
+    replay.reset(11.0, 0.5);
+    replay.setBearingStiffness(stiffness_after_input[2]);
+    std::vector<DynamicsSample> expected;
+    replay.advanceTo(13.0137, [&](const DynamicsSample& d) { expected.push_back(d); });
+    ASSERT_EQ(expected.size(), te_.size());
+    for (std::size_t i = 0; i < te_.size(); ++i) {
+      EXPECT_NEAR(te_[i].dynamic_te, expected[i].dynamic_te,
+                  1e-12 * std::abs(expected[i].dynamic_te) + 1e-18)
+          << i;
+      EXPECT_NEAR(te_[i].mesh_force, expected[i].mesh_force,
+                  1e-9 * std::abs(expected[i].mesh_force) + 1e-12)
+          << i;
+    }
+    EXPECT_TRUE(diagnosticCountAtLeast("transmission_error_published", 2013));
+  }
+
+  /// Sliding spectrum of the predicted TE (1024-sample window, hop 256): updates after 1024, 1280,
+  /// 1536, 1792 samples; the mesh frequency 1000 rpm * 20 / 60 = 333.3 Hz (where the TE excitation
+  /// sits) is among the three peaks.
+  void expectSpectra() {
+    ASSERT_TRUE(waitFor([&] { return spectra_.size() >= 4; }, 60.0)) << spectra_.size();
+    EXPECT_EQ(spectra_.size(), 4u);
+    bool mesh_peak = false;
+    for (double f : spectra_.back().frequencies_hz)
+      mesh_peak |= std::abs(f - 1000.0 * 20 / 60) < spectra_.back().resolution_hz;
+    EXPECT_TRUE(mesh_peak);
+  }
+
+  /// Per-mesh-period statistics: from the first sample on a tooth switch (11.003 s) blocks of 4
+  /// periods (12 samples, 12 ms) up to 13.013 s: 167 blocks; the mean mesh force T / r_b,p.
+  void expectMeshPeriods() {
+    ASSERT_TRUE(waitFor([&] { return mesh_periods_.size() >= 167; }, 60.0)) << mesh_periods_.size();
+    EXPECT_EQ(mesh_periods_.size(), 167u);
+    const double mean_force = 0.5 / reference_->mesh().geometry().baseRadius(0);
+    for (std::size_t i = 0; i < mesh_periods_.size(); ++i) {
+      const MeshPeriodStats& b = mesh_periods_[i];
+      EXPECT_NEAR(b.header.stamp.toSec(), 11.015 + 0.012 * static_cast<double>(i), 1e-6) << i;
+      EXPECT_EQ(b.periods, 4u);
+      EXPECT_EQ(b.samples, 12u);
+      EXPECT_NEAR(b.mesh_frequency, 1000.0 * 20 / 60, 1e-3 * 1000.0 * 20 / 60);
+      EXPECT_TRUE(std::isfinite(b.te_mean) && std::isfinite(b.te_rms) &&
+                  std::isfinite(b.mesh_force_rms));
+      if (b.header.stamp.toSec() > 11.3) {
+        EXPECT_NEAR(b.mesh_force_mean, mean_force, 1e-2 * mean_force) << i;
+      }
+    }
+    EXPECT_TRUE(diagnosticCountAtLeast("mesh_period_stats_published", 167));
+  }
+
   ros::NodeHandle nh_;
   std::string path_;
   std::unique_ptr<StiffnessEstimator> reference_;
@@ -163,100 +266,22 @@ TEST_F(NodeTest, AnswersGoodInputAndSurvivesBadInput) {
   expectAnswer(11.0, reference_->setTorque(0.5, 0.0));
   stiffness_after_input.push_back(shaftStiffness(*reference_));
 
-  // 1b. A resonance estimate came with the first answer: three finite modes, the torsional one
-  // (dominated by x) near 60 kHz with the seed's masses, and a stable Floquet margin.
-  ASSERT_TRUE(waitFor([&] { return !resonance_.empty(); }, 60.0));
-  const Resonance& res = resonance_.back();
-  ASSERT_EQ(res.frequencies_hz.size(), 3u);
-  for (double f : res.frequencies_hz) EXPECT_TRUE(std::isfinite(f) && f > 0.0);
-  EXPECT_EQ(res.dominant_coordinate[2], "x");
-  EXPECT_NEAR(res.frequencies_hz[2], 60e3, 10e3);
-  EXPECT_TRUE(res.floquet_valid);
-  EXPECT_GT(res.floquet_margin, 0.0);
+  expectResonance();
+  ASSERT_FALSE(HasFatalFailure());
 
-  // 2. NaN torque, absurd torque, negative and NaN preload, unknown bearing: no output, counted.
-  sendTorque(std::nan(""), 12.0);
-  sendTorque(1e9, 12.1);
-  preload_pub_.publish(preload(12.2, -5.0, 800.0, 5e-6, 5e-6));
-  preload_pub_.publish(preload(12.3, 1200.0, std::nan(""), 5e-6, 5e-6));
-  Preload unknown = preload(12.4, 1200.0, 800.0, 5e-6, 5e-6);
-  unknown.bearings[0].name = "no_such_bearing";
-  preload_pub_.publish(unknown);
-  EXPECT_TRUE(noMessageFor(0.5));
-  EXPECT_TRUE(diagnosticCountAtLeast("rejected_torque", 2));
-  EXPECT_TRUE(diagnosticCountAtLeast("rejected_preload", 3));
-  bool warned = false;
-  for (const auto& array : diagnostics_)
-    for (const auto& status : array.status)
-      warned |= status.level == diagnostic_msgs::DiagnosticStatus::WARN &&
-                status.message.find("rejected") != std::string::npos;
-  EXPECT_TRUE(warned);
+  expectBadInputRefused();
 
   // 3. The next good input is answered correctly: state was not poisoned.
   sendTorque(0.25, 13.0137);
   expectAnswer(13.0137, reference_->setTorque(0.25, omega * 2.0137));
   stiffness_after_input.push_back(shaftStiffness(*reference_));
 
-  // 4. Dynamics: the first torque (t = 11) started the model; this one released every 1 ms sample
-  // in (11, 13.0137] with the 0.5 N m held: 2013 transmission_error messages, stamped on the grid.
-  ASSERT_TRUE(waitFor([&] { return te_.size() >= 2013; }, 60.0)) << te_.size();
-  EXPECT_EQ(te_.size(), 2013u);
-  EXPECT_NEAR(te_.front().header.stamp.toSec(), 11.001, 1e-6);
-  EXPECT_NEAR(te_.back().header.stamp.toSec(), 13.013, 1e-6);
-  for (const TransmissionError& m : te_) {
-    EXPECT_TRUE(std::isfinite(m.dynamic_te) && std::isfinite(m.x) && std::isfinite(m.mesh_force));
-    EXPECT_TRUE(m.drive_flank_loaded && m.back_flank_loaded);
-    EXPECT_DOUBLE_EQ(m.torque, 0.5);
-  }
-  // Replay what the node did with the core class: built with the bearing stiffness at start-up
-  // (configured preloads, no torque); every accepted input first hands over the new stiffness
-  // (preload at 10 s, torque 0.5 N m at 11 s, which also starts the model, torque 0.25 N m at
-  // 13.0137 s), then the model advances.
-  const RigConfig rig = loadRigFile(path_);
-  DynamicsEstimator replay(rig, shaftStiffness(StiffnessEstimator(rig)), 1000.0);
-  replay.setBearingStiffness(stiffness_after_input[0]);
-  replay.setBearingStiffness(stiffness_after_input[1]);
-  replay.reset(11.0, 0.5);
-  replay.setBearingStiffness(stiffness_after_input[2]);
-  std::vector<DynamicsSample> expected;
-  replay.advanceTo(13.0137, [&](const DynamicsSample& d) { expected.push_back(d); });
-  ASSERT_EQ(expected.size(), te_.size());
-  for (std::size_t i = 0; i < te_.size(); ++i) {
-    EXPECT_NEAR(te_[i].dynamic_te, expected[i].dynamic_te,
-                1e-12 * std::abs(expected[i].dynamic_te) + 1e-18)
-        << i;
-    EXPECT_NEAR(te_[i].mesh_force, expected[i].mesh_force,
-                1e-9 * std::abs(expected[i].mesh_force) + 1e-12)
-        << i;
-  }
-  EXPECT_TRUE(diagnosticCountAtLeast("transmission_error_published", 2013));
-  // Sliding spectrum of the predicted TE (1024-sample window, hop 256): updates after 1024, 1280,
-  // 1536, 1792 samples; the mesh frequency 1000 rpm * 20 / 60 = 333.3 Hz (where the TE excitation
-  // sits) is among the three peaks.
-  ASSERT_TRUE(waitFor([&] { return spectra_.size() >= 4; }, 60.0)) << spectra_.size();
-  EXPECT_EQ(spectra_.size(), 4u);
-  bool mesh_peak = false;
-  for (double f : spectra_.back().frequencies_hz)
-    mesh_peak |= std::abs(f - 1000.0 * 20 / 60) < spectra_.back().resolution_hz;
-  EXPECT_TRUE(mesh_peak);
-  // Per-mesh-period statistics: from the first sample on a tooth switch (11.003 s) blocks of 4
-  // periods (12 samples, 12 ms) up to 13.013 s: 167 blocks; the mean mesh force T / r_b,p.
-  ASSERT_TRUE(waitFor([&] { return mesh_periods_.size() >= 167; }, 60.0)) << mesh_periods_.size();
-  EXPECT_EQ(mesh_periods_.size(), 167u);
-  const double mean_force = 0.5 / reference_->mesh().geometry().baseRadius(0);
-  for (std::size_t i = 0; i < mesh_periods_.size(); ++i) {
-    const MeshPeriodStats& b = mesh_periods_[i];
-    EXPECT_NEAR(b.header.stamp.toSec(), 11.015 + 0.012 * static_cast<double>(i), 1e-6) << i;
-    EXPECT_EQ(b.periods, 4u);
-    EXPECT_EQ(b.samples, 12u);
-    EXPECT_NEAR(b.mesh_frequency, 1000.0 * 20 / 60, 1e-3 * 1000.0 * 20 / 60);
-    EXPECT_TRUE(std::isfinite(b.te_mean) && std::isfinite(b.te_rms) &&
-                std::isfinite(b.mesh_force_rms));
-    if (b.header.stamp.toSec() > 11.3) {
-      EXPECT_NEAR(b.mesh_force_mean, mean_force, 1e-2 * mean_force) << i;
-    }
-  }
-  EXPECT_TRUE(diagnosticCountAtLeast("mesh_period_stats_published", 167));
+  expectDynamicsReplayed(stiffness_after_input);
+  ASSERT_FALSE(HasFatalFailure());
+  expectSpectra();
+  ASSERT_FALSE(HasFatalFailure());
+  expectMeshPeriods();
+  ASSERT_FALSE(HasFatalFailure());
 
   // 5. A gap beyond ~max_gap (5 s here) restarts the dynamics instead of integrating it: the
   // stiffness answer still comes, no transmission_error sample is released, and the restart is

@@ -1,15 +1,6 @@
-// Angle-domain least squares over one window of encoder readings (docs/calibration.md, "Measured
-// TE"): the measured TE is fitted with a mean, each shaft's 1x and 2x orders (eccentricity and
-// encoder mounting: not stiffness) and the first mesh harmonics,
-//   x(theta) = b0 + sum_o [a_o cos(o theta_p) + b_o sin(o theta_p)] + sum_k [c_k cos(2 pi k phi) +
-//   d_k sin(2 pi k phi)],
-// with o in {1, 2, z_p/z_g, 2 z_p/z_g} pinion orders (the gear's 1x and 2x, since theta_g =
-// -(z_p/z_g) theta_p to micro-radians), orders that coincide merged (a 2:1 pair's pinion 1x is the
-// gear's 2x), and phi the mesh phase. This is the order-tracking removal of shaft orders done as
-// one regression rather than resampling and notching: the readings need not be uniform in angle,
-// and a window that does not hold whole periods of every order is handled by the fit instead of
-// leaking. The normal equations are accumulated per reading in fixed-size storage: no allocation,
-// no samples kept.
+// Angle-domain least squares over one window of encoder readings: a mean, each shaft's 1x and 2x
+// orders and the first mesh harmonics (docs/calibration.md "1. Measured TE", step 3). No
+// allocation, no samples kept.
 #pragma once
 
 #include <array>
@@ -38,15 +29,13 @@ class OrderRegression {
   struct Fit {
     double mean = 0.0;                                           ///< b0 [m]
     std::array<std::complex<double>, kMeshHarmonics> harmonics;  ///< c_k - i d_k [m]
-    double mean_std = 0.0,
-           harmonic_std = 0.0;             ///< standard deviations of b0 and of each c_k, d_k [m]
-    double residual_rms = 0.0;             ///< [m]
-    Vector coefficients = Vector::Zero();  ///< in basis order (the orders follow the mean)
+    double mean_std = 0.0, harmonic_std = 0.0;                   ///< of b0 and of each c_k, d_k [m]
+    double residual_rms = 0.0;                                   ///< [m]
+    Vector coefficients = Vector::Zero();                        ///< in basis order
   };
-  /// Solves the window's least squares; false when it is not determined (too few readings, or
-  /// the readings do not span the orders: a rank-deficient or ill-conditioned fit).
+  /// Solves the window's least squares; false when rank-deficient or ill-conditioned.
   bool solve(Fit& out) const;
-  /// The fitted shaft orders at `pinion_angle` (to remove them reading by reading) [m].
+  /// The fitted shaft orders [m] at `pinion_angle` [rad].
   double orders(const Fit& fit, double pinion_angle) const;
   int terms() const { return terms_; }
   int orderCount() const { return orders_count_; }

@@ -1,5 +1,4 @@
-// JSON views of core results for drivetrain_cli and reports. SI units throughout; angles whose
-// key ends in _deg are in degrees for readability.
+// JSON views of core results for drivetrain_cli; SI, angles in keys ending _deg in degrees.
 #pragma once
 
 #include <nlohmann/json.hpp>

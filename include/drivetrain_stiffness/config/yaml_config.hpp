@@ -1,7 +1,5 @@
-// YAML configuration shared by drivetrain_cli, the ROS node and the replay tool, so that one
-// parser and one set of checks define what a valid rig is. Every key is SI (m, N, Pa) except the
-// angles, whose keys say _deg. Unknown keys are errors (a typo must not silently fall back to a
-// default), and every error names the file, the key and the value.
+// The one YAML parser of rigs, bearings and gears: docs/configuration.md. Every error names the
+// file, the key and the value (InvalidInput).
 #pragma once
 
 #include <string>
@@ -13,20 +11,18 @@
 
 namespace drivetrain_stiffness {
 
-/// The range [kScaleLowest, kScaleBound) the loader takes for every stiffness scale (the mesh's,
-/// each bearing's, and their calibration priors' means); a prior's std is at most its width.
+/// The range [kScaleLowest, kScaleBound) of every stiffness scale and prior mean.
 inline constexpr double kScaleLowest = 0.05, kScaleBound = 20.0;
 
-/// Parses a `bearing:` mapping (keys in the README); `where` prefixes error messages.
+/// Parses a `bearing:` mapping; `where` prefixes error messages.
 BearingSupportConfig parseBearing(const YAML::Node& node, const std::string& where);
 /// Loads a file with a top-level `bearing:` block (config/bearings/*.yaml).
 BearingSupportConfig loadBearingFile(const std::string& path);
-/// Parses a `gears:` mapping (and optional `anti_backlash:` / `mesh:` siblings of `root`).
+/// Parses `gears:` and the optional `anti_backlash:` and `mesh:` of `root`.
 void parseGears(const YAML::Node& root, const std::string& where, RigConfig& rig);
-/// Loads a file with `gears:` (and optionally `anti_backlash:`, `mesh:`); `bearings:` is ignored.
+/// Loads a file's `gears:`, `anti_backlash:` and `mesh:`.
 RigConfig loadGearFile(const std::string& path);
-/// Loads a gearbox file with `gears:` and `bearings:` (config/gearboxes/*.yaml). A bearing entry
-/// may hold its keys inline or name a bearing file with `file:` (relative to the gearbox file).
+/// Loads a gearbox file (config/gearboxes/*.yaml); a bearing's `file:` is relative to it.
 RigConfig loadRigFile(const std::string& path);
 
 }  // namespace drivetrain_stiffness

@@ -1,16 +1,5 @@
-// Composite mesh stiffness of a scissor (anti-backlash) gear, seed 000 eqs 1-2.
-//
-// The pinion meshes with the fixed half g1 on its drive flank (stiffness k1, the gear shaft's load
-// path) and with the loaded half g2 on its back flank (k2); g2 is pushed against the pinion by the
-// preloaded spring k_te with preload torque T_p, so the back path is k_c = k_te k2 / (k_te + k2).
-// With F_p = T_p / r_b,gear the spring's preload along the line of action, the equilibrium of the
-// pinion and of g2 for a relative approach x (derived in docs/gear_model.md section 3) gives
-//   drive-flank force F1 = F_p + k1 x,  back-flank force F2 = F_p - k_c x,  F1 - F2 = F_m,
-// so both flanks carry load, and k_s = k1 + k_c (seed 000 eq 1), while
-//   -F_p (1 + k_c/k1) <= F_m <= F_p (1 + k1/k_c).
-// Above the upper bound the back flank (g2) unloads: single-flank mesh k1, with the backlash of
-// seed 000 eq 17 on the back side. Below the lower bound (torque reversal beyond the preload) the
-// drive flank (g1) unloads and the reversed load runs through the spring: k_s = k_c.
+// Composite mesh stiffness of a scissor (anti-backlash) gear, seed 000 eqs 1-2: docs/gear_model.md
+// "3. Anti-backlash composite".
 #pragma once
 
 #include <array>
@@ -24,31 +13,29 @@ namespace drivetrain_stiffness {
 struct RigConfig;
 
 struct AntiBacklashSpec {
-  /// k_te along the line of action [N/m] (seed 000 Table 1: 1e4 N/mm); 0 = an ordinary gear
-  double spring_stiffness = 0.0;
-  double preload_torque = 0.0;  ///< T_p about the gear axis [N·m] (seed 000 Table 1: 1000 N·mm)
-  double loaded_gear_face_width = 0.0;  ///< face width of g2 [m]; 0 = the pair's face width
+  double spring_stiffness = 0.0;        ///< k_te [N/m] along the LOA; 0: an ordinary gear
+  double preload_torque = 0.0;          ///< T_p [N·m] about the gear axis
+  double loaded_gear_face_width = 0.0;  ///< g2's [m]; 0: the pair's
 };
-/// The spec's own checks (InvalidInput naming anti_backlash.<key>), also run by the YAML loader.
+/// Throws InvalidInput naming anti_backlash.<key> for a bad value.
 void validateAntiBacklash(const AntiBacklashSpec& spec);
 
 enum class FlankContact { kBoth, kDriveOnly, kBackOnly };
 const char* toString(FlankContact contact);
 
 struct CompositeMesh {
-  double k1 = 0.0;         ///< drive flank (pinion-g1) [N/m]
-  double k2 = 0.0;         ///< back flank (pinion-g2) [N/m]
-  double k_chain = 0.0;    ///< k_te k2 / (k_te + k2) [N/m]
-  double composite = 0.0;  ///< stiffness of the mesh for this flank state [N/m]
+  double k1 = 0.0;         ///< [N/m] drive flank (pinion-g1)
+  double k2 = 0.0;         ///< [N/m] back flank (pinion-g2)
+  double k_chain = 0.0;    ///< k_c = k_te k2 / (k_te + k2) [N/m]
+  double composite = 0.0;  ///< [N/m] for this flank state (seed 000 eq 1)
   FlankContact contact = FlankContact::kBoth;
   int drive_pairs = 0, back_pairs = 0;
 };
 
 class AntiBacklashMesh {
  public:
-  /// Builds the drive and back tables (potential-energy etc. per `model`) with `samples` points.
-  /// `stiffness_scale` multiplies every tooth pair's stiffness (k1 and k2, not the spring k_te):
-  /// the rig's `mesh.stiffness_scale`, 1 for the drawing's gear (docs/calibration.md).
+  /// The drive and back tables with `samples` points; `stiffness_scale` multiplies k1 and k2, not
+  /// k_te. Throws InvalidInput naming the field.
   AntiBacklashMesh(const GearPairSpec& gears, const AntiBacklashSpec& spec,
                    MeshStiffnessModel model, int samples = 256, double stiffness_scale = 1.0);
   /// The same for a rig: its gears, anti_backlash, mesh model, samples and stiffness scale.
@@ -60,45 +47,34 @@ class AntiBacklashMesh {
   MeshStiffnessModel model() const { return model_; }
   bool verified() const { return verified_; }
   double preloadForce() const { return preload_force_; }  ///< F_p = T_p / r_b,gear [N]
-  /// Both flanks modelled (a scissor spring k_c > 0 or a preload F_p > 0): the mesh force is
-  /// k_s delta + c delta' where both are loaded, F_p cancelling; else an ordinary gear's one flank
-  /// at a time across its backlash.
+  /// Both flanks modelled (k_te > 0 or F_p > 0); else an ordinary gear across its backlash.
   bool antiBacklash() const { return spec_.spring_stiffness > 0.0 || preload_force_ > 0.0; }
 
-  /// Flank state for mesh force F_m [N] along the LOA (positive: pinion drives) at given k1, k_c.
+  /// The flank state under mesh force F_m [N] (> 0: the pinion drives) at k1, k_c [N/m].
   FlankContact flankContact(double mesh_force, double k1, double k_chain) const {
     return flankContact(mesh_force, k1, k_chain, preload_force_);
   }
-  /// The same criterion at preload force F_p [N] (the calibration's estimated T_p / r_b,gear).
+  /// The same at preload force F_p [N].
   static FlankContact flankContact(double mesh_force, double k1, double k_chain,
                                    double preload_force);
-  /// Composite stiffness at mesh phase `phase` in [0, 1) under mesh force F_m [N], from the phase
-  /// table: segments between the exact switching phases of both flanks, each sampled uniformly, so
-  /// the single/double steps stay sharp and the lookup needs no division.
+  /// The composite at mesh phase [0, 1) under mesh force F_m [N], from the phase table.
   CompositeMesh at(double phase, double mesh_force) const;
-  /// The same from the pair tables directly (reference for the phase table; slower).
+  /// The same from the pair tables directly (slower).
   CompositeMesh exactAt(double phase, double mesh_force) const;
   /// Phases in [0, 1) where the number of drive or back pairs in contact changes.
   const std::vector<double>& switchingPhases() const { return breaks_; }
-  /// All phases in [0, 1) where the phase table's interpolation has a node (its slope may change),
-  /// switching phases included, sorted. Between two of them k1, k2, k_c are linear in phase.
+  /// The phase table's nodes in [0, 1), sorted; k1, k2, k_c are linear between them.
   std::vector<double> tableNodePhases() const;
-  /// Period means of k1, k2 and k_c [N/m]: the exact integrals over one mesh period of what at()
-  /// returns. at() interpolates linearly between the nodes of each segment, so the trapezoid over a
-  /// segment's nodes is its exact integral; the sum over the segments, which tile [0, 1), is the
-  /// period mean. Computed once with the table: the resolution is the table's own, and no sampling
-  /// of the steps at the switching phases enters (a midpoint rule over N phases misplaces each step
-  /// by up to half a sample: 256 and 512 samples gave different means).
+  /// The exact period means [N/m] of what at() returns (docs/gear_model.md "Phase table").
   struct PeriodMeans {
     double k1 = 0.0, k2 = 0.0, k_chain = 0.0;
   };
   const PeriodMeans& periodMeans() const { return means_; }
-  /// Drive-flank-only table (the ordinary gear pair) and the g2 table.
+  /// The drive-flank (g1) and back-flank (g2) tables.
   const MeshStiffnessTable& driveTable() const { return *drive_; }
   const MeshStiffnessTable& backTable() const { return *back_; }
 
  private:
-  /// Sets the flank state and the composite stiffness of `c` for mesh force F_m.
   void applyFlankState(CompositeMesh& c, double mesh_force) const;
 
   SpurGearGeometry geometry_;

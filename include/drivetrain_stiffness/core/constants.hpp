@@ -1,4 +1,3 @@
-// Mathematical constants shared by the library (one definition instead of one per file).
 #pragma once
 
 namespace drivetrain_stiffness {

@@ -1,18 +1,5 @@
-// Involute spur gear pair geometry (external gears, ISO 21771:2007 notation), the path of contact
-// and the mesh phase.
-//
-// Along the line of action (LOA), s is measured from T1, the tangent point on the pinion's base
-// circle (T1T2 = a_w sin(alpha_w)). A tooth pair is in contact from s_A = T1T2 - sqrt(ra2^2 -
-// rb2^2) (gear tip on the pinion root flank) to s_E = sqrt(ra1^2 - rb1^2) (pinion tip); the contact
-// ratio is eps_alpha = (s_E - s_A) / p_b with the base pitch p_b = pi m cos(alpha). Mesh phase phi
-// in [0, 1): fraction of a mesh period (one pinion angular pitch 2 pi / z1) since a drive-flank
-// pair entered contact at s_A; pinion angle 0 is such an entry. Drive pair k sits at s = s_A + (phi
-// + k) p_b; two pairs carry load for phi in [0, eps_alpha - 1] (seed 000 eq 2's s_i). Back (coast)
-// flank pairs, meshing with the loaded half g2 of an anti-backlash gear, run along the mirrored LOA
-// from the pinion tip to its root, and reach the pitch point a pinion rotation of s_w1 / r_w1 (the
-// operating tooth thickness) after the drive flank of the same tooth does: their curve is the drive
-// curve mirrored and shifted in phase (Guo & Parker, Mech. Mach. Theory 78 (2014) 263, back-side
-// stiffness "phase-shifted"; the shift is derived in docs/gear_model.md).
+// Involute spur gear pair geometry (ISO 21771:2007 notation), the path of contact and the mesh
+// phase: docs/gear_model.md "1. Geometry and mesh phase". s runs along the line of action from T1.
 #pragma once
 
 #include <array>
@@ -23,32 +10,30 @@
 namespace drivetrain_stiffness {
 
 struct GearPairSpec {
-  double module = 0.0;               ///< m (normal module) [m]
-  double pressure_angle = 0.0;       ///< alpha (normal) [rad]
-  double helix_angle = 0.0;          ///< beta [rad]; only the ISO 6336 baseline uses it
-  std::array<int, 2> teeth{{0, 0}};  ///< z_pinion, z_gear
-  std::array<double, 2> profile_shift{{0.0, 0.0}};  ///< x (coefficient of m)
-  double addendum_coefficient = 1.0;                ///< h_aP* of the basic rack (ISO 53: 1.0)
-  double tool_dedendum_coefficient = 1.25;          ///< h_fP* of the basic rack (ISO 53: 1.25)
+  double module = 0.0;                              ///< m (normal) [m]
+  double pressure_angle = 0.0;                      ///< alpha (normal) [rad]
+  double helix_angle = 0.0;                         ///< beta [rad]; ISO 6336 only
+  std::array<int, 2> teeth{{0, 0}};                 ///< z_pinion, z_gear
+  std::array<double, 2> profile_shift{{0.0, 0.0}};  ///< x [-]
+  double addendum_coefficient = 1.0;                ///< h_aP* (ISO 53)
+  double tool_dedendum_coefficient = 1.25;          ///< h_fP* (ISO 53)
   double face_width = 0.0;                          ///< b [m]
-  std::optional<double> center_distance;   ///< a_w [m]; default: tight (zero-backlash) mesh
-  ElasticMaterial material{2.06e11, 0.3};  ///< both gears
-  std::array<double, 2> bore_diameter{
-      {0.0, 0.0}};  ///< rim/hub bore for the fillet foundation [m]; 0 = r_f/2 (h_f = 2)
+  std::optional<double> center_distance;            ///< a_w [m]; default: tight mesh
+  ElasticMaterial material{2.06e11, 0.3};           ///< both gears
+  std::array<double, 2> bore_diameter{{0.0, 0.0}};  ///< [m] for the fillet foundation; 0: r_f/2
 };
 
-/// A contact point on the LOA and the radii at which it lies on each gear.
+/// A contact point on the LOA.
 struct ContactPoint {
-  double s = 0.0;                            ///< position along the LOA from T1 [m]
-  std::array<double, 2> radius{{0.0, 0.0}};  ///< r_c on pinion, gear [m]
-  std::array<double, 2> pressure_angle{
-      {0.0, 0.0}};  ///< alpha_c = acos(r_b / r_c) on pinion, gear [rad]
+  double s = 0.0;                                    ///< [m] from T1
+  std::array<double, 2> radius{{0.0, 0.0}};          ///< r_c [m] on pinion, gear
+  std::array<double, 2> pressure_angle{{0.0, 0.0}};  ///< alpha_c = acos(r_b / r_c) [rad]
 };
 
 class SpurGearGeometry {
  public:
-  /// Validates everything (undercut, pointed tips, interference, contact ratio >= 1, reachable
-  /// centre distance) and throws InvalidInput naming the field and value.
+  /// Throws InvalidInput naming the field for undercut, pointed tips, interference, a contact ratio
+  /// below 1 or an unreachable centre distance.
   explicit SpurGearGeometry(const GearPairSpec& spec);
 
   const GearPairSpec& spec() const { return spec_; }
@@ -66,27 +51,32 @@ class SpurGearGeometry {
   double tipShortening() const { return tip_shortening_; }    ///< k (coefficient of m), >= 0
   double operatingPressureAngle() const { return alpha_w_; }  ///< alpha_w
   double centerDistance() const { return a_w_; }              ///< a_w
-  double backlash() const {
-    return backlash_;
-  }                                         ///< circumferential, on the operating pitch circle [m]
-  double basePitch() const { return pb_; }  ///< p_b = pi m cos(alpha)
-  double lineOfActionLength() const { return t1t2_; }  ///< T1T2 = a_w sin(alpha_w)
-  double pathStart() const { return s_a_; }            ///< s_A
-  double pathEnd() const { return s_e_; }              ///< s_E
-  double pitchPoint() const { return s_p_; }           ///< s of the pitch point = r_b1 tan(alpha_w)
+  double backlash() const { return backlash_; }               ///< [m] on the operating pitch circle
+  double basePitch() const { return pb_; }                    ///< p_b = pi m cos(alpha)
+  double lineOfActionLength() const { return t1t2_; }         ///< T1T2 = a_w sin(alpha_w)
+  double pathStart() const { return s_a_; }                   ///< s_A
+  double pathEnd() const { return s_e_; }                     ///< s_E
+  double pitchPoint() const { return s_p_; }  ///< s of the pitch point = r_b1 tan(alpha_w)
   double contactRatio() const { return (s_e_ - s_a_) / pb_; }   ///< eps_alpha
-  double backFlankPhaseOffset() const { return back_offset_; }  ///< s_w1 / p_w, in mesh periods
+  double backFlankPhaseOffset() const { return back_offset_; }  ///< s_w1 / p_w [mesh periods]
 
-  /// Mesh phase of a pinion rotation angle [rad] (any real number).
+  /// The mesh phase [0, 1) of a pinion angle [rad].
   double phase(double pinion_angle) const;
-  /// Contact geometry at LOA position s (s_A <= s <= s_E).
+  /// The contact at s [m], s_A <= s <= s_E.
   ContactPoint contactAt(double s) const;
-  /// LOA positions of the drive-flank pairs in contact at phase phi; returns how many (1..3).
+  /// The drive pairs' s [m] at phase phi; returns how many (1..3).
   int drivePairs(double phi, std::array<double, 3>& s) const;
-  /// LOA positions (on the mirrored back LOA) of the back-flank pairs in contact at phase phi.
+  /// The back pairs' s [m] on the mirrored LOA at phase phi; returns how many.
   int backPairs(double phi, std::array<double, 3>& s) const;
 
  private:
+  /// The constructor's steps in order, each throwing InvalidInput naming the field: the reference,
+  /// base and root circles (undercut); the operating centre distance and pressure angle; the tips
+  /// and tooth thickness; the backlash, the path of contact and the back-flank phase.
+  void setReferenceCircles();
+  void setCentreDistance();
+  void setTips();
+  void setPathOfContact();
   GearPairSpec spec_;
   std::array<double, 2> r_{}, rb_{}, ra_{}, rf_{}, rw_{}, alpha2_{}, sw_{};
   double tip_shortening_ = 0, alpha_w_ = 0, a_w_ = 0, backlash_ = 0, pb_ = 0, t1t2_ = 0;

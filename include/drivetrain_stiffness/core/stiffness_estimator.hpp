@@ -1,9 +1,5 @@
-// The online bearing-stiffness estimator, free of ROS: it holds one BearingSupport per rig
-// support, takes the measured pinion torque and the preload settings as plain values, and returns
-// the updated stiffness. Updates are transactional: an input that fails validation (InvalidInput)
-// or has no admissible equilibrium (UnreachableLoad) throws and leaves the previous state intact,
-// so one bad sample can never poison later estimates. Each support is warm-started from its last
-// solution. No clock is read: the caller stamps the results.
+// The online bearing and mesh stiffness estimator, free of ROS and clocks. Every update is
+// transactional: an input that throws leaves the previous state intact.
 #pragma once
 
 #include <array>
@@ -16,122 +12,102 @@
 
 namespace drivetrain_stiffness {
 
-/// Operating settings of one support as carried by the preload input (SI units).
+/// One support's settings as the preload input carries them.
 struct PreloadSetting {
   std::string name;
   double axial_preload = 0.0;       ///< [N]
   double radial_preload = 0.0;      ///< [N]
-  double inner_interference = 0.0;  ///< diametral [m]
-  double outer_interference = 0.0;  ///< diametral [m]
+  double inner_interference = 0.0;  ///< [m] diametral
+  double outer_interference = 0.0;  ///< [m] diametral
 };
 
-/// Input plausibility limits; anything beyond is rejected as absurd.
+/// Input plausibility limits.
 struct EstimatorLimits {
   double max_abs_torque = 100.0;   ///< [N·m]
   double max_preload = 1e5;        ///< [N]
   double max_interference = 1e-3;  ///< [m]
-  /// [-] A support is re-solved only when its radial load moved by more than this fraction of its
-  /// total load (radial + axial preload) since its last solve; 0 = every update. Ball-contact
-  /// stiffness grows as Q^(1/3) (Hertz), so the stiffness lags the exact one by about tol / 3.
+  /// [-] re-solve a support when its radial load moved by more than this fraction of its total
+  /// load; 0: every update (docs/ros_api.md ~bearing_load_tolerance).
   double load_tolerance = 0.0;
-  /// The limits' own rules, in one place for the estimator and the pipeline's options: each bound
-  /// > 0, and the load tolerance by requireLoadTolerance (below) under `load_tolerance_field`, the
-  /// name the caller's user knows (load_tolerance, ~bearing_load_tolerance). InvalidInput naming
-  /// the field otherwise.
+  /// Throws InvalidInput naming the field unless each bound is > 0 and the load tolerance (named
+  /// `load_tolerance_field`) passes requireLoadTolerance.
   void validate(std::string_view load_tolerance_field = "load_tolerance") const;
 };
 
-/// The bound of EstimatorLimits::load_tolerance, one rule for StiffnessEstimator and the pipeline's
-/// options (~bearing_load_tolerance): 0 <= tol <= 0.1 (past 10 % of the load the stiffness would
-/// lag the exact one by more than ~3 %, tol / 3 by Hertz).
+/// The largest load tolerance: the stiffness lags the exact one by about tol / 3 (Hertz).
 constexpr double kMaxLoadTolerance = 0.1;
-/// Throws InvalidInput("<field> = <value>: ...") outside [0, kMaxLoadTolerance] (NaN included);
-/// `field` is the name the caller's user knows (load_tolerance, bearing_load_tolerance).
+/// Throws InvalidInput naming `field` outside [0, kMaxLoadTolerance] or NaN.
 void requireLoadTolerance(std::string_view field, double value);
 
 struct SupportEstimate {
   std::string name;
-  double radial_load = 0.0;  ///< radial preload + share of |mesh force| [N]
-  double axial_load = 0.0;   ///< axial preload (single) or 0 (pair) [N]
-  /// The Hertz model's solution, its tangent `stiffness` multiplied by the support's
-  /// stiffness_scale; `displacement` is the unscaled model's (the next solve's warm start): the
-  /// support's deflection is displacement / stiffness_scale.
+  double radial_load = 0.0;  ///< [N] radial preload + share of |mesh force|
+  double axial_load = 0.0;   ///< [N] axial preload (single) or 0 (pair)
+  /// The Hertz solution: `stiffness` scaled by stiffness_scale, `displacement` unscaled.
   BearingSolution solution;
 };
 
 struct MeshEstimate {
-  double phase = 0.0;     ///< mesh phase in [0, 1)
-  CompositeMesh current;  ///< k1, k2, k_chain, composite and flank state at this phase and load
-  double mean = 0.0;  ///< composite stiffness averaged over a mesh period, same flank state [N/m]
+  double phase = 0.0;     ///< [0, 1)
+  CompositeMesh current;  ///< at this phase and load
+  double mean = 0.0;      ///< [N/m] period mean, same flank state
 };
 
 struct StiffnessEstimate {
-  double torque = 0.0;      ///< pinion input torque [N·m]
-  double mesh_force = 0.0;  ///< |T| / r_b,pinion [N]
+  double torque = 0.0;      ///< [N·m] pinion
+  double mesh_force = 0.0;  ///< [N] |T| / r_b,pinion
   std::vector<SupportEstimate> supports;
   MeshEstimate mesh;
 };
 
 class StiffnessEstimator {
  public:
-  /// Validates the rig and limits and solves the initial state (torque 0, preloads from the
-  /// config). The rig is read only, and shared: the pipeline hands the same one to the dynamics and
-  /// the calibration (the preloads that change at run time are this estimator's state, not the
-  /// rig's).
+  /// Solves torque 0 at the configured preloads. Throws InvalidInput for an invalid rig or limits.
   explicit StiffnessEstimator(std::shared_ptr<const RigConfig> rig,
                               const EstimatorLimits& limits = {});
   /// The same on a copy of `rig`.
   StiffnessEstimator(const RigConfig& rig, const EstimatorLimits& limits = {});
 
-  /// New pinion torque [N·m] at pinion angle [rad]; the mesh force F = |T| / r_b (seed 000 eq 14)
-  /// loads every support radially in proportion to its mesh_load_share, on top of its radial
-  /// preload, and with its sign sets the anti-backlash flank state.
+  /// New pinion torque [N·m] at pinion angle [rad]: F = |T| / r_b (seed 000 eq 14) loads each
+  /// support by its mesh_load_share. Throws InvalidInput or UnreachableLoad.
   const StiffnessEstimate& setTorque(double torque, double pinion_angle = 0.0);
-  /// New settings for the named supports (others keep theirs). Unknown names are an error. In
-  /// place, as setTorque: no heap allocation once every support has been solved once.
+  /// New settings for the named supports. Throws InvalidInput (an unknown name included) or
+  /// UnreachableLoad. Allocation-free once every support has been solved.
   const StiffnessEstimate& setPreloads(const std::vector<PreloadSetting>& settings);
-  /// The value checks of setTorque / setPreloads alone (InvalidInput naming the field), without
-  /// solving: lets a caller refuse bad data before acting on its time stamp.
+  /// setTorque's and setPreloads' value checks alone: InvalidInput naming the field.
   void validateTorque(double torque) const;
   void validatePreloads(const std::vector<PreloadSetting>& settings) const;
-  /// Back to the configured preloads and zero torque (e.g. after a time jump).
+  /// Back to the configured preloads and zero torque.
   const StiffnessEstimate& reset();
 
   const StiffnessEstimate& current() const { return estimate_; }
-  /// Current radial stiffness per shaft (pinion, gear) [N/m]: the supports of each shaft in
-  /// parallel, as the 3-DOF model's k_r1, k_r2 (seed 000 eq 15).
+  /// [N/m] per shaft, its supports in parallel: k_r1, k_r2 (seed 000 eq 15).
   std::array<double, 2> shaftRadialStiffness() const;
   const RigConfig& rig() const { return *rig_; }
   std::shared_ptr<const RigConfig> sharedRig() const { return rig_; }
-  /// Support i's configuration with its current preload settings, and its Hertz model.
+  /// Support i's configuration at its current settings, and its model.
   const BearingSupportConfig& supportConfig(std::size_t i) const { return supports_.at(i).config; }
   const BearingSupport& supportModel(std::size_t i) const { return *supports_.at(i).model; }
-  /// Changes whenever a support's settings or model may have changed (reset, setPreloads), never
-  /// with the torque, and is unique across every estimator of the process: a cache of results that
-  /// depend on supportConfig / supportModel alone (StaticTeModel::shaftDeflection) is valid while
-  /// it stays the same.
+  /// Changes, uniquely within the process, whenever a support's settings or model may have.
   long supportsRevision() const { return supports_revision_; }
   const AntiBacklashMesh& mesh() const { return *mesh_; }
-  /// The same read-only table, for the dynamics of the same rig (built once, shared).
+  /// The same table, shared.
   std::shared_ptr<const AntiBacklashMesh> sharedMesh() const { return mesh_; }
 
  private:
   struct Support {
     BearingSupportConfig config;
     std::unique_ptr<BearingSupport> model;
-    /// setPreloads' scratch: new geometry is assigned into it (no allocation), and it is swapped
-    /// with `model` once every support has solved.
+    /// setPreloads' scratch, swapped with `model` once every support has solved.
     std::unique_ptr<BearingSupport> spare;
   };
-  /// Solves all `supports` (new models: cold starts) for `torque`; throws without touching the
-  /// state.
+  /// Solves all `supports` cold for `torque`; throws without touching the state.
   StiffnessEstimate solveAll(double torque, double pinion_angle,
                              const std::vector<Support>& supports) const;
   MeshEstimate meshAt(double signed_mesh_force, double pinion_angle) const;
-  /// Radial load of a support: its radial preload plus its share of the mesh force [N].
+  /// [N] radial preload plus the share of the mesh force.
   static double radialLoad(const BearingSupportConfig& c, double mesh_force);
-  /// The ~load_tolerance shortcut: support i's last solution still stands for `radial_load`, its
-  /// model and radial preload unchanged (the caller's part), the load within the tolerance.
+  /// Support i's last solution stands for `radial_load` [N] within the load tolerance.
   bool solutionStands(std::size_t i, double radial_load) const;
   /// Index of the support named `name`, or supports_.size().
   std::size_t supportIndex(const std::string& name) const;
@@ -140,13 +116,16 @@ class StiffnessEstimator {
   std::shared_ptr<const RigConfig> rig_;
   EstimatorLimits limits_;
   std::shared_ptr<const AntiBacklashMesh> mesh_;
-  std::array<double, 3>
-      mean_k1_kchain_{};  ///< period means of k1, k_chain (for the flank state) and k1 + k_chain
+  std::array<double, 3> mean_k1_kchain_{};  ///< period means of k1, k_chain and k1 + k_chain
   std::vector<Support> supports_;
   StiffnessEstimate estimate_;
-  /// setTorque's and setPreloads' per-support scratch (one per support, sized with supports_): a
-  /// new solution and the load it is for, swapped into estimate_ once every support has solved;
-  /// setPreloads stages the new settings here too.
+  /// setPreloads' steps: the settings staged in workspace_ (a changed geometry rebuilt into the
+  /// spare; throws InvalidInput or UnreachableLoad naming the support), each support solved there
+  /// at mesh force [N] (throws UnreachableLoad), then everything swapped in.
+  void stagePreloads(const std::vector<PreloadSetting>& settings);
+  void solveStaged(double mesh_force);
+  void commitStaged();
+  /// Per-support scratch, swapped into estimate_ once every support has solved.
   struct Workspace {
     BearingSolution solution;
     double radial_load = 0.0;
@@ -158,7 +137,7 @@ class StiffnessEstimator {
   std::vector<Workspace> workspace_;
   double last_pinion_angle_ = 0.0;
   long supports_revision_ = 0;
-  /// The next supports_revision_ (process-wide, so two estimators never share one).
+  /// The next supports_revision_, process-wide.
   static long nextSupportsRevision();
 };
 

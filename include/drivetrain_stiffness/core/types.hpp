@@ -1,7 +1,6 @@
-// Fixed-size Eigen types shared by the bearing model. Generalised coordinates of a bearing's inner
-// ring relative to its outer ring, measured from the concentric, axially centred position (REP 103
-// SI units): q = [u_x, u_y, u_z, theta_x, theta_y] in m, m, m, rad, rad; z is the bearing axis.
-// Generalised loads on the inner ring: f = [F_x, F_y, F_z, M_x, M_y] in N, N, N, N·m, N·m.
+// Bearing coordinates q = [u_x, u_y, u_z, theta_x, theta_y] [m, m, m, rad, rad] of the inner ring
+// relative to the outer, z the bearing axis; loads f = [F_x, F_y, F_z, M_x, M_y] [N, N, N, N·m,
+// N·m].
 #pragma once
 
 #include <Eigen/Core>

@@ -1,6 +1,5 @@
 // The calibration stage (the calibration rule, docs/ros_api.md): readings to the live Calibrator,
-// its outputs to the sink, its failures counted; and the bands handed with the stiffness and the
-// resonance. ROS-free.
+// its outputs to the sink, and the bands for the stiffness and resonance outputs.
 #pragma once
 
 #include <memory>
@@ -15,15 +14,15 @@ namespace drivetrain_stiffness {
 class CalibrationStage {
  public:
   /// Calibrates when `enabled` and the rig has calibration and dynamics blocks. Keeps references
-  /// to `estimator` (its mesh table shared) and `counters`.
+  /// to `estimator` and `counters`.
   CalibrationStage(std::shared_ptr<const RigConfig> rig, const StiffnessEstimator& estimator,
                    bool enabled, PipelineCounters& counters);
   /// The live calibration, or null.
   const Calibrator* calibrator() const { return calibrator_.get(); }
   /// The readings broke off: the open window is dropped.
   void interrupt();
-  /// One reading: unwrapped angles [rad], mesh phase [-], speed [rad/s], held torque [N*m];
-  /// not `continuous`: a new window. Errors are counted and drop the window. Needs calibrator().
+  /// One reading: angles [rad], mesh phase [-], speed [rad/s], held torque [N*m]; not `continuous`:
+  /// a new window. An Error is counted and drops the window. Needs calibrator().
   void reading(Stamp stamp, double pinion, double gear, double phase, double speed,
                double held_torque, bool continuous, PipelineSink& sink);
   /// PipelineSink::stiffness's bands.
@@ -35,7 +34,7 @@ class CalibrationStage {
   const StiffnessEstimator& estimator_;
   PipelineCounters& counters_;
   std::unique_ptr<Calibrator> calibrator_;
-  MeasuredTeSample measured_te_;  ///< the calibrator's per-reading output (reused: no allocation)
+  MeasuredTeSample measured_te_;
 };
 
 }  // namespace drivetrain_stiffness

@@ -1,6 +1,5 @@
-// The dynamics stage: the 3-DOF model between inputs, under the own-stamp, gap and
-// failed-integration rules (docs/ros_api.md); each output sample, on its exact stamp, to the
-// SampleConsumers in the order they were added. ROS-free.
+// The dynamics stage: the 3-DOF model between inputs under the own-stamp, gap and
+// failed-integration rules (docs/ros_api.md); each sample to the SampleConsumers in order.
 #pragma once
 
 #include <array>
@@ -19,9 +18,8 @@ namespace drivetrain_stiffness {
 
 class DynamicsStage {
  public:
-  /// The model of `rig` (with a dynamics block) on the estimator's bearing stiffness and mesh
-  /// table; ~output_rate [Hz], ~motion_slices, ~max_gap [s]. Keeps references to `estimator`,
-  /// `phase` (followed; its origin restarts with the model) and `counters`. Throws InvalidInput.
+  /// The model of `rig` on the estimator's stiffness. Keeps references to `estimator`, `phase` and
+  /// `counters`. Throws InvalidInput naming the field.
   DynamicsStage(std::shared_ptr<const RigConfig> rig, const StiffnessEstimator& estimator,
                 const PipelineOptions& options, Fidelity fidelity, PhaseSource& phase,
                 PipelineCounters& counters);
@@ -30,12 +28,11 @@ class DynamicsStage {
   DynamicsEstimator& model() { return model_; }
   const DynamicsEstimator& model() const { return model_; }
 
-  /// A torque [N*m] accepted at `stamp`, held from there; a stopped model restarts at equilibrium
-  /// under it (then false: RigPipeline keeps its held torque).
+  /// A torque [N*m] held from `stamp`; a stopped model restarts at equilibrium under it (false).
   bool takeTorque(Stamp stamp, double torque, PipelineSink& sink);
   /// The estimator's bearing stiffness from `stamp` on.
   void takeBearingStiffness(Stamp stamp, PipelineSink& sink);
-  /// Runs the model up to `stamp`; false if stopped, past it, a gap away, or failed (counted).
+  /// Runs the model up to `stamp`; false if stopped, past it, a gap away or failed (counted).
   bool advanceTo(Stamp stamp, PipelineSink& sink);
   /// The gap rule: `stamp` more than ~max_gap after the model's time stops it (counted).
   void stopAfterGap(Stamp stamp);
@@ -43,7 +40,7 @@ class DynamicsStage {
   void followAnchor(Stamp stamp);
   /// Stopped until the next torque, at the estimator's bearing stiffness.
   void reset();
-  /// Counts `e` in dynamics_errors, "`where`: reason" in last_event.
+  /// Counts `e` in dynamics_errors and last_event.
   void error(const std::string& where, const Error& e);
 
  private:
@@ -59,7 +56,7 @@ class DynamicsStage {
   double max_gap_;
   std::vector<SampleConsumer*> consumers_;
   double advance_mesh_frequency_ = 0.0;  ///< [Hz] during the current emitUpTo
-  Stamp epoch_;  ///< the last restart: the model's time 0 (a double at 1.7e9 s resolves 2.4e-7 s)
+  Stamp epoch_;                          ///< the model's time 0
 };
 
 }  // namespace drivetrain_stiffness

@@ -1,6 +1,5 @@
-// The input gate: the time, frame, transport and joint_states value rules (docs/ros_api.md, each
-// a function named as there); every input counted, accepted, refused or dropped. It decides;
-// RigPipeline resets when it says the source or the clock restarted. ROS-free.
+// The input gate: the time, frame, transport and joint_states value rules of docs/ros_api.md, each
+// a function named as there; every input counted.
 #pragma once
 
 #include <cstdint>
@@ -19,8 +18,7 @@ namespace drivetrain_stiffness {
 
 class InputGate {
  public:
-  /// ~stamp_jump_back, ~clock_jump_back [s], ~torque_frame of `options`; keeps `counters` by
-  /// reference.
+  /// Keeps `counters` by reference.
   InputGate(const PipelineOptions& options, PipelineCounters& counters);
 
   // --- The rules, pure ---
@@ -28,15 +26,15 @@ class InputGate {
   static bool isZeroStamp(Stamp stamp) { return stamp.isZero(); }
   /// The stamp-range rule: negative, or past what ros::Time holds (2106-02-07).
   static bool outsideRosTime(Stamp stamp) { return !stamp.inRosRange(); }
-  /// The out-of-order rule: earlier than `last` by at most ~stamp_jump_back (a burst is in order).
+  /// The out-of-order rule: earlier than `last` by at most ~stamp_jump_back.
   bool isOutOfOrder(Stamp stamp, std::optional<Stamp> last) const;
   /// The source-restart rule: earlier than `last` by more than ~stamp_jump_back.
   bool sourceRestarted(Stamp stamp, std::optional<Stamp> last) const;
-  /// The frame rule: not ~torque_frame (a leading '/' ignored; none set: any).
+  /// The frame rule: not ~torque_frame (a leading '/' ignored).
   bool isWrongFrame(std::string_view frame_id) const;
-  /// The clock-jump rule: the caller's clock at `now` went back by more than ~clock_jump_back.
+  /// The clock-jump rule: the clock went back by more than ~clock_jump_back.
   bool clockJumpedBack(Stamp now) const;
-  /// The joint_states value rules: finite, within +-1e5 rpm (InvalidInput naming the field).
+  /// The joint_states value rules; throws InvalidInput naming the field.
   static void validateReading(const MotionInput& reading);
 
   // --- One input through the rules, counted ---
@@ -44,14 +42,13 @@ class InputGate {
   void countDrops(InputStream stream, const InputOrigin& origin);
   /// The frame rule on a torque input: kWrongFrame (refused, counted) or kAccepted.
   InputOutcome checkFrame(Stamp stamp, const InputOrigin& origin);
-  /// The time rules on `stream`'s own stamps (a refusal is not yet counted: reject()).
+  /// The time rules on `stream`'s stamps; a refusal is counted by reject().
   InputOutcome checkStamp(InputStream stream, Stamp stamp) const;
   /// The source-restart rule: the reason to reset everything (counted), or nullopt.
   std::optional<std::string> noteSourceRestart(InputStream stream, Stamp stamp);
-  /// The clock-jump rule at `now`: the reason to reset (counted), unless the stamps restarted
-  /// first.
+  /// The clock-jump rule at `now`: the reason to reset (counted), unless the stamps restarted.
   std::optional<std::string> observeClock(Stamp now);
-  /// Counts a refusal (stream, reason, tally with `found`), says why in last_event; returns `why`.
+  /// Counts a refusal, says why in last_event; returns `why`.
   InputOutcome reject(InputOutcome why, InputStream stream, Stamp stamp, const std::string& reason,
                       std::string_view found = {});
   /// An input taken: counted, its stamp the stream's last.
@@ -60,7 +57,7 @@ class InputGate {
   void forgetStamps();
 
   const RefusalTally& refusals() const { return refusals_; }
-  /// Publishers whose drops cannot be seen (header.seq constant).
+  /// Publishers whose drops cannot be seen.
   std::size_t unnumberedPublishers() const;
 
  private:

@@ -1,5 +1,4 @@
-// The vocabulary of the pipeline's inputs: stamps, where an input came from, and why one is
-// refused.
+// The pipeline's input vocabulary: stamps, origins, refusal reasons.
 #pragma once
 
 #include <cstdint>
@@ -7,8 +6,7 @@
 
 namespace drivetrain_stiffness {
 
-/// A time stamp as integer nanoseconds since the epoch of the caller's clock. Differences are
-/// exact (a double at 1.7e9 s only resolves 2.4e-7 s); toSec() equals ros::Time::toSec().
+/// Integer nanoseconds since the caller's epoch: exact differences; toSec() as ros::Time's.
 struct Stamp {
   std::int64_t ns = 0;
   static Stamp fromSecNsec(std::int64_t sec, std::int64_t nsec) {
@@ -18,7 +16,7 @@ struct Stamp {
   std::int64_t nsec() const { return ns % 1000000000LL; }
   double toSec() const { return static_cast<double>(sec()) + 1e-9 * static_cast<double>(nsec()); }
   bool isZero() const { return ns == 0; }
-  /// ros::Time's range: uint32 seconds and nanoseconds (1970 to 2106-02-07).
+  /// ros::Time's range (1970 to 2106-02-07).
   static constexpr std::int64_t kMaxRosNs = 4294967295LL * 1000000000LL + 999999999LL;
   bool inRosRange() const { return ns >= 0 && ns <= kMaxRosNs; }
 };
@@ -39,15 +37,14 @@ enum class InputOutcome {
 };
 const char* toString(InputOutcome outcome);
 
-/// Where an input came from (its message header and publisher): for the drop count and the frame
-/// rule.
+/// Where an input came from, for the drop count and the frame rule.
 struct InputOrigin {
-  std::string_view publisher;  ///< the publisher's caller id; messages are numbered per publisher
-  std::uint32_t seq = 0;       ///< header.seq (0 throughout when the publisher does not number)
+  std::string_view publisher;  ///< caller id
+  std::uint32_t seq = 0;       ///< header.seq
   std::string_view frame_id;   ///< header.frame_id
 };
 
-/// Whether the caller's subscriber queue holds a backlog at this input (see the transport rules).
+/// Whether the subscriber queue holds a backlog at this input (the transport rules).
 enum class Backlog { kNone, kShed };
 
 }  // namespace drivetrain_stiffness

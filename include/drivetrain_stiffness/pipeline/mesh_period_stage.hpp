@@ -1,6 +1,5 @@
-// The mesh-period statistics stage: the dynamic TE and the mesh force over blocks of whole mesh
-// periods (MeshPeriodStatistics), from the output samples. Estimators and their accuracy:
-// docs/pipeline.md, "Mesh-period statistics". Plain values: no allocation per sample. ROS-free.
+// The mesh-period statistics stage: docs/pipeline.md "Mesh-period statistics". No allocation per
+// sample.
 #pragma once
 
 #include <cstdint>
@@ -12,39 +11,37 @@ namespace drivetrain_stiffness {
 
 class MeshPeriodStage : public SampleConsumer {
  public:
-  /// `dynamics`: the model whose samples it receives (its output interval, fidelity and equivalent
-  /// mass, read at each block's start and end); `pinion_base_radius` [m] > 0; `counters`:
-  /// mesh_period_stats_out and last_event. Keeps references to both.
+  /// `dynamics`: the model whose samples it receives; `pinion_base_radius` [m] > 0. Keeps
+  /// references to `dynamics` and `counters`.
   MeshPeriodStage(const DynamicsEstimator& dynamics, double pinion_base_radius,
                   PipelineCounters& counters);
-  /// Into the running block; a closed block goes to sink.meshPeriod (a non-finite one is counted in
-  /// last_event only). Samples that do not move forward in time are skipped.
+  /// Into the running block; a closed, finite block goes to sink.meshPeriod. Samples that do not
+  /// move forward in time are skipped.
   void sample(Stamp stamp, const DynamicsSample& sample, double mesh_frequency,
               PipelineSink& sink) override;
   /// Drops the running block; the next block starts at the next mesh-period boundary.
   void restart() override { block_ = Accumulator{}; }
 
  private:
-  /// The running block (plain values).
   struct Accumulator {
     bool have_last = false, in_block = false;
     Stamp last_stamp;
-    double last_turns = 0.0;  ///< unwrapped mesh phase of the last sample [turns]
+    double last_turns = 0.0;  ///< [turns] unwrapped
     double last_te = 0.0, last_force = 0.0, last_torque = 0.0;
-    double boundary = 0.0;  ///< the integer mesh phase the block started at
+    double boundary = 0.0;  ///< [turns] the block's start
     std::uint32_t periods = 0, samples = 0;
     Stamp start;
     double start_turns = 0.0, start_velocity = 0.0;
-    double te_ref = 0.0, force_ref = 0.0;  ///< the start values: sums of x - ref (no cancellation)
+    double te_ref = 0.0, force_ref = 0.0;  ///< the start values: the sums are of x - ref
     double te_sum = 0.0, te_sq = 0.0, force_sum = 0.0, force_sq = 0.0,
            torque_sum = 0.0;  ///< trapezoid x dt
     double te_min = 0.0, te_max = 0.0, force_min = 0.0, force_max = 0.0;
   };
   void startBlock(Stamp stamp, const DynamicsSample& s, double turns, double boundary,
                   double mesh_frequency);
-  /// The trapezoid from the last sample to `s` (dt [s]) into the sums, extremes and count.
+  /// The trapezoid from the last sample to `s`, dt [s] long.
   void accumulate(const DynamicsSample& s, double dt);
-  /// The closed block's statistics, ending at sample `s` at `stamp`, unwrapped phase `turns`.
+  /// The block's statistics, ending at `s` at `stamp`, unwrapped phase `turns`.
   MeshPeriodStatistics close(Stamp stamp, const DynamicsSample& s, double count, double turns,
                              bool forward) const;
   void publish(Stamp stamp, const MeshPeriodStatistics& out, PipelineSink& sink);

@@ -1,6 +1,5 @@
-// The phase source: what drives the mesh phase, the nominal speed or the encoders (the encoders
-// rule, docs/ros_api.md): the pinion angle model, readings unwrapped, the gear-ratio check, the
-// time-out. It never touches the dynamics. ROS-free.
+// The phase source: the nominal speed or the encoders drive the mesh phase (the encoders rule,
+// docs/ros_api.md). It never touches the dynamics.
 #pragma once
 
 #include <optional>
@@ -15,8 +14,7 @@ namespace drivetrain_stiffness {
 
 class PhaseSource {
  public:
-  /// One reading, unwrapped: angles [rad], speed [rad/s]; gear_reference [rad]: gear + (z_p/z_g)
-  /// pinion.
+  /// One reading, unwrapped [rad, rad/s]; gear_reference = gear + (z_p/z_g) pinion [rad].
   struct Reading {
     Stamp stamp;
     double pinion = 0.0, speed = 0.0;
@@ -28,7 +26,6 @@ class PhaseSource {
     double angle = 0.0, speed = 0.0;
   };
 
-  /// ~pinion_speed_rpm, ~mesh_phase_offset, ~motion_timeout, ~gear_ratio_tolerance of `options`;
   /// z_p, z_g > 0 teeth. Keeps a reference to `counters`.
   PhaseSource(const PipelineOptions& options, int pinion_teeth, int gear_teeth,
               PipelineCounters& counters);
@@ -53,11 +50,10 @@ class PhaseSource {
   std::optional<Stamp> origin() const { return origin_; }
   void setOrigin(Stamp origin) { origin_ = origin; }
 
-  /// `m` unwrapped against a last reading at most ~motion_timeout old (`continuous`). Changes
-  /// nothing; InvalidInput for an implied speed beyond +-1e5 rpm (an encoder jump).
+  /// `m` unwrapped against a last reading at most ~motion_timeout old (`continuous`). Throws
+  /// InvalidInput for an implied speed beyond +-1e5 rpm.
   Reading unwrap(Stamp stamp, const MotionInput& m, bool& continuous) const;
-  /// A gear angle off the tooth ratio by more than ~gear_ratio_tolerance: counted once,
-  /// re-referenced.
+  /// Counts a gear angle off the tooth ratio (once) and re-references it.
   void checkGearRatio(Reading& reading);
   /// The encoders drive the phase from this reading on.
   void anchorTo(const Reading& reading);
@@ -77,9 +73,9 @@ class PhaseSource {
   double mesh_phase_offset_, motion_timeout_, gear_ratio_tolerance_;
   PipelineCounters& counters_;
   std::optional<Stamp> origin_;
-  std::optional<Anchor> anchor_;    ///< set by readings (and their time-out); empty: nominal
-  bool encoders_ = false;           ///< the anchor comes from a reading (not a time-out)
-  std::optional<Reading> reading_;  ///< the last one, for the next one's unwrapping and ratio check
+  std::optional<Anchor> anchor_;    ///< empty: nominal
+  bool encoders_ = false;           ///< the anchor is a reading's
+  std::optional<Reading> reading_;  ///< the last one
 };
 
 }  // namespace drivetrain_stiffness

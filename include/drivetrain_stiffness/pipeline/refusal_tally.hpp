@@ -1,6 +1,4 @@
-// RefusalTally: every input the pipeline refused, per stream and reason, so that a run's summary
-// says what was not used and why (a frame or joint-name mismatch with what was found against what
-// was expected), not only the last reason.
+// Every input the pipeline refused, per stream and reason, with what was found.
 #pragma once
 
 #include <array>
@@ -21,7 +19,7 @@ const char* toString(InputStream stream);
 
 class RefusalTally {
  public:
-  /// Distinct found values kept per stream and reason; later distinct ones are counted together.
+  /// Distinct found values kept per stream and reason; further ones are counted together.
   static constexpr std::size_t kMaxFound = 8;
   struct Found {
     std::string value;  ///< printable (printableText)
@@ -30,13 +28,13 @@ class RefusalTally {
   /// The refusals of one stream for one reason.
   struct Entry {
     std::uint64_t count = 0;
-    Stamp first_stamp;         ///< the first refused input's stamp
-    std::string first_reason;  ///< and why it was refused
-    std::vector<Found> found;  ///< what was found, by first appearance (frame ids, joint names)
-    std::uint64_t found_other = 0;  ///< refusals whose found value is beyond the first kMaxFound
+    Stamp first_stamp;
+    std::string first_reason;
+    std::vector<Found> found;       ///< by first appearance
+    std::uint64_t found_other = 0;  ///< beyond kMaxFound
   };
 
-  /// Counts one refusal; `found` (may be empty) is the offending value for the summary.
+  /// Counts one refusal; `found` (may be empty): the offending value.
   void record(InputStream stream, InputOutcome why, Stamp stamp, std::string_view reason,
               std::string_view found = {});
   const Entry& entry(InputStream stream, InputOutcome why) const;

@@ -1,6 +1,4 @@
-// The one interface of the stages fed by the dynamics' output samples (the TE output, the sliding
-// TE spectrum, the mesh-period statistics): DynamicsStage hands each sample to every consumer in
-// the order they were added. A new output from the samples is one more consumer. ROS-free.
+// The interface of the stages fed by the dynamics' output samples (docs/pipeline.md "Stages").
 #pragma once
 
 #include "drivetrain_stiffness/core/dynamics_estimator.hpp"
@@ -12,13 +10,11 @@ namespace drivetrain_stiffness {
 class SampleConsumer {
  public:
   virtual ~SampleConsumer() = default;
-  /// One output sample at `stamp` (exact; sample.t = stamp.toSec()). `mesh_frequency` [Hz]: the
-  /// dynamics' over the advance that made it. May throw the library's Error (it ends the advance);
-  /// must not allocate (allocation_tests).
+  /// One output sample at its exact `stamp`; `mesh_frequency` [Hz] over the advance that made it.
+  /// May throw Error (it ends the advance); must not allocate.
   virtual void sample(Stamp stamp, const DynamicsSample& sample, double mesh_frequency,
                       PipelineSink& sink) = 0;
-  /// The dynamics stopped or restarted (or the pipeline reset): no earlier sample continues into
-  /// the next one.
+  /// The dynamics stopped, restarted or reset: no earlier sample continues.
   virtual void restart() = 0;
 };
 

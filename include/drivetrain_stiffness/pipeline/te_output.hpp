@@ -1,6 +1,4 @@
-// The transmission-error output: each output sample to PipelineSink::transmissionError with what
-// its tf frames and markers need (SampleContext: the encoder pinion angle at its stamp, the last
-// published resonance). The first SampleConsumer of the dynamics. ROS-free.
+// The transmission-error output, the dynamics' first SampleConsumer.
 #pragma once
 
 #include <optional>
@@ -13,12 +11,11 @@ namespace drivetrain_stiffness {
 
 class TeOutput : public SampleConsumer {
  public:
-  /// Keeps references to `phase`, `resonance` (the last published estimate, none since a reset)
-  /// and `counters` (te_out).
+  /// Keeps references to `phase`, `resonance` (the last published) and `counters`.
   TeOutput(const PhaseSource& phase, const std::optional<ResonanceEstimate>& resonance,
            PipelineCounters& counters)
       : phase_(phase), resonance_(resonance), counters_(counters) {}
-  /// Counted once the sink took it; a sink's Error passes on (it ends the advance).
+  /// To PipelineSink::transmissionError with its SampleContext; a sink's Error passes on.
   void sample(Stamp stamp, const DynamicsSample& sample, double mesh_frequency,
               PipelineSink& sink) override;
   void restart() override {}

@@ -1,5 +1,4 @@
-// The sliding TE spectrum stage: the dynamic TE of the output samples through a SlidingSpectrum;
-// every hop its strongest lines go to the sink (te_spectrum). ROS-free; no allocation per sample.
+// The sliding TE spectrum stage (te_spectrum); no allocation per sample.
 #pragma once
 
 #include "drivetrain_stiffness/pipeline/pipeline_outputs.hpp"
@@ -10,10 +9,9 @@ namespace drivetrain_stiffness {
 
 class TeSpectrumStage : public SampleConsumer {
  public:
-  /// `window` [samples] >= 8, `hop` [samples] in [1, window], `interval` [s] > 0 between samples
-  /// (InvalidInput otherwise); keeps SpectrumPeaks::kMaxPeaks lines. `counters`: spectra_out.
+  /// `window` >= 8 and `hop` in [1, window] [samples], `interval` > 0 [s]; InvalidInput otherwise.
   TeSpectrumStage(int window, int hop, double interval, PipelineCounters& counters);
-  /// Throws InvalidInput for a non-finite TE (SlidingSpectrum::push).
+  /// Throws InvalidInput for a non-finite TE.
   void sample(Stamp stamp, const DynamicsSample& sample, double mesh_frequency,
               PipelineSink& sink) override;
   /// Empties the window.
@@ -22,7 +20,7 @@ class TeSpectrumStage : public SampleConsumer {
 
  private:
   SlidingSpectrum spectrum_;
-  SpectrumPeaks peaks_;  ///< the sink's copy (reused)
+  SpectrumPeaks peaks_;
   PipelineCounters& counters_;
 };
 

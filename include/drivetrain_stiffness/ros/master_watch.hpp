@@ -1,8 +1,4 @@
-// Notices that the ROS master restarted under a running node. roscpp registers publishers,
-// subscribers and services once, at creation, and never again: after a new master comes up (same
-// URI, new /run_id) the node still runs but nobody can find it. The watch polls /run_id from its
-// own thread (an XML-RPC call, kept off the callback thread that serves the inputs) and calls
-// `onRestart` once, from that thread, when the master answers with another run id.
+// Notices that the ROS master restarted under a running node: docs/reliability.md "Faults".
 #pragma once
 
 #include <atomic>
@@ -16,7 +12,8 @@ namespace drivetrain_stiffness {
 
 class MasterWatch {
  public:
-  /// `period` [s] between polls; `onRestart(old_run_id, new_run_id)`.
+  /// Polls /run_id every `period` [s] from its own thread; calls `onRestart(old_run_id,
+  /// new_run_id)` once, from that thread, when the master answers with another run id.
   MasterWatch(double period, std::function<void(const std::string&, const std::string&)> onRestart);
   ~MasterWatch();  ///< stops and joins the thread
   MasterWatch(const MasterWatch&) = delete;

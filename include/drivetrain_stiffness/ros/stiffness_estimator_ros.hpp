@@ -37,6 +37,13 @@ class StiffnessEstimatorRos {
 
  private:
   class Publishers;
+  /// The constructor's parts: ~deadline, ~torque_queue_size (returned), ~diagnostic_period,
+  /// ~shed_queue_age and ~master_check_period, each checked in that order (InvalidInput); the
+  /// start count under this master; dynamic_reconfigure; the subscriptions and the timer.
+  int readNodeLimits(const ros::NodeHandle& pnh, double& master_check_period);
+  void countStart(ros::NodeHandle& pnh);
+  void startReconfigure(ros::NodeHandle& pnh);
+  void subscribe(ros::NodeHandle& nh, int queue);
   void onTorque(const ros::MessageEvent<const geometry_msgs::WrenchStamped>& event);
   void onPreload(const ros::MessageEvent<const drivetrain_stiffness::Preload>& event);
   void onJointStates(const ros::MessageEvent<const sensor_msgs::JointState>& event);
@@ -54,6 +61,15 @@ class StiffnessEstimatorRos {
   void finishInput(const ros::WallTime& start, double cpu_start);
   void onDiagnosticTimer();
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status);
+  /// diagnose's parts, in the order they add to `status` (called under the lock).
+  void summarizeSinceLastReport(diagnostic_updater::DiagnosticStatusWrapper& status,
+                                const PipelineCounters& c);
+  void addInputStatus(diagnostic_updater::DiagnosticStatusWrapper& status,
+                      const PipelineCounters& c);
+  void addProcessStatus(diagnostic_updater::DiagnosticStatusWrapper& status);
+  void addCalibrationStatus(diagnostic_updater::DiagnosticStatusWrapper& status);
+  void addDynamicsStatus(diagnostic_updater::DiagnosticStatusWrapper& status,
+                         const PipelineCounters& c);
 
   std::mutex mutex_;  // callbacks may run on several threads (nodelet, multi-threaded spinners)
   std::unique_ptr<RigPipeline> pipeline_;

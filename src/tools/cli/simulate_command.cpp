@@ -33,25 +33,28 @@ struct SignalStats {
   nlohmann::json json() const { return {{"rms", n ? std::sqrt(sum2 / n) : 0.0}, {"peak", peak}}; }
 };
 
-int runSimulate(const SimulateArgs& args) {
-  if (args.sweep) return runOscillatorSweep(args);
-  const RigConfig rig = loadRigFile(args.config);
-  Scene scene = makeScene(args.scene, rig);
+/// The scene shortened to --duration (whole output intervals), its transient at most 30 % of it.
+void applyDuration(const SimulateArgs& args, Scene& scene) {
   if (args.duration) {
     requirePositive("--duration", *args.duration);
     scene.duration = std::round(*args.duration / scene.output_interval) * scene.output_interval;
     scene.transient = std::min(scene.transient, 0.3 * scene.duration);
   }
-  const bool reduced = args.method == "quasi_static" || args.method == "linear_modal";
-  const bool automatic = args.method == "auto";
-  const IntegratorMethod method = reduced || automatic
-                                      ? IntegratorMethod::kDopri5
-                                      : parseIntegratorMethod("--method", args.method);
+}
+
+bool fixedStep(IntegratorMethod method) {
+  return method == IntegratorMethod::kRk4 || method == IntegratorMethod::kTrapezoidal;
+}
+
+/// The integrator's options from --step and --rtol in the scene's units; a fixed-step method
+/// samples every whole number of steps and ends on a step (the scene is adjusted). Throws
+/// InvalidInput naming --step or --rtol.
+IntegratorOptions integratorOptions(const SimulateArgs& args, IntegratorMethod method,
+                                    Scene& scene) {
   IntegratorOptions o;
   o.step = args.step ? *args.step : scene.suggested_step;
   requirePositive("--step", o.step);
-  if (method == IntegratorMethod::kRk4 || method == IntegratorMethod::kTrapezoidal) {
-    // Fixed steps: sample every whole number of steps and end on a step.
+  if (fixedStep(method)) {
     scene.output_interval = o.step * std::max(1.0, std::round(scene.output_interval / o.step));
     scene.duration = o.step * std::max(1.0, std::round(scene.duration / o.step));
   }
@@ -61,25 +64,102 @@ int runSimulate(const SimulateArgs& args) {
   o.absolute_tolerance = scale.displacement * args.rtol;
   o.max_step = scale.max_step;
   o.divergence_limit = scale.divergence_limit;
-  std::ofstream csv;
-  if (args.out) {
-    csv.open(*args.out);
-    if (!csv) throw InvalidInput("--out = '" + *args.out + "': cannot write");
-    csv << "# scene " << scene.name << " (" << scene.units << "), method " << toString(method)
-        << "\n";
-    csv << "t,x_p,x_g,x,delta,mesh_force,drive_flank_force,back_flank_force,k_drive,k_back,phase\n";
-    csv.precision(10);
-  }
+  return o;
+}
+
+/// Opens --out with its comment and header lines. Throws InvalidInput if it cannot be written.
+void openCsv(const std::string& path, const Scene& scene, IntegratorMethod method,
+             std::ofstream& csv) {
+  csv.open(path);
+  if (!csv) throw InvalidInput("--out = '" + path + "': cannot write");
+  csv << "# scene " << scene.name << " (" << scene.units << "), method " << toString(method)
+      << "\n";
+  csv << "t,x_p,x_g,x,delta,mesh_force,drive_flank_force,back_flank_force,k_drive,k_back,phase\n";
+  csv.precision(10);
+}
+
+/// What a run observed: the statistics after the transient and the integrator's counts.
+struct SimulationRecord {
   SignalStats delta, xp, xg, x;
   IntegrationStats stats;
+};
+
+/// `auto`: chooses the method on a pilot run, then runs it. Returns the choice as JSON.
+nlohmann::json runAutomatically(const SimulateArgs& args, const Scene& scene,
+                                const Observer& observe, IntegrationStats& stats) {
+  // The run's length weighs the exponential method's set-up against dopri5's work.
+  const double pilot = defaultPilotDuration(scene.duration, scene.output_interval);
+  const AutoChoice c = chooseAutomatically(*scene.model, 0.0, scene.initial, scene.output_interval,
+                                           pilot, args.error_bound, scene.duration, scene.scale());
+  nlohmann::json pilots = nlohmann::json::object();
+  for (const auto& e : c.pilot_errors)
+    pilots[e.first] = std::isfinite(e.second) ? nlohmann::json(e.second) : nlohmann::json(nullptr);
+  nlohmann::json chosen = {
+      {"fidelity", toString(c.fidelity)},
+      {"method", toString(c.method)},
+      {"relative_tolerance", c.fidelity == Fidelity::kFull && c.method == IntegratorMethod::kDopri5
+                                 ? nlohmann::json(c.relative_tolerance)
+                                 : nlohmann::json(nullptr)},
+      {"error_bound", args.error_bound},
+      {"pilot_s", c.pilot_duration},
+      {"pilot_errors", pilots},
+      {"reason", c.reason}};
+  integrateChoice(*scene.model, c, 0.0, scene.initial, scene.duration, scene.output_interval,
+                  observe, &stats);
+  return chosen;
+}
+
+/// The run's JSON summary.
+nlohmann::json simulationSummary(const SimulateArgs& args, const Scene& scene,
+                                 IntegratorMethod method, bool named_by_args,
+                                 const IntegratorOptions& o, const nlohmann::json& chosen,
+                                 const SimulationRecord& r, double wall) {
+  return {{"scene", scene.name},
+          {"description", scene.description},
+          {"units", scene.units},
+          {"method", named_by_args ? args.method : std::string(toString(method))},
+          {"auto", chosen},
+          {"step", fixedStep(method) ? nlohmann::json(o.step) : nlohmann::json(nullptr)},
+          {"relative_tolerance", method == IntegratorMethod::kDopri5
+                                     ? nlohmann::json(o.relative_tolerance)
+                                     : nlohmann::json(nullptr)},
+          {"sim_s", scene.duration},
+          {"wall_s", wall},
+          {"rtf", scene.duration / wall},
+          {"steps", r.stats.steps},
+          {"rejected", r.stats.rejected},
+          {"rhs_evaluations", r.stats.rhs_evaluations},
+          {"events", r.stats.events},
+          {"statistics_from", scene.transient},
+          {"delta", r.delta.json()},
+          {"x_p", r.xp.json()},
+          {"x_g", r.xg.json()},
+          {"x", r.x.json()},
+          {"csv", args.out ? nlohmann::json(*args.out) : nlohmann::json(nullptr)}};
+}
+
+int runSimulate(const SimulateArgs& args) {
+  if (args.sweep) return runOscillatorSweep(args);
+  const RigConfig rig = loadRigFile(args.config);
+  Scene scene = makeScene(args.scene, rig);
+  applyDuration(args, scene);
+  const bool reduced = args.method == "quasi_static" || args.method == "linear_modal";
+  const bool automatic = args.method == "auto";
+  const IntegratorMethod method = reduced || automatic
+                                      ? IntegratorMethod::kDopri5
+                                      : parseIntegratorMethod("--method", args.method);
+  const IntegratorOptions o = integratorOptions(args, method, scene);
+  std::ofstream csv;
+  if (args.out) openCsv(*args.out, scene, method, csv);
+  SimulationRecord r;
   const auto start = std::chrono::steady_clock::now();
   const Observer observe = [&](double t, const State6& y) {
     const GearRotorForces f = scene.model->forces(t, y);
     if (t >= scene.transient) {
-      delta.add(f.delta);
-      xp.add(y[0]);
-      xg.add(y[1]);
-      x.add(y[2]);
+      r.delta.add(f.delta);
+      r.xp.add(y[0]);
+      r.xg.add(y[1]);
+      r.x.add(y[2]);
     }
     if (csv.is_open()) {
       MeshInstant m;
@@ -94,59 +174,16 @@ int runSimulate(const SimulateArgs& args) {
     integrateReduced(*scene.model, parseFidelity("--method", args.method), 0.0, scene.initial,
                      scene.duration, scene.output_interval, observe);
   } else if (automatic) {
-    // The run's length weighs the exponential method's set-up against dopri5's work.
-    const double pilot = defaultPilotDuration(scene.duration, scene.output_interval);
-    const AutoChoice c =
-        chooseAutomatically(*scene.model, 0.0, scene.initial, scene.output_interval, pilot,
-                            args.error_bound, scene.duration, scale);
-    nlohmann::json pilots = nlohmann::json::object();
-    for (const auto& e : c.pilot_errors)
-      pilots[e.first] =
-          std::isfinite(e.second) ? nlohmann::json(e.second) : nlohmann::json(nullptr);
-    chosen = {{"fidelity", toString(c.fidelity)},
-              {"method", toString(c.method)},
-              {"relative_tolerance",
-               c.fidelity == Fidelity::kFull && c.method == IntegratorMethod::kDopri5
-                   ? nlohmann::json(c.relative_tolerance)
-                   : nlohmann::json(nullptr)},
-              {"error_bound", args.error_bound},
-              {"pilot_s", c.pilot_duration},
-              {"pilot_errors", pilots},
-              {"reason", c.reason}};
-    integrateChoice(*scene.model, c, 0.0, scene.initial, scene.duration, scene.output_interval,
-                    observe, &stats);
+    chosen = runAutomatically(args, scene, observe, r.stats);
   } else {
     integrate(*scene.model, method, o, 0.0, scene.initial, scene.duration, scene.output_interval,
-              observe, &stats);
+              observe, &r.stats);
   }
   const double wall =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  const nlohmann::json out = {
-      {"scene", scene.name},
-      {"description", scene.description},
-      {"units", scene.units},
-      {"method", reduced || automatic ? args.method : std::string(toString(method))},
-      {"auto", chosen},
-      {"step", method == IntegratorMethod::kRk4 || method == IntegratorMethod::kTrapezoidal
-                   ? nlohmann::json(o.step)
-                   : nlohmann::json(nullptr)},
-      {"relative_tolerance", method == IntegratorMethod::kDopri5
-                                 ? nlohmann::json(o.relative_tolerance)
-                                 : nlohmann::json(nullptr)},
-      {"sim_s", scene.duration},
-      {"wall_s", wall},
-      {"rtf", scene.duration / wall},
-      {"steps", stats.steps},
-      {"rejected", stats.rejected},
-      {"rhs_evaluations", stats.rhs_evaluations},
-      {"events", stats.events},
-      {"statistics_from", scene.transient},
-      {"delta", delta.json()},
-      {"x_p", xp.json()},
-      {"x_g", xg.json()},
-      {"x", x.json()},
-      {"csv", args.out ? nlohmann::json(*args.out) : nlohmann::json(nullptr)}};
-  std::cout << out.dump(2) << std::endl;
+  std::cout
+      << simulationSummary(args, scene, method, reduced || automatic, o, chosen, r, wall).dump(2)
+      << std::endl;
   return 0;
 }
 

@@ -1,5 +1,4 @@
-// The options of `drivetrain_cli simulate`, shared by its two runs: a scene (simulate_command.cpp)
-// and the backlash oscillator's sweep (oscillator_sweep.cpp).
+// The options of `drivetrain_cli simulate`.
 #pragma once
 
 #include <optional>
@@ -15,8 +14,7 @@ struct SimulateArgs {
   std::optional<std::string> sweep;  ///< "start:stop:step" for the oscillator scene
 };
 
-/// `simulate --scene kahraman_singh --sweep start:stop:step`: up- and down-sweep of the
-/// dimensionless backlash oscillator, JSON with both branches; returns the exit code.
+/// The backlash oscillator's up- and down-sweep as JSON; returns the exit code.
 int runOscillatorSweep(const SimulateArgs& args);
 
 }  // namespace drivetrain_stiffness::cli

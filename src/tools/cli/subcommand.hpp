@@ -1,7 +1,5 @@
-// The subcommands of drivetrain_cli, one file each: every add...Command registers its options on
-// the app (CLI11) and returns what runs it, which prints JSON on stdout (nlohmann-json) and returns
-// the exit code. Errors are thrown (InvalidInput, UnreachableLoad, UnstableIntegration) and mapped
-// to exit codes by main.cpp.
+// drivetrain_cli's subcommands: each add...Command registers its options and returns what runs it
+// (JSON on stdout, the exit code); errors are thrown and main.cpp maps them to exit codes.
 #pragma once
 
 #include <CLI/CLI.hpp>
