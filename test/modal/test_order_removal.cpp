@@ -1,6 +1,7 @@
 // Mesh-order removal: a sinusoid following a measured angle, with varying amplitude, sweeping
 // near and through the modes of records with exactly known poles (synthetic_modes.hpp).
 #include <cmath>
+#include <functional>
 #include <string>
 
 #include <gtest/gtest.h>
