@@ -69,7 +69,9 @@ void OrderRemoval::check(long samples, const Eigen::Ref<const Eigen::VectorXd>& 
     throwInvalid(
         "record.samples", static_cast<double>(samples),
         "must be >= order_removal.block_samples " + std::to_string(options_.block_samples));
-  for (long t = 0; t < samples; ++t) requireFinite("angle[" + std::to_string(t) + "]", angle[t]);
+  if (!angle.allFinite())  // the field is named only for the first bad sample
+    for (long t = 0; t < samples; ++t)
+      if (!std::isfinite(angle[t])) throwNotFinite("angle[" + std::to_string(t) + "]", angle[t]);
 }
 
 void OrderRemoval::remove(Eigen::Ref<Eigen::MatrixXd> record,

@@ -65,9 +65,12 @@ SsiResult SsiCov::identify(const Eigen::Ref<const Eigen::MatrixXd>& record,
   const int l = static_cast<int>(record.rows());
   if (l < 1) throwInvalid("record.channels", l, "must be >= 1");
   requirePositive("sample_rate", sample_rate);
-  for (long c = 0; c < record.cols(); ++c)
-    for (int ch = 0; ch < l; ++ch)
-      requireFinite("record(" + std::to_string(ch) + ", " + std::to_string(c) + ")", record(ch, c));
+  if (!record.allFinite())  // the field is named only for the first bad sample
+    for (long c = 0; c < record.cols(); ++c)
+      for (int ch = 0; ch < l; ++ch)
+        if (!std::isfinite(record(ch, c)))
+          throwNotFinite("record(" + std::to_string(ch) + ", " + std::to_string(c) + ")",
+                         record(ch, c));
   const int i = blockRows(l);
   if ((i - 1) * l < options_.max_order)
     throwInvalid("ssi.block_rows", i,
