@@ -21,7 +21,8 @@ using Eigen::VectorXcd;
 using Eigen::VectorXd;
 
 /// Lag covariances R_k = 1/N sum_t y_{t+k} y_t^T, k = 1..2i-1, over the columns t0..t0+n-1,
-/// stacked as l x l blocks side by side (Peeters & De Roeck 1999, eq. 9).
+/// stacked as l x l blocks side by side (Peeters & De Roeck 1999, "covariance-driven SSI";
+/// docs/vibration.md, "SSI-COV").
 MatrixXd lagCovariances(const MatrixXd& y, long t0, long n, int lags) {
   const long l = y.rows();
   MatrixXd r(l, l * lags);
@@ -32,7 +33,7 @@ MatrixXd lagCovariances(const MatrixXd& y, long t0, long n, int lags) {
 }
 
 /// Block Hankel H = [R_1 .. R_i; R_2 .. R_{i+1}; ...; R_i .. R_{2i-1}] = O_i Gamma_i
-/// (Peeters & De Roeck 1999, eqs. 10-11).
+/// (Peeters & De Roeck 1999; Van Overschee & De Moor 1996, Ch. 3).
 MatrixXd blockHankel(const MatrixXd& r, int i) {
   const long l = r.rows();
   MatrixXd h(i * l, i * l);
@@ -91,7 +92,7 @@ SsiResult SsiCov::identify(const Eigen::Ref<const Eigen::MatrixXd>& record,
 
   // The Hankel matrix as the mean of the blocks' Hankel matrices, and the square root T of its
   // covariance, Sigma_H = T T^T, T_b = (h_b - mean h) / sqrt(n_b (n_b - 1)) (Doehler & Mevel 2013,
-  // Section 3.2 and eq. 17; Reynders et al. 2008, Section 3.1).
+  // Sections 3.2 and 5.1; Reynders et al. 2008, the covariance of the Hankel matrix).
   const long block = nb > 0 ? usable / nb : usable;
   std::vector<MatrixXd> block_r;
   MatrixXd r_mean = MatrixXd::Zero(l, l * lags);
@@ -107,11 +108,14 @@ SsiResult SsiCov::identify(const Eigen::Ref<const Eigen::MatrixXd>& record,
   const MatrixXd h = blockHankel(r_mean, i);
   const long m = h.rows();
 
-  // H = U S V^T; O_n = U_n S_n^{1/2} (Peeters & De Roeck 1999, eq. 12).
+  // H = U S V^T; O_n = U_n S_n^{1/2} (Peeters & De Roeck 1999).
   Eigen::BDCSVD<MatrixXd> svd(h, Eigen::ComputeFullU | Eigen::ComputeFullV);
   const MatrixXd& u = svd.matrixU();
   const MatrixXd& v = svd.matrixV();
   const VectorXd& s = svd.singularValues();
+  if (!(s[0] > 0.0))
+    throwInvalid("record.rms", std::sqrt(y.squaredNorm() / y.size()),
+                 "the record holds no correlated motion (a constant or empty record)");
   const int nmax = options_.max_order;
   const MatrixXd obs = u.leftCols(nmax) * s.head(nmax).cwiseSqrt().asDiagonal();
   const long rows_up = m - l;
@@ -125,9 +129,10 @@ SsiResult SsiCov::identify(const Eigen::Ref<const Eigen::MatrixXd>& record,
   // Per block: the sensitivity coefficients of the left singular vectors outside the kept
   // subspace, C_b[k, j] = sqrt(s_j) (s_j a_kj + s_k a_jk) / (s_j^2 - s_k^2), a = U^T dH_b V, so
   // that the part of dO_n that changes the poles is U[:, n:] C_b[n:, :n] (first-order SVD
-  // perturbation, Reynders et al. 2008 eqs. 26-27; Doehler & Mevel 2013 eqs. 28-34 in another
-  // normalisation). Perturbations inside span(U_n) are similarity transforms of A_n and leave
-  // its eigenvalues unchanged, so the gap s_n - s_{n+1} is the only one that enters.
+  // perturbation: Reynders et al. 2008, the sensitivity of the singular vectors; Doehler & Mevel
+  // 2013 eqs. 28-34 in another normalisation). Perturbations inside span(U_n) are similarity
+  // transforms of A_n and leave its eigenvalues unchanged, so the gap s_n - s_{n+1} is the only one
+  // that enters.
   std::vector<MatrixXd> coeff;
   const double tscale = nb > 1 ? 1.0 / std::sqrt(static_cast<double>(nb) * (nb - 1)) : 0.0;
   if (nb > 1) {
@@ -179,8 +184,8 @@ SsiResult SsiCov::identify(const Eigen::Ref<const Eigen::MatrixXd>& record,
       const auto dup = dobs.topRows(rows_up);
       const auto ddw = dobs.bottomRows(rows_up);
       // dA = O_up^+ (dO_dw - dO_up A) + (O_up^T O_up)^{-1} dO_up^T (O_dw - O_up A)
-      // (the derivative of A = (O_up^T O_up)^{-1} O_up^T O_dw; Reynders et al. 2008 eq. 33,
-      // Doehler & Mevel 2013 eqs. 36-37), with O_up^T O_up = R^T R.
+      // (the derivative of A = (O_up^T O_up)^{-1} O_up^T O_dw; Doehler & Mevel
+      // 2013 eqs. 36-37), with O_up^T O_up = R^T R.
       const MatrixXd qpart = qr.householderQ().transpose() * (ddw - dup * an);
       MatrixXd da = rtri.solve(qpart.topRows(n));
       MatrixXd tmp = dup.transpose() * res;
@@ -206,7 +211,7 @@ SsiResult SsiCov::identify(const Eigen::Ref<const Eigen::MatrixXd>& record,
       p.damping_std = nan;
       if (nb > 1) {
         // f = |lc| / 2 pi, xi = -Re lc / |lc|, d lc = d mu / (mu dt)
-        // (Doehler & Mevel 2013 Lemma 5; Reynders et al. 2008 eqs. 40-41).
+        // (Doehler & Mevel 2013 Lemma 5).
         double vf = 0.0, vx = 0.0;
         for (int b = 0; b < nb; ++b) {
           const std::complex<double> dlc = dmu(q, b) / (mu[j] * dt);

@@ -136,6 +136,8 @@ TEST(SsiCov, RejectsBadOptionsAndRecordsNamingTheField) {
   expectInvalid([&] { ssi.identify(Eigen::MatrixXd(0, 100), 51200.0); }, "record.channels = 0");
   expectInvalid([&] { ssi.identify(y, 0.0); }, "sample_rate = 0");
   expectInvalid([&] { ssi.identify(y.leftCols(500), 51200.0); }, "record.samples = 500");
+  expectInvalid([&] { ssi.identify(Eigen::MatrixXd::Constant(2, 20000, 3.0), 51200.0); },
+                "record.rms = 0");
   Eigen::MatrixXd bad = y;
   bad(1, 7) = std::nan("");
   expectInvalid([&] { ssi.identify(bad, 51200.0); }, "record(1, 7) = nan");
