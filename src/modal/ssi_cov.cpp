@@ -125,6 +125,7 @@ SsiResult SsiCov::identify(const Eigen::Ref<const Eigen::MatrixXd>& record,
   Eigen::HouseholderQR<MatrixXd> qr(obs.topRows(rows_up));
   const MatrixXd rfull = qr.matrixQR().topRows(nmax).triangularView<Eigen::Upper>();
   const MatrixXd qt_dw = qr.householderQ().transpose() * obs.bottomRows(rows_up);
+  const MatrixXd qthin = qr.householderQ() * MatrixXd::Identity(rows_up, nmax);  // Q[:, :nmax]
 
   // Per block: the sensitivity coefficients of the left singular vectors outside the kept
   // subspace, C_b[k, j] = sqrt(s_j) (s_j a_kj + s_k a_jk) / (s_j^2 - s_k^2), a = U^T dH_b V, so
@@ -179,6 +180,12 @@ SsiResult SsiCov::identify(const Eigen::Ref<const Eigen::MatrixXd>& record,
     for (int j = 0; j < n; ++j)
       if (mu[j].imag() > 0.0 && std::abs(mu[j]) > 0.0) kept.push_back(j);
     MatrixXcd dmu(kept.size(), nb > 1 ? nb : 0);
+    // The kept rows of Psi^{-1}, split into real and imaginary parts for real products with dA.
+    MatrixXd inv_re(kept.size(), n), inv_im(kept.size(), n);
+    for (size_t q = 0; q < kept.size(); ++q) {
+      inv_re.row(q) = psi_inv.row(kept[q]).real();
+      inv_im.row(q) = psi_inv.row(kept[q]).imag();
+    }
     for (int b = 0; b < (nb > 1 ? nb : 0); ++b) {
       const MatrixXd dobs = u.rightCols(m - n) * coeff[b].bottomLeftCorner(m - n, n);
       const auto dup = dobs.topRows(rows_up);
@@ -186,16 +193,17 @@ SsiResult SsiCov::identify(const Eigen::Ref<const Eigen::MatrixXd>& record,
       // dA = O_up^+ (dO_dw - dO_up A) + (O_up^T O_up)^{-1} dO_up^T (O_dw - O_up A)
       // (the derivative of A = (O_up^T O_up)^{-1} O_up^T O_dw; Doehler & Mevel
       // 2013 eqs. 36-37), with O_up^T O_up = R^T R.
-      const MatrixXd qpart = qr.householderQ().transpose() * (ddw - dup * an);
-      MatrixXd da = rtri.solve(qpart.topRows(n));
-      MatrixXd tmp = dup.transpose() * res;
-      tmp = rtri.transpose().solve(tmp);
-      da += rtri.solve(tmp);
+      // = R^{-1} (Q_n^T (dO_dw - dO_up A) + R^{-T} dO_up^T (O_dw - O_up A)).
+      MatrixXd rhs = qthin.leftCols(n).transpose() * (ddw - dup * an);
+      rhs += rtri.transpose().solve(dup.transpose() * res);
+      const MatrixXd da = rtri.solve(rhs);
       // d mu_j = chi_j^H dA psi_j / (chi_j^H psi_j) (Doehler & Mevel 2013 eq. 43).
-      const MatrixXcd w = psi_inv * da.cast<std::complex<double>>();
+      const MatrixXd w_re = inv_re * da, w_im = inv_im * da;
       for (size_t q = 0; q < kept.size(); ++q) {
         const int j = kept[q];
-        dmu(q, b) = w.row(j).transpose().cwiseProduct(psi.col(j)).sum();
+        std::complex<double> sum = 0.0;
+        for (int k = 0; k < n; ++k) sum += std::complex<double>(w_re(q, k), w_im(q, k)) * psi(k, j);
+        dmu(q, b) = sum;
       }
     }
     for (size_t q = 0; q < kept.size(); ++q) {
