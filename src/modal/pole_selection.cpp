@@ -1,0 +1,147 @@
+#include "drivetrain_stiffness/modal/pole_selection.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <set>
+
+#include "drivetrain_stiffness/core/validation.hpp"
+
+namespace drivetrain_stiffness::modal {
+
+double mac(const Eigen::VectorXcd& a, const Eigen::VectorXcd& b) {
+  if (a.size() != b.size())
+    throwInvalid("mac.shape_size", static_cast<double>(b.size()),
+                 "must equal the other shape's size " + std::to_string(a.size()));
+  const double na = a.squaredNorm(), nb = b.squaredNorm();
+  if (!(na > 0.0 && nb > 0.0)) return 0.0;
+  // Allemang & Brown 1982: MAC = |a^H b|^2 / ((a^H a)(b^H b)).
+  return std::norm(a.dot(b)) / (na * nb);
+}
+
+namespace {
+
+void validate(const SelectionOptions& o) {
+  requireInOpenRange("selection.stable_frequency", o.stable_frequency, 0.0, 1.0);
+  requirePositive("selection.stable_damping", o.stable_damping);
+  requireInClosedRange("selection.stable_mac", o.stable_mac, 0.0, 1.0);
+  requireInOpenRange("selection.max_damping", o.max_damping, 0.0, 1.0);
+  requireInOpenRange("selection.cluster_frequency", o.cluster_frequency, 0.0, 1.0);
+  requireInClosedRange("selection.cluster_mac", o.cluster_mac, 0.0, 1.0);
+  requireInClosedRange("selection.min_orders_fraction", o.min_orders_fraction, 0.0, 1.0);
+  requireNonNegative("selection.damping_significance", o.damping_significance);
+  requireNonNegative("selection.resolution_sigmas", o.resolution_sigmas);
+}
+
+bool inBand(double f, const std::vector<FrequencyBand>& bands) {
+  return std::any_of(bands.begin(), bands.end(),
+                     [f](const FrequencyBand& b) { return f >= b.low && f <= b.high; });
+}
+
+}  // namespace
+
+SelectionResult selectModes(const SsiResult& ssi, const std::vector<FrequencyBand>& excluded,
+                            const SelectionOptions& o) {
+  validate(o);
+  for (size_t k = 0; k < excluded.size(); ++k) {
+    requireFinite("excluded[" + std::to_string(k) + "].low", excluded[k].low);
+    requireFinite("excluded[" + std::to_string(k) + "].high", excluded[k].high);
+  }
+  SelectionResult out;
+  std::map<int, std::vector<const Pole*>> by_order;
+  for (const Pole& p : ssi.poles) {
+    if (inBand(p.frequency, excluded)) {
+      out.order_poles.push_back(p);
+      continue;
+    }
+    if (!(p.damping > 0.0 && p.damping < o.max_damping)) continue;
+    by_order[p.order].push_back(&p);
+  }
+
+  // Stabilisation: a pole is stable when the order below or above holds one of close frequency,
+  // damping and shape (Peeters & De Roeck 2001, the stabilisation diagram; Reynders et al. 2012).
+  auto matches = [&](const Pole* p, int order) {
+    const auto other = by_order.find(order);
+    if (other == by_order.end()) return false;
+    return std::any_of(other->second.begin(), other->second.end(), [&](const Pole* q) {
+      return std::abs(p->frequency - q->frequency) < o.stable_frequency * p->frequency &&
+             std::abs(p->damping - q->damping) < o.stable_damping * p->damping &&
+             mac(p->shape, q->shape) >= o.stable_mac;
+    });
+  };
+  std::vector<const Pole*> stable;
+  for (const auto& [n, poles] : by_order)
+    for (const Pole* p : poles)
+      if (matches(p, n - 2) || matches(p, n + 2)) stable.push_back(p);
+  std::sort(stable.begin(), stable.end(),
+            [](const Pole* a, const Pole* b) { return a->frequency < b->frequency; });
+
+  // Clustering: each stable pole, by increasing frequency, joins the cluster whose first pole is
+  // within cluster_frequency and cluster_mac, else opens one.
+  std::vector<std::vector<const Pole*>> clusters;
+  for (const Pole* p : stable) {
+    std::vector<const Pole*>* home = nullptr;
+    for (auto& c : clusters) {
+      const Pole* first = c.front();
+      if (std::abs(p->frequency - first->frequency) < o.cluster_frequency * first->frequency &&
+          mac(p->shape, first->shape) >= o.cluster_mac) {
+        home = &c;
+        break;
+      }
+    }
+    if (home)
+      home->push_back(p);
+    else
+      clusters.push_back({p});
+  }
+
+  const int n_orders = (ssi.max_order - ssi.min_order) / 2 + 1;
+  const int needed = std::max(3, static_cast<int>(std::ceil(o.min_orders_fraction * n_orders)));
+  for (const auto& c : clusters) {
+    std::set<int> orders;
+    bool unresolved = false;
+    for (const Pole* p : c) unresolved = !orders.insert(p->order).second || unresolved;
+    if (static_cast<int>(orders.size()) < needed) {
+      ++out.spurious_clusters;
+      continue;
+    }
+    // The representative: the member with the smallest frequency std, the order at which the
+    // first-order propagation's singular-value gap is clearest (docs/vibration.md, "Variance
+    // propagation"); without std, the member of median frequency.
+    const Pole* rep = c[c.size() / 2];
+    if (ssi.variance_blocks > 0)
+      rep = *std::min_element(c.begin(), c.end(), [](const Pole* a, const Pole* b) {
+        return a->frequency_std < b->frequency_std;
+      });
+    const bool significant = std::any_of(c.begin(), c.end(), [&](const Pole* p) {
+      return p->damping > o.damping_significance * p->damping_std;
+    });
+    if (ssi.variance_blocks > 0 && !significant) {
+      ++out.spurious_clusters;
+      continue;
+    }
+    IdentifiedMode m;
+    m.frequency = rep->frequency;
+    m.frequency_std = rep->frequency_std;
+    m.damping = rep->damping;
+    m.damping_std = rep->damping_std;
+    m.shape = rep->shape;
+    m.order = rep->order;
+    m.orders = static_cast<int>(orders.size());
+    m.frequency_spread = c.back()->frequency - c.front()->frequency;
+    m.unresolved = unresolved;
+    out.modes.push_back(std::move(m));
+  }
+  std::sort(
+      out.modes.begin(), out.modes.end(),
+      [](const IdentifiedMode& a, const IdentifiedMode& b) { return a.frequency < b.frequency; });
+  // Neighbours closer than resolution_sigmas std of their difference are not resolved.
+  for (size_t k = 1; k < out.modes.size(); ++k) {
+    IdentifiedMode &a = out.modes[k - 1], &b = out.modes[k];
+    const double sd = std::hypot(a.frequency_std, b.frequency_std);
+    if (b.frequency - a.frequency < o.resolution_sigmas * sd) a.unresolved = b.unresolved = true;
+  }
+  return out;
+}
+
+}  // namespace drivetrain_stiffness::modal
