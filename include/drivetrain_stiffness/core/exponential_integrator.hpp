@@ -26,6 +26,9 @@
 
 namespace drivetrain_stiffness {
 
+template <int P, int Q>
+struct BlockTriangular;
+
 class PeriodicExponentialPropagator {
  public:
   /// `output_interval` must divide the mesh period (within 1e-9); `step_factor` bounds each Magnus
@@ -99,10 +102,25 @@ class PeriodicExponentialPropagator {
 
  private:
   using Matrix11 = Eigen::Matrix<double, 11, 11>;
+  using Vector11 = Eigen::Matrix<double, 11, 1>;
   using Propagator = Eigen::Matrix<double, 9, 11>;
   Matrix11 systemMatrix(double t) const;
+  void buildInterval(long j, const std::vector<double>& kinks, double h_max, const Vector11& scale,
+                     const Matrix11& to_balanced, std::vector<BlockTriangular<6, 5>>& step_exps);
+  /// Magnus steps over [start, start + len] [s], multiplied into phi.
+  void magnusPiece(double start, double len, double h_max, const Matrix11& to_balanced,
+                   std::vector<BlockTriangular<6, 5>>& step_exps, BlockTriangular<6, 5>& phi);
+  void storeTails(const std::vector<BlockTriangular<6, 5>>& step_exps, const Vector11& scale);
   void tabulateSettling(const RigExcitation& excitation, const std::vector<double>& kinks,
                         double period);
+  /// max over 16 phases of sum_k |c v_k| |w_k e_x|.
+  double swingGain(double period) const;
+  /// Interval k with the profile's torque steps; `before` [N·m] held at its start.
+  Eigen::Matrix<double, 9, 1> withTorqueSteps(long k, int j, Vector11& w, double before,
+                                              double t_next, IntegrationStats& st) const;
+  State6 handOver(double t_k, const State6& y_k, double t_end, const Observer& observe,
+                  const IntegratorOptions& fallback, IntegrationStats& st,
+                  IntegrationStats* stats) const;
   std::vector<double> settle_force_;  ///< mesh forces [N], ascending, for contactsSettle
   std::vector<char> settle_ok_;
   double settle_gain_ = 0.0;

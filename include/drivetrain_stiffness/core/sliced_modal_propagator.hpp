@@ -244,6 +244,25 @@ class SlicedModalPropagator {
   /// Slice j's modes by Eigen's EigenSolver and a complex LU inverse (about 5 us).
   void decomposeGeneral(MeshRegime r, int j, Slice& s) const;
   Matrix6 systemMatrix(MeshRegime r, int j) const;
+  /// propagateLinear's walk through the slices: state, phase (whole turns and fraction), time left
+  /// [s], TE phasor, slice, regime, changes met.
+  struct Walk {
+    State6 z, z_end;
+    double whole = 0.0, frac = 0.0, remaining = 0.0;
+    Complex e_theta;
+    int j = -1;
+    MeshRegime regime = MeshRegime::kBothFlanks;
+    int changes = 0;
+  };
+  /// One step of the walk (to a boundary, a change or the end); false where it hands back.
+  bool walkStep(Walk& k, double f, double drive_force) const;
+  /// The step's length [s] to the slice boundary or the end; its end phase and whether it crosses.
+  double stepLength(const Walk& k, double f, double& next, bool& crossing) const;
+  /// The step taken: phase, slice crossed, regime on the far side; false in none.
+  bool endStep(Walk& k, double f, double h, double next, bool crossing, bool leaves,
+               Complex e_end) const;
+  /// The regime the walk's state is in, in its slice; false in none.
+  bool takeRegime(Walk& k, double w) const;
   /// One step's modal set-up from y inside slice j, independent of the step's length: modal
   /// coordinates, forcing, and the particular solution with the free part R where they exist.
   struct Piece {
