@@ -40,6 +40,45 @@ double fastestRate(const GearRotorModel& model, const RigExcitation& excitation,
 }
 // State indices of the augmented system.
 enum : int { kXp = 0, kXg, kX, kVp, kVg, kV, kSin, kCos, kOne, kU, kUdot };
+
+// Output intervals per mesh period [s] at output_interval [s]: InvalidInput where they are more
+// than `most` or do not divide the period.
+long gridIntervals(double period, double output_interval, double most) {
+  const double n_real = period / output_interval;
+  // Checked before lround: a slow mesh on a fine grid asks for more intervals than a long holds.
+  if (!(n_real <= most)) {
+    throwInvalid("output_interval", output_interval,
+                 "gives " + formatValue(n_real) + " samples per mesh period of " +
+                     formatValue(period) + " s: more than " + formatValue(most) +
+                     " stored propagators");
+  }
+  const long n = std::lround(n_real);
+  if (n < 1 || std::abs(n_real - n) > 1e-9 * n_real) {
+    throwInvalid("output_interval", output_interval,
+                 "must divide the mesh period " + formatValue(period) + " s");
+  }
+  return n;
+}
+
+// The times in (t0, t0 + period) where A(t) has a kink, sorted: every node of the phase table and
+// every tooth-count switch, so that A(t) is linear in t inside each piece between them and the
+// Gauss-point Magnus step keeps its order.
+std::vector<double> kinkTimes(const RigExcitation& excitation, double t0, double period) {
+  std::vector<double> kinks;
+  const std::vector<double> nodes = excitation.mesh().tableNodePhases();
+  const double f = excitation.meshFrequency(), phase0 = excitation.spec().initial_phase;
+  const double first_turn = std::floor(phase0 + f * t0);
+  for (int cycle = 0; cycle <= 1; ++cycle) {
+    for (double node : nodes) {
+      const double t = (first_turn + cycle + node - phase0) / f;
+      if (t > t0 && t < t0 + period) kinks.push_back(t);
+    }
+  }
+  for (double t = excitation.nextSwitch(t0); t < t0 + period; t = excitation.nextSwitch(t))
+    kinks.push_back(t);
+  std::sort(kinks.begin(), kinks.end());
+  return kinks;
+}
 }  // namespace
 
 double PeriodicExponentialPropagator::torqueAt(double t) const {
@@ -66,19 +105,7 @@ PeriodicExponentialPropagator::PeriodicExponentialPropagator(const GearRotorMode
   requirePositive("magnus_step_factor", step_factor);
   const RigExcitationSpec& spec = excitation.spec();
   const double period = 1.0 / excitation.meshFrequency();
-  const double n_real = period / output_interval;
-  // Checked before lround: a slow mesh on a fine grid asks for more intervals than a long holds.
-  if (!(n_real <= kMaxIntervalsPerPeriod)) {
-    throwInvalid("output_interval", output_interval,
-                 "gives " + formatValue(n_real) + " samples per mesh period of " +
-                     formatValue(period) + " s: more than " + formatValue(kMaxIntervalsPerPeriod) +
-                     " stored propagators");
-  }
-  const long n = std::lround(n_real);
-  if (n < 1 || std::abs(n_real - n) > 1e-9 * n_real) {
-    throwInvalid("output_interval", output_interval,
-                 "must divide the mesh period " + formatValue(period) + " s");
-  }
+  const long n = gridIntervals(period, output_interval, kMaxIntervalsPerPeriod);
   te_amplitude_ = spec.te_amplitude;
   te_omega_ = kTwoPi * excitation.meshFrequency();
   te_phase_ = kTwoPi * spec.initial_phase;
@@ -100,28 +127,12 @@ PeriodicExponentialPropagator::PeriodicExponentialPropagator(const GearRotorMode
                      formatValue(kMaxSetupSteps) + "): the mesh is too slow for exact propagation");
   }
 
-  // Pieces end exactly on the tooth-count switches and on every node of the phase table, so that
-  // A(t) is linear in t inside each piece and the Gauss-point Magnus step keeps its order.
-  std::vector<double> kinks;
-  {
-    const std::vector<double> nodes = excitation.mesh().tableNodePhases();
-    const double f = excitation.meshFrequency(), phase0 = spec.initial_phase;
-    const double first_turn = std::floor(phase0 + f * t0);
-    for (int cycle = 0; cycle <= 1; ++cycle) {
-      for (double node : nodes) {
-        const double t = (first_turn + cycle + node - phase0) / f;
-        if (t > t0 && t < t0 + period) kinks.push_back(t);
-      }
-    }
-    for (double t = excitation.nextSwitch(t0); t < t0 + period; t = excitation.nextSwitch(t))
-      kinks.push_back(t);
-    std::sort(kinks.begin(), kinks.end());
-  }
+  const std::vector<double> kinks = kinkTimes(excitation, t0, period);
 
   // Balance the state before exponentiating: displacements in um, velocities in um * omega_max,
   // the generator states (sin, cos, 1) and the torque O(1). The exponential is accurate normwise,
   // so without this the O(1) forcing columns would pollute the 1e-7 m displacements.
-  Eigen::Matrix<double, 11, 1> scale;
+  Vector11 scale;
   scale << 1e-6, 1e-6, 1e-6, 1e-6 * w_max, 1e-6 * w_max, 1e-6 * w_max, 1.0, 1.0, 1.0, 1.0,
       1.0 / output_interval;
   // Balancing as an elementwise factor, (D^-1 X D)_rc = X_rc scale_c / scale_r: no dense product.
@@ -145,91 +156,104 @@ PeriodicExponentialPropagator::PeriodicExponentialPropagator(const GearRotorMode
   // The augmented matrix is [[state 6x6, forcing 6x5], [0, generator 5x5]]: the generator rows
   // (sin, cos, 1, u, u') never read the state, and so do Omega, its exponentials and their
   // products.
-  using Blocks = BlockTriangular<6, 5>;
-  std::vector<Blocks> step_exps;  // one interval's Magnus steps, balanced units
-  for (long j = 0; j < n; ++j) {
-    const double a = t0 + j * output_interval, b = a + output_interval;
-    MeshInstant mj;
-    excitation.at(a, mj);
-    k1_[j] = mj.k_drive;
-    kc_[j] = mj.k_back;
-    backlash_offset_[j] = mj.backlash;
-    std::vector<double> cuts = {a};
-    for (auto it = std::upper_bound(kinks.begin(), kinks.end(), a); it != kinks.end() && *it < b;
-         ++it) {
-      if (*it - cuts.back() > 1e-12 * output_interval) cuts.push_back(*it);
-    }
-    if (b - cuts.back() <= 1e-12 * output_interval) cuts.pop_back();
-    cuts.push_back(b);
-    Blocks phi = Blocks::identity();
-    step_exps.clear();
-    for (std::size_t c = 0; c + 1 < cuts.size(); ++c) {
-      const double len = cuts[c + 1] - cuts[c];
-      const int steps = std::max(1, static_cast<int>(std::ceil(len / h_max)));
-      const double h = len / steps;
-      pieces_.push_back({cuts[c], h, steps, static_cast<int>(step_exps.size())});
-      // A(t) is linear in t inside a piece (it ends on every table node and switch), A0 + tau A1
-      // from two interior points (no switch at either end read on its wrong side), so the
-      // 4th-order Magnus step with Gauss points t1, t2 = tau + (1/2 -+ sqrt(3)/6) h (Blanes, Casas,
-      // Oteo & Ros 2009, eq. 4.4), Omega = h/2 (A(t1) + A(t2)) + sqrt(3) h^2/12 [A(t2), A(t1)], is
-      // h A(tau + h/2) + h^3/12 [A1, A0]: one commutator per piece, none per step.
-      const double ta = len / 3.0, tb = 2.0 * len / 3.0;
-      const Matrix11 aa = systemMatrix(cuts[c] + ta), ab = systemMatrix(cuts[c] + tb);
-      const Matrix11 a1 = (ab - aa) / (tb - ta), a0 = aa - ta * a1;
-      // Parameters that pass validation can still overflow the system matrix (a mesh damping of
-      // 1e307 over a gram): refused by name here, where the blocks would otherwise turn NaN.
-      if (!aa.allFinite() || !ab.allFinite()) {
-        throwInvalid("system matrix", (aa.allFinite() ? ab : aa).cwiseAbs().maxCoeff(),
-                     "overflows at t = " + formatValue(cuts[c]) +
-                         " s: the parameters are beyond double range");
-      }
-      const Matrix11 commutator = a1.lazyProduct(a0) - a0.lazyProduct(a1);
-      // The generator rows never read the state (systemMatrix), so A0, A1 and [A1, A0] have a zero
-      // lower-left block and blockTriangularExp may ignore it; checked once per piece.
-      if (!a0.bottomLeftCorner<5, 6>().isZero(0.0) || !a1.bottomLeftCorner<5, 6>().isZero(0.0) ||
-          !commutator.bottomLeftCorner<5, 6>().isZero(0.0)) {
-        throw std::logic_error("exponential set-up: the forcing generator's rows read the state");
-      }
-      if (torque_steps_) piece_operators_.push_back(pieceOperators(aa, ab, len));
-      for (int s = 0; s < steps; ++s) {
-        const Matrix11 omega = h * (a0 + ((s + 0.5) * h) * a1) + (h * h * h / 12.0) * commutator;
-        step_exps.push_back(blockTriangularExp(
-            Blocks::fromDense(omega.cwiseProduct(to_balanced))));  // balanced units
-        phi = step_exps.back() * phi;
-        ++magnus_steps_;
-      }
-    }
-    propagators_[j] =
-        phi.dense().cwiseQuotient(to_balanced).topRows<9>();  // back to physical units
-    // Phi(b, node) backwards from the end, kept at the nodes stride, 2 stride, ... and the last.
-    const int m = static_cast<int>(step_exps.size());
-    const int kept = torque_steps_ ? (m + node_stride_ - 1) / node_stride_ : 0;
-    tails_.resize(tails_.size() + kept);
-    // Only the state rows: the torque response needs no TE or torque row.
-    Eigen::Matrix<double, 6, 11> tail = Eigen::Matrix<double, 6, 11>::Identity();
-    if (torque_steps_) {
-      for (int node = m; node >= 1; --node) {
-        if (node == m || node % node_stride_ == 0) {
-          Tail& out = tails_[tail_begin_.back() + (node + node_stride_ - 1) / node_stride_ - 1];
-          // Back to physical units: d (rows) tail d^-1 (columns).
-          for (int c = 0; c < 7; ++c) {
-            const int col = c < 6 ? c : static_cast<int>(kU);
-            for (int r = 0; r < 6; ++r) out(r, c) = scale[r] * tail(r, col) / scale[col];
-          }
-        }
-        // [T_x, T_y] [[E_x, E_y], [0, E_z]] = [T_x E_x, T_x E_y + T_y E_z]
-        const Blocks& e = step_exps[node - 1];
-        Eigen::Matrix<double, 6, 5> right = tail.leftCols<6>() * e.y;
-        right.noalias() += tail.rightCols<5>() * e.z;
-        tail.leftCols<6>() = (tail.leftCols<6>() * e.x).eval();
-        tail.rightCols<5>() = right;
-      }
-    }
-    node_count_[j] = m;
-    piece_begin_.push_back(static_cast<int>(pieces_.size()));
-    tail_begin_.push_back(static_cast<int>(tails_.size()));
-  }
+  std::vector<BlockTriangular<6, 5>> step_exps;  // one interval's Magnus steps, balanced units
+  for (long j = 0; j < n; ++j) buildInterval(j, kinks, h_max, scale, to_balanced, step_exps);
   if (tabulate_settling && preload_force_ > 0.0) tabulateSettling(excitation, kinks, period);
+}
+
+void PeriodicExponentialPropagator::buildInterval(long j, const std::vector<double>& kinks,
+                                                  double h_max, const Vector11& scale,
+                                                  const Matrix11& to_balanced,
+                                                  std::vector<BlockTriangular<6, 5>>& step_exps) {
+  const double a = t0_ + j * interval_, b = a + interval_;
+  MeshInstant mj;
+  rig().at(a, mj);
+  k1_[j] = mj.k_drive;
+  kc_[j] = mj.k_back;
+  backlash_offset_[j] = mj.backlash;
+  std::vector<double> cuts = {a};
+  for (auto it = std::upper_bound(kinks.begin(), kinks.end(), a); it != kinks.end() && *it < b;
+       ++it) {
+    if (*it - cuts.back() > 1e-12 * interval_) cuts.push_back(*it);
+  }
+  if (b - cuts.back() <= 1e-12 * interval_) cuts.pop_back();
+  cuts.push_back(b);
+  BlockTriangular<6, 5> phi = BlockTriangular<6, 5>::identity();
+  step_exps.clear();
+  for (std::size_t c = 0; c + 1 < cuts.size(); ++c)
+    magnusPiece(cuts[c], cuts[c + 1] - cuts[c], h_max, to_balanced, step_exps, phi);
+  propagators_[j] = phi.dense().cwiseQuotient(to_balanced).topRows<9>();  // back to physical units
+  storeTails(step_exps, scale);
+  node_count_[j] = static_cast<int>(step_exps.size());
+  piece_begin_.push_back(static_cast<int>(pieces_.size()));
+  tail_begin_.push_back(static_cast<int>(tails_.size()));
+}
+
+void PeriodicExponentialPropagator::magnusPiece(double start, double len, double h_max,
+                                                const Matrix11& to_balanced,
+                                                std::vector<BlockTriangular<6, 5>>& step_exps,
+                                                BlockTriangular<6, 5>& phi) {
+  using Blocks = BlockTriangular<6, 5>;
+  const int steps = std::max(1, static_cast<int>(std::ceil(len / h_max)));
+  const double h = len / steps;
+  pieces_.push_back({start, h, steps, static_cast<int>(step_exps.size())});
+  // A(t) is linear in t inside a piece (it ends on every table node and switch), A0 + tau A1
+  // from two interior points (no switch at either end read on its wrong side), so the
+  // 4th-order Magnus step with Gauss points t1, t2 = tau + (1/2 -+ sqrt(3)/6) h (Blanes, Casas,
+  // Oteo & Ros 2009, eq. 4.4), Omega = h/2 (A(t1) + A(t2)) + sqrt(3) h^2/12 [A(t2), A(t1)], is
+  // h A(tau + h/2) + h^3/12 [A1, A0]: one commutator per piece, none per step.
+  const double ta = len / 3.0, tb = 2.0 * len / 3.0;
+  const Matrix11 aa = systemMatrix(start + ta), ab = systemMatrix(start + tb);
+  const Matrix11 a1 = (ab - aa) / (tb - ta), a0 = aa - ta * a1;
+  // Parameters that pass validation can still overflow the system matrix (a mesh damping of
+  // 1e307 over a gram): refused by name here, where the blocks would otherwise turn NaN.
+  if (!aa.allFinite() || !ab.allFinite()) {
+    throwInvalid(
+        "system matrix", (aa.allFinite() ? ab : aa).cwiseAbs().maxCoeff(),
+        "overflows at t = " + formatValue(start) + " s: the parameters are beyond double range");
+  }
+  const Matrix11 commutator = a1.lazyProduct(a0) - a0.lazyProduct(a1);
+  // The generator rows never read the state (systemMatrix), so A0, A1 and [A1, A0] have a zero
+  // lower-left block and blockTriangularExp may ignore it; checked once per piece.
+  if (!a0.bottomLeftCorner<5, 6>().isZero(0.0) || !a1.bottomLeftCorner<5, 6>().isZero(0.0) ||
+      !commutator.bottomLeftCorner<5, 6>().isZero(0.0)) {
+    throw std::logic_error("exponential set-up: the forcing generator's rows read the state");
+  }
+  if (torque_steps_) piece_operators_.push_back(pieceOperators(aa, ab, len));
+  for (int s = 0; s < steps; ++s) {
+    const Matrix11 omega = h * (a0 + ((s + 0.5) * h) * a1) + (h * h * h / 12.0) * commutator;
+    step_exps.push_back(
+        blockTriangularExp(Blocks::fromDense(omega.cwiseProduct(to_balanced))));  // balanced units
+    phi = step_exps.back() * phi;
+    ++magnus_steps_;
+  }
+}
+
+void PeriodicExponentialPropagator::storeTails(const std::vector<BlockTriangular<6, 5>>& step_exps,
+                                               const Vector11& scale) {
+  // Phi(b, node) backwards from the end, kept at the nodes stride, 2 stride, ... and the last.
+  const int m = static_cast<int>(step_exps.size());
+  const int kept = torque_steps_ ? (m + node_stride_ - 1) / node_stride_ : 0;
+  tails_.resize(tails_.size() + kept);
+  if (!torque_steps_) return;
+  // Only the state rows: the torque response needs no TE or torque row.
+  Eigen::Matrix<double, 6, 11> tail = Eigen::Matrix<double, 6, 11>::Identity();
+  for (int node = m; node >= 1; --node) {
+    if (node == m || node % node_stride_ == 0) {
+      Tail& out = tails_[tail_begin_.back() + (node + node_stride_ - 1) / node_stride_ - 1];
+      // Back to physical units: d (rows) tail d^-1 (columns).
+      for (int c = 0; c < 7; ++c) {
+        const int col = c < 6 ? c : static_cast<int>(kU);
+        for (int r = 0; r < 6; ++r) out(r, c) = scale[r] * tail(r, col) / scale[col];
+      }
+    }
+    // [T_x, T_y] [[E_x, E_y], [0, E_z]] = [T_x E_x, T_x E_y + T_y E_z]
+    const BlockTriangular<6, 5>& e = step_exps[node - 1];
+    Eigen::Matrix<double, 6, 5> right = tail.leftCols<6>() * e.y;
+    right.noalias() += tail.rightCols<5>() * e.z;
+    tail.leftCols<6>() = (tail.leftCols<6>() * e.x).eval();
+    tail.rightCols<5>() = right;
+  }
 }
 
 void PeriodicExponentialPropagator::tabulateSettling(const RigExcitation& excitation,
@@ -251,27 +275,7 @@ void PeriodicExponentialPropagator::tabulateSettling(const RigExcitation& excita
     k1[i] = m.k_drive;
     kc[i] = m.k_back;
   }
-  // gain: how far the mesh deflection can swing past its new static value, per unit of a step of
-  // that static value, with both flanks loaded: a tooth switch steps the static deflection by J
-  // (the shafts' static positions depend on the force alone, so the step is J on the torsional
-  // coordinate x), and from rest at the old static state the deflection moves as
-  // delta - delta_new = c e^{A t} (J e_x) = J sum_k (c v_k) e^{lambda_k t} (w_k e_x), bounded by
-  // J sum_k |c v_k| |w_k e_x| (A's modes v_k, the rows w_k of V^-1; c reads delta = x + x_p - x_g).
-  // The largest over 16 phases (the modes change little with the phase; 16 decompositions, not one
-  // per sample).
-  double gain = 0.0;
-  for (int i = 0; i < 16; ++i) {
-    const Matrix6 a = systemMatrix(t0_ + period * (i + 0.5) / 16.0).topLeftCorner<6, 6>();
-    const Eigen::EigenSolver<Matrix6> es(a);
-    if (es.info() != Eigen::Success) {
-      gain = INFINITY;
-      break;
-    }
-    const Eigen::Matrix<std::complex<double>, 6, 6> v = es.eigenvectors(), w = v.inverse();
-    double g = 0.0;
-    for (int k = 0; k < 6; ++k) g += std::abs(v(2, k) + v(0, k) - v(1, k)) * std::abs(w(k, 2));
-    gain = std::isfinite(g) ? std::max(gain, g) : INFINITY;
-  }
+  const double gain = swingGain(period);
   settle_gain_ = gain;
   // Held mesh force F with both flanks loaded at every phase: the static deflection
   // delta = F / (k1 + k_c) and its distance to the thresholds (the back path lifts at
@@ -315,6 +319,31 @@ void PeriodicExponentialPropagator::tabulateSettling(const RigExcitation& excita
     settle_force_.push_back(f);
     settle_ok_.push_back(ok ? 1 : 0);
   }
+}
+
+double PeriodicExponentialPropagator::swingGain(double period) const {
+  // gain: how far the mesh deflection can swing past its new static value, per unit of a step of
+  // that static value, with both flanks loaded: a tooth switch steps the static deflection by J
+  // (the shafts' static positions depend on the force alone, so the step is J on the torsional
+  // coordinate x), and from rest at the old static state the deflection moves as
+  // delta - delta_new = c e^{A t} (J e_x) = J sum_k (c v_k) e^{lambda_k t} (w_k e_x), bounded by
+  // J sum_k |c v_k| |w_k e_x| (A's modes v_k, the rows w_k of V^-1; c reads delta = x + x_p - x_g).
+  // The largest over 16 phases (the modes change little with the phase; 16 decompositions, not one
+  // per sample).
+  double gain = 0.0;
+  for (int i = 0; i < 16; ++i) {
+    const Matrix6 a = systemMatrix(t0_ + period * (i + 0.5) / 16.0).topLeftCorner<6, 6>();
+    const Eigen::EigenSolver<Matrix6> es(a);
+    if (es.info() != Eigen::Success) {
+      gain = INFINITY;
+      break;
+    }
+    const Eigen::Matrix<std::complex<double>, 6, 6> v = es.eigenvectors(), w = v.inverse();
+    double g = 0.0;
+    for (int k = 0; k < 6; ++k) g += std::abs(v(2, k) + v(0, k) - v(1, k)) * std::abs(w(k, 2));
+    gain = std::isfinite(g) ? std::max(gain, g) : INFINITY;
+  }
+  return gain;
 }
 
 bool PeriodicExponentialPropagator::contactsSettle(double torque) const {
@@ -517,6 +546,48 @@ bool PeriodicExponentialPropagator::step(long k, Augmented& z, double torque_k, 
   return true;
 }
 
+Eigen::Matrix<double, 9, 1> PeriodicExponentialPropagator::withTorqueSteps(
+    long k, int j, Vector11& w, double before, double t_next, IntegrationStats& st) const {
+  // The torque held from the interval's start, plus each step's size times the response to a unit
+  // step at its instant (exact: the system is linear).
+  const TorqueProfile& torque = rig().spec().torque;
+  w[kUdot] = 0.0;
+  Eigen::Matrix<double, 9, 1> z_next;
+  z_next.noalias() = propagators_[j].lazyProduct(w);
+  for (const auto& step : torque.steps) {
+    if (step.first > t_next - interval_ && step.first <= t_next) {
+      z_next.head<6>() +=
+          (step.second - before) * torqueStepResponse(k, step.first - (t_next - interval_));
+      before = step.second;
+      ++st.events;
+    }
+  }
+  return z_next;
+}
+
+State6 PeriodicExponentialPropagator::handOver(double t_k, const State6& y_k, double t_end,
+                                               const Observer& observe,
+                                               const IntegratorOptions& fallback,
+                                               IntegrationStats& st,
+                                               IntegrationStats* stats) const {
+  IntegrationStats rest;
+  bool first = true;
+  const State6 y_end = integrate(
+      model_, IntegratorMethod::kDopri5, fallback, t_k, y_k, t_end, interval_,
+      [&](double t, const State6& y) {
+        if (!first && observe) observe(t, y);
+        first = false;
+      },
+      &rest);
+  st.steps += rest.steps;
+  st.rhs_evaluations += rest.rhs_evaluations;
+  st.events += rest.events;
+  st.fallbacks = 1;
+  st.fallback_from = t_k;
+  if (stats) *stats = st;
+  return y_end;
+}
+
 State6 PeriodicExponentialPropagator::run(const State6& y0, double t_end, const Observer& observe,
                                           const IntegratorOptions& fallback,
                                           IntegrationStats* stats) const {
@@ -537,7 +608,7 @@ State6 PeriodicExponentialPropagator::run(const State6& y0, double t_end, const 
   if (observe) observe(t0_, y0);
   const int n = static_cast<int>(propagators_.size());
   double u = torqueAt(t0_) - torque.mean;
-  Eigen::Matrix<double, 11, 1> w;
+  Vector11 w;
   // The interval's propagator: k mod n carried rather than divided out at every sample. Each
   // product is Eigen's lazyProduct: 9 + 1 + 11 is above Eigen's threshold for coefficient-based
   // products, so operator* took its GEMV kernel, whose call costs more than the product at this
@@ -556,42 +627,14 @@ State6 PeriodicExponentialPropagator::run(const State6& y0, double t_end, const 
     Eigen::Matrix<double, 9, 1> z_next;
     if (torque.kind == TorqueProfile::Kind::kSteps &&
         stepInside(torque, t_next - interval_, t_next)) {
-      // Torque steps inside this interval: the torque held from its start, plus each step's size
-      // times the response to a unit step at its instant (exact: the system is linear).
-      w[kUdot] = 0.0;
-      z_next.noalias() = propagators_[j].lazyProduct(w);
-      double before = u + torque.mean;
-      for (const auto& step : torque.steps) {
-        if (step.first > t_next - interval_ && step.first <= t_next) {
-          z_next.head<6>() +=
-              (step.second - before) * torqueStepResponse(k, step.first - (t_next - interval_));
-          before = step.second;
-          ++st.events;
-        }
-      }
+      z_next = withTorqueSteps(k, j, w, u + torque.mean, t_next, st);
     } else {
       z_next.noalias() = propagators_[j].lazyProduct(w);
     }
     const int j_next = j + 1 == n ? 0 : j + 1;
     if (!linearRegime(j_next, z_next)) {
       // A contact opened: dopri5 takes over from the last sample in the linear regime.
-      const double t_k = t0_ + k * interval_;
-      IntegrationStats rest;
-      bool first = true;
-      const State6 y_end = integrate(
-          model_, IntegratorMethod::kDopri5, fallback, t_k, z.head<6>(), t_end, interval_,
-          [&](double t, const State6& y) {
-            if (!first && observe) observe(t, y);
-            first = false;
-          },
-          &rest);
-      st.steps += rest.steps;
-      st.rhs_evaluations += rest.rhs_evaluations;
-      st.events += rest.events;
-      st.fallbacks = 1;
-      st.fallback_from = t_k;
-      if (stats) *stats = st;
-      return y_end;
+      return handOver(t0_ + k * interval_, z.head<6>(), t_end, observe, fallback, st, stats);
     }
     z = z_next;
     u = u_next;

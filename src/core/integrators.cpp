@@ -142,88 +142,122 @@ IntegratorMethod parseIntegratorMethod(const std::string& field, const std::stri
 }
 const char* toString(IntegratorMethod m) { return enumName(kIntegratorMethods, m); }
 
-State6 integrate(const GearRotorModel& model, IntegratorMethod method, const IntegratorOptions& o,
-                 double t0, const State6& y0, double t_end, double interval,
-                 const Observer& observe, IntegrationStats* stats_out) {
-  requireFinite("t0", t0);
-  requireFinite("t_end", t_end);
-  if (!(t_end >= t0))
-    throwInvalid("t_end", t_end,
-                 "must be >= t0 = " + formatValue(t0) + " (time must not run backwards)");
-  requirePositive("output_interval", interval);
-  requirePositive("step", o.step);
-  if (!y0.allFinite()) throw InvalidInput("initial state: contains a non-finite value");
-  if (method == IntegratorMethod::kExponential) {
-    const PeriodicExponentialPropagator propagator(model, t0, interval, o.magnus_step_factor);
-    return propagator.run(y0, t_end, observe, o, stats_out);
-  }
-  IntegrationStats stats;
-  long next_out = 0;
-  if (observe) {
-    observe(t0, y0);
-    next_out = 1;
-  }
-  State6 y = y0;
+namespace {
 
-  if (method == IntegratorMethod::kRk4 || method == IntegratorMethod::kTrapezoidal) {
-    long per_output = 1;
-    const double h = o.step;
-    const long n = fixedStepCount(t_end - t0, h, interval, &per_output);
-    State6 k1, k2, k3, k4;
-    for (long i = 0; i < n; ++i) {
-      const double t = t0 + i * h;  // no accumulated round-off in t
-      if (method == IntegratorMethod::kRk4) {
-        model.rhs(t, y, k1);
-        model.rhs(t + 0.5 * h, y + 0.5 * h * k1, k2);
-        model.rhs(t + 0.5 * h, y + 0.5 * h * k2, k3);
-        model.rhs(t + h, y + h * k3, k4);
-        y += h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4);
-        stats.rhs_evaluations += 4;
-      } else {
-        // y1 = y0 + h/2 (f(t, y0) + f(t + h, y1)): Newton on g(y1) = y1 - y0 - h/2 (f0 + f(y1)).
-        model.rhs(t, y, k1);
-        State6 y1 = y + h * k1;  // explicit Euler predictor
-        // The forces are piecewise linear and the Jacobian exact within a contact regime, so Newton
-        // ends in one or two iterations unless the step crosses a contact change.
-        bool converged = false;
-        for (int it = 0; it < 12 && !converged; ++it) {
-          model.rhs(t + h, y1, k2);
-          const State6 g = y1 - y - 0.5 * h * (k1 + k2);
-          const Matrix6 a = Matrix6::Identity() - 0.5 * h * model.jacobian(t + h, y1);
-          const State6 dy = a.partialPivLu().solve(-g);
-          y1 += dy;
-          ++stats.newton_iterations;
-          stats.rhs_evaluations += 2;
-          const double scale = 1e-14 * (y1.head<3>().cwiseAbs().maxCoeff() + 1e-15);
-          const double vscale = 1e-14 * (y1.tail<3>().cwiseAbs().maxCoeff() + 1e-12);
-          converged = dy.head<3>().cwiseAbs().maxCoeff() <= scale &&
-                      dy.tail<3>().cwiseAbs().maxCoeff() <= vscale;
-        }
-        // A contact change inside the step can make Newton cycle between regimes: the step is kept
-        // (bounded) but counted, so a caller can see how often it happened.
-        if (!converged) ++stats.newton_failures;
-        y = y1;
-      }
-      ++stats.steps;
-      checkState(y, t + h, h, method, o);
-      if (observe && (i + 1) % per_output == 0) observe(t0 + (i + 1) * h, y);
+// Trapezoidal step y1 = y0 + h/2 (f(t, y0) + f(t + h, y1)): Newton on
+// g(y1) = y1 - y0 - h/2 (f0 + f(y1)), from an explicit Euler predictor.
+void trapezoidalStep(const GearRotorModel& model, double t, double h, State6& y, State6& k1,
+                     State6& k2, IntegrationStats& stats) {
+  model.rhs(t, y, k1);
+  State6 y1 = y + h * k1;  // explicit Euler predictor
+  // The forces are piecewise linear and the Jacobian exact within a contact regime, so Newton
+  // ends in one or two iterations unless the step crosses a contact change.
+  bool converged = false;
+  for (int it = 0; it < 12 && !converged; ++it) {
+    model.rhs(t + h, y1, k2);
+    const State6 g = y1 - y - 0.5 * h * (k1 + k2);
+    const Matrix6 a = Matrix6::Identity() - 0.5 * h * model.jacobian(t + h, y1);
+    const State6 dy = a.partialPivLu().solve(-g);
+    y1 += dy;
+    ++stats.newton_iterations;
+    stats.rhs_evaluations += 2;
+    const double scale = 1e-14 * (y1.head<3>().cwiseAbs().maxCoeff() + 1e-15);
+    const double vscale = 1e-14 * (y1.tail<3>().cwiseAbs().maxCoeff() + 1e-12);
+    converged =
+        dy.head<3>().cwiseAbs().maxCoeff() <= scale && dy.tail<3>().cwiseAbs().maxCoeff() <= vscale;
+  }
+  // A contact change inside the step can make Newton cycle between regimes: the step is kept
+  // (bounded) but counted, so a caller can see how often it happened.
+  if (!converged) ++stats.newton_failures;
+  y = y1;
+}
+
+// rk4 or the trapezoidal rule at the fixed step o.step from (t0, y) to t_end.
+State6 integrateFixed(const GearRotorModel& model, IntegratorMethod method,
+                      const IntegratorOptions& o, double t0, State6 y, double t_end,
+                      double interval, const Observer& observe, IntegrationStats& stats) {
+  long per_output = 1;
+  const double h = o.step;
+  const long n = fixedStepCount(t_end - t0, h, interval, &per_output);
+  State6 k1, k2, k3, k4;
+  for (long i = 0; i < n; ++i) {
+    const double t = t0 + i * h;  // no accumulated round-off in t
+    if (method == IntegratorMethod::kRk4) {
+      model.rhs(t, y, k1);
+      model.rhs(t + 0.5 * h, y + 0.5 * h * k1, k2);
+      model.rhs(t + 0.5 * h, y + 0.5 * h * k2, k3);
+      model.rhs(t + h, y + h * k3, k4);
+      y += h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4);
+      stats.rhs_evaluations += 4;
+    } else {
+      trapezoidalStep(model, t, h, y, k1, k2, stats);
     }
-    if (stats_out) *stats_out = stats;
-    return y;
+    ++stats.steps;
+    checkState(y, t + h, h, method, o);
+    if (observe && (i + 1) % per_output == 0) observe(t0 + (i + 1) * h, y);
   }
+  return y;
+}
 
-  // ---- dopri5 ----
-  IntegrationStats& st = stats;
-  Dopri5 dp(model, o, st);
-  // Velocities are compared with displacements through the fastest natural scale: omega_ref =
-  // sqrt(k/m).
+// Velocities are compared with displacements through the fastest natural scale: omega_ref =
+// sqrt(k/m).
+double velocityScale(const GearRotorModel& model, double t0) {
   MeshInstant mi;
   model.meshAt(t0, mi);
   const GearRotorParameters& p = model.parameters();
   const double k_ref =
       std::max({mi.k_drive + mi.k_back, p.bearing_stiffness[0], p.bearing_stiffness[1], 1.0});
   const double m_ref = std::min({model.equivalentMass(), p.pinion_mass, p.gear_mass});
-  dp.setVelocityScale(std::sqrt(k_ref / m_ref));
+  return std::sqrt(k_ref / m_ref);
+}
+
+// A rejected dopri5 step of h_try [s] at t [s]: the step to try next; UnstableIntegration where
+// h_try is already the smallest.
+double rejectedStep(double err, double h_try, double tiny, double t, IntegrationStats& st) {
+  ++st.rejected;
+  if (h_try <= tiny) {
+    throw UnstableIntegration(
+        "integrator dopri5: step size underflow at t = " + formatValue(t) +
+        " s (the error test fails at the smallest step " + formatValue(h_try) +
+        " s; tolerances too tight for double precision, or a discontinuity the step cannot "
+        "resolve)");
+  }
+  if (!std::isfinite(err)) return 0.1 * h_try;
+  return h_try * std::max(0.2, 0.9 * std::pow(err, -0.2));
+}
+
+// An accepted step from (t, y) to (t_new, y_new) whose contact regime changed: the earliest change
+// on the dense output, by bisection in time, and the step redone up to it (so no step straddles
+// the kink; the next step starts on it).
+void locateContactChange(const GearRotorModel& model, Dopri5& dp, double t, const State6& y,
+                         const State6& k1, State6& y_new, State6& k7, DenseStep& dense,
+                         double& h_try, double& t_new, bool& hits_switch, IntegrationStats& st) {
+  const ContactRegime r0 = regimeAt(model, t, y);
+  if (regimeAt(model, t_new, y_new) == r0) return;
+  double lo = t, hi = t_new;
+  for (int i = 0; i < 60 && hi - lo > 1e-14 * std::max(1.0, std::abs(t)); ++i) {
+    const double mid = 0.5 * (lo + hi);
+    if (regimeAt(model, mid, dense.at(mid)) == r0)
+      lo = mid;
+    else
+      hi = mid;
+  }
+  if (hi - t > 1e-9 * h_try) {
+    const double h_event = hi - t;
+    dp.attempt(t, y, k1, h_event, y_new, k7, dense);
+    hits_switch = false;
+    t_new = t + h_event;
+    h_try = h_event;
+    ++st.events;
+  }
+}
+
+// dopri5 from (t0, y) to t_end, observing the grid from index next_out on.
+State6 integrateDopri5(const GearRotorModel& model, const IntegratorOptions& o, double t0, State6 y,
+                       double t_end, double interval, const Observer& observe, long next_out,
+                       IntegrationStats& st) {
+  Dopri5 dp(model, o, st);
+  dp.setVelocityScale(velocityScale(model, t0));
   double t = t0, h = std::min(o.step, o.max_step);
   State6 k1, y_new, k7;
   model.rhs(t, y, k1);
@@ -264,46 +298,12 @@ State6 integrate(const GearRotorModel& model, IntegratorMethod method, const Int
     }
     const double err = dp.attempt(t, y, k1, h_try, y_new, k7, dense, hits_switch);
     if (!(err <= 1.0)) {
-      ++st.rejected;
-      if (h_try <= tiny) {
-        throw UnstableIntegration(
-            "integrator dopri5: step size underflow at t = " + formatValue(t) +
-            " s (the error test fails at the smallest step " + formatValue(h_try) +
-            " s; tolerances too tight for double precision, or a discontinuity the step cannot "
-            "resolve)");
-      }
-      if (!std::isfinite(err)) {
-        h = 0.1 * h_try;
-      } else {
-        h = h_try * std::max(0.2, 0.9 * std::pow(err, -0.2));
-      }
+      h = rejectedStep(err, h_try, tiny, t, st);
       continue;
     }
     double t_new = t + h_try;
-    if (o.locate_events) {
-      const ContactRegime r0 = regimeAt(model, t, y);
-      if (regimeAt(model, t_new, y_new) != r0) {
-        // Earliest contact change on the dense output, by bisection in time.
-        double lo = t, hi = t_new;
-        for (int i = 0; i < 60 && hi - lo > 1e-14 * std::max(1.0, std::abs(t)); ++i) {
-          const double mid = 0.5 * (lo + hi);
-          if (regimeAt(model, mid, dense.at(mid)) == r0)
-            lo = mid;
-          else
-            hi = mid;
-        }
-        if (hi - t > 1e-9 * h_try) {
-          // Redo the step up to the event so no step straddles the kink; the next step starts on
-          // it.
-          const double h_event = hi - t;
-          dp.attempt(t, y, k1, h_event, y_new, k7, dense);
-          hits_switch = false;
-          t_new = t + h_event;
-          h_try = h_event;
-          ++st.events;
-        }
-      }
-    }
+    if (o.locate_events)
+      locateContactChange(model, dp, t, y, k1, y_new, k7, dense, h_try, t_new, hits_switch, st);
     checkState(y_new, t_new, h_try, IntegratorMethod::kDopri5, o);
     if (observe)
       emit(t_new, t0, interval, next_out, observe, [&](double tq) { return dense.at(tq); });
@@ -323,7 +323,37 @@ State6 integrate(const GearRotorModel& model, IntegratorMethod method, const Int
     h = h_try * std::clamp(fac, 0.2, 10.0);
     err_prev = e;
   }
-  if (stats_out) *stats_out = st;
+  return y;
+}
+
+}  // namespace
+
+State6 integrate(const GearRotorModel& model, IntegratorMethod method, const IntegratorOptions& o,
+                 double t0, const State6& y0, double t_end, double interval,
+                 const Observer& observe, IntegrationStats* stats_out) {
+  requireFinite("t0", t0);
+  requireFinite("t_end", t_end);
+  if (!(t_end >= t0))
+    throwInvalid("t_end", t_end,
+                 "must be >= t0 = " + formatValue(t0) + " (time must not run backwards)");
+  requirePositive("output_interval", interval);
+  requirePositive("step", o.step);
+  if (!y0.allFinite()) throw InvalidInput("initial state: contains a non-finite value");
+  if (method == IntegratorMethod::kExponential) {
+    const PeriodicExponentialPropagator propagator(model, t0, interval, o.magnus_step_factor);
+    return propagator.run(y0, t_end, observe, o, stats_out);
+  }
+  IntegrationStats stats;
+  long next_out = 0;
+  if (observe) {
+    observe(t0, y0);
+    next_out = 1;
+  }
+  const State6 y =
+      method == IntegratorMethod::kRk4 || method == IntegratorMethod::kTrapezoidal
+          ? integrateFixed(model, method, o, t0, y0, t_end, interval, observe, stats)
+          : integrateDopri5(model, o, t0, y0, t_end, interval, observe, next_out, stats);
+  if (stats_out) *stats_out = stats;
   return y;
 }
 

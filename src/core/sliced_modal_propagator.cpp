@@ -334,43 +334,39 @@ const SlicedModalPropagator::Slice& SlicedModalPropagator::slice(MeshRegime r, i
   return s;
 }
 
-bool SlicedModalPropagator::decomposeSeeded(MeshRegime r, int j, Slice& s,
-                                            std::array<Complex, 3> seeds) const {
-  // The slice's modes as the quadratic eigenvalue problem Q(lambda) u = 0 with
-  // Q = lambda^2 M + lambda C + K, M = diag(m_p, m_g, m_s), and K, C = diag(bearing, bearing, 0) +
-  // (mesh) g g^T, g = (1, -1, 1) (meshBearingMatrix): the eigenvalues of A = [[0, I], [-M^-1 K,
-  // -M^-1 C]] are the roots of det Q, and its eigenvectors are (u, lambda u) (Tisseur and
-  // Meerbergen, "The quadratic eigenvalue problem", SIAM Review 43(2), 2001, section 3.4). With the
-  // bearing parts diagonal, Q = D(lambda) + sigma(lambda) g g^T, D_i = lambda^2 m_i + lambda c_i +
-  // k_i, sigma = lambda c_s + k_s, and by the matrix determinant lemma
-  //   det Q = D_0 D_1 D_2 + sigma (D_1 D_2 + D_0 D_2 + D_0 D_1),
-  // a closed form that Newton's method polishes from a seed in a few steps (the mesh stiffness
-  // moves little from one slice to the next). The null vector is u_i = g_i prod_{l != i} D_l (a
-  // column of adj Q = det(D) D^-1 - sigma adj-part, which for this rank-one update is that vector
-  // up to scale). M, C and K are symmetric, so the left eigenvector of A is (lambda M u + C u, M u)
-  // and the row of A's inverse eigenvector matrix is that over u^T (2 lambda M + C) u = u^T
-  // Q'(lambda) u (same reference). The result is accepted only if every root converged, the three
-  // are distinct with positive imaginary parts, and with their conjugates they reproduce trace(A)
-  // and det(A), which no set that repeats a root or misses one does; otherwise the caller falls
-  // back to the general eigensolver. Cost: about a tenth of Eigen's EigenSolver plus the inverse of
-  // V.
-  const MeshTerms t = meshTerms(r, j);
-  const double ks = t.stiffness, cs = t.damping;
-  const std::array<double, 3> mass{p_.pinion_mass, p_.gear_mass, m_s_};
-  const std::array<double, 3> kb{p_.bearing_stiffness[0], p_.bearing_stiffness[1], 0.0};
-  const std::array<double, 3> cb{p_.bearing_damping[0], p_.bearing_damping[1], 0.0};
-  const double g[3] = {1.0, -1.0, 1.0};
-  auto diag = [&](Complex l, std::array<Complex, 3>& d, std::array<Complex, 3>& dd) {
+namespace {
+
+// A slice's modes as the quadratic eigenvalue problem Q(lambda) u = 0 with
+// Q = lambda^2 M + lambda C + K, M = diag(m_p, m_g, m_s), and K, C = diag(bearing, bearing, 0) +
+// (mesh) g g^T, g = (1, -1, 1) (meshBearingMatrix): the eigenvalues of A = [[0, I], [-M^-1 K,
+// -M^-1 C]] are the roots of det Q, and its eigenvectors are (u, lambda u) (Tisseur and
+// Meerbergen, "The quadratic eigenvalue problem", SIAM Review 43(2), 2001, section 3.4). With the
+// bearing parts diagonal, Q = D(lambda) + sigma(lambda) g g^T, D_i = lambda^2 m_i + lambda c_i +
+// k_i, sigma = lambda c_s + k_s, and by the matrix determinant lemma
+//   det Q = D_0 D_1 D_2 + sigma (D_1 D_2 + D_0 D_2 + D_0 D_1),
+// a closed form that Newton's method polishes from a seed in a few steps (the mesh stiffness
+// moves little from one slice to the next).
+struct Pencil {
+  std::array<double, 3> mass, kb, cb;
+  double ks, cs;
+  /// D_i(l) and D_i'(l).
+  void diag(Complex l, std::array<Complex, 3>& d, std::array<Complex, 3>& dd) const {
     for (int i = 0; i < 3; ++i) {
       d[i] = (l * mass[i] + cb[i]) * l + kb[i];
       dd[i] = 2.0 * mass[i] * l + cb[i];
     }
-  };
+  }
+};
+
+// Newton on det Q from each seed, in place; false where one does not converge to a root with a
+// positive imaginary part.
+bool polishRoots(const Pencil& q, std::array<Complex, 3>& seeds) {
+  const double ks = q.ks, cs = q.cs;
   std::array<Complex, 3> d, dd;
   for (Complex& l : seeds) {
     bool converged = false;
     for (int it = 0; it < 40 && !converged; ++it) {
-      diag(l, d, dd);
+      q.diag(l, d, dd);
       const Complex sigma = l * cs + ks;
       const Complex pair_sum = d[1] * d[2] + d[0] * d[2] + d[0] * d[1];
       const Complex f = d[0] * d[1] * d[2] + sigma * pair_sum;
@@ -388,7 +384,13 @@ bool SlicedModalPropagator::decomposeSeeded(MeshRegime r, int j, Slice& s,
     }
     if (!converged || !(l.imag() > 0.0)) return false;
   }
-  // Distinct, and with their conjugates the whole spectrum: sum = trace(A), product = det(A).
+  return true;
+}
+
+// The roots are distinct and, with their conjugates, the whole spectrum: sum = trace(A), product =
+// det(A), which no set that repeats a root or misses one reproduces.
+bool wholeSpectrum(const Pencil& q, const std::array<Complex, 3>& seeds,
+                   const Eigen::Matrix3d& k_matrix) {
   double scale = 0.0, re_sum = 0.0, log_product = 0.0;
   for (int k = 0; k < 3; ++k) {
     scale += std::sqrt(norm2(seeds[k]));
@@ -398,21 +400,72 @@ bool SlicedModalPropagator::decomposeSeeded(MeshRegime r, int j, Slice& s,
       if (norm2(seeds[k] - seeds[l]) <= 1e-12 * norm2(seeds[k])) return false;
     }
   }
-  const double trace = -((cb[0] + cs) / mass[0] + (cb[1] + cs) / mass[1] + cs / mass[2]);
-  const Eigen::Matrix3d k_matrix = meshBearingMatrix(ks, p_.bearing_stiffness);
+  const std::array<double, 3>& mass = q.mass;
+  const double trace = -((q.cb[0] + q.cs) / mass[0] + (q.cb[1] + q.cs) / mass[1] + q.cs / mass[2]);
   const double det_k = k_matrix.determinant();
   if (!(det_k > 0.0) || std::abs(re_sum - trace) > 1e-9 * scale ||
       std::abs(log_product - std::log(det_k / (mass[0] * mass[1] * mass[2]))) > 1e-9) {
     return false;
   }
+  return true;
+}
+
+// The eigenbasis' condition in balanced coordinates, ||D^-1 V|| ||V^-1 D|| in the infinity norm,
+// D = diag(1, 1, 1, w, w, w), the general path's usability rule. Column k + 3 of V and row k + 3
+// of V^-1 are the conjugates of column and row k, whose magnitudes are the same bits: each
+// magnitude is taken once and the sums run in infinityNorm's order, so the condition is
+// infinityNorm's to the bit with half its square roots.
+double seededCondition(const Eigen::Matrix<Complex, 6, 6>& v,
+                       const Eigen::Matrix<Complex, 6, 6>& v_inv, double w_ref) {
+  double v_norm = 0.0, v_inv_norm = 0.0;
+  for (int i = 0; i < 6; ++i) {
+    double a[3];
+    for (int c = 0; c < 3; ++c) a[c] = std::sqrt(norm2(v(i, c)));
+    const double sum =
+        a[0] + a[1] + a[2] + a[0] + a[1] + a[2];  // left to right, as infinityNorm sums
+    v_norm = std::max(v_norm, sum / (i < 3 ? 1.0 : w_ref));
+  }
+  for (int i = 0; i < 3; ++i) {
+    double sum = 0.0;
+    for (int c = 0; c < 6; ++c) sum += std::sqrt(norm2(v_inv(i, c))) * (c < 3 ? 1.0 : w_ref);
+    v_inv_norm = std::max(v_inv_norm, sum);
+  }
+  return v_norm * v_inv_norm;
+}
+
+}  // namespace
+
+bool SlicedModalPropagator::decomposeSeeded(MeshRegime r, int j, Slice& s,
+                                            std::array<Complex, 3> seeds) const {
+  // The roots of det Q (Pencil) by Newton, accepted only if every root converged and they are the
+  // whole spectrum; otherwise the caller falls back to the general eigensolver. Cost: about a
+  // tenth of Eigen's EigenSolver plus the inverse of V.
+  const MeshTerms t = meshTerms(r, j);
+  const double ks = t.stiffness, cs = t.damping;
+  const Pencil q{{p_.pinion_mass, p_.gear_mass, m_s_},
+                 {p_.bearing_stiffness[0], p_.bearing_stiffness[1], 0.0},
+                 {p_.bearing_damping[0], p_.bearing_damping[1], 0.0},
+                 ks,
+                 cs};
+  const std::array<double, 3>& mass = q.mass;
+  const std::array<double, 3>& cb = q.cb;
+  const double g[3] = {1.0, -1.0, 1.0};
+  if (!polishRoots(q, seeds)) return false;
+  const Eigen::Matrix3d k_matrix = meshBearingMatrix(ks, p_.bearing_stiffness);
+  if (!wholeSpectrum(q, seeds, k_matrix)) return false;
   // Eigenvectors, in the layout step() expects: k = 0..2 the modes with positive imaginary part
-  // (weight 2), k = 3..5 their conjugates (weight 0, kept for monodromy()).
+  // (weight 2), k = 3..5 their conjugates (weight 0, kept for monodromy()). The null vector is
+  // u_i = g_i prod_{l != i} D_l (a column of adj Q for this rank-one update, up to scale). M, C
+  // and K are symmetric, so the left eigenvector of A is (lambda M u + C u, M u) and the row of
+  // A's inverse eigenvector matrix is that over u^T (2 lambda M + C) u = u^T Q'(lambda) u
+  // (Tisseur and Meerbergen, section 3.4).
   const double w_ref = std::sqrt(std::max(
       1.0, (k_matrix.cwiseAbs().array().colwise() / Eigen::Array3d(mass[0], mass[1], mass[2]))
                .maxCoeff()));
+  std::array<Complex, 3> d, dd;
   for (int k = 0; k < 3; ++k) {
     const Complex l = seeds[k];
-    diag(l, d, dd);
+    q.diag(l, d, dd);
     CVector v;
     Complex gu = 0.0;
     for (int i = 0; i < 3; ++i) {
@@ -446,25 +499,7 @@ bool SlicedModalPropagator::decomposeSeeded(MeshRegime r, int j, Slice& s,
     s.weight[k + 3] = 0.0;
     s.upper[k] = l;
   }
-  // The same usability rule as the general path: the eigenbasis' condition in balanced coordinates,
-  // ||D^-1 V|| ||V^-1 D|| in the infinity norm, D = diag(1, 1, 1, w, w, w). Here column k + 3 of V
-  // and row k + 3 of V^-1 are the conjugates of column and row k, whose magnitudes are the same
-  // bits: each magnitude is taken once and the sums run in infinityNorm's order, so the condition
-  // is infinityNorm's to the bit with half its square roots.
-  double v_norm = 0.0, v_inv_norm = 0.0;
-  for (int i = 0; i < 6; ++i) {
-    double a[3];
-    for (int c = 0; c < 3; ++c) a[c] = std::sqrt(norm2(s.v(i, c)));
-    const double sum =
-        a[0] + a[1] + a[2] + a[0] + a[1] + a[2];  // left to right, as infinityNorm sums
-    v_norm = std::max(v_norm, sum / (i < 3 ? 1.0 : w_ref));
-  }
-  for (int i = 0; i < 3; ++i) {
-    double sum = 0.0;
-    for (int c = 0; c < 6; ++c) sum += std::sqrt(norm2(s.v_inv(i, c))) * (c < 3 ? 1.0 : w_ref);
-    v_inv_norm = std::max(v_inv_norm, sum);
-  }
-  const double condition = v_norm * v_inv_norm;
+  const double condition = seededCondition(s.v, s.v_inv, w_ref);
   s.usable = std::isfinite(condition) && condition < 1e8;
   Eigen::Matrix<double, 6, 1> e_f, e_v;
   e_f << 0.0, 0.0, 0.0, -1.0 / mass[0], 1.0 / mass[1], -1.0 / mass[2];
@@ -719,115 +754,130 @@ double SlicedModalPropagator::propagateLinear(State6& y, double& phase, double f
   if (!(duration >= 0.0) || !std::isfinite(f) || !std::isfinite(phase) ||
       !std::isfinite(drive_force))
     return 0.0;
-  const SlicedMesh& m = *slices_;
-  const int n = m.size();
-  const double w = kTwoPi * f;
-  State6 z = y, z_end;
-  double whole = std::floor(phase), frac = phase - whole, remaining = duration;
-  // What was propagated goes back to the caller, up to where no linear regime holds.
-  const auto handBack = [&] {
-    y = z;
-    phase = whole + frac;
-    return remaining > 0.0 ? duration - remaining : duration;
-  };
+  Walk k;
+  k.z = y;
+  k.whole = std::floor(phase);
+  k.frac = phase - k.whole;
+  k.remaining = duration;
   // The TE forcing's phasor e^{i 2 pi frac}: one sine and cosine where the call starts inside a
   // slice, then carried: a step that ends on a boundary takes the boundary's tabulated phasor, and
   // the phasor's advance over that step, e^{i w h} = e^{i 2 pi (boundary - frac)}, follows from the
   // two. A slice crossed whole thus costs no sine or cosine beyond its modes' exponentials.
-  Complex e_theta = std::polar(1.0, kTwoPi * frac);
-  int j = -1;  // the current slice, found once, then the neighbour entered at each crossing
-  MeshRegime regime = MeshRegime::kBothFlanks;
-  int changes = 0;
-  // The regime the state is in, in slice j; false in none (both flanks unloaded at once, or a
-  // non-finite state: the caller integrates on with dopri5 and calls again).
-  const auto takeRegime = [&] {
-    const std::optional<MeshRegime> found = regimeAt(j, z, e_theta, w);
-    if (found) regime = *found;
-    return found.has_value();
-  };
-  while (remaining > 0.0) {
-    if (f < 0.0 && frac == 0.0) {  // backwards from a period boundary: the top of the period below
-      whole -= 1.0;
-      frac = 1.0;
-    }
-    if (j < 0) {  // the contacts the call starts with
-      j = m.sliceAt(frac == 1.0 ? std::nextafter(1.0, 0.0) : frac, f < 0.0);
-      if (!takeRegime()) return handBack();
-    }
-    const Slice& s = slice(regime, j);
-    if (!s.usable) return handBack();
-    double h = remaining, next = frac + f * remaining;
-    bool crossing = false;
-    if (f != 0.0) {
-      const double boundary = f > 0.0 ? m.end(j) : m.start(j);
-      const double to_boundary = (boundary - frac) / f;
-      if (to_boundary <= remaining) {
-        h = to_boundary;
-        next = boundary;  // exactly on it: the next piece starts in the next slice, no drift
-        crossing = true;
-      }
-    }
-    // The contacts must keep their state through the step, not only at its ends: where the bound
-    // cannot show it, the step is cut to an eighth of the fastest mode's period, so that the checks
-    // at the ends sample every oscillation that could lift a flank (a change missed between two of
-    // them would be one that stays open for less than that).
-    Piece& piece = piece_;
-    prepare(s, regime, j, z, e_theta, w, drive_force, piece);
-    if (regimeMargin(s, regime, j, piece, e_theta, w) <= 0.0) {
-      const double h_check = s.fastest > 0.0 ? kTwoPi / (8.0 * s.fastest) : h;
-      if (h_check < h) {
-        h = h_check;
-        next = frac + f * h;
-        crossing = false;
-        ++substeps_;
-      }
-    }
-    const Complex e_end =
-        crossing ? m.boundaryPhasor(f > 0.0 ? j + 1 : j) : e_theta * std::polar(1.0, w * h);
-    advance(s, piece, w, h, e_end * std::conj(e_theta), z_end);
-    if (!z_end.allFinite()) return handBack();
-    const bool leaves = !inRegime(regime, j, z_end, e_end, w);
-    if (leaves) {
-      // A contact changed inside the step: located on this regime's exact solution, the state
-      // just past the change goes on in the regime it is in there.
-      if (++changes > kMaxChangesPerCall) return handBack();  // chatter: dopri5's to resolve
-      Complex e_hi = e_end;
-      const double hi = locateChange(s, piece, regime, j, e_theta, w, h, z, z_end, &e_hi);
-      if (hi < h) {
-        advance(s, piece, w, hi, e_hi * std::conj(e_theta), z);
-        e_theta = e_hi;
-        // Inside the slice, short of the boundary the step would have reached (kept there where
-        // the change lies within rounding of it, so the next step's length is not negative).
-        frac = std::clamp(frac + f * hi, m.start(j), m.end(j));
-        remaining -= hi;
-        ++events_;
-        if (!takeRegime()) return handBack();
-        continue;
-      }
-      // At the step's very end (to the bisection's resolution): the step stands as it was.
-    }
-    z = z_end;
-    e_theta = e_end;
-    remaining = crossing || h < remaining ? remaining - h : 0.0;
-    frac = next;
-    if (frac >= 1.0) {
-      whole += 1.0;
-      frac -= 1.0;
-    }
-    if (crossing) {
-      ++crossed_;
-      // Right limit: the slice entered must also hold the contacts. Forwards it is the next slice
-      // (the first of the next period after the last); backwards the one below (the top one of the
-      // period below from the first), as sliceAt would find it. The stiffness steps there, so the
-      // contacts may change on the boundary itself.
-      j = f > 0.0 ? (j + 1 == n ? 0 : j + 1) : (j == 0 ? n - 1 : j - 1);
-    }
-    if ((leaves || crossing) && !inRegime(regime, j, z, e_theta, w)) {
-      if (!takeRegime()) return handBack();
-      ++events_;
+  k.e_theta = std::polar(1.0, kTwoPi * k.frac);
+  while (k.remaining > 0.0 && walkStep(k, f, drive_force)) {
+  }
+  // What was propagated goes back to the caller, up to where no linear regime holds.
+  y = k.z;
+  phase = k.whole + k.frac;
+  return k.remaining > 0.0 ? duration - k.remaining : duration;
+}
+
+bool SlicedModalPropagator::takeRegime(Walk& k, double w) const {
+  const std::optional<MeshRegime> found = regimeAt(k.j, k.z, k.e_theta, w);
+  if (found) k.regime = *found;
+  return found.has_value();
+}
+
+double SlicedModalPropagator::stepLength(const Walk& k, double f, double& next,
+                                         bool& crossing) const {
+  const SlicedMesh& m = *slices_;
+  double h = k.remaining;
+  next = k.frac + f * k.remaining;
+  crossing = false;
+  if (f != 0.0) {
+    const double boundary = f > 0.0 ? m.end(k.j) : m.start(k.j);
+    const double to_boundary = (boundary - k.frac) / f;
+    if (to_boundary <= k.remaining) {
+      h = to_boundary;
+      next = boundary;  // exactly on it: the next piece starts in the next slice, no drift
+      crossing = true;
     }
   }
-  return handBack();  // remaining is 0: the whole duration
+  return h;
+}
+
+bool SlicedModalPropagator::walkStep(Walk& k, double f, double drive_force) const {
+  const SlicedMesh& m = *slices_;
+  const double w = kTwoPi * f;
+  if (f < 0.0 && k.frac == 0.0) {  // backwards from a period boundary: the top of the period below
+    k.whole -= 1.0;
+    k.frac = 1.0;
+  }
+  if (k.j < 0) {  // the contacts the call starts with
+    k.j = m.sliceAt(k.frac == 1.0 ? std::nextafter(1.0, 0.0) : k.frac, f < 0.0);
+    if (!takeRegime(k, w)) return false;
+  }
+  const Slice& s = slice(k.regime, k.j);
+  if (!s.usable) return false;
+  double next;
+  bool crossing;
+  double h = stepLength(k, f, next, crossing);
+  // The contacts must keep their state through the step, not only at its ends: where the bound
+  // cannot show it, the step is cut to an eighth of the fastest mode's period, so that the checks
+  // at the ends sample every oscillation that could lift a flank (a change missed between two of
+  // them would be one that stays open for less than that).
+  Piece& piece = piece_;
+  prepare(s, k.regime, k.j, k.z, k.e_theta, w, drive_force, piece);
+  if (regimeMargin(s, k.regime, k.j, piece, k.e_theta, w) <= 0.0) {
+    const double h_check = s.fastest > 0.0 ? kTwoPi / (8.0 * s.fastest) : h;
+    if (h_check < h) {
+      h = h_check;
+      next = k.frac + f * h;
+      crossing = false;
+      ++substeps_;
+    }
+  }
+  const Complex e_end =
+      crossing ? m.boundaryPhasor(f > 0.0 ? k.j + 1 : k.j) : k.e_theta * std::polar(1.0, w * h);
+  advance(s, piece, w, h, e_end * std::conj(k.e_theta), k.z_end);
+  if (!k.z_end.allFinite()) return false;
+  const bool leaves = !inRegime(k.regime, k.j, k.z_end, e_end, w);
+  if (leaves) {
+    // A contact changed inside the step: located on this regime's exact solution, the state
+    // just past the change goes on in the regime it is in there.
+    if (++k.changes > kMaxChangesPerCall) return false;  // chatter: dopri5's to resolve
+    Complex e_hi = e_end;
+    const double hi = locateChange(s, piece, k.regime, k.j, k.e_theta, w, h, k.z, k.z_end, &e_hi);
+    if (hi < h) {
+      advance(s, piece, w, hi, e_hi * std::conj(k.e_theta), k.z);
+      k.e_theta = e_hi;
+      // Inside the slice, short of the boundary the step would have reached (kept there where
+      // the change lies within rounding of it, so the next step's length is not negative).
+      k.frac = std::clamp(k.frac + f * hi, m.start(k.j), m.end(k.j));
+      k.remaining -= hi;
+      ++events_;
+      return takeRegime(k, w);
+    }
+    // At the step's very end (to the bisection's resolution): the step stands as it was.
+  }
+  return endStep(k, f, h, next, crossing, leaves, e_end);
+}
+
+bool SlicedModalPropagator::endStep(Walk& k, double f, double h, double next, bool crossing,
+                                    bool leaves, Complex e_end) const {
+  const int n = slices_->size();
+  const double w = kTwoPi * f;
+  k.z = k.z_end;
+  k.e_theta = e_end;
+  k.remaining = crossing || h < k.remaining ? k.remaining - h : 0.0;
+  k.frac = next;
+  if (k.frac >= 1.0) {
+    k.whole += 1.0;
+    k.frac -= 1.0;
+  }
+  if (crossing) {
+    ++crossed_;
+    // Right limit: the slice entered must also hold the contacts. Forwards it is the next slice
+    // (the first of the next period after the last); backwards the one below (the top one of the
+    // period below from the first), as sliceAt would find it. The stiffness steps there, so the
+    // contacts may change on the boundary itself.
+    k.j = f > 0.0 ? (k.j + 1 == n ? 0 : k.j + 1) : (k.j == 0 ? n - 1 : k.j - 1);
+  }
+  if ((leaves || crossing) && !inRegime(k.regime, k.j, k.z, k.e_theta, w)) {
+    if (!takeRegime(k, w)) return false;
+    ++events_;
+  }
+  return true;
 }
 
 double SlicedModalPropagator::regimeValue(MeshRegime r, int j, const State6& y, Complex e_theta,

@@ -1,25 +1,8 @@
-// The matrix exponential of a block upper-triangular matrix M = [[X, Y], [0, Z]] (X: P x P,
-// Z: Q x Q), as Eigen's MatrixBase::exp() computes it, with every product and the solve done
-// block by block.
-//
-// Why: the exponential integrator's set-up takes one 11x11 exponential per Magnus step (about 1,800
-// per mesh period on the seed rig) of an augmented system matrix whose rows for the forcing
-// generator (sin, cos, 1, u, u') never read the state, so it is [[X (6x6), Y (6x5)], [0, Z (5x5)]].
-// Powers and products of such matrices keep the form, [[X1 X2, X1 Y2 + Y1 Z2], [0, Z1 Z2]]:
-// 671 multiply-adds per product instead of 1331 for the dense 11x11 one, and no packing for
-// Eigen's blocked product kernel (the dense exponential spent most of its time there).
-//
-// The method is the one of Eigen's unsupported/Eigen/src/MatrixFunctions/MatrixExponential.h
-// (Eigen 3.4), itself Higham's scaling and squaring: N. J. Higham, "The scaling and squaring
-// method for the matrix exponential revisited", SIAM J. Matrix Anal. Appl. 26(4) (2005) 1179-1193.
-// The Pade degree m in {3, 5, 7, 9, 13} is chosen from the 1-norm against theta_m (Higham's
-// Table 2.3, the thresholds Eigen uses for double), the matrix scaled by 2^-s for m = 13 so that
-// its norm is below theta_13; r_m = (V - U)^-1 (V + U) with U odd and V even in M (Higham eqs
-// 2.3-2.4, his coefficients b_j), then squared s times. The solve goes block by block too:
-// with D = V - U and N = V + U both block upper-triangular, the result R has
-//   Z-block: D_z R_z = N_z,  X-block: D_x R_x = N_x,  Y-block: D_x R_y = N_y - D_y R_z,
-// by partial-pivoting LU of D_x and D_z (a dense partial-pivoting LU of D would pick its pivots in
-// the same blocks: the rows below the X-block are zero in its columns), solved by luSolve below.
+// The matrix exponential of a block upper-triangular matrix M = [[X, Y], [0, Z]] as Eigen 3.4's
+// MatrixBase::exp() computes it (Higham's scaling and squaring, SIAM J. Matrix Anal. Appl. 26(4)
+// (2005) 1179, Table 2.3 and eqs 2.3-2.4), every product and solve block by block: with
+// D = V - U, N = V + U, D_z R_z = N_z, D_x R_x = N_x, D_x R_y = N_y - D_y R_z (docs/model.md
+// "Integration methods", set-up cost).
 #pragma once
 
 #include <algorithm>
@@ -42,8 +25,7 @@ struct BlockTriangular {
     return {Eigen::Matrix<double, P, P>::Identity(), Eigen::Matrix<double, P, Q>::Zero(),
             Eigen::Matrix<double, Q, Q>::Identity()};
   }
-  /// The blocks of a dense matrix whose lower-left Q x P block is ignored (the caller knows it is
-  /// zero).
+  /// The blocks of a dense matrix; its lower-left block is taken as zero.
   static BlockTriangular fromDense(const Eigen::Matrix<double, P + Q, P + Q>& m) {
     return {m.template topLeftCorner<P, P>(), m.template topRightCorner<P, Q>(),
             m.template bottomRightCorner<Q, Q>()};
@@ -86,27 +68,14 @@ BlockTriangular<P, Q> combine(
   return r;
 }
 
-/// The width of the triangular panels Eigen's solver takes: max(mr, nr) of its product kernel's
-/// register blocking (TriangularSolverMatrix.h, SmallPanelWidth): 4 with SSE2 alone.
+/// The width of Eigen's triangular-solver panels, max(mr, nr) (TriangularSolverMatrix.h).
 inline constexpr int kTriangularPanel = Eigen::internal::gebp_traits<double, double>::mr >
                                                 Eigen::internal::gebp_traits<double, double>::nr
                                             ? Eigen::internal::gebp_traits<double, double>::mr
                                             : Eigen::internal::gebp_traits<double, double>::nr;
 
-/// lu.solve(b) for a small fixed size, in the order of Eigen 3.4's own solve (PartialPivLU's
-/// _solve_impl, then triangular_solve_matrix in TriangularSolverMatrix.h): the rows permuted, then
-/// the unit-lower and the upper substitutions, each over panels of kTriangularPanel rows. Inside a
-/// panel each row, in the upper one first scaled by the reciprocal of its diagonal, is subtracted
-/// from the panel's rows still to come; the rows beyond the panel then lose the sum of the
-/// panel's products, accumulated from zero, as Eigen's product kernel adds them with alpha = -1.
-/// Written out because at the exponential's sizes (6x6, 6x5, 5x5) the blocked solver's packing and
-/// set-up were a quarter of the set-up's time (perf, near_rigid_bearings at 16/omega_max); the
-/// operations and their order are Eigen's, and so are the results, bit for bit where the kernels
-/// take no fused multiply-add: for any size with SSE2 alone (this package's build), and with AVX
-/// up to a panel's rows (8, which covers these sizes); beyond a panel AVX's kernel sums a leftover
-/// row with four accumulators, which this does not copy. Checked against lu.solve in
-/// test_block_triangular_exponential.cpp (which fails with another panel width). A vector or a
-/// dynamic right-hand side goes to lu.solve itself (Eigen solves a vector by another path).
+/// lu.solve(b) for a small fixed size, the operations in the order of Eigen 3.4's own solve, so
+/// the same bits (docs/model.md "Integration methods"); a vector or dynamic b goes to lu.solve.
 template <int N, typename Rhs>
 Eigen::Matrix<double, N, Rhs::ColsAtCompileTime> luSolve(
     const Eigen::PartialPivLU<Eigen::Matrix<double, N, N>>& lu, const Eigen::MatrixBase<Rhs>& b) {
@@ -119,8 +88,7 @@ Eigen::Matrix<double, N, Rhs::ColsAtCompileTime> luSolve(
     // Row-major, so that each row operation below runs over the columns in packets.
     Eigen::Matrix<double, N, C, Eigen::RowMajor> x = lu.permutationP() * rhs;
     const Eigen::Matrix<double, N, N>& m = lu.matrixLU();
-    // L x = P b, L unit lower: panels of W rows from the top; in a panel row k is subtracted from
-    // the panel's rows below it, then the rows below the panel lose the panel's rows' sum.
+    // L x = P b: panels of W rows from the top, then the rows below lose the panel's sum.
     for (int p0 = 0; p0 < N; p0 += W) {
       const int p1 = std::min(N, p0 + W);
       for (int k = p0; k < p1; ++k) {
@@ -149,8 +117,7 @@ Eigen::Matrix<double, N, Rhs::ColsAtCompileTime> luSolve(
   }
 }
 
-/// exp(M) for M = [[X, Y], [0, Z]]: Eigen's scaling and squaring (see the file comment) block by
-/// block.
+/// exp(M) for M = [[X, Y], [0, Z]], block by block.
 template <int P, int Q>
 BlockTriangular<P, Q> blockTriangularExp(BlockTriangular<P, Q> a) {
   using B = BlockTriangular<P, Q>;
@@ -204,8 +171,7 @@ BlockTriangular<P, Q> blockTriangularExp(BlockTriangular<P, Q> a) {
                                    1.0};
     std::frexp(l1 / 5.371920351148152, &squarings);
     if (squarings < 0) squarings = 0;
-    // M / 2^s as a product with 2^-s: the same correctly rounded x 2^-s as ldexp (which Eigen's
-    // exp() calls per coefficient), without a libm call per coefficient (9 % of the set-up).
+    // M / 2^s as a product with 2^-s: rounds as Eigen's ldexp per coefficient.
     const double scale = std::ldexp(1.0, -squarings);
     a.x *= scale;
     a.y *= scale;

@@ -1,0 +1,142 @@
+// DynamicsEstimator's parts (docs/model.md "Model, workspace and engines").
+#pragma once
+
+#include <array>
+#include <memory>
+
+#include "drivetrain_stiffness/core/exponential_integrator.hpp"
+#include "drivetrain_stiffness/core/integrators.hpp"
+#include "drivetrain_stiffness/core/reduced_models.hpp"
+#include "drivetrain_stiffness/core/rig_config.hpp"
+#include "drivetrain_stiffness/core/rig_model.hpp"
+#include "drivetrain_stiffness/core/sliced_interval_maps.hpp"
+#include "drivetrain_stiffness/core/sliced_modal_propagator.hpp"
+
+namespace drivetrain_stiffness {
+
+/// A sliced mesh, the model over it and its exact propagator (none with bearing clearance).
+struct SlicedDynamics {
+  std::shared_ptr<const SlicedMesh> slices;
+  std::unique_ptr<GearRotorModel> model;
+  std::unique_ptr<SlicedModalPropagator> exact;
+  void build(std::shared_ptr<const SlicedMesh> mesh_slices, const GearRotorParameters& p,
+             const DynamicsConfig& d);
+  /// New parameters, in place (no allocation).
+  void setParameters(const GearRotorParameters& p);
+};
+
+/// What describes the rig: configuration, parameters, output grid and what is built from them.
+/// Only a parameter change changes it; the engines fill its caches.
+struct DynamicsModel {
+  std::shared_ptr<const RigConfig> rig;
+  std::shared_ptr<const AntiBacklashMesh> mesh;
+  DampingRatios damping;
+  std::array<double, 2> bearing_stiffness{};  ///< [N/m]
+  double requested_rate = 0.0;                ///< [Hz]
+  IntegratorOptions fallback;                 ///< dopri5's
+  double interval = 0.0;                      ///< output interval [s]
+  std::unique_ptr<GearRotorModel> nominal;    ///< at the nominal phase
+  std::unique_ptr<PeriodicExponentialPropagator> periodic;
+  int motion_slices = 256;
+  SlicedDynamics full;  ///< the fine slices
+  SlicedDynamics mean;  ///< linear_modal: one slice, the period's mean
+  std::unique_ptr<SlicedIntervalMaps> interval_maps;
+  int maps_settle = -1;         ///< settling table holds: 1 yes, 0 no, -1 not asked
+  bool periodic_stale = false;  ///< rebuild the periodic propagators at reset
+
+  GearRotorParameters parameters() const;
+  double nominalMeshFrequency() const;  ///< [Hz]
+  /// F_d = T / r_b,p [N] of pinion torque [N·m].
+  double driveForce(double torque) const;
+  /// full, or mean for linear_modal.
+  const SlicedDynamics& moving(Fidelity fidelity) const;
+  /// Phase slices crossed in h [s] at mesh frequency f [Hz].
+  double slicesIn(double h, double f) const;
+  /// Drops the interval maps' verdicts after a parameter change.
+  void intervalMapsStale();
+};
+
+/// The state and what the inputs set: time, phase, torque, counters.
+struct DynamicsWorkspace {
+  static constexpr int kMaxTorqueChanges = 16;
+  /// A torque input after sample k: offset [s], torque [N·m].
+  struct TorqueChange {
+    double offset = 0.0, torque = 0.0;
+  };
+  State6 y = State6::Zero();
+  bool started = false;
+  double origin = 0.0;  ///< time of the reset [s]
+  long k = 0;           ///< output sample
+  double torque = 0.0;  ///< held [N·m]
+  std::array<TorqueChange, kMaxTorqueChanges> torque_change{};
+  int torque_changes = 0;
+  double interval_torque = 0.0;  ///< held at sample k [N·m]
+  Fidelity fidelity = Fidelity::kFull;
+  bool following = false;       ///< on the sliced propagation
+  bool measured = false;        ///< phase from the encoders
+  double t_state = 0.0;         ///< [s] since the reset
+  double phase = 0.0;           ///< [turns]
+  double mesh_frequency = 0.0;  ///< [Hz]
+  long rebuilds = 0, fallback_intervals = 0, mapped_stretches = 0;
+};
+
+/// One way of carrying the state forward: each operation returns false, the state untouched,
+/// where it does not apply (default: never). No operation allocates.
+class PropagationEngine {
+ public:
+  virtual ~PropagationEngine() = default;
+  /// From sample w.k to w.k + 1, the torque changes at their stamps (the caller counts w.k).
+  virtual bool interval(DynamicsModel& m, DynamicsWorkspace& w);
+  /// Along the sliced propagation to t_rel [s since the reset] > w.t_state.
+  virtual bool propagate(DynamicsModel& m, DynamicsWorkspace& w, double t_rel);
+};
+
+/// The periodic exponential propagators, while the contacts settle.
+class PeriodicEngine final : public PropagationEngine {
+ public:
+  bool interval(DynamicsModel& m, DynamicsWorkspace& w) override;
+};
+
+/// dopri5 on the nominal model (interval) or the moving sliced model (propagate).
+class Dopri5Engine final : public PropagationEngine {
+ public:
+  bool interval(DynamicsModel& m, DynamicsWorkspace& w) override;
+  bool propagate(DynamicsModel& m, DynamicsWorkspace& w, double t_rel) override;
+  /// From t0 to t1 [s since the reset] on the moving sliced model.
+  static void stretch(DynamicsModel& m, DynamicsWorkspace& w, double t0, double t1, State6& y,
+                      double& phase);
+};
+
+/// propagateMeasured: exact between linear regimes, dopri5 stretches through the rest.
+class SlicedModalEngine final : public PropagationEngine {
+ public:
+  bool propagate(DynamicsModel& m, DynamicsWorkspace& w, double t_rel) override;
+};
+
+/// quasi_static along the motion.
+class QuasiStaticEngine final : public PropagationEngine {
+ public:
+  bool propagate(DynamicsModel& m, DynamicsWorkspace& w, double t_rel) override;
+  /// m x'' + c x' + k x = force, exactly over h: m [kg], c [N·s/m], k [N/m], force [N], h [s].
+  static void shaftStep(double m, double c, double k, double force, double h, double& x, double& v);
+};
+
+/// The interval maps at the nominal phase, where the contacts settle.
+class IntervalMapsEngine final : public PropagationEngine {
+ public:
+  bool interval(DynamicsModel& m, DynamicsWorkspace& w) override;
+  /// From sample w.k to t_rel inside the interval after it.
+  bool propagate(DynamicsModel& m, DynamicsWorkspace& w, double t_rel) override;
+
+ private:
+  /// The maps' interval index; -1 where they do not apply.
+  static int mapsInterval(DynamicsModel& m, const DynamicsWorkspace& w);
+};
+
+/// `first`, and where it does not apply `fallback` (null: onto the sliced propagation).
+struct EngineChoice {
+  PropagationEngine* first = nullptr;
+  PropagationEngine* fallback = nullptr;
+};
+
+}  // namespace drivetrain_stiffness
