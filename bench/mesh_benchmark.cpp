@@ -51,7 +51,7 @@ static void BM_RebuildTables(benchmark::State& state) {
 }
 BENCHMARK(BM_RebuildTables)->Arg(0)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond);
 
-// One modal update at the operating point (issue 5 target: under 10 us): 3x3 generalised
+// One modal update at the operating point (the aim: under 10 us): 3x3 generalised
 // eigenproblem plus the 6x6 state-space eigenvalues.
 static void BM_ModalUpdate(benchmark::State& state) {
   GearRotorParameters p;

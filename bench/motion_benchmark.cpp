@@ -82,7 +82,7 @@ static void BM_SliceDecomposition(benchmark::State& state) {
 BENCHMARK(BM_SliceDecomposition)->Unit(benchmark::kMicrosecond);
 
 // The callback right after a bearing-stiffness change at 6000 rpm: one 1 ms advance crosses every
-// slice twice, so it makes all 259 decompositions itself (issue 12 §2: under 0.5 ms). The bearing
+// slice twice, so it makes all 259 decompositions itself (the aim: under 0.5 ms). The bearing
 // stiffness alternates by 1 % (a preload step) and drifts by a further 1e-9 at each change (k 1e-9
 // after k changes), so every value is new (none of the kept parameter sets) and each slice is
 // seeded by the neighbour behind it under the new parameters, as in the pipeline; compare with

@@ -141,7 +141,7 @@ TEST(NoAllocation, CalibrationProgressThroughDroppedWindows) {
   EXPECT_LT(longest, 1.5);
 }
 
-// Preload inputs (issue 15 section 3): new axial and radial preloads and interferences for both
+// Preload inputs: new axial and radial preloads and interferences for both
 // supports at 20 Hz between torque inputs at 10 kHz. "Steady state" here means what a running rig
 // reaches and keeps until a reset or an input gap restarts the dynamics:
 //  - 2 s of torque inputs, as above (tables, propagators, a full spectrum window);
@@ -149,22 +149,20 @@ TEST(NoAllocation, CalibrationProgressThroughDroppedWindows) {
 //    than 1 % while the dynamics run switches them, once, from the periodic propagators to the
 //    sliced propagation (DynamicsEstimator::parametersChanged: the sliced mesh, its propagator and
 //    the model over it are made then and kept until a restart); every later change stays on it.
-//    That switch is a one-time set-up, like the tables, so it belongs to the warm-up (measured
-//    before the kept parameter sets of 2026-11-26: 29 allocations in the warm-up cycle, 28 of them
-//    at its first input, none at the other five; since then each new kept set also sizes its
-//    slices once, in the warm-up).
+//    That switch is a one-time set-up, like the tables, so it belongs to the warm-up (as does the
+//    first sizing of each kept parameter set's slices).
 // Counted: 1 s more of the cycle. It changes the geometry of the supports (axial preload and
 // interference: each support's Hertz model rebuilt and cold-started), the radial preload alone
 // (warm-started), steps that move the bearing stiffness past the dynamics' 1 % (sliced
 // propagator's parameters changed; the cycle's stiffnesses come back to the same values of the
-// dynamics' 1 % grid, whose slices are kept since 2026-11-26, so here they are taken back; the
+// dynamics' 1 % grid, whose slices are kept, so here they are taken back; the
 // decomposition of values never met before is BearingChangesToNewValuesInSteadyState below) and
 // one that does not, and the resonance estimate each time; never the number of balls in contact
 // (the per-ball storage is sized by the bearing's ball count, not by the balls in contact, but a
 // step that changes the count is not what this case claims). The preload vectors are the caller's
-// (the ROS message conversion builds them), made before counting. Before the fix this counted 1618
-// allocations (81 per preload input: name strings in the checks, a copy of the supports, new
-// Hertz models, a new estimate, a new model over the sliced mesh).
+// (the ROS message conversion builds them), made before counting. What would allocate per input:
+// name strings in the checks, a copy of the supports, new Hertz models, a new estimate, a new model
+// over the sliced mesh.
 TEST(NoAllocation, PreloadInputsInSteadyState) {
   RigPipeline pipeline(test::seedServo(), PipelineOptions{});
   ReadingSink sink;

@@ -1,6 +1,6 @@
 #!/usr/bin/python3
-"""drivetrain_cli's numbers against independent sources, one ctest per case (issue 15 §6: the
-regex CLI checks passed on a NaN, which JSON writes as null). Each check recomputes the value here
+"""drivetrain_cli's numbers against independent sources, one ctest per case (a regex
+check would pass on a NaN, which JSON writes as null). Each check recomputes the value here
 from the physics or a published figure, not from the tool's own code; every output is also
 searched for NaN (null) and infinities.
 

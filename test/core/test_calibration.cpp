@@ -665,7 +665,7 @@ int feedWindow(const SyntheticRig& s, Calibrator& calibrator, StiffnessEstimator
 }
 
 TEST(Calibrator, BadStretchesAfterConvergenceLeaveTheEstimate) {
-  // Issue 13: gate outliers, freeze updates when the excitation is too poor, and never let a bad
+  // Gate outliers, freeze updates when the excitation is too poor, and never let a bad
   // stretch of data drive the estimate. After a converged sweep, each window below closes
   // (kWindow) and leaves every parameter and its std exactly as they were, counted as gated or
   // not excited with its reason; a good window afterwards still updates.

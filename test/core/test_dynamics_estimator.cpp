@@ -71,9 +71,9 @@ TEST(DynamicsEstimator, GridAndSteadyState) {
   // Samples 1 ms apart at a 3 ms mesh period step the phase by 1/3 each.
   EXPECT_NEAR(std::fmod(out[10].phase - out[9].phase + 1.0, 1.0), 1.0 / 3.0, 1e-6);
   // Every third sample lands on the period's tooth switch: its phase is the switch, 0 exactly, from
-  // either side of it to rounding (until the night of 2026-11-26 a phase a few ulps past it was
-  // published as 1e-6, the point meshForSample looks at for the right limit, which jittered the
-  // mesh-period statistics' mesh frequency by 2.5e-7 of itself).
+  // either side of it to rounding (a phase a few ulps past it published as 1e-6, the point
+  // meshForSample looks at for the right limit, would jitter the mesh-period statistics' mesh
+  // frequency by 2.5e-7 of itself).
   for (std::size_t i = 2; i < out.size(); i += 3) EXPECT_EQ(out[i].phase, 0.0) << i;
   for (const DynamicsSample& s : out) {
     EXPECT_TRUE(s.state.allFinite());
@@ -305,16 +305,15 @@ TEST(DynamicsEstimator, BearingStiffnessTakesEffectAtItsStamp) {
 
 // Near the anti-backlash knee the back flank lifts and lands several times within ~50 us of every
 // tooth switch (the mesh rings about its new static deflection), while the samples on both sides
-// find both flanks loaded. Checking the regime at the samples alone, the exponential step missed
-// that and was off by 3.4e-4 of the TE at 4 N m and 1.6e-2 at 5 N m (10 kHz grid, against dopri5
-// at rtol 1e-12; measured 2026-11-26 before contactsSettle). Those torques went to dopri5 on the
-// phase table (rtol 1e-8) until the night of 2026-11-26, which ran near real time (1.7x at 3 N m
-// under torque_ripple's ripple); they now move the dynamics onto the sliced propagation at the
-// nominal phase, which locates every contact change on its exact solution: compared here with
-// dopri5 at rtol 1e-12 on the same sliced model along the same nominal motion. Below the knee the
-// periodic step stays (1 and 3 N m, against dopri5 on the phase table). At -1 N m (past the reverse
-// knee, the drive flank lifted) the step also took states that started lifted and ended inside the
-// closed regime: 0.68 of the TE off (10 kHz); see the next test.
+// find both flanks loaded. Checking the regime at the samples alone, the exponential step misses
+// that and is off by 3.4e-4 of the TE at 4 N m and 1.6e-2 at 5 N m (10 kHz grid, against dopri5
+// at rtol 1e-12, without contactsSettle); dopri5 on the phase table (rtol 1e-8) would run near
+// real time (1.7x at 3 N m under torque_ripple's ripple). Those torques move the dynamics onto the
+// sliced propagation at the nominal phase, which locates every contact change on its exact
+// solution: compared here with dopri5 at rtol 1e-12 on the same sliced model along the same nominal
+// motion. Below the knee the periodic step stays (1 and 3 N m, against dopri5 on the phase table).
+// At -1 N m (past the reverse knee, the drive flank lifted) the step also took states that started
+// lifted and ended inside the closed regime: 0.68 of the TE off (10 kHz); see the next test.
 TEST(DynamicsEstimator, NearTheKneeEveryFlankChangeIsIntegrated) {
   const IntegratorOptions o = referenceOptions();
   for (double torque : {1.0, 3.0, 4.0, 5.0, -1.0}) {
@@ -451,8 +450,8 @@ TEST(DynamicsEstimator, OrdinaryGearWithBacklash) {
   EXPECT_FALSE(est.followingMotion());
 }
 
-// A slow mesh on a fine output grid (node parameters ~pinion_speed_rpm, ~output_rate) used to set
-// up exact propagators for hours and gigabytes (fuzz finding: 12 rpm at 1 MHz, 8 s and 200 MB; 1e-3
+// A slow mesh on a fine output grid (node parameters ~pinion_speed_rpm, ~output_rate) would set up
+// exact propagators for hours and gigabytes (a fuzz finding: 12 rpm at 1 MHz, 8 s and 200 MB; 1e-3
 // rpm, hours): refused up front, naming the two settings.
 TEST(DynamicsEstimator, RefusesASetUpTooLargeNamingSpeedAndRate) {
   const auto expectRefused = [](double rpm, double rate) {
@@ -774,8 +773,8 @@ TEST(DynamicsEstimator, ARipplingBearingStiffnessKeepsItsSlices) {
   for (std::size_t i = 0; i < first.size(); ++i) ASSERT_EQ(first[i].state, second[i].state) << i;
 }
 
-// The reduced fidelities follow the measured motion too (until 2026-11-25 the full model ran
-// whenever the encoders drove the phase). quasi_static: at the nominal phase and speed its shafts
+// The reduced fidelities follow the measured motion too (not the full model whenever the encoders
+// drive the phase). quasi_static: at the nominal phase and speed its shafts
 // must move exactly as the nominal quasi_static's, which propagates them by Eigen's matrix
 // exponential (reduced_models.cpp, ShaftPropagator: code shared with nothing here), and its mesh
 // deflection is the static one, so its TE differs from the nominal's only by the slicing of the

@@ -123,9 +123,9 @@ TEST(OperatingPointModes, FloquetMultipliersObeyLiouville) {
     product *= std::abs(r.floquet->result.multipliers[i]);
     largest = std::max(largest, std::abs(r.floquet->result.multipliers[i]));
   }
-  // Measured 1.5e-7 with the 256-sample mean mesh stiffness, 1.8e-6 since the mean is the table's
-  // exact period mean (2026-11-25; the damping agrees with the model's to all digits, so the
-  // difference is the propagators' rounding, not yet understood): bounded at 1e-5.
+  // Measured 1.8e-6 with the table's exact period mean (1.5e-7 with a 256-sample mean; the damping
+  // agrees with the model's to all digits, so the difference is the propagators' rounding, not yet
+  // understood): bounded at 1e-5.
   EXPECT_NEAR(std::log(product) / (-period * trace), 1.0, 1e-5);
   EXPECT_DOUBLE_EQ(r.floquet->result.max_modulus, largest);
   EXPECT_DOUBLE_EQ(r.floquet->result.margin, 1.0 - largest);

@@ -532,7 +532,7 @@ TEST(RigPipeline, LoopStampsBeforeClockResetOnce) {
   EXPECT_EQ(p.estimator().current().supports[0].solution.radialStiffness(), k);
 }
 
-// One rule per setting (issue 15 section 4): every entry that takes a value refuses the same values
+// One rule per setting: every entry that takes a value refuses the same values
 // with a message naming its field, and accepts the same edges.
 namespace {
 

@@ -301,9 +301,8 @@ Clipped clippedAlong(GearRotorModel model, State6 y, double phase, double f, dou
 // landing clips the landing flank's at twice its spring force (the Modelica ElastoBacklash rule of
 // GearRotorModel): both are linear regimes of their own (sliced_modal_propagator.hpp, FlankState),
 // so the whole run is propagated exactly, no dopri5 stretch at all, and agrees with dopri5 at rtol
-// 1e-12 through the same 20 ms to 1e-8. Until 2026-11-26 every clipped moment was handed to a
-// dopri5 stretch (about 30 us of work each, and the stretches' rtol 1e-8 bounded the agreement here
-// at 1e-6).
+// 1e-12 through the same 20 ms to 1e-8 (a dopri5 stretch for every clipped moment would cost about
+// 30 us each, and the stretches' rtol 1e-8 would bound the agreement here at 1e-6).
 TEST(SlicedModalPropagator, ChatterAroundTheKneeIsPropagatedExactly) {
   long stretches = 0, changes = 0;
   Clipped clipped;

@@ -139,20 +139,22 @@ void expectNames(const std::string& message, const std::string& path, const std:
 }  // namespace
 
 TEST(YamlConfig, KeysThatAreNotNamesAreRefused) {
-  // A sequence or mapping as a key used to escape as YAML::TypedBadConversion.
+  // A sequence or mapping as a key is refused by name, not left to escape as
+  // YAML::TypedBadConversion.
   std::string path = writeTemp("seq_key.yaml", std::string(kGood) + "  [a, b]: 1\n");
   expectNames(refusal(loadBearingFile, path), path, "bearing: key ");
   path = writeTemp("seq_top.yaml", std::string(kGears) + "? [a]\n: 1\nbearings: []\n");
   expectNames(refusal(loadRigFile, path), path, "key ");
   path = writeTemp("file_seq.yaml", std::string(kGears) + "bearings:\n  - {name: a, file: [x]}\n");
   expectNames(refusal(loadRigFile, path), path, "bearings[0].file: must be a string");
-  // A NUL in a key used to cut the message (a C string) short before it named anything.
+  // A NUL in a key is escaped: as a C string it would cut the message short before it named
+  // anything.
   path = writeTemp("nul_key.yaml", std::string(kGears) + "\"a\\0b\": 1\nbearings: []\n");
   expectNames(refusal(loadRigFile, path), path, "'a\\x00b': unknown top-level key");
 }
 
 TEST(YamlConfig, BlockRefusalsNameTheFile) {
-  // mesh:, anti_backlash:, dynamics: and the bearing's name used to be refused without the file.
+  // Refusals in mesh:, anti_backlash:, dynamics: and of the bearing's name name the file too.
   std::string path = writeTemp("mesh.yaml", std::string(kGears) + "mesh: {samples: 8}\n");
   expectNames(refusal(loadGearFile, path), path, "mesh.samples = 8");
   path = writeTemp("mesh_model.yaml", std::string(kGears) + "mesh: {model: [1]}\n");
@@ -170,15 +172,16 @@ TEST(YamlConfig, BlockRefusalsNameTheFile) {
 }
 
 TEST(YamlConfig, ContactAngleIsRefusedInDegrees) {
-  // Used to be refused as "contact_angle = 1.745" (radians, a name the file does not have).
+  // Named as the file names it, in degrees, not as "contact_angle = 1.745" (radians, a name the
+  // file does not have).
   const std::string path =
       writeTemp("angle.yaml", std::string(kGood).replace(std::string(kGood).find("25"), 2, "100"));
   expectNames(refusal(loadBearingFile, path), path, "bearing.contact_angle_deg = 100");
 }
 
 TEST(YamlConfig, ReferencedFileRefusalsNameTheEntry) {
-  // A missing file, a directory (used to escape as std::ios_base::failure) and a file that is not
-  // a bearing file: each names the entry's file: key, then the file.
+  // A missing file, a directory (not left to escape as std::ios_base::failure) and a file that is
+  // not a bearing file: each names the entry's file: key, then the file.
   for (const std::string& name :
        {std::string("no_such.yaml"), testing::TempDir(), writeTemp("scalar.yaml", "just text\n"),
         writeTemp("scalar_bearing.yaml", "bearing: 7\n")}) {
@@ -189,7 +192,8 @@ TEST(YamlConfig, ReferencedFileRefusalsNameTheEntry) {
 }
 
 TEST(YamlConfig, UnreachablePreloadNamesFileAndKey) {
-  // A duplex preload no geometry carries used to be refused as "axial_load = ..." with no file.
+  // A duplex preload no geometry carries is refused naming the file and its key, not as
+  // "axial_load = ..." alone.
   const std::string path = writeTemp(
       "pair.yaml", std::string(kGood) + "  arrangement: back_to_back\n  axial_preload: 1e300\n");
   expectNames(refusal<UnreachableLoad>(loadBearingFile, path), path,

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # A 20 s run-up 0 -> 6000 rpm (drivetrain_rig_sim --scenario run_up: encoders at 1 kHz) replayed
-# with the TE at 10 kHz and a report (issue: "a run-up bag whose TE spectrum peaks follow
-# z_p n / 60 within 1 % at each speed"):
+# with the TE at 10 kHz and a report; the TE's spectrum peaks follow z_p n / 60 within 1 % at each
+# speed:
 #  1. Campbell: in every 0.1 s window above 300 rpm the strongest line of the predicted TE is the
 #     mesh frequency z_p n / 60 (z_p = 20, n the encoders' mean speed in the window) within 1 %;
 #  2. order spectrum (the TE resampled on the pinion angle): the strongest order is 20, the mesh;

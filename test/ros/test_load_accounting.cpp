@@ -50,9 +50,9 @@ TEST(LoadAccounting, NothingLostUncountedPacedThenOutrun) {
   // One publication of `torque` for the whole test, held by this handle while each phase's
   // generator comes and goes: roscpp numbers header.seq per publication, so the numbers run on
   // across the phases and a loss at the end of one phase or the start of the next is a gap the node
-  // counts. With a publication per phase, the next phase restarted the numbers at 0 and the node
-  // (rightly) took that as a renumbering, not a gap: 216 inputs lost at a burst's edge went
-  // uncounted once (a clean-clone CI run, 2026-11-24). Its queue: the phases' largest (a burst and
+  // counts. With a publication per phase, the next phase would restart the numbers at 0 and the
+  // node would (rightly) take that as a renumbering, not a gap, leaving inputs lost at a burst's
+  // edge uncounted. Its queue: the phases' largest (a burst and
   // its settle).
   ros::NodeHandle nh;
   const ros::Publisher one_publication =
