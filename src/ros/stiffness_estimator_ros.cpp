@@ -252,72 +252,58 @@ void StiffnessEstimatorRos::finishInput(const ros::WallTime& start, double cpu_s
   if (cpu > deadline_) ++missed_deadlines_cpu_;
 }
 
-void StiffnessEstimatorRos::onTorque(
-    const ros::MessageEvent<const geometry_msgs::WrenchStamped>& event) {
+template <typename Take>
+void StiffnessEstimatorRos::handleInput(const Take& take) {
   const ros::WallTime start = ros::WallTime::now();
   const double cpu_start = threadCpuSeconds();
-  const geometry_msgs::WrenchStamped& msg = *event.getConstMessage();
   std::lock_guard<std::mutex> lock(mutex_);
   observeClock();
-  const TorqueInput in = toTorqueInput(msg, event.getPublisherName());
-  const InputOutcome outcome = pipeline_->torque(in.stamp, in.torque, *publishers_, in.origin,
-                                                 backlogOf(event.getReceiptTime()));
-  if (outcome != InputOutcome::kAccepted) {
+  if (take() != InputOutcome::kAccepted) {
     ROS_WARN_THROTTLE(1.0, "stiffness_estimator: %s", pipeline_->counters().last_event.c_str());
   }
   finishInput(start, cpu_start);
+}
+
+void StiffnessEstimatorRos::onTorque(
+    const ros::MessageEvent<const geometry_msgs::WrenchStamped>& event) {
+  handleInput([&] {
+    const TorqueInput in = toTorqueInput(*event.getConstMessage(), event.getPublisherName());
+    return pipeline_->torque(in.stamp, in.torque, *publishers_, in.origin,
+                             backlogOf(event.getReceiptTime()));
+  });
 }
 
 void StiffnessEstimatorRos::onPreload(
     const ros::MessageEvent<const drivetrain_stiffness::Preload>& event) {
-  const ros::WallTime start = ros::WallTime::now();
-  const double cpu_start = threadCpuSeconds();
-  const drivetrain_stiffness::Preload& msg = *event.getConstMessage();
-  std::lock_guard<std::mutex> lock(mutex_);
-  observeClock();
-  const InputOrigin origin{event.getPublisherName(), msg.header.seq, msg.header.frame_id};
-  toPreloadSettings(msg, preload_settings_);
-  if (pipeline_->preload(fromRosTime(msg.header.stamp), preload_settings_, *publishers_, origin) !=
-      InputOutcome::kAccepted) {
-    ROS_WARN_THROTTLE(1.0, "stiffness_estimator: %s", pipeline_->counters().last_event.c_str());
-  }
-  finishInput(start, cpu_start);
+  handleInput([&] {
+    const drivetrain_stiffness::Preload& msg = *event.getConstMessage();
+    toPreloadSettings(msg, preload_settings_);
+    return pipeline_->preload(fromRosTime(msg.header.stamp), preload_settings_, *publishers_,
+                              {event.getPublisherName(), msg.header.seq, msg.header.frame_id});
+  });
 }
 
 void StiffnessEstimatorRos::onJointStates(
     const ros::MessageEvent<const sensor_msgs::JointState>& event) {
-  const ros::WallTime start = ros::WallTime::now();
-  const double cpu_start = threadCpuSeconds();
-  const sensor_msgs::JointState& msg = *event.getConstMessage();
-  std::lock_guard<std::mutex> lock(mutex_);
-  observeClock();
-  const InputOrigin origin{event.getPublisherName(), msg.header.seq, msg.header.frame_id};
-  const std::optional<MotionInput> reading = toMotionInput(msg, joints_, joint_refusal_);
-  const InputOutcome outcome =
-      reading ? pipeline_->motion(fromRosTime(msg.header.stamp), *reading, *publishers_, origin)
-              : pipeline_->motionRefused(fromRosTime(msg.header.stamp), joint_refusal_, origin,
-                                         jointNamesOf(msg));
-  if (outcome != InputOutcome::kAccepted) {
-    ROS_WARN_THROTTLE(1.0, "stiffness_estimator: %s", pipeline_->counters().last_event.c_str());
-  }
-  finishInput(start, cpu_start);
+  handleInput([&] {
+    const sensor_msgs::JointState& msg = *event.getConstMessage();
+    const InputOrigin origin{event.getPublisherName(), msg.header.seq, msg.header.frame_id};
+    const Stamp stamp = fromRosTime(msg.header.stamp);
+    const std::optional<MotionInput> reading = toMotionInput(msg, joints_, joint_refusal_);
+    return reading ? pipeline_->motion(stamp, *reading, *publishers_, origin)
+                   : pipeline_->motionRefused(stamp, joint_refusal_, origin, jointNamesOf(msg));
+  });
 }
 
 void StiffnessEstimatorRos::onVibration(
     const ros::MessageEvent<const drivetrain_stiffness::VibrationBlock>& event) {
-  const ros::WallTime start = ros::WallTime::now();
-  const double cpu_start = threadCpuSeconds();
-  const drivetrain_stiffness::VibrationBlock& msg = *event.getConstMessage();
-  std::lock_guard<std::mutex> lock(mutex_);
-  observeClock();
-  const InputOrigin origin{event.getPublisherName(), msg.header.seq, msg.header.frame_id};
-  const VibrationBlockView block{msg.sample_rate, msg.channels.data(), msg.channels.size(),
-                                 msg.data.data(), msg.data.size()};
-  if (pipeline_->vibration(fromRosTime(msg.header.stamp), block, *publishers_, origin) !=
-      InputOutcome::kAccepted) {
-    ROS_WARN_THROTTLE(1.0, "stiffness_estimator: %s", pipeline_->counters().last_event.c_str());
-  }
-  finishInput(start, cpu_start);
+  handleInput([&] {
+    const drivetrain_stiffness::VibrationBlock& msg = *event.getConstMessage();
+    const VibrationBlockView block{msg.sample_rate, msg.channels.data(), msg.channels.size(),
+                                   msg.data.data(), msg.data.size()};
+    return pipeline_->vibration(fromRosTime(msg.header.stamp), block, *publishers_,
+                                {event.getPublisherName(), msg.header.seq, msg.header.frame_id});
+  });
 }
 
 void StiffnessEstimatorRos::onReconfigure(drivetrain_stiffness::EstimatorConfig& config,

@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <fstream>
 #include <string_view>
+#include <type_traits>
 
 #include <boost/make_shared.hpp>
 #include <ros/serialization.h>
@@ -95,19 +96,6 @@ std::optional<MessageLayout> layoutIfTypeOf(const BagConnection& connection) {
   return layoutOf<T>();
 }
 
-/// The message as T when it is on `wanted`'s topic (null otherwise, or of another type).
-template <class T>
-boost::shared_ptr<T> instantiateIf(InputStream stream, InputStream wanted,
-                                   const rosbag::MessageInstance& m) {
-  return stream == wanted ? m.instantiate<T>() : nullptr;
-}
-
-template <class T>
-boost::shared_ptr<T> deserializeIf(InputStream stream, InputStream wanted,
-                                   const BagRecordMessage& raw) {
-  return stream == wanted ? deserialize<T>(raw) : nullptr;
-}
-
 }  // namespace
 
 bool topicMatches(const std::string& topic, const std::string& wanted) {
@@ -191,6 +179,21 @@ void ReplayInput::advance() {
   if (has_message_) ++read_;
 }
 
+template <class Make>
+void ReplayInput::fill(ReplayMessage& message, InputStream stream, const Make& make) {
+  // The type follows the topic: each stream's message type, the others null.
+  const auto of = [&](InputStream wanted, auto* type) {
+    return stream == wanted ? make(type) : nullptr;
+  };
+  message.torque_ = of(InputStream::kTorque, static_cast<geometry_msgs::WrenchStamped*>(nullptr));
+  message.preload_ =
+      of(InputStream::kPreload, static_cast<drivetrain_stiffness::Preload*>(nullptr));
+  message.joint_states_ =
+      of(InputStream::kJointStates, static_cast<sensor_msgs::JointState*>(nullptr));
+  message.vibration_ =
+      of(InputStream::kVibration, static_cast<drivetrain_stiffness::VibrationBlock*>(nullptr));
+}
+
 std::optional<InputStream> ReplayInput::streamOf(const std::string& topic) const {
   for (const InputStream s : {InputStream::kTorque, InputStream::kJointStates,
                               InputStream::kVibration, InputStream::kPreload}) {
@@ -217,14 +220,8 @@ bool ReplayInput::nextIndexed() {
     message_.topic_ = &m.getTopic();
     message_.caller_id_ = &headerField(m.getConnectionHeader().get(), "callerid");
     message_.data_type_ = &m.getDataType();
-    const InputStream stream = *streamOf(m.getTopic());
-    message_.torque_ = instantiateIf<geometry_msgs::WrenchStamped>(stream, InputStream::kTorque, m);
-    message_.preload_ =
-        instantiateIf<drivetrain_stiffness::Preload>(stream, InputStream::kPreload, m);
-    message_.joint_states_ =
-        instantiateIf<sensor_msgs::JointState>(stream, InputStream::kJointStates, m);
-    message_.vibration_ =
-        instantiateIf<drivetrain_stiffness::VibrationBlock>(stream, InputStream::kVibration, m);
+    fill(message_, *streamOf(m.getTopic()),
+         [&](auto* type) { return m.instantiate<std::remove_pointer_t<decltype(type)>>(); });
     return true;
   } catch (
       const std::exception& e) {  // a chunk that does not decompress, a damaged record or message
@@ -261,14 +258,8 @@ void ReplayInput::decode(const BagRecordMessage& raw, ReplayMessage& message) co
   message.topic_ = &raw.connection->topic;
   message.caller_id_ = &headerField(&raw.connection->header, "callerid");
   message.data_type_ = &headerField(&raw.connection->header, "type");
-  const InputStream stream = *streamOf(raw.connection->topic);
-  message.torque_ = deserializeIf<geometry_msgs::WrenchStamped>(stream, InputStream::kTorque, raw);
-  message.preload_ =
-      deserializeIf<drivetrain_stiffness::Preload>(stream, InputStream::kPreload, raw);
-  message.joint_states_ =
-      deserializeIf<sensor_msgs::JointState>(stream, InputStream::kJointStates, raw);
-  message.vibration_ =
-      deserializeIf<drivetrain_stiffness::VibrationBlock>(stream, InputStream::kVibration, raw);
+  fill(message, *streamOf(raw.connection->topic),
+       [&](auto* type) { return deserialize<std::remove_pointer_t<decltype(type)>>(raw); });
 }
 
 /// A sequential reading ends in damage: the reader's, or (every chunk read whole) the index that

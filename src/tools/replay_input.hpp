@@ -121,6 +121,9 @@ class ReplayInput {
   bool isWanted(const std::string& topic) const { return streamOf(topic).has_value(); }
   ReadRule readRule(const BagConnection& connection) const;
   void decode(const BagRecordMessage& raw, ReplayMessage& message) const;
+  /// Sets `message`'s pointer of `stream`'s type to make(T*) and the others to null.
+  template <class Make>
+  static void fill(ReplayMessage& message, InputStream stream, const Make& make);
   BagDamage endOfSequentialReading() const;
   std::string withoutIndex() const;  ///< what a sequential reading's damage says of the index
   BagDamage locateDamage(const std::string& rosbag_error) const;

@@ -59,6 +59,10 @@ class StiffnessEstimatorRos {
   /// Counts the input as late when its processing took longer than ~deadline: in wall time (any
   /// cause, preemption included) and in this thread's CPU time (the node's own cost).
   void finishInput(const ros::WallTime& start, double cpu_start);
+  /// `take()` (one input to the pipeline, returning its outcome) under the lock after the clock
+  /// check, timed against ~deadline; a refusal warned about, at most once a second per input type.
+  template <typename Take>
+  void handleInput(const Take& take);
   void onDiagnosticTimer();
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status);
   /// diagnose's parts, in the order they add to `status` (called under the lock).
