@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <optional>
 #include <set>
 
 #include "drivetrain_stiffness/core/validation.hpp"
@@ -38,28 +39,29 @@ bool inBand(double f, const std::vector<FrequencyBand>& bands) {
                      [f](const FrequencyBand& b) { return f >= b.low && f <= b.high; });
 }
 
-}  // namespace
+using PolesByOrder = std::map<int, std::vector<const Pole*>>;
+using Cluster = std::vector<const Pole*>;
 
-SelectionResult selectModes(const SsiResult& ssi, const std::vector<FrequencyBand>& excluded,
-                            const SelectionOptions& o) {
-  validate(o);
-  for (size_t k = 0; k < excluded.size(); ++k) {
-    requireFinite("excluded[" + std::to_string(k) + "].low", excluded[k].low);
-    requireFinite("excluded[" + std::to_string(k) + "].high", excluded[k].high);
-  }
-  SelectionResult out;
-  std::map<int, std::vector<const Pole*>> by_order;
+/// The hard criteria: poles in an excluded band to `order_poles`, damping outside
+/// (0, max_damping) dropped, the rest by order.
+PolesByOrder admissiblePoles(const SsiResult& ssi, const std::vector<FrequencyBand>& excluded,
+                             const SelectionOptions& o, std::vector<Pole>& order_poles) {
+  PolesByOrder by_order;
   for (const Pole& p : ssi.poles) {
     if (inBand(p.frequency, excluded)) {
-      out.order_poles.push_back(p);
+      order_poles.push_back(p);
       continue;
     }
     if (!(p.damping > 0.0 && p.damping < o.max_damping)) continue;
     by_order[p.order].push_back(&p);
   }
+  return by_order;
+}
 
-  // Stabilisation: a pole is stable when the order below or above holds one of close frequency,
-  // damping and shape (Peeters & De Roeck 2001, the stabilisation diagram; Reynders et al. 2012).
+/// Stabilisation: a pole is stable when the order below or above holds one of close frequency,
+/// damping and shape (Peeters & De Roeck 2001, the stabilisation diagram; Reynders et al. 2012).
+/// The stable poles by increasing frequency.
+std::vector<const Pole*> stablePoles(const PolesByOrder& by_order, const SelectionOptions& o) {
   auto matches = [&](const Pole* p, int order) {
     const auto other = by_order.find(order);
     if (other == by_order.end()) return false;
@@ -75,12 +77,16 @@ SelectionResult selectModes(const SsiResult& ssi, const std::vector<FrequencyBan
       if (matches(p, n - 2) || matches(p, n + 2)) stable.push_back(p);
   std::sort(stable.begin(), stable.end(),
             [](const Pole* a, const Pole* b) { return a->frequency < b->frequency; });
+  return stable;
+}
 
-  // Clustering: each stable pole, by increasing frequency, joins the cluster whose first pole is
-  // within cluster_frequency and cluster_mac, else opens one.
-  std::vector<std::vector<const Pole*>> clusters;
+/// Clustering: each stable pole, by increasing frequency, joins the cluster whose first pole is
+/// within cluster_frequency and cluster_mac, else opens one.
+std::vector<Cluster> clusterPoles(const std::vector<const Pole*>& stable,
+                                  const SelectionOptions& o) {
+  std::vector<Cluster> clusters;
   for (const Pole* p : stable) {
-    std::vector<const Pole*>* home = nullptr;
+    Cluster* home = nullptr;
     for (auto& c : clusters) {
       const Pole* first = c.front();
       if (std::abs(p->frequency - first->frequency) < o.cluster_frequency * first->frequency &&
@@ -94,53 +100,76 @@ SelectionResult selectModes(const SsiResult& ssi, const std::vector<FrequencyBan
     else
       clusters.push_back({p});
   }
+  return clusters;
+}
 
+/// The cluster's mode, or nullopt for a spurious cluster: poles from fewer than `needed` orders,
+/// or (with std) none whose damping is significant.
+std::optional<IdentifiedMode> modeOf(const Cluster& c, const SsiResult& ssi,
+                                     const SelectionOptions& o, int needed) {
+  std::set<int> orders;
+  bool unresolved = false;
+  for (const Pole* p : c) unresolved = !orders.insert(p->order).second || unresolved;
+  if (static_cast<int>(orders.size()) < needed) return std::nullopt;
+  // The representative: the member with the smallest frequency std, the order at which the
+  // first-order propagation's singular-value gap is clearest (docs/vibration.md, "Variance
+  // propagation"); without std, the member of median frequency.
+  const Pole* rep = c[c.size() / 2];
+  if (ssi.variance_blocks > 0)
+    rep = *std::min_element(c.begin(), c.end(), [](const Pole* a, const Pole* b) {
+      return a->frequency_std < b->frequency_std;
+    });
+  const bool significant = std::any_of(c.begin(), c.end(), [&](const Pole* p) {
+    return p->damping > o.damping_significance * p->damping_std;
+  });
+  if (ssi.variance_blocks > 0 && !significant) return std::nullopt;
+  IdentifiedMode m;
+  m.frequency = rep->frequency;
+  m.frequency_std = rep->frequency_std;
+  m.damping = rep->damping;
+  m.damping_std = rep->damping_std;
+  m.shape = rep->shape;
+  m.order = rep->order;
+  m.orders = static_cast<int>(orders.size());
+  m.frequency_spread = c.back()->frequency - c.front()->frequency;
+  m.unresolved = unresolved;
+  return m;
+}
+
+/// Neighbours closer than resolution_sigmas std of their difference are not resolved.
+void markUnresolved(std::vector<IdentifiedMode>& modes, const SelectionOptions& o) {
+  for (size_t k = 1; k < modes.size(); ++k) {
+    IdentifiedMode &a = modes[k - 1], &b = modes[k];
+    const double sd = std::hypot(a.frequency_std, b.frequency_std);
+    if (b.frequency - a.frequency < o.resolution_sigmas * sd) a.unresolved = b.unresolved = true;
+  }
+}
+
+}  // namespace
+
+SelectionResult selectModes(const SsiResult& ssi, const std::vector<FrequencyBand>& excluded,
+                            const SelectionOptions& o) {
+  validate(o);
+  for (size_t k = 0; k < excluded.size(); ++k) {
+    requireFinite("excluded[" + std::to_string(k) + "].low", excluded[k].low);
+    requireFinite("excluded[" + std::to_string(k) + "].high", excluded[k].high);
+  }
+  SelectionResult out;
+  const PolesByOrder by_order = admissiblePoles(ssi, excluded, o, out.order_poles);
+  const std::vector<Cluster> clusters = clusterPoles(stablePoles(by_order, o), o);
   const int n_orders = (ssi.max_order - ssi.min_order) / 2 + 1;
   const int needed = std::max(3, static_cast<int>(std::ceil(o.min_orders_fraction * n_orders)));
-  for (const auto& c : clusters) {
-    std::set<int> orders;
-    bool unresolved = false;
-    for (const Pole* p : c) unresolved = !orders.insert(p->order).second || unresolved;
-    if (static_cast<int>(orders.size()) < needed) {
+  for (const Cluster& c : clusters) {
+    if (std::optional<IdentifiedMode> m = modeOf(c, ssi, o, needed)) {
+      out.modes.push_back(std::move(*m));
+    } else {
       ++out.spurious_clusters;
-      continue;
     }
-    // The representative: the member with the smallest frequency std, the order at which the
-    // first-order propagation's singular-value gap is clearest (docs/vibration.md, "Variance
-    // propagation"); without std, the member of median frequency.
-    const Pole* rep = c[c.size() / 2];
-    if (ssi.variance_blocks > 0)
-      rep = *std::min_element(c.begin(), c.end(), [](const Pole* a, const Pole* b) {
-        return a->frequency_std < b->frequency_std;
-      });
-    const bool significant = std::any_of(c.begin(), c.end(), [&](const Pole* p) {
-      return p->damping > o.damping_significance * p->damping_std;
-    });
-    if (ssi.variance_blocks > 0 && !significant) {
-      ++out.spurious_clusters;
-      continue;
-    }
-    IdentifiedMode m;
-    m.frequency = rep->frequency;
-    m.frequency_std = rep->frequency_std;
-    m.damping = rep->damping;
-    m.damping_std = rep->damping_std;
-    m.shape = rep->shape;
-    m.order = rep->order;
-    m.orders = static_cast<int>(orders.size());
-    m.frequency_spread = c.back()->frequency - c.front()->frequency;
-    m.unresolved = unresolved;
-    out.modes.push_back(std::move(m));
   }
   std::sort(
       out.modes.begin(), out.modes.end(),
       [](const IdentifiedMode& a, const IdentifiedMode& b) { return a.frequency < b.frequency; });
-  // Neighbours closer than resolution_sigmas std of their difference are not resolved.
-  for (size_t k = 1; k < out.modes.size(); ++k) {
-    IdentifiedMode &a = out.modes[k - 1], &b = out.modes[k];
-    const double sd = std::hypot(a.frequency_std, b.frequency_std);
-    if (b.frequency - a.frequency < o.resolution_sigmas * sd) a.unresolved = b.unresolved = true;
-  }
+  markUnresolved(out.modes, o);
   return out;
 }
 

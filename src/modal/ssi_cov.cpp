@@ -42,6 +42,202 @@ MatrixXd blockHankel(const MatrixXd& r, int i) {
   return h;
 }
 
+/// The subspace every model order shares: H = U S V^T, O = U_nmax S_nmax^{1/2}, and one QR of
+/// O_up at the largest order (Doehler & Mevel 2012, "Fast multi-order computation of system
+/// matrices": O_up,n = Q_n R_nn, so A_n = R_nn^{-1} (Q^T O_dw)[:n, :n]).
+struct Subspace {
+  MatrixXd u, v;
+  VectorXd s;
+  MatrixXd obs, rfull, qt_dw, qthin;
+  long m = 0, rows_up = 0;
+};
+
+/// Throws InvalidInput naming the first non-finite sample.
+void requireFiniteRecord(const Eigen::Ref<const Eigen::MatrixXd>& record) {
+  if (record.allFinite()) return;  // the field is named only for the first bad sample
+  for (long c = 0; c < record.cols(); ++c)
+    for (long ch = 0; ch < record.rows(); ++ch)
+      if (!std::isfinite(record(ch, c)))
+        throwNotFinite("record(" + std::to_string(ch) + ", " + std::to_string(c) + ")",
+                       record(ch, c));
+}
+
+/// The Hankel matrix as the mean of n_b blocks' (one block when nb = 0), with each block's lag
+/// covariances for the variance (Doehler & Mevel 2013, Sections 3.2 and 5.1; Reynders et al.
+/// 2008, the covariance of the Hankel matrix).
+MatrixXd meanHankel(const MatrixXd& y, int i, int lags, int nb, long usable, int l,
+                    std::vector<MatrixXd>& block_r) {
+  const long block = nb > 0 ? usable / nb : usable;
+  MatrixXd r_mean = MatrixXd::Zero(l, l * lags);
+  if (nb > 0) {
+    block_r.reserve(nb);
+    for (int b = 0; b < nb; ++b) {
+      block_r.push_back(lagCovariances(y, b * block, block, lags));
+      r_mean += block_r.back() / static_cast<double>(nb);
+    }
+  } else {
+    r_mean = lagCovariances(y, 0, block, lags);
+  }
+  return blockHankel(r_mean, i);
+}
+
+/// H's SVD and the QR of O_up at nmax (Peeters & De Roeck 1999). Throws InvalidInput naming the
+/// record's rms when H is zero.
+Subspace decompose(const MatrixXd& h, const MatrixXd& y, int l, int nmax) {
+  Subspace sub;
+  sub.m = h.rows();
+  Eigen::BDCSVD<MatrixXd> svd(h, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  sub.u = svd.matrixU();
+  sub.v = svd.matrixV();
+  sub.s = svd.singularValues();
+  if (!(sub.s[0] > 0.0))
+    throwInvalid("record.rms", std::sqrt(y.squaredNorm() / y.size()),
+                 "the record holds no correlated motion (a constant or empty record)");
+  sub.obs = sub.u.leftCols(nmax) * sub.s.head(nmax).cwiseSqrt().asDiagonal();
+  sub.rows_up = sub.m - l;
+  Eigen::HouseholderQR<MatrixXd> qr(sub.obs.topRows(sub.rows_up));
+  sub.rfull = qr.matrixQR().topRows(nmax).triangularView<Eigen::Upper>();
+  sub.qt_dw = qr.householderQ().transpose() * sub.obs.bottomRows(sub.rows_up);
+  sub.qthin = qr.householderQ() * MatrixXd::Identity(sub.rows_up, nmax);  // Q[:, :nmax]
+  return sub;
+}
+
+/// Per block: the sensitivity coefficients of the left singular vectors outside the kept
+/// subspace, C_b[k, j] = sqrt(s_j) (s_j a_kj + s_k a_jk) / (s_j^2 - s_k^2), a = U^T dH_b V, so
+/// that the part of dO_n that changes the poles is U[:, n:] C_b[n:, :n] (first-order SVD
+/// perturbation: Reynders et al. 2008, the sensitivity of the singular vectors; Doehler & Mevel
+/// 2013 eqs. 28-34 in another normalisation). Perturbations inside span(U_n) are similarity
+/// transforms of A_n and leave its eigenvalues unchanged, so the gap s_n - s_{n+1} is the only one
+/// that enters.
+std::vector<MatrixXd> singularVectorSensitivities(const std::vector<MatrixXd>& block_r,
+                                                  const MatrixXd& h, const Subspace& sub, int i,
+                                                  int nb, int nmax) {
+  std::vector<MatrixXd> coeff;
+  const double tscale = nb > 1 ? 1.0 / std::sqrt(static_cast<double>(nb) * (nb - 1)) : 0.0;
+  if (nb <= 1) return coeff;
+  const VectorXd& s = sub.s;
+  coeff.reserve(nb);
+  for (int b = 0; b < nb; ++b) {
+    const MatrixXd dh = (blockHankel(block_r[b], i) - h) * tscale;
+    const MatrixXd a = sub.u.transpose() * dh * sub.v;
+    MatrixXd c = MatrixXd::Zero(sub.m, nmax);
+    for (int j = 0; j < nmax; ++j)
+      for (long k = j + 1; k < sub.m; ++k) {  // only k >= n > j is used
+        const double den = s[j] * s[j] - s[k] * s[k];
+        c(k, j) = std::sqrt(s[j]) * (s[j] * a(k, j) + s[k] * a(j, k)) / den;
+      }
+    coeff.push_back(std::move(c));
+  }
+  return coeff;
+}
+
+/// One order's state matrix and what its eigenvalues' sensitivities need.
+struct OrderModel {
+  int n = 0;
+  MatrixXd rn, an, on, res;
+  VectorXcd mu;
+  MatrixXcd psi, psi_inv;
+  std::vector<int> kept;  ///< eigenvalues with Im > 0: one per conjugate pair
+};
+
+/// d mu_j of the kept eigenvalues for each block (columns).
+MatrixXcd eigenvalueSensitivities(const OrderModel& om, const Subspace& sub,
+                                  const std::vector<MatrixXd>& coeff, int nb) {
+  const int n = om.n;
+  const auto rtri = om.rn.triangularView<Eigen::Upper>();
+  MatrixXcd dmu(om.kept.size(), nb > 1 ? nb : 0);
+  // The kept rows of Psi^{-1}, split into real and imaginary parts for real products with dA.
+  MatrixXd inv_re(om.kept.size(), n), inv_im(om.kept.size(), n);
+  for (size_t q = 0; q < om.kept.size(); ++q) {
+    inv_re.row(q) = om.psi_inv.row(om.kept[q]).real();
+    inv_im.row(q) = om.psi_inv.row(om.kept[q]).imag();
+  }
+  for (int b = 0; b < (nb > 1 ? nb : 0); ++b) {
+    const MatrixXd dobs = sub.u.rightCols(sub.m - n) * coeff[b].bottomLeftCorner(sub.m - n, n);
+    const auto dup = dobs.topRows(sub.rows_up);
+    const auto ddw = dobs.bottomRows(sub.rows_up);
+    // dA = O_up^+ (dO_dw - dO_up A) + (O_up^T O_up)^{-1} dO_up^T (O_dw - O_up A)
+    // (the derivative of A = (O_up^T O_up)^{-1} O_up^T O_dw; Doehler & Mevel
+    // 2013 eqs. 36-37), with O_up^T O_up = R^T R.
+    // = R^{-1} (Q_n^T (dO_dw - dO_up A) + R^{-T} dO_up^T (O_dw - O_up A)).
+    MatrixXd rhs = sub.qthin.leftCols(n).transpose() * (ddw - dup * om.an);
+    rhs += rtri.transpose().solve(dup.transpose() * om.res);
+    const MatrixXd da = rtri.solve(rhs);
+    // d mu_j = chi_j^H dA psi_j / (chi_j^H psi_j) (Doehler & Mevel 2013 eq. 43).
+    const MatrixXd w_re = inv_re * da, w_im = inv_im * da;
+    for (size_t q = 0; q < om.kept.size(); ++q) {
+      const int j = om.kept[q];
+      std::complex<double> sum = 0.0;
+      for (int k = 0; k < n; ++k)
+        sum += std::complex<double>(w_re(q, k), w_im(q, k)) * om.psi(k, j);
+      dmu(q, b) = sum;
+    }
+  }
+  return dmu;
+}
+
+/// The pole of eigenvalue mu [-] of order n: lambda_c = ln(mu) / dt, its frequency, damping,
+/// their std from the blocks' d mu (NaN with fewer than 2 blocks) and its shape C psi.
+Pole poleOf(int n, std::complex<double> mu, const Eigen::Ref<const VectorXcd>& dmu, int nb,
+            double dt, VectorXcd shape) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  Pole p;
+  p.order = n;
+  const std::complex<double> lc = std::log(mu) / dt;  // lambda_c = ln(mu) / dt
+  p.eigenvalue = lc;
+  const double mag = std::abs(lc);
+  p.frequency = mag / kTwoPi;
+  p.damping = -lc.real() / mag;
+  p.frequency_std = nan;
+  p.damping_std = nan;
+  if (nb > 1) {
+    // f = |lc| / 2 pi, xi = -Re lc / |lc|, d lc = d mu / (mu dt)
+    // (Doehler & Mevel 2013 Lemma 5).
+    double vf = 0.0, vx = 0.0;
+    for (int b = 0; b < nb; ++b) {
+      const std::complex<double> dlc = dmu[b] / (mu * dt);
+      const double dmag = (std::conj(lc) * dlc).real() / mag;
+      const double df = dmag / kTwoPi;
+      const double dx = -dlc.real() / mag + lc.real() * dmag / (mag * mag);
+      vf += df * df;
+      vx += dx * dx;
+    }
+    p.frequency_std = std::sqrt(vf);
+    p.damping_std = std::sqrt(vx);
+  }
+  Eigen::Index big = 0;
+  shape.cwiseAbs().maxCoeff(&big);
+  if (std::abs(shape[big]) > 0.0) shape /= shape[big];
+  p.shape = shape;
+  return p;
+}
+
+/// Appends the poles of order n to `result` (none if the eigensolver fails).
+void addPolesOfOrder(int n, const Subspace& sub, const std::vector<MatrixXd>& coeff, int l, int nb,
+                     double dt, SsiResult& result) {
+  OrderModel om;
+  om.n = n;
+  om.rn = sub.rfull.topLeftCorner(n, n);
+  const auto rtri = om.rn.triangularView<Eigen::Upper>();
+  om.an = rtri.solve(sub.qt_dw.topLeftCorner(n, n));
+  om.on = sub.obs.leftCols(n);
+  // Residual of the shift least squares O_up A = O_dw (enters dA).
+  om.res = om.on.bottomRows(sub.rows_up) - om.on.topRows(sub.rows_up) * om.an;
+  Eigen::EigenSolver<MatrixXd> eig(om.an);
+  if (eig.info() != Eigen::Success) return;
+  om.mu = eig.eigenvalues();
+  om.psi = eig.eigenvectors();
+  om.psi_inv = om.psi.partialPivLu().inverse();  // rows: chi_j^H / (chi_j^H psi_j)
+  const MatrixXcd shapes = om.on.topRows(l).cast<std::complex<double>>() * om.psi;  // C psi
+  for (int j = 0; j < n; ++j)
+    if (om.mu[j].imag() > 0.0 && std::abs(om.mu[j]) > 0.0) om.kept.push_back(j);
+  const MatrixXcd dmu = eigenvalueSensitivities(om, sub, coeff, nb);
+  for (size_t q = 0; q < om.kept.size(); ++q) {
+    const int j = om.kept[q];
+    result.poles.push_back(poleOf(n, om.mu[j], dmu.row(q).transpose(), nb, dt, shapes.col(j)));
+  }
+}
+
 }  // namespace
 
 SsiCov::SsiCov(const SsiOptions& options) : options_(options) {
@@ -66,12 +262,7 @@ SsiResult SsiCov::identify(const Eigen::Ref<const Eigen::MatrixXd>& record,
   const int l = static_cast<int>(record.rows());
   if (l < 1) throwInvalid("record.channels", l, "must be >= 1");
   requirePositive("sample_rate", sample_rate);
-  if (!record.allFinite())  // the field is named only for the first bad sample
-    for (long c = 0; c < record.cols(); ++c)
-      for (int ch = 0; ch < l; ++ch)
-        if (!std::isfinite(record(ch, c)))
-          throwNotFinite("record(" + std::to_string(ch) + ", " + std::to_string(c) + ")",
-                         record(ch, c));
+  requireFiniteRecord(record);
   const int i = blockRows(l);
   if ((i - 1) * l < options_.max_order)
     throwInvalid("ssi.block_rows", i,
@@ -89,67 +280,11 @@ SsiResult SsiCov::identify(const Eigen::Ref<const Eigen::MatrixXd>& record,
 
   MatrixXd y = record;
   y.colwise() -= y.rowwise().mean();
-
-  // The Hankel matrix as the mean of the blocks' Hankel matrices, and the square root T of its
-  // covariance, Sigma_H = T T^T, T_b = (h_b - mean h) / sqrt(n_b (n_b - 1)) (Doehler & Mevel 2013,
-  // Sections 3.2 and 5.1; Reynders et al. 2008, the covariance of the Hankel matrix).
-  const long block = nb > 0 ? usable / nb : usable;
   std::vector<MatrixXd> block_r;
-  MatrixXd r_mean = MatrixXd::Zero(l, l * lags);
-  if (nb > 0) {
-    block_r.reserve(nb);
-    for (int b = 0; b < nb; ++b) {
-      block_r.push_back(lagCovariances(y, b * block, block, lags));
-      r_mean += block_r.back() / static_cast<double>(nb);
-    }
-  } else {
-    r_mean = lagCovariances(y, 0, block, lags);
-  }
-  const MatrixXd h = blockHankel(r_mean, i);
-  const long m = h.rows();
-
-  // H = U S V^T; O_n = U_n S_n^{1/2} (Peeters & De Roeck 1999).
-  Eigen::BDCSVD<MatrixXd> svd(h, Eigen::ComputeFullU | Eigen::ComputeFullV);
-  const MatrixXd& u = svd.matrixU();
-  const MatrixXd& v = svd.matrixV();
-  const VectorXd& s = svd.singularValues();
-  if (!(s[0] > 0.0))
-    throwInvalid("record.rms", std::sqrt(y.squaredNorm() / y.size()),
-                 "the record holds no correlated motion (a constant or empty record)");
+  const MatrixXd h = meanHankel(y, i, lags, nb, usable, l, block_r);
   const int nmax = options_.max_order;
-  const MatrixXd obs = u.leftCols(nmax) * s.head(nmax).cwiseSqrt().asDiagonal();
-  const long rows_up = m - l;
-  // One QR of O_up at the largest order serves every order (Doehler & Mevel 2012, "Fast
-  // multi-order computation of system matrices"): O_up,n = Q_n R_nn, so A_n = R_nn^{-1}
-  // (Q^T O_dw)[:n, :n].
-  Eigen::HouseholderQR<MatrixXd> qr(obs.topRows(rows_up));
-  const MatrixXd rfull = qr.matrixQR().topRows(nmax).triangularView<Eigen::Upper>();
-  const MatrixXd qt_dw = qr.householderQ().transpose() * obs.bottomRows(rows_up);
-  const MatrixXd qthin = qr.householderQ() * MatrixXd::Identity(rows_up, nmax);  // Q[:, :nmax]
-
-  // Per block: the sensitivity coefficients of the left singular vectors outside the kept
-  // subspace, C_b[k, j] = sqrt(s_j) (s_j a_kj + s_k a_jk) / (s_j^2 - s_k^2), a = U^T dH_b V, so
-  // that the part of dO_n that changes the poles is U[:, n:] C_b[n:, :n] (first-order SVD
-  // perturbation: Reynders et al. 2008, the sensitivity of the singular vectors; Doehler & Mevel
-  // 2013 eqs. 28-34 in another normalisation). Perturbations inside span(U_n) are similarity
-  // transforms of A_n and leave its eigenvalues unchanged, so the gap s_n - s_{n+1} is the only one
-  // that enters.
-  std::vector<MatrixXd> coeff;
-  const double tscale = nb > 1 ? 1.0 / std::sqrt(static_cast<double>(nb) * (nb - 1)) : 0.0;
-  if (nb > 1) {
-    coeff.reserve(nb);
-    for (int b = 0; b < nb; ++b) {
-      const MatrixXd dh = (blockHankel(block_r[b], i) - h) * tscale;
-      const MatrixXd a = u.transpose() * dh * v;
-      MatrixXd c = MatrixXd::Zero(m, nmax);
-      for (int j = 0; j < nmax; ++j)
-        for (long k = j + 1; k < m; ++k) {  // only k >= n > j is used
-          const double den = s[j] * s[j] - s[k] * s[k];
-          c(k, j) = std::sqrt(s[j]) * (s[j] * a(k, j) + s[k] * a(j, k)) / den;
-        }
-      coeff.push_back(std::move(c));
-    }
-  }
+  const Subspace sub = decompose(h, y, l, nmax);
+  const std::vector<MatrixXd> coeff = singularVectorSensitivities(block_r, h, sub, i, nb, nmax);
 
   SsiResult result;
   result.sample_rate = sample_rate;
@@ -159,87 +294,8 @@ SsiResult SsiCov::identify(const Eigen::Ref<const Eigen::MatrixXd>& record,
   result.max_order = nmax;
   result.variance_blocks = nb > 1 ? nb : 0;
   const double dt = 1.0 / sample_rate;
-  const double nan = std::numeric_limits<double>::quiet_NaN();
-
-  for (int n = options_.min_order; n <= nmax; n += 2) {
-    const MatrixXd rn = rfull.topLeftCorner(n, n);
-    const auto rtri = rn.triangularView<Eigen::Upper>();
-    const MatrixXd an = rtri.solve(qt_dw.topLeftCorner(n, n));
-    const MatrixXd on = obs.leftCols(n);
-    // Residual of the shift least squares O_up A = O_dw (enters dA below).
-    const MatrixXd res = on.bottomRows(rows_up) - on.topRows(rows_up) * an;
-    Eigen::EigenSolver<MatrixXd> eig(an);
-    if (eig.info() != Eigen::Success) continue;
-    const VectorXcd mu = eig.eigenvalues();
-    const MatrixXcd psi = eig.eigenvectors();
-    const MatrixXcd psi_inv = psi.partialPivLu().inverse();  // rows: chi_j^H / (chi_j^H psi_j)
-    const MatrixXcd shapes = on.topRows(l).cast<std::complex<double>>() * psi;  // C psi
-
-    // d lambda_j for each block (columns), only for the kept poles.
-    std::vector<int> kept;
-    for (int j = 0; j < n; ++j)
-      if (mu[j].imag() > 0.0 && std::abs(mu[j]) > 0.0) kept.push_back(j);
-    MatrixXcd dmu(kept.size(), nb > 1 ? nb : 0);
-    // The kept rows of Psi^{-1}, split into real and imaginary parts for real products with dA.
-    MatrixXd inv_re(kept.size(), n), inv_im(kept.size(), n);
-    for (size_t q = 0; q < kept.size(); ++q) {
-      inv_re.row(q) = psi_inv.row(kept[q]).real();
-      inv_im.row(q) = psi_inv.row(kept[q]).imag();
-    }
-    for (int b = 0; b < (nb > 1 ? nb : 0); ++b) {
-      const MatrixXd dobs = u.rightCols(m - n) * coeff[b].bottomLeftCorner(m - n, n);
-      const auto dup = dobs.topRows(rows_up);
-      const auto ddw = dobs.bottomRows(rows_up);
-      // dA = O_up^+ (dO_dw - dO_up A) + (O_up^T O_up)^{-1} dO_up^T (O_dw - O_up A)
-      // (the derivative of A = (O_up^T O_up)^{-1} O_up^T O_dw; Doehler & Mevel
-      // 2013 eqs. 36-37), with O_up^T O_up = R^T R.
-      // = R^{-1} (Q_n^T (dO_dw - dO_up A) + R^{-T} dO_up^T (O_dw - O_up A)).
-      MatrixXd rhs = qthin.leftCols(n).transpose() * (ddw - dup * an);
-      rhs += rtri.transpose().solve(dup.transpose() * res);
-      const MatrixXd da = rtri.solve(rhs);
-      // d mu_j = chi_j^H dA psi_j / (chi_j^H psi_j) (Doehler & Mevel 2013 eq. 43).
-      const MatrixXd w_re = inv_re * da, w_im = inv_im * da;
-      for (size_t q = 0; q < kept.size(); ++q) {
-        const int j = kept[q];
-        std::complex<double> sum = 0.0;
-        for (int k = 0; k < n; ++k) sum += std::complex<double>(w_re(q, k), w_im(q, k)) * psi(k, j);
-        dmu(q, b) = sum;
-      }
-    }
-    for (size_t q = 0; q < kept.size(); ++q) {
-      const int j = kept[q];
-      Pole p;
-      p.order = n;
-      const std::complex<double> lc = std::log(mu[j]) / dt;  // lambda_c = ln(mu) / dt
-      p.eigenvalue = lc;
-      const double mag = std::abs(lc);
-      p.frequency = mag / kTwoPi;
-      p.damping = -lc.real() / mag;
-      p.frequency_std = nan;
-      p.damping_std = nan;
-      if (nb > 1) {
-        // f = |lc| / 2 pi, xi = -Re lc / |lc|, d lc = d mu / (mu dt)
-        // (Doehler & Mevel 2013 Lemma 5).
-        double vf = 0.0, vx = 0.0;
-        for (int b = 0; b < nb; ++b) {
-          const std::complex<double> dlc = dmu(q, b) / (mu[j] * dt);
-          const double dmag = (std::conj(lc) * dlc).real() / mag;
-          const double df = dmag / kTwoPi;
-          const double dx = -dlc.real() / mag + lc.real() * dmag / (mag * mag);
-          vf += df * df;
-          vx += dx * dx;
-        }
-        p.frequency_std = std::sqrt(vf);
-        p.damping_std = std::sqrt(vx);
-      }
-      VectorXcd shape = shapes.col(j);
-      Eigen::Index big = 0;
-      shape.cwiseAbs().maxCoeff(&big);
-      if (std::abs(shape[big]) > 0.0) shape /= shape[big];
-      p.shape = shape;
-      result.poles.push_back(std::move(p));
-    }
-  }
+  for (int n = options_.min_order; n <= nmax; n += 2)
+    addPolesOfOrder(n, sub, coeff, l, nb, dt, result);
   return result;
 }
 
