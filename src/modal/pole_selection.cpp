@@ -117,7 +117,10 @@ std::optional<IdentifiedMode> modeOf(const Cluster& c, const SsiResult& ssi,
   const Pole* rep = c[c.size() / 2];
   if (ssi.variance_blocks > 0)
     rep = *std::min_element(c.begin(), c.end(), [](const Pole* a, const Pole* b) {
-      return a->frequency_std < b->frequency_std;
+      // A NaN std (no propagation for that pole) ranks last.
+      const double sa = std::isnan(a->frequency_std) ? INFINITY : a->frequency_std;
+      const double sb = std::isnan(b->frequency_std) ? INFINITY : b->frequency_std;
+      return sa < sb;
     });
   const bool significant = std::any_of(c.begin(), c.end(), [&](const Pole* p) {
     return p->damping > o.damping_significance * p->damping_std;

@@ -187,12 +187,14 @@ InputOutcome RigPipeline::motionRefused(Stamp stamp, const std::string& reason,
 InputOutcome RigPipeline::vibration(Stamp stamp, const VibrationBlockView& block,
                                     PipelineSink& sink, const InputOrigin& origin) {
   gate_->countDrops(InputStream::kVibration, origin);
-  return take(
+  const InputOutcome outcome = take(
       InputStream::kVibration, stamp, sink, [&] { vibration_->validate(block); },
       [&]() -> const StiffnessEstimate* {
-        vibration_->append(stamp, block);
+        vibration_->append(stamp, block, origin.seq);
         return nullptr;  // no stiffness message: the estimate has not changed
       });
+  if (outcome != InputOutcome::kAccepted) vibration_->interrupt();
+  return outcome;
 }
 
 void RigPipeline::acceptMotion(Stamp stamp, const MotionInput& m, PipelineSink& sink) {

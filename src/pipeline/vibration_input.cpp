@@ -63,6 +63,16 @@ void VibrationInput::validate(const VibrationBlockView& b) const {
                        "]: none names a bearing support or a ~vibration_channels entry (" +
                        supports + ")");
   }
+  std::size_t width = 0;
+  for (std::size_t c = 0; c < b.channel_count; ++c) width += find(b.channels[c]) >= 0 ? 1 : 0;
+  const double bytes = static_cast<double>(recordFrames(b.sample_rate)) * width * sizeof(float);
+  if (bytes > kMaxRecordBytes) {
+    throwInvalid("vibration: sample_rate", b.sample_rate,
+                 "with ~vibration_record = " + formatValue(record_seconds_) + " s and " +
+                     std::to_string(width) + " mapped channels the record needs " +
+                     formatValue(bytes / 1048576.0) + " MiB, more than " +
+                     formatValue(kMaxRecordBytes / 1048576.0) + " MiB");
+  }
   if (b.size == 0 || b.size % b.channel_count != 0) {
     throw InvalidInput("vibration: data.size() = " + std::to_string(b.size) + " for " +
                        std::to_string(b.channel_count) +
@@ -87,35 +97,54 @@ bool VibrationInput::sameLayout(const VibrationBlockView& b) const {
   return true;
 }
 
-void VibrationInput::append(Stamp stamp, const VibrationBlockView& b) {
+bool VibrationInput::sameRate(double rate) const {
+  return std::abs(rate - rate_) <= kRateTolerance * rate_;
+}
+
+VibrationInput::Continuity VibrationInput::continuity(Stamp stamp, std::uint32_t seq,
+                                                      std::size_t frames) const {
+  if (interrupted_) return Continuity::kGap;  // a refused block's samples are missing
+  const double late = secondsBetween(stamp, last_stamp_) - last_frames_ / rate_;
+  const double block = std::min<double>(last_frames_, frames) / rate_;
+  if (seq != 0 || last_seq_ != 0) {
+    // Numbered blocks: the numbers say what is next; the stamps only catch a paused acquisition
+    // (more than a whole block off) under continuing numbers.
+    if (seq == last_seq_) return Continuity::kOverlap;  // the same block again
+    if (seq != last_seq_ + 1 || late >= block) return Continuity::kGap;
+    return late <= -block ? Continuity::kOverlap : Continuity::kContinues;
+  }
+  // Unnumbered: the stamps against the previous block's end, within half the shorter block.
+  if (late <= -0.5 * block) return Continuity::kOverlap;
+  if (late >= 0.5 * block) return Continuity::kGap;
+  return Continuity::kContinues;
+}
+
+void VibrationInput::append(Stamp stamp, const VibrationBlockView& b, std::uint32_t seq) {
   const std::size_t frames = b.size / b.channel_count;
-  if (recording()) {
-    if (b.sample_rate != rate_) {
-      ++counters_.rate_changes;
-      start(stamp, b);
-    } else if (!sameLayout(b)) {
-      ++counters_.channel_changes;
-      start(stamp, b);
-    } else {
-      // Continuity against the previous block (its stamp plus its duration), within half the
-      // shorter block: stamping jitter and the drift of the converter's clock against the stamps'
-      // stay inside it, a lost block (one whole block late) does not.
-      const double expected = last_frames_ / rate_;
-      const double late = secondsBetween(stamp, last_stamp_) - expected;
-      const double tolerance = 0.5 * std::min<double>(last_frames_, frames) / rate_;
-      if (late < -tolerance) {
-        ++counters_.overlaps;
-        throw InvalidInput("vibration: header.stamp = " + formatValue(stamp.toSec()) +
-                           " s overlaps the previous block by " + formatValue(-late) +
-                           " s (it ends at " + formatValue(last_stamp_.toSec() + expected) + " s)");
-      }
-      if (late > tolerance) {
+  if (!recording()) {
+    start(stamp, b);
+  } else if (!sameRate(b.sample_rate)) {
+    ++counters_.rate_changes;
+    start(stamp, b);
+  } else if (!sameLayout(b)) {
+    ++counters_.channel_changes;
+    start(stamp, b);
+  } else {
+    switch (continuity(stamp, seq, frames)) {
+      case Continuity::kContinues: break;
+      case Continuity::kGap:
         ++counters_.gaps;
         start(stamp, b);
+        break;
+      case Continuity::kOverlap: {
+        ++counters_.overlaps;
+        const double early = last_frames_ / rate_ - secondsBetween(stamp, last_stamp_);
+        throw InvalidInput(
+            "vibration: header.seq = " + std::to_string(seq) +
+            ": overlaps the previous block (header.seq = " + std::to_string(last_seq_) +
+            "), starting " + formatValue(early) + " s before its end");
       }
     }
-  } else {
-    start(stamp, b);
   }
   const std::size_t width = columns_.size();
   for (std::size_t i = 0; i < frames; ++i) {
@@ -133,9 +162,20 @@ void VibrationInput::append(Stamp stamp, const VibrationBlockView& b) {
   if (b.channel_count > width) noteUnknown(b);
   last_stamp_ = stamp;
   last_frames_ = frames;
+  last_seq_ = seq;
+  interrupted_ = false;
+}
+
+std::size_t VibrationInput::recordFrames(double rate) const {
+  return std::max<std::size_t>(1, static_cast<std::size_t>(std::ceil(record_seconds_ * rate)));
 }
 
 void VibrationInput::start(Stamp stamp, const VibrationBlockView& b) {
+  // The ring first: if it cannot be had, the record before stays as it was.
+  std::size_t width = 0;
+  for (std::size_t c = 0; c < b.channel_count; ++c) width += find(b.channels[c]) >= 0 ? 1 : 0;
+  std::vector<float> ring(recordFrames(b.sample_rate) * width, 0.0f);
+  ring_.swap(ring);
   rate_ = b.sample_rate;
   layout_.assign(b.channels, b.channels + b.channel_count);
   columns_.clear();
@@ -143,9 +183,7 @@ void VibrationInput::start(Stamp stamp, const VibrationBlockView& b) {
     const int m = find(b.channels[c]);
     if (m >= 0) columns_.push_back({c, static_cast<std::size_t>(m)});
   }
-  capacity_ =
-      std::max<std::size_t>(1, static_cast<std::size_t>(std::ceil(record_seconds_ * rate_)));
-  ring_.assign(capacity_ * columns_.size(), 0.0f);
+  capacity_ = recordFrames(rate_);
   head_ = frames_ = 0;
   start_ = stamp;
   appended_ = 0;
@@ -161,7 +199,11 @@ void VibrationInput::noteUnknown(const VibrationBlockView& b) {
   }
 }
 
+void VibrationInput::interrupt() { interrupted_ = true; }
+
 void VibrationInput::reset() {
+  interrupted_ = false;
+  last_seq_ = 0;
   columns_.clear();
   layout_.clear();
   frames_ = head_ = capacity_ = 0;

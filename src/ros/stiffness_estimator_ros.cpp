@@ -415,6 +415,12 @@ void StiffnessEstimatorRos::addInputStatus(diagnostic_updater::DiagnosticStatusW
   for (const auto& [key, count] : namedCounters(c)) status.add(key, count);
   status.add("last_event", c.last_event);
   status.add("phase_source", pipeline_->phaseSource());
+  if (!pipeline_->vibrationInput().unknownNames().empty()) {
+    std::string names;
+    for (const std::string& n : pipeline_->vibrationInput().unknownNames())
+      names += (names.empty() ? "" : ", ") + n;
+    status.add("vibration_unknown_channel_names", names);
+  }
   // The time-out is taken on the next input's stamp (the encoders rule): with every input stopped,
   // the age of the last reading on the node's clock says that the phase source above is stale.
   if (const std::optional<double> silence =

@@ -405,6 +405,12 @@ nlohmann::json summaryJson(const ReplayOptions& o, const RigConfig& rig, const J
                          {"gear_joint", joints.gear},
                          {"pinion_teeth", rig.gears.teeth[0]},
                          {"gear_teeth", rig.gears.teeth[1]}};
+  const VibrationInput& vibration = pipeline.vibrationInput();
+  std::vector<std::string> mapped;
+  for (const VibrationChannel& c : vibration.channelMap()) mapped.push_back(printableText(c.name));
+  summary["vibration"] = {{"topic", printableText(o.vibration_topic)},
+                          {"channels", mapped},
+                          {"unknown_channels", vibration.unknownNames()}};
   summary["counters"] = countersJson(pipeline.counters());
   summary["calibration"] = calibrationJson(pipeline);
   // The per-mesh-period statistics over the bag (a campaign's row): speed, torque, TE RMS, force.

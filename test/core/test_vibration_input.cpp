@@ -50,7 +50,9 @@ struct Rig {
   PipelineSink sink;
   explicit Rig(const PipelineOptions& options = noDynamics())
       : pipeline(test::seedServo(), options) {}
-  InputOutcome send(double t, const Block& b) { return pipeline.vibration(at(t), b.view(), sink); }
+  InputOutcome send(double t, const Block& b, std::uint32_t seq = 0) {
+    return pipeline.vibration(at(t), b.view(), sink, {"/daq", seq, ""});
+  }
   const PipelineCounters& counters() const { return pipeline.counters(); }
   const VibrationInput& record() const { return pipeline.vibrationInput(); }
   std::string lastReason() const {
@@ -116,8 +118,9 @@ TEST(VibrationInput, ConsecutiveBlocksMakeOneRecord) {
 }
 
 TEST(VibrationInput, StampJitterAndClockDriftWithinHalfABlockKeepTheRecord) {
-  // Blocks of 1024 samples at 51.2 kHz (20 ms): stamps jittered by +-3 ms around a clock 100 ppm
-  // fast against the converter's, for 100 s (the drift alone reaches 10 ms, half a block).
+  // Unnumbered blocks of 1024 samples at 51.2 kHz (20 ms): stamps jittered by +-3 ms around a
+  // clock 100 ppm fast against the converter's, for 100 s. Each block is judged against the one
+  // before, so the drift (10 ms over the run, half a block) never adds up.
   Rig r;
   Block b(1024);
   const double block = b.seconds();
@@ -152,11 +155,82 @@ TEST(VibrationInput, AnOverlappingBlockIsRefusedAndCounted) {
   EXPECT_EQ(r.send(10.0 + 0.4 * b.seconds(), b), InputOutcome::kInvalidValue);
   EXPECT_EQ(r.counters().vibration.overlaps, 1u);
   EXPECT_EQ(r.counters().rejected_vibration, 1u);
-  EXPECT_NE(r.lastReason().find("overlaps the previous block by 0.012 s"), std::string::npos)
+  EXPECT_NE(r.lastReason().find(
+                "overlaps the previous block (header.seq = 0), starting 0.012 s before its end"),
+            std::string::npos)
       << r.lastReason();
   EXPECT_EQ(r.record().frames(), 1024u);  // nothing of the refused block kept
+  // After a refusal the next block starts a new record: the refused samples are missing.
   EXPECT_EQ(r.send(10.0 + b.seconds(), b), InputOutcome::kAccepted);
+  EXPECT_EQ(r.counters().vibration.gaps, 1u);
+  EXPECT_EQ(r.record().frames(), 1024u);
+  EXPECT_EQ(r.record().origin(), at(10.0 + b.seconds()));
+}
+
+TEST(VibrationInput, ExactlyHalfABlockEarlyIsAnOverlap) {
+  Rig r;
+  Block b(1024);
+  r.send(10.0, b);
+  EXPECT_EQ(r.send(10.0 + 0.5 * b.seconds(), b), InputOutcome::kInvalidValue);
+  EXPECT_EQ(r.counters().vibration.overlaps, 1u);
+}
+
+TEST(VibrationInput, NumberedShortBlocksFollowTheirNumbersThroughStampJitter) {
+  // 256 samples at 102.4 kHz (2.5 ms blocks) stamped with +-1 ms of jitter: consecutive stamps
+  // differ by 0.5 to 4.5 ms, more than half a block off, so only header.seq tells a late block from
+  // a lost one.
+  Rig r;
+  Block b(256);
+  b.rate = 102400.0;
+  b.fill(256, 0.0);
+  const double block = b.seconds();
+  std::uint32_t seq = 1;
+  for (int k = 0; k < 400; ++k, ++seq) {
+    const double jitter = (k % 5 - 2) * 0.5e-3;
+    ASSERT_EQ(r.send(10.0 + k * block + jitter, b, seq), InputOutcome::kAccepted) << k;
+  }
+  EXPECT_EQ(r.counters().vibration.gaps, 0u);
+  EXPECT_EQ(r.record().frames(), 400u * 256u);
+  // Block 401 lost: 402 starts a new record; 402 again is an overlap.
+  EXPECT_EQ(r.send(10.0 + 401 * block, b, seq + 1), InputOutcome::kAccepted);
+  EXPECT_EQ(r.counters().vibration.gaps, 1u);
+  EXPECT_EQ(r.counters().dropped_vibration, 1u);
+  EXPECT_EQ(r.record().frames(), 256u);
+  EXPECT_EQ(r.send(10.0 + 401 * block, b, seq + 1), InputOutcome::kInvalidValue);
+  EXPECT_EQ(r.counters().vibration.overlaps, 1u);
+  // The block after a refusal starts a new record.
+  EXPECT_EQ(r.send(10.0 + 402 * block, b, seq + 2), InputOutcome::kAccepted);
+  EXPECT_EQ(r.counters().vibration.gaps, 2u);
+  // Numbers that continue over a pause in the stamps (acquisition stopped and went on): a gap.
+  EXPECT_EQ(r.send(12.0, b, seq + 3), InputOutcome::kAccepted);
+  EXPECT_EQ(r.counters().vibration.gaps, 3u);
+  EXPECT_EQ(r.record().frames(), 256u);
+}
+
+TEST(VibrationInput, AMeasuredRateThatWandersByLessThanAPpmKeepsTheRecord) {
+  Rig r;
+  Block b(1024);
+  r.send(10.0, b);
+  b.rate = 51200.0 * (1.0 + 5e-7);
+  EXPECT_EQ(r.send(10.0 + 1024 / 51200.0, b), InputOutcome::kAccepted);
+  EXPECT_EQ(r.counters().vibration.rate_changes, 0u);
   EXPECT_EQ(r.record().frames(), 2048u);
+  b.rate = 51200.0 * (1.0 + 2e-6);
+  r.send(10.0 + 2048 / 51200.0, b);
+  EXPECT_EQ(r.counters().vibration.rate_changes, 1u);
+}
+
+TEST(VibrationInput, ARecordBeyondTheMemoryBudgetIsRefusedNamingTheRate) {
+  // 4 s at 10 MHz on two mapped channels: 4e7 frames x 2 x 4 bytes = 305 MiB > 256 MiB.
+  Rig r;
+  Block b(64);
+  b.rate = 1e7;
+  EXPECT_EQ(r.send(10.0, b), InputOutcome::kInvalidValue);
+  EXPECT_NE(r.lastReason().find("vibration: sample_rate = 10000000"), std::string::npos)
+      << r.lastReason();
+  EXPECT_NE(r.lastReason().find("305.1757812 MiB, more than 256 MiB"), std::string::npos)
+      << r.lastReason();
+  EXPECT_FALSE(r.record().recording());
 }
 
 TEST(VibrationInput, ARateChangeOrOtherChannelsStartANewRecord) {

@@ -337,10 +337,12 @@ def vibration_on_a_rig_topic():
         ("channel 'gear_bearing', sample 2) = nan" in reasons.get("invalid value", {}).get("first_reason", ""),
          "the NaN's field not named: %r" % reasons.get("invalid value")),
         (c.get("dropped_vibration") == 1, "dropped (header.seq) %r" % c.get("dropped_vibration")),
-        # block 10 lost; blocks 15 and 20 refused: each leaves a hole the next accepted block starts after
+        # block 10 lost (header.seq jumps); blocks 15 and 20 refused: the next block starts a new record
         (c.get("vibration_gaps") == 3, "gaps %r" % c.get("vibration_gaps")),
         (c.get("vibration_samples") == 22 * 1024, "samples %r" % c.get("vibration_samples")),
         (c.get("vibration_unknown_channels") == 22, "unknown channels %r" % c.get("vibration_unknown_channels")),
+        ((s or {}).get("vibration", {}).get("unknown_channels") == ["tacho"],
+         "summary vibration %r" % (s or {}).get("vibration")),
         ("22 accepted" in md or "22 accepted" in p.stderr, "the summary does not count the blocks"),
     ])
 

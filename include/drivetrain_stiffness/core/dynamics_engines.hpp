@@ -81,7 +81,8 @@ struct DynamicsWorkspace {
 };
 
 /// One way of carrying the state forward: each operation returns false, the state untouched,
-/// where it does not apply (default: never). No operation allocates.
+/// where it does not apply (default: never). No operation allocates in steady state (the interval
+/// maps are made on first use).
 class PropagationEngine {
  public:
   virtual ~PropagationEngine() = default;

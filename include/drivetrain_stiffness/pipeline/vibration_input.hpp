@@ -32,6 +32,10 @@ class VibrationInput {
   static constexpr double kMaxSampleRate = 1e7;       ///< [Hz]
   static constexpr double kMaxAcceleration = 1e6;     ///< [m/s^2], past any accelerometer's range
   static constexpr std::size_t kMaxUnknownNames = 8;  ///< distinct unknown names kept for reports
+  static constexpr double kMaxRecordBytes = 256.0 * 1048576.0;  ///< the record's ring at most
+  /// Rates within this relative difference are one rate (a converter that reports its measured
+  /// rate) [-].
+  static constexpr double kRateTolerance = 1e-6;
 
   /// `record_seconds` [s] of the newest samples are kept (InvalidInput unless in (0, 600]);
   /// keeps `counters` by reference.
@@ -42,9 +46,12 @@ class VibrationInput {
   /// least one known, a whole number of samples, every value finite and within kMaxAcceleration.
   /// Throws InvalidInput naming the field and value.
   void validate(const VibrationBlockView& block) const;
-  /// The continuity rules at `stamp` (the first sample's time), then the block appended. Throws
-  /// InvalidInput, nothing changed, when the block overlaps the record.
-  void append(Stamp stamp, const VibrationBlockView& block);
+  /// The continuity rules at `stamp` (the first sample's time) and `seq` (header.seq; 0 throughout:
+  /// unnumbered), then the block appended. Throws InvalidInput, nothing changed, when the block
+  /// overlaps the record.
+  void append(Stamp stamp, const VibrationBlockView& block, std::uint32_t seq = 0);
+  /// A block was refused: the next one starts a new record (its samples are missing).
+  void interrupt();
   /// Forgets the record (a pipeline reset); the counters stay.
   void reset();
 
@@ -70,6 +77,11 @@ class VibrationInput {
     std::size_t block_index = 0;  ///< position among the block's channels
     std::size_t map_index = 0;    ///< entry of map_
   };
+  enum class Continuity { kContinues, kGap, kOverlap };
+  /// Whether a block of `frames` at `stamp`, numbered `seq`, continues the record.
+  Continuity continuity(Stamp stamp, std::uint32_t seq, std::size_t frames) const;
+  bool sameRate(double rate) const;
+  std::size_t recordFrames(double rate) const;  ///< the ring's frames at `rate` [Hz]
   /// The mapped channel named `name`, or -1.
   int find(std::string_view name) const;
   bool sameLayout(const VibrationBlockView& block) const;
@@ -90,6 +102,8 @@ class VibrationInput {
   std::uint64_t appended_ = 0;   ///< frames appended since start_
   Stamp last_stamp_;             ///< the last block's first sample
   std::size_t last_frames_ = 0;  ///< and its frames
+  std::uint32_t last_seq_ = 0;   ///< and its header.seq
+  bool interrupted_ = false;     ///< a block refused since the last one taken
 };
 
 }  // namespace drivetrain_stiffness
