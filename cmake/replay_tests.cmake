@@ -29,6 +29,14 @@ add_test(NAME rig_sim_load_sweep
   COMMAND ${CATKIN_DEVEL_PREFIX}/env.sh /usr/bin/python3 ${CMAKE_CURRENT_SOURCE_DIR}/test/replay/check_rig_sim_load_sweep.py
           ${DEVEL_BIN} ${CMAKE_CURRENT_SOURCE_DIR} ${CMAKE_CURRENT_BINARY_DIR}/load_sweep_test)
 
+# drivetrain_rig_sim's accelerometers (~15 s): blocks, stamps and channels, drivetrain_replay
+# --vibration-topic accepting them, the other topics unchanged, the Welch peaks at the modal
+# analysis' frequencies (seed gearbox and pinion bearing scale 0.8), the anti-alias stop band at the
+# sensor-noise floor (docs/vibration.md "Simulated accelerometers").
+add_test(NAME rig_sim_vibration
+  COMMAND ${CATKIN_DEVEL_PREFIX}/env.sh /usr/bin/python3 ${CMAKE_CURRENT_SOURCE_DIR}/test/replay/check_rig_sim_vibration.py
+          ${DEVEL_BIN} ${CMAKE_CURRENT_SOURCE_DIR} ${CMAKE_CURRENT_BINARY_DIR}/rig_sim_vibration_test)
+
 # The calibration on two load_sweep recordings of drawn rigs (~25 s): errors and identification
 # flags against the truth (docs/calibration.md section 6).
 add_test(NAME calibration_recovers_drawn_rigs

@@ -2,6 +2,8 @@
 // /torque (geometry_msgs/WrenchStamped, torque.z [N*m]), /preload (drivetrain_stiffness/Preload)
 // and /joint_states (sensor_msgs/JointState, the pinion and gear encoders) with header stamps and
 // record times from a fixed epoch, so the bags are reproducible byte for byte (scenario_bag.hpp).
+// With --vibration-rate > 0 (51200 Hz by default) it adds /vibration (drivetrain_stiffness/
+// VibrationBlock): the model's transverse accelerations at the two supports (rig_vibration.hpp).
 // Needs no master. Example:
 //   drivetrain_rig_sim --scenario torque_ripple --config config/gearboxes/seed_servo.yaml --out
 //   ripple.bag
@@ -21,6 +23,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <optional>
 
 #include <nlohmann/json.hpp>
 
@@ -28,6 +31,7 @@
 #include "drivetrain_stiffness/core/validation.hpp"
 #include "load_sweep.hpp"     // NOLINT(build/include_subdir)
 #include "rig_scenarios.hpp"  // NOLINT(build/include_subdir)
+#include "rig_vibration.hpp"  // NOLINT(build/include_subdir)
 #include "scenario_bag.hpp"   // NOLINT(build/include_subdir)
 
 namespace {
@@ -60,6 +64,27 @@ nlohmann::json truthJson(const drivetrain_stiffness::LoadSweep& sweep,
           {"levels", levels}};
 }
 
+/// The scenario's accelerometer record, or none for --vibration-rate 0.
+std::optional<drivetrain_stiffness::VibrationRecord> simulateScenarioVibration(
+    const drivetrain_stiffness::RigConfig& rig, const drivetrain_stiffness::ScenarioSpec& spec,
+    const drivetrain_stiffness::LoadSweepSpec& sweep_spec,
+    const drivetrain_stiffness::LoadSweep& made, const drivetrain_stiffness::VibrationSpec& v) {
+  using namespace drivetrain_stiffness;
+  if (v.rate == 0.0) return std::nullopt;
+  if (spec.name == "load_sweep") {
+    // The true torque steps between the holds (the published torque carries sensor noise).
+    std::vector<TorqueKnot> knots;
+    for (const LoadSweepLevel& l : made.truth.levels) {
+      knots.push_back({l.t0, l.torque});
+      knots.push_back({l.t1, l.torque});
+    }
+    return simulateVibration(rig, knots, SpeedProfile(sweep_spec.speed_rpm * kTwoPi / 60.0),
+                             made.truth.duration, v);
+  }
+  return simulateVibration(rig, scenarioTorque(made.events), scenarioSpeedProfile(rig, spec),
+                           spec.duration, v);
+}
+
 /// The --campaign options: how each bag's rig differs from --config's.
 struct CampaignSpec {
   std::string dir;
@@ -88,7 +113,8 @@ drivetrain_stiffness::RigConfig campaignRig(drivetrain_stiffness::RigConfig rig,
 void writeCampaign(const drivetrain_stiffness::RigConfig& rig, const CampaignSpec& c,
                    const drivetrain_stiffness::ScenarioSpec& spec,
                    drivetrain_stiffness::LoadSweepSpec sweep_spec,
-                   drivetrain_stiffness::ScenarioBagOptions bag) {
+                   drivetrain_stiffness::ScenarioBagOptions bag,
+                   drivetrain_stiffness::VibrationSpec vibration) {
   using namespace drivetrain_stiffness;
   if (c.bags < 1 || c.bags > 100000)
     throw InvalidInput("--bags: " + std::to_string(c.bags) + " (1 to 100000)");
@@ -105,7 +131,7 @@ void writeCampaign(const drivetrain_stiffness::RigConfig& rig, const CampaignSpe
       << "bag,start,mesh_stiffness_scale,pinion_bearing_scale,gear_bearing_scale,preload_torque\n";
   truth.precision(17);
   const double epoch0 = bag.epoch;
-  const std::uint64_t seed0 = sweep_spec.seed;
+  const std::uint64_t seed0 = sweep_spec.seed, vibration_seed0 = vibration.seed;
   for (int i = 0; i < c.bags; ++i) {
     const RigConfig bag_rig = campaignRig(rig, c, i);
     char name[32];
@@ -118,7 +144,10 @@ void writeCampaign(const drivetrain_stiffness::RigConfig& rig, const CampaignSpe
     } else {
       made.events = makeScenario(bag_rig, spec);
     }
-    writeScenarioBag(made.events, bag, c.dir + "/" + name);
+    vibration.seed = vibration_seed0 + static_cast<std::uint64_t>(i);
+    const std::optional<VibrationRecord> record =
+        simulateScenarioVibration(bag_rig, spec, sweep_spec, made, vibration);
+    writeScenarioBag(made.events, bag, c.dir + "/" + name, record ? &*record : nullptr);
     // The rig's own values (its supports' scales per shaft, as load_sweep's truth reports them).
     std::array<double, 2> bearing_scale{{1.0, 1.0}};
     for (const BearingSupportConfig& b : bag_rig.bearings)
@@ -140,6 +169,7 @@ struct RigSimArgs {
   bool no_velocity = false;
   drivetrain_stiffness::LoadSweepSpec sweep_spec;
   CampaignSpec campaign;
+  drivetrain_stiffness::VibrationSpec vibration;
 };
 
 void addOptions(CLI::App& app, RigSimArgs& a) {
@@ -185,6 +215,19 @@ void addOptions(CLI::App& app, RigSimArgs& a) {
   app.add_option("--pinion-joint", a.bag.pinion_joint,
                  "JointState name of the pinion shaft (pinion)");
   app.add_option("--gear-joint", a.bag.gear_joint, "JointState name of the gear shaft (gear)");
+  app.add_option("--vibration-rate", a.vibration.rate,
+                 "[Hz] accelerometer sample rate (51200); 0: no vibration topic");
+  app.add_option("--vibration-block", a.vibration.block,
+                 "samples per drivetrain_stiffness/VibrationBlock (1024)");
+  app.add_option("--vibration-topic", a.bag.vibration_topic, "VibrationBlock topic (/vibration)");
+  app.add_option("--vibration-roughness", a.vibration.roughness,
+                 "[m] rms of the random mesh displacement (tooth roughness) per internal sample "
+                 "(1e-7)");
+  app.add_option("--vibration-seed", a.vibration.seed,
+                 "seed of the roughness and the sensor noise (load_sweep's --seed, else 1); a "
+                 "campaign's bag i adds i");
+  app.add_option("--vibration-noise", a.vibration.noise,
+                 "[m/s^2] rms of the accelerometers' white noise per sample (0.005)");
 }
 
 /// Writes the bag (or the campaign) the arguments ask for. Throws InvalidInput naming the option.
@@ -195,6 +238,11 @@ void runRigSim(const CLI::App& app, RigSimArgs& a) {
   if (!sweep && (app.count("--seed") > 0 || app.count("--speed-rpm") > 0)) {
     throw InvalidInput("--seed and --speed-rpm: load_sweep only");
   }
+  // The vibration's seed: --vibration-seed, else load_sweep's --seed (1 by default).
+  if (app.count("--vibration-seed") == 0) a.vibration.seed = a.sweep_spec.seed;
+  requireNonNegative("--vibration-rate", a.vibration.rate);
+  // The accelerations come from the dynamics block's model: without one, none unless asked for.
+  if (!rig.dynamics.present && app.count("--vibration-rate") == 0) a.vibration.rate = 0.0;
   if (sweep) {
     a.sweep_spec.torque_rate = a.spec.torque_rate;
     if (app.count("--joint-rate") > 0) a.sweep_spec.joint_rate = a.spec.joint_rate;
@@ -202,7 +250,7 @@ void runRigSim(const CLI::App& app, RigSimArgs& a) {
     a.sweep_spec.joint_velocity = a.spec.joint_velocity;
   }
   if (!a.campaign.dir.empty()) {
-    writeCampaign(rig, a.campaign, a.spec, a.sweep_spec, a.bag);
+    writeCampaign(rig, a.campaign, a.spec, a.sweep_spec, a.bag, a.vibration);
     return;
   }
   if (a.out.empty()) throw InvalidInput("--out or --campaign: one of them is required");
@@ -217,10 +265,13 @@ void runRigSim(const CLI::App& app, RigSimArgs& a) {
     made.events = makeScenario(rig, a.spec);
   }
   const std::vector<RigEvent>& events = made.events;
-  const ScenarioBagCounts n = writeScenarioBag(events, a.bag, a.out);
+  const std::optional<VibrationRecord> record =
+      simulateScenarioVibration(rig, a.spec, a.sweep_spec, made, a.vibration);
+  const ScenarioBagCounts n = writeScenarioBag(events, a.bag, a.out, record ? &*record : nullptr);
   std::cout << "{\"scenario\": \"" << a.spec.name << "\", \"events\": " << events.size()
             << ", \"torque\": " << n.torque << ", \"preload\": " << n.preload
             << ", \"joint_states\": " << n.joint_states << ", \"bag\": \"" << a.out << "\"";
+  if (record) std::cout << ", \"vibration\": " << n.vibration;
   if (sweep) std::cout << ", \"truth\": " << truthJson(made, a.sweep_spec).dump();
   std::cout << "}\n";
 }

@@ -146,6 +146,10 @@ std::string scenarioHelp() {
          "default; its natural length unless --duration is given (which scales every hold)\n";
 }
 
+SpeedProfile scenarioSpeedProfile(const RigConfig& rig, const ScenarioSpec& spec) {
+  return scenarioSpeed(rig, spec);
+}
+
 std::vector<RigEvent> makeScenario(const RigConfig& rig, const ScenarioSpec& spec) {
   requirePositive("duration", spec.duration);
   requirePositive("rate", spec.torque_rate);

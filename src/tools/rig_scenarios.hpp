@@ -8,6 +8,7 @@
 
 #include "drivetrain_stiffness/core/motion.hpp"
 #include "drivetrain_stiffness/core/rig_config.hpp"
+#include "drivetrain_stiffness/core/speed_profile.hpp"
 #include "drivetrain_stiffness/core/stiffness_estimator.hpp"
 
 namespace drivetrain_stiffness {
@@ -36,5 +37,9 @@ struct ScenarioSpec {
 /// field, or the scenario for an unknown name or load_sweep (makeLoadSweep).
 std::vector<RigEvent> makeScenario(const RigConfig& rig, const ScenarioSpec& spec);
 std::string scenarioHelp();
+/// The pinion speed of the named scenario (not load_sweep): the speed scenarios' profiles, else the
+/// gearbox's constant dynamics.speed_rpm (1000 rpm without a dynamics block). Throws InvalidInput
+/// naming the field.
+SpeedProfile scenarioSpeedProfile(const RigConfig& rig, const ScenarioSpec& spec);
 
 }  // namespace drivetrain_stiffness

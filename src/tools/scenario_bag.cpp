@@ -2,12 +2,14 @@
 
 #include <cmath>
 #include <cstdint>
+#include <limits>
 
 #include <geometry_msgs/WrenchStamped.h>
 #include <rosbag/bag.h>
 #include <sensor_msgs/JointState.h>
 
 #include "drivetrain_stiffness/Preload.h"
+#include "drivetrain_stiffness/VibrationBlock.h"
 #include "drivetrain_stiffness/core/validation.hpp"
 
 namespace drivetrain_stiffness {
@@ -25,7 +27,7 @@ void requireName(const std::string& field, const std::string& value) {
 }  // namespace
 
 ScenarioBagCounts writeScenarioBag(const std::vector<RigEvent>& events, const ScenarioBagOptions& o,
-                                   const std::string& path) {
+                                   const std::string& path, const VibrationRecord* vibration) {
   if (!(o.epoch >= 1.0 && o.epoch < 4e9))
     throw InvalidInput("epoch = " + formatValue(o.epoch) + ": must be in [1, 4e9) s");
   requireName("torque_topic", o.torque_topic);
@@ -33,15 +35,41 @@ ScenarioBagCounts writeScenarioBag(const std::vector<RigEvent>& events, const Sc
   requireName("joint_topic", o.joint_topic);
   requireName("pinion_joint", o.pinion_joint);
   requireName("gear_joint", o.gear_joint);
+  if (vibration) requireName("vibration_topic", o.vibration_topic);
   const std::int64_t epoch_ns = std::llround(o.epoch * 1e9);
   rosbag::Bag bag(path, rosbag::bagmode::Write);
   ScenarioBagCounts counts;
   // header.seq numbers each stream from 0, as roscpp and rospy do; a gap is a message lost on the
   // way.
   std::uint32_t seq = 0, preload_seq = 0, joint_seq = 0;
+  // Vibration block b: samples [b n, (b + 1) n), stamped at its first sample, recorded when its
+  // last sample's interval ends; header.seq is b.
+  const std::size_t blocks =
+      vibration ? vibration->samples() / static_cast<std::size_t>(vibration->block) : 0;
+  std::size_t next_block = 0;
+  auto blockNs = [&](std::size_t sample) {
+    return epoch_ns + std::llround(static_cast<double>(sample) * 1e9 / vibration->rate);
+  };
+  auto writeBlocksUntil = [&](std::int64_t ns) {
+    for (; next_block < blocks; ++next_block) {
+      const std::size_t n = static_cast<std::size_t>(vibration->block), first = next_block * n;
+      const std::int64_t record_ns = blockNs(first + n);
+      if (record_ns > ns) return;
+      drivetrain_stiffness::VibrationBlock v;
+      v.header.seq = static_cast<std::uint32_t>(next_block);
+      v.header.stamp = fromNanoseconds(blockNs(first));
+      v.sample_rate = vibration->rate;
+      v.channels.assign(vibration->channels.begin(), vibration->channels.end());
+      v.data.assign(vibration->data.begin() + static_cast<std::ptrdiff_t>(2 * first),
+                    vibration->data.begin() + static_cast<std::ptrdiff_t>(2 * (first + n)));
+      bag.write(o.vibration_topic, fromNanoseconds(record_ns), v);
+      ++counts.vibration;
+    }
+  };
   for (const RigEvent& e : events) {
     const std::int64_t ns =
         epoch_ns + std::llround(e.t * 1e9);  // record time: when the rig sent it
+    writeBlocksUntil(ns - 1);                // a block completed before this event's record time
     const ros::Time record = fromNanoseconds(ns);
     const ros::Time stamp =
         e.zero_stamp ? ros::Time(0, 0) : fromNanoseconds(ns + std::llround(e.stamp_offset * 1e9));
@@ -99,6 +127,7 @@ ScenarioBagCounts writeScenarioBag(const std::vector<RigEvent>& events, const Sc
       ++counts.joint_states;
     }
   }
+  writeBlocksUntil(std::numeric_limits<std::int64_t>::max());
   bag.close();
   return counts;
 }

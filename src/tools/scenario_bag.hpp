@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "rig_scenarios.hpp"  // NOLINT(build/include_subdir)
+#include "rig_vibration.hpp"  // NOLINT(build/include_subdir)
 
 namespace drivetrain_stiffness {
 
@@ -16,15 +17,19 @@ struct ScenarioBagOptions {
   std::string joint_topic = "/joint_states";
   std::string pinion_joint = "pinion";  ///< JointState.name[0]
   std::string gear_joint = "gear";      ///< JointState.name[1]
+  std::string vibration_topic = "/vibration";
 };
 
 struct ScenarioBagCounts {
-  std::size_t torque = 0, preload = 0, joint_states = 0;
+  std::size_t torque = 0, preload = 0, joint_states = 0, vibration = 0;
 };
 
-/// Writes `events` in their order to a new bag at `path` (overwritten). Throws InvalidInput for an
-/// epoch outside [1, 4e9) s or empty topic or joint names.
+/// Writes `events` in their order to a new bag at `path` (overwritten), and the blocks of
+/// `vibration` (none if null) each at the record time its last sample completes it, before the
+/// events of a later record time. Throws InvalidInput for an epoch outside [1, 4e9) s or empty
+/// topic or joint names.
 ScenarioBagCounts writeScenarioBag(const std::vector<RigEvent>& events,
-                                   const ScenarioBagOptions& options, const std::string& path);
+                                   const ScenarioBagOptions& options, const std::string& path,
+                                   const VibrationRecord* vibration = nullptr);
 
 }  // namespace drivetrain_stiffness

@@ -79,7 +79,8 @@ for k, m in enumerate(msgs):
         break
 
 # 3. None at all.
-bag, summary = rig_sim("none", "--scenario", "run_up", "--duration", "0.5", "--joint-rate", "0")
+bag, summary = rig_sim("none", "--scenario", "run_up", "--duration", "0.5", "--joint-rate", "0",
+                       "--vibration-rate", "0")
 with rosbag.Bag(bag) as b:
     check(sorted(b.get_type_and_topic_info().topics) == ["/preload", "/torque"], "--joint-rate 0 wrote joint_states")
 

@@ -1,0 +1,285 @@
+#include "rig_vibration.hpp"  // NOLINT(build/include_subdir)
+
+#include <algorithm>
+#include <cmath>
+#include <memory>
+#include <optional>
+#include <random>
+
+#include <Eigen/Dense>
+#include <unsupported/Eigen/MatrixFunctions>
+
+#include "drivetrain_stiffness/core/constants.hpp"
+#include "drivetrain_stiffness/core/errors.hpp"
+#include "drivetrain_stiffness/core/gear_geometry.hpp"
+#include "drivetrain_stiffness/core/rig_model.hpp"
+#include "drivetrain_stiffness/core/stiffness_estimator.hpp"
+#include "drivetrain_stiffness/core/validation.hpp"
+
+namespace drivetrain_stiffness {
+namespace {
+
+/// Gaussian numbers that are the same on every platform for a seed (as load_sweep's streams):
+/// std::mt19937_64 and std::seed_seq are exact, the uniform and Box-Muller are made here. Its own
+/// stream ids, so the vibration draws move none of the other random streams.
+class VibrationStream {
+ public:
+  VibrationStream(std::uint64_t seed, std::uint32_t stream) {
+    std::seed_seq seq{static_cast<std::uint32_t>(seed & 0xffffffffu),
+                      static_cast<std::uint32_t>(seed >> 32), stream};
+    engine_.seed(seq);
+  }
+  double normal() {
+    const double u1 = 1.0 - uniform(), u2 = uniform();
+    return std::sqrt(-2.0 * std::log(u1)) * std::cos(kTwoPi * u2);
+  }
+
+ private:
+  double uniform() { return static_cast<double>(engine_() >> 11) * 0x1.0p-53; }
+  std::mt19937_64 engine_;
+};
+
+enum : std::uint32_t { kRoughnessStream = 101, kSensorNoiseStream = 102 };
+
+/// The modified Bessel function I0 by its power series (Abramowitz & Stegun 9.6.12).
+double besselI0(double x) {
+  double sum = 1.0, term = 1.0;
+  for (int k = 1; k < 60; ++k) {
+    term *= (0.5 * x / k) * (0.5 * x / k);
+    sum += term;
+    if (term < 1e-17 * sum) break;
+  }
+  return sum;
+}
+
+using Matrix62 = Eigen::Matrix<double, 6, 2>;
+
+/// The linearised model about one operating point, discretised exactly over one internal step
+/// with the inputs u = [w, F_d] held: w = k_s e + c_s e' [N] the mesh's displacement excitation as
+/// a force, F_d [N] the drive force.
+struct OperatingPoint {
+  double torque = 0.0;        ///< [N*m]
+  double mesh_force = 0.0;    ///< [N] F_m = T / r_b,p (seed 000 eq 14)
+  double k_mean = 0.0;        ///< [N/m] meanMeshStiffness: what `drivetrain_cli modes` uses
+  double c_mesh = 0.0;        ///< [N s/m]
+  double k_flank_mean = 0.0;  ///< [N/m] period mean of the composite under F_m
+  std::shared_ptr<const AntiBacklashMesh> mesh;
+  Matrix6 phi;     ///< exp(A h)
+  Matrix62 gamma;  ///< int_0^h exp(A s) ds B
+  Eigen::Matrix3d stiffness;
+  Eigen::Vector3d mass;
+};
+
+OperatingPoint makeOperatingPoint(const RigConfig& rig, StiffnessEstimator& estimator,
+                                  double torque, double h) {
+  OperatingPoint op;
+  op.torque = torque;
+  estimator.setTorque(torque);  // throws UnreachableLoad beyond what the supports carry
+  op.mesh = estimator.sharedMesh();
+  const GearRotorParameters p = rigRotorParameters(rig, *op.mesh, estimator.shaftRadialStiffness());
+  op.k_mean = meanMeshStiffness(*op.mesh);
+  op.c_mesh = p.mesh_damping;
+  op.mesh_force = meshForce(rig.gears, 0, torque);
+  double sum = 0.0;
+  const int samples = 1024;
+  for (int i = 0; i < samples; ++i)
+    sum += op.mesh->at((i + 0.5) / samples, op.mesh_force).composite;
+  op.k_flank_mean = sum / samples;
+  // M q'' + C q' + K q = v w + e_3 F_d over q = (x_p, x_g, x), v = (1, -1, 1): the rhs of
+  // GearRotorModel with delta = x + x_p - x_g - e (seed 000 eq 14-16), K and C as modalAnalysis.
+  op.mass = Eigen::Vector3d(p.pinion_mass, p.gear_mass, p.equivalentMass());
+  op.stiffness = meshBearingMatrix(op.k_mean, p.bearing_stiffness);
+  const Eigen::Matrix3d damping = meshBearingMatrix(p.mesh_damping, p.bearing_damping);
+  const Eigen::Matrix3d inv_m = op.mass.cwiseInverse().asDiagonal();
+  Eigen::Matrix<double, 8, 8> aug = Eigen::Matrix<double, 8, 8>::Zero();
+  aug.block<3, 3>(0, 3).setIdentity();
+  aug.block<3, 3>(3, 0) = -inv_m * op.stiffness;
+  aug.block<3, 3>(3, 3) = -inv_m * damping;
+  aug.block<3, 1>(3, 6) = inv_m * Eigen::Vector3d(1.0, -1.0, 1.0);
+  aug.block<3, 1>(3, 7) = inv_m * Eigen::Vector3d(0.0, 0.0, 1.0);
+  // Zero-order hold: exp(h [[A, B], [0, 0]]) = [[Phi, Gamma], [0, I]] (Van Loan 1978).
+  const Eigen::Matrix<double, 8, 8> e = (aug * h).exp();
+  op.phi = e.block<6, 6>(0, 0);
+  op.gamma = e.block<6, 2>(0, 6);
+  return op;
+}
+
+/// The static deflection under the inputs: K q = v w + e_3 F_d, at rest.
+State6 restState(const OperatingPoint& op, double w, double drive) {
+  State6 y = State6::Zero();
+  y.head<3>() = op.stiffness.ldlt().solve(Eigen::Vector3d(w, -w, w + drive));
+  return y;
+}
+
+}  // namespace
+
+std::vector<double> antiAliasFilter(int oversample) {
+  if (oversample < 2 || oversample > 16)
+    throwInvalid("vibration oversample", oversample, "must be in [2, 16]");
+  // Kaiser's design formulas (Oppenheim & Schafer, Discrete-Time Signal Processing, eq 7.62-7.63):
+  // beta = 0.1102 (A - 8.7) for A > 50 dB, order M = (A - 8) / (2.285 dw).
+  const double attenuation = 100.0;                                 // [dB]
+  const double pass = 0.35 / oversample, stop = 0.45 / oversample;  // [cycles per internal sample]
+  const double cutoff = 0.5 * (pass + stop);
+  const double beta = 0.1102 * (attenuation - 8.7);
+  int order = static_cast<int>(std::ceil((attenuation - 8.0) / (2.285 * kTwoPi * (stop - pass))));
+  if (order % 2 == 1) ++order;  // odd length: an integer group delay of order / 2 samples
+  std::vector<double> taps(static_cast<std::size_t>(order + 1));
+  double sum = 0.0;
+  const double half = 0.5 * order;
+  for (int n = 0; n <= order; ++n) {
+    const double x = n - half;
+    const double sinc = x == 0.0 ? 2.0 * cutoff : std::sin(kTwoPi * cutoff * x) / (kPi * x);
+    const double r = x / half;
+    taps[n] = sinc * besselI0(beta * std::sqrt(std::max(0.0, 1.0 - r * r))) / besselI0(beta);
+    sum += taps[n];
+  }
+  for (double& t : taps) t /= sum;  // unit gain at DC
+  return taps;
+}
+
+std::vector<TorqueKnot> scenarioTorque(const std::vector<RigEvent>& events) {
+  std::vector<TorqueKnot> knots;
+  for (const RigEvent& e : events) {
+    if (e.torque && std::isfinite(*e.torque) && e.frame_id == "pinion" && !e.zero_stamp &&
+        e.stamp_offset == 0.0 && e.lost_before == 0 && std::abs(*e.torque) < 1e3)
+      knots.push_back({e.t, *e.torque});
+  }
+  return knots;
+}
+
+VibrationRecord simulateVibration(const RigConfig& rig, const std::vector<TorqueKnot>& torque,
+                                  const SpeedProfile& speed, double duration,
+                                  const VibrationSpec& spec) {
+  if (torque.empty()) throw InvalidInput("torque: no knot for the vibration");
+  requirePositive("vibration_rate", spec.rate);
+  if (spec.rate > 1e6) throwInvalid("vibration_rate", spec.rate, "must be <= 1e6 Hz");
+  if (spec.block < 1 || spec.block > 1000000)
+    throwInvalid("vibration_block", spec.block, "must be in [1, 1e6] samples");
+  requireNonNegative("vibration_roughness", spec.roughness);
+  requireNonNegative("vibration_noise", spec.noise);
+  requirePositive("duration", duration);
+  if (!rig.dynamics.present)
+    throw InvalidInput("dynamics: the vibration needs the gearbox's 'dynamics:' block");
+  VibrationRecord out;
+  out.rate = spec.rate;
+  out.block = spec.block;
+  for (int shaft = 0; shaft < 2; ++shaft) {
+    for (const BearingSupportConfig& b : rig.bearings) {
+      if (b.shaft == shaft) {
+        out.channels[shaft] = b.name;
+        break;
+      }
+    }
+    if (out.channels[shaft].empty())
+      throw InvalidInput(std::string("bearings: no support on the ") +
+                         (shaft == 0 ? "pinion" : "gear") + " shaft (vibration channels)");
+  }
+  const long blocks = static_cast<long>(std::floor(duration * spec.rate / spec.block + 1e-9));
+  const long n_out = blocks * spec.block;
+  if (n_out < 1 || n_out > 400000000L)
+    throwInvalid("vibration_rate", spec.rate, "gives no whole block or over 4e8 samples");
+  out.data.resize(static_cast<std::size_t>(2 * n_out));
+
+  const std::vector<double> taps = antiAliasFilter(spec.oversample);
+  const long delay = static_cast<long>(taps.size() / 2);
+  const int os = spec.oversample;
+  const double h = 1.0 / (spec.rate * os);
+  const double te_amplitude = rig.dynamics.transmission_error_amplitude;
+  const double teeth = rig.gears.teeth[0];
+
+  StiffnessEstimator estimator(rig);
+  std::size_t knot = 0;
+  // The true torque at t: linear between the knots, held outside them.
+  auto torqueAt = [&](double t) {
+    while (knot + 1 < torque.size() && torque[knot + 1].t <= t) ++knot;
+    const TorqueKnot& a = torque[knot];
+    if (t <= a.t || knot + 1 == torque.size()) return a.torque;
+    const TorqueKnot& b = torque[knot + 1];
+    return a.torque + (b.torque - a.torque) * (t - a.t) / (b.t - a.t);
+  };
+  double held = torque.front().torque;
+  std::optional<OperatingPoint> op = makeOperatingPoint(rig, estimator, held, h);
+  double refused = NAN;  // a torque the supports do not carry: not tried again nearby
+  // The held torque at t; a new operating point when it moves by over 10 %.
+  auto advance = [&](double t) {
+    held = torqueAt(t);
+    auto far = [&](double from) {
+      return !(std::abs(held - from) <= 0.1 * std::max(std::abs(from), 1e-3));
+    };
+    if (far(op->torque) && far(refused)) {
+      try {
+        op = makeOperatingPoint(rig, estimator, held, h);
+      } catch (const Error&) {
+        refused = held;
+      }
+    }
+  };
+  VibrationStream roughness(spec.seed, kRoughnessStream), noise(spec.seed, kSensorNoiseStream);
+  // Output sample i at i / rate is sum_k taps[k] a[i os + delay - k] (zero phase), a[j] the
+  // internal sample at j h; a lead-in of 0.02 s lets the random response settle.
+  const long lead = static_cast<long>(std::ceil(0.02 / h)) + delay;
+  const long j_end = (n_out - 1) * os + delay;
+  std::vector<double> ap, ag;  // internal accelerations from index base
+  long base = -lead;
+  // The mesh excitation e(t) = e_TE + e_k + e_r [m]: the model's TE (RigExcitation: amplitude x
+  // sin of the mesh phase), the loaded stiffness fluctuation as a displacement, -(k_s(phi) - mean)
+  // F_m / (k_mean mean) to first order in the fluctuation, and the random roughness e_r.
+  auto input = [&](double t, double& w, double& drive) {
+    const double turns = teeth * speed.angle(t) / kTwoPi;
+    const double phase = turns - std::floor(turns);
+    const double mesh_hz = teeth * speed.speed(t) / kTwoPi;
+    const double k = op->mesh->at(phase, op->mesh_force).composite;
+    const double e = te_amplitude * std::sin(kTwoPi * phase) -
+                     (k - op->k_flank_mean) * op->mesh_force / (op->k_mean * op->k_flank_mean) +
+                     spec.roughness * roughness.normal();
+    const double e_rate = te_amplitude * kTwoPi * mesh_hz * std::cos(kTwoPi * phase);
+    w = op->k_mean * e + op->c_mesh * e_rate;
+    drive = meshForce(rig.gears, 0, held);
+  };
+  // Internal step j spans [(j - 1/2) h, (j + 1/2) h] with the inputs at its start held; its sample
+  // is the mean acceleration over the step, (v(end) - v(start)) / h, centred on j h. The mean (a
+  // box filter, zero at every multiple of the internal rate) keeps the held input's steps from
+  // folding the direct term's flat spectrum into the band.
+  double w = 0.0, drive = 0.0;
+  advance((base - 0.5) * h);
+  input((base - 0.5) * h, w, drive);
+  State6 y = restState(*op, w, drive);
+  long next_out = 0;
+  for (long j = base; j <= j_end; ++j) {
+    const double t = (j - 0.5) * h;
+    if (j > base) {
+      advance(t);
+      input(t, w, drive);
+    }
+    const Eigen::Vector2d u(w, drive);
+    const State6 next = op->phi * y + op->gamma * u;
+    ap.push_back((next[3] - y[3]) / h);
+    ag.push_back((next[4] - y[4]) / h);
+    y = next;
+    // Every output sample whose filter window is complete.
+    while (next_out < n_out && next_out * os + delay <= j) {
+      const long last = next_out * os + delay - base;  // index of taps[0]'s sample
+      double sp = 0.0, sg = 0.0;
+      for (std::size_t k = 0; k < taps.size(); ++k) {
+        sp += taps[k] * ap[static_cast<std::size_t>(last - static_cast<long>(k))];
+        sg += taps[k] * ag[static_cast<std::size_t>(last - static_cast<long>(k))];
+      }
+      out.data[static_cast<std::size_t>(2 * next_out)] =
+          static_cast<float>(sp + spec.noise * noise.normal());
+      out.data[static_cast<std::size_t>(2 * next_out + 1)] =
+          static_cast<float>(sg + spec.noise * noise.normal());
+      ++next_out;
+    }
+    // Drop what no later output needs.
+    const long keep_from = next_out * os - delay - base;
+    if (keep_from > 65536) {
+      ap.erase(ap.begin(), ap.begin() + keep_from);
+      ag.erase(ag.begin(), ag.begin() + keep_from);
+      base += keep_from;
+    }
+  }
+  return out;
+}
+
+}  // namespace drivetrain_stiffness
