@@ -148,9 +148,10 @@ std::vector<TorqueKnot> scenarioTorque(const std::vector<RigEvent>& events) {
   return knots;
 }
 
-VibrationRecord simulateVibration(const RigConfig& rig, const std::vector<TorqueKnot>& torque,
-                                  const SpeedProfile& speed, double duration,
-                                  const VibrationSpec& spec) {
+namespace {
+
+void validateVibration(const RigConfig& rig, const std::vector<TorqueKnot>& torque, double duration,
+                       const VibrationSpec& spec) {
   if (torque.empty()) throw InvalidInput("torque: no knot for the vibration");
   requirePositive("vibration_rate", spec.rate);
   if (spec.rate > 1e6) throwInvalid("vibration_rate", spec.rate, "must be <= 1e6 Hz");
@@ -161,123 +162,194 @@ VibrationRecord simulateVibration(const RigConfig& rig, const std::vector<Torque
   requirePositive("duration", duration);
   if (!rig.dynamics.present)
     throw InvalidInput("dynamics: the vibration needs the gearbox's 'dynamics:' block");
-  VibrationRecord out;
-  out.rate = spec.rate;
-  out.block = spec.block;
+}
+
+/// Each shaft's first support: the channel that measures it.
+std::array<std::string, 2> supportChannels(const RigConfig& rig) {
+  std::array<std::string, 2> channels;
   for (int shaft = 0; shaft < 2; ++shaft) {
     for (const BearingSupportConfig& b : rig.bearings) {
       if (b.shaft == shaft) {
-        out.channels[shaft] = b.name;
+        channels[shaft] = b.name;
         break;
       }
     }
-    if (out.channels[shaft].empty())
+    if (channels[shaft].empty())
       throw InvalidInput(std::string("bearings: no support on the ") +
                          (shaft == 0 ? "pinion" : "gear") + " shaft (vibration channels)");
   }
+  return channels;
+}
+
+/// The linearised model's inputs along the scenario: the held torque's operating point and the
+/// mesh excitation (docs/vibration.md "Simulated accelerometers").
+class MeshExcitation {
+ public:
+  MeshExcitation(const RigConfig& rig, const std::vector<TorqueKnot>& torque,
+                 const SpeedProfile& speed, const VibrationSpec& spec, double h)
+      : rig_(rig),
+        torque_(torque),
+        speed_(speed),
+        spec_(spec),
+        h_(h),
+        estimator_(rig),
+        held_(torque.front().torque),
+        op_(makeOperatingPoint(rig, estimator_, held_, h)),
+        roughness_(spec.seed, kRoughnessStream) {}
+
+  /// The held torque at t [s]; a new operating point when it moves by over 10 %.
+  void advance(double t) {
+    held_ = torqueAt(t);
+    auto far = [&](double from) {
+      return !(std::abs(held_ - from) <= 0.1 * std::max(std::abs(from), 1e-3));
+    };
+    if (far(op_.torque) && far(refused_)) {
+      try {
+        op_ = makeOperatingPoint(rig_, estimator_, held_, h_);
+      } catch (const Error&) {
+        refused_ = held_;
+      }
+    }
+  }
+
+  /// The inputs at t [s]: the mesh excitation e(t) = e_TE + e_k + e_r [m] as a force w [N] (the
+  /// model's TE, amplitude x sin of the mesh phase; the loaded stiffness fluctuation as a
+  /// displacement, -(k_s(phi) - mean) F_m / (k_mean mean) to first order; the random roughness
+  /// e_r), and the drive force [N].
+  void input(double t, double& w, double& drive) {
+    const double teeth = rig_.gears.teeth[0];
+    const double te_amplitude = rig_.dynamics.transmission_error_amplitude;
+    const double turns = teeth * speed_.angle(t) / kTwoPi;
+    const double phase = turns - std::floor(turns);
+    const double mesh_hz = teeth * speed_.speed(t) / kTwoPi;
+    const double k = op_.mesh->at(phase, op_.mesh_force).composite;
+    const double e = te_amplitude * std::sin(kTwoPi * phase) -
+                     (k - op_.k_flank_mean) * op_.mesh_force / (op_.k_mean * op_.k_flank_mean) +
+                     spec_.roughness * roughness_.normal();
+    const double e_rate = te_amplitude * kTwoPi * mesh_hz * std::cos(kTwoPi * phase);
+    w = op_.k_mean * e + op_.c_mesh * e_rate;
+    drive = meshForce(rig_.gears, 0, held_);
+  }
+
+  const OperatingPoint& operatingPoint() const { return op_; }
+
+ private:
+  /// The true torque at t: linear between the knots, held outside them.
+  double torqueAt(double t) {
+    while (knot_ + 1 < torque_.size() && torque_[knot_ + 1].t <= t) ++knot_;
+    const TorqueKnot& a = torque_[knot_];
+    if (t <= a.t || knot_ + 1 == torque_.size()) return a.torque;
+    const TorqueKnot& b = torque_[knot_ + 1];
+    return a.torque + (b.torque - a.torque) * (t - a.t) / (b.t - a.t);
+  }
+
+  const RigConfig& rig_;
+  const std::vector<TorqueKnot>& torque_;
+  const SpeedProfile& speed_;
+  const VibrationSpec& spec_;
+  double h_;
+  StiffnessEstimator estimator_;
+  std::size_t knot_ = 0;
+  double held_;
+  OperatingPoint op_;
+  double refused_ = NAN;  ///< a torque the supports do not carry: not tried again nearby
+  VibrationStream roughness_;
+};
+
+/// The internal accelerations filtered and decimated to the output: output sample i at i / rate
+/// is sum_k taps[k] a[i os + delay - k] (zero phase), a[j] the internal sample at j h.
+class Decimator {
+ public:
+  Decimator(const VibrationSpec& spec, long base)
+      : taps_(antiAliasFilter(spec.oversample)),
+        delay_(static_cast<long>(taps_.size() / 2)),
+        os_(spec.oversample),
+        noise_level_(spec.noise),
+        base_(base),
+        noise_(spec.seed, kSensorNoiseStream) {}
+  long delay() const { return delay_; }
+
+  /// Internal sample j's accelerations of the two shafts [m/s^2]; then every output sample whose
+  /// filter window is complete, with sensor noise, into `out` (n_out samples in all).
+  void push(long j, double a_pinion, double a_gear, long n_out, std::vector<float>& out) {
+    ap_.push_back(a_pinion);
+    ag_.push_back(a_gear);
+    while (next_out_ < n_out && next_out_ * os_ + delay_ <= j) {
+      const long last = next_out_ * os_ + delay_ - base_;  // index of taps[0]'s sample
+      double sp = 0.0, sg = 0.0;
+      for (std::size_t k = 0; k < taps_.size(); ++k) {
+        sp += taps_[k] * ap_[static_cast<std::size_t>(last - static_cast<long>(k))];
+        sg += taps_[k] * ag_[static_cast<std::size_t>(last - static_cast<long>(k))];
+      }
+      out[static_cast<std::size_t>(2 * next_out_)] =
+          static_cast<float>(sp + noise_level_ * noise_.normal());
+      out[static_cast<std::size_t>(2 * next_out_ + 1)] =
+          static_cast<float>(sg + noise_level_ * noise_.normal());
+      ++next_out_;
+    }
+    // Drop what no later output needs.
+    const long keep_from = next_out_ * os_ - delay_ - base_;
+    if (keep_from > 65536) {
+      ap_.erase(ap_.begin(), ap_.begin() + keep_from);
+      ag_.erase(ag_.begin(), ag_.begin() + keep_from);
+      base_ += keep_from;
+    }
+  }
+
+ private:
+  std::vector<double> taps_;
+  long delay_;
+  int os_;
+  double noise_level_;
+  long base_;  ///< internal index of ap_[0], ag_[0]
+  std::vector<double> ap_, ag_;
+  long next_out_ = 0;
+  VibrationStream noise_;
+};
+
+}  // namespace
+
+VibrationRecord simulateVibration(const RigConfig& rig, const std::vector<TorqueKnot>& torque,
+                                  const SpeedProfile& speed, double duration,
+                                  const VibrationSpec& spec) {
+  validateVibration(rig, torque, duration, spec);
+  VibrationRecord out;
+  out.rate = spec.rate;
+  out.block = spec.block;
+  out.channels = supportChannels(rig);
   const long blocks = static_cast<long>(std::floor(duration * spec.rate / spec.block + 1e-9));
   const long n_out = blocks * spec.block;
   if (n_out < 1 || n_out > 400000000L)
     throwInvalid("vibration_rate", spec.rate, "gives no whole block or over 4e8 samples");
   out.data.resize(static_cast<std::size_t>(2 * n_out));
 
-  const std::vector<double> taps = antiAliasFilter(spec.oversample);
-  const long delay = static_cast<long>(taps.size() / 2);
   const int os = spec.oversample;
   const double h = 1.0 / (spec.rate * os);
-  const double te_amplitude = rig.dynamics.transmission_error_amplitude;
-  const double teeth = rig.gears.teeth[0];
-
-  StiffnessEstimator estimator(rig);
-  std::size_t knot = 0;
-  // The true torque at t: linear between the knots, held outside them.
-  auto torqueAt = [&](double t) {
-    while (knot + 1 < torque.size() && torque[knot + 1].t <= t) ++knot;
-    const TorqueKnot& a = torque[knot];
-    if (t <= a.t || knot + 1 == torque.size()) return a.torque;
-    const TorqueKnot& b = torque[knot + 1];
-    return a.torque + (b.torque - a.torque) * (t - a.t) / (b.t - a.t);
-  };
-  double held = torque.front().torque;
-  std::optional<OperatingPoint> op = makeOperatingPoint(rig, estimator, held, h);
-  double refused = NAN;  // a torque the supports do not carry: not tried again nearby
-  // The held torque at t; a new operating point when it moves by over 10 %.
-  auto advance = [&](double t) {
-    held = torqueAt(t);
-    auto far = [&](double from) {
-      return !(std::abs(held - from) <= 0.1 * std::max(std::abs(from), 1e-3));
-    };
-    if (far(op->torque) && far(refused)) {
-      try {
-        op = makeOperatingPoint(rig, estimator, held, h);
-      } catch (const Error&) {
-        refused = held;
-      }
-    }
-  };
-  VibrationStream roughness(spec.seed, kRoughnessStream), noise(spec.seed, kSensorNoiseStream);
-  // Output sample i at i / rate is sum_k taps[k] a[i os + delay - k] (zero phase), a[j] the
-  // internal sample at j h; a lead-in of 0.02 s lets the random response settle.
-  const long lead = static_cast<long>(std::ceil(0.02 / h)) + delay;
+  MeshExcitation excitation(rig, torque, speed, spec, h);
+  const long delay = static_cast<long>(antiAliasFilter(os).size() / 2);
+  // A lead-in of 0.02 s lets the random response settle.
+  const long base = -(static_cast<long>(std::ceil(0.02 / h)) + delay);
+  Decimator decimator(spec, base);
   const long j_end = (n_out - 1) * os + delay;
-  std::vector<double> ap, ag;  // internal accelerations from index base
-  long base = -lead;
-  // The mesh excitation e(t) = e_TE + e_k + e_r [m]: the model's TE (RigExcitation: amplitude x
-  // sin of the mesh phase), the loaded stiffness fluctuation as a displacement, -(k_s(phi) - mean)
-  // F_m / (k_mean mean) to first order in the fluctuation, and the random roughness e_r.
-  auto input = [&](double t, double& w, double& drive) {
-    const double turns = teeth * speed.angle(t) / kTwoPi;
-    const double phase = turns - std::floor(turns);
-    const double mesh_hz = teeth * speed.speed(t) / kTwoPi;
-    const double k = op->mesh->at(phase, op->mesh_force).composite;
-    const double e = te_amplitude * std::sin(kTwoPi * phase) -
-                     (k - op->k_flank_mean) * op->mesh_force / (op->k_mean * op->k_flank_mean) +
-                     spec.roughness * roughness.normal();
-    const double e_rate = te_amplitude * kTwoPi * mesh_hz * std::cos(kTwoPi * phase);
-    w = op->k_mean * e + op->c_mesh * e_rate;
-    drive = meshForce(rig.gears, 0, held);
-  };
   // Internal step j spans [(j - 1/2) h, (j + 1/2) h] with the inputs at its start held; its sample
   // is the mean acceleration over the step, (v(end) - v(start)) / h, centred on j h. The mean (a
   // box filter, zero at every multiple of the internal rate) keeps the held input's steps from
   // folding the direct term's flat spectrum into the band.
   double w = 0.0, drive = 0.0;
-  advance((base - 0.5) * h);
-  input((base - 0.5) * h, w, drive);
-  State6 y = restState(*op, w, drive);
-  long next_out = 0;
+  excitation.advance((base - 0.5) * h);
+  excitation.input((base - 0.5) * h, w, drive);
+  State6 y = restState(excitation.operatingPoint(), w, drive);
   for (long j = base; j <= j_end; ++j) {
     const double t = (j - 0.5) * h;
     if (j > base) {
-      advance(t);
-      input(t, w, drive);
+      excitation.advance(t);
+      excitation.input(t, w, drive);
     }
+    const OperatingPoint& op = excitation.operatingPoint();
     const Eigen::Vector2d u(w, drive);
-    const State6 next = op->phi * y + op->gamma * u;
-    ap.push_back((next[3] - y[3]) / h);
-    ag.push_back((next[4] - y[4]) / h);
+    const State6 next = op.phi * y + op.gamma * u;
+    decimator.push(j, (next[3] - y[3]) / h, (next[4] - y[4]) / h, n_out, out.data);
     y = next;
-    // Every output sample whose filter window is complete.
-    while (next_out < n_out && next_out * os + delay <= j) {
-      const long last = next_out * os + delay - base;  // index of taps[0]'s sample
-      double sp = 0.0, sg = 0.0;
-      for (std::size_t k = 0; k < taps.size(); ++k) {
-        sp += taps[k] * ap[static_cast<std::size_t>(last - static_cast<long>(k))];
-        sg += taps[k] * ag[static_cast<std::size_t>(last - static_cast<long>(k))];
-      }
-      out.data[static_cast<std::size_t>(2 * next_out)] =
-          static_cast<float>(sp + spec.noise * noise.normal());
-      out.data[static_cast<std::size_t>(2 * next_out + 1)] =
-          static_cast<float>(sg + spec.noise * noise.normal());
-      ++next_out;
-    }
-    // Drop what no later output needs.
-    const long keep_from = next_out * os - delay - base;
-    if (keep_from > 65536) {
-      ap.erase(ap.begin(), ap.begin() + keep_from);
-      ag.erase(ag.begin(), ag.begin() + keep_from);
-      base += keep_from;
-    }
   }
   return out;
 }
