@@ -10,35 +10,11 @@
 #include "drivetrain_stiffness/core/stiffness_estimator.hpp"
 #include "drivetrain_stiffness/core/validation.hpp"
 #include "drivetrain_stiffness/pipeline/rig_pipeline.hpp"
-#include "rig_encoder.hpp"  // NOLINT(build/include_subdir)
+#include "rig_encoder.hpp"    // NOLINT(build/include_subdir)
+#include "seeded_stream.hpp"  // NOLINT(build/include_subdir)
 
 namespace drivetrain_stiffness {
 namespace {
-
-/// Random numbers that are the same on every platform for a seed: std::mt19937_64 and std::seed_seq
-/// are specified exactly by the standard, the library's distributions are not (libstdc++ and libc++
-/// draw differently), so the uniform and the Gaussian are made here. One stream per use, so that a
-/// change in one count (readings, torque samples) does not move the others.
-class Stream {
- public:
-  Stream(std::uint64_t seed, std::uint32_t stream) {
-    std::seed_seq seq{static_cast<std::uint32_t>(seed & 0xffffffffu),
-                      static_cast<std::uint32_t>(seed >> 32), stream};
-    engine_.seed(seq);
-  }
-  /// Uniform in [0, 1): the top 53 bits.
-  double uniform() { return static_cast<double>(engine_() >> 11) * 0x1.0p-53; }
-  double uniform(double a, double b) { return a + (b - a) * uniform(); }
-  /// Standard normal (Box-Muller, the cosine branch only).
-  double normal() {
-    const double u1 = 1.0 - uniform();  // (0, 1]: the logarithm stays finite
-    const double u2 = uniform();
-    return std::sqrt(-2.0 * std::log(u1)) * std::cos(kTwoPi * u2);
-  }
-
- private:
-  std::mt19937_64 engine_;
-};
 
 enum StreamId : std::uint32_t { kEncoderStream = 1, kJitterStream = 2, kTorqueStream = 3 };
 
@@ -411,7 +387,7 @@ void recordReadings(const RigConfig& rig, const LoadSweepSpec& s, const std::arr
                     long n_joint, LoadSweep& out) {
   LoadSweepTruth& truth = out.truth;
   const double omega = s.speed_rpm * kTwoPi / 60.0;
-  Stream encoders(s.seed, kEncoderStream), jitter(s.seed, kJitterStream);
+  SeededStream encoders(s.seed, kEncoderStream), jitter(s.seed, kJitterStream);
   for (int i = 0; i < 2; ++i) {
     truth.eccentricity[i] = encoders.uniform(s.eccentricity_min, s.eccentricity_max);
     truth.eccentricity_phase[i] = encoders.uniform(0.0, kTwoPi);
@@ -441,7 +417,7 @@ void recordReadings(const RigConfig& rig, const LoadSweepSpec& s, const std::arr
 /// noise of sigma = torque_noise |T| + torque_noise_floor.
 void recordTorque(const LoadSweepSpec& s, const LoadSweepTruth& truth, long n_torque,
                   std::vector<RigEvent>& events) {
-  Stream noise(s.seed, kTorqueStream);
+  SeededStream noise(s.seed, kTorqueStream);
   std::size_t level = 0;
   for (long k = 0; k < n_torque; ++k) {
     const double t = k / s.torque_rate;

@@ -15,30 +15,13 @@
 #include "drivetrain_stiffness/core/rig_model.hpp"
 #include "drivetrain_stiffness/core/stiffness_estimator.hpp"
 #include "drivetrain_stiffness/core/validation.hpp"
+#include "seeded_stream.hpp"  // NOLINT(build/include_subdir)
 
 namespace drivetrain_stiffness {
 namespace {
 
-/// Gaussian numbers that are the same on every platform for a seed (as load_sweep's streams):
-/// std::mt19937_64 and std::seed_seq are exact, the uniform and Box-Muller are made here. Its own
-/// stream ids, so the vibration draws move none of the other random streams.
-class VibrationStream {
- public:
-  VibrationStream(std::uint64_t seed, std::uint32_t stream) {
-    std::seed_seq seq{static_cast<std::uint32_t>(seed & 0xffffffffu),
-                      static_cast<std::uint32_t>(seed >> 32), stream};
-    engine_.seed(seq);
-  }
-  double normal() {
-    const double u1 = 1.0 - uniform(), u2 = uniform();
-    return std::sqrt(-2.0 * std::log(u1)) * std::cos(kTwoPi * u2);
-  }
-
- private:
-  double uniform() { return static_cast<double>(engine_() >> 11) * 0x1.0p-53; }
-  std::mt19937_64 engine_;
-};
-
+/// The vibration draws have stream ids of their own (load_sweep uses 1 to 3): they move none of
+/// the other random streams.
 enum : std::uint32_t { kRoughnessStream = 101, kSensorNoiseStream = 102 };
 
 /// The modified Bessel function I0 by its power series (Abramowitz & Stegun 9.6.12).
@@ -253,7 +236,7 @@ class MeshExcitation {
   double held_;
   OperatingPoint op_;
   double refused_ = NAN;  ///< a torque the supports do not carry: not tried again nearby
-  VibrationStream roughness_;
+  SeededStream roughness_;
 };
 
 /// The internal accelerations filtered and decimated to the output: output sample i at i / rate
@@ -304,7 +287,7 @@ class Decimator {
   long base_;  ///< internal index of ap_[0], ag_[0]
   std::vector<double> ap_, ag_;
   long next_out_ = 0;
-  VibrationStream noise_;
+  SeededStream noise_;
 };
 
 }  // namespace
