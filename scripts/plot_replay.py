@@ -1,7 +1,10 @@
 #!/usr/bin/python3
 """Report of a stiffness-estimator run from a bag of its outputs (drivetrain_replay --out, or
 `rosbag record` of a live run): transmission error, its per-mesh-period statistics, stiffness and
-resonance against time, as PNG plots plus report.md with the key figures.
+resonance against time, as PNG plots plus report.md with the key figures; with INPUT_BAG's encoders
+the TE order spectrum and the Campbell diagram (beside INPUT_BAG's accelerometers' spectrogram), and
+from the modal identification's CSV files in REPORT_DIR/csv the stabilisation diagram and its table
+(docs/tools.md "--report").
 
 usage: plot_replay.py OUTPUT_BAG REPORT_DIR [INPUT_BAG]
 Times are seconds since the first output stamp; SI units (TE in m shown in um).

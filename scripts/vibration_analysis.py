@@ -94,18 +94,21 @@ def _density(segments, rate):
     return spec
 
 
-def spectrogram(record, channel, nperseg=2048, max_columns=600):
-    """Short-time PSD of one channel: Hann segments of nperseg samples, at most max_columns of them
-    spread over the record (overlapping by half at most). Returns (t [s] of each segment's
-    centre, frequencies [Hz], psd: frequencies x segments [(m/s^2)^2/Hz]); None if the record is
-    shorter than one segment."""
+def spectrogram(record, channel, nperseg=1024, max_columns=400):
+    """Short-time PSD of one channel: Hann segments of nperseg samples overlapping by half, the
+    consecutive segments averaged in groups (Welch's average) so that at most max_columns remain.
+    Returns (t [s] of each group's centre, frequencies [Hz], psd: frequencies x groups
+    [(m/s^2)^2/Hz]); None if the record is shorter than one segment."""
     x = np.ascontiguousarray(record.data[:, channel])
     if len(x) < nperseg:
         return None
-    step = max(nperseg // 2, int(np.ceil((len(x) - nperseg) / max(1, max_columns - 1))))
-    seg = _segments(x, nperseg, step)
-    t = record.start + (np.arange(len(seg)) * step + 0.5 * nperseg) / record.sample_rate
-    return t, np.fft.rfftfreq(nperseg, 1.0 / record.sample_rate), _density(seg, record.sample_rate).T
+    step = nperseg // 2
+    psd = _density(_segments(x, nperseg, step), record.sample_rate)
+    group = int(np.ceil(len(psd) / max_columns))
+    columns = len(psd) // group
+    psd = psd[:columns * group].reshape(columns, group, -1).mean(axis=1)
+    t = record.start + ((np.arange(columns) * group + 0.5 * (group - 1)) * step + 0.5 * nperseg) / record.sample_rate
+    return t, np.fft.rfftfreq(nperseg, 1.0 / record.sample_rate), psd.T
 
 
 def averaged_psd(records, t_from, t_to, nperseg=4096):
