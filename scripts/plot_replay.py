@@ -3,10 +3,10 @@
 `rosbag record` of a live run): transmission error, its per-mesh-period statistics, stiffness and
 resonance against time, as PNG plots plus report.md with the key figures; with INPUT_BAG's encoders
 the TE order spectrum and the Campbell diagram (beside INPUT_BAG's accelerometers' spectrogram), and
-from the modal identification's CSV files in REPORT_DIR/csv the stabilisation diagram and its table
-(docs/tools.md "--report").
+from the modal identification's CSV files in CSV_DIR (drivetrain_replay's --csv; REPORT_DIR/csv
+without it) the stabilisation diagram and its table (docs/tools.md "--report").
 
-usage: plot_replay.py OUTPUT_BAG REPORT_DIR [INPUT_BAG]
+usage: plot_replay.py OUTPUT_BAG REPORT_DIR [INPUT_BAG [CSV_DIR]]
 Times are seconds since the first output stamp; SI units (TE in m shown in um).
 drivetrain_replay writes REPORT_DIR/summary.json and the top of REPORT_DIR/report.md (status, inputs,
 calibration, output counts) before it runs this script, which then appends its figures. Without a
@@ -178,7 +178,7 @@ def main():
         ax.legend(loc="best")
     finish(fig, [ax], ["natural frequency [kHz]"], "Resonance estimates", os.path.join(report, "resonance.png"))
 
-    modal = modal_plots.ModalResults(os.path.join(report, "csv"))
+    modal = modal_plots.ModalResults(sys.argv[4] if len(sys.argv) > 4 else os.path.join(report, "csv"))
     records, vibration_note = read_records(source) if source != out_bag else ([], "")
     motion_figures = (plot_motion(source, te, res, t0, report, modal, records, *encoder_settings(report))
                       if source != out_bag and te else [])
