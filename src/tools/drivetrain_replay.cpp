@@ -481,7 +481,7 @@ std::string writeReport(const ReplayOptions& o, const nlohmann::json& summary,
   if (o.plots) {
     try {
       runPythonScript("--plot-script", findScript(o.plot_script, "plot_replay.py"),
-                      {o.out_bag, o.report_dir, o.bag_path});
+                      {o.out_bag, o.report_dir, o.bag_path, o.csv_dir});
     } catch (const InvalidInput& e) {
       return e.what();
     }
