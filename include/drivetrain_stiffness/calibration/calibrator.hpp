@@ -142,9 +142,11 @@ class Calibrator {
   /// What the calibration has seen, the open window as a stretch. Allocation-free.
   CalibrationProgress progress() const;
   /// One record's identified frequencies at pinion torque [N·m], t [s] the record's end: one
-  /// update of the same state as the TE windows (no baseline needed). Returns kUpdated, kGated
-  /// (NIS over the gate), or kNone (no usable frequency). Throws InvalidInput naming a mode out of
-  /// range or a frequency or std that is not positive and finite. Allocation-free.
+  /// update of the same state as the TE windows (no baseline needed); each `mode` indexes modes()
+  /// at the current estimate. Returns kUpdated, kGated (NIS over the gate), or kNone (no usable
+  /// frequency). Throws InvalidInput naming a mode out of range or given twice, a frequency or std
+  /// that is not positive and finite, more than 3 frequencies, or a non-finite t or torque.
+  /// Allocation-free.
   WindowOutcome modalUpdate(double t, const ModalFrequency* frequencies, std::size_t count,
                             double torque, const StiffnessEstimator& supports);
   /// The calibrated model's three modes (with shapes) at pinion torque [N·m]: modalAnalysis of the
