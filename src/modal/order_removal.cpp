@@ -118,23 +118,33 @@ void removeSynchronousAverage(Eigen::Ref<Eigen::MatrixXd> record,
       if (!std::isfinite(cycles[t])) throwNotFinite("cycles[" + std::to_string(t) + "]", cycles[t]);
   const long channels = record.rows(), count = std::max(1L, samples / block_samples);
   Eigen::MatrixXd sum;
-  Eigen::VectorXd hits;
+  Eigen::VectorXd hits, position;
+  std::vector<long> bin;
   for (long b = 0; b < count; ++b) {
     long first = 0, length = 0;
     blockSpan(samples, block_samples, b, first, length);
     const double span = std::abs(cycles[first + length - 1] - cycles[first]);
     if (span < 8.0) continue;
-    const long bins = std::clamp(std::lround(4.0 * static_cast<double>(length) / span), 8L, 8192L);
+    const long bins = std::clamp(std::lround(2.0 * static_cast<double>(length) / span), 8L, 8192L);
     sum.setZero(channels, bins);
     hits.setZero(bins);
-    auto phase = [&](long t) {  // [0, bins): the position within the cycle, in bins
-      const double c = cycles[t] - std::floor(cycles[t]);
-      return std::min(c * static_cast<double>(bins), std::nextafter(bins, 0.0));
-    };
-    for (long t = first; t < first + length; ++t) {
-      const long k = static_cast<long>(phase(t));
-      sum.col(k) += record.col(t);
-      hits[k] += 1.0;
+    // Each sample's position within the cycle, in bins, once: the bin it adds to, and the two bin
+    // centres and weight it takes the mean from.
+    bin.resize(length);
+    position.resize(length);
+    const double top = std::nextafter(static_cast<double>(bins), 0.0);
+    for (long t = 0; t < length; ++t) {
+      const double c = cycles[first + t] - std::floor(cycles[first + t]);
+      const double x = std::min(c * static_cast<double>(bins), top);
+      bin[t] = static_cast<long>(x);
+      position[t] = x - 0.5;  // from the first bin's centre
+    }
+    double* s = sum.data();
+    for (long t = 0; t < length; ++t) {
+      const double* y = record.col(first + t).data();
+      double* into = s + bin[t] * channels;
+      for (long c = 0; c < channels; ++c) into[c] += y[c];
+      hits[bin[t]] += 1.0;
     }
     for (long k = 0; k < bins; ++k)
       if (hits[k] > 0.0) sum.col(k) /= hits[k];
@@ -142,11 +152,12 @@ void removeSynchronousAverage(Eigen::Ref<Eigen::MatrixXd> record,
     for (long k = 0; k < bins; ++k)
       if (hits[k] == 0.0) sum.col(k) = sum.col((k + bins - 1) % bins);
     // The mean waveform at each sample: linear between bin centres, cyclic.
-    for (long t = first; t < first + length; ++t) {
-      const double x = phase(t) - 0.5;
-      const double fl = std::floor(x), w = x - fl;
+    for (long t = 0; t < length; ++t) {
+      const double fl = std::floor(position[t]), w = position[t] - fl;
       const long k0 = (static_cast<long>(fl) + bins) % bins, k1 = (k0 + 1) % bins;
-      record.col(t) -= (1.0 - w) * sum.col(k0) + w * sum.col(k1);
+      double* y = record.col(first + t).data();
+      const double *m0 = s + k0 * channels, *m1 = s + k1 * channels;
+      for (long c = 0; c < channels; ++c) y[c] -= (1.0 - w) * m0[c] + w * m1[c];
     }
   }
 }

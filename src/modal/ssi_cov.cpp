@@ -25,10 +25,15 @@ using Eigen::VectorXd;
 /// docs/vibration.md, "SSI-COV").
 MatrixXd lagCovariances(const MatrixXd& y, long t0, long n, int lags) {
   const long l = y.rows();
+  // Channel-major copy: each R_k(a, b) is then one contiguous dot product (vectorised), where a
+  // matrix product per lag (l x n times n x l) spends most of its time packing operands.
+  const MatrixXd channels = y.middleCols(t0, n + lags).transpose();
   MatrixXd r(l, l * lags);
   for (int k = 1; k <= lags; ++k)
-    r.middleCols(l * (k - 1), l).noalias() =
-        y.middleCols(t0 + k, n) * y.middleCols(t0, n).transpose() / static_cast<double>(n);
+    for (long a = 0; a < l; ++a)
+      for (long c = 0; c < l; ++c)
+        r(a, l * (k - 1) + c) =
+            channels.col(a).segment(k, n).dot(channels.col(c).head(n)) / static_cast<double>(n);
   return r;
 }
 

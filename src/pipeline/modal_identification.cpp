@@ -85,19 +85,18 @@ ModalReport identifyModes(const ModalJob& job) {
   for (long i = 1; i < n; i += 256)
     max_speed = std::max(max_speed, std::abs(job.angle[i] - job.angle[i - 1]) * job.sample_rate);
 
-  // The orders out (docs/vibration.md "Mesh-order removal"): each shaft's first two by regression
-  // on the angle, every mesh harmonic by the synchronous average over the mesh cycles.
+  // The orders out (docs/vibration.md "Identification in the pipeline"): synchronous averages
+  // over the pinion's turns (every pinion-shaft order, 1 s blocks) and over the mesh cycles
+  // (every mesh harmonic, 0.25 s blocks, as the speed changes faster than the pinion turns).
   Eigen::MatrixXd record = job.record;
   if (max_speed > kMinOrderSpeed) {
-    const double ratio = static_cast<double>(job.pinion_teeth) / job.gear_teeth;
-    modal::OrderRemovalOptions shafts;
-    shafts.orders = {1.0, 2.0, ratio, 2.0 * ratio};
-    shafts.block_samples = std::min<long>(4096, std::max<long>(16, n / 4));
-    modal::OrderRemoval(shafts).remove(record, job.angle, job.sample_rate);
-    const Eigen::VectorXd mesh_cycles = job.angle * (job.pinion_teeth / kTwoPi);
-    modal::removeSynchronousAverage(record, mesh_cycles,
+    const Eigen::VectorXd turns = job.angle / kTwoPi;
+    modal::removeSynchronousAverage(record, turns,
+                                    std::max<long>(16, std::lround(job.sample_rate)));
+    modal::removeSynchronousAverage(record, turns * static_cast<double>(job.pinion_teeth),
                                     std::max<long>(16, std::lround(0.25 * job.sample_rate)));
-    r.order_bands = orderBands(job, shafts.orders, max_speed);
+    const double ratio = static_cast<double>(job.pinion_teeth) / job.gear_teeth;
+    r.order_bands = orderBands(job, {1.0, 2.0, ratio, 2.0 * ratio}, max_speed);
   } else {
     const double bandwidth = job.sample_rate / kSamplesPerBandwidth;
     r.order_bands.push_back({bandwidth, 0.5 * job.sample_rate, "beyond fs / 2.56", false});

@@ -23,6 +23,9 @@ int main(int argc, char** argv) {
     options.rate_hz = readParam(pnh, "rate", options.rate_hz);
     options.duration_s = readParam(pnh, "duration", options.duration_s);
     options.warmup_s = readParam(pnh, "warmup", options.warmup_s);
+    options.vibration_rate_hz = readParam(pnh, "vibration_rate", options.vibration_rate_hz);
+    if (!(options.vibration_rate_hz >= 0.0 && options.vibration_rate_hz <= 1e6))
+      throw InvalidInput("~vibration_rate: must be in [0, 1e6] Hz");
     if (!(options.rate_hz > 0.0 && options.rate_hz <= 1e5))
       throw InvalidInput("~rate: must be in (0, 1e5] Hz");
     if (!(options.duration_s > 0.0 && options.duration_s <= 86400.0))
@@ -46,6 +49,7 @@ int main(int argc, char** argv) {
   report["rate_hz"] = options.rate_hz;
   report["duration_s"] = options.duration_s;
   report["warmup_s"] = options.warmup_s;
+  report["vibration_rate_hz"] = options.vibration_rate_hz;
   std::cout << report.dump(2) << std::endl;
   if (!out.empty() && !(std::ofstream(out) << report.dump(2) << "\n")) {
     ROS_FATAL("drivetrain_latency: ~out = '%s': cannot be written", out.c_str());

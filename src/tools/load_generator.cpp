@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <random>
 #include <thread>
 
 #include <geometry_msgs/WrenchStamped.h>
@@ -64,7 +65,10 @@ nlohmann::json toJson(const LoadResult& r) {
           {"mean_processing_s", r.mean_processing_s},
           {"rss_warmup_kb", r.rss_warmup_kb},
           {"rss_end_kb", r.rss_end_kb},
-          {"heap_end_b", r.heap_end_b}};
+          {"heap_end_b", r.heap_end_b},
+          {"vibration_sent", r.vibration_sent},
+          {"accepted_vibration", r.accepted_vibration},
+          {"modal_published", r.modal_published}};
 }
 
 LoadGenerator::LoadGenerator(const ros::NodeHandle& nh, const LoadOptions& options)
@@ -76,6 +80,8 @@ LoadGenerator::LoadGenerator(const ros::NodeHandle& nh, const LoadOptions& optio
                           (options_.duration_s + options_.settle_timeout_s);
   const auto queue = static_cast<std::uint32_t>(std::clamp(expected, 1000.0, 1e8));
   torque_pub_ = nh_.advertise<geometry_msgs::WrenchStamped>("torque", queue);
+  if (options_.vibration_rate_hz > 0.0)
+    vibration_pub_ = nh_.advertise<VibrationBlock>("vibration", 1000);
   stiffness_sub_ = nh_.subscribe("stiffness", queue, &LoadGenerator::onStiffness, this,
                                  ros::TransportHints().tcpNoDelay());
   te_sub_ = nh_.subscribe("transmission_error", queue, &LoadGenerator::onTransmissionError, this,
@@ -108,7 +114,8 @@ bool LoadGenerator::connect() {
   const bool ok = waitFor(
       [this] {
         return torque_pub_.getNumSubscribers() > 0 && stiffness_sub_.getNumPublishers() > 0 &&
-               diagnostics_received_ > 0;
+               diagnostics_received_ > 0 &&
+               (!vibration_pub_ || vibration_pub_.getNumSubscribers() > 0);
       },
       options_.connect_timeout_s);
   // getNumPublishers() counts our stiffness link before the node has finished its handshake: an
@@ -175,6 +182,10 @@ void LoadGenerator::onDiagnostics(const diagnostic_msgs::DiagnosticArray::ConstP
         diag_.rss_end_kb = std::strtod(v, nullptr);
       else if (kv.key == "heap_in_use [B]")
         diag_.heap_end_b = std::strtod(v, nullptr);
+      else if (kv.key == "accepted_vibration")
+        diag_.accepted_vibration = std::strtoull(v, nullptr, 10);
+      else if (kv.key == "modal_identifications_published")
+        diag_.modal_published = std::strtoull(v, nullptr, 10);
     }
     // The baseline: the first report after the warm-up (start-up allocations are done by then).
     const bool warm = !warmup_end_.isZero() && ros::WallTime::now() >= warmup_end_;
@@ -221,6 +232,16 @@ LoadResult LoadGenerator::send(std::uint64_t total) {
     warmup_end_ = start + ros::WallDuration(options_.warmup_s);
   }
   ros::WallTime first_send, last_send;
+  // The vibration blocks on their own schedule, stamped contiguously from the first send.
+  VibrationBlock block;
+  block.channels = {"pinion_bearing", "gear_bearing"};
+  block.sample_rate = options_.vibration_rate_hz;
+  block.data.resize(2 * static_cast<std::size_t>(options_.vibration_block));
+  const double block_s = options_.vibration_block / std::max(options_.vibration_rate_hz, 1.0);
+  std::mt19937 noise(1);
+  std::normal_distribution<float> gauss(0.0f, 1.0f);
+  const ros::Time vibration_t0 = ros::Time::now();
+  std::uint64_t blocks = 0;
   for (std::uint64_t i = 0; i < total && ros::ok(); ++i) {
     // Absolute deadlines: a late send does not shift the ones after it (they catch up), so the
     // count and the mean rate are exact; lateness is counted instead.
@@ -240,6 +261,14 @@ LoadResult LoadGenerator::send(std::uint64_t total) {
     m.wrench.torque.z = options_.nominal_torque +
                         options_.ripple_torque * std::sin(kTwoPi * options_.ripple_hz * t);
     torque_pub_.publish(m);
+    while (vibration_pub_ && static_cast<double>(blocks) * block_s <= t) {
+      block.header.seq = static_cast<std::uint32_t>(blocks + 1);
+      block.header.stamp = vibration_t0 + ros::Duration(static_cast<double>(blocks) * block_s);
+      for (float& x : block.data) x = gauss(noise);
+      vibration_pub_.publish(block);
+      ++blocks;
+    }
+    r.vibration_sent = blocks;
     if (r.sent == 0) first_send = now;
     last_send = now;
     ++r.sent;
@@ -289,6 +318,7 @@ LoadResult LoadGenerator::collect(const LoadResult& sends) {
     r.te_received = te_received_;
     r.te_lost = te_lost_;
     r.non_finite = non_finite_;
+    r.vibration_sent = sends.vibration_sent;
   }
   r.answered = latencies.size();
   if (!latencies.empty()) {

@@ -20,6 +20,7 @@
 
 #include "drivetrain_stiffness/Stiffness.h"
 #include "drivetrain_stiffness/TransmissionError.h"
+#include "drivetrain_stiffness/VibrationBlock.h"
 #include "drivetrain_stiffness/pipeline/sequence_gaps.hpp"
 
 namespace drivetrain_stiffness {
@@ -36,6 +37,10 @@ struct LoadOptions {
   double ripple_torque = 0.01;  ///< [N*m] amplitude of the ripple
   double ripple_hz = 100.0;     ///< [Hz] ripple frequency
   std::string diagnostic_status = "stiffness_estimator: stiffness_estimator";
+  /// [Hz] accelerometer sample rate of the vibration blocks sent beside the torque (2 channels,
+  /// the seed gearbox's supports, Gaussian noise); 0: none.
+  double vibration_rate_hz = 0.0;
+  int vibration_block = 1024;  ///< frames per block
 };
 
 /// NaN where nothing was measured (no answer, no diagnostics after the warm-up).
@@ -63,6 +68,8 @@ struct LoadResult {
   std::uint64_t missed_deadlines_cpu_warmup = 0;  ///< of those, by the RSS baseline report
   double max_processing_cpu_s = kNone;  ///< of missed_deadlines, those by the RSS baseline report
   double max_processing_s = kNone, mean_processing_s = kNone;
+  std::uint64_t vibration_sent = 0, accepted_vibration = 0;  ///< blocks
+  std::uint64_t modal_published = 0;  ///< the node's identifications since it started
 };
 
 nlohmann::json toJson(const LoadResult& r);
@@ -95,7 +102,7 @@ class LoadGenerator {
   LoadOptions options_;
   ros::CallbackQueue queue_;  // own queue: the spinner serves only these subscriptions
   ros::NodeHandle nh_;
-  ros::Publisher torque_pub_;
+  ros::Publisher torque_pub_, vibration_pub_;
   ros::Subscriber stiffness_sub_, te_sub_, diagnostics_sub_;
   std::uint32_t next_seq_ = 0;  // header.seq of the next torque sent: the node counts gaps as drops
   std::unique_ptr<ros::AsyncSpinner> spinner_;

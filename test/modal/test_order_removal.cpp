@@ -156,5 +156,49 @@ TEST(OrderRemoval, RejectsBadArgumentsNamingTheField) {
   expectInvalid([&] { removal.bands(angle, -1.0); }, "sample_rate = -1");
 }
 
+TEST(SynchronousAverage, RemovesEveryHarmonicOfTheCycleAndKeepsTheRest) {
+  // 30 harmonics of a 333.3 Hz mesh (to 10 kHz, each 1/k of the first) following a speed that
+  // drifts by 2 % over 4 s, on the rig's two modes (white-noise driven). The synchronous average
+  // over the mesh cycles removes the harmonics (linear in the samples), and leaves the modes'
+  // response, which is not periodic in the angle. The average is linear in the record, so the
+  // two parts are checked on their own.
+  const long n = 4 * 51200;
+  const Eigen::MatrixXd modes = rigModes(kFs).record(n, 21, 0.05);
+  const Eigen::VectorXd cycles = sweepAngle(n, 333.3, 340.0) / (2.0 * M_PI);
+  Eigen::MatrixXd harmonics(2, n);
+  for (long t = 0; t < n; ++t) {
+    double x = 0.0;
+    for (int k = 1; k <= 30; ++k) x += std::cos(2.0 * M_PI * k * cycles[t] + 0.1 * k) / k;
+    harmonics(0, t) = x;
+    harmonics(1, t) = -0.7 * x;
+  }
+  Eigen::MatrixXd y = harmonics;
+  removeSynchronousAverage(y, cycles, 12800);
+  const double left = rms(y) / rms(harmonics);
+  EXPECT_LT(left, 0.02) << "of the harmonics' rms left";
+  y = modes;
+  removeSynchronousAverage(y, cycles, 12800);
+  // The modes' own mean over the m samples of a bin goes with it: at most 1/m of their power
+  // (bins of 2 per sample of a cycle: m = 12800 / (2 x 12800 / 83 cycles) = 41.5), less where
+  // the interpolation mixes two bins' means.
+  const double kept = rms(y) / rms(modes);
+  EXPECT_GT(kept, std::sqrt(1.0 - 1.0 / 41.5) - 0.002);
+  EXPECT_LT(kept, 1.0);
+}
+
+TEST(SynchronousAverage, RejectsBadArgumentsNamingTheField) {
+  Eigen::MatrixXd y = Eigen::MatrixXd::Zero(2, 100);
+  Eigen::VectorXd cycles = Eigen::VectorXd::LinSpaced(100, 0.0, 20.0);
+  EXPECT_THROW(removeSynchronousAverage(y, cycles.head(99), 32), InvalidInput);
+  EXPECT_THROW(removeSynchronousAverage(y, cycles, 8), InvalidInput);
+  cycles[7] = NAN;
+  try {
+    removeSynchronousAverage(y, cycles, 32);
+    FAIL() << "a NaN cycle was taken";
+  } catch (const InvalidInput& e) {
+    EXPECT_NE(std::string(e.what()).find("cycles[7]"), std::string::npos) << e.what();
+  }
+}
+
 }  // namespace
 }  // namespace drivetrain_stiffness::modal
