@@ -44,27 +44,31 @@ MatchResult matchModes(const std::vector<IdentifiedMode>& identified,
     out.observability.push_back(obs);
     out.identified_of.push_back(-1);
   }
-  std::vector<double> best_mac(predicted.size(), -1.0);
-  for (size_t i = 0; i < identified.size(); ++i) {
-    int match = -1;
-    double match_mac = std::numeric_limits<double>::quiet_NaN();
+  // One to one: every candidate pair (within the window, MAC at least min_mac), the highest MAC
+  // first; a pair whose identified or predicted mode is taken already is passed over.
+  struct Candidate {
+    double mac;
+    size_t i, k;
+  };
+  std::vector<Candidate> candidates;
+  for (size_t i = 0; i < identified.size(); ++i)
     for (size_t k = 0; k < predicted.size(); ++k) {
       if (out.observability[k] != Observability::kObservable) continue;
       if (std::abs(identified[i].frequency - predicted[k].frequency) >
           o.frequency_window * predicted[k].frequency)
         continue;
       const double m = mac(identified[i].shape, predicted[k].shape);
-      if (m >= o.min_mac && (match < 0 || m > match_mac)) {
-        match = static_cast<int>(k);
-        match_mac = m;
-      }
+      if (m >= o.min_mac) candidates.push_back({m, i, k});
     }
-    out.predicted_of.push_back(match);
-    out.mac_of.push_back(match_mac);
-    if (match >= 0 && match_mac > best_mac[match]) {
-      best_mac[match] = match_mac;
-      out.identified_of[match] = static_cast<int>(i);
-    }
+  std::stable_sort(candidates.begin(), candidates.end(),
+                   [](const Candidate& a, const Candidate& b) { return a.mac > b.mac; });
+  out.predicted_of.assign(identified.size(), -1);
+  out.mac_of.assign(identified.size(), std::numeric_limits<double>::quiet_NaN());
+  for (const Candidate& c : candidates) {
+    if (out.predicted_of[c.i] >= 0 || out.identified_of[c.k] >= 0) continue;
+    out.predicted_of[c.i] = static_cast<int>(c.k);
+    out.mac_of[c.i] = c.mac;
+    out.identified_of[c.k] = static_cast<int>(c.i);
   }
   return out;
 }

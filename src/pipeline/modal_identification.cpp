@@ -113,7 +113,12 @@ ModalReport identifyModes(const ModalJob& job) {
     r.poles.push_back({p.order, p.frequency, p.damping, p.frequency_std, p.damping_std,
                        selected.status[i], selected.mode_of[i]});
   }
-  const modal::MatchResult match = modal::matchModes(r.modes, atChannels(job), job.sample_rate);
+  // A window of 35 %: a bearing scale 0.7 or 1.3 (the prior's 1-sigma range) moves its mode by
+  // some 15 %, twice that at the prior's 2 sigma; the shape (MAC) tells the modes apart.
+  modal::MatchOptions matching;
+  matching.frequency_window = 0.35;
+  const modal::MatchResult match =
+      modal::matchModes(r.modes, atChannels(job), job.sample_rate, matching);
   r.model_mode = match.predicted_of;
   r.mac.resize(r.modes.size());
   for (std::size_t i = 0; i < r.modes.size(); ++i)

@@ -28,43 +28,57 @@ ModalStage::~ModalStage() {
 void ModalStage::reset() {
   if (pending_.valid()) pending_.wait();
   pending_ = {};
-  angles_.clear();
-  appended_ = renewed_ = 0;
+  filled_ = 0;
 }
 
-void ModalStage::noteAngles(Stamp stamp, std::size_t frames) {
-  const std::uint64_t appended = input_.appended();
-  if (appended == frames || angles_.size() != input_.capacity()) {  // a new record: its angles
-    angles_.assign(input_.capacity(), 0.0);
-    renewed_ = 0;
-  }
-  appended_ = appended;
-  renewed_ += frames;
-  // The phase source's angle at each frame's time: the encoders' anchor extrapolated, or the
-  // nominal angle (the same rule as the TE output's, so both see one angle).
+void ModalStage::fill(Stamp stamp, std::size_t first, std::size_t count) {
+  // The block is the input record's newest block_frames_ frames. Each frame's angle is the phase
+  // source's at the frame's time (the encoders' anchor extrapolated, or the nominal angle: the
+  // TE output's rule).
+  ModalJob& job = jobs_[filling_];
   const double rate = input_.sampleRate();
-  const std::size_t capacity = angles_.size();
-  for (std::size_t j = 0; j < frames; ++j) {
-    const Stamp t{stamp.ns + std::llround(static_cast<double>(j) * 1e9 / rate)};
-    angles_[(appended - frames + j) % capacity] = phase_.pinionAngle(t);
+  const std::size_t block_first = input_.frames() - block_frames_;
+  for (std::size_t j = first; j < first + count; ++j) {
+    const auto column = static_cast<Eigen::Index>(filled_++);
+    for (std::size_t c = 0; c < input_.columns(); ++c)
+      job.record(static_cast<Eigen::Index>(c), column) = input_.value(c, block_first + j);
+    const double offset = static_cast<double>(j) * 1e9 / rate;
+    job.angle[column] = phase_.pinionAngle(Stamp{stamp.ns + std::llround(offset)});
+    if (column == 0) job.start = Stamp{stamp.ns + std::llround(offset)};
   }
 }
 
 void ModalStage::afterBlock(Stamp stamp, std::size_t frames, double held_torque,
                             PipelineSink& sink) {
   if (!enabled_) return;
-  noteAngles(stamp, frames);
   if (pending_.valid() && !(stamp < apply_at_)) apply(stamp, sink);
-  if (renewed_ < input_.capacity() || input_.frames() < input_.capacity()) return;
-  if (pending_.valid()) apply(stamp, sink);  // records shorter than kApplyDelay: no overlap
-  start(held_torque);
+  const std::size_t capacity = input_.capacity();
+  if (input_.appended() == frames) {
+    // A new record (its first block): both buffers sized for it, filled from its start.
+    if (pending_.valid()) apply(stamp, sink);
+    for (ModalJob& job : jobs_) {
+      job.record.resize(static_cast<Eigen::Index>(input_.columns()),
+                        static_cast<Eigen::Index>(capacity));
+      job.angle.resize(static_cast<Eigen::Index>(capacity));
+    }
+    filled_ = 0;
+  }
+  block_frames_ = frames;
+  for (std::size_t done = 0; done < frames;) {
+    const std::size_t count = std::min(frames - done, capacity - filled_);
+    fill(stamp, done, count);
+    done += count;
+    if (filled_ < capacity) continue;
+    if (pending_.valid()) apply(stamp, sink);  // records shorter than kApplyDelay
+    start(held_torque);
+  }
 }
 
 void ModalStage::finish(PipelineSink& sink) {
   if (pending_.valid()) apply(apply_at_, sink);
 }
 
-void ModalStage::predict(double torque) {
+void ModalStage::predict(ModalJob& job, double torque) const {
   // The model's modes at the record's end: the calibrated model's with its 95 % bands when a
   // calibration runs (Calibrator::modes, whose indices its modalUpdate takes), else the
   // estimator's stiffness (ResonanceTracker's model).
@@ -77,7 +91,7 @@ void ModalStage::predict(double torque) {
   const CalibrationBands bands =
       calibrator ? calibrator->bands(torque, estimator_, true) : CalibrationBands{};
   for (std::size_t k = 0; k < 3; ++k) {
-    ModelModePrediction& p = job_.predicted[k];
+    ModelModePrediction& p = job.predicted[k];
     p.dominant = modes[k].dominant;
     p.shape = modes[k].shape;
     p.frequency = calibrator ? bands.natural_frequency[k] : modes[k].natural_frequency;
@@ -87,38 +101,32 @@ void ModalStage::predict(double torque) {
 }
 
 void ModalStage::start(double held_torque) {
-  renewed_ = 0;
-  const std::size_t frames = input_.frames(), columns = input_.columns();
-  const std::size_t capacity = angles_.size();
-  job_.record.resize(static_cast<Eigen::Index>(columns), static_cast<Eigen::Index>(frames));
-  job_.angle.resize(static_cast<Eigen::Index>(frames));
-  const std::uint64_t first = appended_ - frames;
-  for (std::size_t i = 0; i < frames; ++i) {
-    for (std::size_t c = 0; c < columns; ++c)
-      job_.record(static_cast<Eigen::Index>(c), static_cast<Eigen::Index>(i)) = input_.value(c, i);
-    job_.angle[static_cast<Eigen::Index>(i)] = angles_[(first + i) % capacity];
-  }
-  job_.sample_rate = input_.sampleRate();
-  job_.start = input_.origin();
-  job_.end = Stamp{job_.start.ns + std::llround(input_.frameTime(frames - 1) * 1e9)};
-  job_.torque = held_torque;
-  job_.channels.clear();
-  job_.channel_shaft.clear();
+  // The filled buffer goes to the identification as it is (no copy); the other is filled next.
+  ModalJob& job = jobs_[filling_];
+  filling_ = 1 - filling_;
+  filled_ = 0;
+  const std::size_t columns = input_.columns();
+  job.sample_rate = input_.sampleRate();
+  job.end = Stamp{job.start.ns +
+                  std::llround(static_cast<double>(job.record.cols() - 1) * 1e9 / job.sample_rate)};
+  job.torque = held_torque;
+  job.channels.clear();
+  job.channel_shaft.clear();
   for (std::size_t c = 0; c < columns; ++c) {
-    job_.channels.push_back(input_.column(c).name);
-    job_.channel_shaft.push_back(input_.column(c).shaft);
+    job.channels.push_back(input_.column(c).name);
+    job.channel_shaft.push_back(input_.column(c).shaft);
   }
   const auto& teeth = estimator_.mesh().geometry().spec().teeth;
-  job_.pinion_teeth = teeth[0];
-  job_.gear_teeth = teeth[1];
-  job_.max_order = max_order_;
-  job_.block_rows = block_rows_;
-  predict(held_torque);
-  apply_at_ = Stamp{job_.end.ns + std::llround(kApplyDelay * 1e9)};
-  auto identify = [job = &job_]() {
+  job.pinion_teeth = teeth[0];
+  job.gear_teeth = teeth[1];
+  job.max_order = max_order_;
+  job.block_rows = block_rows_;
+  predict(job, held_torque);
+  apply_at_ = Stamp{job.end.ns + std::llround(kApplyDelay * 1e9)};
+  auto identify = [&job]() {
     Outcome out;
     try {
-      out.report = identifyModes(*job);
+      out.report = identifyModes(job);
     } catch (const Error& e) {
       out.error = e.what();
     }

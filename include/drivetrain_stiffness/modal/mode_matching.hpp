@@ -40,16 +40,16 @@ struct MatchResult {
   /// Per identified mode: the matched predicted mode's index, or -1; its MAC (NaN if none).
   std::vector<int> predicted_of;
   std::vector<double> mac_of;
-  /// Per predicted mode: whether it is observable, and the identified mode matched to it with
-  /// the highest MAC, or -1 (observable but not identified in this record).
+  /// Per predicted mode: whether it is observable, and the identified mode matched to it, or -1
+  /// (observable but not identified in this record).
   std::vector<Observability> observability;
   std::vector<int> identified_of;
 };
 
-/// Matches each identified mode to the observable predicted mode of highest MAC within the
-/// frequency window. Throws InvalidInput naming a non-positive rate, a predicted frequency that is
-/// not positive and finite, a shape of another size than the identified shapes, or an option
-/// out of range.
+/// Matches identified and observable predicted modes one to one within the frequency window, the
+/// pairs of highest MAC first. Throws InvalidInput naming a non-positive rate, a predicted
+/// frequency that is not positive and finite, a shape of another size than the identified shapes,
+/// or an option out of range.
 MatchResult matchModes(const std::vector<IdentifiedMode>& identified,
                        const std::vector<PredictedMode>& predicted, double sample_rate,
                        const MatchOptions& options = {});

@@ -54,9 +54,10 @@ struct IdentifiedMode {
   int order = 0;                  ///< model order of the representative
   int orders = 0;                 ///< model orders holding a pole of the cluster
   double frequency_spread = 0.0;  ///< max - min frequency over the cluster [Hz]
-  /// True when one order put two poles into the cluster, or when a neighbouring mode lies within
-  /// resolution_sigmas std of the difference: close modes these channels and this record cannot
-  /// separate; frequency and std then describe neither alone.
+  /// True when an order put two poles into the cluster, fewer than half its poles agree with its
+  /// median frequency within 2 of their std, or a neighbouring mode lies within resolution_sigmas
+  /// std of the difference: close modes these channels and this record cannot separate; frequency
+  /// and std then describe neither alone.
   bool unresolved = false;
 };
 

@@ -37,9 +37,10 @@ class ModalStage {
   ModalStage(const ModalStage&) = delete;
   ModalStage& operator=(const ModalStage&) = delete;
 
-  /// After the input took a block of `frames` frames stamped `stamp` (its first frame): the
-  /// frames' angles noted, a due result applied, a renewed record handed to the identification.
-  /// Allocates only when a record starts (the angle ring) or an identification starts (the job).
+  /// After the input took a block of `frames` frames stamped `stamp` (its first frame): a due
+  /// result applied, the frames and their angles written into the record being filled, a full
+  /// record handed to the identification. Allocates only when a record starts (two buffers of
+  /// ~vibration_record) and when an identification starts (its thread and result).
   void afterBlock(Stamp stamp, std::size_t frames, double held_torque, PipelineSink& sink);
   /// The input ended: the pending identification, if any, is applied (stamped as it would have
   /// been).
@@ -54,9 +55,11 @@ class ModalStage {
     ModalReport report;
     std::string error;  ///< non-empty: the identification threw this
   };
-  void noteAngles(Stamp stamp, std::size_t frames);
+  /// Frames [first, first + count) of the block (the newest of the input's record) into the
+  /// buffer being filled, at `stamp` + first / rate.
+  void fill(Stamp stamp, std::size_t first, std::size_t count);
   void start(double held_torque);
-  void predict(double torque);
+  void predict(ModalJob& job, double torque) const;
   void apply(Stamp stamp, PipelineSink& sink);
 
   const RigConfig& rig_;
@@ -67,11 +70,12 @@ class ModalStage {
   PipelineCounters& counters_;
   bool enabled_, worker_;
   int max_order_, block_rows_;
-  std::vector<double> angles_;  ///< [rad] frame g of the record at g % capacity
-  std::uint64_t appended_ = 0;  ///< the input's appended() after the last block
-  std::uint64_t renewed_ = 0;   ///< frames appended since the last identification's record
-  ModalJob job_;                ///< read by the identification until apply()
-  std::future<Outcome> pending_;
+  /// Two records: one filled block by block, the other read by a pending identification.
+  std::array<ModalJob, 2> jobs_;
+  std::size_t filling_ = 0;       ///< the buffer being filled
+  std::size_t filled_ = 0;        ///< its frames so far
+  std::size_t block_frames_ = 0;  ///< the frames of the block being taken
+  std::future<Outcome> pending_;  ///< reads jobs_[1 - filling_] until apply()
   Stamp apply_at_;
 };
 
