@@ -187,3 +187,7 @@ add_test(NAME replay_writes_the_calibration
 add_rostest_gtest(calibration_topics_rostest test/ros/calibration_topics.test test/ros/test_calibration_topics.cpp)
 target_link_libraries(calibration_topics_rostest ${PROJECT_NAME}_ros ${catkin_LIBRARIES})
 add_dependencies(calibration_topics_rostest stiffness_estimator ${PROJECT_NAME}_generate_messages_cpp)
+add_rostest_gtest(modal_topics_rostest test/ros/modal_topics.test test/ros/test_modal_topics.cpp)
+target_include_directories(modal_topics_rostest PRIVATE test/modal)
+target_link_libraries(modal_topics_rostest ${PROJECT_NAME}_ros ${catkin_LIBRARIES})
+add_dependencies(modal_topics_rostest stiffness_estimator ${PROJECT_NAME}_generate_messages_cpp)

@@ -6,8 +6,10 @@ report (plot_replay.py) and its test (test/replay/check_run_up_spectrum.py).
 - order_spectrum: the TE resampled on a uniform pinion-angle grid (angle-domain resampling, as
   computed order tracking does it: Fyfe & Munck, Mech. Syst. Signal Process. 11 (1997) 187), then
   an FFT: amplitude against shaft order (cycles per pinion revolution; the mesh is order z_p);
-- campbell: short-time spectra of the TE against the mean speed of each window (the Campbell
-  diagram of a run-up): frequency of the strongest line in each window, and the whole map.
+- campbell: short-time spectra of the TE against the mean speed of each window: frequency of the
+  strongest line in each window, and the whole map (aliased above the output's Nyquist frequency);
+- mesh_order_amplitudes: per time window the amplitude of each mesh order, by least squares on the
+  mesh phase of each sample: free of aliasing, whatever the output rate (the Campbell diagram).
 numpy only; SI units (rad, rad/s, s, m, Hz)."""
 import struct
 
@@ -109,3 +111,40 @@ def campbell(te_t, te, enc_t, enc_speed, window=0.1, hop=0.05, pad=8):
         rpm.append(np.mean(np.interp(t_mid, enc_t, enc_speed)) * 60.0 / (2 * np.pi))
         rows.append(spec)
     return np.array(rpm), np.array(peak), (np.array(rpm), freqs, np.array(rows).T if rows else np.zeros((len(freqs), 0)))
+
+
+def mesh_order_amplitudes(te_t, te, mesh_phase, window=0.1, hop=0.05, max_order=40, orders_in_window=None,
+                          max_condition=100.0):
+    """Amplitude [m] of mesh orders 1..max_order of the TE in windows of `window` s every `hop` s.
+    Each window's samples are fitted by least squares with c_0 + sum_k a_k cos(2 pi k phi) +
+    b_k sin(2 pi k phi), phi the mesh phase [-] of each sample (the angle-domain regression of
+    docs/calibration.md "Orders, by regression"); the amplitude of order k is hypot(a_k, b_k).
+    The regressors are evaluated at the sampling instants, so an order above the output's Nyquist
+    frequency is fitted at its own order, not folded onto another: the fit only needs the phases
+    of the window's samples to spread over the period (a sampling synchronous with the mesh makes
+    it singular). orders_in_window(t_mid) -> the number of orders to fit in the window centred at
+    t_mid (at most max_order; None: max_order); a window whose design matrix has a condition
+    number above max_condition, or fewer than 4 samples per fitted order, is left NaN.
+    Returns (t_mid [s] of each window, amplitudes: windows x max_order, NaN where not fitted)."""
+    te_t, te, phase = np.asarray(te_t), np.asarray(te), np.asarray(mesh_phase)
+    t_mid, rows = [], []
+    if len(te_t) < 2:
+        return np.zeros(0), np.zeros((0, max_order))
+    # Windows on time, not on sample counts: the output grid may have gaps (a reset).
+    starts = np.arange(te_t[0], te_t[-1] - window + 1e-12, hop)
+    lo = np.searchsorted(te_t, starts)
+    hi = np.searchsorted(te_t, starts + window)
+    for s, a, b in zip(starts, lo, hi):
+        mid = s + 0.5 * window
+        row = np.full(max_order, np.nan)
+        k_max = max_order if orders_in_window is None else int(min(max_order, orders_in_window(mid)))
+        k_max = min(k_max, (b - a - 1) // 4)
+        if k_max >= 1:
+            arg = 2 * np.pi * np.outer(phase[a:b], np.arange(1, k_max + 1))
+            design = np.hstack([np.ones((b - a, 1)), np.cos(arg), np.sin(arg)])
+            coef, _, rank, sv = np.linalg.lstsq(design, te[a:b], rcond=None)
+            if rank == design.shape[1] and sv[0] <= max_condition * sv[-1]:
+                row[:k_max] = np.hypot(coef[1:k_max + 1], coef[k_max + 1:])
+        t_mid.append(mid)
+        rows.append(row)
+    return np.array(t_mid), np.array(rows).reshape(len(rows), max_order)

@@ -1,9 +1,12 @@
 #!/usr/bin/python3
 """Report of a stiffness-estimator run from a bag of its outputs (drivetrain_replay --out, or
 `rosbag record` of a live run): transmission error, its per-mesh-period statistics, stiffness and
-resonance against time, as PNG plots plus report.md with the key figures.
+resonance against time, as PNG plots plus report.md with the key figures; with INPUT_BAG's encoders
+the TE order spectrum and the Campbell diagram (beside INPUT_BAG's accelerometers' spectrogram), and
+from the modal identification's CSV files in CSV_DIR (drivetrain_replay's --csv; REPORT_DIR/csv
+without it) the stabilisation diagram and its table (docs/tools.md "--report").
 
-usage: plot_replay.py OUTPUT_BAG REPORT_DIR [INPUT_BAG]
+usage: plot_replay.py OUTPUT_BAG REPORT_DIR [INPUT_BAG [CSV_DIR]]
 Times are seconds since the first output stamp; SI units (TE in m shown in um).
 drivetrain_replay writes REPORT_DIR/summary.json and the top of REPORT_DIR/report.md (status, inputs,
 calibration, output counts) before it runs this script, which then appends its figures. Without a
@@ -25,7 +28,9 @@ except ImportError as e:
              "(drivetrain_replay --no-plots)" % e)
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import modal_plots  # noqa: E402
 import motion_analysis  # noqa: E402
+import vibration_analysis  # noqa: E402
 
 
 def read(bag_path):
@@ -39,7 +44,7 @@ def read(bag_path):
                 mp.append((t - 0.5 * m.duration, m.te_mean, m.te_rms, m.mesh_force_mean, m.mesh_force_rms,
                            m.mesh_frequency, m.periods))
             elif topic == "/transmission_error":
-                te.append((t, m.dynamic_te, m.static_te, m.mesh_force))
+                te.append((t, m.dynamic_te, m.static_te, m.mesh_force, m.mesh_phase))
             elif topic == "/stiffness":
                 st.append((t, m.mesh_stiffness, m.mesh_stiffness_mean, [b.radial_stiffness for b in m.bearings],
                            [b.name for b in m.bearings], m.torque))
@@ -173,7 +178,10 @@ def main():
         ax.legend(loc="best")
     finish(fig, [ax], ["natural frequency [kHz]"], "Resonance estimates", os.path.join(report, "resonance.png"))
 
-    motion_figures = plot_motion(source, te, res, t0, report, *encoder_settings(report)) if source != out_bag and te else []
+    modal = modal_plots.ModalResults(sys.argv[4] if len(sys.argv) > 4 else os.path.join(report, "csv"))
+    records, vibration_note = read_records(source) if source != out_bag else ([], "")
+    motion_figures = (plot_motion(source, te, res, t0, report, modal, records, *encoder_settings(report))
+                      if source != out_bag and te else [])
     if source != out_bag and not te:
         motion_figures = [(None, "", "No Campbell diagram or TE order spectrum: the replay made no transmission error "
                                      "samples (no dynamics).")]
@@ -210,11 +218,39 @@ def main():
         f.write("\n![transmission error](transmission_error.png)\n\n![per mesh period](mesh_period_stats.png)\n\n"
                 "![stiffness](stiffness.png)\n\n"
                 "![resonance](resonance.png)\n")
-        for name, caption, note in motion_figures:
+        for name, caption, note in motion_figures + plot_modal(modal, records, t0, report) + (
+                [(None, "", vibration_note)] if vibration_note else []):
             if name:
                 f.write("\n![%s](%s)\n" % (caption, name))
             if note:
                 f.write("\n%s\n" % note)
+
+
+def read_records(input_bag):
+    """The input bag's accelerometer records (vibration_analysis.read_vibration) and "", or [] and
+    a note saying why they could not be read."""
+    try:
+        return vibration_analysis.read_vibration(input_bag)[1], ""
+    except Exception as e:  # noqa: BLE001 - not a bag rosbag reads (a damaged input)
+        return [], "No accelerometer spectra: the input bag could not be read (%s: %s)." % (type(e).__name__, e)
+
+
+def plot_modal(modal, records, t0, report):
+    """The stabilisation diagram of the last identification that matched a model mode (else the
+    last one) and report.md's table of it, from the replay's modal_identification.csv and
+    modal_poles.csv; a note instead when they are absent or empty."""
+    if modal.identification is None or modal.poles is None:
+        missing = [n for n, rows in ((modal_plots.IDENTIFICATION_FILE, modal.identification),
+                                     (modal_plots.POLES_FILE, modal.poles)) if rows is None]
+        return [(None, "", "No stabilisation diagram or modal identification table: the replay wrote no %s (no "
+                           "modal identification: no accelerometers, or a replay or bag older than the stage)."
+                 % " or ".join("`%s`" % n for n in missing))]
+    stamp = modal.chosen_stamp()
+    if stamp is None:
+        return [(None, "", "No stabilisation diagram: `%s` has no identification." % modal_plots.IDENTIFICATION_FILE)]
+    note = modal_plots.stabilisation_figure(os.path.join(report, "stabilisation.png"), modal, stamp, records, t0)
+    return [(None, "", modal_plots.identification_table(modal, stamp, t0)),
+            ("stabilisation.png", "stabilisation diagram", note)]
 
 
 def save(fig, report, name, caption, note=""):
@@ -225,12 +261,13 @@ def save(fig, report, name, caption, note=""):
     return name, caption, note
 
 
-def plot_motion(input_bag, te, res, t0, report, topic="/joint_states", joint="pinion", z_p=20):
-    """With the rig's encoders in the input bag (`topic`, the pinion's `joint`): the Campbell
-    diagram (TE short-time spectra against the measured speed, mesh orders 1-4 of the pinion's z_p
-    teeth as lines, and the natural frequencies of each resonance estimate against the speed while
-    it held) and the TE order spectrum (angle-domain resampling). Returns the (file, caption) pairs
-    written, and (None, "", note) for a figure left out, saying why."""
+def plot_motion(input_bag, te, res, t0, report, modal, records, topic="/joint_states", joint="pinion", z_p=20):
+    """With the rig's encoders in the input bag (`topic`, the pinion's `joint`): the TE order
+    spectrum (angle-domain resampling) and the Campbell diagram (modal_plots.campbell_figure: the
+    TE's mesh-order amplitudes against the measured speed, by regression on the mesh phase, with
+    the mesh orders of the pinion's z_p teeth, the predicted modes, the identified poles of `modal`
+    and the spectrogram of the accelerometer `records` beside it). Returns the (file, caption,
+    note) triples written, and (None, "", note) for a figure left out, saying why."""
     def left_out(why):
         return [(None, "", "No Campbell diagram or TE order spectrum: %s." % why)]
     try:
@@ -258,63 +295,26 @@ def plot_motion(input_bag, te, res, t0, report, topic="/joint_states", joint="pi
         turns = abs(enc_angle[-1] - enc_angle[0]) / (2 * np.pi)
         out.append((None, "", "No TE order spectrum: the pinion turns %.2f revolutions over the encoder readings; "
                               "the angle-domain resampling needs 4 revolutions in one direction." % turns))
-    dt = np.median(np.diff(te_t)) if len(te_t) > 1 else 0.0
-    if not (dt > 0 and te_t[-1] - te_t[0] > 0.5):
+    if not (len(te_t) > 1 and te_t[-1] - te_t[0] > 0.5):
         out.append((None, "", "No Campbell diagram: the transmission error spans %.3f s (more than 0.5 s needed)."
                               % (te_t[-1] - te_t[0] if len(te_t) else 0.0)))
-    else:
-        rpm, _, (speeds, freqs, rows) = motion_analysis.campbell(te_t, dyn, enc_t, enc_speed)
-        if not (rows.shape[1] > 2 and np.ptp(rpm) > 1.0):
-            out.append((None, "", "No Campbell diagram: the encoders' speed spans %.2f rpm over %d short-time spectra "
-                                  "(it needs more than 1 rpm and 3 spectra: a diagram against speed needs the speed "
-                                  "to change)." % (np.ptp(rpm) if len(rpm) else 0.0, rows.shape[1])))
-        else:
-            order = np.argsort(rpm)
-            fig, ax = plt.subplots(figsize=(9, 5))
-            level = np.log10(rows[:, order] + 1e-30)
-            # Colour from the median (the broadband floor) to the strongest line.
-            ax.pcolormesh(speeds[order], freqs, level, shading="nearest", cmap="viridis",
-                          vmin=np.percentile(level, 50), vmax=level.max())
-            n = np.linspace(rpm.min(), rpm.max(), 50)
-            for k in range(1, 5):
-                ax.plot(n, k * z_p * np.abs(n) / 60.0, "w--", lw=0.8)
-            # Each resonance estimate from its stamp to the next one's (the last to the end of the
-            # TE), at the encoders' speed over that time: the natural frequencies against speed.
-            t_end = te_t[-1]
-            for j, r in enumerate(res):
-                t_next = res[j + 1][0] if j + 1 < len(res) else t_end
-                if t_next < r[0]:
-                    continue
-                ts = np.linspace(r[0], t_next, 20)
-                n_held = np.interp(ts, enc_t, enc_speed) * 60.0 / (2 * np.pi)
-                for fr in r[1]:
-                    ax.plot(n_held, np.full_like(n_held, fr), "r-", lw=1.0)
-            # Up to the 4th mesh order at the top speed, where the orders cross the natural
-            # frequencies below it (the diagram's purpose); above the TE output's Nyquist frequency
-            # (output_rate / 2) there is no spectrum: shaded.
-            top = max(freqs[-1], 1.1 * 4 * z_p * np.abs(rpm).max() / 60.0)
-            if top > freqs[-1]:
-                ax.axhspan(freqs[-1], top, color="0.25", zorder=0)
-                ax.text(0.01, 0.99, "no TE spectrum above %.0f Hz (output_rate / 2)" % freqs[-1], color="w",
-                        transform=ax.transAxes, va="top", fontsize=8)
-            ax.set_ylim(0, top)
-            ax.set_xlabel("pinion speed [rpm] (encoders)")
-            ax.set_ylabel("frequency [Hz]")
-            ax.set_title("Campbell diagram: TE spectra (colour, log), mesh orders 1-4 (dashed),\n"
-                         "natural frequencies of the resonance estimates against speed (red)")
-            # The TE is sampled at the output rate: a mesh order above its Nyquist frequency folds
-            # back into the diagram as a line falling with the speed (an alias, not a mode).
-            nyquist = freqs[-1]
-            top_rpm = np.abs(rpm).max()
-            folded = [(k, 60.0 * nyquist / (k * z_p)) for k in (4, 3, 2, 1) if k * z_p * top_rpm / 60.0 > nyquist]
-            note = ""
-            if folded:
-                note = ("**Aliasing:** above the Nyquist frequency of the TE output (%.0f Hz, output_rate / 2) the "
-                        "mesh lines fold back into the diagram: %s. For orders 1-4 unfolded up to the top speed "
-                        "(%.0f rpm), replay with output_rate >= %.0f Hz (--params)."
-                        % (nyquist, ", ".join("mesh order %d above %.0f rpm" % (k, n) for k, n in folded), top_rpm,
-                           math.ceil(2 * 4 * z_p * top_rpm / 60.0)))
-            out.append(save(fig, report, "campbell.png", "Campbell diagram", note))
+        return out
+    speed = np.abs(np.interp(te_t, enc_t, enc_speed)) * 60.0 / (2 * np.pi)
+    if not np.ptp(speed) > 1.0:
+        out.append((None, "", "No Campbell diagram: the encoders' speed spans %.2f rpm over the transmission error "
+                              "(it needs more than 1 rpm: a diagram against speed needs the speed to change)."
+                              % np.ptp(speed)))
+        return out
+    def omega_at(t):
+        return np.interp(t, enc_t, enc_speed)
+    # The mesh orders up to the top of the diagram in each window (at most modal_plots.MAX_ORDER).
+    top, _ = modal_plots.band_top(res, modal, records, 1.1 * 4 * z_p * speed.max() / 60.0)
+    tracks = motion_analysis.mesh_order_amplitudes(
+        te_t, dyn, np.array([r[4] for r in te]), max_order=modal_plots.MAX_ORDER,
+        orders_in_window=lambda t: top / max(1e-9, z_p * abs(omega_at(t)) / (2 * np.pi)))
+    note = modal_plots.campbell_figure(os.path.join(report, "campbell.png"), tracks, z_p, omega_at, res, te_t[-1],
+                                       modal, records, t0)
+    out.append(("campbell.png", "Campbell diagram", note))
     return out
 
 

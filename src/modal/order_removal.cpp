@@ -105,6 +105,52 @@ void OrderRemoval::remove(Eigen::Ref<Eigen::MatrixXd> record,
   }
 }
 
+void removeSynchronousAverage(Eigen::Ref<Eigen::MatrixXd> record,
+                              const Eigen::Ref<const Eigen::VectorXd>& cycles, long block_samples) {
+  const long samples = record.cols();
+  if (cycles.size() != samples)
+    throwInvalid("cycles.size", static_cast<double>(cycles.size()),
+                 "must equal the record's samples " + std::to_string(samples));
+  if (block_samples < 16)
+    throwInvalid("block_samples", static_cast<double>(block_samples), "must be >= 16");
+  if (!cycles.allFinite())
+    for (long t = 0; t < samples; ++t)
+      if (!std::isfinite(cycles[t])) throwNotFinite("cycles[" + std::to_string(t) + "]", cycles[t]);
+  const long channels = record.rows(), count = std::max(1L, samples / block_samples);
+  Eigen::MatrixXd sum;
+  Eigen::VectorXd hits;
+  for (long b = 0; b < count; ++b) {
+    long first = 0, length = 0;
+    blockSpan(samples, block_samples, b, first, length);
+    const double span = std::abs(cycles[first + length - 1] - cycles[first]);
+    if (span < 8.0) continue;
+    const long bins = std::clamp(std::lround(4.0 * static_cast<double>(length) / span), 8L, 8192L);
+    sum.setZero(channels, bins);
+    hits.setZero(bins);
+    auto phase = [&](long t) {  // [0, bins): the position within the cycle, in bins
+      const double c = cycles[t] - std::floor(cycles[t]);
+      return std::min(c * static_cast<double>(bins), std::nextafter(bins, 0.0));
+    };
+    for (long t = first; t < first + length; ++t) {
+      const long k = static_cast<long>(phase(t));
+      sum.col(k) += record.col(t);
+      hits[k] += 1.0;
+    }
+    for (long k = 0; k < bins; ++k)
+      if (hits[k] > 0.0) sum.col(k) /= hits[k];
+    // An empty bin (a speed change within the block) takes its neighbour's mean.
+    for (long k = 0; k < bins; ++k)
+      if (hits[k] == 0.0) sum.col(k) = sum.col((k + bins - 1) % bins);
+    // The mean waveform at each sample: linear between bin centres, cyclic.
+    for (long t = first; t < first + length; ++t) {
+      const double x = phase(t) - 0.5;
+      const double fl = std::floor(x), w = x - fl;
+      const long k0 = (static_cast<long>(fl) + bins) % bins, k1 = (k0 + 1) % bins;
+      record.col(t) -= (1.0 - w) * sum.col(k0) + w * sum.col(k1);
+    }
+  }
+}
+
 std::vector<FrequencyBand> OrderRemoval::bands(const Eigen::Ref<const Eigen::VectorXd>& angle,
                                                double sample_rate) const {
   const long samples = angle.size();

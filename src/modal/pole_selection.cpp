@@ -10,6 +10,17 @@
 
 namespace drivetrain_stiffness::modal {
 
+const char* poleStatusName(PoleStatus s) {
+  switch (s) {
+    case PoleStatus::kOrderBand: return "order band";
+    case PoleStatus::kInadmissible: return "inadmissible";
+    case PoleStatus::kUnstable: return "unstable";
+    case PoleStatus::kStable: return "stable";
+    case PoleStatus::kSelected: return "selected";
+  }
+  return "unknown";
+}
+
 double mac(const Eigen::VectorXcd& a, const Eigen::VectorXcd& b) {
   if (a.size() != b.size())
     throwInvalid("mac.shape_size", static_cast<double>(b.size()),
@@ -32,11 +43,18 @@ void validate(const SelectionOptions& o) {
   requireInClosedRange("selection.min_orders_fraction", o.min_orders_fraction, 0.0, 1.0);
   requireNonNegative("selection.damping_significance", o.damping_significance);
   requireNonNegative("selection.resolution_sigmas", o.resolution_sigmas);
+  requireNonNegative("selection.line_damping", o.line_damping);
 }
 
-bool inBand(double f, const std::vector<FrequencyBand>& bands) {
-  return std::any_of(bands.begin(), bands.end(),
-                     [f](const FrequencyBand& b) { return f >= b.low && f <= b.high; });
+/// Whether `p` lies in a band that sets it aside: any band, or a lines_only one when p is
+/// line-like (an order's residual line has no damping; a mode seen through the order has).
+bool setAside(const Pole& p, const std::vector<FrequencyBand>& bands, const SelectionOptions& o) {
+  const bool line =
+      !(p.damping >= o.line_damping) ||
+      (std::isfinite(p.damping_std) && !(p.damping > o.damping_significance * p.damping_std));
+  return std::any_of(bands.begin(), bands.end(), [&](const FrequencyBand& b) {
+    return p.frequency >= b.low && p.frequency <= b.high && (!b.lines_only || line);
+  });
 }
 
 using PolesByOrder = std::map<int, std::vector<const Pole*>>;
@@ -48,7 +66,7 @@ PolesByOrder admissiblePoles(const SsiResult& ssi, const std::vector<FrequencyBa
                              const SelectionOptions& o, std::vector<Pole>& order_poles) {
   PolesByOrder by_order;
   for (const Pole& p : ssi.poles) {
-    if (inBand(p.frequency, excluded)) {
+    if (setAside(p, excluded, o)) {
       order_poles.push_back(p);
       continue;
     }
@@ -148,6 +166,32 @@ void markUnresolved(std::vector<IdentifiedMode>& modes, const SelectionOptions& 
   }
 }
 
+/// SelectionResult::status and mode_of from the selection's intermediate results; `reported[j]`
+/// became mode `j` before the sort by frequency put it at the position where by_frequency holds j.
+void noteStatus(const SsiResult& ssi, const std::vector<FrequencyBand>& excluded,
+                const SelectionOptions& o, const std::vector<const Pole*>& stable,
+                const std::vector<const Cluster*>& reported,
+                const std::vector<std::size_t>& by_frequency, SelectionResult& out) {
+  const std::size_t n = ssi.poles.size();
+  out.status.assign(n, PoleStatus::kUnstable);
+  out.mode_of.assign(n, -1);
+  auto index = [&](const Pole* p) { return static_cast<std::size_t>(p - ssi.poles.data()); };
+  for (std::size_t i = 0; i < n; ++i) {
+    const Pole& p = ssi.poles[i];
+    if (setAside(p, excluded, o))
+      out.status[i] = PoleStatus::kOrderBand;
+    else if (!(p.damping > 0.0 && p.damping < o.max_damping))
+      out.status[i] = PoleStatus::kInadmissible;
+  }
+  for (const Pole* p : stable) out.status[index(p)] = PoleStatus::kStable;
+  for (std::size_t k = 0; k < by_frequency.size(); ++k) {
+    for (const Pole* p : *reported[by_frequency[k]]) {
+      out.status[index(p)] = PoleStatus::kSelected;
+      out.mode_of[index(p)] = static_cast<int>(k);
+    }
+  }
+}
+
 }  // namespace
 
 SelectionResult selectModes(const SsiResult& ssi, const std::vector<FrequencyBand>& excluded,
@@ -159,20 +203,29 @@ SelectionResult selectModes(const SsiResult& ssi, const std::vector<FrequencyBan
   }
   SelectionResult out;
   const PolesByOrder by_order = admissiblePoles(ssi, excluded, o, out.order_poles);
-  const std::vector<Cluster> clusters = clusterPoles(stablePoles(by_order, o), o);
+  const std::vector<const Pole*> stable = stablePoles(by_order, o);
+  const std::vector<Cluster> clusters = clusterPoles(stable, o);
   const int n_orders = (ssi.max_order - ssi.min_order) / 2 + 1;
   const int needed = std::max(3, static_cast<int>(std::ceil(o.min_orders_fraction * n_orders)));
+  std::vector<const Cluster*> reported;
   for (const Cluster& c : clusters) {
     if (std::optional<IdentifiedMode> m = modeOf(c, ssi, o, needed)) {
       out.modes.push_back(std::move(*m));
+      reported.push_back(&c);
     } else {
       ++out.spurious_clusters;
     }
   }
-  std::sort(
-      out.modes.begin(), out.modes.end(),
-      [](const IdentifiedMode& a, const IdentifiedMode& b) { return a.frequency < b.frequency; });
+  std::vector<std::size_t> by_frequency(out.modes.size());
+  for (std::size_t k = 0; k < by_frequency.size(); ++k) by_frequency[k] = k;
+  std::stable_sort(by_frequency.begin(), by_frequency.end(), [&](std::size_t a, std::size_t b) {
+    return out.modes[a].frequency < out.modes[b].frequency;
+  });
+  std::vector<IdentifiedMode> sorted;
+  for (std::size_t k : by_frequency) sorted.push_back(std::move(out.modes[k]));
+  out.modes = std::move(sorted);
   markUnresolved(out.modes, o);
+  noteStatus(ssi, excluded, o, stable, reported, by_frequency, out);
   return out;
 }
 

@@ -40,6 +40,22 @@ void CalibrationStage::reading(Stamp stamp, double pinion, double gear, double p
   }
 }
 
+void CalibrationStage::modal(Stamp stamp, const ModalFrequency* frequencies, std::size_t count,
+                             double torque, PipelineSink& sink) {
+  if (!calibrator_) return;
+  try {
+    // TEMPORARY until Calibrator::modalUpdate lands.
+    (void)frequencies;
+    (void)count;
+    (void)torque;
+    (void)stamp;
+    (void)sink;
+  } catch (const Error& e) {
+    ++counters_.calibration_errors;
+    counters_.last_event = std::string("calibration: ") + e.what();
+  }
+}
+
 CalibrationBands CalibrationStage::stiffnessBands(const StiffnessEstimate& estimate) const {
   if (calibrator_) return calibrator_->bands(estimate.torque, estimator_, false);
   CalibrationBands b;  // no calibration: the drawing's model, bounds of zero width

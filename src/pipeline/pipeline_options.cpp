@@ -52,6 +52,12 @@ void PipelineOptions::validate() const {
     throw InvalidInput("motion_slices = " + std::to_string(motion_slices) +
                        ": must be in [4, 65536] per mesh period");
   }
+  if (modal_max_order < 4 || modal_max_order > 60 || modal_max_order % 2 != 0) {
+    throwInvalid("modal_max_order", modal_max_order, "must be even, from 4 to 60");
+  }
+  if (modal_block_rows < 2 || modal_block_rows > 200) {
+    throwInvalid("modal_block_rows", modal_block_rows, "must be from 2 to 200");
+  }
   if (!(vibration_record > 0.0 && vibration_record <= 600.0)) {
     throwInvalid("vibration_record", vibration_record, "must be in (0, 600] s");
   }

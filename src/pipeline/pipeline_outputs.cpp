@@ -44,7 +44,9 @@ std::vector<std::pair<std::string, std::uint64_t>> namedCounters(const PipelineC
           {"measured_te_published", c.measured_te_out},
           {"calibration_published", c.calibration_out},
           {"calibration_errors", c.calibration_errors},
-          {"mesh_period_stats_published", c.mesh_period_stats_out}};
+          {"mesh_period_stats_published", c.mesh_period_stats_out},
+          {"modal_identifications_published", c.modal_out},
+          {"modal_identification_errors", c.modal_errors}};
 }
 
 }  // namespace drivetrain_stiffness

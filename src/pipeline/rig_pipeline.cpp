@@ -48,6 +48,8 @@ RigPipeline::RigPipeline(const RigConfig& rig, const PipelineOptions& options,
       std::make_unique<VibrationInput>(vibrationChannels(*rig_, options_.vibration_channels),
                                        options_.vibration_record, counters_.vibration);
   phase_ = std::make_unique<PhaseSource>(options_, teeth[0], teeth[1], counters_);
+  modal_ = std::make_unique<ModalStage>(*rig_, *vibration_, *phase_, *estimator_, *calibration_,
+                                        options_, counters_);
   if (options_.dynamics) {
     dynamics_ = std::make_unique<DynamicsStage>(rig_, *estimator_, options_, settings_.fidelity,
                                                 *phase_, counters_);
@@ -73,6 +75,7 @@ void RigPipeline::reset(const std::string& reason) {
   calibration_->interrupt();
   resonance_->forget();  // the next accepted input republishes the resonance
   vibration_->reset();
+  modal_->reset();
   counters_.last_event = "reset: " + reason;
 }
 
@@ -193,9 +196,15 @@ InputOutcome RigPipeline::vibration(Stamp stamp, const VibrationBlockView& block
         vibration_->append(stamp, block, origin.seq);
         return nullptr;  // no stiffness message: the estimate has not changed
       });
-  if (outcome != InputOutcome::kAccepted) vibration_->interrupt();
+  if (outcome != InputOutcome::kAccepted) {
+    vibration_->interrupt();
+    return outcome;
+  }
+  modal_->afterBlock(stamp, block.size / block.channel_count, held_torque_, sink);
   return outcome;
 }
+
+void RigPipeline::finish(PipelineSink& sink) { modal_->finish(sink); }
 
 void RigPipeline::acceptMotion(Stamp stamp, const MotionInput& m, PipelineSink& sink) {
   // Transactional: the reading is checked against the last one before anything changes.

@@ -280,6 +280,83 @@ drivetrain_stiffness::MeshPeriodStats toMeshPeriodStatsMsg(Stamp stamp, const st
   return m;
 }
 
+namespace {
+
+/// A standard deviation for a message: 0 when not computed (NaN).
+double stdOrZero(double s) { return std::isnan(s) ? 0.0 : s; }
+
+drivetrain_stiffness::IdentifiedMode toIdentifiedModeMsg(const ModalReport& r, std::size_t i) {
+  auto f = [](const char* field, double value) {
+    return finite("modal_identification.modes", field, value);
+  };
+  const modal::IdentifiedMode& m = r.modes[i];
+  drivetrain_stiffness::IdentifiedMode out;
+  out.frequency = f("frequency", m.frequency);
+  out.frequency_std = f("frequency_std", stdOrZero(m.frequency_std));
+  out.damping = f("damping", m.damping);
+  out.damping_std = f("damping_std", stdOrZero(m.damping_std));
+  out.orders = static_cast<std::uint32_t>(m.orders);
+  out.unresolved = m.unresolved;
+  out.model_mode = r.model_mode[i];
+  out.mac = f("mac", r.mac[i]);
+  out.statement = r.statement(i);
+  return out;
+}
+
+drivetrain_stiffness::PredictedMode toPredictedModeMsg(const ModalReport& r, std::size_t k) {
+  auto f = [](const char* field, double value) {
+    return finite("modal_identification.predicted", field, value);
+  };
+  const ModelModePrediction& p = r.predicted[k];
+  drivetrain_stiffness::PredictedMode out;
+  out.dominant = p.dominant;
+  out.frequency = f("frequency", p.frequency);
+  out.frequency_low = f("frequency_low", p.low);
+  out.frequency_high = f("frequency_high", p.high);
+  out.observability = modal::observabilityName(r.observability[k]);
+  out.identified = r.identified[k];
+  out.statement = r.modelStatement(k);
+  return out;
+}
+
+}  // namespace
+
+drivetrain_stiffness::ModalIdentification toModalIdentificationMsg(Stamp stamp,
+                                                                   const std::string& frame_id,
+                                                                   const ModalReport& r) {
+  auto f = [](const char* field, double value) {
+    return finite("modal_identification", field, value);
+  };
+  drivetrain_stiffness::ModalIdentification m;
+  m.header.stamp = toRosTime(stamp);
+  m.header.frame_id = frame_id;
+  m.record_duration = f("record_duration", r.duration);
+  m.sample_rate = f("sample_rate", r.sample_rate);
+  m.torque = f("torque", r.torque);
+  m.pinion_speed = f("pinion_speed", r.pinion_speed);
+  m.channels = r.channels;
+  for (std::size_t i = 0; i < r.modes.size(); ++i) m.modes.push_back(toIdentifiedModeMsg(r, i));
+  for (std::size_t k = 0; k < r.predicted.size(); ++k)
+    m.predicted.push_back(toPredictedModeMsg(r, k));
+  for (const modal::FrequencyBand& b : r.order_bands) {
+    m.order_band_low.push_back(f("order_band_low", b.low));
+    m.order_band_high.push_back(f("order_band_high", b.high));
+  }
+  m.spurious_clusters = static_cast<std::uint32_t>(r.spurious_clusters);
+  for (const ModalPoleRow& p : r.poles) {
+    // A pole whose frequency or damping is not finite is left out of the diagram.
+    if (!std::isfinite(p.frequency) || !std::isfinite(p.damping)) continue;
+    m.pole_order.push_back(static_cast<std::uint16_t>(p.order));
+    m.pole_frequency.push_back(p.frequency);
+    m.pole_damping.push_back(p.damping);
+    m.pole_frequency_std.push_back(std::isfinite(p.frequency_std) ? p.frequency_std : 0.0);
+    m.pole_damping_std.push_back(std::isfinite(p.damping_std) ? p.damping_std : 0.0);
+    m.pole_status.push_back(modal::poleStatusName(p.status));
+    m.pole_mode.push_back(p.mode);
+  }
+  return m;
+}
+
 std::string calibrationStatus(const RigPipeline& pipeline) {
   if (const Calibrator* c = pipeline.calibrator()) {
     const CalibrationEstimate& e = c->estimate();

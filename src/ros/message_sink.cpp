@@ -74,6 +74,13 @@ void MessageSink::calibration(Stamp stamp, const CalibrationEstimate& estimate) 
   emitCalibration(m);
 }
 
+void MessageSink::modalIdentification(Stamp stamp, const ModalReport& report) {
+  drivetrain_stiffness::ModalIdentification m =
+      toModalIdentificationMsg(stamp, settings_.frames.pinion, report);
+  m.header.seq = modal_seq_++;
+  emitModalIdentification(m);
+}
+
 void MessageSink::meshPeriod(Stamp stamp, const MeshPeriodStatistics& stats) {
   drivetrain_stiffness::MeshPeriodStats m =
       toMeshPeriodStatsMsg(stamp, settings_.frames.pinion, stats);

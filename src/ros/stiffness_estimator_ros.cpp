@@ -10,6 +10,7 @@
 #include "drivetrain_stiffness/Calibration.h"
 #include "drivetrain_stiffness/MeasuredTe.h"
 #include "drivetrain_stiffness/MeshPeriodStats.h"
+#include "drivetrain_stiffness/ModalIdentification.h"
 #include "drivetrain_stiffness/Resonance.h"
 #include "drivetrain_stiffness/SpectralPeaks.h"
 #include "drivetrain_stiffness/Stiffness.h"
@@ -74,6 +75,9 @@ class StiffnessEstimatorRos::Publishers : public MessageSink {
     // The TE and mesh force per block of whole mesh periods (~10 output samples or more each).
     mesh_period_stats_ =
         nh.advertise<drivetrain_stiffness::MeshPeriodStats>("mesh_period_stats", 1000);
+    // One message per identified accelerometer record (seconds apart).
+    modal_identification_ =
+        nh.advertise<drivetrain_stiffness::ModalIdentification>("modal_identification", 100);
   }
 
  protected:
@@ -92,6 +96,9 @@ class StiffnessEstimatorRos::Publishers : public MessageSink {
   void emitMeshPeriodStats(const drivetrain_stiffness::MeshPeriodStats& m) override {
     mesh_period_stats_.publish(m);
   }
+  void emitModalIdentification(const drivetrain_stiffness::ModalIdentification& m) override {
+    modal_identification_.publish(m);
+  }
   void emitTransforms(const std::vector<geometry_msgs::TransformStamped>& t) override {
     tf_.sendTransform(t);
   }
@@ -99,7 +106,7 @@ class StiffnessEstimatorRos::Publishers : public MessageSink {
 
  private:
   ros::Publisher stiffness_, te_, resonance_, spectrum_, markers_, measured_te_, calibration_,
-      mesh_period_stats_;
+      mesh_period_stats_, modal_identification_;
   tf2_ros::TransformBroadcaster tf_;
 };
 
@@ -116,8 +123,9 @@ StiffnessEstimatorRos::StiffnessEstimatorRos(ros::NodeHandle nh, ros::NodeHandle
   const auto get = [&pnh](const std::string& name, const auto& fallback) {
     return readParam(pnh, name, fallback);
   };
-  pipeline_ = std::make_unique<RigPipeline>(rig, readPipelineOptions(get, rig),
-                                            readRuntimeSettings(get, rig));
+  PipelineOptions options = readPipelineOptions(get, rig);
+  options.modal_worker = true;  // no input waits for an identification (docs/vibration.md)
+  pipeline_ = std::make_unique<RigPipeline>(rig, options, readRuntimeSettings(get, rig));
   publishers_ = std::make_unique<Publishers>(nh, *pipeline_, readOutputSettings(get));
   joints_ = readJointNames(get);
   double master_check_period = 0.0;

@@ -251,6 +251,7 @@ struct ReplayOptions {
   std::string compression = "lz4";
   std::string topics_option = "all", csv_topics_option;
   bool plots = true;
+  bool modal_worker = false;
 };
 
 /// Parses the command line into `o`; returns an exit code when the run ends here (--help, bad
@@ -273,7 +274,7 @@ std::optional<int> parseOptions(int argc, char** argv, ReplayOptions& o) {
                  "comma-separated list of "
                  "stiffness, transmission_error, te_spectrum, resonance, measured_te, calibration, "
                  "mesh_period_stats, "
-                 "tf, rig_markers")
+                 "tf, rig_markers, modal_identification")
       ->capture_default_str();
   app.add_option("--csv-topics", o.csv_topics_option,
                  "Output topics written to --csv alone (default: --topics)");
@@ -295,6 +296,9 @@ std::optional<int> parseOptions(int argc, char** argv, ReplayOptions& o) {
   app.add_option("--plot-script", o.plot_script,
                  "matplotlib script: OUTPUT_BAG REPORT_DIR INPUT_BAG");
   app.add_flag("!--no-plots", o.plots, "Write the report without PNG plots");
+  app.add_flag("--modal-worker", o.modal_worker,
+               "Identify the vibration records on a worker thread, as the node does (the same "
+               "outputs, bit for bit)");
   try {
     app.parse(argc, argv);
   } catch (
@@ -477,7 +481,7 @@ std::string writeReport(const ReplayOptions& o, const nlohmann::json& summary,
   if (o.plots) {
     try {
       runPythonScript("--plot-script", findScript(o.plot_script, "plot_replay.py"),
-                      {o.out_bag, o.report_dir, o.bag_path});
+                      {o.out_bag, o.report_dir, o.bag_path, o.csv_dir});
     } catch (const InvalidInput& e) {
       return e.what();
     }
@@ -499,7 +503,9 @@ int run(int argc, char** argv) {
                                       : OutputTopics::parse("--csv-topics", o.csv_topics_option);
   const RigConfig rig = loadRigFile(o.config);
   const YamlParameters get = readParameterFile(o.params);
-  RigPipeline pipeline(rig, readPipelineOptions(get, rig), readRuntimeSettings(get, rig));
+  PipelineOptions options = readPipelineOptions(get, rig);
+  options.modal_worker = o.modal_worker;
+  RigPipeline pipeline(rig, options, readRuntimeSettings(get, rig));
   if (!o.calibrate_out.empty() && !pipeline.calibrator()) {  // refused before anything is read
     throw InvalidInput("--calibrate = '" + o.calibrate_out +
                        "': no calibration runs with --config '" + o.config + "' (" +
@@ -522,6 +528,7 @@ int run(int argc, char** argv) {
                       o.csv_dir, topics, csv_topics);
   const auto start = std::chrono::steady_clock::now();  // only for the printed speed
   const ReadSpan span = replayMessages(input, o, joints, pipeline, writer, inputs);
+  pipeline.finish(writer);  // the last record's identification
   writer.close();
   const double wall =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

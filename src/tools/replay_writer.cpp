@@ -244,13 +244,26 @@ ReplayWriter::ReplayWriter(const RigPipeline& pipeline, const OutputSettings& se
   if (csv_topics_.has(OutputTopics::kCalibration))
     calibration_csv_ =
         std::make_unique<CsvFile>(csv_dir + "/calibration.csv", calibrationCsvHeader());
+  // The modal identification: one row per identified mode and per model mode left without one,
+  // and every pole of every order (the stabilisation diagram). Empty cells where a value does not
+  // apply.
+  if (csv_topics_.has(OutputTopics::kModalIdentification)) {
+    modal_csv_ = std::make_unique<CsvFile>(
+        csv_dir + "/modal_identification.csv",
+        "stamp,record_start,record_duration,sample_rate,torque,pinion_speed,status,mode,model_mode,"
+        "dominant,predicted_frequency,predicted_low,predicted_high,frequency,frequency_std,"
+        "damping,damping_std,mac,orders,unresolved");
+    modal_poles_csv_ = std::make_unique<CsvFile>(
+        csv_dir + "/modal_poles.csv",
+        "stamp,order,frequency,damping,frequency_std,damping_std,stable,mode,order_band,status");
+  }
 }
 
 void ReplayWriter::close() {
   // Each close throws on an I/O error, naming its file.
   if (bag_) bag_->close();
   for (auto* csv : {&stiffness_csv_, &te_csv_, &spectrum_csv_, &resonance_csv_, &measured_te_csv_,
-                    &calibration_csv_, &mesh_period_csv_}) {
+                    &calibration_csv_, &mesh_period_csv_, &modal_csv_, &modal_poles_csv_}) {
     if (*csv) (*csv)->close();
   }
 }
@@ -393,6 +406,53 @@ void ReplayWriter::emitMeshPeriodStats(const drivetrain_stiffness::MeshPeriodSta
   c.number(m.mesh_force_mean).number(m.mesh_force_rms).number(m.mesh_force_peak_to_peak);
   c.number(m.mesh_frequency).number(m.torque).number(static_cast<double>(m.periods));
   c.number(static_cast<double>(m.samples)).number(m.duration).endRow();
+}
+
+void ReplayWriter::emitModalIdentification(const drivetrain_stiffness::ModalIdentification& m) {
+  if (auto* bag = bagFor(OutputTopics::kModalIdentification))
+    bag->write("/modal_identification", m.header.stamp, m);
+  if (!modal_csv_) return;
+  const ros::Duration duration(m.record_duration);
+  const ros::Time start = m.header.stamp - duration;
+  auto head = [&](CsvFile& c, const char* status) -> CsvFile& {
+    c.stamp(m.header.stamp).stamp(start).number(m.record_duration).number(m.sample_rate);
+    return c.number(m.torque).number(m.pinion_speed).text(status);
+  };
+  auto predicted = [&](CsvFile& c, int k) {
+    if (k < 0) {
+      c.text("").text("").text("").text("").text("");
+      return;
+    }
+    const drivetrain_stiffness::PredictedMode& p = m.predicted[static_cast<std::size_t>(k)];
+    c.number(k).text(p.dominant).number(p.frequency).number(p.frequency_low);
+    c.number(p.frequency_high);
+  };
+  CsvFile& c = *modal_csv_;
+  for (std::size_t i = 0; i < m.modes.size(); ++i) {
+    const drivetrain_stiffness::IdentifiedMode& x = m.modes[i];
+    head(c, x.model_mode >= 0 ? "identified" : "unmatched").number(static_cast<double>(i));
+    predicted(c, x.model_mode);
+    c.number(x.frequency).number(x.frequency_std).number(x.damping).number(x.damping_std);
+    (x.model_mode >= 0 ? c.number(x.mac) : c.text(""));
+    c.number(x.orders).number(x.unresolved).endRow();
+  }
+  for (std::size_t k = 0; k < m.predicted.size(); ++k) {
+    const drivetrain_stiffness::PredictedMode& p = m.predicted[k];
+    if (p.identified >= 0) continue;
+    const bool observable = p.observability == "observable";
+    head(c, observable ? "not identified" : p.observability.c_str()).text("");
+    predicted(c, static_cast<int>(k));
+    for (int i = 0; i < 7; ++i) c.text("");
+    c.endRow();
+  }
+  CsvFile& poles = *modal_poles_csv_;
+  for (std::size_t i = 0; i < m.pole_order.size(); ++i) {
+    const std::string& status = m.pole_status[i];
+    poles.stamp(m.header.stamp).number(m.pole_order[i]).number(m.pole_frequency[i]);
+    poles.number(m.pole_damping[i]).number(m.pole_frequency_std[i]).number(m.pole_damping_std[i]);
+    poles.number(status == "stable" || status == "selected");
+    poles.number(m.pole_mode[i]).number(status == "order band").text(status).endRow();
+  }
 }
 
 void ReplayWriter::emitTransforms(const std::vector<geometry_msgs::TransformStamped>& t) {

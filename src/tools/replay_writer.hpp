@@ -33,12 +33,13 @@ class OutputTopics {
     kMeshPeriodStats,
     kTf,
     kRigMarkers,
+    kModalIdentification,
     kCount
   };
   /// The topic names as written to the bag (without the leading '/'), as --topics takes them.
   static constexpr const char* kNames[kCount] = {
-      "stiffness",   "transmission_error", "te_spectrum", "resonance",  "measured_te",
-      "calibration", "mesh_period_stats",  "tf",          "rig_markers"};
+      "stiffness",   "transmission_error", "te_spectrum", "resonance",   "measured_te",
+      "calibration", "mesh_period_stats",  "tf",          "rig_markers", "modal_identification"};
   static OutputTopics all() { return OutputTopics((1u << kCount) - 1u); }
   /// "all", or names from kNames separated by commas; throws InvalidInput naming `option` and the
   /// unknown or empty name.
@@ -112,6 +113,7 @@ class ReplayWriter : public MessageSink {
   void emitMeshPeriodStats(const drivetrain_stiffness::MeshPeriodStats& m) override;
   void emitTransforms(const std::vector<geometry_msgs::TransformStamped>& t) override;
   void emitMarkers(const visualization_msgs::MarkerArray& m) override;
+  void emitModalIdentification(const drivetrain_stiffness::ModalIdentification& m) override;
 
  private:
   /// The bag, if --out was given and the topic is selected.
@@ -123,7 +125,7 @@ class ReplayWriter : public MessageSink {
   MeshPeriodTotals mesh_period_totals_;
   std::unique_ptr<BagWriter> bag_;
   std::unique_ptr<CsvFile> stiffness_csv_, te_csv_, spectrum_csv_, resonance_csv_, measured_te_csv_,
-      calibration_csv_, mesh_period_csv_;
+      calibration_csv_, mesh_period_csv_, modal_csv_, modal_poles_csv_;
   std::vector<std::string> bearing_names_;
 };
 

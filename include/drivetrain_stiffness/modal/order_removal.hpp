@@ -50,4 +50,14 @@ class OrderRemoval {
   OrderRemovalOptions options_;
 };
 
+/// Time-synchronous averaging (Braun 1975; McFadden 1987): subtracts from each channel of the
+/// channels x samples `record` its mean waveform over the cycles of an order, every harmonic of
+/// that order at once at a cost linear in the samples. `cycles`: the order's unwrapped cycle count
+/// at each sample (z_p x pinion angle / 2 pi for the mesh). Per sub-block of `block_samples`: four
+/// bins per sample of one cycle (8 to 8192), the mean interpolated linearly between bin centres; a
+/// sub-block of fewer than 8 whole cycles is left as it is. Throws InvalidInput when the sizes
+/// differ, a value is not finite or block_samples < 16.
+void removeSynchronousAverage(Eigen::Ref<Eigen::MatrixXd> record,
+                              const Eigen::Ref<const Eigen::VectorXd>& cycles, long block_samples);
+
 }  // namespace drivetrain_stiffness::modal

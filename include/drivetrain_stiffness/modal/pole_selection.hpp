@@ -20,6 +20,9 @@ double mac(const Eigen::VectorXcd& a, const Eigen::VectorXcd& b);
 struct FrequencyBand {
   double low = 0.0, high = 0.0;
   std::string label;
+  /// Only line-like poles inside are set aside (damping below line_damping or not significant):
+  /// a removed order's band, through which a damped mode still shows. False: every pole inside.
+  bool lines_only = false;
 };
 
 /// Thresholds of the selection (docs/vibration.md, "Pole selection").
@@ -35,6 +38,8 @@ struct SelectionOptions {
   /// A cluster none of whose poles has a damping above this many of its std is spurious (not
   /// distinguishable from an undamped pole: noise) [-]; needs variance blocks.
   double damping_significance = 2.0;
+  /// Below this damping ratio a pole inside a lines_only band is the order's line [-].
+  double line_damping = 0.002;
   /// Two modes closer than this many std of their difference are marked unresolved [-].
   double resolution_sigmas = 2.0;
 };
@@ -55,10 +60,25 @@ struct IdentifiedMode {
   bool unresolved = false;
 };
 
+/// What became of a pole in the selection.
+enum class PoleStatus {
+  kOrderBand,     ///< inside an excluded band: a removed order, set aside
+  kInadmissible,  ///< damping outside (0, max_damping)
+  kUnstable,      ///< no matching pole at the neighbouring orders
+  kStable,        ///< stable, in a cluster found spurious
+  kSelected,      ///< stable, in the cluster of a reported mode
+};
+/// "order band", "inadmissible", "unstable", "stable" or "selected".
+const char* poleStatusName(PoleStatus s);
+
 struct SelectionResult {
   std::vector<IdentifiedMode> modes;  ///< sorted by frequency
-  std::vector<Pole> order_poles;      ///< poles inside an excluded band: never reported as modes
-  int spurious_clusters = 0;  ///< clusters from too few orders or with insignificant damping
+  /// Per pole of the SsiResult, in its order: what became of it, and the index into `modes` of the
+  /// mode its cluster became (-1 otherwise).
+  std::vector<PoleStatus> status;
+  std::vector<int> mode_of;
+  std::vector<Pole> order_poles;  ///< poles inside an excluded band: never reported as modes
+  int spurious_clusters = 0;      ///< clusters from too few orders or with insignificant damping
 };
 
 /// Selects the modes among `ssi`'s poles; poles inside any `excluded` band (a removed mesh or

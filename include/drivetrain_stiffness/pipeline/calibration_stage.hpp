@@ -11,6 +11,13 @@
 
 namespace drivetrain_stiffness {
 
+// TEMPORARY until calibrator.hpp's lands.
+struct ModalFrequency {
+  int mode = 0;
+  double frequency = 0.0;
+  double frequency_std = 0.0;
+};
+
 class CalibrationStage {
  public:
   /// Calibrates when `enabled` and the rig has calibration and dynamics blocks. Keeps references
@@ -25,6 +32,10 @@ class CalibrationStage {
   /// a new window. An Error is counted and drops the window. Needs calibrator().
   void reading(Stamp stamp, double pinion, double gear, double phase, double speed,
                double held_torque, bool continuous, PipelineSink& sink);
+  /// One record's identified frequencies at held torque [N*m]: one update of the calibration,
+  /// published when it updated; an Error is counted. Needs nothing (no calibrator: ignored).
+  void modal(Stamp stamp, const ModalFrequency* frequencies, std::size_t count, double torque,
+             PipelineSink& sink);
   /// PipelineSink::stiffness's bands.
   CalibrationBands stiffnessBands(const StiffnessEstimate& estimate) const;
   /// PipelineSink::resonance's bands, at the current torque.

@@ -34,7 +34,13 @@ struct PipelineOptions {
   bool calibrate = true;
   /// Vibration channels named otherwise than a bearing support (docs/vibration.md "Input").
   std::vector<VibrationChannelAlias> vibration_channels;
-  double vibration_record = 4.0;  ///< [s] of accelerations kept for the identification
+  double vibration_record = 4.0;     ///< [s] of accelerations kept for the identification
+  bool modal_identification = true;  ///< identify each renewed vibration record
+  int modal_max_order = 20;          ///< SSI-COV's last model order (even, 4 to 60)
+  int modal_block_rows = 40;         ///< SSI-COV's block rows (lags to 2i - 1; 2 to 200)
+  /// Identify on a worker thread (the node); off: in the caller's thread (a replay). The outputs
+  /// are the same bits either way.
+  bool modal_worker = false;
   /// Throws InvalidInput naming the parameter and its value.
   void validate() const;
 };

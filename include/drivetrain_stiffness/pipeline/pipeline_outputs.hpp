@@ -12,6 +12,7 @@
 #include "drivetrain_stiffness/core/modal_analysis.hpp"
 #include "drivetrain_stiffness/core/stiffness_estimator.hpp"
 #include "drivetrain_stiffness/pipeline/input_types.hpp"
+#include "drivetrain_stiffness/pipeline/modal_identification.hpp"
 #include "drivetrain_stiffness/spectral/spectrum.hpp"
 
 namespace drivetrain_stiffness {
@@ -72,6 +73,8 @@ class PipelineSink {
   virtual void calibration(Stamp /*stamp*/, const CalibrationEstimate& /*estimate*/) {}
   /// A closed block of whole mesh periods, at its end sample's stamp.
   virtual void meshPeriod(Stamp /*stamp*/, const MeshPeriodStatistics& /*stats*/) {}
+  /// One vibration record's modal identification, at the record's last sample's stamp.
+  virtual void modalIdentification(Stamp /*stamp*/, const ModalReport& /*report*/) {}
 };
 
 /// What the vibration block rules counted (VibrationInput).
@@ -105,8 +108,10 @@ struct PipelineCounters {
   std::uint64_t measured_te_out = 0, calibration_out = 0;
   std::uint64_t mesh_period_stats_out = 0;
   std::uint64_t calibration_errors = 0;
-  double simulated_s = 0.0;  ///< [s] model time integrated
-  std::string last_event;    ///< the last rejection or reset, with its reason
+  std::uint64_t modal_out = 0;     ///< modal identifications published
+  std::uint64_t modal_errors = 0;  ///< records the identification could not identify
+  double simulated_s = 0.0;        ///< [s] model time integrated
+  std::string last_event;          ///< the last rejection or reset, with its reason
 };
 
 /// The counters by the names /diagnostics and drivetrain_replay's summary use.

@@ -21,6 +21,7 @@
 #include "drivetrain_stiffness/pipeline/input_gate.hpp"
 #include "drivetrain_stiffness/pipeline/input_types.hpp"
 #include "drivetrain_stiffness/pipeline/mesh_period_stage.hpp"
+#include "drivetrain_stiffness/pipeline/modal_stage.hpp"
 #include "drivetrain_stiffness/pipeline/phase_source.hpp"
 #include "drivetrain_stiffness/pipeline/pipeline_options.hpp"
 #include "drivetrain_stiffness/pipeline/pipeline_outputs.hpp"
@@ -60,6 +61,8 @@ class RigPipeline {
   /// One accelerometer block at `stamp` (its first sample): the vibration block rules.
   InputOutcome vibration(Stamp stamp, const VibrationBlockView& block, PipelineSink& sink,
                          const InputOrigin& origin = {});
+  /// The input ended (a replay's end of bag): an identification still pending is applied.
+  void finish(PipelineSink& sink);
   /// The vibration record and its channel map.
   const VibrationInput& vibrationInput() const { return *vibration_; }
   /// What drives the mesh phase (PhaseSource::name).
@@ -120,7 +123,8 @@ class RigPipeline {
   std::unique_ptr<TeSpectrumStage> te_spectrum_;
   std::unique_ptr<MeshPeriodStage> mesh_periods_;
   std::unique_ptr<VibrationInput> vibration_;
-  double held_torque_ = 0.0;  ///< [N*m] paired with readings by the calibration
+  std::unique_ptr<ModalStage> modal_;  ///< after everything it reads
+  double held_torque_ = 0.0;           ///< [N*m] paired with readings by the calibration
   std::optional<Stamp> last_stiffness_out_;
 };
 

@@ -66,6 +66,10 @@ class VibrationInput {
   /// The mapped channel of column `c` (its name, shaft and sign).
   const VibrationChannel& column(std::size_t c) const { return map_[columns_[c].map_index]; }
   std::size_t frames() const { return frames_; }
+  /// Frames the record holds when full (~vibration_record at its rate).
+  std::size_t capacity() const { return capacity_; }
+  /// Frames appended since the record started (a new record starts at its first block's frames).
+  std::uint64_t appended() const { return appended_; }
   /// Acceleration of column c at frame i, sign applied [m/s^2].
   float value(std::size_t c, std::size_t i) const;
   /// Time of frame i [s] relative to `origin()`: the record's first sample.

@@ -7,6 +7,7 @@
 #include "drivetrain_stiffness/Calibration.h"
 #include "drivetrain_stiffness/MeasuredTe.h"
 #include "drivetrain_stiffness/MeshPeriodStats.h"
+#include "drivetrain_stiffness/ModalIdentification.h"
 #include "drivetrain_stiffness/Preload.h"
 #include "drivetrain_stiffness/Resonance.h"
 #include "drivetrain_stiffness/SpectralPeaks.h"
@@ -70,6 +71,11 @@ drivetrain_stiffness::MeasuredTe toMeasuredTeMsg(Stamp stamp, const std::string&
 /// One block of whole mesh periods. Throws InvalidInput naming a non-finite field.
 drivetrain_stiffness::MeshPeriodStats toMeshPeriodStatsMsg(Stamp stamp, const std::string& frame_id,
                                                            const MeshPeriodStatistics& s);
+/// One record's modal identification; a standard deviation not computed is 0. Throws
+/// InvalidInput naming a non-finite field.
+drivetrain_stiffness::ModalIdentification toModalIdentificationMsg(Stamp stamp,
+                                                                   const std::string& frame_id,
+                                                                   const ModalReport& r);
 /// The calibration's state in words: the last window's outcome, or why there is none.
 std::string calibrationStatus(const RigPipeline& pipeline);
 /// The identified parameters' names joined with ", "; "none" if none.

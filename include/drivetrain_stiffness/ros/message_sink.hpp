@@ -38,6 +38,7 @@ class MessageSink : public PipelineSink {
   void measuredTe(Stamp stamp, const MeasuredTeSample& sample) override;
   void calibration(Stamp stamp, const CalibrationEstimate& estimate) override;
   void meshPeriod(Stamp stamp, const MeshPeriodStatistics& stats) override;
+  void modalIdentification(Stamp stamp, const ModalReport& report) override;
 
   /// New run-time settings, as applied to the pipeline (RigPipeline::apply): the sink draws with
   /// their tf rate and exaggeration from the next output on.
@@ -53,6 +54,7 @@ class MessageSink : public PipelineSink {
   virtual void emitMeasuredTe(const drivetrain_stiffness::MeasuredTe& msg) = 0;
   virtual void emitCalibration(const drivetrain_stiffness::Calibration& msg) = 0;
   virtual void emitMeshPeriodStats(const drivetrain_stiffness::MeshPeriodStats& msg) = 0;
+  virtual void emitModalIdentification(const drivetrain_stiffness::ModalIdentification& msg) = 0;
   virtual void emitTransforms(const std::vector<geometry_msgs::TransformStamped>& transforms) = 0;
   virtual void emitMarkers(const visualization_msgs::MarkerArray& markers) = 0;
 
@@ -70,7 +72,7 @@ class MessageSink : public PipelineSink {
   // roscpp writes its own per-publication count, the same numbers while a subscriber listens): a
   // reader sees from the gaps what it lost.
   std::uint32_t stiffness_seq_ = 0, te_seq_ = 0, measured_te_seq_ = 0, calibration_seq_ = 0,
-                mesh_period_seq_ = 0;
+                mesh_period_seq_ = 0, modal_seq_ = 0;
 };
 
 }  // namespace drivetrain_stiffness

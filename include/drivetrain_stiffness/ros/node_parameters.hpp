@@ -49,6 +49,9 @@ PipelineOptions readPipelineOptions(const Get& get, const RigConfig& rig) {
   o.vibration_channels =
       parseVibrationAliases(get("vibration_channels", std::map<std::string, std::string>{}));
   o.vibration_record = get("vibration_record", o.vibration_record);
+  o.modal_identification = get("modal_identification", o.modal_identification);
+  o.modal_max_order = get("modal_max_order", o.modal_max_order);
+  o.modal_block_rows = get("modal_block_rows", o.modal_block_rows);
   try {
     o.validate();
   } catch (const InvalidInput& e) {

@@ -1,0 +1,78 @@
+// The modal identification stage: each time the vibration record holds ~vibration_record of new
+// samples, one identification of it (modal_identification.hpp), run on a worker thread (the node)
+// or in the caller's (a replay). Its result is applied at the first accepted vibration block
+// stamped kApplyDelay after the record's end, or at finish(): the same input either way, so a
+// replay is bit-identical to the live run. The matched frequencies update the calibration
+// (docs/vibration.md "Identification in the pipeline").
+#pragma once
+
+#include <cstdint>
+#include <future>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "drivetrain_stiffness/core/rig_config.hpp"
+#include "drivetrain_stiffness/core/stiffness_estimator.hpp"
+#include "drivetrain_stiffness/pipeline/calibration_stage.hpp"
+#include "drivetrain_stiffness/pipeline/modal_identification.hpp"
+#include "drivetrain_stiffness/pipeline/phase_source.hpp"
+#include "drivetrain_stiffness/pipeline/pipeline_options.hpp"
+#include "drivetrain_stiffness/pipeline/pipeline_outputs.hpp"
+#include "drivetrain_stiffness/pipeline/vibration_input.hpp"
+
+namespace drivetrain_stiffness {
+
+class ModalStage {
+ public:
+  /// [s] of record time between a record's end and its result's use: room for the worker.
+  static constexpr double kApplyDelay = 0.5;
+
+  /// Keeps references to everything; identifies with options.modal_max_order on a worker thread
+  /// when options.modal_worker.
+  ModalStage(const RigConfig& rig, const VibrationInput& input, const PhaseSource& phase,
+             const StiffnessEstimator& estimator, CalibrationStage& calibration,
+             const PipelineOptions& options, PipelineCounters& counters);
+  ~ModalStage();  ///< waits for a running identification
+  ModalStage(const ModalStage&) = delete;
+  ModalStage& operator=(const ModalStage&) = delete;
+
+  /// After the input took a block of `frames` frames stamped `stamp` (its first frame): the
+  /// frames' angles noted, a due result applied, a renewed record handed to the identification.
+  /// Allocates only when a record starts (the angle ring) or an identification starts (the job).
+  void afterBlock(Stamp stamp, std::size_t frames, double held_torque, PipelineSink& sink);
+  /// The input ended: the pending identification, if any, is applied (stamped as it would have
+  /// been).
+  void finish(PipelineSink& sink);
+  /// Forgets the record's angles and any pending identification (a pipeline reset).
+  void reset();
+  /// An identification is running or waits to be applied.
+  bool pending() const { return pending_.valid(); }
+
+ private:
+  struct Outcome {
+    ModalReport report;
+    std::string error;  ///< non-empty: the identification threw this
+  };
+  void noteAngles(Stamp stamp, std::size_t frames);
+  void start(double held_torque);
+  void predict(double torque);
+  void apply(Stamp stamp, PipelineSink& sink);
+
+  const RigConfig& rig_;
+  const VibrationInput& input_;
+  const PhaseSource& phase_;
+  const StiffnessEstimator& estimator_;
+  CalibrationStage& calibration_;
+  PipelineCounters& counters_;
+  bool enabled_, worker_;
+  int max_order_, block_rows_;
+  std::vector<double> angles_;  ///< [rad] frame g of the record at g % capacity
+  std::uint64_t appended_ = 0;  ///< the input's appended() after the last block
+  std::uint64_t renewed_ = 0;   ///< frames appended since the last identification's record
+  ModalJob job_;                ///< read by the identification until apply()
+  std::future<Outcome> pending_;
+  Stamp apply_at_;
+};
+
+}  // namespace drivetrain_stiffness

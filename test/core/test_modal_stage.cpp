@@ -1,0 +1,189 @@
+// The modal identification stage in the pipeline: synthetic accelerometer records with known
+// modes (exactly discretised oscillators, test/modal/synthetic_modes.hpp) through the vibration
+// input, a mesh-order line on a mode, and the same bits with and without the worker thread.
+#include <cmath>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "drivetrain_stiffness/core/constants.hpp"
+#include "drivetrain_stiffness/pipeline/rig_pipeline.hpp"
+#include "seed_rig.hpp"
+#include "synthetic_modes.hpp"
+
+namespace drivetrain_stiffness {
+namespace {
+
+constexpr double kRate = 51200.0;  // [Hz]
+constexpr std::size_t kBlock = 1024;
+
+/// Keeps every identification and calibration the pipeline hands out.
+struct ModalSink : PipelineSink {
+  std::vector<std::pair<Stamp, ModalReport>> reports;
+  std::vector<std::pair<Stamp, CalibrationEstimate>> calibrations;
+  void modalIdentification(Stamp stamp, const ModalReport& r) override {
+    reports.emplace_back(stamp, r);
+  }
+  void calibration(Stamp stamp, const CalibrationEstimate& e) override {
+    calibrations.emplace_back(stamp, e);
+  }
+};
+
+/// The seed rig's two transverse modes moved (gear 7,800 Hz; pinion at `pinion` Hz), seen by the
+/// two housings: each mode mostly on its own shaft's channel.
+modal::test::SyntheticModes movedModes(double pinion) {
+  Eigen::MatrixXd shapes(2, 2);  // rows: pinion_bearing, gear_bearing; columns: the modes
+  shapes << 0.2, 1.0, 1.0, -0.1;
+  return modal::test::SyntheticModes({{7800.0, 0.02}, {pinion, 0.02}}, shapes, kRate);
+}
+
+/// Feeds `record` (2 x samples) as blocks from t0 [s], with a torque input each block (the
+/// nominal phase runs from the first), `line` [m/s^2] added to the pinion channel at mesh
+/// harmonic `harmonic` of the nominal mesh phase.
+void feed(RigPipeline& pipeline, PipelineSink& sink, const Eigen::MatrixXd& record, double t0,
+          double line = 0.0, int harmonic = 0) {
+  const std::vector<std::string> channels{"pinion_bearing", "gear_bearing"};
+  std::vector<float> data(kBlock * 2);
+  const double mesh_hz = 20.0 * 1000.0 / 60.0;  // seed servo: z_p = 20 at 1000 rpm
+  for (long first = 0; first + static_cast<long>(kBlock) <= record.cols(); first += kBlock) {
+    const double t = t0 + first / kRate;
+    ASSERT_EQ(pipeline.torque(test::stampAt(t), 0.5, sink), InputOutcome::kAccepted);
+    for (std::size_t i = 0; i < kBlock; ++i) {
+      const double ti = (first + static_cast<long>(i)) / kRate;  // since the first torque
+      data[2 * i] = static_cast<float>(record(0, first + i) +
+                                       line * std::sin(kTwoPi * harmonic * mesh_hz * ti));
+      data[2 * i + 1] = static_cast<float>(record(1, first + i));
+    }
+    const VibrationBlockView block{kRate, channels.data(), 2, data.data(), data.size()};
+    ASSERT_EQ(pipeline.vibration(test::stampAt(t), block, sink), InputOutcome::kAccepted);
+  }
+}
+
+PipelineOptions options(bool worker) {
+  PipelineOptions o;
+  o.vibration_record = 2.0;
+  o.modal_worker = worker;
+  return o;
+}
+
+TEST(ModalStage, IdentifiesEachRenewedRecordAndMatchesTheModelModes) {
+  RigPipeline pipeline(test::seedServo(), options(false));
+  ModalSink sink;
+  const Eigen::MatrixXd record = movedModes(9200.0).record(6 * 51200, 7);
+  feed(pipeline, sink, record, 10.0);
+  pipeline.finish(sink);
+  // Three renewed 2 s records in 6 s; the last applied at finish().
+  ASSERT_EQ(sink.reports.size(), 3u);
+  EXPECT_EQ(pipeline.counters().modal_out, 3u);
+  for (const auto& [stamp, r] : sink.reports) {
+    EXPECT_EQ(stamp, r.end);
+    EXPECT_NEAR(r.duration, 2.0, 1.0 / kRate);
+    ASSERT_GE(r.identified[0], 0);  // the model's x_g mode, then x_p
+    ASSERT_GE(r.identified[1], 0);
+    EXPECT_EQ(r.predicted[0].dominant, "x_g");
+    EXPECT_EQ(r.predicted[1].dominant, "x_p");
+    const modal::IdentifiedMode& gear = r.modes[r.identified[0]];
+    const modal::IdentifiedMode& pinion = r.modes[r.identified[1]];
+    // The true poles of the exactly discretised oscillators, within 4 std and 0.2 %.
+    EXPECT_NEAR(gear.frequency, 7800.0, std::min(4.0 * gear.frequency_std, 15.6));
+    EXPECT_NEAR(pinion.frequency, 9200.0, std::min(4.0 * pinion.frequency_std, 18.4));
+    EXPECT_EQ(r.observability[2], modal::Observability::kAboveNyquist);  // x at 61 kHz
+    const std::string predicts = "where the model predicts " +
+                                 std::to_string(std::lround(r.predicted[1].frequency)) +
+                                 " Hz (x_p)";
+    EXPECT_NE(r.modelStatement(1).find(predicts), std::string::npos) << r.modelStatement(1);
+  }
+}
+
+TEST(ModalStage, AMeshOrderOnAModeIsRemovedAndNeverReported) {
+  // The 28th mesh harmonic at 1000 rpm, 9333.3 Hz, exactly on the pinion mode, as a line of
+  // three times the mode's rms.
+  const double harmonic_hz = 28 * 20.0 * 1000.0 / 60.0;
+  const Eigen::MatrixXd record = movedModes(harmonic_hz).record(4 * 51200, 11);
+  const double rms = std::sqrt(record.row(0).squaredNorm() / record.cols());
+  RigPipeline pipeline(test::seedServo(), options(false));
+  ModalSink sink;
+  feed(pipeline, sink, record, 10.0, 3.0 * rms, 28);
+  pipeline.finish(sink);
+  ASSERT_EQ(sink.reports.size(), 2u);
+  for (const auto& [stamp, r] : sink.reports) {
+    ASSERT_GE(r.identified[1], 0);
+    const modal::IdentifiedMode& pinion = r.modes[r.identified[1]];
+    EXPECT_NEAR(pinion.frequency, harmonic_hz, 0.002 * harmonic_hz);
+    EXPECT_GT(pinion.damping, 0.01);  // the mode's 0.02, not the line's 0
+    for (const modal::IdentifiedMode& m : r.modes) EXPECT_GT(m.damping, 0.002) << m.frequency;
+    // The harmonic's band is reported among the removed orders.
+    bool listed = false;
+    for (const modal::FrequencyBand& b : r.order_bands)
+      listed = listed || (b.low <= harmonic_hz && harmonic_hz <= b.high);
+    EXPECT_TRUE(listed);
+  }
+}
+
+TEST(ModalStage, TheWorkerThreadGivesTheSameBitsAtTheSameInputs) {
+  const Eigen::MatrixXd record = movedModes(9200.0).record(5 * 51200, 3);
+  RigPipeline deferred(test::seedServo(), options(false));
+  RigPipeline worker(test::seedServo(), options(true));
+  ModalSink a, b;
+  feed(deferred, a, record, 10.0);
+  feed(worker, b, record, 10.0);
+  // Applied kApplyDelay after each record's end, at the same block either way.
+  ASSERT_EQ(a.reports.size(), 2u);
+  ASSERT_EQ(b.reports.size(), 2u);
+  for (std::size_t k = 0; k < 2; ++k) {
+    EXPECT_EQ(a.reports[k].first, b.reports[k].first);
+    ASSERT_EQ(a.reports[k].second.modes.size(), b.reports[k].second.modes.size());
+    for (std::size_t i = 0; i < a.reports[k].second.modes.size(); ++i) {
+      EXPECT_EQ(a.reports[k].second.modes[i].frequency, b.reports[k].second.modes[i].frequency);
+      EXPECT_EQ(a.reports[k].second.modes[i].frequency_std,
+                b.reports[k].second.modes[i].frequency_std);
+    }
+  }
+  EXPECT_EQ(a.calibrations.size(), b.calibrations.size());
+}
+
+TEST(ModalStage, AResultIsAppliedHalfASecondAfterItsRecord) {
+  const Eigen::MatrixXd record = movedModes(9200.0).record(51200 * 13 / 5, 5);  // 2.6 s
+  RigPipeline pipeline(test::seedServo(), options(false));
+  ModalSink sink;
+  feed(pipeline, sink, record, 10.0);
+  ASSERT_EQ(sink.reports.size(), 1u);
+  // The record ends at 12 s - 1 sample; the first block stamped 0.5 s later (12.5 s) applies it.
+  EXPECT_EQ(sink.reports[0].first, sink.reports[0].second.end);
+  EXPECT_NEAR(sink.reports[0].second.end.toSec() - test::stampAt(10.0).toSec(), 2.0 - 1 / kRate,
+              1e-6);
+  pipeline.finish(sink);  // nothing pending
+  EXPECT_EQ(sink.reports.size(), 1u);
+}
+
+TEST(ModalStage, OffIdentifiesNothing) {
+  PipelineOptions o = options(false);
+  o.modal_identification = false;
+  RigPipeline pipeline(test::seedServo(), o);
+  ModalSink sink;
+  feed(pipeline, sink, movedModes(9200.0).record(3 * 51200, 1), 10.0);
+  pipeline.finish(sink);
+  EXPECT_TRUE(sink.reports.empty());
+  EXPECT_EQ(pipeline.counters().modal_out, 0u);
+}
+
+TEST(ModalStage, OptionsOutOfRangeAreRefusedByName) {
+  PipelineOptions o;
+  o.modal_max_order = 21;
+  EXPECT_THROW(
+      {
+        try {
+          o.validate();
+        } catch (const InvalidInput& e) {
+          EXPECT_NE(std::string(e.what()).find("modal_max_order"), std::string::npos);
+          throw;
+        }
+      },
+      InvalidInput);
+  o.modal_max_order = 20;
+  o.modal_block_rows = 1;
+  EXPECT_THROW(o.validate(), InvalidInput);
+}
+
+}  // namespace
+}  // namespace drivetrain_stiffness
