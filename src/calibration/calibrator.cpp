@@ -324,6 +324,14 @@ void Calibrator::jacobian(const CalibrationVector& p, double torque,
   }
 }
 
+void Calibrator::bound(CalibrationVector& state) {
+  // Physical bounds: scales in [0.05, 20) as the YAML loader's, a preload torque >= 0.
+  state[kMeshScale] = std::clamp(state[kMeshScale], 0.05, 19.9);
+  for (int i : {kPinionBearingScale, kGearBearingScale})
+    state[i] = std::clamp(state[i], 1.0 / 19.9, 1.0 / 0.05);
+  state[kPreloadTorque] = std::max(0.0, state[kPreloadTorque]);
+}
+
 CalibrationVector Calibrator::iteratedUpdate(
     const CalibrationMatrix& prior, const Eigen::Matrix<double, kFeatureSize, kFeatureSize>& R,
     const FeatureVector& z, double torque, ModelErrorScale::FeatureRows& H,
@@ -336,11 +344,7 @@ CalibrationVector Calibrator::iteratedUpdate(
     const Eigen::Matrix<double, kFeatureSize, kFeatureSize> Si = H * prior * H.transpose() + R;
     K = prior * H.transpose() * Si.inverse();
     CalibrationVector next = state_ + K * (z - h - H * (state_ - theta));
-    // Physical bounds: scales in [0.05, 20) as the YAML loader's, a preload torque >= 0.
-    next[kMeshScale] = std::clamp(next[kMeshScale], 0.05, 19.9);
-    for (int i : {kPinionBearingScale, kGearBearingScale})
-      next[i] = std::clamp(next[i], 1.0 / 19.9, 1.0 / 0.05);
-    next[kPreloadTorque] = std::max(0.0, next[kPreloadTorque]);
+    bound(next);
     const double moved =
         ((next - theta).cwiseQuotient(state_prior_std_.cwiseMax(1e-300))).cwiseAbs().maxCoeff();
     theta = next;
@@ -349,15 +353,18 @@ CalibrationVector Calibrator::iteratedUpdate(
   return theta;
 }
 
+CalibrationMatrix Calibrator::processNoise(double t) const {
+  const double dt = has_update_t_ ? std::max(0.0, t - last_update_t_) : 0.0;
+  const CalibrationVector walk = (state_prior_std_.array() > 0.0).select(state_reference_std_, 0.0);
+  return ((config_.drift * config_.drift * dt) * walk.cwiseAbs2()).asDiagonal();
+}
+
 void Calibrator::update(const FeatureVector& z, const FeatureVector& z_std, double torque) {
   // Random walk since the last update (a preload that relaxes, wear): relative to the drawing's
   // spread (the prior's, unless a calibrated gearbox keeps the drawing's as reference_std). Held
   // parameters (prior std 0) do not walk.
   const double t = window_.t1;
-  const double dt = has_update_t_ ? std::max(0.0, t - last_update_t_) : 0.0;
-  const CalibrationVector walk = (state_prior_std_.array() > 0.0).select(state_reference_std_, 0.0);
-  const CalibrationMatrix Q =
-      ((config_.drift * config_.drift * dt) * walk.cwiseAbs2()).asDiagonal();
+  const CalibrationMatrix Q = processNoise(t);
   const CalibrationMatrix prior = state_covariance_ + Q;
 
   // Measurement noise: the window's own, the relative model error and the floor
@@ -412,6 +419,169 @@ void Calibrator::update(const FeatureVector& z, const FeatureVector& z_std, doub
   estimate_.predicted = predict(state_, torque);
 }
 
+// ---- Natural frequencies (docs/calibration.md "Natural frequencies") ----
+
+namespace {
+
+/// Upper 0.1 % points of the chi-square distribution with 1, 2 and 3 degrees of freedom
+/// (NIST/SEMATECH e-Handbook of Statistical Methods, sec. 1.3.6.7.4, "Critical values of the
+/// chi-square distribution", column 0.999).
+constexpr double kChiSquare999[3] = {10.828, 13.816, 16.266};
+
+/// The mass-weighted modal assurance criterion (a'Mb)^2 / (a'Ma b'Mb), M = diag(mass) (Allemang &
+/// Brown 1982, with the mass as the weighting): 1 or 0 between two modes of one model, which are
+/// M-orthogonal.
+double mac(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& mass) {
+  const Eigen::Vector3d ma = mass.cwiseProduct(a);
+  const double ab = ma.dot(b), aa = ma.dot(a), bb = b.dot(mass.cwiseProduct(b));
+  return aa > 0.0 && bb > 0.0 ? ab * ab / (aa * bb) : 0.0;
+}
+
+/// For each mode of `from`, the mode of `to` it becomes: the one-to-one assignment of the highest
+/// total MAC over the six permutations; ties keep the order by frequency.
+std::array<int, 3> followModes(const std::array<Mode, 3>& from, const std::array<Mode, 3>& to,
+                               const Eigen::Vector3d& mass) {
+  std::array<int, 3> order{0, 1, 2}, best = order;
+  double best_sum = -1.0;
+  do {
+    double sum = 0.0;
+    for (int k = 0; k < 3; ++k) sum += mac(from[k].shape, to[order[k]].shape, mass);
+    if (sum > best_sum + 1e-12) {
+      best_sum = sum;
+      best = order;
+    }
+  } while (std::next_permutation(order.begin(), order.end()));
+  return best;
+}
+
+[[noreturn]] void invalidFrequency(std::size_t i, const char* field, double value,
+                                   const char* why) {
+  throwInvalid("calibration: natural frequencies[" + std::to_string(i) + "]." + field, value, why);
+}
+
+}  // namespace
+
+WindowOutcome Calibrator::modalUpdate(double t, const ModalFrequency* frequencies,
+                                      std::size_t count, double torque,
+                                      const StiffnessEstimator& supports) {
+  using Rows = Eigen::Matrix<double, 3, kCalibrationSize>;
+  using Gain = Eigen::Matrix<double, kCalibrationSize, 3>;
+  if (count > 3) {
+    throwInvalid("calibration: natural frequencies count", static_cast<double>(count),
+                 "at most 3, one per mode of the model");
+  }
+  if (count > 0 && frequencies == nullptr) throw std::invalid_argument("modalUpdate: no array");
+  requireFinite("calibration: natural frequencies torque", torque);
+  requireFinite("calibration: natural frequencies t", t);
+  std::array<int, 3> mode{};
+  Eigen::Vector3d z = Eigen::Vector3d::Zero(), z_std = Eigen::Vector3d::Ones();
+  for (std::size_t j = 0; j < count; ++j) {
+    const ModalFrequency& f = frequencies[j];
+    if (f.mode < 0 || f.mode > 2) {
+      invalidFrequency(j, "mode", f.mode, "must be 0, 1 or 2 (the model's modes by frequency)");
+    }
+    for (std::size_t i = 0; i < j; ++i) {
+      if (mode[i] == f.mode) invalidFrequency(j, "mode", f.mode, "appears twice in one record");
+    }
+    if (!(std::isfinite(f.frequency) && f.frequency > 0.0))
+      invalidFrequency(j, "frequency", f.frequency, "must be positive and finite [Hz]");
+    if (!(std::isfinite(f.frequency_std) && f.frequency_std > 0.0))
+      invalidFrequency(j, "frequency_std", f.frequency_std, "must be positive and finite [Hz]");
+    mode[j] = f.mode;
+    z[j] = f.frequency;
+    z_std[j] = f.frequency_std;
+  }
+  if (count == 0) return WindowOutcome::kNone;
+
+  // h(state): the matched modes' natural frequencies of the model at this torque, with the
+  // supports' unit stiffness at their current load (as bands() and modes()); slots past `count`
+  // stay 0. Mode k is the current estimate's k-th by frequency (modes()); at another state it is
+  // followed by its shape (the assignment of highest total MAC), so that two modes that change
+  // order within the update keep their identities.
+  const std::array<double, 2> unit = unitBearingStiffness(supports);
+  const std::array<Mode, 3> reference = modesAt(estimate_.value, torque, unit, supports);
+  const GearRotorParameters rotor = rigRotorParameters(*rig_, supports.mesh(), unit);
+  const Eigen::Vector3d mass(rotor.pinion_mass, rotor.gear_mass, rotor.equivalentMass());
+  auto predictModes = [&](const CalibrationVector& state) {
+    const std::array<Mode, 3> m = modesAt(toParameters(state), torque, unit, supports);
+    const std::array<int, 3> follow = followModes(reference, m, mass);
+    Eigen::Vector3d h = Eigen::Vector3d::Zero();
+    for (std::size_t j = 0; j < count; ++j)
+      h[j] =
+          m[static_cast<std::size_t>(follow[static_cast<std::size_t>(mode[j])])].natural_frequency;
+    return h;
+  };
+  // The Jacobian by central differences on the state, as jacobian() for the mesh scale and T_p;
+  // the TE offset does not enter the modes, a held parameter has no column.
+  auto modalJacobian = [&](const CalibrationVector& state, Rows& H) {
+    H.setZero();
+    for (int i : {kMeshScale, kPinionBearingScale, kGearBearingScale, kPreloadTorque}) {
+      if (!(state_prior_std_[i] > 0.0)) continue;
+      const double step = 1e-4 * std::max(state_prior_std_[i], std::abs(state[i]));
+      CalibrationVector a = state, b = state;
+      a[i] += step;
+      b[i] -= step;
+      H.col(i) = (predictModes(a) - predictModes(b)) / (2.0 * step);
+    }
+  };
+
+  const CalibrationMatrix Q = processNoise(t);
+  const CalibrationMatrix prior = state_covariance_ + Q;
+  const Eigen::Vector3d h0 = predictModes(state_);
+  Rows H;
+  modalJacobian(state_, H);
+  // No parameter that moves these modes is estimated: nothing to learn from the record.
+  if (H.cwiseAbs().maxCoeff() == 0.0) return WindowOutcome::kNone;
+  // Measurement noise: the identification's variance and the relative model error of a natural
+  // frequency (masses, inertias, the housing), which every record of the same mode shares: the
+  // n-th record of a mode carries n times its variance. Unused slots: unit variance, no row.
+  Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
+  for (std::size_t j = 0; j < count; ++j) {
+    const double repeats = static_cast<double>(modal_count_[static_cast<std::size_t>(mode[j])] + 1);
+    const double model = config_.modal_model_error * h0[j];
+    R(j, j) = z_std[j] * z_std[j] + repeats * model * model;
+  }
+  const Eigen::Vector3d innovation = z - h0;
+  const Eigen::Matrix3d S = H * prior * H.transpose() + R;
+  const double nis = innovation.dot(S.ldlt().solve(innovation));
+  estimate_.modal_nis = nis;
+  if (!(nis <= kChiSquare999[count - 1])) {  // also refuses a NaN
+    ++estimate_.modal_gated;
+    return WindowOutcome::kGated;
+  }
+  // Iterated EKF, as iteratedUpdate: Gauss-Newton on the posterior mode, the frequencies being
+  // nonlinear in the state (f ~ sqrt(k), k ~ 1/c).
+  CalibrationVector theta = state_;
+  Gain K;
+  for (int iteration = 0; iteration < 4; ++iteration) {
+    const Eigen::Vector3d h = iteration == 0 ? h0 : predictModes(theta);
+    if (iteration > 0) modalJacobian(theta, H);
+    const Eigen::Matrix3d Si = H * prior * H.transpose() + R;
+    K = prior * H.transpose() * Si.inverse();
+    CalibrationVector next = state_ + K * (z - h - H * (state_ - theta));
+    bound(next);
+    const double moved =
+        ((next - theta).cwiseQuotient(state_prior_std_.cwiseMax(1e-300))).cwiseAbs().maxCoeff();
+    theta = next;
+    if (moved < 1e-6) break;
+  }
+  // Joseph form, and the same gain and noise on the model-error scaling's covariance: the
+  // frequencies carry no allowance of the TE features, so their information stays whatever c.
+  const CalibrationMatrix IKH = CalibrationMatrix::Identity() - K * H;
+  const CalibrationMatrix KRK = K * R * K.transpose();
+  state_covariance_ = IKH * prior * IKH.transpose() + KRK;
+  state_covariance_ = 0.5 * (state_covariance_ + state_covariance_.transpose()).eval();
+  model_error_.predict(Q);
+  model_error_.absorb(IKH, KRK);
+  state_ = theta;
+  last_update_t_ = has_update_t_ ? std::max(last_update_t_, t) : t;
+  has_update_t_ = true;
+  for (std::size_t j = 0; j < count; ++j) ++modal_count_[static_cast<std::size_t>(mode[j])];
+  ++estimate_.modal_updates;
+  outputs(torque, supports);
+  return WindowOutcome::kUpdated;
+}
+
 std::uint32_t Calibrator::countAtOperatingPoint(double torque) {
   const long key = std::lround(torque / (2.0 * config_.torque_band));
   int i = 0;
@@ -444,10 +614,32 @@ double Calibrator::spreadOf(F&& f, std::uint32_t depends_on) const {
   return std::sqrt(std::max(0.0, g.dot(covariance_ * g)));
 }
 
+std::array<double, 2> Calibrator::unitBearingStiffness(const StiffnessEstimator& supports) const {
+  std::array<double, 2> unit{0.0, 0.0};
+  for (std::size_t i = 0; i < rig_->bearings.size(); ++i) {
+    const SupportEstimate& s = supports.current().supports[i];
+    unit[rig_->bearings[i].shaft] +=
+        s.solution.radialStiffness() / supports.supportConfig(i).stiffness_scale;
+  }
+  return unit;
+}
+
+std::array<Mode, 3> Calibrator::modesAt(const CalibrationVector& p, double torque,
+                                        const std::array<double, 2>& unit,
+                                        const StiffnessEstimator& supports) const {
+  const std::array<double, 2> kb{p[kPinionBearingScale] * unit[0], p[kGearBearingScale] * unit[1]};
+  return modalAnalysis(rigRotorParameters(*rig_, supports.mesh(), kb),
+                       model_.meanMeshStiffness(p, torque));
+}
+
+std::array<Mode, 3> Calibrator::modes(double torque, const StiffnessEstimator& supports) const {
+  return modesAt(estimate_.value, torque, unitBearingStiffness(supports), supports);
+}
+
 CalibrationBands Calibrator::bands(double torque, const StiffnessEstimator& supports,
                                    bool with_modes) const {
   CalibrationBands out;
-  out.calibrated = estimate_.updates > 0;
+  out.calibrated = estimate_.updates > 0 || estimate_.modal_updates > 0;
   const CalibrationVector& theta = estimate_.value;
   const CalibrationMatrix& P = covariance_;
   // Period-mean mesh stiffness at this torque (its flank state per phase).
@@ -459,12 +651,7 @@ CalibrationBands Calibrator::bands(double torque, const StiffnessEstimator& supp
   out.mesh_stiffness_low = out.mesh_stiffness - k95 * mesh_std;
   out.mesh_stiffness_high = out.mesh_stiffness + k95 * mesh_std;
   // Bearing stiffness per shaft: the Hertz tangent at the current load (scale 1) times the scale.
-  std::array<double, 2> unit{0.0, 0.0};
-  for (std::size_t i = 0; i < rig_->bearings.size(); ++i) {
-    const SupportEstimate& s = supports.current().supports[i];
-    unit[rig_->bearings[i].shaft] +=
-        s.solution.radialStiffness() / supports.supportConfig(i).stiffness_scale;
-  }
+  const std::array<double, 2> unit = unitBearingStiffness(supports);
   for (int s = 0; s < 2; ++s) {
     const int index = s == 0 ? kPinionBearingScale : kGearBearingScale;
     out.bearing_stiffness[s] = theta[index] * unit[s];
@@ -473,12 +660,7 @@ CalibrationBands Calibrator::bands(double torque, const StiffnessEstimator& supp
   }
   if (!with_modes) return out;
   // Natural frequencies of the calibrated model (modal_analysis.hpp), each with its band.
-  auto modes = [&](const CalibrationVector& p) {
-    const std::array<double, 2> kb{p[kPinionBearingScale] * unit[0],
-                                   p[kGearBearingScale] * unit[1]};
-    return modalAnalysis(rigRotorParameters(*rig_, supports.mesh(), kb),
-                         model_.meanMeshStiffness(p, torque));
-  };
+  auto modes = [&](const CalibrationVector& p) { return modesAt(p, torque, unit, supports); };
   const std::array<Mode, 3> m = modes(theta);
   // The three frequencies' gradients together: two modal analyses per parameter that moves them.
   Eigen::Matrix<double, 3, kCalibrationSize> G = Eigen::Matrix<double, 3, kCalibrationSize>::Zero();
@@ -652,6 +834,21 @@ CalibrationProgress Calibrator::progress() const {
 
 std::string Calibrator::waitingReason() const {
   if (estimate_.updates > 0) return {};
+  if (estimate_.modal_updates > 0) {
+    // The natural frequencies have calibrated the bearings; the encoder windows, which the mesh
+    // scale and T_p need, still wait.
+    return format(estimate_.modal_updates == 1
+                      ? "%llu record of natural frequencies updated the calibration, the "
+                        "encoders' TE not yet: "
+                      : "%llu records of natural frequencies updated the calibration, the "
+                        "encoders' TE not yet: ",
+                  static_cast<unsigned long long>(estimate_.modal_updates)) +
+           teWaitingReason();
+  }
+  return teWaitingReason();
+}
+
+std::string Calibrator::teWaitingReason() const {
   const CalibrationProgress p = progress();
   if (p.readings == 0) return "no encoder reading with the gear angle has reached the calibration";
   const double tb = config_.baseline_torque;

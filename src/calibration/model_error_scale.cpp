@@ -47,6 +47,13 @@ void ModelErrorScale::update(const FeatureVector& nu, const FeatureVector& varia
   ++windows_;
 }
 
+void ModelErrorScale::absorb(const CalibrationMatrix& ikh, const CalibrationMatrix& krk) {
+  // Joseph form (Gelb 1974, sec. 7.2): the other measurement's whole noise is known, so it joins
+  // P_N; the features' model-error parts are only carried through the gain.
+  noise_part_ = (ikh * noise_part_ * ikh.transpose()).eval() + krk;
+  for (CalibrationMatrix& p : model_part_) p = (ikh * p * ikh.transpose()).eval();
+}
+
 FeatureVector ModelErrorScale::scale() const {
   FeatureVector c = FeatureVector::Ones();
   if (windows_ < kMinWindows) return c;

@@ -340,6 +340,7 @@ const std::set<std::string> kCalibrationKeys = {"mesh_stiffness_scale",
                                                 "max_mesh_to_natural",
                                                 "gate",
                                                 "model_error",
+                                                "modal_model_error",
                                                 "te_noise_floor",
                                                 "drift",
                                                 "reference_torque"};
@@ -412,6 +413,7 @@ static void parseCalibration(const YAML::Node& root, const std::string& file, Ri
   k.max_mesh_to_natural = readDouble(c, w, "max_mesh_to_natural", k.max_mesh_to_natural);
   k.gate = readDouble(c, w, "gate", k.gate);
   k.model_error = readDouble(c, w, "model_error", k.model_error);
+  k.modal_model_error = readDouble(c, w, "modal_model_error", k.modal_model_error);
   k.te_noise_floor = readDouble(c, w, "te_noise_floor", k.te_noise_floor);
   k.drift = readDouble(c, w, "drift", k.drift);
   k.reference_torque = readDouble(c, w, "reference_torque", k.reference_torque);
@@ -421,6 +423,7 @@ static void parseCalibration(const YAML::Node& root, const std::string& file, Ri
   requireInHalfOpenRange(key(w, "max_mesh_to_natural"), k.max_mesh_to_natural, 1e-6, 1.0);
   requirePositive(key(w, "gate"), k.gate);
   requireInHalfOpenRange(key(w, "model_error"), k.model_error, 0.0, 1.0);
+  requireInHalfOpenRange(key(w, "modal_model_error"), k.modal_model_error, 0.0, 1.0);
   requirePositive(key(w, "te_noise_floor"), k.te_noise_floor);
   requireInHalfOpenRange(key(w, "drift"), k.drift, 0.0, 1.0);
   requirePositive(key(w, "reference_torque"), k.reference_torque);

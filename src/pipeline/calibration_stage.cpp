@@ -44,12 +44,12 @@ void CalibrationStage::modal(Stamp stamp, const ModalFrequency* frequencies, std
                              double torque, PipelineSink& sink) {
   if (!calibrator_) return;
   try {
-    // TEMPORARY until Calibrator::modalUpdate lands.
-    (void)frequencies;
-    (void)count;
-    (void)torque;
-    (void)stamp;
-    (void)sink;
+    const WindowOutcome outcome =
+        calibrator_->modalUpdate(stamp.toSec(), frequencies, count, torque, estimator_);
+    if (outcome != WindowOutcome::kNone) {
+      sink.calibration(stamp, calibrator_->estimate());
+      ++counters_.calibration_out;
+    }
   } catch (const Error& e) {
     ++counters_.calibration_errors;
     counters_.last_event = std::string("calibration: ") + e.what();

@@ -66,11 +66,14 @@ void ModalStage::finish(PipelineSink& sink) {
 
 void ModalStage::predict(double torque) {
   // The model's modes at the record's end: the calibrated model's with its 95 % bands when a
-  // calibration runs, else the estimator's stiffness (ResonanceTracker's model).
-  const std::array<double, 2> kb = estimator_.shaftRadialStiffness();
-  const std::array<Mode, 3> modes = modalAnalysis(rigRotorParameters(rig_, estimator_.mesh(), kb),
-                                                  estimator_.current().mesh.mean);
+  // calibration runs (Calibrator::modes, whose indices its modalUpdate takes), else the
+  // estimator's stiffness (ResonanceTracker's model).
   const Calibrator* calibrator = calibration_.calibrator();
+  const std::array<Mode, 3> modes =
+      calibrator ? calibrator->modes(torque, estimator_)
+                 : modalAnalysis(rigRotorParameters(rig_, estimator_.mesh(),
+                                                    estimator_.shaftRadialStiffness()),
+                                 estimator_.current().mesh.mean);
   const CalibrationBands bands =
       calibrator ? calibrator->bands(torque, estimator_, true) : CalibrationBands{};
   for (std::size_t k = 0; k < 3; ++k) {

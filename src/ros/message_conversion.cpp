@@ -211,6 +211,9 @@ drivetrain_stiffness::Calibration toCalibrationMsg(Stamp stamp, const std::strin
   m.updates = e.updates;
   m.gated = e.gated;
   m.not_excited = e.not_excited;
+  m.modal_updates = e.modal_updates;
+  m.modal_gated = e.modal_gated;
+  m.modal_nis = f("modal_nis", e.modal_nis);
   m.window_torque = f("window_torque", e.window_torque);
   m.window_speed = f("window_speed", e.window_speed);
   m.series_compliance = f("series_compliance", e.series_compliance);
@@ -360,6 +363,9 @@ drivetrain_stiffness::ModalIdentification toModalIdentificationMsg(Stamp stamp,
 std::string calibrationStatus(const RigPipeline& pipeline) {
   if (const Calibrator* c = pipeline.calibrator()) {
     const CalibrationEstimate& e = c->estimate();
+    if (e.windows == 0 && e.modal_updates > 0)
+      return "natural frequencies of " + std::to_string(e.modal_updates) +
+             " records; waiting for the first window (a gear turn at a steady torque)";
     return e.windows == 0 ? "waiting for the first window (a gear turn at a steady torque)"
                           : toString(e.outcome);
   }

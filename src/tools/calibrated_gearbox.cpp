@@ -61,7 +61,7 @@ std::string yamlNumber(double value) {
 namespace {
 
 /// Throws InvalidInput (naming --calibrate) for a rig without a calibration block, an estimate that
-/// no window updated, or a non-finite value or std.
+/// neither a window nor a record of natural frequencies updated, or a non-finite value or std.
 void requireCalibrated(const std::string& config_path, const RigConfig& rig,
                        const CalibrationEstimate& estimate) {
   if (!rig.calibration.present) {
@@ -69,7 +69,7 @@ void requireCalibrated(const std::string& config_path, const RigConfig& rig,
                        "' has no calibration: block: nothing was calibrated "
                        "(docs/calibration.md)");
   }
-  if (estimate.updates == 0) {
+  if (estimate.updates == 0 && estimate.modal_updates == 0) {
     throw InvalidInput("--calibrate: no window of the bag updated the calibration (" +
                        std::to_string(estimate.windows) +
                        " windows: " + std::to_string(estimate.baseline_windows) + " baseline, " +

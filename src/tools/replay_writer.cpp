@@ -174,7 +174,7 @@ std::string calibrationCsvHeader() {
          bands +
          ",knee_torque,measured_mean_te,predicted_mean_te,"
          "measured_mesh_harmonic_1,predicted_mesh_harmonic_1,"
-         "measured_mesh_harmonic_2,predicted_mesh_harmonic_2";
+         "measured_mesh_harmonic_2,predicted_mesh_harmonic_2,modal_updates,modal_gated,modal_nis";
 }
 
 }  // namespace
@@ -393,7 +393,9 @@ void ReplayWriter::emitCalibration(const drivetrain_stiffness::Calibration& m) {
       .number(m.natural_frequency_3_high);
   c.number(m.knee_torque).number(m.measured_mean_te).number(m.predicted_mean_te);
   c.number(m.measured_mesh_harmonic_1).number(m.predicted_mesh_harmonic_1);
-  c.number(m.measured_mesh_harmonic_2).number(m.predicted_mesh_harmonic_2).endRow();
+  c.number(m.measured_mesh_harmonic_2).number(m.predicted_mesh_harmonic_2);
+  c.number(static_cast<double>(m.modal_updates)).number(static_cast<double>(m.modal_gated));
+  c.number(m.modal_nis).endRow();
 }
 
 void ReplayWriter::emitMeshPeriodStats(const drivetrain_stiffness::MeshPeriodStats& m) {

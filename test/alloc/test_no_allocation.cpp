@@ -141,6 +141,37 @@ TEST(NoAllocation, CalibrationProgressThroughDroppedWindows) {
   EXPECT_LT(longest, 1.5);
 }
 
+// The calibration's updates from identified natural frequencies (Calibrator::modalUpdate): per
+// record a few modal analyses, the iterated update and the outputs in fixed-size storage. Warmed up
+// by one record, then ten records counted: updated, gated and empty ones.
+TEST(NoAllocation, NaturalFrequencyRecordsThroughCalibrationUpdates) {
+  RigConfig rig = test::seedServo();
+  rig.calibration.present = true;
+  Calibrator calibrator(rig);
+  StiffnessEstimator supports(rig);
+  supports.setTorque(2.0);
+  const std::array<Mode, 3> model = calibrator.modes(2.0, supports);
+  // A rig whose transverse modes sit 1 % above and 2 % below the drawing's.
+  const std::array<ModalFrequency, 2> record{
+      {{0, 1.01 * model[0].natural_frequency, 4.0}, {1, 0.98 * model[1].natural_frequency, 5.0}}};
+  const ModalFrequency outlier{1, 3.0 * model[1].natural_frequency, 5.0};
+  ASSERT_EQ(calibrator.modalUpdate(0.5, record.data(), 2, 2.0, supports), WindowOutcome::kUpdated);
+  const long before = allocationCount();
+  int updated = 0, gated = 0;
+  for (int i = 1; i <= 10; ++i) {
+    const WindowOutcome o = i % 5 == 0 ? calibrator.modalUpdate(i, &outlier, 1, 2.0, supports)
+                            : i % 7 == 0
+                                ? calibrator.modalUpdate(i, nullptr, 0, 2.0, supports)
+                                : calibrator.modalUpdate(i, record.data(), 2, 2.0, supports);
+    updated += o == WindowOutcome::kUpdated;
+    gated += o == WindowOutcome::kGated;
+  }
+  const long n = allocationCount() - before;
+  EXPECT_EQ(n, 0) << n / 10.0 << " heap allocations per record";
+  EXPECT_EQ(updated, 7);
+  EXPECT_EQ(gated, 2);
+}
+
 // Preload inputs: new axial and radial preloads and interferences for both
 // supports at 20 Hz between torque inputs at 10 kHz. "Steady state" here means what a running rig
 // reaches and keeps until a reset or an input gap restarts the dynamics:

@@ -82,6 +82,7 @@ TEST(CalibrationConfig, PriorsDefaultToTheRigsOwnValues) {
                    1.3);  // the pinion support's stiffness_scale
   EXPECT_DOUBLE_EQ(rig.calibration.gear_bearing_scale.mean, 1.0);
   EXPECT_DOUBLE_EQ(rig.calibration.te_offset.std, 2e-6);
+  EXPECT_EQ(rig.calibration.modal_model_error, 0.002);  // docs/calibration.md "Natural frequencies"
   EXPECT_DOUBLE_EQ(rig.bearings[0].stiffness_scale, 1.3);
 }
 
@@ -101,6 +102,14 @@ TEST(CalibrationConfig, RefusesBadValuesNamingTheField) {
                 .find("calibration.preload_torque.mean"),
             std::string::npos);
   EXPECT_NE(message("calibration:\n  gate: 0").find("calibration.gate"), std::string::npos);
+  EXPECT_NE(
+      message("calibration:\n  modal_model_error: -0.001").find("calibration.modal_model_error"),
+      std::string::npos);
+  EXPECT_NE(
+      message("calibration:\n  modal_model_error: .nan").find("calibration.modal_model_error"),
+      std::string::npos);
+  EXPECT_EQ(seedWith("calibration:\n  modal_model_error: 0.005").calibration.modal_model_error,
+            0.005);
   EXPECT_NE(message("calibration:\n  typo: 1").find("calibration.typo: unknown key"),
             std::string::npos);
   EXPECT_NE(

@@ -110,5 +110,33 @@ TEST(ModelErrorScale, IsTheFiltersOwnCovarianceUntilItHasEnoughWindows) {
   EXPECT_LT((t.scale.covariance() - t.filter).norm(), 1e-12 * t.filter.norm());
 }
 
+TEST(ModelErrorScale, AnotherMeasurementsUpdateHoldsAtEveryScale) {
+  // A measurement of another kind (the natural frequencies: docs/calibration.md "Natural
+  // frequencies") with gain K, Jacobian H and a noise R it knows, after windows that show c = 4:
+  // the estimate's real covariance is the Joseph form of the real covariance before it, whatever c
+  // the features' model error has: (I - K H) P(c) (I - K H)' + K R K'.
+  std::mt19937_64 rng(5);
+  Trial t = run(rng, 60, 4.0);
+  ASSERT_GT(t.scale.scale().maxCoeff(), 1.0);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  Eigen::Matrix<double, 2, kCalibrationSize> H;
+  for (int j = 0; j < 2; ++j) {
+    for (int i = 0; i < kCalibrationSize; ++i) H(j, i) = normal(rng);
+  }
+  const Eigen::Matrix2d R = Eigen::Vector2d(0.02, 0.05).asDiagonal();
+  const CalibrationMatrix P = t.scale.covariance(1.0);
+  const Eigen::Matrix<double, kCalibrationSize, 2> K =
+      P * H.transpose() * (H * P * H.transpose() + R).inverse();
+  const CalibrationMatrix IKH = CalibrationMatrix::Identity() - K * H;
+  const CalibrationMatrix KRK = K * R * K.transpose();
+  const CalibrationMatrix before_own = t.scale.covariance(0.0), before_wide = P;
+  t.scale.absorb(IKH, KRK);
+  const CalibrationMatrix own = IKH * before_own * IKH.transpose() + KRK;
+  const CalibrationMatrix wide = IKH * before_wide * IKH.transpose() + KRK;
+  EXPECT_LT((t.scale.covariance(0.0) - own).norm(), 1e-12 * own.norm());
+  EXPECT_LT((t.scale.covariance(1.0) - wide).norm(), 1e-12 * wide.norm());
+  EXPECT_LT(wide.trace(), before_wide.trace());  // the other measurement's information stays
+}
+
 }  // namespace
 }  // namespace drivetrain_stiffness

@@ -1,6 +1,7 @@
-// Live calibration of the stiffness model against the rig's encoders, free of ROS and of any
-// clock: docs/calibration.md "1. Measured TE" to "4. Outputs and confidence bands". Allocation-free
-// per reading; per window only fixed-size Eigen and the supports' preallocated solutions.
+// Live calibration of the stiffness model against the rig's encoders and its identified natural
+// frequencies, free of ROS and of any clock: docs/calibration.md "1. Measured TE" to "4. Outputs
+// and confidence bands", and "Natural frequencies". Allocation-free per reading; per window and per
+// identification only fixed-size Eigen and the supports' preallocated solutions.
 #pragma once
 
 #include <array>
@@ -13,6 +14,7 @@
 #include "drivetrain_stiffness/calibration/model_error_scale.hpp"
 #include "drivetrain_stiffness/calibration/order_regression.hpp"
 #include "drivetrain_stiffness/calibration/static_te_model.hpp"
+#include "drivetrain_stiffness/core/modal_analysis.hpp"
 #include "drivetrain_stiffness/core/rig_config.hpp"
 
 namespace drivetrain_stiffness {
@@ -47,6 +49,9 @@ struct CalibrationEstimate {
   /// Per feature, the model error the windows show over the allowance (ModelErrorScale::scale).
   FeatureVector model_error_scale = FeatureVector::Ones();
   std::uint64_t windows = 0, baseline_windows = 0, updates = 0, gated = 0, not_excited = 0;
+  /// Records of identified natural frequencies that updated the estimate, and that were gated.
+  std::uint64_t modal_updates = 0, modal_gated = 0;
+  double modal_nis = 0.0;      ///< of the last record of natural frequencies (dof: its count)
   double window_torque = 0.0;  ///< [N·m] the last window's mean
   double window_speed = 0.0;   ///< [rad/s] the last window's mean pinion speed
   FeatureVector measured = FeatureVector::Zero(), predicted = FeatureVector::Zero(),
@@ -91,7 +96,8 @@ struct CalibrationProgress {
 
 /// The calibrated stiffness and natural frequencies at an operating point, 95 % bounds.
 struct CalibrationBands {
-  bool calibrated = false;  ///< a window updated the parameters (else: the prior's bounds)
+  /// A window or a record of natural frequencies updated the parameters (else: the prior's bounds).
+  bool calibrated = false;
   double mesh_stiffness = 0.0, mesh_stiffness_low = 0.0,
          mesh_stiffness_high = 0.0;  ///< [N/m] period mean
   std::array<double, 2> bearing_stiffness{}, bearing_stiffness_low{},
@@ -105,6 +111,14 @@ struct MeasuredTeSample {
   double te = 0.0, predicted = 0.0, residual = 0.0;
   double torque = 0.0;  ///< [N·m] held
   double phase = 0.0;   ///< [-] mesh phase
+};
+
+/// An identified natural frequency matched to the model's mode `mode` (0..2, modalAnalysis's order,
+/// by natural frequency).
+struct ModalFrequency {
+  int mode = 0;
+  double frequency = 0.0;      ///< [Hz]
+  double frequency_std = 0.0;  ///< [Hz] its standard deviation (> 0)
 };
 
 class Calibrator {
@@ -127,8 +141,21 @@ class Calibrator {
   const CalibrationEstimate& estimate() const { return estimate_; }
   /// What the calibration has seen, the open window as a stretch. Allocation-free.
   CalibrationProgress progress() const;
+  /// One record's identified frequencies at pinion torque [N·m], t [s] the record's end: one
+  /// update of the same state as the TE windows (no baseline needed); each `mode` indexes modes()
+  /// at the current estimate. Returns kUpdated, kGated (NIS over the gate), or kNone (no usable
+  /// frequency). Throws InvalidInput naming a mode out of range or given twice, a frequency or std
+  /// that is not positive and finite, more than 3 frequencies, or a non-finite t or torque.
+  /// Allocation-free.
+  WindowOutcome modalUpdate(double t, const ModalFrequency* frequencies, std::size_t count,
+                            double torque, const StiffnessEstimator& supports);
+  /// The calibrated model's three modes (with shapes) at pinion torque [N·m]: modalAnalysis of the
+  /// current estimate (bearing scales times the supports' unit stiffness, the mesh's period-mean
+  /// stiffness at that torque).
+  std::array<Mode, 3> modes(double torque, const StiffnessEstimator& supports) const;
   /// Why no window has updated the estimate, one sentence with the numbers (docs/calibration.md
-  /// "When no window updates"); empty once one has. Allocates.
+  /// "When no window updates"), led by the count of records of natural frequencies that did; empty
+  /// once a window has. Allocates.
   std::string waitingReason() const;
   const RigConfig& rig() const { return *rig_; }
   const StaticTeModel& model() const { return model_; }
@@ -142,6 +169,8 @@ class Calibrator {
 
  private:
   void closeWindow(const StiffnessEstimator& supports);
+  /// waitingReason's sentence about the encoder windows alone.
+  std::string teWaitingReason() const;
   /// The excitation rule; sets the number that decided it and its limit.
   WindowOutcome excitation(double speed, double duration, double& value, double& limit) const;
   void noteOutcome(WindowOutcome outcome, double value, double limit);
@@ -157,6 +186,10 @@ class Calibrator {
                                    const Eigen::Matrix<double, kFeatureSize, kFeatureSize>& R,
                                    const FeatureVector& z, double torque,
                                    ModelErrorScale::FeatureRows& H, ModelErrorScale::Gain& K) const;
+  /// Clamps a state to the physical bounds: scales in [0.05, 19.9], T_p >= 0.
+  static void bound(CalibrationVector& state);
+  /// The random walk since the last update at t [s] (docs/calibration.md "3. The estimator").
+  CalibrationMatrix processNoise(double t) const;
   /// Within ~torque_band plus 1 % of the window's first torque.
   bool inBand(double torque) const;
   void outputs(double torque, const StiffnessEstimator& supports);
@@ -164,6 +197,13 @@ class Calibrator {
   template <typename F>
   double spreadOf(F&& f, std::uint32_t depends_on = ~0u) const;
   FeatureVector predict(const CalibrationVector& p, double torque) const;
+  /// Each shaft's bearing stiffness at scale 1 [N/m]: the supports' radial stiffness at their
+  /// current load over their configured stiffness_scale.
+  std::array<double, 2> unitBearingStiffness(const StiffnessEstimator& supports) const;
+  /// The model's modes at parameters p, pinion torque [N·m] and unit bearing stiffness [N/m].
+  std::array<Mode, 3> modesAt(const CalibrationVector& p, double torque,
+                              const std::array<double, 2>& unit,
+                              const StiffnessEstimator& supports) const;
 
   std::shared_ptr<const RigConfig> rig_;
   const CalibrationConfig& config_;  ///< rig_->calibration
@@ -194,6 +234,8 @@ class Calibrator {
   std::array<std::uint32_t, kBins> bin_count_{};
   int bins_used_ = 0;
   std::uint32_t countAtOperatingPoint(double torque);
+  /// Records that carried each mode's frequency (docs/calibration.md "Natural frequencies").
+  std::array<std::uint32_t, 3> modal_count_{};
   double last_update_t_ = 0.0;
   bool has_update_t_ = false;
 

@@ -29,6 +29,10 @@ class ModelErrorScale {
   /// and the update's gain K and Jacobian H.
   void update(const FeatureVector& nu, const FeatureVector& variance, const FeatureVector& noise,
               const FeatureVector& model, const Gain& K, const FeatureRows& H);
+  /// An update by another kind of measurement (no allowance of these features in its noise):
+  /// P_N takes (I - K H) P_N (I - K H)' + K R K', each P_Mj (I - K H) P_Mj (I - K H)'. `ikh`:
+  /// I - K H, `krk`: K R K'.
+  void absorb(const CalibrationMatrix& ikh, const CalibrationMatrix& krk);
   /// c per feature (1 before kMinWindows windows).
   FeatureVector scale() const;
   /// P_true at max(scale(), min_scale) per feature.

@@ -61,6 +61,7 @@ struct CalibrationConfig {
   double max_mesh_to_natural = 0.1;                 ///< [-]
   double gate = 16.27;                              ///< NIS (chi^2, 3 dof, 0.999)
   double model_error = 0.01;                        ///< [-] relative
+  double modal_model_error = 0.002;                 ///< [-] relative, per natural frequency
   double te_noise_floor = 2e-9;                     ///< [m]
   double drift = 1e-4;                              ///< [1/sqrt(s)] relative
   double reference_torque = 1.0;                    ///< [N·m] of series_compliance

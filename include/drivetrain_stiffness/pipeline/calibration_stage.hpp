@@ -11,13 +11,6 @@
 
 namespace drivetrain_stiffness {
 
-// TEMPORARY until calibrator.hpp's lands.
-struct ModalFrequency {
-  int mode = 0;
-  double frequency = 0.0;
-  double frequency_std = 0.0;
-};
-
 class CalibrationStage {
  public:
   /// Calibrates when `enabled` and the rig has calibration and dynamics blocks. Keeps references
@@ -33,7 +26,7 @@ class CalibrationStage {
   void reading(Stamp stamp, double pinion, double gear, double phase, double speed,
                double held_torque, bool continuous, PipelineSink& sink);
   /// One record's identified frequencies at held torque [N*m]: one update of the calibration,
-  /// published when it updated; an Error is counted. Needs nothing (no calibrator: ignored).
+  /// published unless no frequency was usable; an Error is counted. Without a calibrator: ignored.
   void modal(Stamp stamp, const ModalFrequency* frequencies, std::size_t count, double torque,
              PipelineSink& sink);
   /// PipelineSink::stiffness's bands.
