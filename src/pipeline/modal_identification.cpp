@@ -16,10 +16,6 @@ namespace {
 /// Below this pinion speed the orders are not removed: their lines sit at a few hertz, far below
 /// any transverse mode, and an angle that barely moves makes the regression singular [rad/s].
 constexpr double kMinOrderSpeed = 1.0;
-/// The analysis band ends at fs / 2.56, where a data acquisition's anti-alias filter starts to
-/// roll off (the 2.56 samples per hertz of bandwidth of FFT analysers, e.g. ISO 18431-1 practice);
-/// poles beyond it are the filter's, not the structure's.
-constexpr double kSamplesPerBandwidth = 2.56;
 /// Mesh harmonics whose bands are reported at most (the synchronous average removes them all).
 constexpr int kMaxMeshBands = 256;
 
@@ -30,7 +26,7 @@ std::vector<modal::FrequencyBand> orderBands(const ModalJob& job,
                                              double max_speed) {
   modal::OrderRemovalOptions o;
   o.orders = shaft_orders;
-  const double bandwidth = job.sample_rate / kSamplesPerBandwidth;
+  const double bandwidth = job.band * job.sample_rate;
   const double mesh_frequency = job.pinion_teeth * max_speed / kTwoPi;  // [Hz]
   for (int k = 1; k <= kMaxMeshBands && k * mesh_frequency < bandwidth; ++k)
     o.orders.push_back(static_cast<double>(k) * job.pinion_teeth);
@@ -40,7 +36,7 @@ std::vector<modal::FrequencyBand> orderBands(const ModalJob& job,
   std::vector<modal::FrequencyBand> bands =
       modal::OrderRemoval(o).bands(job.angle, job.sample_rate);
   for (modal::FrequencyBand& b : bands) b.lines_only = true;
-  bands.push_back({bandwidth, 0.5 * job.sample_rate, "beyond fs / 2.56", false});
+  bands.push_back({bandwidth, 0.5 * job.sample_rate, "beyond the flat band", false});
   return bands;
 }
 
@@ -98,8 +94,10 @@ ModalReport identifyModes(const ModalJob& job) {
     const double ratio = static_cast<double>(job.pinion_teeth) / job.gear_teeth;
     r.order_bands = orderBands(job, {1.0, 2.0, ratio, 2.0 * ratio}, max_speed);
   } else {
-    const double bandwidth = job.sample_rate / kSamplesPerBandwidth;
-    r.order_bands.push_back({bandwidth, 0.5 * job.sample_rate, "beyond fs / 2.56", false});
+    // Beyond the chain's flat band (~modal_band) the anti-alias filter rolls off: poles there are
+    // its own.
+    r.order_bands.push_back(
+        {job.band * job.sample_rate, 0.5 * job.sample_rate, "beyond the flat band", false});
   }
   modal::SsiOptions ssi_options;
   ssi_options.max_order = job.max_order;

@@ -19,7 +19,8 @@ ModalStage::ModalStage(const RigConfig& rig, const VibrationInput& input, const 
       enabled_(options.modal_identification),
       worker_(options.modal_worker),
       max_order_(options.modal_max_order),
-      block_rows_(options.modal_block_rows) {}
+      block_rows_(options.modal_block_rows),
+      band_(options.modal_band) {}
 
 ModalStage::~ModalStage() {
   if (pending_.valid()) pending_.wait();
@@ -121,6 +122,7 @@ void ModalStage::start(double held_torque) {
   job.gear_teeth = teeth[1];
   job.max_order = max_order_;
   job.block_rows = block_rows_;
+  job.band = band_;
   predict(job, held_torque);
   apply_at_ = Stamp{job.end.ns + std::llround(kApplyDelay * 1e9)};
   auto identify = [&job]() {

@@ -55,6 +55,9 @@ void PipelineOptions::validate() const {
   if (modal_max_order < 4 || modal_max_order > 60 || modal_max_order % 2 != 0) {
     throwInvalid("modal_max_order", modal_max_order, "must be even, from 4 to 60");
   }
+  if (!(modal_band > 0.0 && modal_band <= 0.5)) {
+    throwInvalid("modal_band", modal_band, "must be in (0, 0.5] (a fraction of the sample rate)");
+  }
   if (modal_block_rows < 2 || modal_block_rows > 200) {
     throwInvalid("modal_block_rows", modal_block_rows, "must be from 2 to 200");
   }

@@ -37,6 +37,7 @@ struct ModalJob {
   int pinion_teeth = 0, gear_teeth = 0;
   int max_order = 20;   ///< SSI-COV's last model order (even)
   int block_rows = 40;  ///< SSI-COV's block rows i (lags 1 to 2i - 1)
+  double band = 0.35;   ///< the flat band as a fraction of sample_rate: poles above set aside
 };
 
 /// One pole of one model order, for the stabilisation diagram.

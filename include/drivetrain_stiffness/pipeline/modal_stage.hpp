@@ -70,6 +70,7 @@ class ModalStage {
   PipelineCounters& counters_;
   bool enabled_, worker_;
   int max_order_, block_rows_;
+  double band_;
   /// Two records: one filled block by block, the other read by a pending identification.
   std::array<ModalJob, 2> jobs_;
   std::size_t filling_ = 0;       ///< the buffer being filled

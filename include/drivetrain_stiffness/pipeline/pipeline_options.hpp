@@ -38,6 +38,9 @@ struct PipelineOptions {
   bool modal_identification = true;  ///< identify each renewed vibration record
   int modal_max_order = 20;          ///< SSI-COV's last model order (even, 4 to 60)
   int modal_block_rows = 40;         ///< SSI-COV's block rows (lags to 2i - 1; 2 to 200)
+  /// The accelerometer chain's flat band as a fraction of the sample rate (its anti-alias filter's
+  /// pass band, (0, 0.5]); poles above it are set aside [-].
+  double modal_band = 0.35;
   /// Identify on a worker thread (the node); off: in the caller's thread (a replay). The outputs
   /// are the same bits either way.
   bool modal_worker = false;
