@@ -19,13 +19,12 @@ constexpr double kMinOrderSpeed = 1.0;
 /// Mesh harmonics whose bands are reported at most (the synchronous average removes them all).
 constexpr int kMaxMeshBands = 256;
 
-/// The bands of the removed orders over the record (lines_only: a mode shows through them) and
-/// the band beyond the analysis bandwidth (everything there set aside).
-std::vector<modal::FrequencyBand> orderBands(const ModalJob& job,
-                                             const std::vector<double>& shaft_orders,
-                                             double max_speed) {
+/// The bands of the removed orders over the record, lines_only (a mode shows through them): each
+/// shaft's first two and every mesh harmonic below the flat band.
+std::vector<modal::FrequencyBand> orderBands(const ModalJob& job, double max_speed) {
+  const double ratio = static_cast<double>(job.pinion_teeth) / job.gear_teeth;
   modal::OrderRemovalOptions o;
-  o.orders = shaft_orders;
+  o.orders = {1.0, 2.0, ratio, 2.0 * ratio};
   const double bandwidth = job.band * job.sample_rate;
   const double mesh_frequency = job.pinion_teeth * max_speed / kTwoPi;  // [Hz]
   for (int k = 1; k <= kMaxMeshBands && k * mesh_frequency < bandwidth; ++k)
@@ -36,7 +35,6 @@ std::vector<modal::FrequencyBand> orderBands(const ModalJob& job,
   std::vector<modal::FrequencyBand> bands =
       modal::OrderRemoval(o).bands(job.angle, job.sample_rate);
   for (modal::FrequencyBand& b : bands) b.lines_only = true;
-  bands.push_back({bandwidth, 0.5 * job.sample_rate, "beyond the flat band", false});
   return bands;
 }
 
@@ -91,14 +89,12 @@ ModalReport identifyModes(const ModalJob& job) {
                                     std::max<long>(16, std::lround(job.sample_rate)));
     modal::removeSynchronousAverage(record, turns * static_cast<double>(job.pinion_teeth),
                                     std::max<long>(16, std::lround(0.25 * job.sample_rate)));
-    const double ratio = static_cast<double>(job.pinion_teeth) / job.gear_teeth;
-    r.order_bands = orderBands(job, {1.0, 2.0, ratio, 2.0 * ratio}, max_speed);
-  } else {
-    // Beyond the chain's flat band (~modal_band) the anti-alias filter rolls off: poles there are
-    // its own.
-    r.order_bands.push_back(
-        {job.band * job.sample_rate, 0.5 * job.sample_rate, "beyond the flat band", false});
+    r.order_bands = orderBands(job, max_speed);
   }
+  // Beyond the chain's flat band (~modal_band) the anti-alias filter rolls off: poles there are
+  // its own.
+  r.order_bands.push_back(
+      {job.band * job.sample_rate, 0.5 * job.sample_rate, "beyond the flat band", false});
   modal::SsiOptions ssi_options;
   ssi_options.max_order = job.max_order;
   ssi_options.block_rows = job.block_rows;

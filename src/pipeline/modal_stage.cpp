@@ -160,7 +160,7 @@ void ModalStage::apply(Stamp stamp, PipelineSink& sink) {
   for (std::size_t i = 0; i < r.modes.size() && count < 3; ++i) {
     const modal::IdentifiedMode& m = r.modes[i];
     const int k = r.model_mode[i];
-    if (k < 0 || m.unresolved || r.identified[k] != static_cast<int>(i)) continue;
+    if (k < 0 || m.unresolved) continue;  // matching is one to one: model mode k has only i
     if (!(std::isfinite(m.frequency_std) && m.frequency_std > 0.0)) continue;
     frequencies[count++] = {k, m.frequency, m.frequency_std};
   }
