@@ -14,5 +14,5 @@ if(DRIVETRAIN_WITH_ROS)  # drivetrain_rig_sim and drivetrain_replay write and re
 add_test(NAME campaign_end_to_end
   COMMAND /usr/bin/python3 ${CMAKE_CURRENT_SOURCE_DIR}/test/campaign/test_campaign.py)
 set_tests_properties(campaign_end_to_end PROPERTIES TIMEOUT 1500
-  ENVIRONMENT "DRIVETRAIN_RIG_SIM=${DEVEL_BIN}/drivetrain_rig_sim;DRIVETRAIN_REPLAY=${DEVEL_BIN}/drivetrain_replay")
+  ENVIRONMENT "DRIVETRAIN_RIG_SIM=${DEVEL_BIN}/drivetrain_rig_sim;DRIVETRAIN_REPLAY=${DEVEL_BIN}/drivetrain_replay;DRIVETRAIN_CLI=${DEVEL_BIN}/drivetrain_cli")
 endif()

@@ -17,6 +17,9 @@ import uuid
 # The calibrated parameters of msg/Calibration.msg, in its order (docs/calibration.md).
 CALIBRATED = ("mesh_stiffness_scale", "pinion_bearing_scale", "gear_bearing_scale", "preload_torque", "te_offset")
 MODES = 3  # natural frequencies of the 3-DOF model (seed 000 §3)
+# The model's coordinates that name its modes by the one holding most of a mode's energy
+# (msg/PredictedMode.msg `dominant`; docs/model.md): pinion and gear transverse, mesh.
+MODAL_COORDINATES = ("x_p", "x_g", "x")
 
 _PR_SET_PDEATHSIG = 1
 
@@ -111,12 +114,30 @@ def bag_row(job, returncode, stderr, summary, out_dir):
     frequencies = summary.get("final_resonance_hz") or []
     for i in range(MODES):
         row[f"natural_frequency_{i + 1}"] = frequencies[i] if i < len(frequencies) else None
+    row.update(modal_columns(summary))
     calibration = summary.get("calibration", {})
     row["calibration_updates"] = calibration.get("updates")
+    row["modal_updates"] = calibration.get("modal_updates")
+    row["modal_gated"] = calibration.get("modal_gated")
     for name in CALIBRATED:
         for suffix in ("", "_std", "_identified"):
             row[name + suffix] = calibration.get(name + suffix)
     row["calibration_status"] = summary.get("calibrate_error") or calibration.get("status")
+    return row
+
+
+def modal_columns(summary):
+    """The accelerometers' modal identification over the bag, from summary.json's "modal"
+    (src/tools/modal_totals.hpp): modal_identifications, the records identified; per model mode,
+    named by its dominant coordinate, the last identified frequency and its standard deviation
+    [Hz], empty when no record identified it (or, for _std, when the record did not compute one)."""
+    modal = summary.get("modal") or {}
+    row = {"modal_identifications": modal.get("records")}
+    modes = modal.get("modes") or {}
+    for name in MODAL_COORDINATES:
+        mode = modes.get(name) or {}
+        row[f"modal_frequency_{name}"] = mode.get("frequency")
+        row[f"modal_frequency_{name}_std"] = mode.get("frequency_std")
     return row
 
 

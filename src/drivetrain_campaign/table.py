@@ -6,13 +6,15 @@ written in Python's shortest round-trip form, booleans as true/false, missing va
 
 import csv
 
-from .replay_task import CALIBRATED, MODES
+from .replay_task import CALIBRATED, MODAL_COORDINATES, MODES
 
 COLUMNS = (
     ["bag", "sha256", "start", "duration", "status", "accepted", "rejected", "dropped", "wrong_type",
      "speed_min", "speed_max", "torque_min", "torque_max", "te_rms", "te_peak_to_peak", "mesh_force_mean"]
     + [f"natural_frequency_{i + 1}" for i in range(MODES)]
-    + ["calibration_updates", "calibration_status"]
+    + ["modal_identifications"]
+    + [f"modal_frequency_{name}{suffix}" for name in MODAL_COORDINATES for suffix in ("", "_std")]
+    + ["calibration_updates", "modal_updates", "modal_gated", "calibration_status"]
     + [name + suffix for name in CALIBRATED for suffix in ("", "_std", "_identified")]
     + ["alarm", "alarm_reason", "out_of_family", "family_reason", "duplicates", "report"]
 )

@@ -128,6 +128,11 @@ nlohmann::json calibrationJson(const RigPipeline& pipeline) {
   j["updates"] = e.updates;
   j["gated"] = e.gated;
   j["not_excited"] = e.not_excited;
+  // Records of identified natural frequencies that updated the estimate or were gated, and the
+  // last one's NIS (the Calibration message's modal_updates, modal_gated, modal_nis).
+  j["modal_updates"] = e.modal_updates;
+  j["modal_gated"] = e.modal_gated;
+  j["modal_nis"] = e.modal_nis;
   // The model error the windows show per feature (mean TE, |C_1|, |C_2|), as a multiple of the
   // configured allowance; above 1 the std and bands above are widened (model_error_scale.hpp).
   j["model_error_scale"] = {e.model_error_scale[0], e.model_error_scale[1], e.model_error_scale[2]};
@@ -419,6 +424,8 @@ nlohmann::json summaryJson(const ReplayOptions& o, const RigConfig& rig, const J
   summary["calibration"] = calibrationJson(pipeline);
   // The per-mesh-period statistics over the bag (a campaign's row): speed, torque, TE RMS, force.
   summary["mesh_periods"] = writer.meshPeriodTotals().json();
+  // The modal identifications over the bag (a campaign's row): per mode, the last identified.
+  summary["modal"] = writer.modalTotals().json();
   if (const DynamicsEstimator* d = pipeline.dynamics())
     summary["dynamics_work"] = dynamicsWorkJson(*d);
   if (const auto& r = pipeline.lastResonance()) {

@@ -411,6 +411,7 @@ void ReplayWriter::emitMeshPeriodStats(const drivetrain_stiffness::MeshPeriodSta
 }
 
 void ReplayWriter::emitModalIdentification(const drivetrain_stiffness::ModalIdentification& m) {
+  modal_totals_.add(m);
   if (auto* bag = bagFor(OutputTopics::kModalIdentification))
     bag->write("/modal_identification", m.header.stamp, m);
   if (!modal_csv_) return;

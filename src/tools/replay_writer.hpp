@@ -12,6 +12,7 @@
 
 #include "bag_writer.hpp"          // NOLINT(build/include_subdir)
 #include "mesh_period_totals.hpp"  // NOLINT(build/include_subdir)
+#include "modal_totals.hpp"        // NOLINT(build/include_subdir)
 #include "drivetrain_stiffness/ros/message_sink.hpp"
 
 namespace drivetrain_stiffness {
@@ -100,6 +101,8 @@ class ReplayWriter : public MessageSink {
   void close();
   /// Every mesh_period_stats block so far, summed (whether or not --topics writes the topic).
   const MeshPeriodTotals& meshPeriodTotals() const { return mesh_period_totals_; }
+  /// Every modal identification so far, summed (whether or not --topics writes the topic).
+  const ModalTotals& modalTotals() const { return modal_totals_; }
   const OutputTopics& topics() const { return bag_topics_; }     ///< what the bag holds
   const OutputTopics& csvTopics() const { return csv_topics_; }  ///< what the CSV files hold
 
@@ -123,6 +126,7 @@ class ReplayWriter : public MessageSink {
 
   OutputTopics bag_topics_, csv_topics_;
   MeshPeriodTotals mesh_period_totals_;
+  ModalTotals modal_totals_;
   std::unique_ptr<BagWriter> bag_;
   std::unique_ptr<CsvFile> stiffness_csv_, te_csv_, spectrum_csv_, resonance_csv_, measured_te_csv_,
       calibration_csv_, mesh_period_csv_, modal_csv_, modal_poles_csv_;

@@ -4,13 +4,16 @@ a local cluster on the loopback gives the serial run's table byte for byte; a wo
 mid-campaign leaves every bag with exactly one row, equal to the serial one; a second run
 replays nothing, a grown campaign replays only the new bag; a truncated bag and a file that is
 not a bag get their rows with reasons; the change detector raises on a 10 % loss of mesh
-stiffness and stays quiet on a constant campaign; every socket the campaign's processes listen on
-is on 127.0.0.1, and the embedded cluster's HTTP servers serve no page.
+stiffness and stays quiet on a constant campaign; a bag with accelerometers gives the identified
+modes' columns, one without leaves them empty; every socket the campaign's processes listen on is
+on 127.0.0.1, and the embedded cluster's HTTP servers serve no page.
 
-Environment: DRIVETRAIN_RIG_SIM and DRIVETRAIN_REPLAY (the built programs; CMakeLists.txt sets them).
+Environment: DRIVETRAIN_RIG_SIM, DRIVETRAIN_REPLAY and DRIVETRAIN_CLI (the built programs;
+CMakeLists.txt sets them).
 """
 
 import csv
+import json
 import os
 import shutil
 import signal
@@ -27,6 +30,7 @@ CAMPAIGN = os.path.join(ROOT, "scripts", "drivetrain_campaign")
 CONFIG = os.path.join(ROOT, "config", "gearboxes", "seed_servo.yaml")
 RIG_SIM = os.environ.get("DRIVETRAIN_RIG_SIM", "drivetrain_rig_sim")
 REPLAY = os.environ.get("DRIVETRAIN_REPLAY", "drivetrain_replay")
+CLI = os.environ.get("DRIVETRAIN_CLI", "drivetrain_cli")
 # Short load sweeps: every hold scaled down, still whole gear turns at 600 rpm (load_sweep.hpp).
 SIM = ["--scenario", "load_sweep", "--config", CONFIG, "--duration", "6", "--speed-rpm", "600"]
 
@@ -244,6 +248,63 @@ class Campaign(unittest.TestCase):
             self.assertAlmostEqual(float(row["mesh_stiffness_scale"]), truth[f"bag_00{i}.bag"], delta=0.05)
             self.assertEqual(row["alarm"], "true" if i >= 3 else "false", (i, row["alarm_reason"]))
         self.assertIn("mesh_stiffness_scale -", r["bag_003.bag"]["alarm_reason"])
+
+    def test_identified_modes_from_the_accelerometers(self):
+        # The model's modes at the gearbox's torque, by dominant coordinate (drivetrain_cli modes, the
+        # mean mesh stiffness as the replay's model uses): the identified frequencies lie within 1 %.
+        import yaml
+
+        with open(CONFIG) as f:
+            torque = yaml.safe_load(f)["dynamics"]["torque"]
+        cli = json.loads(subprocess.run([CLI, "modes", "--config", CONFIG, "--torque", str(torque)], check=True,
+                                        capture_output=True, text=True).stdout)
+        model = {m["dominant_coordinate"]: m["natural_frequency_hz"] for m in cli["modes"]["mesh_mean"]}
+        self.assertEqual(sorted(model), ["x", "x_g", "x_p"])
+        bags = os.path.join(self.tmp, "vibration")
+        os.makedirs(bags)
+        with_vibration, without = os.path.join(bags, "ripple.bag"), os.path.join(bags, "quiet.bag")
+        for bag, rate in ((with_vibration, "51200"), (without, "0")):
+            subprocess.run([RIG_SIM, "--scenario", "torque_ripple", "--duration", "10", "--config", CONFIG,
+                            "--vibration-rate", rate, "--out", bag], check=True, capture_output=True)
+        out = os.path.join(self.tmp, "vibration_campaign")
+        campaign(out, [bags], "--serial", "--bag-outputs", "all")
+        r = {os.path.basename(x["bag"]): x for x in rows(out)}
+        row = r["ripple.bag"]
+        csv_dir = os.path.join(out, row["report"], "csv")
+        with open(os.path.join(csv_dir, "modal_identification.csv"), newline="") as f:
+            identified = list(csv.DictReader(f))
+        # One record per 4 s of 51.2 kHz samples, each a message and its rows in the CSV file.
+        self.assertEqual(int(row["modal_identifications"]), len({x["stamp"] for x in identified}))
+        self.assertEqual(int(row["modal_identifications"]), 2)
+        for name, frequency in model.items():
+            last = [x for x in identified if x["status"] == "identified" and x["dominant"] == name]
+            if frequency > 51200 / 2:  # above Nyquist: no record can hold it
+                self.assertEqual(last, [], name)
+                self.assertEqual(row[f"modal_frequency_{name}"], "", name)
+                self.assertEqual(row[f"modal_frequency_{name}_std"], "", name)
+                continue
+            self.assertTrue(last, name)
+            self.assertEqual(float(row[f"modal_frequency_{name}"]), float(last[-1]["frequency"]), name)
+            self.assertEqual(float(row[f"modal_frequency_{name}_std"]), float(last[-1]["frequency_std"]), name)
+            self.assertAlmostEqual(float(row[f"modal_frequency_{name}"]) / frequency, 1.0, delta=0.01, msg=name)
+            self.assertGreater(float(row[f"modal_frequency_{name}_std"]), 0.0, name)
+        with open(os.path.join(csv_dir, "calibration.csv"), newline="") as f:
+            final = list(csv.DictReader(f))[-1]
+        for column in ("modal_updates", "modal_gated"):
+            self.assertEqual(int(row[column]), int(float(final[column])), column)
+        self.assertGreater(int(row["modal_updates"]), 0)  # the identified frequencies update the calibration
+        quiet = r["quiet.bag"]
+        self.assertEqual(quiet["status"], "ok")
+        self.assertEqual((quiet["modal_identifications"], quiet["modal_updates"], quiet["modal_gated"]), ("0", "0", "0"))
+        for name in model:
+            self.assertEqual((quiet[f"modal_frequency_{name}"], quiet[f"modal_frequency_{name}_std"]), ("", ""), name)
+        # The load sweeps' accelerometers (one record each) give the bearing modes too.
+        for x in rows(self.serial):
+            if x["bag"].startswith(self.step):
+                self.assertEqual(int(x["modal_identifications"]), 1, x["bag"])
+                for name in ("x_p", "x_g"):
+                    self.assertAlmostEqual(float(x[f"modal_frequency_{name}"]) / model[name], 1.0, delta=0.01,
+                                           msg=(x["bag"], name))
 
     def test_cluster_equals_serial_and_a_rerun_replays_nothing(self):
         out = os.path.join(self.tmp, "cluster")

@@ -32,7 +32,12 @@ const std::vector<std::string>& schemaKeys() {
       // dynamics:
       "pinion_mass", "gear_mass", "pinion_inertia", "gear_inertia", "mesh_damping_ratio",
       "bearing_damping_ratio", "bearing_clearance", "speed_rpm", "transmission_error_amplitude",
-      "backlash", "torque"};
+      "backlash", "torque",
+      // calibration: (docs/calibration.md), its priors {mean, std, reference_std}
+      "calibration", "mesh_stiffness_scale", "pinion_bearing_scale", "gear_bearing_scale",
+      "te_offset", "baseline_torque", "torque_band", "min_speed_rpm", "max_mesh_to_natural", "gate",
+      "model_error", "modal_model_error", "te_noise_floor", "drift", "reference_torque", "mean",
+      "std", "reference_std"};
   return keys;
 }
 

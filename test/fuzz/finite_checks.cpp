@@ -168,4 +168,23 @@ void FiniteSink::meshPeriod(Stamp, const MeshPeriodStatistics& s) {
   ++outputs;
 }
 
+void FiniteSink::modalIdentification(Stamp, const ModalReport& r) {
+  // The standard deviations may be NaN (not computed: the message carries 0); the rest is finite.
+  for (double v : {r.duration, r.sample_rate, r.torque, r.pinion_speed})
+    check("modal_identification", v);
+  for (std::size_t i = 0; i < r.modes.size(); ++i) {
+    check("modal_identification.modes.frequency", r.modes[i].frequency);
+    check("modal_identification.modes.damping", r.modes[i].damping);
+  }
+  for (double mac : r.mac) check("modal_identification.modes.mac", mac);
+  for (const ModelModePrediction& p : r.predicted) {
+    for (double v : {p.frequency, p.low, p.high}) check("modal_identification.predicted", v);
+  }
+  for (const ModalPoleRow& p : r.poles) {
+    check("modal_identification.pole_frequency", p.frequency);
+    check("modal_identification.pole_damping", p.damping);
+  }
+  ++outputs;
+}
+
 }  // namespace drivetrain_stiffness::fuzz

@@ -25,6 +25,7 @@ class FiniteSink : public PipelineSink {
   void measuredTe(Stamp stamp, const MeasuredTeSample& sample) override;
   void calibration(Stamp stamp, const CalibrationEstimate& estimate) override;
   void meshPeriod(Stamp stamp, const MeshPeriodStatistics& stats) override;
+  void modalIdentification(Stamp stamp, const ModalReport& report) override;
   std::uint64_t outputs = 0;
 };
 

@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace drivetrain_stiffness::fuzz {
@@ -27,6 +28,8 @@ class FuzzFinding : public std::logic_error {
 struct CaseStats {
   std::uint64_t accepted = 0, refused = 0;
   std::vector<std::string> refusals;
+  /// The library's own counters at the case's end, by name (the pipeline target's namedCounters).
+  std::vector<std::pair<std::string, std::uint64_t>> counters;
   void refuse(const std::string& message) {
     ++refused;
     refusals.push_back(message);

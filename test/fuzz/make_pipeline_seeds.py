@@ -86,6 +86,26 @@ def motion(stamp, angle, velocity=None, gear=None, missing=False, numbering=0):
     return out
 
 
+# vibration blocks: layout byte bits 0-2 channel names (pipeline_decoder.cpp decodeVibration)
+BOTH, GEAR_ONLY, EXTRA_UNKNOWN, NO_CHANNELS, EMPTY_NAME, NONE_KNOWN, REPEATED = range(7)
+UNNUMBERED, NEXT, SAME_SEQ, SKIP_SEQ = range(4)
+R51200, R51200_WITHIN, R51200_PAST, R25600, R64, R0, R_NEGATIVE = range(7)
+
+
+def vibration(stamp, frames, rate=R51200, channels=BOTH, numbering=NEXT, size=0, poison=None, amplitude=0.5):
+    """One block: `frames` frames of a sine of `amplitude` [m/s^2]; size 2: one sample short of whole
+    frames, 3: no samples; poison (index, value bytes): that sample replaced."""
+    layout = channels | numbering << 3 | size << 5 | (0x80 if poison else 0)
+    out = bytes([0xE0]) + stamp + bytes([layout, rate, frames]) + typical(amplitude, 10.0)
+    if poison:
+        out += bytes([poison[0]]) + poison[1]
+    return out
+
+
+def block_ms(frames, hz):  # a block's length, the stamp step of continuous blocks
+    return frames / hz * 1e3
+
+
 def encoder_run_up(n, rpm0, rpm1):
     """Torque and joint_states at 1 kHz, the pinion from rpm0 to rpm1, angle wrapped at +-pi."""
     out, angle = b"", 0.0
@@ -139,6 +159,33 @@ seeds = {
     + motion(back(0.5), 0.1) + motion(ZERO, 0.1) + motion(forward(1), 0.2, numbering=0x10 | 3 << 5)
     + motion(forward(1), 0.3, 60.0, 2.0) + motion(forward(1), 0.35, 60.0, 3.0) + ripple(5, 50.0, 0.1, 0.0)
     + motion(forward(1), 0.0, raw(1e9) and None) + ripple(3, 1.0, 0.1, 0.0),
+    # accelerometer blocks at 51.2 kHz, numbered and continuous, then unnumbered 64 Hz blocks that
+    # fill a 4 s record: the identification runs (on modes far above that Nyquist frequency)
+    "valid_vibration.bin": header() + ripple(2, 1.0, 0.1, 0.0)
+    + b"".join(vibration(forward(block_ms(32, 51200)), 32) for _ in range(4))
+    + b"".join(vibration(forward(block_ms(32, 64)), 32, rate=R64, numbering=UNNUMBERED) for _ in range(9))
+    + ripple(2, 1.0, 0.1, 0.0),
+    # blocks the value rules refuse, each after a good one: a NaN sample, a sample past the range,
+    # a length not a whole number of frames, no samples, zero and negative rate, no channels, an
+    # empty name, no known name, a repeated name
+    "invalid_vibration_values.bin": header() + ripple(1, 1.0, 0.1, 0.0) + vibration(forward(0.625), 32)
+    + vibration(forward(0.625), 32, poison=(5, interesting(NAN))) + vibration(forward(0.625), 32, poison=(7, raw(2e6)))
+    + vibration(forward(0.625), 32, size=2) + vibration(forward(0.625), 32, size=3)
+    + vibration(forward(0.625), 32, rate=R0) + vibration(forward(0.625), 32, rate=R_NEGATIVE)
+    + vibration(forward(0.625), 32, channels=NO_CHANNELS) + vibration(forward(0.625), 32, channels=EMPTY_NAME)
+    + vibration(forward(0.625), 32, channels=NONE_KNOWN) + vibration(forward(0.625), 32, channels=REPEATED)
+    + vibration(forward(0.625), 32),
+    # the continuity rules: a rate within the tolerance continues, one past it and another rate start
+    # new records, a skipped number and a late block are gaps, the same number again and an early
+    # block overlap (refused), an unknown extra channel is counted, a changed channel set restarts
+    "invalid_vibration_continuity.bin": header() + ripple(1, 1.0, 0.1, 0.0) + vibration(forward(0.625), 32)
+    + vibration(forward(0.625), 32, rate=R51200_WITHIN) + vibration(forward(0.625), 32, rate=R51200_PAST)
+    + vibration(forward(1.25), 32, rate=R25600) + vibration(forward(1.25), 32, rate=R25600, numbering=SKIP_SEQ)
+    + vibration(forward(1.25), 32, rate=R25600, numbering=SAME_SEQ) + vibration(forward(5.0), 32, rate=R25600)
+    + vibration(forward(1.25), 32, rate=R25600, numbering=UNNUMBERED)
+    + vibration(forward(0.3), 32, rate=R25600, numbering=UNNUMBERED)
+    + vibration(forward(1.25), 32, rate=R25600, channels=EXTRA_UNKNOWN)
+    + vibration(forward(1.25), 32, rate=R25600, channels=GEAR_ONLY),
     "no_dynamics_preload_ramp.bin": header(no_dynamics=1, exact_solve=1)
     + b"".join(preload(forward(1), [pre(0, 500.0 + 250.0 * i), pre(1, 500.0 + 250.0 * i, inner=2e-6 * i)]) + torque(SAME, typical(0.1, 0.3)) for i in range(8)),
 }

@@ -1,5 +1,6 @@
 #include "pipeline_decoder.hpp"
 
+#include <algorithm>
 #include <cfloat>
 #include <cmath>
 #include <limits>
@@ -111,6 +112,48 @@ MotionCase decodeMotion(ByteReader& in) {
     m.reading.pinion_velocity = decodeValue(in, 700.0);  // [rad/s]: 6700 rpm at full scale
   if (flags & 2) m.reading.gear_angle = decodeValue(in, 10.0);
   return m;
+}
+
+VibrationCase decodeVibration(ByteReader& in) {
+  // Channel names: both supports, one, an unknown extra, none, an empty name, none known, a
+  // repeated name, one from the bytes beside a support.
+  static const std::vector<std::string> kLayouts[] = {{"pinion_bearing", "gear_bearing"},
+                                                      {"gear_bearing"},
+                                                      {"pinion_bearing", "gear_bearing", "tacho"},
+                                                      {},
+                                                      {"", "gear_bearing"},
+                                                      {"nacelle"},
+                                                      {"pinion_bearing", "pinion_bearing"},
+                                                      {}};
+  const std::uint8_t layout = in.u8(), rate = in.u8();
+  VibrationCase v;
+  v.channels = kLayouts[layout % 8];
+  if (layout % 8 == 7) v.channels = {in.string(16), "gear_bearing"};
+  v.numbering = (layout >> 3) & 3;
+  static const double kRates[] = {
+      51200.0, 51200.0 * (1.0 + 1e-7), 51200.0 * (1.0 + 1e-5), 25600.0, 64.0, 0.0, -51200.0};
+  v.sample_rate = rate % 8 < 7 ? kRates[rate % 8] : std::min(decodeValue(in, 51200.0), 51200.0);
+  const std::size_t frames = in.u8() % 33;
+  const double amplitude = decodeValue(in, 10.0);  // [m/s^2]
+  const std::size_t width = v.channels.size();
+  v.data.resize(frames * width);
+  for (std::size_t i = 0; i < v.data.size(); ++i) {
+    v.data[i] = static_cast<float>(
+        amplitude * std::sin(0.7 * static_cast<double>(i / std::max<std::size_t>(width, 1)) +
+                             0.3 * static_cast<double>(i % std::max<std::size_t>(width, 1))));
+  }
+  switch ((layout >> 5) & 3) {
+    case 2:  // one sample short of whole frames
+      if (!v.data.empty()) v.data.pop_back();
+      break;
+    case 3: v.data.clear(); break;
+    default: break;
+  }
+  if ((layout & 0x80) && !v.data.empty()) {
+    const std::size_t at = in.u8() % v.data.size();
+    v.data[at] = static_cast<float>(decodeValue(in, 1e6));  // NaN, +-Inf, past the range
+  }
+  return v;
 }
 
 std::vector<PreloadSetting> decodePreloads(ByteReader& in) {

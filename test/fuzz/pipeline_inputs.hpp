@@ -26,4 +26,10 @@ inline InputOutcome feedPreload(RigPipeline& pipeline, Stamp stamp,
   return pipeline.preload(stamp, settings, sink);
 }
 
+inline InputOutcome feedVibration(RigPipeline& pipeline, Stamp stamp,
+                                  const VibrationBlockView& block, PipelineSink& sink,
+                                  const InputOrigin& origin) {
+  return pipeline.vibration(stamp, block, sink, origin);
+}
+
 }  // namespace drivetrain_stiffness::fuzz

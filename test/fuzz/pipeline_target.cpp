@@ -1,4 +1,5 @@
-// RigPipeline's message inputs and run-time setters on hostile sequences (pipeline_decoder.hpp):
+// RigPipeline's message inputs (torque, preload, encoders, accelerometer blocks) and run-time
+// setters on hostile sequences (pipeline_decoder.hpp):
 // nothing escapes but the documented refusals, every value refusal names its field, every input
 // is counted, and every number handed to the sink is finite (FiniteSink).
 #include <memory>
@@ -26,6 +27,7 @@ const std::vector<std::string> kTorqueFields = {"torque", "pinion_bearing", "gea
 const std::vector<std::string> kMotionFields = {"pinion position", "pinion velocity",
                                                 "gear position",   "~pinion_joint",
                                                 "pinion_bearing",  "gear_bearing"};
+const std::vector<std::string> kVibrationFields = {"sample_rate", "channels", "data", "header.seq"};
 const std::vector<std::string> kPreloadFields = {
     "name",           "axial_preload", "radial_preload", "inner_interference", "outer_interference",
     "pinion_bearing", "gear_bearing"};
@@ -47,8 +49,13 @@ void checkOutcome(InputOutcome outcome, const RigPipeline& pipeline,
 }
 
 void checkCounts(const RigPipeline& pipeline, std::uint64_t torques, std::uint64_t preloads,
-                 std::uint64_t motions) {
+                 std::uint64_t motions, std::uint64_t blocks) {
   const PipelineCounters& c = pipeline.counters();
+  if (c.accepted_vibration + c.rejected_vibration != blocks) {
+    throw FuzzFinding("a vibration block was not counted: " + std::to_string(blocks) +
+                      " sent, counters " + std::to_string(c.accepted_vibration) + "+" +
+                      std::to_string(c.rejected_vibration));
+  }
   if (c.accepted_motion + c.rejected_motion != motions) {
     throw FuzzFinding("a joint_states message was not counted: " + std::to_string(motions) +
                       " sent, counters " + std::to_string(c.accepted_motion) + "+" +
@@ -75,11 +82,17 @@ class PipelineCase {
       const std::uint8_t op_byte = in_.u8();
       if (op_byte >= 0xF0) {
         motion();
+      } else if (op_byte >= 0xE0) {
+        vibration();
       } else {
         operation(op_byte % 8);
       }
-      checkCounts(pipeline_, torques_, preloads_, motions_);
+      checkCounts(pipeline_, torques_, preloads_, motions_, blocks_);
     }
+    // The end of the input (a replay's end of bag): an identification still pending is applied.
+    acceptOrRefuse(
+        stats_, [&] { pipeline_.finish(sink_); },
+        [](const std::string& m) { throw FuzzFinding("finish() threw: " + m); });
   }
 
  private:
@@ -108,6 +121,34 @@ class PipelineCase {
         },
         [](const std::string& msg) {
           throw FuzzFinding("motion() threw instead of refusing: " + msg);
+        });
+  }
+
+  void vibration() {
+    now_ = decodeStamp(in_, now_);
+    const VibrationCase v = decodeVibration(in_);
+    switch (v.numbering) {
+      case 0: vibration_seq_ = 0; break;
+      case 1: ++vibration_seq_; break;
+      case 3: vibration_seq_ += 2; break;
+      default: break;  // the same number again
+    }
+    VibrationBlockView block;
+    block.sample_rate = v.sample_rate;
+    block.channels = v.channels.data();
+    block.channel_count = v.channels.size();
+    block.data = v.data.data();
+    block.size = v.data.size();
+    ++blocks_;
+    acceptOrRefuse(
+        stats_,
+        [&] {
+          checkOutcome(
+              feedVibration(pipeline_, now_, block, sink_, {"/vibration", vibration_seq_, ""}),
+              pipeline_, kVibrationFields, stats_);
+        },
+        [](const std::string& m) {
+          throw FuzzFinding("vibration() threw instead of refusing: " + m);
         });
   }
 
@@ -202,8 +243,8 @@ class PipelineCase {
   CaseStats& stats_;
   FiniteSink sink_;
   Stamp now_{0};
-  std::uint64_t torques_ = 0, preloads_ = 0, motions_ = 0;
-  std::uint32_t seq_ = 0, motion_seq_ = 0;
+  std::uint64_t torques_ = 0, preloads_ = 0, motions_ = 0, blocks_ = 0;
+  std::uint32_t seq_ = 0, motion_seq_ = 0, vibration_seq_ = 0;
 };
 
 }  // namespace
@@ -224,6 +265,7 @@ CaseStats fuzzPipeline(const std::uint8_t* data, std::size_t size) {
       &requireNamesParameter);
   if (!built) return stats;  // the decoder only picks valid options: the rule above says why not
   PipelineCase(in, *pipeline, stats).run();
+  stats.counters = namedCounters(pipeline->counters());
   return stats;
 }
 

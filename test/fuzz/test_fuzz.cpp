@@ -5,6 +5,9 @@
 #include <gtest/gtest.h>
 
 #include <cstdio>
+#include <stdexcept>
+#include <string>
+#include <vector>
 
 #include "fuzz_driver.hpp"
 #include "fuzz_target.hpp"
@@ -56,6 +59,69 @@ TEST_P(FuzzTargetTest, SeedsAreWhatTheirNamesSay) {
       EXPECT_GT(c.refused, 0u) << seed.name;
     }
   }
+}
+
+std::uint64_t counter(const CaseStats& c, const std::string& name) {
+  for (const auto& [key, value] : c.counters) {
+    if (key == name) return value;
+  }
+  ADD_FAILURE() << "no counter " << name;
+  return 0;
+}
+
+const SeedFile& seedNamed(const std::vector<SeedFile>& seeds, const std::string& name) {
+  for (const SeedFile& s : seeds) {
+    if (s.name == name) return s;
+  }
+  throw std::runtime_error("no seed " + name);
+}
+
+// The vibration seeds count what docs/vibration.md "Input" says their blocks break (the blocks
+// are listed in test/fuzz/make_pipeline_seeds.py).
+TEST(PipelineVibrationSeeds, CountWhatTheRulesSay) {
+  const FuzzTarget* target = findFuzzTarget("pipeline");
+  ASSERT_NE(target, nullptr);
+  const std::vector<SeedFile> seeds = loadCorpusFiles(*target);
+  auto run = [&](const std::string& name) {
+    const SeedFile& s = seedNamed(seeds, name);
+    return target->fuzzOne(s.bytes.data(), s.bytes.size());
+  };
+  // 4 blocks at 51.2 kHz, then 9 of 32 frames at 64 Hz: a new rate (a new record), filled after 8
+  // (4 s = 256 frames), so one identification ends, with a report or an error.
+  const CaseStats valid = run("valid_vibration.bin");
+  EXPECT_EQ(counter(valid, "accepted_vibration"), 13u);
+  EXPECT_EQ(counter(valid, "vibration_samples"), 13u * 32u);
+  EXPECT_EQ(counter(valid, "vibration_rate_changes"), 1u);
+  EXPECT_EQ(counter(valid, "vibration_gaps"), 0u);
+  EXPECT_EQ(counter(valid, "modal_identifications_published") +
+                counter(valid, "modal_identification_errors"),
+            1u);
+  // 10 broken blocks between 2 good ones, each refused by a value rule, nothing of them kept.
+  const CaseStats values = run("invalid_vibration_values.bin");
+  EXPECT_EQ(counter(values, "accepted_vibration"), 2u);
+  EXPECT_EQ(counter(values, "rejected_vibration"), 10u);
+  EXPECT_EQ(counter(values, "vibration_samples"), 64u);
+  for (const char* field : {"data[5]", "data[7]", "data.size() = 63", "data.size() = 0",
+                            "sample_rate = 0", "sample_rate = -51200", "channels.size() = 0",
+                            "channels[0] is empty", "none names a bearing support", "repeats"}) {
+    bool named = false;
+    for (const std::string& r : values.refusals)
+      named = named || r.find(field) != std::string::npos;
+    EXPECT_TRUE(named) << field;
+  }
+  // Rates: within the tolerance continues, past it and 25.6 kHz restart (2); a skipped number, a
+  // block after a refused one and an unnumbered one after numbered ones are gaps (3); the same
+  // number again and an unnumbered block 0.95 ms early overlap (2, refused); an unknown extra
+  // channel and then one channel fewer change the channels (2), the unknown one counted once.
+  const CaseStats continuity = run("invalid_vibration_continuity.bin");
+  EXPECT_EQ(counter(continuity, "accepted_vibration"), 9u);
+  EXPECT_EQ(counter(continuity, "rejected_vibration"), 2u);
+  EXPECT_EQ(counter(continuity, "vibration_rate_changes"), 2u);
+  EXPECT_EQ(counter(continuity, "vibration_gaps"), 3u);
+  EXPECT_EQ(counter(continuity, "vibration_overlaps"), 2u);
+  EXPECT_EQ(counter(continuity, "vibration_channel_changes"), 2u);
+  EXPECT_EQ(counter(continuity, "vibration_unknown_channels"), 1u);
+  EXPECT_EQ(counter(continuity, "vibration_samples"), 9u * 32u);
 }
 
 std::vector<std::string> targetNames() {

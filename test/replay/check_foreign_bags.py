@@ -3,7 +3,8 @@
 in another frame, two kinds of refusal in one bag, only unrelated topics, a topic of the wrong
 type, one topic named for two inputs, a directory or a pipe as --bag, gaps with load changes, a
 frame id that is not UTF-8, encoders that barely turn, a calibration recording whose torque steps
-are too short for a window. For each: the exit code
+are too short for a window, accelerometer blocks that break the block rules (on a rig topic, and
+the bag fuzz target's seeds). For each: the exit code
 (docs/replay_exit_codes.md), the run summary on stderr, summary.json's "inputs", and report.md
 with and without plots say what was used, what was not, and why.
 
@@ -347,6 +348,37 @@ def vibration_on_a_rig_topic():
     ])
 
 
+def vibration_fuzz_seeds():
+    """The bag fuzz target's seeds with accelerometer blocks (test/fuzz/make_bag_seeds.py): the valid
+    one accepted whole; of the broken one's 12 blocks, 6 refused (the same header.seq again, a NaN,
+    one value short, zero and negative rates, no channels) and 6 accepted: one seq lost (dropped, a
+    gap), an unknown channel (counted on each of the 3 blocks that carry it, a channel change), then
+    8 kHz (a rate change): 3 x 16 + 1 x 16 + 2 x 8 frames. Exit 0: the torque was accepted."""
+    seeds = os.path.join(src, "test/data/fuzz/bag")
+    p, s, md, _ = run("fuzz_valid_vibration", os.path.join(seeds, "valid_vibration.bag"))
+    c = (s or {}).get("counters", {})
+    check("fuzz_seed_valid_vibration", [
+        (p.returncode == 0, "exit %d: %s" % (p.returncode, p.stderr[-300:])),
+        ((c.get("accepted_vibration"), c.get("rejected_vibration"), c.get("vibration_samples")) == (8, 0, 128),
+         "accepted/rejected/samples %r" % c),
+    ])
+    p, s, md, _ = run("fuzz_broken_vibration", os.path.join(seeds, "vibration_broken_blocks.bag"))
+    c = (s or {}).get("counters", {})
+    expected = {"accepted_vibration": 6, "rejected_vibration": 6, "dropped_vibration": 1, "vibration_gaps": 1,
+                "vibration_overlaps": 1, "vibration_rate_changes": 1, "vibration_channel_changes": 1,
+                "vibration_unknown_channels": 3, "vibration_samples": 80}
+    reasons = (s or {}).get("inputs", {}).get("vibration", {}).get("refused_by_reason", {})
+    check("fuzz_seed_broken_vibration", [
+        (p.returncode == 0, "exit %d: %s" % (p.returncode, p.stderr[-300:])),
+        ((s or {}).get("status") == "ok", "status %r" % (s or {}).get("status")),
+        ({k: c.get(k) for k in expected} == expected, "counters %r, expected %r" % ({k: c.get(k) for k in expected},
+                                                                                    expected)),
+        (reasons.get("invalid value", {}).get("count") == 6, "refusals %r" % reasons),
+        ((s or {}).get("vibration", {}).get("unknown_channels") == ["tacho"],
+         "summary vibration %r" % (s or {}).get("vibration")),
+    ])
+
+
 def main():
     shutil.rmtree(work, ignore_errors=True)
     os.makedirs(work)
@@ -363,6 +395,7 @@ def main():
     encoders_barely_turn()
     calibration_without_a_window()
     vibration_on_a_rig_topic()
+    vibration_fuzz_seeds()
     if failures:
         sys.exit("check_foreign_bags: failed: %s" % ", ".join(failures))
     print("check_foreign_bags: every foreign bag's replay says what it used, what it did not, and why")
