@@ -42,6 +42,7 @@ void validate(const SelectionOptions& o) {
   requireInClosedRange("selection.cluster_mac", o.cluster_mac, 0.0, 1.0);
   requireInClosedRange("selection.min_orders_fraction", o.min_orders_fraction, 0.0, 1.0);
   requireNonNegative("selection.damping_significance", o.damping_significance);
+  requirePositive("selection.frequency_resolution", o.frequency_resolution);
   requireNonNegative("selection.resolution_sigmas", o.resolution_sigmas);
   requireNonNegative("selection.line_damping", o.line_damping);
 }
@@ -125,9 +126,19 @@ std::vector<Cluster> clusterPoles(const std::vector<const Pole*>& stable,
 /// or (with std) none whose damping is significant.
 std::optional<IdentifiedMode> modeOf(const Cluster& c, const SsiResult& ssi,
                                      const SelectionOptions& o, int needed) {
-  std::set<int> orders;
-  int doubled = 0;  // orders that put two poles into the cluster
-  for (const Pole* p : c) doubled += orders.insert(p->order).second ? 0 : 1;
+  // A pole is resolved when its frequency is known within half its resonance's half-width (see
+  // frequency_resolution); above the true order the record's noise adds poles beside a mode that
+  // are not, and only two resolved poles of one order make it doubled.
+  const bool with_std = ssi.variance_blocks > 0;
+  auto resolved = [&](const Pole* p) {
+    return !with_std || p->frequency_std <= o.frequency_resolution * p->damping * p->frequency;
+  };
+  std::set<int> orders, resolved_orders;
+  int doubled = 0;  // orders that put two resolved poles into the cluster
+  for (const Pole* p : c) {
+    orders.insert(p->order);
+    if (resolved(p)) doubled += resolved_orders.insert(p->order).second ? 0 : 1;
+  }
   if (static_cast<int>(orders.size()) < needed) return std::nullopt;
   // Unresolved when an order sees two poles here, or when fewer than half the members agree with
   // the median within 2 of their std (below): close modes of one shape, whose poles wander
@@ -157,6 +168,7 @@ std::optional<IdentifiedMode> modeOf(const Cluster& c, const SsiResult& ssi,
     return p->damping > o.damping_significance * p->damping_std;
   });
   if (ssi.variance_blocks > 0 && !significant) return std::nullopt;
+  if (!resolved(rep)) return std::nullopt;
   IdentifiedMode m;
   m.frequency = rep->frequency;
   m.frequency_std = rep->frequency_std;

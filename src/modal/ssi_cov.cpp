@@ -20,25 +20,26 @@ using Eigen::MatrixXd;
 using Eigen::VectorXcd;
 using Eigen::VectorXd;
 
-/// Lag covariances R_k = 1/N sum_t y_{t+k} y_t^T, k = 1..2i-1, over the columns t0..t0+n-1,
-/// stacked as l x l blocks side by side (Peeters & De Roeck 1999, "covariance-driven SSI";
-/// docs/vibration.md, "SSI-COV").
-MatrixXd lagCovariances(const MatrixXd& y, long t0, long n, int lags) {
+/// Lag covariances R_k = 1/N sum_t y_{t+k} y_t^T, k = p+1..p+lags, over the columns
+/// t0..t0+n-1, stacked as l x l blocks side by side (Peeters & De Roeck 1999, "covariance-driven
+/// SSI"; docs/vibration.md, "SSI-COV").
+MatrixXd lagCovariances(const MatrixXd& y, long t0, long n, int lags, int p) {
   const long l = y.rows();
   // Channel-major copy: each R_k(a, b) is then one contiguous dot product (vectorised), where a
   // matrix product per lag (l x n times n x l) spends most of its time packing operands.
-  const MatrixXd channels = y.middleCols(t0, n + lags).transpose();
+  const MatrixXd channels = y.middleCols(t0, n + p + lags).transpose();
   MatrixXd r(l, l * lags);
   for (int k = 1; k <= lags; ++k)
     for (long a = 0; a < l; ++a)
       for (long c = 0; c < l; ++c)
         r(a, l * (k - 1) + c) =
-            channels.col(a).segment(k, n).dot(channels.col(c).head(n)) / static_cast<double>(n);
+            channels.col(a).segment(p + k, n).dot(channels.col(c).head(n)) / static_cast<double>(n);
   return r;
 }
 
 /// Block Hankel H = [R_1 .. R_i; R_2 .. R_{i+1}; ...; R_i .. R_{2i-1}] = O_i Gamma_i
-/// (Peeters & De Roeck 1999; Van Overschee & De Moor 1996, Ch. 3).
+/// (Peeters & De Roeck 1999; Van Overschee & De Moor 1996, Ch. 3), each R_k here R_{p+k}: then
+/// Gamma_i = [A^p G, ..., A^{p+i-1} G] and O_i, hence A and the shapes C psi, are the same.
 MatrixXd blockHankel(const MatrixXd& r, int i) {
   const long l = r.rows();
   MatrixXd h(i * l, i * l);
@@ -70,18 +71,18 @@ void requireFiniteRecord(const Eigen::Ref<const Eigen::MatrixXd>& record) {
 /// The Hankel matrix as the mean of n_b blocks' (one block when nb = 0), with each block's lag
 /// covariances for the variance (Doehler & Mevel 2013, Sections 3.2 and 5.1; Reynders et al.
 /// 2008, the covariance of the Hankel matrix).
-MatrixXd meanHankel(const MatrixXd& y, int i, int lags, int nb, long usable, int l,
+MatrixXd meanHankel(const MatrixXd& y, int i, int lags, int p, int nb, long usable, int l,
                     std::vector<MatrixXd>& block_r) {
   const long block = nb > 0 ? usable / nb : usable;
   MatrixXd r_mean = MatrixXd::Zero(l, l * lags);
   if (nb > 0) {
     block_r.reserve(nb);
     for (int b = 0; b < nb; ++b) {
-      block_r.push_back(lagCovariances(y, b * block, block, lags));
+      block_r.push_back(lagCovariances(y, b * block, block, lags, p));
       r_mean += block_r.back() / static_cast<double>(nb);
     }
   } else {
-    r_mean = lagCovariances(y, 0, block, lags);
+    r_mean = lagCovariances(y, 0, block, lags, p);
   }
   return blockHankel(r_mean, i);
 }
@@ -253,6 +254,8 @@ SsiCov::SsiCov(const SsiOptions& options) : options_(options) {
   if (options.block_rows < 0) throwInvalid("ssi.block_rows", options.block_rows, "must be >= 0");
   if (options.variance_blocks < 0 || options.variance_blocks == 1)
     throwInvalid("ssi.variance_blocks", options.variance_blocks, "must be 0 or >= 2");
+  if (options.skipped_lags < 0 || options.skipped_lags > 10000)
+    throwInvalid("ssi.skipped_lags", options.skipped_lags, "must be from 0 to 10000");
 }
 
 int SsiCov::blockRows(int channels) const {
@@ -274,8 +277,9 @@ SsiResult SsiCov::identify(const Eigen::Ref<const Eigen::MatrixXd>& record,
                  "(block_rows - 1) * channels (" + std::to_string(l) +
                      ") must be >= ssi.max_order " + std::to_string(options_.max_order));
   const int lags = 2 * i - 1;
+  const int p = options_.skipped_lags;
   const int nb = options_.variance_blocks;
-  const long usable = record.cols() - lags;  // t with t + 2i - 1 inside the record
+  const long usable = record.cols() - lags - p;  // t with t + p + 2i - 1 inside the record
   const long min_block = 4L * lags;
   if (usable < std::max(nb, 1) * min_block)
     throwInvalid("record.samples", static_cast<double>(record.cols()),
@@ -286,7 +290,7 @@ SsiResult SsiCov::identify(const Eigen::Ref<const Eigen::MatrixXd>& record,
   MatrixXd y = record;
   y.colwise() -= y.rowwise().mean();
   std::vector<MatrixXd> block_r;
-  const MatrixXd h = meanHankel(y, i, lags, nb, usable, l, block_r);
+  const MatrixXd h = meanHankel(y, i, lags, p, nb, usable, l, block_r);
   const int nmax = options_.max_order;
   const Subspace sub = decompose(h, y, l, nmax);
   const std::vector<MatrixXd> coeff = singularVectorSensitivities(block_r, h, sub, i, nb, nmax);
@@ -295,6 +299,7 @@ SsiResult SsiCov::identify(const Eigen::Ref<const Eigen::MatrixXd>& record,
   result.sample_rate = sample_rate;
   result.channels = l;
   result.block_rows = i;
+  result.skipped_lags = p;
   result.min_order = options_.min_order;
   result.max_order = nmax;
   result.variance_blocks = nb > 1 ? nb : 0;

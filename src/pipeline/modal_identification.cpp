@@ -98,6 +98,7 @@ ModalReport identifyModes(const ModalJob& job) {
   modal::SsiOptions ssi_options;
   ssi_options.max_order = job.max_order;
   ssi_options.block_rows = job.block_rows;
+  ssi_options.skipped_lags = job.skipped_lags;
   const modal::SsiResult ssi = modal::SsiCov(ssi_options).identify(record, job.sample_rate);
   const modal::SelectionResult selected = modal::selectModes(ssi, r.order_bands);
   r.modes = selected.modes;

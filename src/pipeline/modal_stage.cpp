@@ -20,6 +20,7 @@ ModalStage::ModalStage(const RigConfig& rig, const VibrationInput& input, const 
       worker_(options.modal_worker),
       max_order_(options.modal_max_order),
       block_rows_(options.modal_block_rows),
+      skipped_lags_(options.modal_skipped_lags),
       band_(options.modal_band) {}
 
 ModalStage::~ModalStage() {
@@ -122,6 +123,7 @@ void ModalStage::start(double held_torque) {
   job.gear_teeth = teeth[1];
   job.max_order = max_order_;
   job.block_rows = block_rows_;
+  job.skipped_lags = skipped_lags_;
   job.band = band_;
   predict(job, held_torque);
   apply_at_ = Stamp{job.end.ns + std::llround(kApplyDelay * 1e9)};

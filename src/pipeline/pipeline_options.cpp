@@ -61,6 +61,9 @@ void PipelineOptions::validate() const {
   if (modal_block_rows < 2 || modal_block_rows > 200) {
     throwInvalid("modal_block_rows", modal_block_rows, "must be from 2 to 200");
   }
+  if (modal_skipped_lags < 0 || modal_skipped_lags > 1000) {
+    throwInvalid("modal_skipped_lags", modal_skipped_lags, "must be from 0 to 1000");
+  }
   if (!(vibration_record > 0.0 && vibration_record <= 600.0)) {
     throwInvalid("vibration_record", vibration_record, "must be in (0, 600] s");
   }

@@ -63,6 +63,7 @@ PipelineOptions options(bool worker) {
   PipelineOptions o;
   o.vibration_record = 2.0;
   o.modal_worker = worker;
+  o.modal_skipped_lags = 0;  // the synthetic records' noise is white: no filter to skip
   return o;
 }
 
@@ -183,6 +184,14 @@ TEST(ModalStage, OptionsOutOfRangeAreRefusedByName) {
   o.modal_max_order = 20;
   o.modal_block_rows = 1;
   EXPECT_THROW(o.validate(), InvalidInput);
+  o.modal_block_rows = 40;
+  o.modal_skipped_lags = -1;
+  try {
+    o.validate();
+    ADD_FAILURE() << "no InvalidInput for modal_skipped_lags = -1";
+  } catch (const InvalidInput& e) {
+    EXPECT_NE(std::string(e.what()).find("modal_skipped_lags = -1"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace

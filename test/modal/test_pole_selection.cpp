@@ -142,6 +142,32 @@ TEST(PoleSelection, CloseModesOnOneChannelAreNeverResolvedWrongly) {
   }
 }
 
+// A mode's frequency must be known within its own resonance: a stable, damped cluster whose std
+// exceeds half its half-power half-width (damping x frequency) is noise, not a mode.
+TEST(PoleSelection, AClusterWhoseFrequencyIsNotResolvedWithinItsResonanceIsSpurious) {
+  auto cluster = [](double frequency_std) {
+    SsiResult r;
+    r.min_order = 4;
+    r.max_order = 20;
+    r.channels = 2;
+    r.variance_blocks = 50;
+    for (int n = 4; n <= 20; n += 2) {
+      Pole p;
+      p.order = n;
+      p.frequency = 9600.0;
+      p.damping = 0.03;  // half-power half-width 288 Hz
+      p.frequency_std = frequency_std;
+      p.damping_std = 0.002;  // damping significant: 15 std
+      p.shape = Eigen::VectorXcd::Ones(2);
+      r.poles.push_back(p);
+    }
+    return selectModes(r, {}).modes.size();
+  };
+  EXPECT_EQ(cluster(20.0), 1u);
+  EXPECT_EQ(cluster(143.0), 1u);  // 0.5 x 288 Hz = 144 Hz
+  EXPECT_EQ(cluster(145.0), 0u);
+}
+
 TEST(PoleSelection, RejectsThresholdsOutOfRange) {
   const SsiResult empty;
   SelectionOptions o;
@@ -154,6 +180,9 @@ TEST(PoleSelection, RejectsThresholdsOutOfRange) {
   }
   o = {};
   o.stable_mac = 1.5;
+  EXPECT_THROW(selectModes(empty, {}, o), InvalidInput);
+  o = {};
+  o.frequency_resolution = 0.0;
   EXPECT_THROW(selectModes(empty, {}, o), InvalidInput);
   FrequencyBand nan_band;
   nan_band.low = std::nan("");

@@ -38,6 +38,10 @@ struct SelectionOptions {
   /// A cluster none of whose poles has a damping above this many of its std is spurious (not
   /// distinguishable from an undamped pole: noise) [-]; needs variance blocks.
   double damping_significance = 2.0;
+  /// A cluster whose representative's frequency std exceeds this fraction of its half-power
+  /// half-width (damping x frequency) is spurious: its frequency is not resolved within its own
+  /// resonance [-]; needs variance blocks.
+  double frequency_resolution = 0.5;
   /// Below this damping ratio a pole inside a lines_only band is the order's line [-].
   double line_damping = 0.002;
   /// Two modes closer than this many std of their difference are marked unresolved [-].

@@ -17,6 +17,9 @@ struct SsiOptions {
   int min_order = 2;         ///< first model order (even, >= 2)
   int max_order = 40;        ///< last model order (even); (i - 1) * channels >= max_order
   int variance_blocks = 50;  ///< n_b records' blocks for the Hankel covariance; 0: no std
+  /// p: the Hankel starts at lag p + 1 (lags p + 1..p + 2i - 1), past the span over which the
+  /// acquisition chain's filter correlates the output's noise and direct term (>= 0)
+  int skipped_lags = 0;
 };
 
 /// One continuous-time pole of one model order (the one of a conjugate pair with Im > 0).
@@ -36,6 +39,7 @@ struct SsiResult {
   double sample_rate = 0.0;  ///< [Hz]
   int channels = 0;
   int block_rows = 0;
+  int skipped_lags = 0;
   int min_order = 0, max_order = 0;
   int variance_blocks = 0;  ///< 0 when no std was computed
 };

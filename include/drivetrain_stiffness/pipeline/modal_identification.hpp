@@ -35,9 +35,10 @@ struct ModalJob {
   std::vector<int> channel_shaft;  ///< per column: 0 pinion (x_p), 1 gear (x_g)
   std::array<ModelModePrediction, 3> predicted;
   int pinion_teeth = 0, gear_teeth = 0;
-  int max_order = 20;   ///< SSI-COV's last model order (even)
-  int block_rows = 40;  ///< SSI-COV's block rows i (lags 1 to 2i - 1)
-  double band = 0.35;   ///< the flat band as a fraction of sample_rate: poles above set aside
+  int max_order = 20;     ///< SSI-COV's last model order (even)
+  int block_rows = 40;    ///< SSI-COV's block rows i (lags 1 to 2i - 1)
+  int skipped_lags = 32;  ///< SSI-COV's Hankel starts at lag skipped_lags + 1
+  double band = 0.35;     ///< the flat band as a fraction of sample_rate: poles above set aside
 };
 
 /// One pole of one model order, for the stabilisation diagram.

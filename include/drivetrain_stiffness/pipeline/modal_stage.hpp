@@ -69,7 +69,7 @@ class ModalStage {
   CalibrationStage& calibration_;
   PipelineCounters& counters_;
   bool enabled_, worker_;
-  int max_order_, block_rows_;
+  int max_order_, block_rows_, skipped_lags_;
   double band_;
   /// Two records: one filled block by block, the other read by a pending identification.
   std::array<ModalJob, 2> jobs_;

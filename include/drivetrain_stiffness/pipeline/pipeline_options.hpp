@@ -38,6 +38,9 @@ struct PipelineOptions {
   bool modal_identification = true;  ///< identify each renewed vibration record
   int modal_max_order = 20;          ///< SSI-COV's last model order (even, 4 to 60)
   int modal_block_rows = 40;         ///< SSI-COV's block rows (lags to 2i - 1; 2 to 200)
+  /// Lags the SSI-COV Hankel skips (0 to 1000): the span over which the accelerometer chain's
+  /// anti-alias filter correlates the noise and the direct term [samples].
+  int modal_skipped_lags = 32;
   /// The accelerometer chain's flat band as a fraction of the sample rate (its anti-alias filter's
   /// pass band, (0, 0.5]); poles above it are set aside [-].
   double modal_band = 0.35;

@@ -52,6 +52,7 @@ PipelineOptions readPipelineOptions(const Get& get, const RigConfig& rig) {
   o.modal_identification = get("modal_identification", o.modal_identification);
   o.modal_max_order = get("modal_max_order", o.modal_max_order);
   o.modal_block_rows = get("modal_block_rows", o.modal_block_rows);
+  o.modal_skipped_lags = get("modal_skipped_lags", o.modal_skipped_lags);
   o.modal_band = get("modal_band", o.modal_band);
   try {
     o.validate();
