@@ -1,6 +1,7 @@
 #include "drivetrain_stiffness/pipeline/modal_stage.hpp"
 
 #include <cmath>
+#include <utility>
 
 #include "drivetrain_stiffness/core/modal_analysis.hpp"
 #include "drivetrain_stiffness/core/rig_model.hpp"
@@ -127,7 +128,11 @@ void ModalStage::start(double held_torque) {
   job.band = band_;
   predict(job, held_torque);
   apply_at_ = Stamp{job.end.ns + std::llround(kApplyDelay * 1e9)};
-  auto identify = [&job]() {
+  // The last result goes with the new identification and is freed on its thread: its memory is
+  // the worker's, and freeing it can return the worker's heap to the system (a millisecond of
+  // the callback's time).
+  auto identify = [&job, spent = std::move(spent_)]() mutable {
+    { const Outcome drop = std::move(spent); }
     Outcome out;
     try {
       out.report = identifyModes(job);
@@ -137,11 +142,12 @@ void ModalStage::start(double held_torque) {
     return out;
   };
   // Deferred: run by apply() in the caller's thread, at the same input as the worker's result.
-  pending_ = std::async(worker_ ? std::launch::async : std::launch::deferred, identify);
+  pending_ = std::async(worker_ ? std::launch::async : std::launch::deferred, std::move(identify));
 }
 
 void ModalStage::apply(Stamp stamp, PipelineSink& sink) {
-  const Outcome outcome = pending_.get();
+  spent_ = pending_.get();  // freed by the next identification (start())
+  const Outcome& outcome = spent_;
   pending_ = {};
   if (!outcome.error.empty()) {
     ++counters_.modal_errors;

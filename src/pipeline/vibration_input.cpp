@@ -171,11 +171,15 @@ std::size_t VibrationInput::recordFrames(double rate) const {
 }
 
 void VibrationInput::start(Stamp stamp, const VibrationBlockView& b) {
-  // The ring first: if it cannot be had, the record before stays as it was.
+  // The ring first: if it cannot be had, the record before stays as it was. A ring of the same
+  // size is kept (a gap or a layout change at the same rate allocates nothing).
   std::size_t width = 0;
   for (std::size_t c = 0; c < b.channel_count; ++c) width += find(b.channels[c]) >= 0 ? 1 : 0;
-  std::vector<float> ring(recordFrames(b.sample_rate) * width, 0.0f);
-  ring_.swap(ring);
+  const std::size_t size = recordFrames(b.sample_rate) * width;
+  if (size != ring_size_) {
+    ring_ = std::unique_ptr<float[]>(new float[size]);  // default-initialised: not zeroed
+    ring_size_ = size;
+  }
   rate_ = b.sample_rate;
   layout_.assign(b.channels, b.channels + b.channel_count);
   columns_.clear();

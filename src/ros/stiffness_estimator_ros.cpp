@@ -249,19 +249,23 @@ void StiffnessEstimatorRos::observeClock() {
   }
 }
 
-void StiffnessEstimatorRos::finishInput(const ros::WallTime& start, double cpu_start) {
+void StiffnessEstimatorRos::finishInput(const ros::WallTime& start, double cpu_start,
+                                        const char* topic) {
   const double took = (ros::WallTime::now() - start).toSec();
   const double cpu = threadCpuSeconds() - cpu_start;
   processing_s_ += took;
   max_processing_s_ = std::max(max_processing_s_, took);
-  max_processing_cpu_s_ = std::max(max_processing_cpu_s_, cpu);
+  if (cpu > max_processing_cpu_s_) {
+    max_processing_cpu_s_ = cpu;
+    max_processing_cpu_topic_ = topic;
+  }
   ++processed_;
   if (took > deadline_) ++missed_deadlines_;
   if (cpu > deadline_) ++missed_deadlines_cpu_;
 }
 
 template <typename Take>
-void StiffnessEstimatorRos::handleInput(const Take& take) {
+void StiffnessEstimatorRos::handleInput(const char* topic, const Take& take) {
   const ros::WallTime start = ros::WallTime::now();
   const double cpu_start = threadCpuSeconds();
   std::lock_guard<std::mutex> lock(mutex_);
@@ -269,12 +273,12 @@ void StiffnessEstimatorRos::handleInput(const Take& take) {
   if (take() != InputOutcome::kAccepted) {
     ROS_WARN_THROTTLE(1.0, "stiffness_estimator: %s", pipeline_->counters().last_event.c_str());
   }
-  finishInput(start, cpu_start);
+  finishInput(start, cpu_start, topic);
 }
 
 void StiffnessEstimatorRos::onTorque(
     const ros::MessageEvent<const geometry_msgs::WrenchStamped>& event) {
-  handleInput([&] {
+  handleInput("torque", [&] {
     const TorqueInput in = toTorqueInput(*event.getConstMessage(), event.getPublisherName());
     return pipeline_->torque(in.stamp, in.torque, *publishers_, in.origin,
                              backlogOf(event.getReceiptTime()));
@@ -283,7 +287,7 @@ void StiffnessEstimatorRos::onTorque(
 
 void StiffnessEstimatorRos::onPreload(
     const ros::MessageEvent<const drivetrain_stiffness::Preload>& event) {
-  handleInput([&] {
+  handleInput("preload", [&] {
     const drivetrain_stiffness::Preload& msg = *event.getConstMessage();
     toPreloadSettings(msg, preload_settings_);
     return pipeline_->preload(fromRosTime(msg.header.stamp), preload_settings_, *publishers_,
@@ -293,7 +297,7 @@ void StiffnessEstimatorRos::onPreload(
 
 void StiffnessEstimatorRos::onJointStates(
     const ros::MessageEvent<const sensor_msgs::JointState>& event) {
-  handleInput([&] {
+  handleInput("joint_states", [&] {
     const sensor_msgs::JointState& msg = *event.getConstMessage();
     const InputOrigin origin{event.getPublisherName(), msg.header.seq, msg.header.frame_id};
     const Stamp stamp = fromRosTime(msg.header.stamp);
@@ -305,7 +309,7 @@ void StiffnessEstimatorRos::onJointStates(
 
 void StiffnessEstimatorRos::onVibration(
     const ros::MessageEvent<const drivetrain_stiffness::VibrationBlock>& event) {
-  handleInput([&] {
+  handleInput("vibration", [&] {
     const drivetrain_stiffness::VibrationBlock& msg = *event.getConstMessage();
     const VibrationBlockView block{msg.sample_rate, msg.channels.data(), msg.channels.size(),
                                    msg.data.data(), msg.data.size()};
@@ -453,6 +457,7 @@ void StiffnessEstimatorRos::addProcessStatus(diagnostic_updater::DiagnosticStatu
   status.add("mean_processing [s]", processed_ ? processing_s_ / processed_ : 0.0);
   status.add("max_processing [s]", max_processing_s_);
   status.add("max_processing_cpu [s]", max_processing_cpu_s_);
+  status.add("max_processing_cpu_topic", max_processing_cpu_topic_);
   status.add("resident_memory [kB]", residentMemoryKb());
   status.add("heap_in_use [B]", heapInUseBytes());
   status.add("reconfigurations", reconfigurations_);

@@ -61,6 +61,7 @@ nlohmann::json toJson(const LoadResult& r) {
           {"missed_deadlines_cpu", r.missed_deadlines_cpu},
           {"missed_deadlines_cpu_warmup", r.missed_deadlines_cpu_warmup},
           {"max_processing_cpu_s", r.max_processing_cpu_s},
+          {"max_processing_cpu_topic", r.max_processing_cpu_topic},
           {"max_processing_s", r.max_processing_s},
           {"mean_processing_s", r.mean_processing_s},
           {"rss_warmup_kb", r.rss_warmup_kb},
@@ -164,6 +165,8 @@ void LoadGenerator::onDiagnostics(const diagnostic_msgs::DiagnosticArray::ConstP
         diag_.missed_deadlines_cpu = std::strtoull(v, nullptr, 10);
       else if (kv.key == "max_processing_cpu [s]")
         diag_.max_processing_cpu_s = std::strtod(v, nullptr);
+      else if (kv.key == "max_processing_cpu_topic")
+        diag_.max_processing_cpu_topic = kv.value;
       else if (kv.key == "stiffness_published")
         diag_.stiffness_published = std::strtoull(v, nullptr, 10);
       else if (kv.key == "dropped_torque")

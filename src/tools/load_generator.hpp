@@ -66,7 +66,8 @@ struct LoadResult {
   std::uint64_t missed_deadlines_warmup = 0;
   std::uint64_t missed_deadlines_cpu = 0;         ///< the node's own CPU time beyond ~deadline
   std::uint64_t missed_deadlines_cpu_warmup = 0;  ///< of those, by the RSS baseline report
-  double max_processing_cpu_s = kNone;  ///< of missed_deadlines, those by the RSS baseline report
+  double max_processing_cpu_s = kNone;   ///< of missed_deadlines, those by the RSS baseline report
+  std::string max_processing_cpu_topic;  ///< the input topic of max_processing_cpu_s
   double max_processing_s = kNone, mean_processing_s = kNone;
   std::uint64_t vibration_sent = 0, accepted_vibration = 0;  ///< blocks
   std::uint64_t modal_published = 0;  ///< the node's identifications since it started

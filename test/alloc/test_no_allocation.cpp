@@ -335,6 +335,31 @@ TEST(NoAllocation, VibrationBlocksInSteadyState) {
   EXPECT_EQ(pipeline.counters().vibration.samples, 399u * 1024u);
 }
 
+// A lost block at the same rate starts a new record: the input's ring and the stage's two record
+// buffers are kept (same size), so the restart allocates nothing.
+TEST(NoAllocation, VibrationRecordRestartAfterAGap) {
+  RigPipeline pipeline(test::seedServo(), PipelineOptions{});
+  PipelineSink sink;
+  const std::vector<std::string> channels{"pinion_bearing", "gear_bearing"};
+  std::vector<float> data(1024 * channels.size());
+  for (std::size_t i = 0; i < data.size(); ++i) data[i] = static_cast<float>(std::sin(0.1 * i));
+  const VibrationBlockView block{51200.0, channels.data(), channels.size(), data.data(),
+                                 data.size()};
+  const double period = 1024 / 51200.0;
+  auto send = [&](int k) {
+    const Stamp stamp = test::stampAt(10.0 + k * period);
+    ASSERT_EQ(pipeline.vibration(stamp, block, sink), InputOutcome::kAccepted) << k;
+    ASSERT_EQ(pipeline.torque(stamp, 0.5, sink), InputOutcome::kAccepted) << k;
+  };
+  for (int k = 0; k < 50; ++k) send(k);  // the first record: its buffers allocated
+  const long before = allocationCount();
+  for (int k = 51; k < 100; ++k) send(k);  // block 50 lost: a gap, a new record
+  const long n = allocationCount() - before;
+  EXPECT_EQ(pipeline.counters().vibration.gaps, 1u);
+  EXPECT_EQ(n, 0) << n << " heap allocations over a record's restart";
+  EXPECT_EQ(pipeline.vibrationInput().appended(), 49u * 1024u);
+}
+
 TEST(NoAllocation, VibrationBlocksWithoutIdentification) {
   PipelineOptions options;
   options.modal_identification = false;

@@ -77,6 +77,7 @@ class ModalStage {
   std::size_t filled_ = 0;        ///< its frames so far
   std::size_t block_frames_ = 0;  ///< the frames of the block being taken
   std::future<Outcome> pending_;  ///< reads jobs_[1 - filling_] until apply()
+  Outcome spent_;                 ///< the last result applied, until the next start() frees it
   Stamp apply_at_;
 };
 

@@ -5,6 +5,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -100,7 +101,10 @@ class VibrationInput {
   double rate_ = 0.0;
   std::vector<std::string> layout_;  ///< the block channel names the record was started with
   std::vector<Column> columns_;
-  std::vector<float> ring_;  ///< capacity_ frames x columns, frame-major
+  /// capacity_ frames x columns, frame-major; only frames [0, frames_) are read, so it is left
+  /// uninitialised: its pages are touched block by block, not all at a record's start.
+  std::unique_ptr<float[]> ring_;
+  std::size_t ring_size_ = 0;  ///< ring_'s floats
   std::size_t capacity_ = 0, head_ = 0, frames_ = 0;
   Stamp start_;                  ///< stamp of the record's first sample ever appended
   std::uint64_t appended_ = 0;   ///< frames appended since start_

@@ -57,12 +57,14 @@ class StiffnessEstimatorRos {
   /// ROS time going back (a looping bag) resets the pipeline; called under the lock.
   void observeClock();
   /// Counts the input as late when its processing took longer than ~deadline: in wall time (any
-  /// cause, preemption included) and in this thread's CPU time (the node's own cost).
-  void finishInput(const ros::WallTime& start, double cpu_start);
-  /// `take()` (one input to the pipeline, returning its outcome) under the lock after the clock
-  /// check, timed against ~deadline; a refusal warned about, at most once a second per input type.
+  /// cause, preemption included) and in this thread's CPU time (the node's own cost); keeps the
+  /// `topic` of the input with the largest CPU time.
+  void finishInput(const ros::WallTime& start, double cpu_start, const char* topic);
+  /// `take()` (one input to the pipeline from `topic`, returning its outcome) under the lock after
+  /// the clock check, timed against ~deadline; a refusal warned about, at most once a second per
+  /// input type.
   template <typename Take>
-  void handleInput(const Take& take);
+  void handleInput(const char* topic, const Take& take);
   void onDiagnosticTimer();
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status);
   /// diagnose's parts, in the order they add to `status` (called under the lock).
@@ -94,6 +96,7 @@ class StiffnessEstimatorRos {
   double deadline_ = 1e-3;  // [s] processing time per input beyond which it counts as late
   std::uint64_t missed_deadlines_ = 0, missed_deadlines_cpu_ = 0, reconfigurations_ = 0;
   double max_processing_cpu_s_ = 0.0;
+  const char* max_processing_cpu_topic_ = "";  // the input topic of max_processing_cpu_s_
   std::uint64_t rejected_at_last_report_ = 0, resets_at_last_report_ = 0, late_at_last_report_ = 0;
   double processing_s_ = 0.0, max_processing_s_ = 0.0;
   std::uint64_t processed_ = 0;
