@@ -140,35 +140,38 @@ std::optional<IdentifiedMode> modeOf(const Cluster& c, const SsiResult& ssi,
     if (resolved(p)) doubled += resolved_orders.insert(p->order).second ? 0 : 1;
   }
   if (static_cast<int>(orders.size()) < needed) return std::nullopt;
-  // Unresolved when an order sees two poles here, or when fewer than half the members agree with
-  // the median within 2 of their std (below): close modes of one shape, whose poles wander
-  // between them from order to order.
+  // Unresolved when an order sees two resolved poles here, or when fewer than half the resolved
+  // members agree with their median within 2 of their std (below): close modes of one shape,
+  // whose poles wander between them from order to order.
   bool unresolved = doubled > 0;
-  // The representative: among the members within 2 std of the cluster's median frequency (the
+  // The representative: among the resolved members within 2 std of their median frequency (the
   // orders where the pole has converged), the one with the smallest frequency std, the order at
   // which the first-order propagation's singular-value gap is clearest (docs/vibration.md,
   // "Variance propagation"). Too low an order biases its pole, with a small std: on 50 simulated
   // rigs the smallest-std member over the whole cluster erred by -0.085 % on average, 3 of its
-  // std. Without std, the member of median frequency.
-  std::vector<const Pole*> by_frequency(c.begin(), c.end());
+  // std. Unresolved members (noise beside the mode) would drag the median. Without std, the
+  // member of median frequency.
+  std::vector<const Pole*> by_frequency;
+  for (const Pole* p : c)
+    if (resolved(p)) by_frequency.push_back(p);
+  if (by_frequency.empty()) return std::nullopt;  // no member resolved: noise
   std::sort(by_frequency.begin(), by_frequency.end(),
             [](const Pole* a, const Pole* b) { return a->frequency < b->frequency; });
   const Pole* rep = by_frequency[by_frequency.size() / 2];
   const double median = rep->frequency;
-  if (ssi.variance_blocks > 0) {
+  if (with_std) {
     std::size_t agree = 0;
-    for (const Pole* p : c) {
+    for (const Pole* p : by_frequency) {
       const bool converged = std::abs(p->frequency - median) <= 2.0 * p->frequency_std;
       agree += converged ? 1 : 0;
       if (converged && p->frequency_std < rep->frequency_std) rep = p;
     }
-    unresolved = unresolved || 2 * agree < c.size();
+    unresolved = unresolved || 2 * agree < by_frequency.size();
   }
   const bool significant = std::any_of(c.begin(), c.end(), [&](const Pole* p) {
     return p->damping > o.damping_significance * p->damping_std;
   });
-  if (ssi.variance_blocks > 0 && !significant) return std::nullopt;
-  if (!resolved(rep)) return std::nullopt;
+  if (with_std && !significant) return std::nullopt;
   IdentifiedMode m;
   m.frequency = rep->frequency;
   m.frequency_std = rep->frequency_std;
