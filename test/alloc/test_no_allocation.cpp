@@ -6,6 +6,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
+#include <string>
+#include <utility>
 #include <vector>
 
 #include "drivetrain_stiffness/config/yaml_config.hpp"
@@ -307,75 +310,66 @@ TEST(NoAllocation, BearingChangesToNewValuesInSteadyState) {
       << "the changes did not decompose slices";
 }
 
+/// A pipeline fed 1024-sample vibration blocks at 51.2 kHz (block k stamped 10 s + k blocks), with
+/// a torque input at each block when `with_torque`.
+struct VibrationFeed {
+  VibrationFeed(std::vector<std::string> names, const PipelineOptions& options,
+                std::optional<float> constant = std::nullopt)
+      : pipeline(test::seedServo(), options), channels(std::move(names)) {
+    data.resize(1024 * channels.size());
+    for (std::size_t i = 0; i < data.size(); ++i)
+      data[i] = constant ? *constant : static_cast<float>(std::sin(0.1 * i));
+  }
+  void send(int k, bool with_torque = true) {
+    const VibrationBlockView block{51200.0, channels.data(), channels.size(), data.data(),
+                                   data.size()};
+    const Stamp stamp = test::stampAt(10.0 + k * 1024 / 51200.0);
+    ASSERT_EQ(pipeline.vibration(stamp, block, sink), InputOutcome::kAccepted) << k;
+    if (with_torque) {
+      ASSERT_EQ(pipeline.torque(stamp, 0.5, sink), InputOutcome::kAccepted) << k;
+    }
+  }
+  RigPipeline pipeline;
+  PipelineSink sink;
+  std::vector<std::string> channels;
+  std::vector<float> data;  ///< sin(0.1 i), or the constant
+};
+
 // Vibration blocks (two channels and an unknown one, 1024 samples at 51.2 kHz) appended to the
 // record past its length (4 s: the ring wraps), between torque inputs: none may allocate.
 TEST(NoAllocation, VibrationBlocksInSteadyState) {
-  RigPipeline pipeline(test::seedServo(), PipelineOptions{});
-  PipelineSink sink;
-  const std::vector<std::string> channels{"pinion_bearing", "tacho", "gear_bearing"};
-  std::vector<float> data(1024 * channels.size());
-  for (std::size_t i = 0; i < data.size(); ++i) data[i] = static_cast<float>(std::sin(0.1 * i));
-  const VibrationBlockView block{51200.0, channels.data(), channels.size(), data.data(),
-                                 data.size()};
-  const double period = 1024 / 51200.0;
-  auto send = [&](int k) {
-    const Stamp stamp = test::stampAt(10.0 + k * period);
-    ASSERT_EQ(pipeline.vibration(stamp, block, sink), InputOutcome::kAccepted) << k;
-    ASSERT_EQ(pipeline.torque(stamp, 0.5, sink), InputOutcome::kAccepted) << k;
-  };
+  VibrationFeed feed({"pinion_bearing", "tacho", "gear_bearing"}, PipelineOptions{});
   // 5 s: the record full, its ring wrapped, its first identification (4 s of blocks, 200) run
   // and applied 0.5 s later (block 225). An identification allocates (its record's copy, SSI's
   // matrices), once per record; the blocks between identifications allocate nothing.
-  for (int k = 0; k < 250; ++k) send(k);
-  EXPECT_EQ(pipeline.counters().modal_out + pipeline.counters().modal_errors, 1u);
+  for (int k = 0; k < 250; ++k) feed.send(k);
+  EXPECT_EQ(feed.pipeline.counters().modal_out + feed.pipeline.counters().modal_errors, 1u);
   const long before = allocationCount();
-  for (int k = 250; k < 399; ++k) send(k);  // block 399 completes the next record
+  for (int k = 250; k < 399; ++k) feed.send(k);  // block 399 completes the next record
   const long n = allocationCount() - before;
   EXPECT_EQ(n, 0) << n / 149.0 << " heap allocations per block and torque input";
-  EXPECT_EQ(pipeline.counters().vibration.samples, 399u * 1024u);
+  EXPECT_EQ(feed.pipeline.counters().vibration.samples, 399u * 1024u);
 }
 
 // A lost block at the same rate starts a new record: the input's ring and the stage's two record
 // buffers are kept (same size), so the restart allocates nothing.
 TEST(NoAllocation, VibrationRecordRestartAfterAGap) {
-  RigPipeline pipeline(test::seedServo(), PipelineOptions{});
-  PipelineSink sink;
-  const std::vector<std::string> channels{"pinion_bearing", "gear_bearing"};
-  std::vector<float> data(1024 * channels.size());
-  for (std::size_t i = 0; i < data.size(); ++i) data[i] = static_cast<float>(std::sin(0.1 * i));
-  const VibrationBlockView block{51200.0, channels.data(), channels.size(), data.data(),
-                                 data.size()};
-  const double period = 1024 / 51200.0;
-  auto send = [&](int k) {
-    const Stamp stamp = test::stampAt(10.0 + k * period);
-    ASSERT_EQ(pipeline.vibration(stamp, block, sink), InputOutcome::kAccepted) << k;
-    ASSERT_EQ(pipeline.torque(stamp, 0.5, sink), InputOutcome::kAccepted) << k;
-  };
-  for (int k = 0; k < 50; ++k) send(k);  // the first record: its buffers allocated
+  VibrationFeed feed({"pinion_bearing", "gear_bearing"}, PipelineOptions{});
+  for (int k = 0; k < 50; ++k) feed.send(k);  // the first record: its buffers allocated
   const long before = allocationCount();
-  for (int k = 51; k < 100; ++k) send(k);  // block 50 lost: a gap, a new record
+  for (int k = 51; k < 100; ++k) feed.send(k);  // block 50 lost: a gap, a new record
   const long n = allocationCount() - before;
-  EXPECT_EQ(pipeline.counters().vibration.gaps, 1u);
+  EXPECT_EQ(feed.pipeline.counters().vibration.gaps, 1u);
   EXPECT_EQ(n, 0) << n << " heap allocations over a record's restart";
-  EXPECT_EQ(pipeline.vibrationInput().appended(), 49u * 1024u);
+  EXPECT_EQ(feed.pipeline.vibrationInput().appended(), 49u * 1024u);
 }
 
 TEST(NoAllocation, VibrationBlocksWithoutIdentification) {
   PipelineOptions options;
   options.modal_identification = false;
-  RigPipeline pipeline(test::seedServo(), options);
-  PipelineSink sink;
-  const std::vector<std::string> channels{"pinion_bearing", "gear_bearing"};
-  std::vector<float> data(1024 * channels.size(), 0.5f);
-  const VibrationBlockView block{51200.0, channels.data(), channels.size(), data.data(),
-                                 data.size()};
-  const double period = 1024 / 51200.0;
-  auto send = [&](int k) {
-    const Stamp stamp = test::stampAt(10.0 + k * period);
-    ASSERT_EQ(pipeline.vibration(stamp, block, sink), InputOutcome::kAccepted) << k;
-  };
-  for (int k = 0; k < 250; ++k) send(k);
+  VibrationFeed feed({"pinion_bearing", "gear_bearing"}, options, 0.5f);
+  for (int k = 0; k < 250; ++k) feed.send(k, false);
   const long before = allocationCount();
-  for (int k = 250; k < 500; ++k) send(k);
+  for (int k = 250; k < 500; ++k) feed.send(k, false);
   EXPECT_EQ(allocationCount() - before, 0);
 }
