@@ -38,9 +38,10 @@ struct SelectionOptions {
   /// A cluster none of whose poles has a damping above this many of its std is spurious (not
   /// distinguishable from an undamped pole: noise) [-]; needs variance blocks.
   double damping_significance = 2.0;
-  /// A cluster whose representative's frequency std exceeds this fraction of its half-power
-  /// half-width (damping x frequency) is spurious: its frequency is not resolved within its own
-  /// resonance [-]; needs variance blocks.
+  /// A pole whose frequency std exceeds this fraction of its half-power half-width (damping x
+  /// frequency) is not resolved within its own resonance: it neither doubles an order nor enters
+  /// the median or the representative, and a cluster with no resolved pole is spurious [-]; needs
+  /// variance blocks.
   double frequency_resolution = 0.5;
   /// Below this damping ratio a pole inside a lines_only band is the order's line [-].
   double line_damping = 0.002;
