@@ -258,5 +258,42 @@ TEST(CalibratorModes, OneRecordMatchesTheLinearGaussianPosterior) {
   }
 }
 
+TEST(CalibratorModes, AVeeringRigDoesNotRunToTheBounds) {
+  // A drawn rig of the modal validation (scripts/modal_validation, seed 1, rig 24): bearing scales
+  // 0.7636 (pinion) and 1.0799 (gear), mesh scale 0.9522, at 0.1 N·m. Its transverse
+  // modes lie 2.2 % apart with mixed shapes: 8,103 Hz (x_p) below 8,285 Hz (x_g), where the
+  // drawing has 9,377 Hz (x_p) above 7,884 Hz (x_g). One record of both frequencies with the stds
+  // of an 80 s identification (1.71 and 4.73 Hz), no model error. Full Gauss-Newton steps took the
+  // scales to 0.95 and 1.36 (7.6 and 19.9, the bound, in the 80 s replay); with steps that lower
+  // the posterior's cost the update lands within 0.5 % of the truth (the issue asks 3 %).
+  RigConfig rig = seedRig();
+  rig.calibration.modal_model_error = 0.0;
+  const double torque = 0.1;
+  CalibrationVector truth = nominal(rig);
+  truth[kMeshScale] = 0.952169707954613;
+  truth[kPinionBearingScale] = 0.7635527420243946;
+  truth[kGearBearingScale] = 1.0798959676219346;
+  const std::array<Mode, 3> measured = trueModes(rig, truth, torque);
+  ASSERT_EQ(measured[0].dominant, "x_p");
+  ASSERT_EQ(measured[1].dominant, "x_g");
+  ASSERT_LT(measured[1].natural_frequency / measured[0].natural_frequency, 1.03);
+  StiffnessEstimator supports(rig);
+  supports.setTorque(torque);
+  Calibrator calibrator(rig);
+  std::array<ModalFrequency, 2> f{};
+  for (int k = 0; k < 2; ++k) {
+    f[k].mode = matched(calibrator, measured[k], torque, supports);
+    f[k].frequency = measured[k].natural_frequency;
+    f[k].frequency_std = k == 0 ? 1.71 : 4.73;
+  }
+  ASSERT_EQ(calibrator.modalUpdate(1.0, f.data(), 2, torque, supports), WindowOutcome::kUpdated);
+  const CalibrationEstimate& e = calibrator.estimate();
+  std::cout << "estimate " << e.value.transpose() << "\n";
+  for (int i : {kPinionBearingScale, kGearBearingScale}) {
+    EXPECT_NEAR(e.value[i] / truth[i], 1.0, 5e-3) << i;
+    EXPECT_TRUE(e.identified[i]) << i;
+  }
+}
+
 }  // namespace
 }  // namespace drivetrain_stiffness
