@@ -18,6 +18,23 @@ namespace {
 constexpr double kMinOrderSpeed = 1.0;
 /// Mesh harmonics whose bands are reported at most (the synchronous average removes them all).
 constexpr int kMaxMeshBands = 256;
+/// A record whose quarter-second mean speeds all lie within this fraction of their mean is at
+/// steady speed: its synchronous averages run over the whole record [-].
+constexpr double kSteadySpeed = 0.01;
+
+/// True when the pinion's mean speed over each quarter second of `angle` [rad] lies within
+/// kSteadySpeed of the record's mean speed (docs/vibration.md "Identification in the pipeline").
+bool steadySpeed(const Eigen::VectorXd& angle, double sample_rate) {
+  const long n = angle.size(), piece = std::max(16L, std::lround(0.25 * sample_rate));
+  if (n < 2) return false;
+  const double mean = (angle[n - 1] - angle[0]) / static_cast<double>(n - 1);  // [rad/sample]
+  if (!(std::abs(mean) > 0.0)) return false;
+  for (long first = 0; first + piece <= n; first += piece) {
+    const double speed = (angle[first + piece - 1] - angle[first]) / static_cast<double>(piece - 1);
+    if (std::abs(speed - mean) > kSteadySpeed * std::abs(mean)) return false;
+  }
+  return true;
+}
 
 /// The bands of the removed orders over the record, lines_only (a mode shows through them): each
 /// shaft's first two and every mesh harmonic below the flat band.
@@ -81,14 +98,20 @@ ModalReport identifyModes(const ModalJob& job) {
 
   // The orders out (docs/vibration.md "Identification in the pipeline"): synchronous averages
   // over the pinion's turns (every pinion-shaft order, 1 s blocks) and over the mesh cycles
-  // (every mesh harmonic, 0.25 s blocks, as the speed changes faster than the pinion turns).
+  // (every mesh harmonic, 0.25 s blocks, as the speed changes faster than the pinion turns); at
+  // steady speed both over the whole record, as an average over N cycles takes 1/N of the modes'
+  // random response with it, which at lags near one cycle moves the modes ("Averaging blocks").
   Eigen::MatrixXd record = job.record;
   if (max_speed > kMinOrderSpeed) {
     const Eigen::VectorXd turns = job.angle / kTwoPi;
-    modal::removeSynchronousAverage(record, turns,
-                                    std::max<long>(16, std::lround(job.sample_rate)));
+    const bool steady = steadySpeed(job.angle, job.sample_rate);
+    modal::removeSynchronousAverage(
+        record, turns,
+        steady ? std::max<long>(16, n) : std::max<long>(16, std::lround(job.sample_rate)));
+    const long mesh_block =
+        steady ? std::max<long>(16, n) : std::max<long>(16, std::lround(0.25 * job.sample_rate));
     modal::removeSynchronousAverage(record, turns * static_cast<double>(job.pinion_teeth),
-                                    std::max<long>(16, std::lround(0.25 * job.sample_rate)));
+                                    mesh_block);
     r.order_bands = orderBands(job, max_speed);
   }
   // Beyond the chain's flat band (~modal_band) the anti-alias filter rolls off: poles there are

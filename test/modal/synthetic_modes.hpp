@@ -41,20 +41,23 @@ class SyntheticModes {
   }
 
   /// A record of `samples` samples after `warmup` samples of settling; measurement noise of
-  /// `noise` times each channel's response rms (taken from the modal variance).
-  Eigen::MatrixXd record(long samples, unsigned seed, double noise = 0.05,
-                         long warmup = 2000) const {
+  /// `noise` times each channel's response rms (taken from the modal variance). `common`: every
+  /// mode driven by one white input, as a rig's modes by the mesh force (the channels' lag
+  /// covariances are then not symmetric), instead of one input per mode.
+  Eigen::MatrixXd record(long samples, unsigned seed, double noise = 0.05, long warmup = 2000,
+                         bool common = false) const {
     std::mt19937_64 rng(seed);
     std::normal_distribution<double> g(0.0, 1.0);
     const int nm = static_cast<int>(modes_.size());
     std::vector<Eigen::Vector2d> x(nm, Eigen::Vector2d::Zero());
     Eigen::MatrixXd q(nm, samples);
     for (long t = -warmup; t < samples; ++t) {
+      const double shared = common ? g(rng) : 0.0;
       for (int k = 0; k < nm; ++k) {
         // A velocity kick per sample, scaled so that each mode's displacement is O(1).
         const double w = 2.0 * M_PI * modes_[k].frequency;
         x[k] = transitions_[k] * x[k];
-        x[k][1] += w * std::sqrt(modes_[k].damping) * g(rng);
+        x[k][1] += w * std::sqrt(modes_[k].damping) * (common ? shared : g(rng));
         if (t >= 0) q(k, t) = x[k][0];
       }
     }
