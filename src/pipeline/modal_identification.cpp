@@ -105,13 +105,12 @@ ModalReport identifyModes(const ModalJob& job) {
   if (max_speed > kMinOrderSpeed) {
     const Eigen::VectorXd turns = job.angle / kTwoPi;
     const bool steady = steadySpeed(job.angle, job.sample_rate);
-    modal::removeSynchronousAverage(
-        record, turns,
-        steady ? std::max<long>(16, n) : std::max<long>(16, std::lround(job.sample_rate)));
-    const long mesh_block =
-        steady ? std::max<long>(16, n) : std::max<long>(16, std::lround(0.25 * job.sample_rate));
+    auto block = [&](double seconds) {  // [samples]: the whole record at steady speed
+      return std::max<long>(16, steady ? n : std::lround(seconds * job.sample_rate));
+    };
+    modal::removeSynchronousAverage(record, turns, block(1.0));
     modal::removeSynchronousAverage(record, turns * static_cast<double>(job.pinion_teeth),
-                                    mesh_block);
+                                    block(0.25));
     r.order_bands = orderBands(job, max_speed);
   }
   // Beyond the chain's flat band (~modal_band) the anti-alias filter rolls off: poles there are

@@ -170,7 +170,7 @@ TEST(ModalIdentification, ASteadyMeshAverageLeavesTheModesWhereTheyAre) {
     const ModalReport removed = identifyModes(job);
     job.angle = still;
     const ModalReport kept = identifyModes(job);
-    ASSERT_TRUE(kept.order_bands.size() == 1u) << "only the flat band's edge: no order removed";
+    ASSERT_EQ(kept.order_bands.size(), 1u) << "only the flat band's edge: no order removed";
     for (int k = 0; k < 2; ++k) {
       ASSERT_GE(removed.identified[k], 0) << names[k] << ", record " << record;
       ASSERT_GE(kept.identified[k], 0) << names[k] << ", record " << record;
