@@ -8,16 +8,15 @@
 namespace drivetrain_stiffness {
 
 DynamicsStage::DynamicsStage(std::shared_ptr<const RigConfig> rig,
-                             const StiffnessEstimator& estimator, const PipelineOptions& options,
-                             Fidelity fidelity, PhaseSource& phase, PipelineCounters& counters)
-    : estimator_(estimator),
-      phase_(phase),
+                             const StiffnessEstimator& stiffness, const PipelineOptions& options,
+                             Fidelity fidelity, PipelineCounters& counters)
+    : stiffness_(stiffness),
       counters_(counters),
-      model_(std::move(rig), estimator.shaftRadialStiffness(), options.output_rate,
-             estimator.sharedMesh()),
+      dynamics_(std::move(rig), stiffness.shaftRadialStiffness(), options.output_rate,
+                stiffness.sharedMesh()),
       max_gap_(options.max_gap) {
-  model_.setFidelity(fidelity);
-  model_.setMotionSlices(options.motion_slices);
+  dynamics_.setFidelity(fidelity);
+  dynamics_.setMotionSlices(options.motion_slices);
 }
 
 void DynamicsStage::error(const std::string& where, const Error& e) {
@@ -26,32 +25,30 @@ void DynamicsStage::error(const std::string& where, const Error& e) {
 }
 
 void DynamicsStage::stop() {
-  model_.stop();
+  dynamics_.stop();
   for (SampleConsumer* c : consumers_) c->restart();  // nothing before the stop continues after it
 }
 
 void DynamicsStage::restart(Stamp stamp, double torque) {
   epoch_ = stamp;
-  model_.reset(0.0, torque);
+  dynamics_.reset(0.0, torque);
   for (SampleConsumer* c : consumers_) c->restart();  // a new spectrum window, no mesh periods
-  phase_.setOrigin(stamp);  // the stiffness message's mesh phase restarts with the dynamics
-  followAnchor(stamp);      // measured motion: the dynamics start at the measured phase
 }
 
 void DynamicsStage::reset() {
   // The model restarts at the next torque input (its reset needs its time), with the bearing
-  // stiffness of the configured preloads: taken up only if it moved by more than 1 %, as always.
+  // stiffness of the configured preloads: taken up only if it moved by more than 1 %.
   stop();
   try {
-    model_.setBearingStiffness(estimator_.shaftRadialStiffness());
+    dynamics_.setBearingStiffness(stiffness_.shaftRadialStiffness());
   } catch (const Error& e) {
     error("dynamics", e);
   }
 }
 
 void DynamicsStage::stopAfterGap(Stamp stamp) {
-  if (!model_.started()) return;
-  const double gap = secondsBetween(stamp, epoch_) - model_.time();
+  if (!dynamics_.started()) return;
+  const double gap = secondsBetween(stamp, epoch_) - dynamics_.time();
   if (!(gap > max_gap_)) return;
   ++counters_.gap_restarts;
   counters_.last_event =
@@ -59,35 +56,35 @@ void DynamicsStage::stopAfterGap(Stamp stamp) {
   stop();
 }
 
-bool DynamicsStage::advanceTo(Stamp stamp, PipelineSink& sink) {
-  if (!model_.started()) return false;
+Advance DynamicsStage::advanceTo(Stamp stamp, PipelineSink& sink) {
+  if (!dynamics_.started()) return Advance::kStopped;
   const double t = secondsBetween(stamp, epoch_);
-  // Past it already (another stream), or a gap the gap rule restarts at the next torque input.
-  if (t <= model_.time() || t - model_.time() > max_gap_) return false;
+  if (t <= dynamics_.time()) return Advance::kAlreadyPast;
+  if (t - dynamics_.time() > max_gap_) return Advance::kGap;
   try {
     emitUpTo(t, sink);
   } catch (const Error& e) {
     error("dynamics (restarted at the next torque input)", e);
     stop();
-    return false;
+    return Advance::kFailed;
   }
-  return true;
+  return Advance::kAdvanced;
 }
 
 void DynamicsStage::emitUpTo(double t, PipelineSink& sink) {
-  const double from = model_.time();
+  const double from = dynamics_.time();
   // The motion is held over one advance: its mesh frequency unwraps the phase between samples.
   // A member, not a capture: the lambda must stay within std::function's small buffer (two
   // pointers), or every advance allocates (allocation_tests).
-  advance_mesh_frequency_ = model_.meshFrequency();
+  advance_mesh_frequency_ = dynamics_.meshFrequency();
   // The time integrated counts whether the advance ends or throws (a throw passes on untouched).
   struct CountSimulated {
     const DynamicsEstimator& dynamics;
     double from;
     double& simulated;
     ~CountSimulated() { simulated += dynamics.time() - from; }
-  } count{model_, from, counters_.simulated_s};
-  model_.advanceTo(t, [this, &sink](const DynamicsSample& relative) {
+  } count{dynamics_, from, counters_.simulated_s};
+  dynamics_.advanceTo(t, [this, &sink](const DynamicsSample& relative) {
     DynamicsSample s = relative;
     const Stamp sample_stamp{epoch_.ns + std::llround(relative.t * 1e9)};
     s.t = sample_stamp.toSec();
@@ -95,61 +92,50 @@ void DynamicsStage::emitUpTo(double t, PipelineSink& sink) {
   });
 }
 
-bool DynamicsStage::takeTorque(Stamp stamp, double torque, PipelineSink& sink) {
-  std::optional<double> at;  // the stamp on the model's clock, once the model runs up to it
-  try {
-    // The gap rule: a paused rig restarts the model at this input instead of integrating the gap.
-    stopAfterGap(stamp);
-    if (!model_.started()) {
-      restart(stamp, torque);
-      return false;
-    }
-    const double t = secondsBetween(stamp, epoch_);
-    // Else another stream took the model past this stamp: the torque applies from there.
-    if (t > model_.time()) emitUpTo(t, sink);
-    at = t;
-  } catch (const Error& e) {
-    // The state stays at its last good sample and every later input would fail the same way:
-    // restart the model here (counted), as after a gap.
-    error("dynamics (restarted at this input)", e);
+TorqueTaken DynamicsStage::takeTorque(Stamp stamp, double torque) {
+  if (!dynamics_.started()) {
+    // The gap rule, a failure or a reset stopped it (or it never ran): it restarts at this input
+    // instead of integrating what it missed.
     try {
       restart(stamp, torque);
-    } catch (const Error& again) {
-      error("dynamics", again);
+    } catch (const Error& e) {
+      error("dynamics", e);
     }
+    return TorqueTaken::kRestarted;
   }
   try {
-    model_.setTorque(torque,
-                     at);  // the new torque holds from its stamp on, whatever happened above
+    // From its stamp on; where another stream took the model past it, from the model's time.
+    dynamics_.setTorque(torque, secondsBetween(stamp, epoch_));
   } catch (const Error& e) {
     error("dynamics", e);
   }
-  return true;
+  return TorqueTaken::kHeld;
 }
 
-void DynamicsStage::takeBearingStiffness(Stamp stamp, PipelineSink& sink) {
-  // Taken up only when it moved by more than 1 %, at the input's own stamp. After a gap the model
-  // stops first and restarts at the next torque input with it: the stiffness belongs after the
-  // gap, not at the last input before it.
-  stopAfterGap(stamp);
-  const bool advanced = advanceTo(stamp, sink);
+void DynamicsStage::takeBearingStiffness(Stamp stamp, Advance advanced) {
+  // Taken up only when it moved by more than 1 %, at the input's own stamp. A stopped model
+  // restarts at the next torque input with it: the stiffness belongs after a gap, not at the last
+  // input before it.
   try {
     std::optional<double> at;
-    if (model_.started()) at = advanced ? secondsBetween(stamp, epoch_) : model_.time();
-    model_.setBearingStiffness(estimator_.shaftRadialStiffness(), at);
+    if (dynamics_.started()) {
+      at = advanced == Advance::kAdvanced ? secondsBetween(stamp, epoch_) : dynamics_.time();
+    }
+    dynamics_.setBearingStiffness(stiffness_.shaftRadialStiffness(), at);
   } catch (const Error& e) {
     error("dynamics", e);
   }
 }
 
-void DynamicsStage::followAnchor(Stamp stamp) {
-  if (!model_.started() || !phase_.anchor()) return;
+std::optional<DynamicsStage::Moment> DynamicsStage::momentAtOrAfter(Stamp stamp) const {
+  if (!dynamics_.started()) return std::nullopt;
+  const double t = std::max(secondsBetween(stamp, epoch_), dynamics_.time());
+  return Moment{t, Stamp{epoch_.ns + std::llround(t * 1e9)}};
+}
+
+void DynamicsStage::followMotion(const Moment& at, double mesh_turns, double mesh_frequency) {
   try {
-    // Another stream may have taken the model past this stamp: the motion applies from there.
-    const double t = std::max(secondsBetween(stamp, epoch_), model_.time());
-    const Stamp at{epoch_.ns + std::llround(t * 1e9)};
-    model_.followMotion(t, phase_.meshTurns(phase_.pinionAngle(at)),
-                        phase_.meshTurns(phase_.anchor()->speed));
+    dynamics_.followMotion(at.t, mesh_turns, mesh_frequency);
   } catch (const Error& e) {
     error("dynamics", e);
   }

@@ -51,14 +51,14 @@ RigPipeline::RigPipeline(const RigConfig& rig, const PipelineOptions& options,
   modal_ = std::make_unique<ModalStage>(*rig_, *vibration_, *phase_, *estimator_, *calibration_,
                                         options_, counters_);
   if (options_.dynamics) {
-    dynamics_ = std::make_unique<DynamicsStage>(rig_, *estimator_, options_, settings_.fidelity,
-                                                *phase_, counters_);
+    dynamics_ =
+        std::make_unique<DynamicsStage>(rig_, *estimator_, options_, settings_.fidelity, counters_);
     te_output_ = std::make_unique<TeOutput>(*phase_, resonance_->last(), counters_);
     te_spectrum_ =
         std::make_unique<TeSpectrumStage>(options_.spectrum_window, options_.spectrum_hop,
-                                          dynamics_->model().outputInterval(), counters_);
+                                          dynamics_->dynamics().outputInterval(), counters_);
     mesh_periods_ = std::make_unique<MeshPeriodStage>(
-        dynamics_->model(), estimator_->mesh().geometry().baseRadius(0), counters_);
+        dynamics_->dynamics(), estimator_->mesh().geometry().baseRadius(0), counters_);
     // The order in which each sample reaches them (and so the sink's calls).
     dynamics_->addConsumer(*te_output_);
     dynamics_->addConsumer(*te_spectrum_);
@@ -97,87 +97,136 @@ std::optional<double> RigPipeline::encoderSilence(Stamp now) const {
 
 const char* RigPipeline::phaseSource() const { return phase_->name(); }
 
-template <typename Validate, typename Update>
-InputOutcome RigPipeline::take(InputStream stream, Stamp stamp, PipelineSink& sink,
-                               Validate validate, Update update) {
+template <typename Validate>
+InputOutcome RigPipeline::gate(InputStream stream, Stamp stamp, Validate validate) {
   // Values first: a bad value must not trigger a source-restart reset before it is refused.
-  try {
-    validate();
-  } catch (const InvalidInput& e) {
-    return gate_->reject(InputOutcome::kInvalidValue, stream, stamp, e.what());
-  }
+  const InputOutcome value_ok = refuseOnError(stream, stamp, validate);
+  if (value_ok != InputOutcome::kAccepted) return value_ok;
   const InputOutcome time_ok = gate_->checkStamp(stream, stamp);
   if (time_ok != InputOutcome::kAccepted) {
     return gate_->reject(time_ok, stream, stamp, "stamp " + formatValue(stamp.toSec()) + " s");
   }
   if (const std::optional<std::string> restarted = gate_->noteSourceRestart(stream, stamp))
     reset(*restarted);
-  const StiffnessEstimate* estimate = nullptr;
+  return InputOutcome::kAccepted;
+}
+
+template <typename F>
+InputOutcome RigPipeline::refuseOnError(InputStream stream, Stamp stamp, F f) {
   try {
-    // Transactional: throws without changing the state. No estimate: a shed input (no stiffness
-    // update).
-    estimate = update();
+    f();
   } catch (const InvalidInput& e) {
     return gate_->reject(InputOutcome::kInvalidValue, stream, stamp, e.what());
   } catch (const UnreachableLoad& e) {
     return gate_->reject(InputOutcome::kUnreachableLoad, stream, stamp, e.what());
   }
-  // Taken: whatever becomes of its outputs (each guarded and counted on its own) the input is
-  // counted accepted once and never also rejected.
-  gate_->accept(stream, stamp);
-  if (estimate) afterUpdate(stamp, *estimate, sink);
   return InputOutcome::kAccepted;
+}
+
+Advance RigPipeline::advance(Stamp stamp, PipelineSink& sink) {
+  // The encoders' time-out at its own moment: the dynamics run up to it on the encoders' phase,
+  // which from there runs at the nominal speed.
+  if (const std::optional<Stamp> at = phase_->encodersTimedOut(stamp)) {
+    if (dynamics_) dynamics_->advanceTo(*at, sink);
+    phase_->fallBackToNominal(*at);
+    followPhase(*at);
+  }
+  if (!dynamics_) return Advance::kStopped;
+  // The own-stamp rule, after the gap rule: a paused rig restarts the model at the next torque
+  // input instead of integrating the gap.
+  dynamics_->stopAfterGap(stamp);
+  return dynamics_->advanceTo(stamp, sink);
 }
 
 InputOutcome RigPipeline::torque(Stamp stamp, double torque, PipelineSink& sink,
                                  const InputOrigin& origin, Backlog backlog) {
-  gate_->countDrops(InputStream::kTorque, origin);
+  constexpr InputStream kStream = InputStream::kTorque;
+  gate_->countDrops(kStream, origin);
   if (gate_->checkFrame(stamp, origin) != InputOutcome::kAccepted) return InputOutcome::kWrongFrame;
-  const InputOutcome outcome = take(
-      InputStream::kTorque, stamp, sink, [&] { estimator_->validateTorque(torque); },
-      [&]() -> const StiffnessEstimate* {
-        // The mesh phase counts from the first torque input after a (re)start, as the dynamics do;
-        // the origin is kept only if the input is accepted.
-        checkMotionTimeout(stamp, sink);
-        const Stamp origin_stamp = phase_->origin().value_or(stamp);
-        if (backlog == Backlog::kShed) {
-          // Shed: the rules and the dynamics, no stiffness update or message (its estimate would be
-          // replaced by the newest input's before anyone could read it).
-          phase_->setOrigin(origin_stamp);
-          ++counters_.stiffness_shed;
-          return nullptr;
-        }
-        const StiffnessEstimate& e =
-            estimator_->setTorque(torque, phase_->stiffnessAngle(stamp, origin_stamp));
-        phase_->setOrigin(origin_stamp);
-        return &e;
-      });
-  // The torque the calibration pairs the next readings with (kept as it was when this one restarted
-  // the dynamics: what the pipeline has always done).
-  if (outcome == InputOutcome::kAccepted &&
-      (!dynamics_ || dynamics_->takeTorque(stamp, torque, sink))) {
-    held_torque_ = torque;
+  InputOutcome outcome = gate(kStream, stamp, [&] { estimator_->validateTorque(torque); });
+  if (outcome != InputOutcome::kAccepted) return outcome;
+  const Advance advanced = advance(stamp, sink);
+  const StiffnessEstimate* estimate = nullptr;
+  outcome = refuseOnError(kStream, stamp,
+                          [&] { estimate = applyTorque(stamp, torque, backlog, advanced); });
+  if (outcome != InputOutcome::kAccepted) return outcome;
+  gate_->accept(kStream, stamp);
+  if (estimate) publishStiffness(stamp, *estimate, sink);
+  return InputOutcome::kAccepted;
+}
+
+const StiffnessEstimate* RigPipeline::applyTorque(Stamp stamp, double torque, Backlog backlog,
+                                                  Advance advanced) {
+  // The nominal mesh phase counts from the first torque input after a (re)start of the pipeline;
+  // the stiffness of the input that sets it is taken at that origin.
+  const Stamp origin = phase_->origin().value_or(stamp);
+  const StiffnessEstimate* estimate = nullptr;
+  if (backlog == Backlog::kShed) {
+    // Shed: the rules and the dynamics, no stiffness update or message (its estimate would be
+    // replaced by the newest input's before anyone could read it).
+    ++counters_.stiffness_shed;
+  } else {
+    // Transactional: throws with nothing changed.
+    estimate = &estimator_->setTorque(torque, phase_->stiffnessAngle(stamp, origin));
   }
-  return outcome;
+  phase_->setOrigin(origin);
+  held_torque_ = torque;
+  if (!dynamics_) return estimate;
+  if (estimate) dynamics_->takeBearingStiffness(stamp, advanced);
+  if (dynamics_->takeTorque(stamp, torque) == TorqueTaken::kRestarted) {
+    // The nominal phase restarts with the dynamics; measured motion: they start at its phase.
+    phase_->setOrigin(stamp);
+    followPhase(stamp);
+  }
+  return estimate;
 }
 
 InputOutcome RigPipeline::preload(Stamp stamp, const std::vector<PreloadSetting>& settings,
                                   PipelineSink& sink, const InputOrigin& origin) {
-  gate_->countDrops(InputStream::kPreload, origin);
-  return take(
-      InputStream::kPreload, stamp, sink, [&] { estimator_->validatePreloads(settings); },
-      [&]() -> const StiffnessEstimate* { return &estimator_->setPreloads(settings); });
+  constexpr InputStream kStream = InputStream::kPreload;
+  gate_->countDrops(kStream, origin);
+  InputOutcome outcome = gate(kStream, stamp, [&] { estimator_->validatePreloads(settings); });
+  if (outcome != InputOutcome::kAccepted) return outcome;
+  const Advance advanced = advance(stamp, sink);
+  const StiffnessEstimate* estimate = nullptr;
+  outcome = refuseOnError(kStream, stamp, [&] { estimate = &estimator_->setPreloads(settings); });
+  if (outcome != InputOutcome::kAccepted) return outcome;
+  if (dynamics_) dynamics_->takeBearingStiffness(stamp, advanced);
+  gate_->accept(kStream, stamp);
+  publishStiffness(stamp, *estimate, sink);
+  return InputOutcome::kAccepted;
 }
 
 InputOutcome RigPipeline::motion(Stamp stamp, const MotionInput& reading, PipelineSink& sink,
                                  const InputOrigin& origin) {
-  gate_->countDrops(InputStream::kJointStates, origin);
-  return take(
-      InputStream::kJointStates, stamp, sink, [&] { InputGate::validateReading(reading); },
-      [&]() -> const StiffnessEstimate* {
-        acceptMotion(stamp, reading, sink);
-        return nullptr;  // no stiffness message: the estimate has not changed
-      });
+  constexpr InputStream kStream = InputStream::kJointStates;
+  gate_->countDrops(kStream, origin);
+  InputOutcome outcome = gate(kStream, stamp, [&] { InputGate::validateReading(reading); });
+  if (outcome != InputOutcome::kAccepted) return outcome;
+  // Unwrapped against the last reading before anything moves (the encoders rule's speed bound).
+  PhaseSource::Reading unwrapped;
+  bool continuous = false;
+  outcome = refuseOnError(kStream, stamp,
+                          [&] { unwrapped = phase_->unwrap(stamp, reading, continuous); });
+  if (outcome != InputOutcome::kAccepted) return outcome;
+  advance(stamp, sink);
+  applyMotion(stamp, unwrapped);
+  gate_->accept(kStream, stamp);
+  if (calibration_->calibrator() && unwrapped.gear) {  // the calibration rule
+    calibration_->reading(stamp, unwrapped.pinion, *unwrapped.gear,
+                          phase_->meshPhase(unwrapped.pinion), unwrapped.speed, held_torque_,
+                          continuous, sink);
+  }
+  return InputOutcome::kAccepted;
+}
+
+void RigPipeline::applyMotion(Stamp stamp, PhaseSource::Reading& reading) {
+  phase_->checkGearRatio(reading);
+  // The first reading moves the mesh phase from the nominal count to the measured one (a jump):
+  // the running block of mesh periods would count a period that never was.
+  if (!phase_->encodersDrive() && mesh_periods_) mesh_periods_->restart();
+  phase_->anchorTo(reading);
+  followPhase(stamp);
 }
 
 InputOutcome RigPipeline::motionRefused(Stamp stamp, const std::string& reason,
@@ -189,56 +238,34 @@ InputOutcome RigPipeline::motionRefused(Stamp stamp, const std::string& reason,
 
 InputOutcome RigPipeline::vibration(Stamp stamp, const VibrationBlockView& block,
                                     PipelineSink& sink, const InputOrigin& origin) {
-  gate_->countDrops(InputStream::kVibration, origin);
-  const InputOutcome outcome = take(
-      InputStream::kVibration, stamp, sink, [&] { vibration_->validate(block); },
-      [&]() -> const StiffnessEstimate* {
-        vibration_->append(stamp, block, origin.seq);
-        return nullptr;  // no stiffness message: the estimate has not changed
-      });
+  // No advance: a block's stamp is its first sample's, and the record has a clock of its own.
+  constexpr InputStream kStream = InputStream::kVibration;
+  gate_->countDrops(kStream, origin);
+  InputOutcome outcome = gate(kStream, stamp, [&] { vibration_->validate(block); });
+  if (outcome == InputOutcome::kAccepted) {
+    outcome = refuseOnError(kStream, stamp, [&] { vibration_->append(stamp, block, origin.seq); });
+  }
   if (outcome != InputOutcome::kAccepted) {
     vibration_->interrupt();
     return outcome;
   }
+  gate_->accept(kStream, stamp);
   modal_->afterBlock(stamp, block.size / block.channel_count, held_torque_, sink);
   return outcome;
 }
 
 void RigPipeline::finish(PipelineSink& sink) { modal_->finish(sink); }
 
-void RigPipeline::acceptMotion(Stamp stamp, const MotionInput& m, PipelineSink& sink) {
-  // Transactional: the reading is checked against the last one before anything changes.
-  bool continuous = false;
-  PhaseSource::Reading accepted = phase_->unwrap(stamp, m, continuous);
-  checkMotionTimeout(stamp, sink);
-  phase_->checkGearRatio(accepted);
-  // The own-stamp rule: the dynamics run up to this reading with the motion before it (the gap
-  // rule: they stop, and the next torque input restarts them at the measured phase).
-  if (dynamics_) {
-    dynamics_->stopAfterGap(stamp);
-    dynamics_->advanceTo(stamp, sink);
-  }
-  // The first reading moves the mesh phase from the nominal count to the measured one (a jump):
-  // the running block of mesh periods would count a period that never was.
-  if (!phase_->encodersDrive() && mesh_periods_) mesh_periods_->restart();
-  if (calibration_->calibrator() && accepted.gear) {  // the calibration rule
-    calibration_->reading(stamp, accepted.pinion, *accepted.gear,
-                          phase_->meshPhase(accepted.pinion), accepted.speed, held_torque_,
-                          continuous, sink);
-  }
-  phase_->anchorTo(accepted);
-  if (dynamics_) dynamics_->followAnchor(stamp);
+void RigPipeline::followPhase(Stamp stamp) {
+  if (!dynamics_ || !phase_->anchor()) return;
+  const std::optional<DynamicsStage::Moment> at = dynamics_->momentAtOrAfter(stamp);
+  if (!at) return;  // stopped: a restart follows the phase from its own stamp
+  dynamics_->followMotion(*at, phase_->meshTurns(phase_->pinionAngle(at->stamp)),
+                          phase_->meshTurns(phase_->anchor()->speed));
 }
 
-void RigPipeline::checkMotionTimeout(Stamp stamp, PipelineSink& sink) {
-  const std::optional<Stamp> at = phase_->encodersTimedOut(stamp);
-  if (!at) return;
-  if (dynamics_) dynamics_->advanceTo(*at, sink);
-  phase_->fallBackToNominal(*at);
-  if (dynamics_) dynamics_->followAnchor(*at);
-}
-
-void RigPipeline::afterUpdate(Stamp stamp, const StiffnessEstimate& estimate, PipelineSink& sink) {
+void RigPipeline::publishStiffness(Stamp stamp, const StiffnessEstimate& estimate,
+                                   PipelineSink& sink) {
   // Coalescing by stamp, not by wall time, so a replay coalesces exactly as the live node did.
   const bool due = settings_.stiffness_rate <= 0.0 || !last_stiffness_out_ ||
                    stamp < *last_stiffness_out_ ||
@@ -250,24 +277,16 @@ void RigPipeline::afterUpdate(Stamp stamp, const StiffnessEstimate& estimate, Pi
       ++counters_.stiffness_out;
     } catch (const Error& e) {
       // The sink refused the message (a field it will not publish, such as a non-finite one): the
-      // input stays taken, the dynamics still get its stiffness below, the refusal is counted.
+      // input stays taken, the refusal is counted.
       ++counters_.stiffness_refused;
       counters_.last_event = std::string("stiffness message not published: ") + e.what();
     }
   } else {
     ++counters_.stiffness_coalesced;
   }
-  pushStiffness(stamp, estimate, sink);
-}
-
-void RigPipeline::pushStiffness(Stamp stamp, const StiffnessEstimate& estimate,
-                                PipelineSink& sink) {
   if (!dynamics_) return;
-  // Every accepted input hands the new bearing stiffness to the dynamics at its own stamp (after a
-  // gap they stop first), then the resonance estimate is refreshed.
-  dynamics_->takeBearingStiffness(stamp, sink);
   const DampingRatios damping{settings_.mesh_damping_ratio, settings_.bearing_damping_ratio};
-  resonance_->update(stamp, estimate, damping, dynamics_->model(), sink);
+  resonance_->update(stamp, estimate, damping, dynamics_->dynamics(), sink);
 }
 
 void RigPipeline::apply(const RuntimeSettings& settings) {
@@ -277,13 +296,13 @@ void RigPipeline::apply(const RuntimeSettings& settings) {
   settings_ = settings;
   if (damping_changed) {
     if (dynamics_)
-      dynamics_->model().setDamping(settings.mesh_damping_ratio, settings.bearing_damping_ratio);
+      dynamics_->dynamics().setDamping(settings.mesh_damping_ratio, settings.bearing_damping_ratio);
     resonance_->forget();  // damped frequencies and ratios changed: republish at the next input
   }
   if (dynamics_) {
     // The mesh-force estimator depends on the fidelity (MeshPeriodStatistics): a block spans one.
-    if (dynamics_->model().fidelity() != settings.fidelity) mesh_periods_->restart();
-    dynamics_->model().setFidelity(settings.fidelity);
+    if (dynamics_->dynamics().fidelity() != settings.fidelity) mesh_periods_->restart();
+    dynamics_->dynamics().setFidelity(settings.fidelity);
   }
 }
 

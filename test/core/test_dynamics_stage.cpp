@@ -1,6 +1,6 @@
 // DynamicsStage: samples on their exact stamps reach every consumer in the order they were added,
-// a torque input restarts a stopped model (and the phase origin with it), the gap rule stops the
-// model and restarts the consumers, and the TE output hands each sample its context.
+// a torque input restarts a stopped model, the gap rule stops the model and restarts the
+// consumers, each advance says what it did, and the TE output hands each sample its context.
 #include <gtest/gtest.h>
 
 #include <memory>
@@ -37,8 +37,7 @@ struct Fixture {
   StiffnessEstimator estimator{rig};
   PipelineOptions options;
   PipelineCounters counters;
-  PhaseSource phase{options, 20, 40, counters};
-  DynamicsStage stage{rig, estimator, options, Fidelity::kFull, phase, counters};
+  DynamicsStage stage{rig, estimator, options, Fidelity::kFull, counters};
   std::vector<std::string> log;
   Logger a{"a", log}, b{"b", log};
   PipelineSink sink;
@@ -52,10 +51,11 @@ struct Fixture {
 
 TEST(DynamicsStage, SamplesReachEveryConsumerInOrderOnExactStamps) {
   Fixture f;
-  EXPECT_FALSE(f.stage.takeTorque(at(1.0), 0.1, f.sink));  // restarts the stopped model
-  EXPECT_TRUE(f.phase.origin() && *f.phase.origin() == at(1.0));
+  EXPECT_EQ(f.stage.advanceTo(at(1.0), f.sink), Advance::kStopped);
+  EXPECT_EQ(f.stage.takeTorque(at(1.0), 0.1), TorqueTaken::kRestarted);
   EXPECT_EQ(f.a.restarts, 1);
-  EXPECT_TRUE(f.stage.takeTorque(at(1.0105), 0.1, f.sink));
+  EXPECT_EQ(f.stage.advanceTo(at(1.0105), f.sink), Advance::kAdvanced);
+  EXPECT_EQ(f.stage.takeTorque(at(1.0105), 0.1), TorqueTaken::kHeld);
   ASSERT_EQ(f.a.stamps.size(), 10u);  // 1 ms grid from the restart: 1.001 ... 1.010
   for (std::size_t k = 0; k < f.a.stamps.size(); ++k) {
     EXPECT_TRUE(f.a.stamps[k] == at(1.0 + 1e-3 * (k + 1)));
@@ -67,33 +67,50 @@ TEST(DynamicsStage, SamplesReachEveryConsumerInOrderOnExactStamps) {
   // integrated.
   EXPECT_NEAR(f.counters.simulated_s, 0.010, 1e-12);
   // Already past a stamp: nothing to do.
-  EXPECT_FALSE(f.stage.advanceTo(at(1.005), f.sink));
+  EXPECT_EQ(f.stage.advanceTo(at(1.005), f.sink), Advance::kAlreadyPast);
 }
 
 TEST(DynamicsStage, TheGapRuleStopsTheModelAndRestartsTheConsumers) {
   Fixture f;
-  f.stage.takeTorque(at(1.0), 0.1, f.sink);
-  f.stage.takeTorque(at(1.002), 0.1, f.sink);
+  f.stage.takeTorque(at(1.0), 0.1);
+  f.stage.advanceTo(at(1.002), f.sink);
   const int restarts = f.b.restarts;
   // More than ~max_gap (1 s) on: not integrated.
-  EXPECT_FALSE(f.stage.advanceTo(at(2.5), f.sink));
+  EXPECT_EQ(f.stage.advanceTo(at(2.5), f.sink), Advance::kGap);
   f.stage.stopAfterGap(at(2.5));
   EXPECT_EQ(f.counters.gap_restarts, 1u);
-  EXPECT_FALSE(f.stage.model().started());
+  EXPECT_FALSE(f.stage.dynamics().started());
   EXPECT_EQ(f.b.restarts, restarts + 1);
-  EXPECT_FALSE(f.stage.takeTorque(at(2.5), 0.2, f.sink));  // the next torque input restarts it
-  EXPECT_TRUE(f.stage.model().started());
-  EXPECT_TRUE(*f.phase.origin() == at(2.5));
+  EXPECT_EQ(f.stage.advanceTo(at(2.5), f.sink), Advance::kStopped);
+  // The next torque input restarts it there.
+  EXPECT_EQ(f.stage.takeTorque(at(2.5), 0.2), TorqueTaken::kRestarted);
+  EXPECT_TRUE(f.stage.dynamics().started());
+  EXPECT_FALSE(f.stage.momentAtOrAfter(at(2.5))->stamp < at(2.5));
   EXPECT_EQ(f.a.stamps.size(), 2u);  // nothing integrated across the gap
+}
+
+TEST(DynamicsStage, AMomentIsNeverBeforeTheModelsTime) {
+  Fixture f;
+  EXPECT_FALSE(f.stage.momentAtOrAfter(at(1.0)).has_value());  // stopped: no clock
+  f.stage.takeTorque(at(1.0), 0.1);
+  f.stage.advanceTo(at(1.0105), f.sink);  // nominal phase: the state sits on 1.010
+  const auto behind = f.stage.momentAtOrAfter(at(1.004));
+  ASSERT_TRUE(behind);
+  EXPECT_NEAR(behind->t, 0.010, 1e-12);  // the model's time, on its own clock
+  EXPECT_TRUE(behind->stamp == at(1.010));
+  const auto ahead = f.stage.momentAtOrAfter(at(1.0107));
+  EXPECT_NEAR(ahead->t, 0.0107, 1e-12);
+  EXPECT_TRUE(ahead->stamp == at(1.0107));
 }
 
 TEST(DynamicsStage, AResetStopsUntilTheNextTorque) {
   Fixture f;
-  f.stage.takeTorque(at(1.0), 0.1, f.sink);
+  f.stage.takeTorque(at(1.0), 0.1);
   f.stage.reset();
-  EXPECT_FALSE(f.stage.model().started());
-  EXPECT_FALSE(f.stage.advanceTo(at(1.01), f.sink));
+  EXPECT_FALSE(f.stage.dynamics().started());
+  EXPECT_EQ(f.stage.advanceTo(at(1.01), f.sink), Advance::kStopped);
   EXPECT_TRUE(f.a.stamps.empty());
+  EXPECT_EQ(f.stage.takeTorque(at(1.02), 0.1), TorqueTaken::kRestarted);
 }
 
 TEST(TeOutput, EachSampleCarriesTheEncoderAngleAndTheLastResonance) {

@@ -269,3 +269,35 @@ TEST(RigPipelineMotion, AnAdvanceAcrossTooManySlicesRestartsInsteadOfStalling) {
       << p.counters().last_event;
   EXPECT_TRUE(p.dynamics()->started());  // restarted at that input
 }
+
+// The calibration rule pairs each reading with the torque held at it: the last accepted torque
+// input, whether or not it (re)started the dynamics. A torque of 0.2 N*m (above the seed's
+// ~baseline_torque, 0.05 N*m: config/gearboxes/seed_servo.yaml) that starts the stopped dynamics
+// makes the readings after it a loaded stretch; after a pause longer than ~max_gap (1 s) a torque
+// of 0 N*m restarts them and the readings after it are unloaded.
+TEST(RigPipelineMotion, TheTorqueThatRestartsTheDynamicsIsTheHeldTorque) {
+  RigPipeline p(rig(), PipelineOptions{});
+  ASSERT_NE(p.calibrator(), nullptr);
+  Recorder r;
+  const double w = 120.0 / 60.0 * kTwoPi;  // [rad/s]
+  auto readings = [&](double from, double to) {
+    for (double t = from; t < to; t += 1e-3) {
+      MotionInput in;
+      in.pinion_angle = std::remainder(w * t, kTwoPi);
+      in.pinion_velocity = w;
+      in.gear_angle = std::remainder(-static_cast<double>(kZp) / kZg * w * t, kTwoPi);
+      ASSERT_EQ(p.motion(at(t), in, r), InputOutcome::kAccepted) << p.counters().last_event;
+    }
+  };
+  ASSERT_EQ(p.torque(at(0.0), 0.2, r), InputOutcome::kAccepted);  // starts the dynamics
+  readings(3e-4, 0.3);
+  const CalibrationProgress loaded = p.calibrator()->progress();
+  EXPECT_EQ(loaded.unloaded.readings, 0);
+  EXPECT_GT(loaded.loaded.readings, 250);
+  EXPECT_NEAR(loaded.loaded.torque, 0.2, 1e-12);
+  // Every input pauses for 1.7 s: the gap rule stops the dynamics; the next torque restarts them.
+  ASSERT_EQ(p.torque(at(2.0), 0.0, r), InputOutcome::kAccepted);
+  EXPECT_EQ(p.counters().gap_restarts, 1u);
+  readings(2.0003, 2.3);
+  EXPECT_GT(p.calibrator()->progress().unloaded.readings, 250);
+}

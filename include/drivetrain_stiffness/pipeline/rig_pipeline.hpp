@@ -1,9 +1,11 @@
 // The online pipeline, free of ROS, run by the node, the nodelet and drivetrain_replay: inputs
 // with their stamps and the caller's clock in, every output to a PipelineSink. It composes the
-// stages of docs/pipeline.md and applies the rules of docs/ros_api.md, "Time and input rules". It
-// reads no clock, so a replay with the recorded stamps is bit-identical to the live run. Only the
-// library's own errors (core/errors.hpp) are caught, each counted with its reason in last_event;
-// a programming error passes through.
+// stages of docs/pipeline.md and applies the rules of docs/ros_api.md, "Time and input rules", in
+// one order per input: gate, advance (the phase and the dynamics to the input's stamp), apply,
+// publish. It alone owns the phase source and decides when the dynamics advance. It reads no
+// clock, so a replay with the recorded stamps is bit-identical to the live run. Only the library's
+// own errors (core/errors.hpp) are caught, each counted with its reason in last_event; a
+// programming error passes through.
 #pragma once
 
 #include <cstdint>
@@ -85,7 +87,7 @@ class RigPipeline {
   const RefusalTally& refusals() const { return gate_->refusals(); }
   const PipelineOptions& options() const { return options_; }
   const StiffnessEstimator& estimator() const { return *estimator_; }
-  const DynamicsEstimator* dynamics() const { return dynamics_ ? &dynamics_->model() : nullptr; }
+  const DynamicsEstimator* dynamics() const { return dynamics_ ? &dynamics_->dynamics() : nullptr; }
   /// The live calibration, or null (no calibration block, or ~calibrate off).
   const Calibrator* calibrator() const { return calibration_->calibrator(); }
   /// The rig as run (shared read only): the gearbox with the nominal speed and start-up damping.
@@ -96,18 +98,27 @@ class RigPipeline {
   double encoderPinionAngle(Stamp stamp) const;
 
  private:
-  /// `validate` (value rules), the time rules, `update` (transactional; nullptr: no stiffness
-  /// message).
-  template <typename Validate, typename Update>
-  InputOutcome take(InputStream stream, Stamp stamp, PipelineSink& sink, Validate validate,
-                    Update update);
-  /// The stiffness message (throttled by ~stiffness_rate on stamps), then pushStiffness.
-  void afterUpdate(Stamp stamp, const StiffnessEstimate& estimate, PipelineSink& sink);
-  /// The bearing stiffness to the dynamics at `stamp`, then the resonance.
-  void pushStiffness(Stamp stamp, const StiffnessEstimate& estimate, PipelineSink& sink);
-  void acceptMotion(Stamp stamp, const MotionInput& reading, PipelineSink& sink);
-  /// The encoders' time-out, if due at `stamp`.
-  void checkMotionTimeout(Stamp stamp, PipelineSink& sink);
+  /// The gate: the value rules (`validate` throws InvalidInput), the time rules and the source
+  /// restart rule. kAccepted: the input goes on.
+  template <typename Validate>
+  InputOutcome gate(InputStream stream, Stamp stamp, Validate validate);
+  /// The gate's refusal of an input whose value `f` throws for (InvalidInput, UnreachableLoad);
+  /// kAccepted if it does not.
+  template <typename F>
+  InputOutcome refuseOnError(InputStream stream, Stamp stamp, F f);
+  /// The phase (the encoders' time-out) and the dynamics (the gap rule, then the model) to
+  /// `stamp`; the result for the bearing stiffness taken at it.
+  Advance advance(Stamp stamp, PipelineSink& sink);
+  /// The stiffness estimate at the torque (null: shed), the torque held for the dynamics and the
+  /// calibration. Throws what StiffnessEstimator::setTorque throws, with nothing changed.
+  const StiffnessEstimate* applyTorque(Stamp stamp, double torque, Backlog backlog,
+                                       Advance advanced);
+  /// The reading becomes the phase's anchor and the dynamics follow it.
+  void applyMotion(Stamp stamp, PhaseSource::Reading& reading);
+  /// The stiffness message (throttled by ~stiffness_rate on stamps), then the resonance.
+  void publishStiffness(Stamp stamp, const StiffnessEstimate& estimate, PipelineSink& sink);
+  /// The dynamics follow the phase source's anchor from `stamp` (or the model's time, if later).
+  void followPhase(Stamp stamp);
 
   std::shared_ptr<const RigConfig> rig_;  ///< first: the stages share it
   PipelineOptions options_;
@@ -124,7 +135,7 @@ class RigPipeline {
   std::unique_ptr<MeshPeriodStage> mesh_periods_;
   std::unique_ptr<VibrationInput> vibration_;
   std::unique_ptr<ModalStage> modal_;  ///< after everything it reads
-  double held_torque_ = 0.0;           ///< [N*m] paired with readings by the calibration
+  double held_torque_ = 0.0;  ///< [N*m] the last accepted torque, which the calibration pairs with
   std::optional<Stamp> last_stiffness_out_;
 };
 
