@@ -5,9 +5,8 @@
 namespace drivetrain_stiffness {
 
 CalibrationStage::CalibrationStage(std::shared_ptr<const RigConfig> rig,
-                                   const StiffnessEstimator& estimator, bool enabled,
-                                   PipelineCounters& counters)
-    : estimator_(estimator), counters_(counters) {
+                                   const StiffnessEstimator& estimator, bool enabled)
+    : estimator_(estimator) {
   // One mesh table for the rig: the stiffness estimator's, shared read only.
   if (enabled && rig->calibration.present && rig->dynamics.present) {
     calibrator_ = std::make_unique<Calibrator>(rig, estimator.sharedMesh());
@@ -35,7 +34,7 @@ void CalibrationStage::reading(Stamp stamp, double pinion, double gear, double p
     }
   } catch (const Error& e) {
     ++counters_.calibration_errors;
-    counters_.last_event = std::string("calibration: ") + e.what();
+    events_.record(std::string("calibration: ") + e.what());
     calibrator_->interrupt();
   }
 }
@@ -52,7 +51,7 @@ void CalibrationStage::modal(Stamp stamp, const ModalFrequency* frequencies, std
     }
   } catch (const Error& e) {
     ++counters_.calibration_errors;
-    counters_.last_event = std::string("calibration: ") + e.what();
+    events_.record(std::string("calibration: ") + e.what());
   }
 }
 

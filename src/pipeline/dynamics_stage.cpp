@@ -9,9 +9,8 @@ namespace drivetrain_stiffness {
 
 DynamicsStage::DynamicsStage(std::shared_ptr<const RigConfig> rig,
                              const StiffnessEstimator& stiffness, const PipelineOptions& options,
-                             Fidelity fidelity, PipelineCounters& counters)
+                             Fidelity fidelity)
     : stiffness_(stiffness),
-      counters_(counters),
       dynamics_(std::move(rig), stiffness.shaftRadialStiffness(), options.output_rate,
                 stiffness.sharedMesh()),
       max_gap_(options.max_gap) {
@@ -20,8 +19,8 @@ DynamicsStage::DynamicsStage(std::shared_ptr<const RigConfig> rig,
 }
 
 void DynamicsStage::error(const std::string& where, const Error& e) {
-  ++counters_.dynamics_errors;
-  counters_.last_event = where + ": " + e.what();
+  ++counters_.model_errors;
+  events_.record(where + ": " + e.what());
 }
 
 void DynamicsStage::stop() {
@@ -51,8 +50,8 @@ void DynamicsStage::stopAfterGap(Stamp stamp) {
   const double gap = secondsBetween(stamp, epoch_) - dynamics_.time();
   if (!(gap > max_gap_)) return;
   ++counters_.gap_restarts;
-  counters_.last_event =
-      "input gap of " + formatValue(gap) + " s (more than ~max_gap): dynamics restarted";
+  events_.record("input gap of " + formatValue(gap) +
+                 " s (more than ~max_gap): dynamics restarted");
   stop();
 }
 

@@ -20,11 +20,10 @@ const char* toString(InputOutcome outcome) {
   return "?";
 }
 
-InputGate::InputGate(const PipelineOptions& options, PipelineCounters& counters)
+InputGate::InputGate(const PipelineOptions& options)
     : stamp_jump_back_(options.stamp_jump_back),
       clock_jump_back_(options.clock_jump_back),
-      torque_frame_(options.torque_frame),
-      counters_(counters) {}
+      torque_frame_(options.torque_frame) {}
 
 bool InputGate::isOutOfOrder(Stamp stamp, std::optional<Stamp> last) const {
   return last && stamp < *last && secondsBetween(*last, stamp) <= stamp_jump_back_;
@@ -132,7 +131,7 @@ InputOutcome InputGate::reject(InputOutcome why, InputStream s, Stamp stamp,
     case InputOutcome::kStampRange: ++counters_.stamps_out_of_range; break;
     case InputOutcome::kAccepted: break;
   }
-  counters_.last_event = std::string(toString(s)) + " rejected (" + toString(why) + "): " + reason;
+  events_.record(std::string(toString(s)) + " rejected (" + toString(why) + "): " + reason);
   return why;
 }
 

@@ -5,9 +5,8 @@
 
 namespace drivetrain_stiffness {
 
-MeshPeriodStage::MeshPeriodStage(const DynamicsEstimator& dynamics, double pinion_base_radius,
-                                 PipelineCounters& counters)
-    : dynamics_(dynamics), base_radius_(pinion_base_radius), counters_(counters) {}
+MeshPeriodStage::MeshPeriodStage(const DynamicsEstimator& dynamics, double pinion_base_radius)
+    : dynamics_(dynamics), base_radius_(pinion_base_radius) {}
 
 void MeshPeriodStage::startBlock(Stamp stamp, const DynamicsSample& s, double turns,
                                  double boundary, double mesh_frequency) {
@@ -85,7 +84,7 @@ void MeshPeriodStage::publish(Stamp stamp, const MeshPeriodStatistics& out, Pipe
     ++counters_.mesh_period_stats_out;
     sink.meshPeriod(stamp, out);
   } else {
-    counters_.last_event = "mesh_period_stats: a statistic is not finite (not published)";
+    events_.record("mesh_period_stats: a statistic is not finite (not published)");
   }
 }
 

@@ -10,13 +10,12 @@ namespace drivetrain_stiffness {
 
 ModalStage::ModalStage(const RigConfig& rig, const VibrationInput& input, const PhaseSource& phase,
                        const StiffnessEstimator& estimator, CalibrationStage& calibration,
-                       const PipelineOptions& options, PipelineCounters& counters)
+                       const PipelineOptions& options)
     : rig_(rig),
       input_(input),
       phase_(phase),
       estimator_(estimator),
       calibration_(calibration),
-      counters_(counters),
       enabled_(options.modal_identification),
       worker_(options.modal_worker),
       max_order_(options.modal_max_order),
@@ -151,7 +150,7 @@ void ModalStage::apply(Stamp stamp, PipelineSink& sink) {
   pending_ = {};
   if (!outcome.error.empty()) {
     ++counters_.modal_errors;
-    counters_.last_event = "modal identification: " + outcome.error;
+    events_.record("modal identification: " + outcome.error);
     return;
   }
   const ModalReport& r = outcome.report;
@@ -160,7 +159,7 @@ void ModalStage::apply(Stamp stamp, PipelineSink& sink) {
     ++counters_.modal_out;
   } catch (const Error& e) {
     ++counters_.modal_errors;
-    counters_.last_event = std::string("modal identification: ") + e.what();
+    events_.record(std::string("modal identification: ") + e.what());
   }
   // The matched, resolved frequencies with a standard deviation into the calibration.
   std::array<ModalFrequency, 3> frequencies;

@@ -6,15 +6,13 @@
 
 namespace drivetrain_stiffness {
 
-PhaseSource::PhaseSource(const PipelineOptions& options, int pinion_teeth, int gear_teeth,
-                         PipelineCounters& counters)
+PhaseSource::PhaseSource(const PipelineOptions& options, int pinion_teeth, int gear_teeth)
     : teeth_p_(pinion_teeth),
       teeth_g_(gear_teeth),
       nominal_speed_(options.pinion_speed_rpm * kTwoPi / 60.0),
       mesh_phase_offset_(options.mesh_phase_offset),
       motion_timeout_(options.motion_timeout),
-      gear_ratio_tolerance_(options.gear_ratio_tolerance),
-      counters_(counters) {}
+      gear_ratio_tolerance_(options.gear_ratio_tolerance) {}
 
 double PhaseSource::pinionAngle(Stamp stamp) const {
   if (anchor_) return anchor_->angle + anchor_->speed * secondsBetween(stamp, anchor_->stamp);
@@ -104,10 +102,10 @@ void PhaseSource::checkGearRatio(Reading& reading) {
   const double off = residual - *reading.gear_reference;
   if (std::abs(off) > gear_ratio_tolerance_) {
     ++counters_.gear_ratio_mismatches;
-    counters_.last_event =
+    events_.record(
         "joint_states: the gear angle moved " + formatValue(off) +
         " rad off -(z_p/z_g) x the pinion angle (more than ~gear_ratio_tolerance): a slip, or a "
-        "wrong ~pinion_joint/~gear_joint mapping";
+        "wrong ~pinion_joint/~gear_joint mapping");
     reading.gear_reference = residual;  // one report per slip; a wrong mapping keeps reporting
   }
 }
@@ -122,9 +120,8 @@ std::optional<Stamp> PhaseSource::encodersTimedOut(Stamp stamp) {
   if (!encoders_ || !reading_ || secondsBetween(stamp, reading_->stamp) <= motion_timeout_)
     return std::nullopt;
   ++counters_.motion_timeouts;
-  counters_.last_event =
-      "joint_states: none for ~motion_timeout = " + formatValue(motion_timeout_) +
-      " s: the mesh phase runs at ~pinion_speed_rpm from there";
+  events_.record("joint_states: none for ~motion_timeout = " + formatValue(motion_timeout_) +
+                 " s: the mesh phase runs at ~pinion_speed_rpm from there");
   return Stamp{reading_->stamp.ns + std::llround(motion_timeout_ * 1e9)};
 }
 

@@ -6,13 +6,8 @@
 namespace drivetrain_stiffness {
 
 ResonanceTracker::ResonanceTracker(const RigConfig& rig, const StiffnessEstimator& estimator,
-                                   const CalibrationStage& calibration, double threshold,
-                                   PipelineCounters& counters)
-    : rig_(rig),
-      estimator_(estimator),
-      calibration_(calibration),
-      threshold_(threshold),
-      counters_(counters) {}
+                                   const CalibrationStage& calibration, double threshold)
+    : rig_(rig), estimator_(estimator), calibration_(calibration), threshold_(threshold) {}
 
 bool ResonanceTracker::withinCourantFischerBounds(const std::array<double, 3>& springs,
                                                   const std::array<double, 3>& at_last,
@@ -62,8 +57,8 @@ void ResonanceTracker::update(Stamp stamp, const StiffnessEstimate& estimate,
     sink.resonance(stamp, r, calibration_.resonanceBands(r));
     ++counters_.resonance_out;
   } catch (const Error& e) {
-    ++counters_.dynamics_errors;
-    counters_.last_event = std::string("resonance: ") + e.what();
+    ++counters_.resonance_errors;
+    events_.record(std::string("resonance: ") + e.what());
   }
 }
 

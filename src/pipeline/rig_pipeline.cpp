@@ -35,30 +35,26 @@ RigPipeline::RigPipeline(const RigConfig& rig, const PipelineOptions& options)
 RigPipeline::RigPipeline(const RigConfig& rig, const PipelineOptions& options,
                          const RuntimeSettings& settings)
     : rig_(runningRig(rig, options, settings)), options_(options), settings_(settings) {
-  gate_ = std::make_unique<InputGate>(options_, counters_);
+  gate_ = std::make_unique<InputGate>(options_);
   // One mesh table for the rig: the stiffness estimator's, shared read only with the dynamics and
   // the calibration.
   estimator_ = std::make_unique<StiffnessEstimator>(rig_, options_.limits);
-  calibration_ =
-      std::make_unique<CalibrationStage>(rig_, *estimator_, options_.calibrate, counters_);
+  calibration_ = std::make_unique<CalibrationStage>(rig_, *estimator_, options_.calibrate);
   resonance_ = std::make_unique<ResonanceTracker>(*rig_, *estimator_, *calibration_,
-                                                  options_.resonance_threshold, counters_);
+                                                  options_.resonance_threshold);
   const auto& teeth = estimator_->mesh().geometry().spec().teeth;
-  vibration_ =
-      std::make_unique<VibrationInput>(vibrationChannels(*rig_, options_.vibration_channels),
-                                       options_.vibration_record, counters_.vibration);
-  phase_ = std::make_unique<PhaseSource>(options_, teeth[0], teeth[1], counters_);
+  vibration_ = std::make_unique<VibrationInput>(
+      vibrationChannels(*rig_, options_.vibration_channels), options_.vibration_record);
+  phase_ = std::make_unique<PhaseSource>(options_, teeth[0], teeth[1]);
   modal_ = std::make_unique<ModalStage>(*rig_, *vibration_, *phase_, *estimator_, *calibration_,
-                                        options_, counters_);
+                                        options_);
   if (options_.dynamics) {
-    dynamics_ =
-        std::make_unique<DynamicsStage>(rig_, *estimator_, options_, settings_.fidelity, counters_);
-    te_output_ = std::make_unique<TeOutput>(*phase_, resonance_->last(), counters_);
-    te_spectrum_ =
-        std::make_unique<TeSpectrumStage>(options_.spectrum_window, options_.spectrum_hop,
-                                          dynamics_->dynamics().outputInterval(), counters_);
-    mesh_periods_ = std::make_unique<MeshPeriodStage>(
-        dynamics_->dynamics(), estimator_->mesh().geometry().baseRadius(0), counters_);
+    dynamics_ = std::make_unique<DynamicsStage>(rig_, *estimator_, options_, settings_.fidelity);
+    te_output_ = std::make_unique<TeOutput>(*phase_, resonance_->last());
+    te_spectrum_ = std::make_unique<TeSpectrumStage>(
+        options_.spectrum_window, options_.spectrum_hop, dynamics_->dynamics().outputInterval());
+    mesh_periods_ = std::make_unique<MeshPeriodStage>(dynamics_->dynamics(),
+                                                      estimator_->mesh().geometry().baseRadius(0));
     // The order in which each sample reaches them (and so the sink's calls).
     dynamics_->addConsumer(*te_output_);
     dynamics_->addConsumer(*te_spectrum_);
@@ -76,13 +72,41 @@ void RigPipeline::reset(const std::string& reason) {
   resonance_->forget();  // the next accepted input republishes the resonance
   vibration_->reset();
   modal_->reset();
-  counters_.last_event = "reset: " + reason;
+  events_.record("reset: " + reason);
 }
 
 bool RigPipeline::observeClock(Stamp now, PipelineSink& /*sink*/) {
   const std::optional<std::string> jumped = gate_->observeClock(now);  // the clock-jump rule
   if (jumped) reset(*jumped);
   return jumped.has_value();
+}
+
+const PipelineCounters& RigPipeline::counters() const {
+  PipelineCounters& m = merged_;
+  static_cast<GateCounters&>(m) = gate_->counters();
+  static_cast<PhaseCounters&>(m) = phase_->counters();
+  static_cast<DynamicsCounters&>(m) = dynamics_ ? dynamics_->counters() : DynamicsCounters{};
+  static_cast<ResonanceCounters&>(m) = resonance_->counters();
+  static_cast<StiffnessOutputCounters&>(m) = counters_;
+  static_cast<TeOutputCounters&>(m) = te_output_ ? te_output_->counters() : TeOutputCounters{};
+  static_cast<SpectrumCounters&>(m) = te_spectrum_ ? te_spectrum_->counters() : SpectrumCounters{};
+  static_cast<MeshPeriodCounters&>(m) =
+      mesh_periods_ ? mesh_periods_->counters() : MeshPeriodCounters{};
+  static_cast<CalibrationCounters&>(m) = calibration_->counters();
+  static_cast<ModalCounters&>(m) = modal_->counters();
+  m.vibration = vibration_->counters();
+  m.dynamics_errors = m.model_errors + m.resonance_errors;
+  // The last event is the latest of any stage's.
+  const EventLog* last = &events_;
+  for (const EventLog* e : {&gate_->events(), &phase_->events(), &resonance_->events(),
+                            &calibration_->events(), &modal_->events()}) {
+    if (e->order() > last->order()) last = e;
+  }
+  if (dynamics_ && dynamics_->events().order() > last->order()) last = &dynamics_->events();
+  if (mesh_periods_ && mesh_periods_->events().order() > last->order())
+    last = &mesh_periods_->events();
+  m.last_event = last->last();
+  return m;
 }
 
 double RigPipeline::pinionAngle(Stamp stamp) const { return phase_->pinionAngle(stamp); }
@@ -279,7 +303,7 @@ void RigPipeline::publishStiffness(Stamp stamp, const StiffnessEstimate& estimat
       // The sink refused the message (a field it will not publish, such as a non-finite one): the
       // input stays taken, the refusal is counted.
       ++counters_.stiffness_refused;
-      counters_.last_event = std::string("stiffness message not published: ") + e.what();
+      events_.record(std::string("stiffness message not published: ") + e.what());
     }
   } else {
     ++counters_.stiffness_coalesced;

@@ -5,8 +5,8 @@
 
 namespace drivetrain_stiffness {
 
-TeSpectrumStage::TeSpectrumStage(int window, int hop, double interval, PipelineCounters& counters)
-    : spectrum_(window, hop, interval, SpectrumPeaks::kMaxPeaks), counters_(counters) {}
+TeSpectrumStage::TeSpectrumStage(int window, int hop, double interval)
+    : spectrum_(window, hop, interval, SpectrumPeaks::kMaxPeaks) {}
 
 void TeSpectrumStage::sample(Stamp stamp, const DynamicsSample& s, double /*mesh_frequency*/,
                              PipelineSink& sink) {

@@ -19,9 +19,8 @@ std::string namesOf(const VibrationBlockView& block) {
 }
 }  // namespace
 
-VibrationInput::VibrationInput(std::vector<VibrationChannel> channels, double record_seconds,
-                               VibrationCounters& counters)
-    : map_(std::move(channels)), record_seconds_(record_seconds), counters_(counters) {
+VibrationInput::VibrationInput(std::vector<VibrationChannel> channels, double record_seconds)
+    : map_(std::move(channels)), record_seconds_(record_seconds) {
   if (!(record_seconds > 0.0 && record_seconds <= 600.0)) {
     throwInvalid("vibration_record", record_seconds, "must be in (0, 600] s");
   }

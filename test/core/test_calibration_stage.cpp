@@ -20,22 +20,20 @@ TEST(CalibrationStage, CalibratesOnlyWhenEnabledWithBothBlocks) {
   const auto rig = seed();
   ASSERT_TRUE(rig->calibration.present && rig->dynamics.present);
   StiffnessEstimator estimator(rig);
-  PipelineCounters counters;
-  EXPECT_NE(CalibrationStage(rig, estimator, true, counters).calibrator(), nullptr);
-  EXPECT_EQ(CalibrationStage(rig, estimator, false, counters).calibrator(), nullptr);
+  EXPECT_NE(CalibrationStage(rig, estimator, true).calibrator(), nullptr);
+  EXPECT_EQ(CalibrationStage(rig, estimator, false).calibrator(), nullptr);
   auto bare = std::make_shared<RigConfig>(*rig);
   bare->calibration.present = false;
-  EXPECT_EQ(CalibrationStage(bare, estimator, true, counters).calibrator(), nullptr);
+  EXPECT_EQ(CalibrationStage(bare, estimator, true).calibrator(), nullptr);
   auto still = std::make_shared<RigConfig>(*rig);
   still->dynamics.present = false;
-  EXPECT_EQ(CalibrationStage(still, estimator, true, counters).calibrator(), nullptr);
+  EXPECT_EQ(CalibrationStage(still, estimator, true).calibrator(), nullptr);
 }
 
 TEST(CalibrationStage, WithoutACalibrationTheBandsAreTheDrawingsOfZeroWidth) {
   const auto rig = seed();
   StiffnessEstimator estimator(rig);
-  PipelineCounters counters;
-  CalibrationStage stage(rig, estimator, false, counters);
+  CalibrationStage stage(rig, estimator, false);
   const StiffnessEstimate& e = estimator.setTorque(0.1, 0.0);
   const CalibrationBands b = stage.stiffnessBands(e);
   EXPECT_EQ(b.mesh_stiffness, e.mesh.mean);
@@ -55,8 +53,7 @@ TEST(CalibrationStage, WithoutACalibrationTheBandsAreTheDrawingsOfZeroWidth) {
 TEST(CalibrationStage, WithACalibrationTheBandsAreTheCalibratorsAndReadingsReachIt) {
   const auto rig = seed();
   StiffnessEstimator estimator(rig);
-  PipelineCounters counters;
-  CalibrationStage stage(rig, estimator, true, counters);
+  CalibrationStage stage(rig, estimator, true);
   const StiffnessEstimate& e = estimator.setTorque(0.1, 0.0);
   const CalibrationBands expected = stage.calibrator()->bands(e.torque, estimator, false);
   const CalibrationBands b = stage.stiffnessBands(e);
@@ -69,6 +66,6 @@ TEST(CalibrationStage, WithACalibrationTheBandsAreTheCalibratorsAndReadingsReach
     stage.reading(test::stampAt(k * 2e-4), 0.01 * k, -0.01 * k * 20 / 40.0, 0.0, 50.0, 0.0, k > 0,
                   sink);
   }
-  EXPECT_EQ(counters.calibration_errors, 0u) << counters.last_event;
-  EXPECT_EQ(counters.measured_te_out, 0u);
+  EXPECT_EQ(stage.counters().calibration_errors, 0u) << stage.events().last();
+  EXPECT_EQ(stage.counters().measured_te_out, 0u);
 }

@@ -36,8 +36,8 @@ struct Fixture {
   std::shared_ptr<const RigConfig> rig = std::make_shared<RigConfig>(test::seedServo());
   StiffnessEstimator estimator{rig};
   PipelineOptions options;
-  PipelineCounters counters;
-  DynamicsStage stage{rig, estimator, options, Fidelity::kFull, counters};
+  DynamicsStage stage{rig, estimator, options, Fidelity::kFull};
+  const DynamicsCounters& counters = stage.counters();
   std::vector<std::string> log;
   Logger a{"a", log}, b{"b", log};
   PipelineSink sink;
@@ -116,12 +116,11 @@ TEST(DynamicsStage, AResetStopsUntilTheNextTorque) {
 TEST(TeOutput, EachSampleCarriesTheEncoderAngleAndTheLastResonance) {
   PipelineOptions options;
   options.mesh_phase_offset = 0.5;
-  PipelineCounters counters;
-  PhaseSource phase{options, 20, 40, counters};
+  PhaseSource phase{options, 20, 40};
   bool continuous = false;
   phase.anchorTo(phase.unwrap(at(0.0), MotionInput{0.2, 10.0, std::nullopt}, continuous));
   std::optional<ResonanceEstimate> resonance;
-  TeOutput out(phase, resonance, counters);
+  TeOutput out(phase, resonance);
   struct Seen : PipelineSink {
     SampleContext context;
     void transmissionError(Stamp, const DynamicsSample&, const SampleContext& c) override {
@@ -134,5 +133,5 @@ TEST(TeOutput, EachSampleCarriesTheEncoderAngleAndTheLastResonance) {
   resonance = ResonanceEstimate{};
   out.sample(at(0.02), DynamicsSample{}, 0.0, sink);
   EXPECT_EQ(sink.context.resonance, &*resonance);
-  EXPECT_EQ(counters.te_out, 2u);
+  EXPECT_EQ(out.counters().te_out, 2u);
 }

@@ -24,8 +24,8 @@ struct Fixture {
     o.torque_frame = "rig";
     return o;
   }();
-  PipelineCounters counters;
-  InputGate gate{options, counters};
+  InputGate gate{options};
+  const GateCounters& counters = gate.counters();
 };
 
 }  // namespace
@@ -62,8 +62,7 @@ TEST(InputGate, TheFrameRuleIgnoresALeadingSlash) {
       f.gate.refusals().entry(InputStream::kTorque, InputOutcome::kWrongFrame).found.at(0).value,
       "base_link");
   PipelineOptions any;
-  PipelineCounters counters;
-  EXPECT_FALSE(InputGate(any, counters).isWrongFrame("anything"));
+  EXPECT_FALSE(InputGate(any).isWrongFrame("anything"));
 }
 
 TEST(InputGate, EachStreamKeepsItsOwnStamps) {
@@ -91,7 +90,7 @@ TEST(InputGate, ARefusalIsCountedByStreamAndReasonWithWhy) {
             InputOutcome::kInvalidValue);
   EXPECT_EQ(f.counters.rejected_motion, 1u);
   EXPECT_EQ(f.counters.invalid_values, 1u);
-  EXPECT_EQ(f.counters.last_event, "joint_states rejected (invalid value): no pinion joint");
+  EXPECT_EQ(f.gate.events().last(), "joint_states rejected (invalid value): no pinion joint");
   const RefusalTally::Entry& e =
       f.gate.refusals().entry(InputStream::kJointStates, InputOutcome::kInvalidValue);
   EXPECT_EQ(e.count, 1u);

@@ -28,8 +28,8 @@ constexpr double kTorque = 0.1;         // [N*m]
 
 struct Fixture {
   DynamicsEstimator dynamics{test::seedServo(), {1e8, 1e8}, kRate};
-  PipelineCounters counters;
-  MeshPeriodStage stage{dynamics, kBaseRadius, counters};
+  MeshPeriodStage stage{dynamics, kBaseRadius};
+  const MeshPeriodCounters& counters = stage.counters();
   Blocks sink;
   /// Sample k of a steady run at `sign` x kMesh: TE and force alternate about their means.
   void feed(int k, double sign = 1.0) {

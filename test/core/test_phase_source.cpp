@@ -26,8 +26,8 @@ struct Fixture {
     o.motion_timeout = 0.1;
     return o;
   }();
-  PipelineCounters counters;
-  PhaseSource phase{options, kZp, kZg, counters};
+  PhaseSource phase{options, kZp, kZg};
+  const PhaseCounters& counters = phase.counters();
   /// Unwraps and anchors a reading; returns whether it continued the last one.
   bool read(double t, double pinion, std::optional<double> velocity = std::nullopt,
             std::optional<double> gear = std::nullopt) {

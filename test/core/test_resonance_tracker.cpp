@@ -25,9 +25,9 @@ struct Resonances : PipelineSink {
 struct Fixture {
   std::shared_ptr<const RigConfig> rig = std::make_shared<RigConfig>(test::seedServo());
   StiffnessEstimator estimator{rig};
-  PipelineCounters counters;
-  CalibrationStage calibration{rig, estimator, false, counters};
-  ResonanceTracker tracker{*rig, estimator, calibration, 0.01, counters};
+  CalibrationStage calibration{rig, estimator, false};
+  ResonanceTracker tracker{*rig, estimator, calibration, 0.01};
+  const ResonanceCounters& counters = tracker.counters();
   DynamicsEstimator dynamics{rig, estimator.shaftRadialStiffness(), 1000.0, estimator.sharedMesh()};
   DampingRatios damping = DampingRatios::of(rig->dynamics);
   Resonances sink;

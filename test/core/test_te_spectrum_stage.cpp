@@ -40,8 +40,7 @@ void feed(TeSpectrumStage& stage, Spectra& sink, int from, int to) {
 }  // namespace
 
 TEST(TeSpectrumStage, EveryHopTheWindowsOwnLines) {
-  PipelineCounters counters;
-  TeSpectrumStage stage(64, 16, kDt, counters);
+  TeSpectrumStage stage(64, 16, kDt);
   SlidingSpectrum reference(64, 16, kDt, SpectrumPeaks::kMaxPeaks);
   Spectra sink;
   std::vector<std::vector<SpectralPeak>> expected;
@@ -51,7 +50,7 @@ TEST(TeSpectrumStage, EveryHopTheWindowsOwnLines) {
   feed(stage, sink, 0, 128);
   ASSERT_EQ(sink.out.size(), 5u);  // at 64, 80, 96, 112 and 128 samples
   ASSERT_EQ(expected.size(), sink.out.size());
-  EXPECT_EQ(counters.spectra_out, 5u);
+  EXPECT_EQ(stage.counters().spectra_out, 5u);
   EXPECT_TRUE(sink.stamps[0] == test::stampAt(63 * kDt));  // the newest sample in the window
   for (std::size_t i = 0; i < expected.size(); ++i) {
     ASSERT_EQ(sink.out[i].count, expected[i].size());
@@ -66,8 +65,7 @@ TEST(TeSpectrumStage, EveryHopTheWindowsOwnLines) {
 }
 
 TEST(TeSpectrumStage, ARestartEmptiesTheWindow) {
-  PipelineCounters counters;
-  TeSpectrumStage stage(64, 16, kDt, counters);
+  TeSpectrumStage stage(64, 16, kDt);
   Spectra sink;
   feed(stage, sink, 0, 60);
   stage.restart();
@@ -78,8 +76,7 @@ TEST(TeSpectrumStage, ARestartEmptiesTheWindow) {
 }
 
 TEST(TeSpectrumStage, ANonFiniteTeIsRefused) {
-  PipelineCounters counters;
-  TeSpectrumStage stage(64, 16, kDt, counters);
+  TeSpectrumStage stage(64, 16, kDt);
   Spectra sink;
   DynamicsSample s;
   s.dynamic_te = std::nan("");

@@ -13,10 +13,10 @@ namespace drivetrain_stiffness {
 
 class CalibrationStage {
  public:
-  /// Calibrates when `enabled` and the rig has calibration and dynamics blocks. Keeps references
-  /// to `estimator` and `counters`.
+  /// Calibrates when `enabled` and the rig has calibration and dynamics blocks. Keeps a reference
+  /// to `estimator`.
   CalibrationStage(std::shared_ptr<const RigConfig> rig, const StiffnessEstimator& estimator,
-                   bool enabled, PipelineCounters& counters);
+                   bool enabled);
   /// The live calibration, or null.
   const Calibrator* calibrator() const { return calibrator_.get(); }
   /// The readings broke off: the open window is dropped.
@@ -33,10 +33,14 @@ class CalibrationStage {
   CalibrationBands stiffnessBands(const StiffnessEstimate& estimate) const;
   /// PipelineSink::resonance's bands, at the current torque.
   CalibrationBands resonanceBands(const ResonanceEstimate& estimate) const;
+  const CalibrationCounters& counters() const { return counters_; }
+  /// The last error, with its reason.
+  const EventLog& events() const { return events_; }
 
  private:
   const StiffnessEstimator& estimator_;
-  PipelineCounters& counters_;
+  CalibrationCounters counters_;
+  EventLog events_;
   std::unique_ptr<Calibrator> calibrator_;
   MeasuredTeSample measured_te_;
 };

@@ -40,14 +40,17 @@ class DynamicsStage {
     Stamp stamp;
   };
 
-  /// The model of `rig` on the estimator's stiffness. Keeps references to `estimator` and
-  /// `counters`. Throws InvalidInput naming the field.
+  /// The model of `rig` on the estimator's stiffness. Keeps a reference to `estimator`. Throws
+  /// InvalidInput naming the field.
   DynamicsStage(std::shared_ptr<const RigConfig> rig, const StiffnessEstimator& estimator,
-                const PipelineOptions& options, Fidelity fidelity, PipelineCounters& counters);
+                const PipelineOptions& options, Fidelity fidelity);
   /// Each sample goes to `consumer` after those added before (kept by reference).
   void addConsumer(SampleConsumer& consumer) { consumers_.push_back(&consumer); }
   DynamicsEstimator& dynamics() { return dynamics_; }
   const DynamicsEstimator& dynamics() const { return dynamics_; }
+  const DynamicsCounters& counters() const { return counters_; }
+  /// The last gap restart or error, with its reason.
+  const EventLog& events() const { return events_; }
 
   /// Runs the model up to `stamp`, each sample to the consumers; a failure is counted and stops it.
   Advance advanceTo(Stamp stamp, PipelineSink& sink);
@@ -68,13 +71,14 @@ class DynamicsStage {
  private:
   void restart(Stamp stamp, double torque);
   void stop();
-  /// Counts `e` in dynamics_errors and last_event.
+  /// Counts `e` in model_errors and the events.
   void error(const std::string& where, const Error& e);
   /// advanceTo(t), each sample to the consumers (throws what advanceTo throws).
   void emitUpTo(double t, PipelineSink& sink);
 
   const StiffnessEstimator& stiffness_;
-  PipelineCounters& counters_;
+  DynamicsCounters counters_;
+  EventLog events_;
   DynamicsEstimator dynamics_;
   double max_gap_;
   std::vector<SampleConsumer*> consumers_;

@@ -13,13 +13,13 @@
 #include "drivetrain_stiffness/pipeline/pipeline_outputs.hpp"
 #include "drivetrain_stiffness/pipeline/refusal_tally.hpp"
 #include "drivetrain_stiffness/pipeline/sequence_gaps.hpp"
+#include "drivetrain_stiffness/pipeline/stage_counters.hpp"
 
 namespace drivetrain_stiffness {
 
 class InputGate {
  public:
-  /// Keeps `counters` by reference.
-  InputGate(const PipelineOptions& options, PipelineCounters& counters);
+  explicit InputGate(const PipelineOptions& options);
 
   // --- The rules, pure ---
   /// The zero-stamp rule: the publisher forgot to stamp.
@@ -48,7 +48,7 @@ class InputGate {
   std::optional<std::string> noteSourceRestart(InputStream stream, Stamp stamp);
   /// The clock-jump rule at `now`: the reason to reset (counted), unless the stamps restarted.
   std::optional<std::string> observeClock(Stamp now);
-  /// Counts a refusal, says why in last_event; returns `why`.
+  /// Counts a refusal, says why in events(); returns `why`.
   InputOutcome reject(InputOutcome why, InputStream stream, Stamp stamp, const std::string& reason,
                       std::string_view found = {});
   /// An input taken: counted, its stamp the stream's last.
@@ -57,6 +57,9 @@ class InputGate {
   void forgetStamps();
 
   const RefusalTally& refusals() const { return refusals_; }
+  const GateCounters& counters() const { return counters_; }
+  /// The last refusal, with its reason.
+  const EventLog& events() const { return events_; }
   /// Publishers whose drops cannot be seen.
   std::size_t unnumberedPublishers() const;
 
@@ -70,7 +73,8 @@ class InputGate {
 
   double stamp_jump_back_, clock_jump_back_;
   std::string torque_frame_;
-  PipelineCounters& counters_;
+  GateCounters counters_;
+  EventLog events_;
   RefusalTally refusals_;
   std::array<Stream, kInputStreams> streams_;
   std::optional<Stamp> last_clock_;

@@ -11,16 +11,18 @@ namespace drivetrain_stiffness {
 
 class MeshPeriodStage : public SampleConsumer {
  public:
-  /// `dynamics`: the model whose samples it receives; `pinion_base_radius` [m] > 0. Keeps
-  /// references to `dynamics` and `counters`.
-  MeshPeriodStage(const DynamicsEstimator& dynamics, double pinion_base_radius,
-                  PipelineCounters& counters);
+  /// `dynamics`: the model whose samples it receives (kept by reference); `pinion_base_radius`
+  /// [m] > 0.
+  MeshPeriodStage(const DynamicsEstimator& dynamics, double pinion_base_radius);
   /// Into the running block; a closed, finite block goes to sink.meshPeriod. Samples that do not
   /// move forward in time are skipped.
   void sample(Stamp stamp, const DynamicsSample& sample, double mesh_frequency,
               PipelineSink& sink) override;
   /// Drops the running block; the next block starts at the next mesh-period boundary.
   void restart() override { block_ = Accumulator{}; }
+  const MeshPeriodCounters& counters() const { return counters_; }
+  /// The last block not published, with its reason.
+  const EventLog& events() const { return events_; }
 
  private:
   struct Accumulator {
@@ -48,7 +50,8 @@ class MeshPeriodStage : public SampleConsumer {
 
   const DynamicsEstimator& dynamics_;
   double base_radius_;
-  PipelineCounters& counters_;
+  MeshPeriodCounters counters_;
+  EventLog events_;
   Accumulator block_;
 };
 

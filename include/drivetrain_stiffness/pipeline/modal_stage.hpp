@@ -32,7 +32,7 @@ class ModalStage {
   /// when options.modal_worker.
   ModalStage(const RigConfig& rig, const VibrationInput& input, const PhaseSource& phase,
              const StiffnessEstimator& estimator, CalibrationStage& calibration,
-             const PipelineOptions& options, PipelineCounters& counters);
+             const PipelineOptions& options);
   ~ModalStage();  ///< waits for a running identification
   ModalStage(const ModalStage&) = delete;
   ModalStage& operator=(const ModalStage&) = delete;
@@ -49,6 +49,9 @@ class ModalStage {
   void reset();
   /// An identification is running or waits to be applied.
   bool pending() const { return pending_.valid(); }
+  const ModalCounters& counters() const { return counters_; }
+  /// The last record that could not be identified, with the reason.
+  const EventLog& events() const { return events_; }
 
  private:
   struct Outcome {
@@ -67,7 +70,8 @@ class ModalStage {
   const PhaseSource& phase_;
   const StiffnessEstimator& estimator_;
   CalibrationStage& calibration_;
-  PipelineCounters& counters_;
+  ModalCounters counters_;
+  EventLog events_;
   bool enabled_, worker_;
   int max_order_, block_rows_, skipped_lags_;
   double band_;

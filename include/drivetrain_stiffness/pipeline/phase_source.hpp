@@ -8,7 +8,7 @@
 #include "drivetrain_stiffness/core/motion.hpp"
 #include "drivetrain_stiffness/pipeline/input_types.hpp"
 #include "drivetrain_stiffness/pipeline/pipeline_options.hpp"
-#include "drivetrain_stiffness/pipeline/pipeline_outputs.hpp"
+#include "drivetrain_stiffness/pipeline/stage_counters.hpp"
 
 namespace drivetrain_stiffness {
 
@@ -26,9 +26,8 @@ class PhaseSource {
     double angle = 0.0, speed = 0.0;
   };
 
-  /// z_p, z_g > 0 teeth. Keeps a reference to `counters`.
-  PhaseSource(const PipelineOptions& options, int pinion_teeth, int gear_teeth,
-              PipelineCounters& counters);
+  /// z_p, z_g > 0 teeth.
+  PhaseSource(const PipelineOptions& options, int pinion_teeth, int gear_teeth);
 
   /// [rad]: the anchor extrapolated, or the nominal angle since origin() (0 before).
   double pinionAngle(Stamp stamp) const;
@@ -46,6 +45,9 @@ class PhaseSource {
   std::optional<double> encoderSilence(Stamp now) const;
   bool encodersDrive() const { return encoders_; }
   const std::optional<Anchor>& anchor() const { return anchor_; }
+  const PhaseCounters& counters() const { return counters_; }
+  /// The last time-out or gear-ratio mismatch, with its reason.
+  const EventLog& events() const { return events_; }
   /// Where the nominal angle counts from (the first torque after a restart).
   std::optional<Stamp> origin() const { return origin_; }
   void setOrigin(Stamp origin) { origin_ = origin; }
@@ -71,7 +73,8 @@ class PhaseSource {
   int teeth_p_, teeth_g_;
   double nominal_speed_;  ///< [rad/s]
   double mesh_phase_offset_, motion_timeout_, gear_ratio_tolerance_;
-  PipelineCounters& counters_;
+  PhaseCounters counters_;
+  EventLog events_;
   std::optional<Stamp> origin_;
   std::optional<Anchor> anchor_;    ///< empty: nominal
   bool encoders_ = false;           ///< the anchor is a reading's

@@ -1,4 +1,4 @@
-// What the pipeline hands out, as plain values: its sink's inputs and its counters.
+// What the pipeline hands out, as plain values: its sink's inputs and its merged counters.
 #pragma once
 
 #include <array>
@@ -13,6 +13,7 @@
 #include "drivetrain_stiffness/core/stiffness_estimator.hpp"
 #include "drivetrain_stiffness/pipeline/input_types.hpp"
 #include "drivetrain_stiffness/pipeline/modal_identification.hpp"
+#include "drivetrain_stiffness/pipeline/stage_counters.hpp"
 #include "drivetrain_stiffness/spectral/spectrum.hpp"
 
 namespace drivetrain_stiffness {
@@ -77,41 +78,21 @@ class PipelineSink {
   virtual void modalIdentification(Stamp /*stamp*/, const ModalReport& /*report*/) {}
 };
 
-/// What the vibration block rules counted (VibrationInput).
-struct VibrationCounters {
-  std::uint64_t samples = 0;           ///< accepted samples per channel (frames)
-  std::uint64_t gaps = 0;              ///< a block later than the previous one's end: new record
-  std::uint64_t overlaps = 0;          ///< a block earlier than the previous one's end: refused
-  std::uint64_t rate_changes = 0;      ///< another sample rate: new record
-  std::uint64_t channel_changes = 0;   ///< other channel names: new record
-  std::uint64_t unknown_channels = 0;  ///< channels of accepted blocks that name no support
-};
-
-/// Everything the pipeline saw (docs/ros_api.md, /diagnostics).
-struct PipelineCounters {
-  std::uint64_t accepted_torque = 0, rejected_torque = 0;
-  std::uint64_t accepted_preload = 0, rejected_preload = 0;
-  std::uint64_t zero_stamps = 0, out_of_order = 0, invalid_values = 0, unreachable_loads = 0;
-  std::uint64_t wrong_frames = 0, stamps_out_of_range = 0;
-  std::uint64_t dropped_torque = 0, dropped_preload = 0;
-  std::uint64_t accepted_motion = 0, rejected_motion = 0, dropped_motion = 0;
-  std::uint64_t accepted_vibration = 0, rejected_vibration = 0, dropped_vibration = 0;  ///< blocks
+/// Every stage's counters merged by RigPipeline::counters(), and the last event of any stage
+/// (docs/ros_api.md, /diagnostics).
+struct PipelineCounters : GateCounters,
+                          PhaseCounters,
+                          DynamicsCounters,
+                          ResonanceCounters,
+                          StiffnessOutputCounters,
+                          TeOutputCounters,
+                          SpectrumCounters,
+                          MeshPeriodCounters,
+                          CalibrationCounters,
+                          ModalCounters {
   VibrationCounters vibration;
-  std::uint64_t motion_timeouts = 0, gear_ratio_mismatches = 0;
-  std::uint64_t stiffness_shed = 0;
-  std::uint64_t clock_resets = 0, stamp_resets = 0, gap_restarts = 0;
-  std::uint64_t dynamics_errors = 0;
-  std::uint64_t stiffness_out = 0, stiffness_coalesced = 0;
-  std::uint64_t stiffness_refused = 0;
-  std::uint64_t te_out = 0, spectra_out = 0, resonance_out = 0;
-  std::uint64_t modal_updates = 0;
-  std::uint64_t measured_te_out = 0, calibration_out = 0;
-  std::uint64_t mesh_period_stats_out = 0;
-  std::uint64_t calibration_errors = 0;
-  std::uint64_t modal_out = 0;     ///< modal identifications published
-  std::uint64_t modal_errors = 0;  ///< records the identification could not identify
-  double simulated_s = 0.0;        ///< [s] model time integrated
-  std::string last_event;          ///< the last rejection or reset, with its reason
+  std::uint64_t dynamics_errors = 0;  ///< model_errors + resonance_errors
+  std::string last_event;             ///< the last rejection, reset or error, with its reason
 };
 
 /// The counters by the names /diagnostics and drivetrain_replay's summary use.

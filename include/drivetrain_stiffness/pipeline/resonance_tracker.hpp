@@ -18,8 +18,7 @@ class ResonanceTracker {
  public:
   /// `threshold` [-] in (0, 1). Keeps references to everything but the threshold.
   ResonanceTracker(const RigConfig& rig, const StiffnessEstimator& estimator,
-                   const CalibrationStage& calibration, double threshold,
-                   PipelineCounters& counters);
+                   const CalibrationStage& calibration, double threshold);
   /// True when every spring [N/m] is within [(1 - threshold)^2, (1 + threshold)^2] (shrunk by 1e-9)
   /// of `at_last`: by Courant-Fischer no natural frequency can have moved by more than threshold.
   static bool withinCourantFischerBounds(const std::array<double, 3>& springs,
@@ -32,13 +31,17 @@ class ResonanceTracker {
   void forget() { last_.reset(); }
   /// The last published estimate.
   const std::optional<ResonanceEstimate>& last() const { return last_; }
+  const ResonanceCounters& counters() const { return counters_; }
+  /// The last error, with its reason.
+  const EventLog& events() const { return events_; }
 
  private:
   const RigConfig& rig_;
   const StiffnessEstimator& estimator_;
   const CalibrationStage& calibration_;
   double threshold_;
-  PipelineCounters& counters_;
+  ResonanceCounters counters_;
+  EventLog events_;
   std::optional<ResonanceEstimate> last_;
   std::array<double, 3> springs_at_last_{};  ///< [N/m]
 };

@@ -4,7 +4,7 @@
 // one order per input: gate, advance (the phase and the dynamics to the input's stamp), apply,
 // publish. It alone owns the phase source and decides when the dynamics advance. It reads no
 // clock, so a replay with the recorded stamps is bit-identical to the live run. Only the library's
-// own errors (core/errors.hpp) are caught, each counted with its reason in last_event; a
+// own errors (core/errors.hpp) are caught, each counted by its stage with its reason; a
 // programming error passes through.
 #pragma once
 
@@ -82,7 +82,9 @@ class RigPipeline {
   void apply(const RuntimeSettings& settings);
   const RuntimeSettings& settings() const { return settings_; }
 
-  const PipelineCounters& counters() const { return counters_; }
+  /// Every stage's counters merged under the keys of namedCounters, with the last event of any
+  /// stage. Valid until the next call; no allocation unless the last event's text grew.
+  const PipelineCounters& counters() const;
   /// Every refused input by stream and reason.
   const RefusalTally& refusals() const { return gate_->refusals(); }
   const PipelineOptions& options() const { return options_; }
@@ -123,7 +125,9 @@ class RigPipeline {
   std::shared_ptr<const RigConfig> rig_;  ///< first: the stages share it
   PipelineOptions options_;
   RuntimeSettings settings_;
-  PipelineCounters counters_;  ///< before the stages: they count in it
+  StiffnessOutputCounters counters_;  ///< of the stiffness output, the pipeline's own
+  EventLog events_;                   ///< resets, stiffness messages the sink refused
+  mutable PipelineCounters merged_;   ///< what counters() returns
   std::unique_ptr<InputGate> gate_;
   std::unique_ptr<StiffnessEstimator> estimator_;
   std::unique_ptr<CalibrationStage> calibration_;

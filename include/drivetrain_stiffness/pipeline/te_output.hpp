@@ -11,19 +11,19 @@ namespace drivetrain_stiffness {
 
 class TeOutput : public SampleConsumer {
  public:
-  /// Keeps references to `phase`, `resonance` (the last published) and `counters`.
-  TeOutput(const PhaseSource& phase, const std::optional<ResonanceEstimate>& resonance,
-           PipelineCounters& counters)
-      : phase_(phase), resonance_(resonance), counters_(counters) {}
+  /// Keeps references to `phase` and `resonance` (the last published).
+  TeOutput(const PhaseSource& phase, const std::optional<ResonanceEstimate>& resonance)
+      : phase_(phase), resonance_(resonance) {}
   /// To PipelineSink::transmissionError with its SampleContext; a sink's Error passes on.
   void sample(Stamp stamp, const DynamicsSample& sample, double mesh_frequency,
               PipelineSink& sink) override;
   void restart() override {}
+  const TeOutputCounters& counters() const { return counters_; }
 
  private:
   const PhaseSource& phase_;
   const std::optional<ResonanceEstimate>& resonance_;
-  PipelineCounters& counters_;
+  TeOutputCounters counters_;
 };
 
 }  // namespace drivetrain_stiffness

@@ -10,18 +10,19 @@ namespace drivetrain_stiffness {
 class TeSpectrumStage : public SampleConsumer {
  public:
   /// `window` >= 8 and `hop` in [1, window] [samples], `interval` > 0 [s]; InvalidInput otherwise.
-  TeSpectrumStage(int window, int hop, double interval, PipelineCounters& counters);
+  TeSpectrumStage(int window, int hop, double interval);
   /// Throws InvalidInput for a non-finite TE.
   void sample(Stamp stamp, const DynamicsSample& sample, double mesh_frequency,
               PipelineSink& sink) override;
   /// Empties the window.
   void restart() override { spectrum_.reset(); }
   const SlidingSpectrum& spectrum() const { return spectrum_; }
+  const SpectrumCounters& counters() const { return counters_; }
 
  private:
   SlidingSpectrum spectrum_;
   SpectrumPeaks peaks_;
-  PipelineCounters& counters_;
+  SpectrumCounters counters_;
 };
 
 }  // namespace drivetrain_stiffness

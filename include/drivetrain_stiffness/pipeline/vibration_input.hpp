@@ -38,10 +38,8 @@ class VibrationInput {
   /// rate) [-].
   static constexpr double kRateTolerance = 1e-6;
 
-  /// `record_seconds` [s] of the newest samples are kept (InvalidInput unless in (0, 600]);
-  /// keeps `counters` by reference.
-  VibrationInput(std::vector<VibrationChannel> channels, double record_seconds,
-                 VibrationCounters& counters);
+  /// `record_seconds` [s] of the newest samples are kept (InvalidInput unless in (0, 600]).
+  VibrationInput(std::vector<VibrationChannel> channels, double record_seconds);
 
   /// The value rules: rate in (0, kMaxSampleRate], 1 to kMaxChannels distinct non-empty names, at
   /// least one known, a whole number of samples, every value finite and within kMaxAcceleration.
@@ -53,6 +51,7 @@ class VibrationInput {
   void append(Stamp stamp, const VibrationBlockView& block, std::uint32_t seq = 0);
   /// A block was refused: the next one starts a new record (its samples are missing).
   void interrupt();
+  const VibrationCounters& counters() const { return counters_; }
   /// Forgets the record (a pipeline reset); the counters stay.
   void reset();
 
@@ -95,7 +94,7 @@ class VibrationInput {
 
   std::vector<VibrationChannel> map_;
   double record_seconds_;
-  VibrationCounters& counters_;
+  VibrationCounters counters_;
   std::vector<std::string> unknown_names_;
   // The record.
   double rate_ = 0.0;
