@@ -381,7 +381,8 @@ void Calibrator::update(const FeatureVector& z, const FeatureVector& z_std, doub
     const double model = config_.model_error * std::abs(h0[i]);
     noise[i] = z_std[i] * z_std[i] + config_.te_noise_floor * config_.te_noise_floor;
     model_variance[i] = repeats * model * model;
-    // Summed in the order R always was, not as noise + model_variance: the same bits as before.
+    // Summed window, model, floor in this order, not as noise + model_variance: the order sets
+    // R's last bits and so the calibration outputs' (another order rounds differently).
     R(i, i) =
         z_std[i] * z_std[i] + model_variance[i] + config_.te_noise_floor * config_.te_noise_floor;
   }
@@ -730,7 +731,7 @@ void Calibrator::outputs(double torque, const StiffnessEstimator& supports) {
   // The reported covariance: the filter's own while the windows show a model error within the
   // configured allowance; widened to the estimate's real covariance under the model error they
   // show where it exceeds it (model_error_scale.hpp). Never narrowed: a model error that repeats
-  // at an operating point is invisible in the innovations, and bands learned down from them were
+  // at an operating point is invisible in the innovations, and bands learned down from them are
   // overconfident after a 10-min dwell at one load (docs/calibration.md, section 3).
   const CalibrationVector theta = toParameters(state_);
   const CalibrationMatrix J = parameterJacobian(state_);

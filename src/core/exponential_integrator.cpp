@@ -293,9 +293,9 @@ void PeriodicExponentialPropagator::tabulateSettling(const RigExcitation& excita
     forces.push_back(-f);
   }
   std::sort(forces.begin(), forces.end());
-  // What does not depend on the force, once per phase (the same expressions as before, so the
-  // table is bit for bit the one of evaluating them per force, with two divisions fewer per force
-  // and phase): the stiffness sum and the thresholds F_p / k_c, F_p / k1.
+  // What does not depend on the force, once per phase: the stiffness sum and the thresholds
+  // F_p / k_c, F_p / k1 (one operation each, so the table is bit for bit what evaluating them per
+  // force gives, with two divisions fewer per force and phase).
   bool stiff_everywhere = true;
   std::vector<double> sum(n), back_threshold(n), drive_threshold(n);
   for (std::size_t i = 0; i < n; ++i) {
@@ -526,7 +526,7 @@ bool PeriodicExponentialPropagator::step(long k, Augmented& z, double torque_k, 
   const long n = static_cast<long>(propagators_.size());
   // The state must start in the linear regime too: one that starts with a flank lifted and ends,
   // under the closed regime's propagator, inside it would otherwise pass (the node hands such a
-  // state over from a dopri5 interval; at -1 N m on the seed servo that was 0.68 of the TE).
+  // state over from a dopri5 interval; at -1 N m on the seed servo that costs 0.68 of the TE).
   if (!linearRegime(static_cast<int>(((k % n) + n) % n), z)) return false;
   const double mean = torque_mean_;
   Eigen::Matrix<double, 11, 1> w;

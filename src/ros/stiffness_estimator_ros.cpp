@@ -189,7 +189,7 @@ void StiffnessEstimatorRos::countStart(ros::NodeHandle& pnh) {
 
 // dynamic_reconfigure starts from the parameter server: seed it with the gearbox's damping, every
 // time (the server writes its values back, so a restart would otherwise reuse the last session's
-// and the node would no longer match drivetrain_replay on the same files).
+// and the node would not match drivetrain_replay on the same files).
 void StiffnessEstimatorRos::startReconfigure(ros::NodeHandle& pnh) {
   const RuntimeSettings& run = pipeline_->settings();
   pnh.setParam("mesh_damping_ratio", run.mesh_damping_ratio);

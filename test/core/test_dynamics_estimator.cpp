@@ -724,17 +724,17 @@ TEST(DynamicsEstimator, BearingStiffnessMovesOnAOnePercentGrid) {
 
 // Under a rippling load the bearing stiffness swings by a few per cent at the ripple's frequency
 // (3.4 % at 10 N m with torque_ripple's 5 % sixth shaft order on the seed servo), so the 1 % dead
-// band lets through hundreds of changes a second. Each moved the sliced propagation onto new
-// parameters, whose slices were all decomposed again as they were crossed: 178,525 decompositions
-// for 172,606 slices crossed in that 2 s replay. On the 1 % grid the swing visits a few values
-// again and again, and each value's slices are kept (SlicedModalPropagator::kKeptParameterSets):
-// here a stiffness stepping among three values two grid steps apart every 1 ms for 0.2 s at
-// 1000 rpm, each with a 1e-4 noise (200 changes, 17,000 slices crossed), may decompose each slice
-// once per value: without the grid every change is a new value, without the kept sets every change
-// decomposes the slices crossed. A second estimator through the same inputs gives the same bits
-// (the kept slices depend on the inputs only: a replay is the live run); that the kept slices
-// propagate as fresh ones do is KeptParameterSetsAreTakenBackAsTheyWere in
-// test_sliced_propagation.cpp.
+// band lets through hundreds of changes a second. Off the grid each would move the sliced
+// propagation onto new parameters, whose slices are all decomposed again as they are crossed:
+// 178,525 decompositions for 172,606 slices crossed in a 2 s replay of that load. On the 1 % grid
+// the swing visits a few values again and again, and each value's slices are kept
+// (SlicedModalPropagator::kKeptParameterSets): here a stiffness stepping among three values two
+// grid steps apart every 1 ms for 0.2 s at 1000 rpm, each with a 1e-4 noise (200 changes, 17,000
+// slices crossed), may decompose each slice once per value: without the grid every change is a new
+// value, without the kept sets every change decomposes the slices crossed. A second estimator
+// through the same inputs gives the same bits (the kept slices depend on the inputs only: a replay
+// is the live run); that the kept slices propagate as fresh ones do is
+// KeptParameterSetsAreTakenBackAsTheyWere in test_sliced_propagation.cpp.
 TEST(DynamicsEstimator, ARipplingBearingStiffnessKeepsItsSlices) {
   const std::array<double, 3> values{1.2e8, 1.2e8 * 1.0201,
                                      1.2e8 * 1.0406};  // two and four grid steps apart

@@ -263,8 +263,8 @@ TEST(Scenes, ChaoticSceneHasSensitiveDependence) {
   EXPECT_GT(std::log(1e5) / t_chaotic, 0.01);
 }
 
-// Review finding: at rtol 1e-12 / atol 1e-19 a tooth switch 1e-12 turn ahead was skipped and the
-// smallest step straddled it, rejected forever. The switch is now hit exactly.
+// At rtol 1e-12 / atol 1e-19 a tooth switch 1e-12 turn ahead is hit exactly: a step that skipped
+// it would straddle it at the smallest step size and be rejected forever.
 TEST(Scenes, Dopri5TightTolerancesFinish) {
   const Scene s = makeScene("nominal", rig());
   IntegratorOptions o;

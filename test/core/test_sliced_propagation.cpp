@@ -495,10 +495,10 @@ TEST(SlicedModalPropagator, FreeFlightInTheBacklashGoesToDopri5StretchesUntilAFl
 // 7), 13.2498 s into it: 5.33 N m at 120 rpm, 211 us to the next output sample, across the tooth
 // switch at phase 0 where the back path lands (parameters and state as the estimator held them).
 // Within one 1.9 us step the state leaves the both-flank regime, comes back and leaves again; a
-// search over the whole step converged on the second change and measured 1e-6 of the deflection
-// off dopri5 (rtol 1e-13, steps <= 0.1 us, which honours the tooth switch); locateChange's samples
-// find the first. The old path, dopri5 stretches through every clipped damper, missed a landing
-// 0.43 s later by 2.8e-4 of that sample's TE.
+// search over the whole step converges on the second change, 1e-6 of the deflection off dopri5
+// (rtol 1e-13, steps <= 0.1 us, which honours the tooth switch); locateChange's samples find the
+// first. Stretches of dopri5 through every clipped damper, instead, miss a landing 0.43 s later
+// by 2.8e-4 of that sample's TE.
 TEST(SlicedModalPropagator, ALeaveAndReturnInsideAStepIsTakenAtTheFirstChange) {
   GearRotorParameters p =
       rigRotorParameters(rig(), *mesh(), {108737127.15110265, 108737127.15110265});

@@ -104,7 +104,7 @@ TEST(ScenarioBag, JointStatesAreReadableByRosbagWithTheRightNamesAndPositions) {
     for (double p : j->position) EXPECT_NEAR(p / kCount, std::round(p / kCount), 1e-6) << t;
     ++k;
   }
-  // The torque beside them, as before.
+  // The torque beside them on /torque, one message per reading.
   rosbag::View torque(bag, rosbag::TopicQuery("/torque"));
   EXPECT_EQ(torque.size(), 200u);
   EXPECT_EQ(torque.begin()->instantiate<geometry_msgs::WrenchStamped>()->wrench.torque.z, 0.1);
