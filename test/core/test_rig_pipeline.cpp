@@ -156,9 +156,9 @@ TEST(RigPipeline, LongGapRestartsTheDynamics) {
 // stamped after it is taken up. The last torque before the gap lies off the 1 ms output grid (the
 // dynamics stand on the sample before it, its torque change pending), and the first after it moves
 // a bearing stiffness by more than the 1 % at which the dynamics take a change up: applied at the
-// time before the gap, that change reached the dynamics as "before the current time" (a dynamics
-// error) and the restart kept the old stiffness. Each input is also tried as a preload, which takes
-// the same path without a torque.
+// time before the gap, that change would reach the dynamics as "before the current time" (a
+// dynamics error) and the restart would keep the old stiffness. Each input is also tried as a
+// preload, which takes the same path without a torque.
 TEST(RigPipeline, AStiffnessChangeAfterAGapRestartsWithTheNewStiffness) {
   for (const bool by_preload : {false, true}) {
     RigPipeline p(rig(), PipelineOptions{});
