@@ -8,7 +8,7 @@
 
 #include <rosbag/bag.h>
 
-#include "bag_writer.hpp"  // NOLINT(build/include_subdir)
+#include "bag/bag_writer.hpp"  // NOLINT(build/include_subdir)
 #include "drivetrain_stiffness/Stiffness.h"
 #include "drivetrain_stiffness/TransmissionError.h"
 

@@ -4,13 +4,13 @@
 # its figures depend on how busy the machine is.
 
 # Torque load on the node and what comes back (latency, counts, the node's diagnostics).
-add_library(${PROJECT_NAME}_load_generator STATIC src/tools/load_generator.cpp)
+add_library(${PROJECT_NAME}_load_generator STATIC src/tools/latency/load_generator.cpp)
 target_include_directories(${PROJECT_NAME}_load_generator PUBLIC src/tools include ${catkin_INCLUDE_DIRS})
 target_link_libraries(${PROJECT_NAME}_load_generator ${PROJECT_NAME}_pipeline ${catkin_LIBRARIES} nlohmann_json::nlohmann_json)
 add_dependencies(${PROJECT_NAME}_load_generator ${PROJECT_NAME}_generate_messages_cpp)
 
 # launch/latency.launch and scripts/soak: p50/p99 input-to-output latency, deadlines, memory as JSON.
-add_executable(drivetrain_latency src/tools/drivetrain_latency.cpp)
+add_executable(drivetrain_latency src/tools/latency/drivetrain_latency.cpp)
 target_link_libraries(drivetrain_latency ${PROJECT_NAME}_load_generator)
 install(TARGETS drivetrain_latency RUNTIME DESTINATION ${CATKIN_PACKAGE_BIN_DESTINATION})
 

@@ -191,8 +191,8 @@ class MotionExcitation : public GearExcitation {
 double radPerSecond(double rpm) { return rpm * kTwoPi / 60.0; }
 
 /// The scenes whose speed changes: the pinion speed profile over [0, T] by name (the profiles of
-/// drivetrain_rig_sim's speed scenarios, src/tools/rig_scenarios.cpp; speed_steps' ramps are T/20,
-/// 50 ms at the 1 s default, as the scenario's).
+/// drivetrain_rig_sim's speed scenarios, src/tools/scenarios/rig_scenarios.cpp; speed_steps' ramps
+/// are T/20, 50 ms at the 1 s default, as the scenario's).
 SpeedProfile motionProfile(const std::string& name, double T) {
   if (name == "run_up") return SpeedProfile(SpeedRamp{0.0, radPerSecond(6000.0), 0.0, T});
   if (name == "speed_steps") {

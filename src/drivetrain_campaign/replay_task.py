@@ -128,7 +128,7 @@ def bag_row(job, returncode, stderr, summary, out_dir):
 
 def modal_columns(summary):
     """The accelerometers' modal identification over the bag, from summary.json's "modal"
-    (src/tools/modal_totals.hpp): modal_identifications, the records identified; per model mode,
+    (src/tools/replay/modal_totals.hpp): modal_identifications, the records identified; per model mode,
     named by its dominant coordinate, the last identified frequency and its standard deviation
     [Hz], empty when no record identified it (or, for _std, when the record did not compute one)."""
     modal = summary.get("modal") or {}
@@ -147,7 +147,7 @@ PERIOD_KEYS = ("speed_min", "speed_max", "torque_min", "torque_max", "te_rms", "
 def period_statistics(summary):
     """Speed and torque ranges and TE figures over the bag's per-mesh-period blocks
     (msg/MeshPeriodStats.msg), as drivetrain_replay sums them into summary.json's "mesh_periods"
-    (src/tools/mesh_period_totals.hpp): pinion speed = 2 pi f_mesh / z_p [rad/s]; torque = the
+    (src/tools/replay/mesh_period_totals.hpp): pinion speed = 2 pi f_mesh / z_p [rad/s]; torque = the
     block's mean held pinion torque [N*m]; te_rms = RMS about each block's mean, combined over
     blocks by time [m]; te_peak_to_peak = the largest block's [m]; mesh_force_mean = time-weighted
     [N]. Empty when the bag gave no block."""

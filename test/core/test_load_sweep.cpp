@@ -1,5 +1,6 @@
-// The load_sweep scenario (src/tools/load_sweep.hpp) on a perturbed rig whose truth is known
-// (test/data/perturbed_servo.yaml: mesh scale 0.8, pinion support 0.7, gear support 1.3, T_p 1.2):
+// The load_sweep scenario (src/tools/scenarios/load_sweep.hpp) on a perturbed rig whose truth is
+// known (test/data/perturbed_servo.yaml: mesh scale 0.8, pinion support 0.7, gear support 1.3,
+// T_p 1.2):
 //  - the gear encoder carries the static TE of the true rig: per hold, the mean over the hold's
 //  last
 //    gear turn of x_enc = r_b,p theta_p + r_b,g theta_g (from the quantised readings, mounting
@@ -24,7 +25,7 @@
 #include "drivetrain_stiffness/core/constants.hpp"
 #include "drivetrain_stiffness/core/stiffness_estimator.hpp"
 #include "drivetrain_stiffness/core/validation.hpp"
-#include "load_sweep.hpp"
+#include "scenarios/load_sweep.hpp"
 
 using namespace drivetrain_stiffness;
 

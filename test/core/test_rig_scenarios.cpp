@@ -1,9 +1,9 @@
-// The rig scenarios' encoder readings (src/tools/rig_scenarios.hpp): joint events at their rate, on
-// the 2^20-count grid, the gear at -(z_p / z_g) of the pinion (motion.hpp's sign convention), the
-// speed scenarios' speeds and angles against their closed forms (ramp: omega = s0 + (s1 - s0) t /
-// T, theta = s0 t + (s1 - s0) t^2 / (2 T); reversal: omega = s cos(2 pi t / T), theta = s T sin(2
-// pi t / T) / (2 pi)), and the older scenarios' torque and preload events unchanged by the
-// readings.
+// The rig scenarios' encoder readings (src/tools/scenarios/rig_scenarios.hpp): joint events at
+// their rate, on the 2^20-count grid, the gear at -(z_p / z_g) of the pinion (motion.hpp's sign
+// convention), the speed scenarios' speeds and angles against their closed forms (ramp: omega = s0
+// + (s1 - s0) t / T, theta = s0 t + (s1 - s0) t^2 / (2 T); reversal: omega = s cos(2 pi t / T),
+// theta = s T sin(2 pi t / T) / (2 pi)), and the older scenarios' torque and preload events
+// unchanged by the readings.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -14,8 +14,8 @@
 #include "drivetrain_stiffness/config/yaml_config.hpp"
 #include "drivetrain_stiffness/core/constants.hpp"
 #include "drivetrain_stiffness/core/validation.hpp"
-#include "rig_encoder.hpp"
-#include "rig_scenarios.hpp"
+#include "scenarios/rig_encoder.hpp"
+#include "scenarios/rig_scenarios.hpp"
 
 using namespace drivetrain_stiffness;
 

@@ -11,7 +11,7 @@
 
 #include "drivetrain_stiffness/core/validation.hpp"
 #include "fuzz_target.hpp"
-#include "replay_input.hpp"
+#include "bag/replay_input.hpp"
 
 namespace drivetrain_stiffness::fuzz {
 namespace {

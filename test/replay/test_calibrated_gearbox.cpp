@@ -1,15 +1,15 @@
-// drivetrain_replay --calibrate's gearbox YAML (src/tools/calibrated_gearbox.hpp): written from a
-// calibration estimate, reloaded with loadRigFile as the node loads ~gearbox_config, the calibrated
-// values round-trip exactly and the rest of the rig is unchanged; relative bearing `file:`
-// references still resolve from another directory; a config without a calibration block and an
-// estimate that no window updated are refused and nothing is written.
+// drivetrain_replay --calibrate's gearbox YAML (src/tools/replay/calibrated_gearbox.hpp): written
+// from a calibration estimate, reloaded with loadRigFile as the node loads ~gearbox_config, the
+// calibrated values round-trip exactly and the rest of the rig is unchanged; relative bearing
+// `file:` references still resolve from another directory; a config without a calibration block and
+// an estimate that no window updated are refused and nothing is written.
 #include <gtest/gtest.h>
 
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 
-#include "calibrated_gearbox.hpp"  // NOLINT(build/include_subdir)
+#include "replay/calibrated_gearbox.hpp"  // NOLINT(build/include_subdir)
 #include "drivetrain_stiffness/config/yaml_config.hpp"
 #include "drivetrain_stiffness/core/validation.hpp"
 

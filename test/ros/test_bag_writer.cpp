@@ -19,7 +19,7 @@
 #include <std_msgs/String.h>
 #include <tf2_msgs/TFMessage.h>
 
-#include "bag_writer.hpp"  // NOLINT(build/include_subdir)
+#include "bag/bag_writer.hpp"  // NOLINT(build/include_subdir)
 #include "drivetrain_stiffness/Stiffness.h"
 
 namespace ds = drivetrain_stiffness;

@@ -15,7 +15,7 @@
 #include <geometry_msgs/WrenchStamped.h>
 
 #include "drivetrain_stiffness/ros/parameters.hpp"
-#include "load_generator.hpp"
+#include "latency/load_generator.hpp"
 
 using namespace drivetrain_stiffness;
 

@@ -1,5 +1,5 @@
-// drivetrain_rig_sim's bag (src/tools/scenario_bag.hpp) read back by rosbag::View: the encoders'
-// joint_states are sensor_msgs/JointState with the type's md5sum and definition
+// drivetrain_rig_sim's bag (src/tools/rig_sim/scenario_bag.hpp) read back by rosbag::View: the
+// encoders' joint_states are sensor_msgs/JointState with the type's md5sum and definition
 // (ros::message_traits), names [pinion, gear], positions equal to the scenario's readings and
 // within half a count of the run-up's closed form theta = s1 t^2 / (2 T), velocities or none, no
 // effort, an empty frame_id, header.seq from 0 and stamps = record times = epoch + t; the torque
@@ -22,8 +22,8 @@
 #include "drivetrain_stiffness/config/yaml_config.hpp"
 #include "drivetrain_stiffness/core/constants.hpp"
 #include "drivetrain_stiffness/core/validation.hpp"
-#include "rig_scenarios.hpp"
-#include "scenario_bag.hpp"
+#include "scenarios/rig_scenarios.hpp"
+#include "rig_sim/scenario_bag.hpp"
 
 using namespace drivetrain_stiffness;
 

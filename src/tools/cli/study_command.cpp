@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "python_script.hpp"  // NOLINT(build/include_subdir): src/tools
+#include "common/python_script.hpp"  // NOLINT(build/include_subdir): src/tools
 #include "drivetrain_stiffness/config/yaml_config.hpp"
 #include "drivetrain_stiffness/core/validation.hpp"
 #include "drivetrain_stiffness/studies/parameter_studies.hpp"

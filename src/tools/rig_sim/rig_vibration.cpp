@@ -15,7 +15,7 @@
 #include "drivetrain_stiffness/core/rig_model.hpp"
 #include "drivetrain_stiffness/core/stiffness_estimator.hpp"
 #include "drivetrain_stiffness/core/validation.hpp"
-#include "seeded_stream.hpp"  // NOLINT(build/include_subdir)
+#include "scenarios/seeded_stream.hpp"  // NOLINT(build/include_subdir)
 
 namespace drivetrain_stiffness {
 namespace {

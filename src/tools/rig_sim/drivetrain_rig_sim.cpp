@@ -29,10 +29,10 @@
 
 #include "drivetrain_stiffness/config/yaml_config.hpp"
 #include "drivetrain_stiffness/core/validation.hpp"
-#include "load_sweep.hpp"     // NOLINT(build/include_subdir)
-#include "rig_scenarios.hpp"  // NOLINT(build/include_subdir)
-#include "rig_vibration.hpp"  // NOLINT(build/include_subdir)
-#include "scenario_bag.hpp"   // NOLINT(build/include_subdir)
+#include "scenarios/load_sweep.hpp"     // NOLINT(build/include_subdir)
+#include "scenarios/rig_scenarios.hpp"  // NOLINT(build/include_subdir)
+#include "rig_vibration.hpp"            // NOLINT(build/include_subdir)
+#include "scenario_bag.hpp"             // NOLINT(build/include_subdir)
 
 namespace {
 

@@ -4,7 +4,7 @@
 #include <optional>
 
 #include "drivetrain_stiffness/core/validation.hpp"
-#include "replay_input.hpp"  // NOLINT(build/include_subdir): topicMatches
+#include "bag/replay_input.hpp"  // NOLINT(build/include_subdir): topicMatches
 
 namespace drivetrain_stiffness {
 namespace {

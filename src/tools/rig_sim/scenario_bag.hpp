@@ -5,8 +5,8 @@
 #include <string>
 #include <vector>
 
-#include "rig_scenarios.hpp"  // NOLINT(build/include_subdir)
-#include "rig_vibration.hpp"  // NOLINT(build/include_subdir)
+#include "scenarios/rig_scenarios.hpp"  // NOLINT(build/include_subdir)
+#include "rig_vibration.hpp"            // NOLINT(build/include_subdir)
 
 namespace drivetrain_stiffness {
 

@@ -10,7 +10,7 @@
 
 #include "drivetrain_stiffness/core/rig_config.hpp"
 #include "drivetrain_stiffness/core/speed_profile.hpp"
-#include "rig_scenarios.hpp"  // NOLINT(build/include_subdir)
+#include "scenarios/rig_scenarios.hpp"  // NOLINT(build/include_subdir)
 
 namespace drivetrain_stiffness {
 

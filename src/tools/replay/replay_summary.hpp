@@ -13,7 +13,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "bag_index_check.hpp"  // NOLINT(build/include_subdir)
+#include "bag/bag_index_check.hpp"  // NOLINT(build/include_subdir)
 #include "drivetrain_stiffness/pipeline/rig_pipeline.hpp"
 
 namespace drivetrain_stiffness {

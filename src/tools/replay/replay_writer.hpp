@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "bag_writer.hpp"          // NOLINT(build/include_subdir)
+#include "bag/bag_writer.hpp"      // NOLINT(build/include_subdir)
 #include "mesh_period_totals.hpp"  // NOLINT(build/include_subdir)
 #include "modal_totals.hpp"        // NOLINT(build/include_subdir)
 #include "drivetrain_stiffness/ros/message_sink.hpp"

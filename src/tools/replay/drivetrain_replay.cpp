@@ -28,8 +28,8 @@
 #include "drivetrain_stiffness/core/validation.hpp"
 #include "drivetrain_stiffness/config/yaml_config.hpp"
 #include "drivetrain_stiffness/ros/node_parameters.hpp"
-#include "python_script.hpp"  // NOLINT(build/include_subdir)
-#include "replay_input.hpp"   // NOLINT(build/include_subdir)
+#include "common/python_script.hpp"  // NOLINT(build/include_subdir)
+#include "bag/replay_input.hpp"      // NOLINT(build/include_subdir)
 #include "drivetrain_stiffness/config/yaml_parameters.hpp"
 #include "replay_summary.hpp"      // NOLINT(build/include_subdir)
 #include "replay_writer.hpp"       // NOLINT(build/include_subdir)
