@@ -18,25 +18,6 @@
 
 namespace drivetrain_stiffness {
 
-const char* toString(WindowOutcome outcome) {
-  switch (outcome) {
-    case WindowOutcome::kNone: return "none";
-    case WindowOutcome::kBaseline: return "baseline";
-    case WindowOutcome::kUpdated: return "updated";
-    case WindowOutcome::kGated: return "gated (normalised innovation above ~gate)";
-    case WindowOutcome::kNoBaseline:
-      return "no baseline yet (needs a window at |torque| <= ~baseline_torque)";
-    case WindowOutcome::kTooSlow: return "not excited: slower than ~min_speed_rpm";
-    case WindowOutcome::kNotQuasiStatic:
-      return "not excited: mesh frequency above ~max_mesh_to_natural of the lowest mode";
-    case WindowOutcome::kTooSparse:
-      return "not excited: too few readings per mesh period for the second harmonic";
-    case WindowOutcome::kIllConditioned:
-      return "not excited: the readings do not determine the shaft orders";
-  }
-  return "?";
-}
-
 namespace {
 constexpr double k95 = 1.959963984540054;  // two-sided 95 % of the normal distribution
 }  // namespace
@@ -45,6 +26,11 @@ namespace {
 const RigConfig& required(const std::shared_ptr<const RigConfig>& rig) {
   if (!rig) throw std::invalid_argument("Calibrator: no rig");  // a caller's bug, not bad data
   return *rig;
+}
+
+/// [rad] of pinion angle a window spans: one gear turn.
+double gearTurn(const RigConfig& rig) {
+  return kTwoPi * std::max(1.0, static_cast<double>(rig.gears.teeth[1]) / rig.gears.teeth[0]);
 }
 }  // namespace
 
@@ -55,7 +41,8 @@ Calibrator::Calibrator(std::shared_ptr<const RigConfig> shared_rig,
     : rig_(std::move(shared_rig)),
       config_(required(rig_).calibration),
       model_(*rig_, std::move(mesh)),
-      regression_(rig_->gears.teeth[0], rig_->gears.teeth[1]) {
+      regression_(rig_->gears.teeth[0], rig_->gears.teeth[1]),
+      report_(gearTurn(*rig_), config_.baseline_torque) {
   const RigConfig& rig = *rig_;
   if (!config_.present) throw InvalidInput("calibration: the gearbox has no calibration block");
   if (!rig.dynamics.present)
@@ -65,8 +52,7 @@ Calibrator::Calibrator(std::shared_ptr<const RigConfig> shared_rig,
   // Whole turns of both encoders shift x by 2 pi (m r_b,p + n r_b,g); with r_b proportional to z
   // these form the lattice 2 pi r_b,p gcd(z_p, z_g) / z_p.
   lattice_ = kTwoPi * model_.baseRadius()[0] * std::gcd(teeth_[0], teeth_[1]) / teeth_[0];
-  gear_turn_ = kTwoPi * std::max(1.0, static_cast<double>(teeth_[1]) / teeth_[0]);
-  progress_.window_angle = gear_turn_;
+  gear_turn_ = gearTurn(rig);
   const CalibrationConfig& c = config_;
   CalibrationVector mean;
   mean << c.mesh_stiffness_scale.mean, c.pinion_bearing_scale.mean, c.gear_bearing_scale.mean,
@@ -123,7 +109,7 @@ void Calibrator::interrupt() {
 int Calibrator::reading(double t, double pinion, double gear, double phase, double speed,
                         double torque, const StiffnessEstimator& supports,
                         MeasuredTeSample& sample) {
-  ++progress_.readings;
+  report_.noteReading();
   // 1. The measured TE, reduced onto the lattice around the first one.
   const double raw = model_.baseRadius()[0] * pinion + model_.baseRadius()[1] * gear;
   if (!te_reference_) te_reference_ = raw;
@@ -221,13 +207,6 @@ WindowOutcome Calibrator::excitation(double speed, double duration, double& valu
   return WindowOutcome::kUpdated;
 }
 
-void Calibrator::noteOutcome(WindowOutcome outcome, double value, double limit) {
-  const auto i = static_cast<std::size_t>(outcome);
-  ++progress_.closed[i];
-  progress_.value[i] = value;
-  progress_.limit[i] = limit;
-}
-
 void Calibrator::closeWindow(const StiffnessEstimator& supports) {
   ++estimate_.windows;
   const double n = static_cast<double>(window_.n);
@@ -235,8 +214,7 @@ void Calibrator::closeWindow(const StiffnessEstimator& supports) {
   const double speed = window_.speed_sum / n;
   estimate_.window_torque = torque;
   estimate_.window_speed = speed;
-  progress_.smallest_torque = std::min(progress_.smallest_torque, std::abs(torque));
-  if (std::abs(torque) > config_.baseline_torque) ++progress_.loaded_windows;
+  report_.noteWindow(torque);
   if (estimate_.natural_frequency[0] == 0.0)
     outputs(torque, supports);  // the modes, for the first check
   OrderRegression::Fit fit;
@@ -251,7 +229,7 @@ void Calibrator::closeWindow(const StiffnessEstimator& supports) {
     ++estimate_.not_excited;
     estimate_.outcome = outcome;
     estimate_.excited = false;
-    noteOutcome(outcome, value, limit);
+    report_.noteOutcome(outcome, value, limit);
     return;
   }
   last_fit_ = fit;
@@ -272,13 +250,13 @@ void Calibrator::closeWindow(const StiffnessEstimator& supports) {
     ++estimate_.baseline_windows;
     estimate_.baseline = true;
     estimate_.outcome = WindowOutcome::kBaseline;
-    noteOutcome(WindowOutcome::kBaseline, std::abs(torque), config_.baseline_torque);
+    report_.noteOutcome(WindowOutcome::kBaseline, std::abs(torque), config_.baseline_torque);
     return;
   }
   if (base_count_ == 0) {
     ++estimate_.not_excited;
     estimate_.outcome = WindowOutcome::kNoBaseline;
-    noteOutcome(WindowOutcome::kNoBaseline, std::abs(torque), config_.baseline_torque);
+    report_.noteOutcome(WindowOutcome::kNoBaseline, std::abs(torque), config_.baseline_torque);
     return;
   }
   // 4. The features above the baseline, with their standard deviations: the fit's, the baseline's,
@@ -397,7 +375,7 @@ void Calibrator::update(const FeatureVector& z, const FeatureVector& z_std, doub
     ++estimate_.gated;
     estimate_.outcome = WindowOutcome::kGated;
     estimate_.predicted = h0;
-    noteOutcome(WindowOutcome::kGated, nis, config_.gate);
+    report_.noteOutcome(WindowOutcome::kGated, nis, config_.gate);
     return;
   }
   model_error_.predict(Q);
@@ -415,7 +393,7 @@ void Calibrator::update(const FeatureVector& z, const FeatureVector& z_std, doub
   has_update_t_ = true;
   ++estimate_.updates;
   estimate_.outcome = WindowOutcome::kUpdated;
-  noteOutcome(WindowOutcome::kUpdated, nis, config_.gate);
+  report_.noteOutcome(WindowOutcome::kUpdated, nis, config_.gate);
   estimate_.predicted = predict(state_, torque);
 }
 
@@ -774,83 +752,6 @@ void Calibrator::outputs(double torque, const StiffnessEstimator& supports) {
   e.knee_torque = model_.kneeTorque(theta);
 }
 
-// ---- Progress: why no window has updated the estimate ----
-
-double CalibrationProgress::windowSeconds(double speed) const {
-  // The window rule closes a window once its readings span window_angle of pinion angle.
-  return std::abs(speed) > 0.0 ? window_angle / std::abs(speed)
-                               : std::numeric_limits<double>::infinity();
-}
-
-namespace {
-
-/// The stretch that came nearer to closing a window: the larger angle (the window rule's measure),
-/// then the longer time (a rig at rest spans no angle).
-bool nearer(const SteadyStretch& a, const SteadyStretch& b) {
-  if (a.readings == 0) return false;
-  if (b.readings == 0) return true;
-  return a.angle > b.angle || (a.angle == b.angle && a.duration > b.duration);
-}
-
-void keep(CalibrationProgress& p, const SteadyStretch& s, double baseline_torque) {
-  if (s.readings == 0) return;
-  p.smallest_torque = std::min(p.smallest_torque, std::abs(s.torque));
-  // Unloaded or loaded by the rule a closed window is judged by (closeWindow: |T| <=
-  // ~baseline_torque).
-  SteadyStretch& kept = std::abs(s.torque) <= baseline_torque ? p.unloaded : p.loaded;
-  if (nearer(s, kept)) kept = s;
-}
-
-/// printf into a string, for the sentences below (never on the per-reading path).
-template <typename... Args>
-std::string format(const char* spec, Args... args) {
-  char buffer[256];
-  std::snprintf(buffer, sizeof buffer, spec, args...);
-  return buffer;
-}
-
-std::string windowsCount(std::uint64_t n) {
-  return format(n == 1 ? "%llu window" : "%llu windows", static_cast<unsigned long long>(n));
-}
-
-/// Appends to `out` why each kind of closed window fell short, with the last one's numbers.
-void addOutcomeClauses(const CalibrationProgress& p, std::string& out) {
-  auto clause = [&out](const std::string& text) { out += "; " + text; };
-  auto last = [&p](WindowOutcome o, std::size_t& i) {
-    i = static_cast<std::size_t>(o);
-    return p.closed[i];
-  };
-  std::size_t i = 0;
-  if (const std::uint64_t n = last(WindowOutcome::kTooSlow, i)) {
-    clause(windowsCount(n) + format(" too slow: the last at %.3g rpm, below ~min_speed_rpm = %g",
-                                    p.value[i], p.limit[i]));
-  }
-  if (const std::uint64_t n = last(WindowOutcome::kNotQuasiStatic, i)) {
-    clause(windowsCount(n) + format(" not quasi-static: the last at a mesh frequency of %.4g Hz, "
-                                    "above ~max_mesh_to_natural x "
-                                    "the lowest natural frequency = %.4g Hz",
-                                    p.value[i], p.limit[i]));
-  }
-  if (const std::uint64_t n = last(WindowOutcome::kTooSparse, i)) {
-    clause(windowsCount(n) + format(" too sparse: the last read at %.4g Hz, and its second mesh "
-                                    "harmonic needs more than %.4g Hz",
-                                    p.value[i], p.limit[i]));
-  }
-  if (const std::uint64_t n = last(WindowOutcome::kIllConditioned, i)) {
-    clause(
-        windowsCount(n) +
-        format(" ill-conditioned: the last one's %.0f readings do not determine the shaft orders",
-               p.value[i]));
-  }
-  if (const std::uint64_t n = last(WindowOutcome::kGated, i)) {
-    clause(windowsCount(n) +
-           format(" gated: the last one's normalised innovation squared %.3g, above ~gate = %g",
-                  p.value[i], p.limit[i]));
-  }
-}
-
-}  // namespace
-
 SteadyStretch Calibrator::openStretch() const {
   SteadyStretch s;
   if (!window_.open || window_.n == 0) return s;
@@ -863,82 +764,12 @@ SteadyStretch Calibrator::openStretch() const {
   return s;
 }
 
-void Calibrator::noteStretch() { keep(progress_, openStretch(), config_.baseline_torque); }
+void Calibrator::noteStretch() { report_.noteStretch(openStretch()); }
 
-CalibrationProgress Calibrator::progress() const {
-  CalibrationProgress p = progress_;
-  keep(p, openStretch(), config_.baseline_torque);
-  return p;
-}
+CalibrationProgress Calibrator::progress() const { return report_.progress(openStretch()); }
 
 std::string Calibrator::waitingReason() const {
-  if (estimate_.updates > 0) return {};
-  if (estimate_.modal_updates > 0) {
-    // The natural frequencies have calibrated the bearings; the encoder windows, which the mesh
-    // scale and T_p need, still wait.
-    return format(estimate_.modal_updates == 1
-                      ? "%llu record of natural frequencies updated the calibration, the "
-                        "encoders' TE not yet: "
-                      : "%llu records of natural frequencies updated the calibration, the "
-                        "encoders' TE not yet: ",
-                  static_cast<unsigned long long>(estimate_.modal_updates)) +
-           teWaitingReason();
-  }
-  return teWaitingReason();
-}
-
-std::string Calibrator::teWaitingReason() const {
-  const CalibrationProgress p = progress();
-  if (p.readings == 0) return "no encoder reading with the gear angle has reached the calibration";
-  const double tb = config_.baseline_torque;
-  // A stretch against the window it fell short of: one gear turn of pinion angle, in seconds at
-  // the stretch's own mean speed.
-  auto shortOf = [&](const SteadyStretch& s, const char* which) {
-    std::string out = format(
-        "the longest steady %storque (%.3g N*m) lasted %.2f s, %.2f of a gear turn, and a window "
-        "needs one gear turn",
-        which, s.torque, s.duration, s.angle / p.window_angle);
-    const double rpm = std::abs(s.speed) * 60.0 / kTwoPi;
-    out += rpm > 0.0 ? format(", %.2f s at %.4g rpm", p.windowSeconds(s.speed), rpm)
-                     : std::string(", and the pinion stood still");
-    return out;
-  };
-  const std::string no_unloaded = format(
-      "no torque was held at |T| <= ~baseline_torque = %g N*m for the unloaded baseline (the "
-      "smallest: %.3g N*m)",
-      tb, p.smallest_torque);
-  if (estimate_.windows == 0) {
-    std::string out =
-        "no window closed: " + shortOf(nearer(p.unloaded, p.loaded) ? p.unloaded : p.loaded, "");
-    if (p.unloaded.readings == 0) out += "; " + no_unloaded;
-    return out;
-  }
-  // Windows closed, none updated: what closed, then why each kind fell short.
-  static const char* const kShort[kWindowOutcomes] = {
-      "none",     "baseline",         "updated",    "gated",          "before any baseline",
-      "too slow", "not quasi-static", "too sparse", "ill-conditioned"};
-  std::string counts;
-  for (int i = 0; i < kWindowOutcomes; ++i) {
-    if (p.closed[i] == 0) continue;
-    counts += format("%s%llu %s", counts.empty() ? "" : ", ",
-                     static_cast<unsigned long long>(p.closed[i]), kShort[i]);
-  }
-  std::string out = "no window updated the calibration (" + windowsCount(estimate_.windows) +
-                    " closed: " + counts + ")";
-  auto clause = [&out](const std::string& text) { out += "; " + text; };
-  const std::uint64_t unloaded_windows = estimate_.windows - p.loaded_windows;
-  if (estimate_.baseline_windows == 0 && unloaded_windows == 0) {
-    clause(p.unloaded.readings > 0
-               ? "no unloaded baseline window: " + shortOf(p.unloaded, "unloaded ")
-               : no_unloaded);
-  }
-  if (p.loaded_windows == 0) {
-    clause(p.loaded.readings > 0
-               ? "no loaded window closed: " + shortOf(p.loaded, "loaded ")
-               : format("no torque above ~baseline_torque = %g N*m was held", tb));
-  }
-  addOutcomeClauses(p, out);
-  return out;
+  return report_.waitingReason(estimate_, openStretch());
 }
 
 }  // namespace drivetrain_stiffness
