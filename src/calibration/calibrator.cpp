@@ -27,11 +27,6 @@ const RigConfig& required(const std::shared_ptr<const RigConfig>& rig) {
   if (!rig) throw std::invalid_argument("Calibrator: no rig");  // a caller's bug, not bad data
   return *rig;
 }
-
-/// [rad] of pinion angle a window spans: one gear turn.
-double gearTurn(const RigConfig& rig) {
-  return kTwoPi * std::max(1.0, static_cast<double>(rig.gears.teeth[1]) / rig.gears.teeth[0]);
-}
 }  // namespace
 
 Calibrator::Calibrator(const RigConfig& rig) : Calibrator(std::make_shared<const RigConfig>(rig)) {}
@@ -41,18 +36,12 @@ Calibrator::Calibrator(std::shared_ptr<const RigConfig> shared_rig,
     : rig_(std::move(shared_rig)),
       config_(required(rig_).calibration),
       model_(*rig_, std::move(mesh)),
-      regression_(rig_->gears.teeth[0], rig_->gears.teeth[1]),
-      report_(gearTurn(*rig_), config_.baseline_torque) {
+      windows_(*rig_, model_),
+      report_(windows_.windowAngle(), config_.baseline_torque) {
   const RigConfig& rig = *rig_;
   if (!config_.present) throw InvalidInput("calibration: the gearbox has no calibration block");
   if (!rig.dynamics.present)
     throw InvalidInput("calibration: needs the gearbox's dynamics block (masses for the modes)");
-  teeth_[0] = rig.gears.teeth[0];
-  teeth_[1] = rig.gears.teeth[1];
-  // Whole turns of both encoders shift x by 2 pi (m r_b,p + n r_b,g); with r_b proportional to z
-  // these form the lattice 2 pi r_b,p gcd(z_p, z_g) / z_p.
-  lattice_ = kTwoPi * model_.baseRadius()[0] * std::gcd(teeth_[0], teeth_[1]) / teeth_[0];
-  gear_turn_ = gearTurn(rig);
   const CalibrationConfig& c = config_;
   CalibrationVector mean;
   mean << c.mesh_stiffness_scale.mean, c.pinion_bearing_scale.mean, c.gear_bearing_scale.mean,
@@ -101,130 +90,40 @@ CalibrationMatrix Calibrator::filterCovariance() const {
 }
 
 void Calibrator::interrupt() {
-  if (window_.open) noteStretch();
-  window_.open = false;
-  filtered_torque_.reset();
+  report_.noteStretch(windows_.openStretch());
+  windows_.interrupt();
 }
 
 int Calibrator::reading(double t, double pinion, double gear, double phase, double speed,
                         double torque, const StiffnessEstimator& supports,
                         MeasuredTeSample& sample) {
   report_.noteReading();
-  // 1. The measured TE, reduced onto the lattice around the first one.
-  const double raw = model_.baseRadius()[0] * pinion + model_.baseRadius()[1] * gear;
-  if (!te_reference_) te_reference_ = raw;
-  const double te = *te_reference_ + std::remainder(raw - *te_reference_, lattice_);
-
-  // 2. The window: closed when it spans a gear turn, dropped when the filtered torque leaves its
-  // band (first-order low-pass, exact for the time step).
-  if (!filtered_torque_ || !(t > last_t_)) {
-    filtered_torque_ = filtered_torque_ ? *filtered_torque_ : torque;
-  } else {
-    *filtered_torque_ += (torque - *filtered_torque_) * -std::expm1(-(t - last_t_) / kTorqueFilter);
-  }
-  last_t_ = t;
-  const double watched = *filtered_torque_;
+  const double te = windows_.measuredTe(pinion, gear);
+  SteadyStretch dropped;
+  const int step = windows_.add(t, pinion, phase, speed, torque, te, supports, model_, dropped);
+  if (step & WindowAccumulator::kDropped) report_.noteStretch(dropped);
   int result = kNothing;
-  if (window_.open && !inBand(watched)) {
-    noteStretch();
-    window_.open = false;
-  }
-  if (!window_.open) {
-    regression_.clear();
-    window_ = Window{};
-    histogram_.clear();
-    window_.open = true;
-    window_.t0 = t;
-    window_.torque0 = watched;
-    window_.angle_min = window_.angle_max = pinion;
-    model_.shaftDeflection(watched, supports, window_.shafts);
-  }
-  if (!model_.nearSwitch(phase, kSwitchGuard)) {
-    histogram_.add(phase);
-    regression_.add(pinion, phase, te);
-  }
-  window_.t1 = t;
-  window_.angle_min = std::min(window_.angle_min, pinion);
-  window_.angle_max = std::max(window_.angle_max, pinion);
-  window_.torque_sum += torque;
-  window_.speed_sum += speed;
-  ++window_.n;
-  if (window_.angle_max - window_.angle_min >= gear_turn_) {
+  if (step & WindowAccumulator::kSpans) {
     closeWindow(supports);
-    window_.open = false;
+    windows_.close();
     result |= kWindow;
   }
-
-  // 3. The processed reading, once a baseline and a fit exist.
-  if (base_count_ > 0 && has_fit_) {
-    double base = base_mean_;
-    for (int k = 0; k < OrderRegression::kMeshHarmonics; ++k) {
-      base += std::real(base_harmonics_[k] * std::polar(1.0, kTwoPi * (k + 1) * phase));
-    }
-    sample.te = te - base - regression_.orders(last_fit_, pinion);
-    // The shafts' deflection: within the window's band, the one at the window's torque scaled to
-    // this reading's (the bearings are smooth over a band); outside it (a step the filter has not
-    // followed yet), the reading's own exact solution.
-    std::array<double, 2> shafts{};
-    if (inBand(torque) && window_.torque0 != 0.0) {
-      const double scale = torque / window_.torque0;
-      shafts = {window_.shafts[0] * scale, window_.shafts[1] * scale};
-    } else {
-      model_.shaftDeflection(torque, supports, shafts);
-    }
-    sample.predicted =
-        model_.at(estimate_.value, phase, torque, shafts, base_torque_, base_shafts_);
-    sample.residual = sample.te - sample.predicted;
-    sample.torque = torque;
-    sample.phase = phase;
+  if (windows_.sample(te, pinion, phase, torque, estimate_.value, supports, model_, sample))
     result |= kSample;
-  }
   return result;
-}
-
-bool Calibrator::inBand(double torque) const {
-  return std::abs(torque - window_.torque0) <=
-         config_.torque_band + 0.01 * std::abs(window_.torque0);
-}
-
-WindowOutcome Calibrator::excitation(double speed, double duration, double& value,
-                                     double& limit) const {
-  const double rpm = std::abs(speed) * 60.0 / kTwoPi;
-  value = rpm;
-  limit = config_.min_speed_rpm;
-  if (rpm < config_.min_speed_rpm) return WindowOutcome::kTooSlow;
-  const double mesh_hz = std::abs(speed) * teeth_[0] / kTwoPi;
-  const double lowest = estimate_.natural_frequency[0];
-  value = mesh_hz;
-  limit = config_.max_mesh_to_natural * lowest;
-  if (lowest > 0.0 && mesh_hz > config_.max_mesh_to_natural * lowest)
-    return WindowOutcome::kNotQuasiStatic;
-  // The second mesh harmonic below 0.45 of the reading rate (Nyquist with a margin).
-  const double rate = duration > 0.0 ? static_cast<double>(window_.n - 1) / duration : 0.0;
-  value = rate;
-  limit = 2.0 * mesh_hz / 0.45;
-  if (!(2.0 * mesh_hz < 0.45 * rate)) return WindowOutcome::kTooSparse;
-  return WindowOutcome::kUpdated;
 }
 
 void Calibrator::closeWindow(const StiffnessEstimator& supports) {
   ++estimate_.windows;
-  const double n = static_cast<double>(window_.n);
-  const double torque = window_.torque_sum / n;
-  const double speed = window_.speed_sum / n;
+  const double torque = windows_.meanTorque();
+  const double speed = windows_.meanSpeed();
   estimate_.window_torque = torque;
   estimate_.window_speed = speed;
   report_.noteWindow(torque);
   if (estimate_.natural_frequency[0] == 0.0)
     outputs(torque, supports);  // the modes, for the first check
-  OrderRegression::Fit fit;
   double value = 0.0, limit = 0.0;
-  WindowOutcome outcome = excitation(speed, window_.t1 - window_.t0, value, limit);
-  if (outcome == WindowOutcome::kUpdated && !regression_.solve(fit)) {
-    outcome = WindowOutcome::kIllConditioned;
-    value = static_cast<double>(regression_.count());
-    limit = 4.0 * regression_.terms();  // OrderRegression::solve's fewest readings
-  }
+  const WindowOutcome outcome = windows_.fit(speed, estimate_.natural_frequency[0], value, limit);
   if (outcome != WindowOutcome::kUpdated) {
     ++estimate_.not_excited;
     estimate_.outcome = outcome;
@@ -232,52 +131,29 @@ void Calibrator::closeWindow(const StiffnessEstimator& supports) {
     report_.noteOutcome(outcome, value, limit);
     return;
   }
-  last_fit_ = fit;
-  has_fit_ = true;
   estimate_.excited = true;
   if (std::abs(torque) <= config_.baseline_torque) {
-    // 3. The baseline: running means of the window fits (equal weights: the windows are alike).
-    const double k = static_cast<double>(++base_count_);
-    base_torque_ += (torque - base_torque_) / k;
-    base_mean_ += (fit.mean - base_mean_) / k;
-    for (int h = 0; h < OrderRegression::kMeshHarmonics; ++h)
-      base_harmonics_[h] += (fit.harmonics[h] - base_harmonics_[h]) / k;
-    // Variance of the running mean: the windows' own variances / k (between-window scatter is
-    // checked by the NIS of the loaded windows).
-    base_mean_var_ += (fit.mean_std * fit.mean_std - base_mean_var_) / k;
-    base_harm_var_ += (fit.harmonic_std * fit.harmonic_std - base_harm_var_) / k;
-    model_.shaftDeflection(base_torque_, supports, base_shafts_);
+    windows_.addBaseline(torque, supports, model_);
     ++estimate_.baseline_windows;
     estimate_.baseline = true;
     estimate_.outcome = WindowOutcome::kBaseline;
     report_.noteOutcome(WindowOutcome::kBaseline, std::abs(torque), config_.baseline_torque);
     return;
   }
-  if (base_count_ == 0) {
+  if (!windows_.hasBaseline()) {
     ++estimate_.not_excited;
     estimate_.outcome = WindowOutcome::kNoBaseline;
     report_.noteOutcome(WindowOutcome::kNoBaseline, std::abs(torque), config_.baseline_torque);
     return;
   }
-  // 4. The features above the baseline, with their standard deviations: the fit's, the baseline's,
-  // the model error and the floor, in quadrature.
   FeatureVector z, z_std;
-  const double kb = static_cast<double>(base_count_);
-  z[0] = fit.mean - base_mean_;
-  z_std[0] = std::sqrt(fit.mean_std * fit.mean_std + base_mean_var_ / kb);
-  for (int h = 0; h < kFeatureHarmonics; ++h) {
-    z[1 + h] = std::abs(fit.harmonics[h] - base_harmonics_[h]);
-    z_std[1 + h] = std::sqrt(fit.harmonic_std * fit.harmonic_std + base_harm_var_ / kb);
-  }
-  model_.shaftDeflection(torque, supports, shafts_);
-  model_.prepare(histogram_, regression_.count(), sampled_);
+  windows_.features(torque, supports, model_, z, z_std);
   update(z, z_std, torque);
   outputs(torque, supports);
 }
 
 FeatureVector Calibrator::predict(const CalibrationVector& state, double torque) const {
-  return model_.sampledFeatures(toParameters(state), torque, shafts_, base_torque_, base_shafts_,
-                                sampled_);
+  return windows_.predictFeatures(model_, toParameters(state), torque);
 }
 
 void Calibrator::jacobian(const CalibrationVector& p, double torque,
@@ -290,7 +166,7 @@ void Calibrator::jacobian(const CalibrationVector& p, double torque,
   H(0, kTeOffset) = state_prior_std_[kTeOffset] > 0.0 ? 1.0 : 0.0;
   for (int s = 0; s < 2; ++s) {
     const int i = s == 0 ? kPinionBearingScale : kGearBearingScale;
-    if (state_prior_std_[i] > 0.0) H(0, i) = shafts_[s] - base_shafts_[s];  // mean TE = ... + u c
+    if (state_prior_std_[i] > 0.0) H(0, i) = windows_.shaftOverBaseline(s);  // mean TE = ... + u c
   }
   for (int i : {kMeshScale, kPreloadTorque}) {
     if (!(state_prior_std_[i] > 0.0)) continue;  // held: no column
@@ -341,7 +217,7 @@ void Calibrator::update(const FeatureVector& z, const FeatureVector& z_std, doub
   // Random walk since the last update (a preload that relaxes, wear): relative to the drawing's
   // spread (the prior's, unless a calibrated gearbox keeps the drawing's as reference_std). Held
   // parameters (prior std 0) do not walk.
-  const double t = window_.t1;
+  const double t = windows_.endTime();
   const CalibrationMatrix Q = processNoise(t);
   const CalibrationMatrix prior = state_covariance_ + Q;
 
@@ -353,7 +229,7 @@ void Calibrator::update(const FeatureVector& z, const FeatureVector& z_std, doub
   Eigen::Matrix<double, kFeatureSize, kFeatureSize> R =
       Eigen::Matrix<double, kFeatureSize, kFeatureSize>::Zero();
   const FeatureVector h0 = predict(state_, torque);
-  const double repeats = static_cast<double>(countAtOperatingPoint(torque));
+  const double repeats = static_cast<double>(windows_.countAtOperatingPoint(torque));
   FeatureVector noise, model_variance;
   for (int i = 0; i < kFeatureSize; ++i) {
     const double model = config_.model_error * std::abs(h0[i]);
@@ -599,20 +475,6 @@ WindowOutcome Calibrator::modalUpdate(double t, const ModalFrequency* frequencie
   return WindowOutcome::kUpdated;
 }
 
-std::uint32_t Calibrator::countAtOperatingPoint(double torque) {
-  const long key = std::lround(torque / (2.0 * config_.torque_band));
-  int i = 0;
-  while (i < bins_used_ && bin_key_[i] != key) ++i;
-  if (i == bins_used_) {
-    if (bins_used_ < kBins) {
-      bin_key_[bins_used_++] = key;
-    } else {
-      i = kBins - 1;
-    }
-  }
-  return ++bin_count_[i];
-}
-
 template <typename F>
 double Calibrator::spreadOf(F&& f, std::uint32_t depends_on) const {
   // A scalar output's standard deviation by linearisation: sqrt(g' P g), g by central differences.
@@ -752,24 +614,12 @@ void Calibrator::outputs(double torque, const StiffnessEstimator& supports) {
   e.knee_torque = model_.kneeTorque(theta);
 }
 
-SteadyStretch Calibrator::openStretch() const {
-  SteadyStretch s;
-  if (!window_.open || window_.n == 0) return s;
-  const double n = static_cast<double>(window_.n);
-  s.readings = window_.n;
-  s.duration = window_.t1 - window_.t0;
-  s.angle = window_.angle_max - window_.angle_min;
-  s.torque = window_.torque_sum / n;
-  s.speed = window_.speed_sum / n;
-  return s;
+CalibrationProgress Calibrator::progress() const {
+  return report_.progress(windows_.openStretch());
 }
 
-void Calibrator::noteStretch() { report_.noteStretch(openStretch()); }
-
-CalibrationProgress Calibrator::progress() const { return report_.progress(openStretch()); }
-
 std::string Calibrator::waitingReason() const {
-  return report_.waitingReason(estimate_, openStretch());
+  return report_.waitingReason(estimate_, windows_.openStretch());
 }
 
 }  // namespace drivetrain_stiffness

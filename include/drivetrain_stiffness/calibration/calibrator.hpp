@@ -15,6 +15,7 @@
 #include "drivetrain_stiffness/calibration/model_error_scale.hpp"
 #include "drivetrain_stiffness/calibration/order_regression.hpp"
 #include "drivetrain_stiffness/calibration/static_te_model.hpp"
+#include "drivetrain_stiffness/calibration/window_accumulator.hpp"
 #include "drivetrain_stiffness/core/modal_analysis.hpp"
 #include "drivetrain_stiffness/core/rig_config.hpp"
 
@@ -32,13 +33,6 @@ struct CalibrationBands {
       bearing_stiffness_high{};  ///< [N/m] per shaft
   std::array<double, 3> natural_frequency{}, natural_frequency_low{},
       natural_frequency_high{};  ///< [Hz]
-};
-
-/// One reading's measured TE without baseline and shaft orders, and the model's prediction [m].
-struct MeasuredTeSample {
-  double te = 0.0, predicted = 0.0, residual = 0.0;
-  double torque = 0.0;  ///< [N·m] held
-  double phase = 0.0;   ///< [-] mesh phase
 };
 
 /// An identified natural frequency matched to the model's mode `mode` (0..2, modalAnalysis's order,
@@ -96,12 +90,8 @@ class Calibrator {
   CalibrationBands bands(double torque, const StiffnessEstimator& supports, bool with_modes) const;
 
  private:
+  /// The spanning window's outcome, and the baseline or the update it makes.
   void closeWindow(const StiffnessEstimator& supports);
-  /// The excitation rule; sets the number that decided it and its limit.
-  WindowOutcome excitation(double speed, double duration, double& value, double& limit) const;
-  /// Keeps the open window's stretch in the report.
-  void noteStretch();
-  SteadyStretch openStretch() const;
   void update(const FeatureVector& z, const FeatureVector& z_std, double torque);
   /// The features' Jacobian at state p and torque [N·m]: closed-form columns for the offset and the
   /// bearing compliances, central differences for the mesh scale and T_p; held parameters 0.
@@ -116,8 +106,6 @@ class Calibrator {
   static void bound(CalibrationVector& state);
   /// The random walk since the last update at t [s] (docs/calibration.md "3. The estimator").
   CalibrationMatrix processNoise(double t) const;
-  /// Within ~torque_band plus 1 % of the window's first torque.
-  bool inBand(double torque) const;
   void outputs(double torque, const StiffnessEstimator& supports);
   /// sqrt(g' P g), g the central-difference gradient of f over the parameters set in depends_on.
   template <typename F>
@@ -134,10 +122,7 @@ class Calibrator {
   std::shared_ptr<const RigConfig> rig_;
   const CalibrationConfig& config_;  ///< rig_->calibration
   StaticTeModel model_;
-  OrderRegression regression_;
-  int teeth_[2] = {0, 0};
-  double lattice_ = 0.0;    ///< [m] the TE's ambiguity from the encoders' whole turns
-  double gear_turn_ = 0.0;  ///< [rad] of pinion angle a window spans
+  WindowAccumulator windows_;
 
   /// The filter's state: each bearing scale s as its compliance factor c = 1/s (docs/calibration.md
   /// "3. The estimator").
@@ -153,48 +138,10 @@ class Calibrator {
   static CalibrationMatrix parameterJacobian(const CalibrationVector& state);
   CalibrationEstimate estimate_;
   CalibrationReport report_;
-  /// Accepted windows per torque bin 2 ~torque_band wide (docs/calibration.md "3. The
-  /// estimator"); past kBins the last bin is shared.
-  static constexpr int kBins = 256;
-  std::array<long, kBins> bin_key_{};
-  std::array<std::uint32_t, kBins> bin_count_{};
-  int bins_used_ = 0;
-  std::uint32_t countAtOperatingPoint(double torque);
   /// Records that carried each mode's frequency (docs/calibration.md "Natural frequencies").
   std::array<std::uint32_t, 3> modal_count_{};
   double last_update_t_ = 0.0;
   bool has_update_t_ = false;
-
-  /// The open window.
-  struct Window {
-    bool open = false;
-    double t0 = 0.0, t1 = 0.0, torque0 = 0.0, angle_min = 0.0, angle_max = 0.0;
-    std::array<double, 2> shafts{};  ///< [m] shaft deflections at torque0
-    double torque_sum = 0.0, speed_sum = 0.0;
-    long n = 0;
-  } window_;
-  std::optional<double> te_reference_;  ///< the first TE, around which later ones are reduced
-  /// The window rule's low-pass time constant on the held torque (docs/calibration.md "1. Measured
-  /// TE").
-  static constexpr double kTorqueFilter = 0.02;  ///< [s]
-  std::optional<double> filtered_torque_;
-  double last_t_ = 0.0;
-  StaticTeModel::PhaseHistogram histogram_{};  ///< the open window's sampled mesh phases
-  StaticTeModel::SampledPhases sampled_;       ///< the closed window's, prepared for the model
-  /// [mesh periods] readings this near a switching phase stay out of the fit (docs/calibration.md
-  /// "1. Measured TE").
-  static constexpr double kSwitchGuard = 2e-3;
-
-  /// The baseline: running means over the baseline windows.
-  double base_torque_ = 0.0, base_mean_ = 0.0, base_mean_var_ = 0.0, base_harm_var_ = 0.0;
-  std::array<std::complex<double>, OrderRegression::kMeshHarmonics> base_harmonics_{};
-  std::uint64_t base_count_ = 0;
-  std::array<double, 2> base_shafts_{};
-
-  /// The last fit, whose orders later readings lose, and the shafts' deflection.
-  OrderRegression::Fit last_fit_;
-  bool has_fit_ = false;
-  std::array<double, 2> shafts_{};  ///< [m] at the last loaded window's mean torque
   std::array<double, 2> scratch_{};
 };
 
