@@ -6,11 +6,10 @@
 
 #include <array>
 #include <cstdint>
-#include <limits>
 #include <memory>
-#include <optional>
 #include <string>
 
+#include "drivetrain_stiffness/calibration/calibration_estimator.hpp"
 #include "drivetrain_stiffness/calibration/calibration_report.hpp"
 #include "drivetrain_stiffness/calibration/model_error_scale.hpp"
 #include "drivetrain_stiffness/calibration/order_regression.hpp"
@@ -60,15 +59,14 @@ class Calibrator {
               const StiffnessEstimator& supports, MeasuredTeSample& sample);
   /// The readings broke off: drops the open window.
   void interrupt();
-  const CalibrationEstimate& estimate() const { return estimate_; }
+  const CalibrationEstimate& estimate() const { return estimate_; }  ///< the last update's state
   /// What the calibration has seen, the open window as a stretch. Allocation-free.
   CalibrationProgress progress() const;
   /// One record's identified frequencies at pinion torque [N·m], t [s] the record's end: one
-  /// update of the same state as the TE windows (no baseline needed); each `mode` indexes modes()
-  /// at the current estimate. Returns kUpdated, kGated (NIS over the gate), or kNone (no usable
-  /// frequency). Throws InvalidInput naming a mode out of range or given twice, a frequency or std
-  /// that is not positive and finite, more than 3 frequencies, or a non-finite t or torque.
-  /// Allocation-free.
+  /// update of the TE windows' state (no baseline needed); each `mode` indexes modes() at the
+  /// estimate. Returns kUpdated, kGated (NIS over the gate), or kNone (no usable frequency). Throws
+  /// InvalidInput naming a mode out of range or given twice, a frequency or std that is not
+  /// positive and finite, more than 3 frequencies, or a non-finite t or torque. Allocation-free.
   WindowOutcome modalUpdate(double t, const ModalFrequency* frequencies, std::size_t count,
                             double torque, const StiffnessEstimator& supports);
   /// The calibrated model's three modes (with shapes) at pinion torque [N·m]: modalAnalysis of the
@@ -79,12 +77,13 @@ class Calibrator {
   /// "When no window updates"), led by the count of records of natural frequencies that did; empty
   /// once a window has. Allocates.
   std::string waitingReason() const;
-  const RigConfig& rig() const { return *rig_; }
-  const StaticTeModel& model() const { return model_; }
-  const CalibrationVector& parameters() const { return estimate_.value; }
+  const RigConfig& rig() const { return *rig_; }         ///< the calibrated rig
+  const StaticTeModel& model() const { return model_; }  ///< the windows' TE model
+  const CalibrationVector& parameters() const { return estimate_.value; }  ///< the estimate's value
+  /// The parameters' reported covariance (under the model error the windows show).
   const CalibrationMatrix& covariance() const { return covariance_; }
   /// The filter's own covariance, under the configured model-error allowance.
-  CalibrationMatrix filterCovariance() const;
+  CalibrationMatrix filterCovariance() const { return estimator_.filterCovariance(); }
   /// The calibrated stiffness at pinion torque [N·m] and, `with_modes`, the natural frequencies.
   /// Allocation-free.
   CalibrationBands bands(double torque, const StiffnessEstimator& supports, bool with_modes) const;
@@ -92,56 +91,22 @@ class Calibrator {
  private:
   /// The spanning window's outcome, and the baseline or the update it makes.
   void closeWindow(const StiffnessEstimator& supports);
+  /// The filter's update by the closed window's features z (std z_std) at torque [N·m].
   void update(const FeatureVector& z, const FeatureVector& z_std, double torque);
-  /// The features' Jacobian at state p and torque [N·m]: closed-form columns for the offset and the
-  /// bearing compliances, central differences for the mesh scale and T_p; held parameters 0.
-  void jacobian(const CalibrationVector& p, double torque, ModelErrorScale::FeatureRows& H) const;
-  /// The iterated EKF's posterior mode from state_ (at most four relinearisations); H and K are
-  /// those of the last iteration.
-  CalibrationVector iteratedUpdate(const CalibrationMatrix& prior,
-                                   const Eigen::Matrix<double, kFeatureSize, kFeatureSize>& R,
-                                   const FeatureVector& z, double torque,
-                                   ModelErrorScale::FeatureRows& H, ModelErrorScale::Gain& K) const;
-  /// Clamps a state to the physical bounds: scales in [0.05, 19.9], T_p >= 0.
-  static void bound(CalibrationVector& state);
-  /// The random walk since the last update at t [s] (docs/calibration.md "3. The estimator").
-  CalibrationMatrix processNoise(double t) const;
+  /// The estimate's parameters, covariance, stiffness and modes at torque [N·m] from the filter.
   void outputs(double torque, const StiffnessEstimator& supports);
   /// sqrt(g' P g), g the central-difference gradient of f over the parameters set in depends_on.
   template <typename F>
   double spreadOf(F&& f, std::uint32_t depends_on = ~0u) const;
-  FeatureVector predict(const CalibrationVector& p, double torque) const;
-  /// Each shaft's bearing stiffness at scale 1 [N/m]: the supports' radial stiffness at their
-  /// current load over their configured stiffness_scale.
-  std::array<double, 2> unitBearingStiffness(const StiffnessEstimator& supports) const;
-  /// The model's modes at parameters p, pinion torque [N·m] and unit bearing stiffness [N/m].
-  std::array<Mode, 3> modesAt(const CalibrationVector& p, double torque,
-                              const std::array<double, 2>& unit,
-                              const StiffnessEstimator& supports) const;
 
   std::shared_ptr<const RigConfig> rig_;
   const CalibrationConfig& config_;  ///< rig_->calibration
   StaticTeModel model_;
   WindowAccumulator windows_;
-
-  /// The filter's state: each bearing scale s as its compliance factor c = 1/s (docs/calibration.md
-  /// "3. The estimator").
-  CalibrationVector state_ = CalibrationVector::Zero(),
-                    state_prior_std_ = CalibrationVector::Zero();
-  /// The drawing's spread in the state's coordinates.
-  CalibrationVector state_reference_std_ = CalibrationVector::Zero();
-  CalibrationMatrix state_covariance_ = CalibrationMatrix::Zero();
-  CalibrationMatrix covariance_ = CalibrationMatrix::Zero();  ///< of the parameters
-  ModelErrorScale model_error_;
-  /// State to parameters (c -> 1/c), and that map's Jacobian.
-  static CalibrationVector toParameters(const CalibrationVector& state);
-  static CalibrationMatrix parameterJacobian(const CalibrationVector& state);
-  CalibrationEstimate estimate_;
+  CalibrationEstimator estimator_;
   CalibrationReport report_;
-  /// Records that carried each mode's frequency (docs/calibration.md "Natural frequencies").
-  std::array<std::uint32_t, 3> modal_count_{};
-  double last_update_t_ = 0.0;
-  bool has_update_t_ = false;
+  CalibrationEstimate estimate_;
+  CalibrationMatrix covariance_ = CalibrationMatrix::Zero();  ///< of the parameters
   std::array<double, 2> scratch_{};
 };
 
