@@ -2,8 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
-#include <numeric>
 #include <stdexcept>
 #include <utility>
 
@@ -18,34 +16,61 @@
 
 namespace drivetrain_stiffness {
 
-const char* toString(WindowOutcome outcome) {
-  switch (outcome) {
-    case WindowOutcome::kNone: return "none";
-    case WindowOutcome::kBaseline: return "baseline";
-    case WindowOutcome::kUpdated: return "updated";
-    case WindowOutcome::kGated: return "gated (normalised innovation above ~gate)";
-    case WindowOutcome::kNoBaseline:
-      return "no baseline yet (needs a window at |torque| <= ~baseline_torque)";
-    case WindowOutcome::kTooSlow: return "not excited: slower than ~min_speed_rpm";
-    case WindowOutcome::kNotQuasiStatic:
-      return "not excited: mesh frequency above ~max_mesh_to_natural of the lowest mode";
-    case WindowOutcome::kTooSparse:
-      return "not excited: too few readings per mesh period for the second harmonic";
-    case WindowOutcome::kIllConditioned:
-      return "not excited: the readings do not determine the shaft orders";
-  }
-  return "?";
-}
-
 namespace {
+
 constexpr double k95 = 1.959963984540054;  // two-sided 95 % of the normal distribution
-}  // namespace
 
-namespace {
 const RigConfig& required(const std::shared_ptr<const RigConfig>& rig) {
   if (!rig) throw std::invalid_argument("Calibrator: no rig");  // a caller's bug, not bad data
   return *rig;
 }
+
+/// The calibration block's prior means.
+CalibrationVector priorMean(const CalibrationConfig& c) {
+  CalibrationVector mean;
+  mean << c.mesh_stiffness_scale.mean, c.pinion_bearing_scale.mean, c.gear_bearing_scale.mean,
+      c.preload_torque.mean, c.te_offset.mean;
+  return mean;
+}
+
+/// The calibration block's prior std, or (`reference`) the drawing's spread; T_p is held on a rig
+/// without a scissor spring.
+CalibrationVector priorStd(const RigConfig& rig, bool reference) {
+  const CalibrationConfig& c = rig.calibration;
+  CalibrationVector std;
+  if (reference) {
+    std << c.mesh_stiffness_scale.reference(), c.pinion_bearing_scale.reference(),
+        c.gear_bearing_scale.reference(), c.preload_torque.reference(), c.te_offset.reference();
+  } else {
+    std << c.mesh_stiffness_scale.std, c.pinion_bearing_scale.std, c.gear_bearing_scale.std,
+        c.preload_torque.std, c.te_offset.std;
+  }
+  if (!(rig.anti_backlash.spring_stiffness > 0.0)) std[kPreloadTorque] = 0.0;  // no scissor spring
+  return std;
+}
+
+/// Each shaft's bearing stiffness at scale 1 [N/m]: the supports' radial stiffness at their
+/// current load over their configured stiffness_scale.
+std::array<double, 2> unitBearingStiffness(const RigConfig& rig,
+                                           const StiffnessEstimator& supports) {
+  std::array<double, 2> unit{0.0, 0.0};
+  for (std::size_t i = 0; i < rig.bearings.size(); ++i) {
+    const SupportEstimate& s = supports.current().supports[i];
+    unit[rig.bearings[i].shaft] +=
+        s.solution.radialStiffness() / supports.supportConfig(i).stiffness_scale;
+  }
+  return unit;
+}
+
+/// The model's modes at parameters p, pinion torque [N·m] and unit bearing stiffness [N/m].
+std::array<Mode, 3> modesAt(const RigConfig& rig, const StaticTeModel& model,
+                            const CalibrationVector& p, double torque,
+                            const std::array<double, 2>& unit, const StiffnessEstimator& supports) {
+  const std::array<double, 2> kb{p[kPinionBearingScale] * unit[0], p[kGearBearingScale] * unit[1]};
+  return modalAnalysis(rigRotorParameters(rig, supports.mesh(), kb),
+                       model.meanMeshStiffness(p, torque));
+}
+
 }  // namespace
 
 Calibrator::Calibrator(const RigConfig& rig) : Calibrator(std::make_shared<const RigConfig>(rig)) {}
@@ -55,379 +80,154 @@ Calibrator::Calibrator(std::shared_ptr<const RigConfig> shared_rig,
     : rig_(std::move(shared_rig)),
       config_(required(rig_).calibration),
       model_(*rig_, std::move(mesh)),
-      regression_(rig_->gears.teeth[0], rig_->gears.teeth[1]) {
+      windows_(*rig_, model_),
+      estimator_(config_, priorMean(config_), priorStd(*rig_, false), priorStd(*rig_, true)),
+      report_(windows_.windowAngle(), config_.baseline_torque) {
   const RigConfig& rig = *rig_;
   if (!config_.present) throw InvalidInput("calibration: the gearbox has no calibration block");
   if (!rig.dynamics.present)
     throw InvalidInput("calibration: needs the gearbox's dynamics block (masses for the modes)");
-  teeth_[0] = rig.gears.teeth[0];
-  teeth_[1] = rig.gears.teeth[1];
-  // Whole turns of both encoders shift x by 2 pi (m r_b,p + n r_b,g); with r_b proportional to z
-  // these form the lattice 2 pi r_b,p gcd(z_p, z_g) / z_p.
-  lattice_ = kTwoPi * model_.baseRadius()[0] * std::gcd(teeth_[0], teeth_[1]) / teeth_[0];
-  gear_turn_ = kTwoPi * std::max(1.0, static_cast<double>(teeth_[1]) / teeth_[0]);
-  progress_.window_angle = gear_turn_;
-  const CalibrationConfig& c = config_;
-  CalibrationVector mean;
-  mean << c.mesh_stiffness_scale.mean, c.pinion_bearing_scale.mean, c.gear_bearing_scale.mean,
-      c.preload_torque.mean, c.te_offset.mean;
-  estimate_.prior_std << c.mesh_stiffness_scale.std, c.pinion_bearing_scale.std,
-      c.gear_bearing_scale.std, c.preload_torque.std, c.te_offset.std;
-  CalibrationVector reference;
-  reference << c.mesh_stiffness_scale.reference(), c.pinion_bearing_scale.reference(),
-      c.gear_bearing_scale.reference(), c.preload_torque.reference(), c.te_offset.reference();
-  if (!(rig.anti_backlash.spring_stiffness > 0.0)) {  // no scissor spring
-    estimate_.prior_std[kPreloadTorque] = 0.0;
-    reference[kPreloadTorque] = 0.0;
-  }
-  // The prior in the state's coordinates: c = 1/s, std(c) = std(s) / s^2 (first order).
-  state_ = mean;
-  state_prior_std_ = estimate_.prior_std;
-  state_reference_std_ = reference;
-  for (int i : {kPinionBearingScale, kGearBearingScale}) {
-    state_[i] = 1.0 / mean[i];
-    state_prior_std_[i] = estimate_.prior_std[i] / (mean[i] * mean[i]);
-    state_reference_std_[i] = reference[i] / (mean[i] * mean[i]);
-  }
-  state_covariance_ = state_prior_std_.cwiseAbs2().asDiagonal();
-  model_error_.reset(state_covariance_);
+  estimate_.prior_std = priorStd(rig, false);
   covariance_ = estimate_.prior_std.cwiseAbs2().asDiagonal();
-  estimate_.value = mean;
+  estimate_.value = priorMean(config_);
   estimate_.std = estimate_.prior_std;
 }
 
-CalibrationVector Calibrator::toParameters(const CalibrationVector& state) {
-  CalibrationVector p = state;
-  p[kPinionBearingScale] = 1.0 / state[kPinionBearingScale];
-  p[kGearBearingScale] = 1.0 / state[kGearBearingScale];
-  return p;
-}
-
-CalibrationMatrix Calibrator::parameterJacobian(const CalibrationVector& state) {
-  CalibrationMatrix J = CalibrationMatrix::Identity();
-  for (int i : {kPinionBearingScale, kGearBearingScale}) J(i, i) = -1.0 / (state[i] * state[i]);
-  return J;
-}
-
-CalibrationMatrix Calibrator::filterCovariance() const {
-  const CalibrationMatrix J = parameterJacobian(state_);
-  return J * state_covariance_ * J.transpose();
-}
-
 void Calibrator::interrupt() {
-  if (window_.open) noteStretch();
-  window_.open = false;
-  filtered_torque_.reset();
+  report_.noteStretch(windows_.openStretch());
+  windows_.interrupt();
 }
 
 int Calibrator::reading(double t, double pinion, double gear, double phase, double speed,
                         double torque, const StiffnessEstimator& supports,
                         MeasuredTeSample& sample) {
-  ++progress_.readings;
-  // 1. The measured TE, reduced onto the lattice around the first one.
-  const double raw = model_.baseRadius()[0] * pinion + model_.baseRadius()[1] * gear;
-  if (!te_reference_) te_reference_ = raw;
-  const double te = *te_reference_ + std::remainder(raw - *te_reference_, lattice_);
-
-  // 2. The window: closed when it spans a gear turn, dropped when the filtered torque leaves its
-  // band (first-order low-pass, exact for the time step).
-  if (!filtered_torque_ || !(t > last_t_)) {
-    filtered_torque_ = filtered_torque_ ? *filtered_torque_ : torque;
-  } else {
-    *filtered_torque_ += (torque - *filtered_torque_) * -std::expm1(-(t - last_t_) / kTorqueFilter);
-  }
-  last_t_ = t;
-  const double watched = *filtered_torque_;
+  report_.noteReading();
+  const double te = windows_.measuredTe(pinion, gear);
+  SteadyStretch dropped;
+  const int step = windows_.add(t, pinion, phase, speed, torque, te, supports, model_, dropped);
+  if (step & WindowAccumulator::kDropped) report_.noteStretch(dropped);
   int result = kNothing;
-  if (window_.open && !inBand(watched)) {
-    noteStretch();
-    window_.open = false;
-  }
-  if (!window_.open) {
-    regression_.clear();
-    window_ = Window{};
-    histogram_.clear();
-    window_.open = true;
-    window_.t0 = t;
-    window_.torque0 = watched;
-    window_.angle_min = window_.angle_max = pinion;
-    model_.shaftDeflection(watched, supports, window_.shafts);
-  }
-  if (!model_.nearSwitch(phase, kSwitchGuard)) {
-    histogram_.add(phase);
-    regression_.add(pinion, phase, te);
-  }
-  window_.t1 = t;
-  window_.angle_min = std::min(window_.angle_min, pinion);
-  window_.angle_max = std::max(window_.angle_max, pinion);
-  window_.torque_sum += torque;
-  window_.speed_sum += speed;
-  ++window_.n;
-  if (window_.angle_max - window_.angle_min >= gear_turn_) {
+  if (step & WindowAccumulator::kSpans) {
     closeWindow(supports);
-    window_.open = false;
+    windows_.close();
     result |= kWindow;
   }
-
-  // 3. The processed reading, once a baseline and a fit exist.
-  if (base_count_ > 0 && has_fit_) {
-    double base = base_mean_;
-    for (int k = 0; k < OrderRegression::kMeshHarmonics; ++k) {
-      base += std::real(base_harmonics_[k] * std::polar(1.0, kTwoPi * (k + 1) * phase));
-    }
-    sample.te = te - base - regression_.orders(last_fit_, pinion);
-    // The shafts' deflection: within the window's band, the one at the window's torque scaled to
-    // this reading's (the bearings are smooth over a band); outside it (a step the filter has not
-    // followed yet), the reading's own exact solution.
-    std::array<double, 2> shafts{};
-    if (inBand(torque) && window_.torque0 != 0.0) {
-      const double scale = torque / window_.torque0;
-      shafts = {window_.shafts[0] * scale, window_.shafts[1] * scale};
-    } else {
-      model_.shaftDeflection(torque, supports, shafts);
-    }
-    sample.predicted =
-        model_.at(estimate_.value, phase, torque, shafts, base_torque_, base_shafts_);
-    sample.residual = sample.te - sample.predicted;
-    sample.torque = torque;
-    sample.phase = phase;
+  if (windows_.sample(te, pinion, phase, torque, estimate_.value, supports, model_, sample))
     result |= kSample;
-  }
   return result;
-}
-
-bool Calibrator::inBand(double torque) const {
-  return std::abs(torque - window_.torque0) <=
-         config_.torque_band + 0.01 * std::abs(window_.torque0);
-}
-
-WindowOutcome Calibrator::excitation(double speed, double duration, double& value,
-                                     double& limit) const {
-  const double rpm = std::abs(speed) * 60.0 / kTwoPi;
-  value = rpm;
-  limit = config_.min_speed_rpm;
-  if (rpm < config_.min_speed_rpm) return WindowOutcome::kTooSlow;
-  const double mesh_hz = std::abs(speed) * teeth_[0] / kTwoPi;
-  const double lowest = estimate_.natural_frequency[0];
-  value = mesh_hz;
-  limit = config_.max_mesh_to_natural * lowest;
-  if (lowest > 0.0 && mesh_hz > config_.max_mesh_to_natural * lowest)
-    return WindowOutcome::kNotQuasiStatic;
-  // The second mesh harmonic below 0.45 of the reading rate (Nyquist with a margin).
-  const double rate = duration > 0.0 ? static_cast<double>(window_.n - 1) / duration : 0.0;
-  value = rate;
-  limit = 2.0 * mesh_hz / 0.45;
-  if (!(2.0 * mesh_hz < 0.45 * rate)) return WindowOutcome::kTooSparse;
-  return WindowOutcome::kUpdated;
-}
-
-void Calibrator::noteOutcome(WindowOutcome outcome, double value, double limit) {
-  const auto i = static_cast<std::size_t>(outcome);
-  ++progress_.closed[i];
-  progress_.value[i] = value;
-  progress_.limit[i] = limit;
 }
 
 void Calibrator::closeWindow(const StiffnessEstimator& supports) {
   ++estimate_.windows;
-  const double n = static_cast<double>(window_.n);
-  const double torque = window_.torque_sum / n;
-  const double speed = window_.speed_sum / n;
+  const double torque = windows_.meanTorque();
+  const double speed = windows_.meanSpeed();
   estimate_.window_torque = torque;
   estimate_.window_speed = speed;
-  progress_.smallest_torque = std::min(progress_.smallest_torque, std::abs(torque));
-  if (std::abs(torque) > config_.baseline_torque) ++progress_.loaded_windows;
+  report_.noteWindow(torque);
   if (estimate_.natural_frequency[0] == 0.0)
     outputs(torque, supports);  // the modes, for the first check
-  OrderRegression::Fit fit;
   double value = 0.0, limit = 0.0;
-  WindowOutcome outcome = excitation(speed, window_.t1 - window_.t0, value, limit);
-  if (outcome == WindowOutcome::kUpdated && !regression_.solve(fit)) {
-    outcome = WindowOutcome::kIllConditioned;
-    value = static_cast<double>(regression_.count());
-    limit = 4.0 * regression_.terms();  // OrderRegression::solve's fewest readings
-  }
+  const WindowOutcome outcome = windows_.fit(speed, estimate_.natural_frequency[0], value, limit);
   if (outcome != WindowOutcome::kUpdated) {
     ++estimate_.not_excited;
     estimate_.outcome = outcome;
     estimate_.excited = false;
-    noteOutcome(outcome, value, limit);
+    report_.noteOutcome(outcome, value, limit);
     return;
   }
-  last_fit_ = fit;
-  has_fit_ = true;
   estimate_.excited = true;
   if (std::abs(torque) <= config_.baseline_torque) {
-    // 3. The baseline: running means of the window fits (equal weights: the windows are alike).
-    const double k = static_cast<double>(++base_count_);
-    base_torque_ += (torque - base_torque_) / k;
-    base_mean_ += (fit.mean - base_mean_) / k;
-    for (int h = 0; h < OrderRegression::kMeshHarmonics; ++h)
-      base_harmonics_[h] += (fit.harmonics[h] - base_harmonics_[h]) / k;
-    // Variance of the running mean: the windows' own variances / k (between-window scatter is
-    // checked by the NIS of the loaded windows).
-    base_mean_var_ += (fit.mean_std * fit.mean_std - base_mean_var_) / k;
-    base_harm_var_ += (fit.harmonic_std * fit.harmonic_std - base_harm_var_) / k;
-    model_.shaftDeflection(base_torque_, supports, base_shafts_);
+    windows_.addBaseline(torque, supports, model_);
     ++estimate_.baseline_windows;
     estimate_.baseline = true;
     estimate_.outcome = WindowOutcome::kBaseline;
-    noteOutcome(WindowOutcome::kBaseline, std::abs(torque), config_.baseline_torque);
+    report_.noteOutcome(WindowOutcome::kBaseline, std::abs(torque), config_.baseline_torque);
     return;
   }
-  if (base_count_ == 0) {
+  if (!windows_.hasBaseline()) {
     ++estimate_.not_excited;
     estimate_.outcome = WindowOutcome::kNoBaseline;
-    noteOutcome(WindowOutcome::kNoBaseline, std::abs(torque), config_.baseline_torque);
+    report_.noteOutcome(WindowOutcome::kNoBaseline, std::abs(torque), config_.baseline_torque);
     return;
   }
-  // 4. The features above the baseline, with their standard deviations: the fit's, the baseline's,
-  // the model error and the floor, in quadrature.
   FeatureVector z, z_std;
-  const double kb = static_cast<double>(base_count_);
-  z[0] = fit.mean - base_mean_;
-  z_std[0] = std::sqrt(fit.mean_std * fit.mean_std + base_mean_var_ / kb);
-  for (int h = 0; h < kFeatureHarmonics; ++h) {
-    z[1 + h] = std::abs(fit.harmonics[h] - base_harmonics_[h]);
-    z_std[1 + h] = std::sqrt(fit.harmonic_std * fit.harmonic_std + base_harm_var_ / kb);
-  }
-  model_.shaftDeflection(torque, supports, shafts_);
-  model_.prepare(histogram_, regression_.count(), sampled_);
+  windows_.features(torque, supports, model_, z, z_std);
   update(z, z_std, torque);
   outputs(torque, supports);
 }
 
-FeatureVector Calibrator::predict(const CalibrationVector& state, double torque) const {
-  return model_.sampledFeatures(toParameters(state), torque, shafts_, base_torque_, base_shafts_,
-                                sampled_);
-}
+namespace {
 
-void Calibrator::jacobian(const CalibrationVector& p, double torque,
-                          ModelErrorScale::FeatureRows& H) const {
-  H.setZero();
-  // Closed-form columns where the features are simple in the parameter: the offset adds to the
-  // mean; a bearing scale s divides its shaft's deflection (d/ds (u/s) = -u/s^2), which is the
-  // same at every phase, so it moves the mean only. The mesh scale and T_p by central
-  // differences.
-  H(0, kTeOffset) = state_prior_std_[kTeOffset] > 0.0 ? 1.0 : 0.0;
-  for (int s = 0; s < 2; ++s) {
-    const int i = s == 0 ? kPinionBearingScale : kGearBearingScale;
-    if (state_prior_std_[i] > 0.0) H(0, i) = shafts_[s] - base_shafts_[s];  // mean TE = ... + u c
+/// A window's TE features as the filter's measurement: the model on the window's sampled phases.
+class TeFeatures final : public StateMeasurement {
+ public:
+  /// The features of the last window `windows` prepared, at torque [N·m].
+  TeFeatures(const WindowAccumulator& windows, const StaticTeModel& model,
+             const CalibrationVector& prior_std, double torque)
+      : windows_(windows), model_(model), prior_std_(prior_std), torque_(torque) {}
+
+  /// The features at a state.
+  MeasurementVector predict(const CalibrationVector& state) const override {
+    return windows_.predictFeatures(model_, CalibrationEstimator::toParameters(state), torque_);
   }
-  for (int i : {kMeshScale, kPreloadTorque}) {
-    if (!(state_prior_std_[i] > 0.0)) continue;  // held: no column
-    const double step = 1e-4 * std::max(state_prior_std_[i], std::abs(p[i]));
-    CalibrationVector a = p, b = p;
-    a[i] += step;
-    b[i] -= step;
-    H.col(i) = (predict(a, torque) - predict(b, torque)) / (2.0 * step);
+
+  /// The features' Jacobian at state p: closed-form columns for the offset and the bearing
+  /// compliances, central differences for the mesh scale and T_p; held parameters 0.
+  void jacobian(const CalibrationVector& p, MeasurementRows& H) const override {
+    H.setZero();
+    // Closed-form columns where the features are simple in the parameter: the offset adds to the
+    // mean; a bearing scale s divides its shaft's deflection (d/ds (u/s) = -u/s^2), which is the
+    // same at every phase, so it moves the mean only. The mesh scale and T_p by central
+    // differences.
+    H(0, kTeOffset) = prior_std_[kTeOffset] > 0.0 ? 1.0 : 0.0;
+    for (int s = 0; s < 2; ++s) {
+      const int i = s == 0 ? kPinionBearingScale : kGearBearingScale;
+      if (prior_std_[i] > 0.0) H(0, i) = windows_.shaftOverBaseline(s);  // mean TE = ... + u c
+    }
+    for (int i : {kMeshScale, kPreloadTorque}) {
+      if (!(prior_std_[i] > 0.0)) continue;  // held: no column
+      const double step = 1e-4 * std::max(prior_std_[i], std::abs(p[i]));
+      CalibrationVector a = p, b = p;
+      a[i] += step;
+      b[i] -= step;
+      H.col(i) = (predict(a) - predict(b)) / (2.0 * step);
+    }
   }
-}
 
-void Calibrator::bound(CalibrationVector& state) {
-  // Physical bounds: scales in [0.05, 20) as the YAML loader's, a preload torque >= 0.
-  state[kMeshScale] = std::clamp(state[kMeshScale], 0.05, 19.9);
-  for (int i : {kPinionBearingScale, kGearBearingScale})
-    state[i] = std::clamp(state[i], 1.0 / 19.9, 1.0 / 0.05);
-  state[kPreloadTorque] = std::max(0.0, state[kPreloadTorque]);
-}
+ private:
+  const WindowAccumulator& windows_;
+  const StaticTeModel& model_;
+  const CalibrationVector& prior_std_;
+  double torque_;
+};
 
-CalibrationVector Calibrator::iteratedUpdate(
-    const CalibrationMatrix& prior, const Eigen::Matrix<double, kFeatureSize, kFeatureSize>& R,
-    const FeatureVector& z, double torque, ModelErrorScale::FeatureRows& H,
-    ModelErrorScale::Gain& K) const {
-  // Iterated EKF (Gauss-Newton on the posterior mode): relinearise at the new estimate.
-  CalibrationVector theta = state_;
-  for (int iteration = 0; iteration < 4; ++iteration) {
-    const FeatureVector h = predict(theta, torque);
-    if (iteration > 0) jacobian(theta, torque, H);
-    const Eigen::Matrix<double, kFeatureSize, kFeatureSize> Si = H * prior * H.transpose() + R;
-    K = prior * H.transpose() * Si.inverse();
-    CalibrationVector next = state_ + K * (z - h - H * (state_ - theta));
-    bound(next);
-    const double moved =
-        ((next - theta).cwiseQuotient(state_prior_std_.cwiseMax(1e-300))).cwiseAbs().maxCoeff();
-    theta = next;
-    if (moved < 1e-6) break;
-  }
-  return theta;
-}
-
-CalibrationMatrix Calibrator::processNoise(double t) const {
-  const double dt = has_update_t_ ? std::max(0.0, t - last_update_t_) : 0.0;
-  const CalibrationVector walk = (state_prior_std_.array() > 0.0).select(state_reference_std_, 0.0);
-  return ((config_.drift * config_.drift * dt) * walk.cwiseAbs2()).asDiagonal();
-}
+}  // namespace
 
 void Calibrator::update(const FeatureVector& z, const FeatureVector& z_std, double torque) {
-  // Random walk since the last update (a preload that relaxes, wear): relative to the drawing's
-  // spread (the prior's, unless a calibrated gearbox keeps the drawing's as reference_std). Held
-  // parameters (prior std 0) do not walk.
-  const double t = window_.t1;
-  const CalibrationMatrix Q = processNoise(t);
-  const CalibrationMatrix prior = state_covariance_ + Q;
-
-  // Measurement noise: the window's own, the relative model error and the floor
-  // (docs/calibration.md). The model error repeats at an operating point: the n-th window there
-  // carries n times its variance, so a long dwell adds no more than one window's worth of model
-  // information. N (the fit's, the baseline's and the floor's variance) and M (the model error)
-  // apart, for model_error_ (model_error_scale.hpp).
-  Eigen::Matrix<double, kFeatureSize, kFeatureSize> R =
-      Eigen::Matrix<double, kFeatureSize, kFeatureSize>::Zero();
-  const FeatureVector h0 = predict(state_, torque);
-  const double repeats = static_cast<double>(countAtOperatingPoint(torque));
-  FeatureVector noise, model_variance;
-  for (int i = 0; i < kFeatureSize; ++i) {
-    const double model = config_.model_error * std::abs(h0[i]);
-    noise[i] = z_std[i] * z_std[i] + config_.te_noise_floor * config_.te_noise_floor;
-    model_variance[i] = repeats * model * model;
-    // Summed window, model, floor in this order, not as noise + model_variance: the order sets
-    // R's last bits and so the calibration outputs' (another order rounds differently).
-    R(i, i) =
-        z_std[i] * z_std[i] + model_variance[i] + config_.te_noise_floor * config_.te_noise_floor;
-  }
-  ModelErrorScale::FeatureRows H;
-  jacobian(state_, torque, H);
-  const FeatureVector innovation = z - h0;
-  const Eigen::Matrix<double, kFeatureSize, kFeatureSize> S = H * prior * H.transpose() + R;
-  const double nis = innovation.dot(S.ldlt().solve(innovation));
-  estimate_.nis = nis;
+  const TeFeatures features(windows_, model_, estimator_.priorStd(), torque);
+  const double repeats = static_cast<double>(windows_.countAtOperatingPoint(torque));
+  FeatureUpdate u;
+  const bool updated =
+      estimator_.updateFeatures(features, z, z_std, windows_.endTime(), repeats, u);
+  estimate_.nis = u.nis;
   estimate_.measured = z;
-  estimate_.feature_std = R.diagonal().cwiseSqrt();
-  if (!(nis <= config_.gate)) {  // also refuses a NaN
+  estimate_.feature_std = u.feature_std;
+  if (!updated) {
     ++estimate_.gated;
     estimate_.outcome = WindowOutcome::kGated;
-    estimate_.predicted = h0;
-    noteOutcome(WindowOutcome::kGated, nis, config_.gate);
+    estimate_.predicted = u.predicted;
+    report_.noteOutcome(WindowOutcome::kGated, u.nis, config_.gate);
     return;
   }
-  model_error_.predict(Q);
-  const FeatureVector variance =
-      model_error_.innovationVariance(H, noise);  // before the update, at the prior's H
-  ModelErrorScale::Gain K;
-  const CalibrationVector theta = iteratedUpdate(prior, R, z, torque, H, K);
-  // Joseph form: stays symmetric positive semi-definite whatever the rounding.
-  const CalibrationMatrix IKH = CalibrationMatrix::Identity() - K * H;
-  state_covariance_ = IKH * prior * IKH.transpose() + K * R * K.transpose();
-  state_covariance_ = 0.5 * (state_covariance_ + state_covariance_.transpose()).eval();
-  model_error_.update(innovation, variance, noise, model_variance, K, H);
-  state_ = theta;
-  last_update_t_ = t;
-  has_update_t_ = true;
   ++estimate_.updates;
   estimate_.outcome = WindowOutcome::kUpdated;
-  noteOutcome(WindowOutcome::kUpdated, nis, config_.gate);
-  estimate_.predicted = predict(state_, torque);
+  report_.noteOutcome(WindowOutcome::kUpdated, u.nis, config_.gate);
+  estimate_.predicted = features.predict(estimator_.state());
 }
 
 // ---- Natural frequencies (docs/calibration.md "Natural frequencies") ----
 
 namespace {
-
-/// Upper 0.1 % points of the chi-square distribution with 1, 2 and 3 degrees of freedom
-/// (NIST/SEMATECH e-Handbook of Statistical Methods, sec. 1.3.6.7.4, "Critical values of the
-/// chi-square distribution", column 0.999).
-constexpr double kChiSquare999[3] = {10.828, 13.816, 16.266};
 
 /// The mass-weighted modal assurance criterion (a'Mb)^2 / (a'Ma b'Mb), M = diag(mass) (Allemang &
 /// Brown 1982, with the mass as the weighting): 1 or 0 between two modes of one model, which are
@@ -455,22 +255,80 @@ std::array<int, 3> followModes(const std::array<Mode, 3>& from, const std::array
   return best;
 }
 
-/// Gauss-Newton relinearisations of one record of natural frequencies at most: near a veering the
-/// cost falls slowly (a record of the validation's rig 44 still lowered it at the sixth) [-].
-constexpr int kModalIterations = 8;
-
 [[noreturn]] void invalidFrequency(std::size_t i, const char* field, double value,
                                    const char* why) {
   throwInvalid("calibration: natural frequencies[" + std::to_string(i) + "]." + field, value, why);
 }
+
+/// A record's natural frequencies as the filter's measurement: the matched modes' natural
+/// frequencies of the model at the record's torque, with the supports' unit stiffness at their
+/// current load (as bands() and modes()); slots past `count` stay 0. Mode k is the estimate's k-th
+/// by frequency (modes()); at another state it is followed by its shape (the assignment of highest
+/// total MAC), so that two modes that change order within the update keep their identities.
+class ModalFrequencies final : public StateMeasurement {
+ public:
+  /// The modes `mode` (count of them) at torque [N·m], numbered at the parameters `estimate`.
+  ModalFrequencies(const RigConfig& rig, const StaticTeModel& model,
+                   const StiffnessEstimator& supports, const CalibrationVector& estimate,
+                   const CalibrationVector& prior_std, double torque,
+                   const std::array<int, 3>& mode, std::size_t count)
+      : rig_(rig),
+        model_(model),
+        supports_(supports),
+        prior_std_(prior_std),
+        torque_(torque),
+        mode_(mode),
+        count_(count),
+        unit_(unitBearingStiffness(rig, supports)),
+        reference_(modesAt(rig, model, estimate, torque, unit_, supports)) {
+    const GearRotorParameters rotor = rigRotorParameters(rig, supports.mesh(), unit_);
+    mass_ = Eigen::Vector3d(rotor.pinion_mass, rotor.gear_mass, rotor.equivalentMass());
+  }
+
+  /// The matched modes' natural frequencies [Hz] at a state.
+  MeasurementVector predict(const CalibrationVector& state) const override {
+    const std::array<Mode, 3> m =
+        modesAt(rig_, model_, CalibrationEstimator::toParameters(state), torque_, unit_, supports_);
+    const std::array<int, 3> follow = followModes(reference_, m, mass_);
+    Eigen::Vector3d h = Eigen::Vector3d::Zero();
+    for (std::size_t j = 0; j < count_; ++j)
+      h[j] =
+          m[static_cast<std::size_t>(follow[static_cast<std::size_t>(mode_[j])])].natural_frequency;
+    return h;
+  }
+
+  /// The Jacobian by central differences on the state, as TeFeatures's for the mesh scale and T_p;
+  /// the TE offset does not enter the modes, a held parameter has no column.
+  void jacobian(const CalibrationVector& state, MeasurementRows& H) const override {
+    H.setZero();
+    for (int i : {kMeshScale, kPinionBearingScale, kGearBearingScale, kPreloadTorque}) {
+      if (!(prior_std_[i] > 0.0)) continue;
+      const double step = 1e-4 * std::max(prior_std_[i], std::abs(state[i]));
+      CalibrationVector a = state, b = state;
+      a[i] += step;
+      b[i] -= step;
+      H.col(i) = (predict(a) - predict(b)) / (2.0 * step);
+    }
+  }
+
+ private:
+  const RigConfig& rig_;
+  const StaticTeModel& model_;
+  const StiffnessEstimator& supports_;
+  const CalibrationVector& prior_std_;
+  double torque_;
+  const std::array<int, 3>& mode_;
+  std::size_t count_;
+  std::array<double, 2> unit_;
+  std::array<Mode, 3> reference_;
+  Eigen::Vector3d mass_;
+};
 
 }  // namespace
 
 WindowOutcome Calibrator::modalUpdate(double t, const ModalFrequency* frequencies,
                                       std::size_t count, double torque,
                                       const StiffnessEstimator& supports) {
-  using Rows = Eigen::Matrix<double, 3, kCalibrationSize>;
-  using Gain = Eigen::Matrix<double, kCalibrationSize, 3>;
   if (count > 3) {
     throwInvalid("calibration: natural frequencies count", static_cast<double>(count),
                  "at most 3, one per mode of the model");
@@ -479,7 +337,7 @@ WindowOutcome Calibrator::modalUpdate(double t, const ModalFrequency* frequencie
   requireFinite("calibration: natural frequencies torque", torque);
   requireFinite("calibration: natural frequencies t", t);
   std::array<int, 3> mode{};
-  Eigen::Vector3d z = Eigen::Vector3d::Zero(), z_std = Eigen::Vector3d::Ones();
+  MeasurementVector z = MeasurementVector::Zero(), z_std = MeasurementVector::Ones();
   for (std::size_t j = 0; j < count; ++j) {
     const ModalFrequency& f = frequencies[j];
     if (f.mode < 0 || f.mode > 2) {
@@ -498,142 +356,19 @@ WindowOutcome Calibrator::modalUpdate(double t, const ModalFrequency* frequencie
   }
   if (count == 0) return WindowOutcome::kNone;
 
-  // h(state): the matched modes' natural frequencies of the model at this torque, with the
-  // supports' unit stiffness at their current load (as bands() and modes()); slots past `count`
-  // stay 0. Mode k is the current estimate's k-th by frequency (modes()); at another state it is
-  // followed by its shape (the assignment of highest total MAC), so that two modes that change
-  // order within the update keep their identities.
-  const std::array<double, 2> unit = unitBearingStiffness(supports);
-  const std::array<Mode, 3> reference = modesAt(estimate_.value, torque, unit, supports);
-  const GearRotorParameters rotor = rigRotorParameters(*rig_, supports.mesh(), unit);
-  const Eigen::Vector3d mass(rotor.pinion_mass, rotor.gear_mass, rotor.equivalentMass());
-  auto predictModes = [&](const CalibrationVector& state) {
-    const std::array<Mode, 3> m = modesAt(toParameters(state), torque, unit, supports);
-    const std::array<int, 3> follow = followModes(reference, m, mass);
-    Eigen::Vector3d h = Eigen::Vector3d::Zero();
-    for (std::size_t j = 0; j < count; ++j)
-      h[j] =
-          m[static_cast<std::size_t>(follow[static_cast<std::size_t>(mode[j])])].natural_frequency;
-    return h;
-  };
-  // The Jacobian by central differences on the state, as jacobian() for the mesh scale and T_p;
-  // the TE offset does not enter the modes, a held parameter has no column.
-  auto modalJacobian = [&](const CalibrationVector& state, Rows& H) {
-    H.setZero();
-    for (int i : {kMeshScale, kPinionBearingScale, kGearBearingScale, kPreloadTorque}) {
-      if (!(state_prior_std_[i] > 0.0)) continue;
-      const double step = 1e-4 * std::max(state_prior_std_[i], std::abs(state[i]));
-      CalibrationVector a = state, b = state;
-      a[i] += step;
-      b[i] -= step;
-      H.col(i) = (predictModes(a) - predictModes(b)) / (2.0 * step);
-    }
-  };
-
-  const CalibrationMatrix Q = processNoise(t);
-  const CalibrationMatrix prior = state_covariance_ + Q;
-  const Eigen::Vector3d h0 = predictModes(state_);
-  Rows H;
-  modalJacobian(state_, H);
-  // No parameter that moves these modes is estimated: nothing to learn from the record.
-  if (H.cwiseAbs().maxCoeff() == 0.0) return WindowOutcome::kNone;
-  // Measurement noise: the identification's variance and the relative model error of a natural
-  // frequency (masses, inertias, the housing), which every record of the same mode shares: the
-  // n-th record of a mode carries n times its variance. Unused slots: unit variance, no row.
-  Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
-  for (std::size_t j = 0; j < count; ++j) {
-    const double repeats = static_cast<double>(modal_count_[static_cast<std::size_t>(mode[j])] + 1);
-    const double model = config_.modal_model_error * h0[j];
-    R(j, j) = z_std[j] * z_std[j] + repeats * model * model;
-  }
-  const Eigen::Vector3d innovation = z - h0;
-  const Eigen::Matrix3d S = H * prior * H.transpose() + R;
-  const double nis = innovation.dot(S.ldlt().solve(innovation));
+  const ModalFrequencies modes(*rig_, model_, supports, estimate_.value, estimator_.priorStd(),
+                               torque, mode, count);
+  double nis = 0.0;
+  const WindowOutcome outcome = estimator_.updateFrequencies(modes, z, z_std, mode, count, t, nis);
+  if (outcome == WindowOutcome::kNone) return outcome;
   estimate_.modal_nis = nis;
-  if (!(nis <= kChiSquare999[count - 1])) {  // also refuses a NaN
+  if (outcome == WindowOutcome::kGated) {
     ++estimate_.modal_gated;
-    return WindowOutcome::kGated;
+    return outcome;
   }
-  // Iterated EKF, as iteratedUpdate: Gauss-Newton on the posterior mode, the frequencies being
-  // nonlinear in the state (f ~ sqrt(k), k ~ 1/c). A step is taken only where it lowers the
-  // posterior's cost (prior term plus the frequencies' residual), halved up to 6 times otherwise
-  // (backtracking line search, Nocedal & Wright 2006, Algorithm 3.1): near a veering the
-  // frequencies bend sharply and a full step can overshoot. A first step that finds no lower cost
-  // gates the record: the model cannot follow it from the estimate.
-  CalibrationMatrix prior_held = prior;  // the prior term over the estimated parameters only
-  for (int i = 0; i < kCalibrationSize; ++i)
-    if (!(state_prior_std_[i] > 0.0)) {
-      prior_held.row(i).setZero();
-      prior_held.col(i).setZero();
-      prior_held(i, i) = 1.0;
-    }
-  const Eigen::LDLT<CalibrationMatrix> prior_ldlt(prior_held);
-  auto cost = [&](const CalibrationVector& state, const Eigen::Vector3d& h) {
-    const CalibrationVector d = state - state_;
-    double c = d.dot(prior_ldlt.solve(d));
-    for (std::size_t j = 0; j < count; ++j) c += (z[j] - h[j]) * (z[j] - h[j]) / R(j, j);
-    return c;
-  };
-  CalibrationVector theta = state_;
-  Eigen::Vector3d h = h0;
-  double current = cost(theta, h);
-  Gain K;
-  for (int iteration = 0; iteration < kModalIterations; ++iteration) {
-    if (iteration > 0) modalJacobian(theta, H);
-    const Eigen::Matrix3d Si = H * prior * H.transpose() + R;
-    K = prior * H.transpose() * Si.inverse();
-    CalibrationVector next = state_ + K * (z - h - H * (state_ - theta));
-    bound(next);
-    Eigen::Vector3d h_next = predictModes(next);
-    double next_cost = cost(next, h_next);
-    const CalibrationVector step = next - theta;
-    for (int halving = 1; halving <= 6 && !(next_cost <= current); ++halving) {
-      next = theta + std::ldexp(1.0, -halving) * step;
-      bound(next);
-      h_next = predictModes(next);
-      next_cost = cost(next, h_next);
-    }
-    if (!(next_cost <= current)) {
-      if (iteration > 0) break;
-      ++estimate_.modal_gated;
-      return WindowOutcome::kGated;
-    }
-    const double moved =
-        ((next - theta).cwiseQuotient(state_prior_std_.cwiseMax(1e-300))).cwiseAbs().maxCoeff();
-    theta = next;
-    h = h_next;
-    current = next_cost;
-    if (moved < 1e-6) break;
-  }
-  // Joseph form, and the same gain and noise on the model-error scaling's covariance: the
-  // frequencies carry no allowance of the TE features, so their information stays whatever c.
-  const CalibrationMatrix IKH = CalibrationMatrix::Identity() - K * H;
-  const CalibrationMatrix KRK = K * R * K.transpose();
-  state_covariance_ = IKH * prior * IKH.transpose() + KRK;
-  state_covariance_ = 0.5 * (state_covariance_ + state_covariance_.transpose()).eval();
-  model_error_.predict(Q);
-  model_error_.absorb(IKH, KRK);
-  state_ = theta;
-  last_update_t_ = has_update_t_ ? std::max(last_update_t_, t) : t;
-  has_update_t_ = true;
-  for (std::size_t j = 0; j < count; ++j) ++modal_count_[static_cast<std::size_t>(mode[j])];
   ++estimate_.modal_updates;
   outputs(torque, supports);
-  return WindowOutcome::kUpdated;
-}
-
-std::uint32_t Calibrator::countAtOperatingPoint(double torque) {
-  const long key = std::lround(torque / (2.0 * config_.torque_band));
-  int i = 0;
-  while (i < bins_used_ && bin_key_[i] != key) ++i;
-  if (i == bins_used_) {
-    if (bins_used_ < kBins) {
-      bin_key_[bins_used_++] = key;
-    } else {
-      i = kBins - 1;
-    }
-  }
-  return ++bin_count_[i];
+  return outcome;
 }
 
 template <typename F>
@@ -654,26 +389,9 @@ double Calibrator::spreadOf(F&& f, std::uint32_t depends_on) const {
   return std::sqrt(std::max(0.0, g.dot(covariance_ * g)));
 }
 
-std::array<double, 2> Calibrator::unitBearingStiffness(const StiffnessEstimator& supports) const {
-  std::array<double, 2> unit{0.0, 0.0};
-  for (std::size_t i = 0; i < rig_->bearings.size(); ++i) {
-    const SupportEstimate& s = supports.current().supports[i];
-    unit[rig_->bearings[i].shaft] +=
-        s.solution.radialStiffness() / supports.supportConfig(i).stiffness_scale;
-  }
-  return unit;
-}
-
-std::array<Mode, 3> Calibrator::modesAt(const CalibrationVector& p, double torque,
-                                        const std::array<double, 2>& unit,
-                                        const StiffnessEstimator& supports) const {
-  const std::array<double, 2> kb{p[kPinionBearingScale] * unit[0], p[kGearBearingScale] * unit[1]};
-  return modalAnalysis(rigRotorParameters(*rig_, supports.mesh(), kb),
-                       model_.meanMeshStiffness(p, torque));
-}
-
 std::array<Mode, 3> Calibrator::modes(double torque, const StiffnessEstimator& supports) const {
-  return modesAt(estimate_.value, torque, unitBearingStiffness(supports), supports);
+  return modesAt(*rig_, model_, estimate_.value, torque, unitBearingStiffness(*rig_, supports),
+                 supports);
 }
 
 CalibrationBands Calibrator::bands(double torque, const StiffnessEstimator& supports,
@@ -691,7 +409,7 @@ CalibrationBands Calibrator::bands(double torque, const StiffnessEstimator& supp
   out.mesh_stiffness_low = out.mesh_stiffness - k95 * mesh_std;
   out.mesh_stiffness_high = out.mesh_stiffness + k95 * mesh_std;
   // Bearing stiffness per shaft: the Hertz tangent at the current load (scale 1) times the scale.
-  const std::array<double, 2> unit = unitBearingStiffness(supports);
+  const std::array<double, 2> unit = unitBearingStiffness(*rig_, supports);
   for (int s = 0; s < 2; ++s) {
     const int index = s == 0 ? kPinionBearingScale : kGearBearingScale;
     out.bearing_stiffness[s] = theta[index] * unit[s];
@@ -700,7 +418,9 @@ CalibrationBands Calibrator::bands(double torque, const StiffnessEstimator& supp
   }
   if (!with_modes) return out;
   // Natural frequencies of the calibrated model (modal_analysis.hpp), each with its band.
-  auto modes = [&](const CalibrationVector& p) { return modesAt(p, torque, unit, supports); };
+  auto modes = [&](const CalibrationVector& p) {
+    return modesAt(*rig_, model_, p, torque, unit, supports);
+  };
   const std::array<Mode, 3> m = modes(theta);
   // The three frequencies' gradients together: two modal analyses per parameter that moves them.
   Eigen::Matrix<double, 3, kCalibrationSize> G = Eigen::Matrix<double, 3, kCalibrationSize>::Zero();
@@ -733,11 +453,13 @@ void Calibrator::outputs(double torque, const StiffnessEstimator& supports) {
   // show where it exceeds it (model_error_scale.hpp). Never narrowed: a model error that repeats
   // at an operating point is invisible in the innovations, and bands learned down from them are
   // overconfident after a 10-min dwell at one load (docs/calibration.md, section 3).
-  const CalibrationVector theta = toParameters(state_);
-  const CalibrationMatrix J = parameterJacobian(state_);
-  e.model_error_scale = model_error_.scale();
+  const CalibrationVector& state = estimator_.state();
+  const CalibrationVector theta = CalibrationEstimator::toParameters(state);
+  const CalibrationMatrix J = CalibrationEstimator::parameterJacobian(state);
+  e.model_error_scale = estimator_.modelError().scale();
   const bool wider = (e.model_error_scale.array() > 1.0).any();
-  const CalibrationMatrix P = wider ? model_error_.covariance(1.0) : state_covariance_;
+  const CalibrationMatrix P =
+      wider ? estimator_.modelError().covariance(1.0) : estimator_.stateCovariance();
   covariance_ = J * P * J.transpose();
   e.value = theta;
   e.std = covariance_.diagonal().cwiseMax(0.0).cwiseSqrt();
@@ -748,8 +470,8 @@ void Calibrator::outputs(double torque, const StiffnessEstimator& supports) {
   // reported covariance: information the windows seem to give but their model error takes back
   // (c > 1) does not count.
   for (int i = 0; i < kCalibrationSize; ++i) {
-    e.identified[i] = state_prior_std_[i] > 0.0 &&
-                      std::sqrt(std::max(0.0, P(i, i))) < 0.5 * state_reference_std_[i];
+    e.identified[i] = estimator_.priorStd()[i] > 0.0 &&
+                      std::sqrt(std::max(0.0, P(i, i))) < 0.5 * estimator_.referenceStd()[i];
   }
   // Series compliance at the reference torque: mean TE above zero torque over the mesh force.
   const double tr = config_.reference_torque;
@@ -775,171 +497,12 @@ void Calibrator::outputs(double torque, const StiffnessEstimator& supports) {
   e.knee_torque = model_.kneeTorque(theta);
 }
 
-// ---- Progress: why no window has updated the estimate ----
-
-double CalibrationProgress::windowSeconds(double speed) const {
-  // The window rule closes a window once its readings span window_angle of pinion angle.
-  return std::abs(speed) > 0.0 ? window_angle / std::abs(speed)
-                               : std::numeric_limits<double>::infinity();
-}
-
-namespace {
-
-/// The stretch that came nearer to closing a window: the larger angle (the window rule's measure),
-/// then the longer time (a rig at rest spans no angle).
-bool nearer(const SteadyStretch& a, const SteadyStretch& b) {
-  if (a.readings == 0) return false;
-  if (b.readings == 0) return true;
-  return a.angle > b.angle || (a.angle == b.angle && a.duration > b.duration);
-}
-
-void keep(CalibrationProgress& p, const SteadyStretch& s, double baseline_torque) {
-  if (s.readings == 0) return;
-  p.smallest_torque = std::min(p.smallest_torque, std::abs(s.torque));
-  // Unloaded or loaded by the rule a closed window is judged by (closeWindow: |T| <=
-  // ~baseline_torque).
-  SteadyStretch& kept = std::abs(s.torque) <= baseline_torque ? p.unloaded : p.loaded;
-  if (nearer(s, kept)) kept = s;
-}
-
-/// printf into a string, for the sentences below (never on the per-reading path).
-template <typename... Args>
-std::string format(const char* spec, Args... args) {
-  char buffer[256];
-  std::snprintf(buffer, sizeof buffer, spec, args...);
-  return buffer;
-}
-
-std::string windowsCount(std::uint64_t n) {
-  return format(n == 1 ? "%llu window" : "%llu windows", static_cast<unsigned long long>(n));
-}
-
-/// Appends to `out` why each kind of closed window fell short, with the last one's numbers.
-void addOutcomeClauses(const CalibrationProgress& p, std::string& out) {
-  auto clause = [&out](const std::string& text) { out += "; " + text; };
-  auto last = [&p](WindowOutcome o, std::size_t& i) {
-    i = static_cast<std::size_t>(o);
-    return p.closed[i];
-  };
-  std::size_t i = 0;
-  if (const std::uint64_t n = last(WindowOutcome::kTooSlow, i)) {
-    clause(windowsCount(n) + format(" too slow: the last at %.3g rpm, below ~min_speed_rpm = %g",
-                                    p.value[i], p.limit[i]));
-  }
-  if (const std::uint64_t n = last(WindowOutcome::kNotQuasiStatic, i)) {
-    clause(windowsCount(n) + format(" not quasi-static: the last at a mesh frequency of %.4g Hz, "
-                                    "above ~max_mesh_to_natural x "
-                                    "the lowest natural frequency = %.4g Hz",
-                                    p.value[i], p.limit[i]));
-  }
-  if (const std::uint64_t n = last(WindowOutcome::kTooSparse, i)) {
-    clause(windowsCount(n) + format(" too sparse: the last read at %.4g Hz, and its second mesh "
-                                    "harmonic needs more than %.4g Hz",
-                                    p.value[i], p.limit[i]));
-  }
-  if (const std::uint64_t n = last(WindowOutcome::kIllConditioned, i)) {
-    clause(
-        windowsCount(n) +
-        format(" ill-conditioned: the last one's %.0f readings do not determine the shaft orders",
-               p.value[i]));
-  }
-  if (const std::uint64_t n = last(WindowOutcome::kGated, i)) {
-    clause(windowsCount(n) +
-           format(" gated: the last one's normalised innovation squared %.3g, above ~gate = %g",
-                  p.value[i], p.limit[i]));
-  }
-}
-
-}  // namespace
-
-SteadyStretch Calibrator::openStretch() const {
-  SteadyStretch s;
-  if (!window_.open || window_.n == 0) return s;
-  const double n = static_cast<double>(window_.n);
-  s.readings = window_.n;
-  s.duration = window_.t1 - window_.t0;
-  s.angle = window_.angle_max - window_.angle_min;
-  s.torque = window_.torque_sum / n;
-  s.speed = window_.speed_sum / n;
-  return s;
-}
-
-void Calibrator::noteStretch() { keep(progress_, openStretch(), config_.baseline_torque); }
-
 CalibrationProgress Calibrator::progress() const {
-  CalibrationProgress p = progress_;
-  keep(p, openStretch(), config_.baseline_torque);
-  return p;
+  return report_.progress(windows_.openStretch());
 }
 
 std::string Calibrator::waitingReason() const {
-  if (estimate_.updates > 0) return {};
-  if (estimate_.modal_updates > 0) {
-    // The natural frequencies have calibrated the bearings; the encoder windows, which the mesh
-    // scale and T_p need, still wait.
-    return format(estimate_.modal_updates == 1
-                      ? "%llu record of natural frequencies updated the calibration, the "
-                        "encoders' TE not yet: "
-                      : "%llu records of natural frequencies updated the calibration, the "
-                        "encoders' TE not yet: ",
-                  static_cast<unsigned long long>(estimate_.modal_updates)) +
-           teWaitingReason();
-  }
-  return teWaitingReason();
-}
-
-std::string Calibrator::teWaitingReason() const {
-  const CalibrationProgress p = progress();
-  if (p.readings == 0) return "no encoder reading with the gear angle has reached the calibration";
-  const double tb = config_.baseline_torque;
-  // A stretch against the window it fell short of: one gear turn of pinion angle, in seconds at
-  // the stretch's own mean speed.
-  auto shortOf = [&](const SteadyStretch& s, const char* which) {
-    std::string out = format(
-        "the longest steady %storque (%.3g N*m) lasted %.2f s, %.2f of a gear turn, and a window "
-        "needs one gear turn",
-        which, s.torque, s.duration, s.angle / p.window_angle);
-    const double rpm = std::abs(s.speed) * 60.0 / kTwoPi;
-    out += rpm > 0.0 ? format(", %.2f s at %.4g rpm", p.windowSeconds(s.speed), rpm)
-                     : std::string(", and the pinion stood still");
-    return out;
-  };
-  const std::string no_unloaded = format(
-      "no torque was held at |T| <= ~baseline_torque = %g N*m for the unloaded baseline (the "
-      "smallest: %.3g N*m)",
-      tb, p.smallest_torque);
-  if (estimate_.windows == 0) {
-    std::string out =
-        "no window closed: " + shortOf(nearer(p.unloaded, p.loaded) ? p.unloaded : p.loaded, "");
-    if (p.unloaded.readings == 0) out += "; " + no_unloaded;
-    return out;
-  }
-  // Windows closed, none updated: what closed, then why each kind fell short.
-  static const char* const kShort[kWindowOutcomes] = {
-      "none",     "baseline",         "updated",    "gated",          "before any baseline",
-      "too slow", "not quasi-static", "too sparse", "ill-conditioned"};
-  std::string counts;
-  for (int i = 0; i < kWindowOutcomes; ++i) {
-    if (p.closed[i] == 0) continue;
-    counts += format("%s%llu %s", counts.empty() ? "" : ", ",
-                     static_cast<unsigned long long>(p.closed[i]), kShort[i]);
-  }
-  std::string out = "no window updated the calibration (" + windowsCount(estimate_.windows) +
-                    " closed: " + counts + ")";
-  auto clause = [&out](const std::string& text) { out += "; " + text; };
-  const std::uint64_t unloaded_windows = estimate_.windows - p.loaded_windows;
-  if (estimate_.baseline_windows == 0 && unloaded_windows == 0) {
-    clause(p.unloaded.readings > 0
-               ? "no unloaded baseline window: " + shortOf(p.unloaded, "unloaded ")
-               : no_unloaded);
-  }
-  if (p.loaded_windows == 0) {
-    clause(p.loaded.readings > 0
-               ? "no loaded window closed: " + shortOf(p.loaded, "loaded ")
-               : format("no torque above ~baseline_torque = %g N*m was held", tb));
-  }
-  addOutcomeClauses(p, out);
-  return out;
+  return report_.waitingReason(estimate_, windows_.openStretch());
 }
 
 }  // namespace drivetrain_stiffness

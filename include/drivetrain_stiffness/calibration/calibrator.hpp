@@ -6,93 +6,21 @@
 
 #include <array>
 #include <cstdint>
-#include <limits>
 #include <memory>
-#include <optional>
 #include <string>
 
+#include "drivetrain_stiffness/calibration/calibration_estimator.hpp"
+#include "drivetrain_stiffness/calibration/calibration_report.hpp"
 #include "drivetrain_stiffness/calibration/model_error_scale.hpp"
 #include "drivetrain_stiffness/calibration/order_regression.hpp"
 #include "drivetrain_stiffness/calibration/static_te_model.hpp"
+#include "drivetrain_stiffness/calibration/window_accumulator.hpp"
 #include "drivetrain_stiffness/core/modal_analysis.hpp"
 #include "drivetrain_stiffness/core/rig_config.hpp"
 
 namespace drivetrain_stiffness {
 
 class StiffnessEstimator;
-
-/// Why the last window did or did not update the estimate.
-enum class WindowOutcome {
-  kNone,
-  kBaseline,
-  kUpdated,
-  kGated,
-  kNoBaseline,
-  kTooSlow,
-  kNotQuasiStatic,
-  kTooSparse,
-  kIllConditioned
-};
-constexpr int kWindowOutcomes = static_cast<int>(WindowOutcome::kIllConditioned) + 1;
-const char* toString(WindowOutcome outcome);
-
-/// The calibration's state after a window (SI; the Calibration message).
-struct CalibrationEstimate {
-  CalibrationVector value = CalibrationVector::Zero();
-  CalibrationVector std = CalibrationVector::Zero();
-  CalibrationVector prior_std = CalibrationVector::Zero();
-  std::array<bool, kCalibrationSize> identified{};  ///< posterior std below half the prior's
-  WindowOutcome outcome = WindowOutcome::kNone;
-  bool excited = false;   ///< the last window's excitation sufficed
-  bool baseline = false;  ///< a baseline exists
-  double nis = 0.0;       ///< of the last loaded window (3 dof)
-  /// Per feature, the model error the windows show over the allowance (ModelErrorScale::scale).
-  FeatureVector model_error_scale = FeatureVector::Ones();
-  std::uint64_t windows = 0, baseline_windows = 0, updates = 0, gated = 0, not_excited = 0;
-  /// Records of identified natural frequencies that updated the estimate, and that were gated.
-  std::uint64_t modal_updates = 0, modal_gated = 0;
-  double modal_nis = 0.0;      ///< of the last record of natural frequencies (dof: its count)
-  double window_torque = 0.0;  ///< [N·m] the last window's mean
-  double window_speed = 0.0;   ///< [rad/s] the last window's mean pinion speed
-  FeatureVector measured = FeatureVector::Zero(), predicted = FeatureVector::Zero(),
-                feature_std = FeatureVector::Zero();
-  double series_compliance = 0.0,
-         series_compliance_std = 0.0;  ///< [m/N] mean TE / F at ~reference_torque
-  double mesh_stiffness = 0.0, mesh_stiffness_low = 0.0,
-         mesh_stiffness_high = 0.0;  ///< [N/m] at the window torque, 95 % bounds
-  std::array<double, 2> bearing_stiffness{}, bearing_stiffness_low{},
-      bearing_stiffness_high{};  ///< [N/m] per shaft
-  std::array<double, 3> natural_frequency{}, natural_frequency_low{},
-      natural_frequency_high{};  ///< [Hz]
-  double knee_torque = 0.0;      ///< [N·m] where the back half lifts
-};
-
-/// A stretch of readings at a steady torque that did not become a window (dropped or still open).
-struct SteadyStretch {
-  long readings = 0;
-  double duration = 0.0;  ///< [s]
-  double angle = 0.0;     ///< [rad] of pinion angle spanned
-  double torque = 0.0;    ///< [N·m] mean held torque
-  double speed = 0.0;     ///< [rad/s] mean pinion speed
-};
-
-/// What the calibration has seen, for Calibrator::waitingReason; fixed size.
-struct CalibrationProgress {
-  std::uint64_t readings = 0;  ///< readings with the gear angle
-  double window_angle = 0.0;   ///< [rad] of pinion angle a window spans: one gear turn
-  /// The longest unloaded and loaded stretches (by angle, then time); readings == 0: none.
-  SteadyStretch unloaded, loaded;
-  /// [N·m] the smallest mean |torque| of any stretch or closed window.
-  double smallest_torque = std::numeric_limits<double>::infinity();
-  std::uint64_t loaded_windows = 0;                     ///< closed above ~baseline_torque
-  std::array<std::uint64_t, kWindowOutcomes> closed{};  ///< closed windows per WindowOutcome
-  /// Per WindowOutcome, the number that decided its last window and its limit (docs/calibration.md
-  /// "When no window updates").
-  std::array<double, kWindowOutcomes> value{}, limit{};
-  std::uint64_t count(WindowOutcome o) const { return closed[static_cast<std::size_t>(o)]; }
-  /// [s] one window at pinion speed [rad/s]; infinite at rest.
-  double windowSeconds(double speed) const;
-};
 
 /// The calibrated stiffness and natural frequencies at an operating point, 95 % bounds.
 struct CalibrationBands {
@@ -104,13 +32,6 @@ struct CalibrationBands {
       bearing_stiffness_high{};  ///< [N/m] per shaft
   std::array<double, 3> natural_frequency{}, natural_frequency_low{},
       natural_frequency_high{};  ///< [Hz]
-};
-
-/// One reading's measured TE without baseline and shaft orders, and the model's prediction [m].
-struct MeasuredTeSample {
-  double te = 0.0, predicted = 0.0, residual = 0.0;
-  double torque = 0.0;  ///< [N·m] held
-  double phase = 0.0;   ///< [-] mesh phase
 };
 
 /// An identified natural frequency matched to the model's mode `mode` (0..2, modalAnalysis's order,
@@ -138,15 +59,14 @@ class Calibrator {
               const StiffnessEstimator& supports, MeasuredTeSample& sample);
   /// The readings broke off: drops the open window.
   void interrupt();
-  const CalibrationEstimate& estimate() const { return estimate_; }
+  const CalibrationEstimate& estimate() const { return estimate_; }  ///< the last update's state
   /// What the calibration has seen, the open window as a stretch. Allocation-free.
   CalibrationProgress progress() const;
   /// One record's identified frequencies at pinion torque [N·m], t [s] the record's end: one
-  /// update of the same state as the TE windows (no baseline needed); each `mode` indexes modes()
-  /// at the current estimate. Returns kUpdated, kGated (NIS over the gate), or kNone (no usable
-  /// frequency). Throws InvalidInput naming a mode out of range or given twice, a frequency or std
-  /// that is not positive and finite, more than 3 frequencies, or a non-finite t or torque.
-  /// Allocation-free.
+  /// update of the TE windows' state (no baseline needed); each `mode` indexes modes() at the
+  /// estimate. Returns kUpdated, kGated (NIS over the gate), or kNone (no usable frequency). Throws
+  /// InvalidInput naming a mode out of range or given twice, a frequency or std that is not
+  /// positive and finite, more than 3 frequencies, or a non-finite t or torque. Allocation-free.
   WindowOutcome modalUpdate(double t, const ModalFrequency* frequencies, std::size_t count,
                             double torque, const StiffnessEstimator& supports);
   /// The calibrated model's three modes (with shapes) at pinion torque [N·m]: modalAnalysis of the
@@ -157,118 +77,36 @@ class Calibrator {
   /// "When no window updates"), led by the count of records of natural frequencies that did; empty
   /// once a window has. Allocates.
   std::string waitingReason() const;
-  const RigConfig& rig() const { return *rig_; }
-  const StaticTeModel& model() const { return model_; }
-  const CalibrationVector& parameters() const { return estimate_.value; }
+  const RigConfig& rig() const { return *rig_; }         ///< the calibrated rig
+  const StaticTeModel& model() const { return model_; }  ///< the windows' TE model
+  const CalibrationVector& parameters() const { return estimate_.value; }  ///< the estimate's value
+  /// The parameters' reported covariance (under the model error the windows show).
   const CalibrationMatrix& covariance() const { return covariance_; }
   /// The filter's own covariance, under the configured model-error allowance.
-  CalibrationMatrix filterCovariance() const;
+  CalibrationMatrix filterCovariance() const { return estimator_.filterCovariance(); }
   /// The calibrated stiffness at pinion torque [N·m] and, `with_modes`, the natural frequencies.
   /// Allocation-free.
   CalibrationBands bands(double torque, const StiffnessEstimator& supports, bool with_modes) const;
 
  private:
+  /// The spanning window's outcome, and the baseline or the update it makes.
   void closeWindow(const StiffnessEstimator& supports);
-  /// waitingReason's sentence about the encoder windows alone.
-  std::string teWaitingReason() const;
-  /// The excitation rule; sets the number that decided it and its limit.
-  WindowOutcome excitation(double speed, double duration, double& value, double& limit) const;
-  void noteOutcome(WindowOutcome outcome, double value, double limit);
-  void noteStretch();
-  SteadyStretch openStretch() const;
+  /// The filter's update by the closed window's features z (std z_std) at torque [N·m].
   void update(const FeatureVector& z, const FeatureVector& z_std, double torque);
-  /// The features' Jacobian at state p and torque [N·m]: closed-form columns for the offset and the
-  /// bearing compliances, central differences for the mesh scale and T_p; held parameters 0.
-  void jacobian(const CalibrationVector& p, double torque, ModelErrorScale::FeatureRows& H) const;
-  /// The iterated EKF's posterior mode from state_ (at most four relinearisations); H and K are
-  /// those of the last iteration.
-  CalibrationVector iteratedUpdate(const CalibrationMatrix& prior,
-                                   const Eigen::Matrix<double, kFeatureSize, kFeatureSize>& R,
-                                   const FeatureVector& z, double torque,
-                                   ModelErrorScale::FeatureRows& H, ModelErrorScale::Gain& K) const;
-  /// Clamps a state to the physical bounds: scales in [0.05, 19.9], T_p >= 0.
-  static void bound(CalibrationVector& state);
-  /// The random walk since the last update at t [s] (docs/calibration.md "3. The estimator").
-  CalibrationMatrix processNoise(double t) const;
-  /// Within ~torque_band plus 1 % of the window's first torque.
-  bool inBand(double torque) const;
+  /// The estimate's parameters, covariance, stiffness and modes at torque [N·m] from the filter.
   void outputs(double torque, const StiffnessEstimator& supports);
   /// sqrt(g' P g), g the central-difference gradient of f over the parameters set in depends_on.
   template <typename F>
   double spreadOf(F&& f, std::uint32_t depends_on = ~0u) const;
-  FeatureVector predict(const CalibrationVector& p, double torque) const;
-  /// Each shaft's bearing stiffness at scale 1 [N/m]: the supports' radial stiffness at their
-  /// current load over their configured stiffness_scale.
-  std::array<double, 2> unitBearingStiffness(const StiffnessEstimator& supports) const;
-  /// The model's modes at parameters p, pinion torque [N·m] and unit bearing stiffness [N/m].
-  std::array<Mode, 3> modesAt(const CalibrationVector& p, double torque,
-                              const std::array<double, 2>& unit,
-                              const StiffnessEstimator& supports) const;
 
   std::shared_ptr<const RigConfig> rig_;
   const CalibrationConfig& config_;  ///< rig_->calibration
   StaticTeModel model_;
-  OrderRegression regression_;
-  int teeth_[2] = {0, 0};
-  double lattice_ = 0.0;    ///< [m] the TE's ambiguity from the encoders' whole turns
-  double gear_turn_ = 0.0;  ///< [rad] of pinion angle a window spans
-
-  /// The filter's state: each bearing scale s as its compliance factor c = 1/s (docs/calibration.md
-  /// "3. The estimator").
-  CalibrationVector state_ = CalibrationVector::Zero(),
-                    state_prior_std_ = CalibrationVector::Zero();
-  /// The drawing's spread in the state's coordinates.
-  CalibrationVector state_reference_std_ = CalibrationVector::Zero();
-  CalibrationMatrix state_covariance_ = CalibrationMatrix::Zero();
-  CalibrationMatrix covariance_ = CalibrationMatrix::Zero();  ///< of the parameters
-  ModelErrorScale model_error_;
-  /// State to parameters (c -> 1/c), and that map's Jacobian.
-  static CalibrationVector toParameters(const CalibrationVector& state);
-  static CalibrationMatrix parameterJacobian(const CalibrationVector& state);
+  WindowAccumulator windows_;
+  CalibrationEstimator estimator_;
+  CalibrationReport report_;
   CalibrationEstimate estimate_;
-  CalibrationProgress progress_;
-  /// Accepted windows per torque bin 2 ~torque_band wide (docs/calibration.md "3. The
-  /// estimator"); past kBins the last bin is shared.
-  static constexpr int kBins = 256;
-  std::array<long, kBins> bin_key_{};
-  std::array<std::uint32_t, kBins> bin_count_{};
-  int bins_used_ = 0;
-  std::uint32_t countAtOperatingPoint(double torque);
-  /// Records that carried each mode's frequency (docs/calibration.md "Natural frequencies").
-  std::array<std::uint32_t, 3> modal_count_{};
-  double last_update_t_ = 0.0;
-  bool has_update_t_ = false;
-
-  /// The open window.
-  struct Window {
-    bool open = false;
-    double t0 = 0.0, t1 = 0.0, torque0 = 0.0, angle_min = 0.0, angle_max = 0.0;
-    std::array<double, 2> shafts{};  ///< [m] shaft deflections at torque0
-    double torque_sum = 0.0, speed_sum = 0.0;
-    long n = 0;
-  } window_;
-  std::optional<double> te_reference_;  ///< the first TE, around which later ones are reduced
-  /// The window rule's low-pass time constant on the held torque (docs/calibration.md "1. Measured
-  /// TE").
-  static constexpr double kTorqueFilter = 0.02;  ///< [s]
-  std::optional<double> filtered_torque_;
-  double last_t_ = 0.0;
-  StaticTeModel::PhaseHistogram histogram_{};  ///< the open window's sampled mesh phases
-  StaticTeModel::SampledPhases sampled_;       ///< the closed window's, prepared for the model
-  /// [mesh periods] readings this near a switching phase stay out of the fit (docs/calibration.md
-  /// "1. Measured TE").
-  static constexpr double kSwitchGuard = 2e-3;
-
-  /// The baseline: running means over the baseline windows.
-  double base_torque_ = 0.0, base_mean_ = 0.0, base_mean_var_ = 0.0, base_harm_var_ = 0.0;
-  std::array<std::complex<double>, OrderRegression::kMeshHarmonics> base_harmonics_{};
-  std::uint64_t base_count_ = 0;
-  std::array<double, 2> base_shafts_{};
-
-  /// The last fit, whose orders later readings lose, and the shafts' deflection.
-  OrderRegression::Fit last_fit_;
-  bool has_fit_ = false;
-  std::array<double, 2> shafts_{};  ///< [m] at the last loaded window's mean torque
+  CalibrationMatrix covariance_ = CalibrationMatrix::Zero();  ///< of the parameters
   std::array<double, 2> scratch_{};
 };
 
