@@ -25,7 +25,7 @@ target_link_libraries(${PROJECT_NAME}_fuzz_harness PUBLIC ${PROJECT_NAME}_config
 target_compile_definitions(${PROJECT_NAME}_fuzz_harness PRIVATE DRIVETRAIN_SOURCE_DIR="${CMAKE_CURRENT_SOURCE_DIR}")
 add_dependencies(${PROJECT_NAME}_fuzz_harness ${PROJECT_NAME}_generate_messages_cpp)
 
-catkin_add_gtest(fuzz_tests test/fuzz/test_fuzz.cpp test/fuzz/test_node_parameters.cpp test/core/test_main.cpp
+catkin_add_gtest(fuzz_tests test/fuzz/test_fuzz.cpp test/fuzz/test_node_parameters.cpp test/support/test_main.cpp
   WORKING_DIRECTORY ${CMAKE_CURRENT_SOURCE_DIR})
 target_link_libraries(fuzz_tests ${PROJECT_NAME}_fuzz_harness)
 

@@ -54,7 +54,7 @@ add_test(NAME modal_validation_recovers_drawn_bearings
           --out ${CMAKE_CURRENT_BINARY_DIR}/modal_validation_test)
 
 # The scenario bag writer: joint_states read back by rosbag::View with sensor_msgs/JointState's md5sum.
-catkin_add_gtest(scenario_bag_tests test/core/test_main.cpp test/ros/test_scenario_bag.cpp src/tools/rig_sim/scenario_bag.cpp)
+catkin_add_gtest(scenario_bag_tests test/support/test_main.cpp test/ros/test_scenario_bag.cpp src/tools/rig_sim/scenario_bag.cpp)
 target_link_libraries(scenario_bag_tests ${PROJECT_NAME}_scenarios ${PROJECT_NAME}_config ${catkin_LIBRARIES})
 target_compile_definitions(scenario_bag_tests PRIVATE DRIVETRAIN_SOURCE_DIR="${CMAKE_CURRENT_SOURCE_DIR}")
 add_dependencies(scenario_bag_tests ${PROJECT_NAME}_generate_messages_cpp)
@@ -135,7 +135,7 @@ add_test(NAME speed_sweep_peaks_at_the_estimated_modes
           ${DEVEL_BIN} ${CMAKE_CURRENT_SOURCE_DIR} ${CMAKE_CURRENT_BINARY_DIR}/speed_sweep_test)
 
 # RigVisualizer's display scale: the run-time settings' rule, from the constructor and setExaggeration.
-catkin_add_gtest(rig_visualization_tests test/core/test_main.cpp test/ros/test_rig_visualization.cpp)
+catkin_add_gtest(rig_visualization_tests test/support/test_main.cpp test/ros/test_rig_visualization.cpp)
 target_link_libraries(rig_visualization_tests ${PROJECT_NAME}_messages ${PROJECT_NAME}_config)
 target_compile_definitions(rig_visualization_tests PRIVATE DRIVETRAIN_SOURCE_DIR="${CMAKE_CURRENT_SOURCE_DIR}")
 add_dependencies(rig_visualization_tests ${PROJECT_NAME}_generate_messages_cpp)
@@ -177,7 +177,7 @@ add_test(NAME ros_lookup_from_a_fresh_shell
 # drivetrain_replay --calibrate's gearbox YAML: written from an estimate, reloaded with loadRigFile,
 # the calibrated values exact and the rest unchanged; bearing files resolve from another directory;
 # refusals without a calibration block or without an update.
-catkin_add_gtest(replay_calibrate_tests test/core/test_main.cpp test/replay/test_calibrated_gearbox.cpp
+catkin_add_gtest(replay_calibrate_tests test/support/test_main.cpp test/replay/test_calibrated_gearbox.cpp
   src/tools/replay/calibrated_gearbox.cpp)
 target_include_directories(replay_calibrate_tests PRIVATE ${CMAKE_CURRENT_SOURCE_DIR}/src/tools)
 target_link_libraries(replay_calibrate_tests ${PROJECT_NAME}_config ${PROJECT_NAME}_calibration)
