@@ -211,9 +211,9 @@ void DynamicsEstimator::setBearingStiffness(const std::array<double, 2>& k,
 
 double DynamicsEstimator::bearingGridValue(double k) {
   // Grid points 1.01^n, n = round(ln k / ln 1.01): the nearest in ratio, within a factor 1.005 of
-  // k. The same k, or any k between the same two midpoints, gives the same bits (one exp of an
-  // integer times a constant), which is what lets the sliced propagation recognise a value met
-  // before (SlicedModalPropagator::kKeptParameterSets). With the 1 % dead band of
+  // k. The same k, or any k between the same two midpoints, gives the same value to the bit (one
+  // exp of an integer times a constant), which is what lets the sliced propagation recognise a
+  // value met before (SlicedModalPropagator::kKeptParameterSets). With the 1 % dead band of
   // setBearingStiffness, the stiffness the model runs with stays within 1 % of the estimator's.
   if (!(k >= 1.0) || !std::isfinite(k)) return k;
   static const double kStep = std::log(1.01);
