@@ -26,7 +26,9 @@ struct SlicedDynamics {
 };
 
 /// What describes the rig: configuration, parameters, output grid and what is built from them.
-/// Only a parameter change (DynamicsEstimator's own methods) changes it; the engines read it.
+/// Only a parameter change (DynamicsEstimator's own methods) changes it. The engines take it const;
+/// they set the models' torque and motion inputs, and the sliced propagators decompose their
+/// slices as they are crossed (caches of the parameters alone).
 struct DynamicsModel {
   std::shared_ptr<const RigConfig> rig;
   std::shared_ptr<const AntiBacklashMesh> mesh;
@@ -101,7 +103,7 @@ enum class EngineResult {
   kDeclinedNothingToPropagate,  ///< the target is not after the state's time
 };
 
-/// One way of carrying the state forward, reading the model and changing only the workspace: each
+/// One way of carrying the state forward, reading the model and changing the workspace: each
 /// operation returns kDone or why it does not apply, the state untouched (default:
 /// kDeclinedNoSuchOperation). No operation allocates in steady state (the interval maps are made
 /// on first use).
