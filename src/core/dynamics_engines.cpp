@@ -46,32 +46,37 @@ double DynamicsModel::slicesIn(double h, double f) const {
   return std::abs(f) * h * full.slices->size();
 }
 
-void DynamicsModel::intervalMapsStale() {
+void DynamicsWorkspace::intervalMapsStale() {
   if (interval_maps) interval_maps->invalidate();
-  maps_settle = -1;
+  maps_settle = MapsSettle::kNotAsked;
 }
 
-bool PropagationEngine::interval(DynamicsModel&, DynamicsWorkspace&) { return false; }
+EngineResult PropagationEngine::interval(const DynamicsModel&, DynamicsWorkspace&) {
+  return EngineResult::kDeclinedNoSuchOperation;
+}
 
-bool PropagationEngine::propagate(DynamicsModel&, DynamicsWorkspace&, double) { return false; }
+EngineResult PropagationEngine::propagate(const DynamicsModel&, DynamicsWorkspace&, double) {
+  return EngineResult::kDeclinedNoSuchOperation;
+}
 
-bool PeriodicEngine::interval(DynamicsModel& m, DynamicsWorkspace& w) {
+EngineResult PeriodicEngine::interval(const DynamicsModel& m, DynamicsWorkspace& w) {
   // Near a knee a flank may lift and land again between two samples (contactsSettle): not here.
   const PeriodicExponentialPropagator* p = m.periodic.get();
+  if (!p) return EngineResult::kDeclinedNoPropagator;
   const double t_k = w.k * m.interval;
   if (w.torque_changes == 0) {
-    if (!(p && p->contactsSettle(w.torque))) return false;
+    if (!p->contactsSettle(w.torque)) return EngineResult::kDeclinedContactsMayChange;
     PeriodicExponentialPropagator::Augmented z = p->augment(t_k, w.y);
-    if (!p->step(w.k, z, w.torque, w.torque)) return false;
+    if (!p->step(w.k, z, w.torque, w.torque)) return EngineResult::kDeclinedLeftLinearRegime;
     w.y = z.head<6>();
-    return true;
+    return EngineResult::kDone;
   }
   // The torque held at the sample, then each input from its stamp (the own-stamp rule): the held
   // torque's propagation plus each step's size times the response to a unit step at its instant.
-  bool settles = p && p->contactsSettle(w.interval_torque);
+  bool settles = p->contactsSettle(w.interval_torque);
   for (int i = 0; i < w.torque_changes && settles; ++i)
     settles = p->contactsSettle(w.torque_change[i].torque);
-  if (!settles) return false;
+  if (!settles) return EngineResult::kDeclinedContactsMayChange;
   State6 added = State6::Zero();
   double before = w.interval_torque;
   for (int i = 0; i < w.torque_changes; ++i) {
@@ -80,18 +85,19 @@ bool PeriodicEngine::interval(DynamicsModel& m, DynamicsWorkspace& w) {
     before = w.torque_change[i].torque;
   }
   PeriodicExponentialPropagator::Augmented z = p->augment(t_k, w.y);
-  if (!p->step(w.k, z, w.interval_torque, w.interval_torque, &added)) return false;
+  if (!p->step(w.k, z, w.interval_torque, w.interval_torque, &added))
+    return EngineResult::kDeclinedLeftLinearRegime;
   w.y = z.head<6>();
-  return true;
+  return EngineResult::kDone;
 }
 
-bool Dopri5Engine::interval(DynamicsModel& m, DynamicsWorkspace& w) {
+EngineResult Dopri5Engine::interval(const DynamicsModel& m, DynamicsWorkspace& w) {
   const double t_k = w.k * m.interval, t_next = (w.k + 1) * m.interval;
   if (w.torque_changes == 0) {
     w.y = integrate(*m.nominal, IntegratorMethod::kDopri5, m.fallback, t_k, w.y, t_next, m.interval,
                     nullptr);
     ++w.fallback_intervals;
-    return true;
+    return EngineResult::kDone;
   }
   // Piecewise between the stamps, each piece with the torque held before it.
   double from = t_k, held = w.interval_torque;
@@ -106,11 +112,11 @@ bool Dopri5Engine::interval(DynamicsModel& m, DynamicsWorkspace& w) {
   }
   m.nominal->setTorqueInput(w.torque);
   ++w.fallback_intervals;
-  return true;
+  return EngineResult::kDone;
 }
 
-void Dopri5Engine::stretch(DynamicsModel& m, DynamicsWorkspace& w, double t0, double t1, State6& y,
-                           double& phase) {
+void Dopri5Engine::stretch(const DynamicsModel& m, DynamicsWorkspace& w, double t0, double t1,
+                           State6& y, double& phase) {
   w.t_state = t0;  // the motion input's anchor
   GearRotorModel& model = *m.moving(w.fidelity).model;
   model.setMotionInput(MeshMotion{w.t_state, w.phase, w.mesh_frequency});
@@ -120,14 +126,15 @@ void Dopri5Engine::stretch(DynamicsModel& m, DynamicsWorkspace& w, double t0, do
   ++w.fallback_intervals;
 }
 
-bool Dopri5Engine::propagate(DynamicsModel& m, DynamicsWorkspace& w, double t_rel) {
+EngineResult Dopri5Engine::propagate(const DynamicsModel& m, DynamicsWorkspace& w, double t_rel) {
   stretch(m, w, w.t_state, t_rel, w.y, w.phase);
   w.phase = wrapTurns(w.phase);
   w.t_state = t_rel;
-  return true;
+  return EngineResult::kDone;
 }
 
-bool SlicedModalEngine::propagate(DynamicsModel& m, DynamicsWorkspace& w, double t_rel) {
+EngineResult SlicedModalEngine::propagate(const DynamicsModel& m, DynamicsWorkspace& w,
+                                          double t_rel) {
   // full: the sliced model; linear_modal: the same with the period's mean stiffness (one slice).
   // Where the state is in no linear regime (both flanks unloaded at once: no mesh stiffness)
   // dopri5 on the same sliced model along the same motion takes over for a stretch.
@@ -139,10 +146,11 @@ bool SlicedModalEngine::propagate(DynamicsModel& m, DynamicsWorkspace& w, double
                     dopri5);
   w.phase = wrapTurns(w.phase);
   w.t_state = t_rel;
-  return true;
+  return EngineResult::kDone;
 }
 
-bool QuasiStaticEngine::propagate(DynamicsModel& m, DynamicsWorkspace& w, double t_rel) {
+EngineResult QuasiStaticEngine::propagate(const DynamicsModel& m, DynamicsWorkspace& w,
+                                          double t_rel) {
   // reduced_models.hpp, m_s -> 0: each shaft is a damped oscillator on its bearing pushed by
   // -/+ F_d, held over the step; the mesh deflection is the static one of the slice the phase is
   // in, in the flank state that force puts it in (AntiBacklashMesh::flankContact), so delta' = 0
@@ -181,7 +189,7 @@ bool QuasiStaticEngine::propagate(DynamicsModel& m, DynamicsWorkspace& w, double
   y[2] = delta - y[0] + y[1] + a * std::sin(theta);
   y[5] = -y[3] + y[4] + a * kTwoPi * f * std::cos(theta);
   w.t_state = t_rel;
-  return true;
+  return EngineResult::kDone;
 }
 
 void QuasiStaticEngine::shaftStep(double m, double c, double k, double force, double h, double& x,
@@ -208,41 +216,49 @@ void QuasiStaticEngine::shaftStep(double m, double c, double k, double force, do
   v = decay * (v0 * cos_term.real() - (sigma * v0 + w2 * u0) * sinc.real());
 }
 
-int IntervalMapsEngine::mapsInterval(DynamicsModel& m, const DynamicsWorkspace& w) {
+EngineResult IntervalMapsEngine::mapsInterval(const DynamicsModel& m, DynamicsWorkspace& w,
+                                              int& i) {
   // The same trust as the periodic propagators' at the nominal phase: a torque whose contacts
   // settle between samples (contactsSettle, tabulated with those propagators) and the loaded
   // regime checked at the stretch's ends; elsewhere the slices are crossed one by one, each with
   // its bound (propagateLinear).
-  if (!m.full.exact || !m.periodic || !m.periodic->contactsSettle(w.torque)) return -1;
+  using Settle = DynamicsWorkspace::MapsSettle;
+  if (!m.full.exact || !m.periodic) return EngineResult::kDeclinedNoPropagator;
+  if (!m.periodic->contactsSettle(w.torque)) return EngineResult::kDeclinedContactsMayChange;
   const double f = m.nominalMeshFrequency();
   const double per_period = std::round(1.0 / (f * m.interval));
   if (!(f > 0.0) ||
       !(per_period >= 1.0 && per_period <= PeriodicExponentialPropagator::kMaxIntervalsPerPeriod))
-    return -1;
-  if (!m.interval_maps || m.interval_maps->intervals() != static_cast<int>(per_period) ||
-      m.interval_maps->meshFrequency() != f) {
-    m.interval_maps =
+    return EngineResult::kDeclinedGridNotPeriodic;
+  if (!w.interval_maps || w.interval_maps->intervals() != static_cast<int>(per_period) ||
+      w.interval_maps->meshFrequency() != f) {
+    w.interval_maps =
         std::make_unique<SlicedIntervalMaps>(*m.full.slices, static_cast<int>(per_period), f);
-    m.maps_settle = -1;
+    w.maps_settle = Settle::kNotAsked;
   }
   // The settling table holds for the parameters now while their swing gain is not larger
   // (docs/model.md "Back to one product per sample at the nominal speed").
-  if (m.maps_settle < 0)
-    m.maps_settle = m.full.exact->loadedSwingGain() <= 1.05 * m.periodic->settleGain() ? 1 : 0;
-  if (m.maps_settle == 0) return -1;
-  return static_cast<int>(w.k % m.interval_maps->intervals());
+  if (w.maps_settle == Settle::kNotAsked)
+    w.maps_settle = m.full.exact->loadedSwingGain() <= 1.05 * m.periodic->settleGain()
+                        ? Settle::kHolds
+                        : Settle::kFails;
+  if (w.maps_settle == Settle::kFails) return EngineResult::kDeclinedSwingGainTooLarge;
+  i = static_cast<int>(w.k % w.interval_maps->intervals());
+  return EngineResult::kDone;
 }
 
-bool IntervalMapsEngine::interval(DynamicsModel& m, DynamicsWorkspace& w) {
-  const int i = mapsInterval(m, w);
-  if (i < 0) return false;
+EngineResult IntervalMapsEngine::interval(const DynamicsModel& m, DynamicsWorkspace& w) {
+  int i = -1;
+  const EngineResult found = mapsInterval(m, w, i);
+  if (found != EngineResult::kDone) return found;
   const SlicedModalPropagator& exact = *m.full.exact;
-  SlicedIntervalMaps& maps = *m.interval_maps;
+  SlicedIntervalMaps& maps = *w.interval_maps;
   const int n = maps.intervals();
   const double f = maps.meshFrequency(), t0 = w.k * m.interval, t1 = (w.k + 1) * m.interval;
   const double drive_force = m.driveForce(w.torque);
-  if (!exact.inLoadedRegime(w.y, w.phase, f)) return false;
-  if (!maps.available(exact, i)) return false;  // before any work: the first use crosses
+  if (!exact.inLoadedRegime(w.y, w.phase, f)) return EngineResult::kDeclinedNotInLoadedRegime;
+  // Before any work: the first use crosses.
+  if (!maps.available(exact, i)) return EngineResult::kDeclinedMapsNotMade;
   State6 y = w.y;
   double phase = w.phase;
   int j = 0;
@@ -252,47 +268,53 @@ bool IntervalMapsEngine::interval(DynamicsModel& m, DynamicsWorkspace& w) {
     // Off the grid (an input's stamp): exactly to the next slice boundary, then its tail map, from
     // the loaded regime there (the exact part goes through any change of the contacts).
     j = maps.boundaryAtOrBefore(i, u) + 1;
-    if (j > end) return false;
+    if (j > end) return EngineResult::kDeclinedPastLastBoundary;
     const double h = (maps.offset(i, j) - u) / f;
-    if (h > 0.0 && !exact.propagate(y, phase, f, h, drive_force)) return false;
-    if (!exact.inLoadedRegime(y, static_cast<double>(i) / n + maps.offset(i, j), f)) return false;
+    if (h > 0.0 && !exact.propagate(y, phase, f, h, drive_force))
+      return EngineResult::kDeclinedLeftLinearRegime;
+    if (!exact.inLoadedRegime(y, static_cast<double>(i) / n + maps.offset(i, j), f))
+      return EngineResult::kDeclinedNotInLoadedRegime;
   }
-  if (!maps.toEnd(exact, i, j, y, drive_force)) return false;
+  if (!maps.toEnd(exact, i, j, y, drive_force)) return EngineResult::kDeclinedMapsUnusable;
   // The grid's own phase at the interval's end: the period's tooth switch is 0, the slice entered.
   phase = i + 1 == n ? 0.0 : static_cast<double>(i + 1) / n;
-  if (!exact.inLoadedRegime(y, phase, f)) return false;
+  if (!exact.inLoadedRegime(y, phase, f)) return EngineResult::kDeclinedNotInLoadedRegime;
   w.y = y;
   w.phase = phase;
   w.t_state = t1;
   ++w.mapped_stretches;
-  return true;
+  return EngineResult::kDone;
 }
 
-bool IntervalMapsEngine::propagate(DynamicsModel& m, DynamicsWorkspace& w, double t_rel) {
-  if (!(t_rel > w.t_state)) return false;
+EngineResult IntervalMapsEngine::propagate(const DynamicsModel& m, DynamicsWorkspace& w,
+                                           double t_rel) {
+  if (!(t_rel > w.t_state)) return EngineResult::kDeclinedNothingToPropagate;
   const double t0 = w.k * m.interval;
-  if (std::abs(w.t_state - t0) > 1e-9 * m.interval)
-    return false;  // off the grid: the slices one by one
-  const int i = mapsInterval(m, w);
-  if (i < 0) return false;
+  // Off the grid: the slices one by one.
+  if (std::abs(w.t_state - t0) > 1e-9 * m.interval) return EngineResult::kDeclinedOffGrid;
+  int i = -1;
+  const EngineResult found = mapsInterval(m, w, i);
+  if (found != EngineResult::kDone) return found;
   const SlicedModalPropagator& exact = *m.full.exact;
-  SlicedIntervalMaps& maps = *m.interval_maps;
+  SlicedIntervalMaps& maps = *w.interval_maps;
   const double f = maps.meshFrequency(), u = f * (t_rel - t0);
   const int j = maps.boundaryAtOrBefore(i, u);
-  if (j == 0 || j == maps.boundaries(i)) return false;  // inside the first slice: nothing to gain
+  // Inside the first slice: nothing to gain.
+  if (j == 0 || j == maps.boundaries(i)) return EngineResult::kDeclinedWithinOneSlice;
   const double drive_force = m.driveForce(w.torque);
-  if (!exact.inLoadedRegime(w.y, w.phase, f)) return false;
+  if (!exact.inLoadedRegime(w.y, w.phase, f)) return EngineResult::kDeclinedNotInLoadedRegime;
   State6 y = w.y;
-  if (!maps.fromStart(exact, i, j, y, drive_force)) return false;
+  if (!maps.fromStart(exact, i, j, y, drive_force)) return EngineResult::kDeclinedMapsUnusable;
   double phase = static_cast<double>(i) / maps.intervals() + maps.offset(i, j);
-  if (!exact.inLoadedRegime(y, phase, f)) return false;
+  if (!exact.inLoadedRegime(y, phase, f)) return EngineResult::kDeclinedNotInLoadedRegime;
   const double h = t_rel - (t0 + maps.offset(i, j) / f);
-  if (h > 0.0 && !exact.propagate(y, phase, f, h, drive_force)) return false;
+  if (h > 0.0 && !exact.propagate(y, phase, f, h, drive_force))
+    return EngineResult::kDeclinedLeftLinearRegime;
   w.y = y;
   w.phase = wrapTurns(phase);
   w.t_state = t_rel;
   ++w.mapped_stretches;
-  return true;
+  return EngineResult::kDone;
 }
 
 }  // namespace drivetrain_stiffness

@@ -11,6 +11,30 @@
 #include "drivetrain_stiffness/core/validation.hpp"
 
 namespace drivetrain_stiffness {
+namespace {
+
+/// Whether the engine left the step to the fallback: every reason does, kDone alone does not.
+bool declined(EngineResult r) {
+  switch (r) {
+    case EngineResult::kDone: return false;
+    case EngineResult::kDeclinedNoSuchOperation:
+    case EngineResult::kDeclinedNoPropagator:
+    case EngineResult::kDeclinedContactsMayChange:
+    case EngineResult::kDeclinedLeftLinearRegime:
+    case EngineResult::kDeclinedNotInLoadedRegime:
+    case EngineResult::kDeclinedGridNotPeriodic:
+    case EngineResult::kDeclinedSwingGainTooLarge:
+    case EngineResult::kDeclinedMapsNotMade:
+    case EngineResult::kDeclinedMapsUnusable:
+    case EngineResult::kDeclinedOffGrid:
+    case EngineResult::kDeclinedPastLastBoundary:
+    case EngineResult::kDeclinedWithinOneSlice:
+    case EngineResult::kDeclinedNothingToPropagate: return true;
+  }
+  return true;
+}
+
+}  // namespace
 
 DynamicsEstimator::DynamicsEstimator(const RigConfig& rig,
                                      const std::array<double, 2>& bearing_stiffness,
@@ -126,7 +150,8 @@ void DynamicsEstimator::reset(double t, double torque) {
   }
   ws_.following = false;
   ws_.measured = false;
-  model_.maps_settle = -1;  // the periodic propagators (and their settling table) may be new
+  // The periodic propagators (and their settling table) may be new.
+  ws_.maps_settle = DynamicsWorkspace::MapsSettle::kNotAsked;
   ws_.t_state = 0.0;
   ws_.origin = t;
   ws_.k = 0;
@@ -186,9 +211,9 @@ void DynamicsEstimator::setBearingStiffness(const std::array<double, 2>& k,
 
 double DynamicsEstimator::bearingGridValue(double k) {
   // Grid points 1.01^n, n = round(ln k / ln 1.01): the nearest in ratio, within a factor 1.005 of
-  // k. The same k, or any k between the same two midpoints, gives the same bits (one exp of an
-  // integer times a constant), which is what lets the sliced propagation recognise a value met
-  // before (SlicedModalPropagator::kKeptParameterSets). With the 1 % dead band of
+  // k. The same k, or any k between the same two midpoints, gives the same value to the bit (one
+  // exp of an integer times a constant), which is what lets the sliced propagation recognise a
+  // value met before (SlicedModalPropagator::kKeptParameterSets). With the 1 % dead band of
   // setBearingStiffness, the stiffness the model runs with stays within 1 % of the estimator's.
   if (!(k >= 1.0) || !std::isfinite(k)) return k;
   static const double kStep = std::log(1.01);
@@ -216,7 +241,7 @@ void DynamicsEstimator::parametersChanged() {
     build();
     return;
   }
-  model_.intervalMapsStale();
+  ws_.intervalMapsStale();
   if (ws_.following) {
     const GearRotorParameters p = model_.parameters();
     model_.full.setParameters(p);
@@ -238,7 +263,7 @@ void DynamicsEstimator::setMotionSlices(int slices) {
   model_.motion_slices = slices;
   model_.full = SlicedDynamics{};
   model_.mean = SlicedDynamics{};
-  model_.interval_maps.reset();
+  ws_.interval_maps.reset();
 }
 
 void DynamicsEstimator::startFollowing() {
@@ -254,7 +279,7 @@ void DynamicsEstimator::startFollowing() {
   }
   // The parameters may have changed while stopped (parametersChanged rebuilds only the periodic
   // propagators then): the interval maps are made again for these.
-  model_.intervalMapsStale();
+  ws_.intervalMapsStale();
   // The state sits on grid sample k; the nominal phase there (RigExcitation: turns = f t).
   ws_.t_state = ws_.k * model_.interval;
   ws_.mesh_frequency = model_.nominalMeshFrequency();
@@ -354,7 +379,7 @@ void DynamicsEstimator::advanceFollowing(double t_rel, const Sink& sink) {
   const long k_end = static_cast<long>(std::floor(t_rel / interval + 1e-9));
   while (ws_.k < k_end) {
     const EngineChoice c = chooseEngines();
-    if (!(c.first && c.first->interval(model_, ws_))) {
+    if (!c.first || declined(c.first->interval(model_, ws_))) {
       if (!ws_.measured) countSlicesCrossed((ws_.k + 1) * interval, crossed);
       propagateTo((ws_.k + 1) * interval);
     }
@@ -362,7 +387,26 @@ void DynamicsEstimator::advanceFollowing(double t_rel, const Sink& sink) {
     if (sink) sink(movingSample());
   }
   const EngineChoice c = chooseEngines();
-  if (!(c.first && c.first->propagate(model_, ws_, t_rel))) propagateTo(t_rel);
+  if (!c.first || declined(c.first->propagate(model_, ws_, t_rel))) propagateTo(t_rel);
+}
+
+DynamicsWork DynamicsEstimator::work() const {
+  DynamicsWork w;
+  w.rebuilds = ws_.rebuilds;
+  w.fallback_intervals = ws_.fallback_intervals;
+  w.mapped_stretches = ws_.mapped_stretches;
+  w.interval_maps_made = ws_.interval_maps ? ws_.interval_maps->intervalsMade() : 0L;
+  w.exact = ws_.following ? model_.full.exact != nullptr : model_.periodic != nullptr;
+  if (const SlicedModalPropagator* s = model_.moving(ws_.fidelity).exact.get()) {
+    w.sliced = true;
+    w.slices_crossed = s->slicesCrossed();
+    w.decompositions = s->decompositions();
+    w.general_decompositions = s->generalDecompositions();
+    w.regime_changes = s->regimeChanges();
+    w.checked_substeps = s->checkedSubsteps();
+    w.kept_sets_reused = s->keptSetsReused();
+  }
+  return w;
 }
 
 bool DynamicsEstimator::floquetMargin(double* margin) const {
@@ -470,7 +514,7 @@ void DynamicsEstimator::advanceNominal(double t, long k_end, const Sink& sink) {
   while (ws_.k < k_end) {
     const double t_next = (ws_.k + 1) * model_.interval;
     const EngineChoice c = chooseEngines();
-    if (!c.first->interval(model_, ws_)) {
+    if (declined(c.first->interval(model_, ws_))) {
       if (!c.fallback) {
         followFromHere(t - ws_.origin, sink);
         return;

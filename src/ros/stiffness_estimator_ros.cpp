@@ -509,9 +509,10 @@ void StiffnessEstimatorRos::addDynamicsStatus(diagnostic_updater::DiagnosticStat
   if (const DynamicsEstimator* d = pipeline_->dynamics()) {
     status.add("dynamics_fidelity", toString(d->fidelity()));
     status.add("dynamics_output_interval [s]", d->outputInterval());
-    status.add("dynamics_exact_propagation", d->exact() ? "yes" : "no (bearing clearance: dopri5)");
-    status.add("dynamics_dopri5_intervals", d->fallbackIntervals());
-    status.add("dynamics_rebuilds", d->rebuilds());
+    const DynamicsWork work = d->work();
+    status.add("dynamics_exact_propagation", work.exact ? "yes" : "no (bearing clearance: dopri5)");
+    status.add("dynamics_dopri5_intervals", work.fallback_intervals);
+    status.add("dynamics_rebuilds", work.rebuilds);
     // Real-time factor: model time integrated per second of processing.
     const double rtf = processing_s_ > 0.0 ? c.simulated_s / processing_s_ : 0.0;
     status.add("realtime_factor", rtf);

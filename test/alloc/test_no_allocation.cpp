@@ -249,7 +249,7 @@ TEST(NoAllocation, PreloadInputsInSteadyState) {
   for (long k = 20000; k < 23000; ++k) step(k, true);    // ...one preload cycle (6 inputs at 20 Hz)
   ASSERT_TRUE(pipeline.dynamics()->followingMotion());   // switched to the sliced propagation
   const PipelineCounters before_counters = pipeline.counters();
-  const long dynamics_changes_before = pipeline.dynamics()->rebuilds();
+  const long dynamics_changes_before = pipeline.dynamics()->work().rebuilds;
   const long before = allocationCount();
   for (long k = 23000; k < 33000; ++k)
     step(k, true);  // 1 s: 20 preload inputs, 10000 torque inputs
@@ -263,7 +263,7 @@ TEST(NoAllocation, PreloadInputsInSteadyState) {
   EXPECT_TRUE(same_balls) << "a preload step changed the number of balls in contact";
   // The dynamics' bearing stiffness changed during the counted second (4 of the 6 steps move it
   // past 1 %: 14 of the 20 inputs), and they stayed on the sliced propagation.
-  EXPECT_EQ(pipeline.dynamics()->rebuilds() - dynamics_changes_before, 14);
+  EXPECT_EQ(pipeline.dynamics()->work().rebuilds - dynamics_changes_before, 14);
   EXPECT_TRUE(pipeline.dynamics()->followingMotion());
   EXPECT_GT(c.modal_updates, before_counters.modal_updates);
 }
@@ -298,15 +298,14 @@ TEST(NoAllocation, BearingChangesToNewValuesInSteadyState) {
     run(t + 2e-3);
   }
   ASSERT_TRUE(est.followingMotion());
-  const SlicedModalPropagator& prop = *est.slicedPropagator();
-  const long decompositions_before = prop.decompositions(), before = allocationCount();
+  const long decompositions_before = est.work().decompositions, before = allocationCount();
   for (int i = 0; i < 20; ++i) {
     newStiffness();
     run(t + 2e-3);
   }
   const long n = allocationCount() - before;
   EXPECT_EQ(n, 0) << n / 20.0 << " heap allocations per bearing change";
-  EXPECT_GT(prop.decompositions() - decompositions_before, 20 * 100)
+  EXPECT_GT(est.work().decompositions - decompositions_before, 20 * 100)
       << "the changes did not decompose slices";
 }
 

@@ -60,14 +60,14 @@ GearRotorModel slicedModel(double k, double f, double torque) {
 TEST(DynamicsEstimator, GridAndSteadyState) {
   DynamicsEstimator est(rig(), {1.2e8, 1.2e8}, 1000.0);
   EXPECT_NEAR(est.outputInterval(), 1e-3, 1e-15);  // 1 kHz divides the 3 ms mesh period
-  EXPECT_TRUE(est.exact());
+  EXPECT_TRUE(est.work().exact);
   const double epoch = 1.7e9;  // a ROS wall-clock epoch: phase must not lose resolution
   est.reset(epoch, 0.1);
   std::vector<DynamicsSample> out;
   est.advanceTo(epoch + 0.5004, [&](const DynamicsSample& s) { out.push_back(s); });
   ASSERT_EQ(out.size(), 500u);
   EXPECT_NEAR(out.back().t, epoch + 0.5, 1e-6);
-  EXPECT_EQ(est.fallbackIntervals(), 0);
+  EXPECT_EQ(est.work().fallback_intervals, 0);
   // Samples 1 ms apart at a 3 ms mesh period step the phase by 1/3 each.
   EXPECT_NEAR(std::fmod(out[10].phase - out[9].phase + 1.0, 1.0), 1.0 / 3.0, 1e-6);
   // Every third sample lands on the period's tooth switch: its phase is the switch, 0 exactly, from
@@ -154,7 +154,7 @@ TEST(DynamicsEstimator, TorqueTakesEffectAtItsStampInsideAnInterval) {
   est.setTorque(0.25, 0.0307);
   est.advanceTo(0.06, keep);
   ASSERT_EQ(online.size(), 60u);
-  EXPECT_EQ(est.fallbackIntervals(), 0);  // the exact propagators carried both steps
+  EXPECT_EQ(est.work().fallback_intervals, 0);  // the exact propagators carried both steps
 
   IntegratorOptions o;
   o.relative_tolerance = 1e-11;
@@ -325,7 +325,7 @@ TEST(DynamicsEstimator, NearTheKneeEveryFlankChangeIsIntegrated) {
     est.advanceTo(0.02, [&](const DynamicsSample& s) { online.push_back(s.dynamic_te); });
     const bool moved = torque < 0.0 || torque > 3.0;
     EXPECT_EQ(est.followingMotion(), moved) << torque << " N m";
-    EXPECT_EQ(est.fallbackIntervals(), 0) << torque << " N m";
+    EXPECT_EQ(est.work().fallback_intervals, 0) << torque << " N m";
     const GearRotorModel sliced = slicedModel(1.2e8, f, torque);
     const GearRotorModel& model = moved ? sliced : est.model();
     integrate(model, IntegratorMethod::kDopri5, o, 0.0, start, 0.02, est.outputInterval(),
@@ -344,7 +344,7 @@ TEST(DynamicsEstimator, NearTheKneeEveryFlankChangeIsIntegrated) {
     // and 8.8e-12 at -1 N m. A missed change is 3.4e-4 and more (above).
     EXPECT_LT(std::sqrt(e / r), moved ? 1e-6 : 1e-7) << torque << " N m";
     if (moved && torque > 0.0) {
-      EXPECT_GT(est.slicedPropagator()->regimeChanges(), 0)
+      EXPECT_GT(est.work().regime_changes, 0)
           << torque << " N m";  // the back path's lifts and landings
     }
   }
@@ -413,7 +413,7 @@ TEST(DynamicsEstimator, StiffnessUpdateKeepsThePhase) {
   auto keep = [&](const DynamicsSample& s) { phases.push_back(s.phase); };
   est.advanceTo(0.0015, keep);
   est.setBearingStiffness({1.4e8, 1.4e8});
-  EXPECT_EQ(est.rebuilds(), 2);
+  EXPECT_EQ(est.work().rebuilds, 2);
   est.advanceTo(0.0035, keep);
   ASSERT_EQ(phases.size(), 3u);
   for (std::size_t i = 1; i < phases.size(); ++i)
@@ -429,7 +429,7 @@ TEST(DynamicsEstimator, OrdinaryGearWithBacklash) {
   est.reset(0.0, 0.1);
   std::vector<DynamicsSample> out;
   est.advanceTo(0.06, [&](const DynamicsSample& s) { out.push_back(s); });
-  EXPECT_EQ(est.fallbackIntervals(), 0);
+  EXPECT_EQ(est.work().fallback_intervals, 0);
   for (const DynamicsSample& s : out) {
     EXPECT_TRUE(s.drive_flank_loaded);
     EXPECT_FALSE(s.back_flank_loaded);
@@ -446,7 +446,7 @@ TEST(DynamicsEstimator, OrdinaryGearWithBacklash) {
   // open).
   est.setTorque(-0.1);
   est.advanceTo(0.08, [&](const DynamicsSample& s) { EXPECT_TRUE(s.state.allFinite()); });
-  EXPECT_GT(est.fallbackIntervals(), 0);
+  EXPECT_GT(est.work().fallback_intervals, 0);
   EXPECT_FALSE(est.followingMotion());
 }
 
@@ -472,7 +472,7 @@ TEST(DynamicsEstimator, RefusesASetUpTooLargeNamingSpeedAndRate) {
   // The set-up bound leaves ordinary slow speeds alone.
   RigConfig r = rig();
   r.dynamics.speed_rpm = 100.0;
-  EXPECT_TRUE(DynamicsEstimator(r, {1.2e8, 1.2e8}, 1000.0).exact());
+  EXPECT_TRUE(DynamicsEstimator(r, {1.2e8, 1.2e8}, 1000.0).work().exact);
 }
 
 // Without exact propagation (bearing clearance), a mesh period that overflows the grid arithmetic
@@ -505,7 +505,7 @@ TEST(DynamicsEstimator, FollowsAMeasuredRunUpExactly) {
   est.advanceTo(0.04, keep);
   ASSERT_TRUE(est.followingMotion());
   ASSERT_EQ(online.size(), 40u);
-  EXPECT_EQ(est.fallbackIntervals(), 0);
+  EXPECT_EQ(est.work().fallback_intervals, 0);
   // Reference: the sliced model re-anchored at the same readings, dopri5 at rtol 1e-12.
   auto slices = std::make_shared<const SlicedMesh>(
       std::make_shared<const AntiBacklashMesh>(rig().gears, rig().anti_backlash, rig().mesh_model,
@@ -576,11 +576,12 @@ TEST(DynamicsEstimator, FollowsTheMotionThroughAFlankThatLifts) {
   std::vector<DynamicsSample> online;
   est.advanceTo(7e-3, [&](const DynamicsSample& s) { online.push_back(s); });
   ASSERT_EQ(online.size(), 20u);
-  ASSERT_NE(est.slicedPropagator(), nullptr);
-  EXPECT_GT(est.slicedPropagator()->regimeChanges(), 0) << "the lift was not located";
-  EXPECT_EQ(est.fallbackIntervals(), 0) << "a dopri5 stretch: some moment was in no linear regime";
-  std::printf("regime changes %ld, dopri5 stretches %ld\n", est.slicedPropagator()->regimeChanges(),
-              est.fallbackIntervals());
+  ASSERT_TRUE(est.work().sliced);
+  EXPECT_GT(est.work().regime_changes, 0) << "the lift was not located";
+  EXPECT_EQ(est.work().fallback_intervals, 0)
+      << "a dopri5 stretch: some moment was in no linear regime";
+  std::printf("regime changes %ld, dopri5 stretches %ld\n", est.work().regime_changes,
+              est.work().fallback_intervals);
   // Reference: the same sliced model (256 slices) at 10 N m from the state at 5 ms.
   auto slices = std::make_shared<const SlicedMesh>(
       std::make_shared<const AntiBacklashMesh>(rig().gears, rig().anti_backlash, rig().mesh_model,
@@ -620,15 +621,15 @@ TEST(DynamicsEstimator, BearingChangeWhileRunningBuildsNothingInTheCall) {
   est.advanceTo(0.01, nullptr);
   est.setBearingStiffness({1.5e8, 1.5e8});
   ASSERT_TRUE(est.followingMotion());
-  ASSERT_NE(est.slicedPropagator(), nullptr);
-  EXPECT_EQ(est.slicedPropagator()->decompositions(), 0);
+  ASSERT_TRUE(est.work().sliced);
+  EXPECT_EQ(est.work().decompositions, 0);
   std::vector<DynamicsSample> out;
   est.advanceTo(0.05, [&](const DynamicsSample& s) { out.push_back(s); });
   ASSERT_EQ(out.size(), 40u);
   for (const DynamicsSample& s : out)
     EXPECT_TRUE(s.state.allFinite() && s.drive_flank_loaded && s.back_flank_loaded);
   // One decomposition per slice crossed, each once.
-  EXPECT_LE(est.slicedPropagator()->decompositions(), 300);
+  EXPECT_LE(est.work().decompositions, 300);
   // Stiffer bearings, same torque: the mean mesh force stays T / r_b (17.7 N, seed 000 eq 14).
   double mean = 0.0;
   for (std::size_t i = out.size() - 30; i < out.size(); ++i) mean += out[i].mesh_force / 30.0;
@@ -659,8 +660,8 @@ TEST(DynamicsEstimator, TheNominalPhaseAfterABearingChangeStreamsIntervalMaps) {
       est.setTorque(torque * (1.0 + 0.2 * std::sin(0.9 * m)), at);
     }
     est.advanceTo(0.080, keep);
-    *mapped = est.mappedStretches();
-    *crossed = est.slicedPropagator()->slicesCrossed();
+    *mapped = est.work().mapped_stretches;
+    *crossed = est.work().slices_crossed;
     return te;
   };
   long mapped = 0, crossed = 0, mapped_ref = 0, crossed_ref = 0;
@@ -689,15 +690,17 @@ TEST(DynamicsEstimator, TheNominalPhaseAfterABearingChangeStreamsIntervalMaps) {
   // The maps' settling rule compares the swing gain from the slices' modes with the table's: at the
   // parameters the table was made with, the two agree within the 5 % the rule allows (independent
   // computations: Eigen's eigensolver on the phase table's Jacobian at 16 phases, the seeded modes
-  // of the slices there).
+  // of the slices there). The sliced propagator is the estimator's: its parameters, 256 slices.
   DynamicsEstimator est(rig(), {1.2e8, 1.2e8}, 1000.0);
   est.reset(0.0, 0.1);
   est.advanceTo(0.010, nullptr);
-  est.setDamping(est.damping().mesh,
-                 est.damping().bearing);  // onto the sliced model, parameters unchanged
   const PeriodicExponentialPropagator table(est.model(), 0.0, est.outputInterval(), 1.0, true);
   ASSERT_GT(table.settleGain(), 0.0);
-  EXPECT_NEAR(est.slicedPropagator()->loadedSwingGain() / table.settleGain(), 1.0, 0.05);
+  const SlicedModalPropagator exact(
+      est.model().parameters(),
+      std::make_shared<const SlicedMesh>(std::make_shared<const AntiBacklashMesh>(rig()), 256),
+      rig().dynamics.transmission_error_amplitude, rig().dynamics.backlash);
+  EXPECT_NEAR(exact.loadedSwingGain() / table.settleGain(), 1.0, 0.05);
 }
 
 // The dynamics take up a bearing-stiffness change on a 1 % grid
@@ -756,15 +759,15 @@ TEST(DynamicsEstimator, ARipplingBearingStiffnessKeepsItsSlices) {
   };
   DynamicsEstimator est(rig(), {1.2e8, 1.2e8}, 1000.0);
   const std::vector<DynamicsSample> first = run(est);
-  const SlicedModalPropagator& prop = *est.slicedPropagator();
+  const DynamicsWork work = est.work();
   std::printf(
       "%ld slices crossed, %ld decompositions, %ld kept sets taken back, %ld model updates\n",
-      prop.slicesCrossed(), prop.decompositions(), prop.keptSetsReused(), est.rebuilds());
-  EXPECT_GE(est.rebuilds(), 150);
-  EXPECT_GT(prop.slicesCrossed(), 15000);
-  EXPECT_LE(prop.decompositions(), 3 * 259 + 10)
+      work.slices_crossed, work.decompositions, work.kept_sets_reused, work.rebuilds);
+  EXPECT_GE(work.rebuilds, 150);
+  EXPECT_GT(work.slices_crossed, 15000);
+  EXPECT_LE(work.decompositions, 3 * 259 + 10)
       << "the slices of a value met before were decomposed again";
-  EXPECT_GE(prop.keptSetsReused(), 140);
+  EXPECT_GE(work.kept_sets_reused, 140);
   for (const DynamicsSample& s : first)
     ASSERT_TRUE(s.state.allFinite() && s.drive_flank_loaded && s.back_flank_loaded);
   DynamicsEstimator again(rig(), {1.2e8, 1.2e8}, 1000.0);
@@ -840,7 +843,7 @@ TEST(DynamicsEstimator, LinearModalFollowsTheMeasuredMotion) {
     est.advanceTo(t, [&](const DynamicsSample& s) { online.push_back(s); });
     est.followMotion(t, f * t, f);
   }
-  EXPECT_EQ(est.fallbackIntervals(), 0);
+  EXPECT_EQ(est.work().fallback_intervals, 0);
   std::vector<std::pair<double, double>> steady;
   for (const DynamicsSample& s : online) {
     if (s.t >= 0.03) steady.emplace_back(s.t, s.dynamic_te);
@@ -913,7 +916,7 @@ TEST(DynamicsEstimator, AGapAtTheNominalPhaseCountsOnlyTheSlicesCrossedOneByOne)
       EXPECT_NE(std::string(e.what()).find("one by one"), std::string::npos) << e.what();
     }
     EXPECT_TRUE(est.followingMotion());
-    return std::make_pair(te, est.mappedStretches());
+    return std::make_pair(te, est.work().mapped_stretches);
   };
   bool refused = false;
   const auto [mapped_once, maps_once] = run(0.1, true, &refused);

@@ -94,7 +94,7 @@ TEST(RigPipelineMotion, PhaseFollowsTheEncoderThroughARunUp) {
   const PipelineCounters& c = p.counters();
   EXPECT_EQ(c.accepted_motion, 200u);
   EXPECT_EQ(c.rejected_motion + c.dropped_motion + c.motion_timeouts + c.gear_ratio_mismatches, 0u);
-  EXPECT_EQ(p.dynamics()->fallbackIntervals(), 0);
+  EXPECT_EQ(p.dynamics()->work().fallback_intervals, 0);
   // The stiffness estimate's mesh phase follows the same angle.
   EXPECT_LT(
       phaseDistance(p.estimator().current().mesh.phase, phaseOf(extrapolated(m, 0.199), 0.125)),

@@ -22,6 +22,20 @@ struct DynamicsSample {
   bool drive_flank_loaded = false, back_flank_loaded = false;
 };
 
+/// What the dynamics did since construction: deterministic counts, for reports and tests.
+struct DynamicsWork {
+  long rebuilds = 0;            ///< builds, and parameter changes taken up while running
+  long fallback_intervals = 0;  ///< intervals and stretches dopri5 took
+  long mapped_stretches = 0;    ///< stretches the interval maps took
+  long interval_maps_made = 0;  ///< intervals whose maps were made (0: no maps)
+  bool exact = false;           ///< exact propagation now (false: dopri5, bearing clearance)
+  /// The moving sliced propagator exists (the fidelity's: full, or linear_modal's mean); the
+  /// counts below are its own, 0 without it.
+  bool sliced = false;
+  long slices_crossed = 0, decompositions = 0, general_decompositions = 0;
+  long regime_changes = 0, checked_substeps = 0, kept_sets_reused = 0;
+};
+
 /// The 3-DOF dynamics on an output grid, at the nominal phase or along the measured motion.
 class DynamicsEstimator {
  public:
@@ -57,11 +71,6 @@ class DynamicsEstimator {
   double meshFrequency() const;
   /// Slices per mesh period. Throws InvalidInput (outside [4, 65536], or in use).
   void setMotionSlices(int slices);
-  /// Null until first used.
-  const SlicedModalPropagator* slicedPropagator() const { return model_.full.exact.get(); }
-  const SlicedModalPropagator* movingSlicedPropagator() const {
-    return model_.moving(ws_.fidelity).exact.get();
-  }
   /// A change over 1 % as bearingGridValue(k) [N/m] from `at` [s]. Throws InvalidInput.
   void setBearingStiffness(const std::array<double, 2>& k, std::optional<double> at = std::nullopt);
   /// k [N/m] on the grid 1.01^n (k itself below 1 N/m).
@@ -80,13 +89,8 @@ class DynamicsEstimator {
     return ws_.origin + (ws_.following ? ws_.t_state : ws_.k * model_.interval);
   }
   double outputInterval() const { return model_.interval; }  ///< [s]
-  long rebuilds() const { return ws_.rebuilds; }
-  long fallbackIntervals() const { return ws_.fallback_intervals; }
-  long mappedStretches() const { return ws_.mapped_stretches; }
-  const SlicedIntervalMaps* intervalMaps() const { return model_.interval_maps.get(); }
-  bool exact() const {
-    return ws_.following ? model_.full.exact != nullptr : model_.periodic != nullptr;
-  }
+  /// The counts of the work done so far, and whether the propagation is exact now.
+  DynamicsWork work() const;
   const RigConfig& rig() const { return *model_.rig; }
   const AntiBacklashMesh& mesh() const { return *model_.mesh; }
   const GearRotorModel& model() const { return *model_.nominal; }

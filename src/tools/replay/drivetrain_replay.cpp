@@ -162,17 +162,17 @@ std::string jsonText(const nlohmann::json& j) {
 /// the regime bound could not clear them; at the nominal phase after a change, the stretches the
 /// interval maps took and the intervals made (docs/model.md).
 nlohmann::json dynamicsWorkJson(const DynamicsEstimator& d) {
-  nlohmann::json work = {
-      {"model_updates", d.rebuilds()},
-      {"dopri5_intervals", d.fallbackIntervals()},
-      {"mapped_stretches", d.mappedStretches()},
-      {"interval_maps_made", d.intervalMaps() ? d.intervalMaps()->intervalsMade() : 0L}};
-  if (const SlicedModalPropagator* s = d.movingSlicedPropagator()) {
-    work["slices_crossed"] = s->slicesCrossed();
-    work["slice_decompositions"] = s->decompositions();
-    work["general_decompositions"] = s->generalDecompositions();
-    work["contact_changes"] = s->regimeChanges();
-    work["checked_substeps"] = s->checkedSubsteps();
+  const DynamicsWork w = d.work();
+  nlohmann::json work = {{"model_updates", w.rebuilds},
+                         {"dopri5_intervals", w.fallback_intervals},
+                         {"mapped_stretches", w.mapped_stretches},
+                         {"interval_maps_made", w.interval_maps_made}};
+  if (w.sliced) {
+    work["slices_crossed"] = w.slices_crossed;
+    work["slice_decompositions"] = w.decompositions;
+    work["general_decompositions"] = w.general_decompositions;
+    work["contact_changes"] = w.regime_changes;
+    work["checked_substeps"] = w.checked_substeps;
   }
   return work;
 }
