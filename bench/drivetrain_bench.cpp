@@ -20,10 +20,10 @@
 #include <sstream>
 
 #include "drivetrain_stiffness/config/yaml_config.hpp"
-#include "drivetrain_stiffness/core/exponential_integrator.hpp"
-#include "drivetrain_stiffness/core/reduced_models.hpp"
-#include "drivetrain_stiffness/core/scenes.hpp"
-#include "drivetrain_stiffness/core/sliced_modal_propagator.hpp"
+#include "drivetrain_stiffness/core/dynamics/exponential_integrator.hpp"
+#include "drivetrain_stiffness/core/dynamics/reduced_models.hpp"
+#include "drivetrain_stiffness/core/scenes/scenes.hpp"
+#include "drivetrain_stiffness/core/dynamics/sliced_modal_propagator.hpp"
 #include "peer_integrators.hpp"
 
 namespace ds = drivetrain_stiffness;

@@ -4,8 +4,8 @@
 #include <benchmark/benchmark.h>
 
 #include "drivetrain_stiffness/config/yaml_config.hpp"
-#include "drivetrain_stiffness/core/anti_backlash_mesh.hpp"
-#include "drivetrain_stiffness/core/modal_analysis.hpp"
+#include "drivetrain_stiffness/core/gear/anti_backlash_mesh.hpp"
+#include "drivetrain_stiffness/core/resonance/modal_analysis.hpp"
 
 using namespace drivetrain_stiffness;
 

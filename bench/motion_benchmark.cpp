@@ -17,8 +17,8 @@
 
 #include "drivetrain_stiffness/config/yaml_config.hpp"
 #include "drivetrain_stiffness/core/constants.hpp"
-#include "drivetrain_stiffness/core/scenes.hpp"
-#include "drivetrain_stiffness/core/sliced_modal_propagator.hpp"
+#include "drivetrain_stiffness/core/scenes/scenes.hpp"
+#include "drivetrain_stiffness/core/dynamics/sliced_modal_propagator.hpp"
 #include "drivetrain_stiffness/pipeline/rig_pipeline.hpp"
 
 using namespace drivetrain_stiffness;

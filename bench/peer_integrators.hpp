@@ -7,7 +7,7 @@
 #include <functional>
 #include <string>
 
-#include "drivetrain_stiffness/core/gear_rotor_model.hpp"
+#include "drivetrain_stiffness/core/dynamics/gear_rotor_model.hpp"
 
 namespace drivetrain_stiffness {
 namespace bench {

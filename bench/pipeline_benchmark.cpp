@@ -13,8 +13,8 @@
 #include <cmath>
 
 #include "drivetrain_stiffness/config/yaml_config.hpp"
-#include "drivetrain_stiffness/core/dynamics_estimator.hpp"
-#include "drivetrain_stiffness/core/exponential_integrator.hpp"
+#include "drivetrain_stiffness/core/dynamics/dynamics_estimator.hpp"
+#include "drivetrain_stiffness/core/dynamics/exponential_integrator.hpp"
 #include "drivetrain_stiffness/pipeline/rig_pipeline.hpp"
 #include "ripple_torque_feed.hpp"  // NOLINT(build/include_subdir)
 

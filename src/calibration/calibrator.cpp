@@ -9,7 +9,7 @@
 #include <Eigen/LU>
 
 #include "drivetrain_stiffness/core/constants.hpp"
-#include "drivetrain_stiffness/core/modal_analysis.hpp"
+#include "drivetrain_stiffness/core/resonance/modal_analysis.hpp"
 #include "drivetrain_stiffness/core/rig_model.hpp"
 #include "drivetrain_stiffness/core/stiffness_estimator.hpp"
 #include "drivetrain_stiffness/core/validation.hpp"

@@ -3,7 +3,7 @@
 #include <cmath>
 #include <utility>
 
-#include "drivetrain_stiffness/core/modal_analysis.hpp"
+#include "drivetrain_stiffness/core/resonance/modal_analysis.hpp"
 #include "drivetrain_stiffness/core/rig_model.hpp"
 
 namespace drivetrain_stiffness {

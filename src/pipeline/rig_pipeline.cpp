@@ -109,6 +109,21 @@ const PipelineCounters& RigPipeline::counters() const {
   return m;
 }
 
+PipelineDiagnostics RigPipeline::diagnostics(Stamp now) const {
+  std::optional<DynamicsDiagnostics> dynamics;
+  if (dynamics_) {
+    const DynamicsEstimator& d = dynamics_->dynamics();
+    dynamics = DynamicsDiagnostics{d.fidelity(), d.outputInterval(), d.work()};
+  }
+  return PipelineDiagnostics{counters(),
+                             gate_->refusals(),
+                             phase_->name(),
+                             phase_->encoderSilence(now),
+                             vibration_->unknownNames(),
+                             gate_->unnumberedPublishers(),
+                             dynamics};
+}
+
 double RigPipeline::pinionAngle(Stamp stamp) const { return phase_->pinionAngle(stamp); }
 
 double RigPipeline::encoderPinionAngle(Stamp stamp) const {

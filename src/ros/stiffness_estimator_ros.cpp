@@ -360,12 +360,12 @@ void StiffnessEstimatorRos::onDiagnosticTimer() {
 
 void StiffnessEstimatorRos::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) {
   std::lock_guard<std::mutex> lock(mutex_);
-  const PipelineCounters& c = pipeline_->counters();
-  summarizeSinceLastReport(status, c);
-  addInputStatus(status, c);
-  addProcessStatus(status);
+  const PipelineDiagnostics d = pipeline_->diagnostics(fromRosTime(ros::Time::now()));
+  summarizeSinceLastReport(status, d.counters);
+  addInputStatus(status, d);
+  addProcessStatus(status, d);
   addCalibrationStatus(status);
-  addDynamicsStatus(status, c);
+  addDynamicsStatus(status, d);
 }
 
 void StiffnessEstimatorRos::summarizeSinceLastReport(
@@ -423,20 +423,19 @@ void StiffnessEstimatorRos::summarizeSinceLastReport(
 }
 
 void StiffnessEstimatorRos::addInputStatus(diagnostic_updater::DiagnosticStatusWrapper& status,
-                                           const PipelineCounters& c) {
-  for (const auto& [key, count] : namedCounters(c)) status.add(key, count);
-  status.add("last_event", c.last_event);
-  status.add("phase_source", pipeline_->phaseSource());
-  if (!pipeline_->vibrationInput().unknownNames().empty()) {
+                                           const PipelineDiagnostics& d) {
+  for (const auto& [key, count] : namedCounters(d.counters)) status.add(key, count);
+  status.add("last_event", d.counters.last_event);
+  status.add("phase_source", d.phase_source);
+  if (!d.unknown_vibration_channels.empty()) {
     std::string names;
-    for (const std::string& n : pipeline_->vibrationInput().unknownNames())
+    for (const std::string& n : d.unknown_vibration_channels)
       names += (names.empty() ? "" : ", ") + n;
     status.add("vibration_unknown_channel_names", names);
   }
   // The time-out is taken on the next input's stamp (the encoders rule): with every input stopped,
   // the age of the last reading on the node's clock says that the phase source above is stale.
-  if (const std::optional<double> silence =
-          pipeline_->encoderSilence(fromRosTime(ros::Time::now()))) {
+  if (const std::optional<double> silence = d.encoder_silence) {
     status.add("encoder_silence [s]", *silence);
     if (*silence > pipeline_->options().motion_timeout) {
       status.mergeSummaryf(
@@ -448,9 +447,10 @@ void StiffnessEstimatorRos::addInputStatus(diagnostic_updater::DiagnosticStatusW
   }
 }
 
-void StiffnessEstimatorRos::addProcessStatus(diagnostic_updater::DiagnosticStatusWrapper& status) {
+void StiffnessEstimatorRos::addProcessStatus(diagnostic_updater::DiagnosticStatusWrapper& status,
+                                             const PipelineDiagnostics& d) {
   status.add("process_restarts", starts_ - 1);
-  status.add("unnumbered_publishers", pipeline_->unnumberedPublishers());
+  status.add("unnumbered_publishers", d.unnumbered_publishers);
   status.add("missed_deadlines", missed_deadlines_);
   status.add("missed_deadlines_cpu", missed_deadlines_cpu_);
   status.add("deadline [s]", deadline_);
@@ -505,16 +505,16 @@ void StiffnessEstimatorRos::addCalibrationStatus(
 }
 
 void StiffnessEstimatorRos::addDynamicsStatus(diagnostic_updater::DiagnosticStatusWrapper& status,
-                                              const PipelineCounters& c) {
-  if (const DynamicsEstimator* d = pipeline_->dynamics()) {
-    status.add("dynamics_fidelity", toString(d->fidelity()));
-    status.add("dynamics_output_interval [s]", d->outputInterval());
-    const DynamicsWork work = d->work();
+                                              const PipelineDiagnostics& d) {
+  if (d.dynamics) {
+    status.add("dynamics_fidelity", toString(d.dynamics->fidelity));
+    status.add("dynamics_output_interval [s]", d.dynamics->output_interval);
+    const DynamicsWork& work = d.dynamics->work;
     status.add("dynamics_exact_propagation", work.exact ? "yes" : "no (bearing clearance: dopri5)");
     status.add("dynamics_dopri5_intervals", work.fallback_intervals);
     status.add("dynamics_rebuilds", work.rebuilds);
     // Real-time factor: model time integrated per second of processing.
-    const double rtf = processing_s_ > 0.0 ? c.simulated_s / processing_s_ : 0.0;
+    const double rtf = processing_s_ > 0.0 ? d.counters.simulated_s / processing_s_ : 0.0;
     status.add("realtime_factor", rtf);
     if (rtf > 0.0 && rtf < 1.0)
       status.mergeSummary(diagnostic_msgs::DiagnosticStatus::WARN, "slower than real time");

@@ -16,7 +16,7 @@
 #include <iomanip>
 #include <limits>
 
-#include "drivetrain_stiffness/core/modal_analysis.hpp"
+#include "drivetrain_stiffness/core/resonance/modal_analysis.hpp"
 #include "drivetrain_stiffness/core/rig_model.hpp"
 #include "drivetrain_stiffness/core/stiffness_estimator.hpp"
 #include "drivetrain_stiffness/core/validation.hpp"

@@ -14,7 +14,7 @@
 #include "drivetrain_stiffness/config/yaml_config.hpp"
 #include "counting_new.hpp"  // NOLINT(build/include_subdir)
 #include "drivetrain_stiffness/calibration/calibrator.hpp"
-#include "drivetrain_stiffness/core/dynamics_estimator.hpp"
+#include "drivetrain_stiffness/core/dynamics/dynamics_estimator.hpp"
 #include "drivetrain_stiffness/core/stiffness_estimator.hpp"
 #include "drivetrain_stiffness/pipeline/rig_pipeline.hpp"
 #include "ripple_torque_feed.hpp"  // NOLINT(build/include_subdir)

@@ -10,7 +10,7 @@
 #include <gtest/gtest.h>
 
 #include "drivetrain_stiffness/calibration/calibrator.hpp"
-#include "drivetrain_stiffness/core/modal_analysis.hpp"
+#include "drivetrain_stiffness/core/resonance/modal_analysis.hpp"
 #include "drivetrain_stiffness/core/rig_model.hpp"
 #include "drivetrain_stiffness/core/stiffness_estimator.hpp"
 #include "seed_rig.hpp"  // NOLINT(build/include_subdir)

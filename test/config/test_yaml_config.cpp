@@ -4,8 +4,8 @@
 #include <fstream>
 
 #include "drivetrain_stiffness/config/yaml_config.hpp"
-#include "drivetrain_stiffness/core/hertz_contact.hpp"
-#include "drivetrain_stiffness/core/reduced_models.hpp"
+#include "drivetrain_stiffness/core/bearing/hertz_contact.hpp"
+#include "drivetrain_stiffness/core/dynamics/reduced_models.hpp"
 #include "drivetrain_stiffness/core/validation.hpp"
 
 using namespace drivetrain_stiffness;

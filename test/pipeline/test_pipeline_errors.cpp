@@ -12,7 +12,7 @@
 
 #include "drivetrain_stiffness/config/yaml_config.hpp"
 #include "drivetrain_stiffness/core/errors.hpp"
-#include "drivetrain_stiffness/core/integrators.hpp"
+#include "drivetrain_stiffness/core/dynamics/integrators.hpp"
 #include "drivetrain_stiffness/pipeline/rig_pipeline.hpp"
 #include "seed_rig.hpp"  // NOLINT(build/include_subdir)
 

@@ -12,7 +12,7 @@
 
 #include "drivetrain_stiffness/config/yaml_config.hpp"
 #include "drivetrain_stiffness/core/rig_model.hpp"
-#include "drivetrain_stiffness/core/scenes.hpp"
+#include "drivetrain_stiffness/core/scenes/scenes.hpp"
 #include "drivetrain_stiffness/core/validation.hpp"
 #include "drivetrain_stiffness/pipeline/rig_pipeline.hpp"
 #include "seed_rig.hpp"  // NOLINT(build/include_subdir)

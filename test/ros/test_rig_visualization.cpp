@@ -9,7 +9,7 @@
 #include <string>
 
 #include "drivetrain_stiffness/config/yaml_config.hpp"
-#include "drivetrain_stiffness/core/anti_backlash_mesh.hpp"
+#include "drivetrain_stiffness/core/gear/anti_backlash_mesh.hpp"
 #include "drivetrain_stiffness/core/validation.hpp"
 #include "drivetrain_stiffness/pipeline/runtime_settings.hpp"
 #include "drivetrain_stiffness/ros/message_conversion.hpp"

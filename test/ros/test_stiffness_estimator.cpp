@@ -15,7 +15,7 @@
 #include "drivetrain_stiffness/Stiffness.h"
 #include "drivetrain_stiffness/TransmissionError.h"
 #include "drivetrain_stiffness/config/yaml_config.hpp"
-#include "drivetrain_stiffness/core/dynamics_estimator.hpp"
+#include "drivetrain_stiffness/core/dynamics/dynamics_estimator.hpp"
 #include "drivetrain_stiffness/core/stiffness_estimator.hpp"
 
 using namespace drivetrain_stiffness;

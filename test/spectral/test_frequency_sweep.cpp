@@ -2,8 +2,8 @@
 #include <gtest/gtest.h>
 
 #include "drivetrain_stiffness/config/yaml_config.hpp"
-#include "drivetrain_stiffness/core/modal_analysis.hpp"
-#include "drivetrain_stiffness/core/scenes.hpp"
+#include "drivetrain_stiffness/core/resonance/modal_analysis.hpp"
+#include "drivetrain_stiffness/core/scenes/scenes.hpp"
 #include "drivetrain_stiffness/core/stiffness_estimator.hpp"
 #include "drivetrain_stiffness/core/validation.hpp"
 #include "drivetrain_stiffness/spectral/frequency_sweep.hpp"

@@ -4,7 +4,7 @@
 
 #include <cmath>
 
-#include "drivetrain_stiffness/core/ball_bearing.hpp"
+#include "drivetrain_stiffness/core/bearing/ball_bearing.hpp"
 
 namespace drivetrain_stiffness {
 namespace test {

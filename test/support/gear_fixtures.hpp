@@ -3,7 +3,7 @@
 
 #include <cmath>
 
-#include "drivetrain_stiffness/core/gear_geometry.hpp"
+#include "drivetrain_stiffness/core/gear/gear_geometry.hpp"
 
 namespace drivetrain_stiffness {
 namespace test {

@@ -9,7 +9,7 @@
 
 #include "drivetrain_stiffness/calibration/static_te_model.hpp"
 #include "drivetrain_stiffness/core/constants.hpp"
-#include "drivetrain_stiffness/core/motion.hpp"
+#include "drivetrain_stiffness/core/dynamics/motion.hpp"
 #include "drivetrain_stiffness/core/stiffness_estimator.hpp"
 
 namespace drivetrain_stiffness::test {

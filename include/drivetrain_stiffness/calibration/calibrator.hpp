@@ -15,7 +15,7 @@
 #include "drivetrain_stiffness/calibration/order_regression.hpp"
 #include "drivetrain_stiffness/calibration/static_te_model.hpp"
 #include "drivetrain_stiffness/calibration/window_accumulator.hpp"
-#include "drivetrain_stiffness/core/modal_analysis.hpp"
+#include "drivetrain_stiffness/core/resonance/modal_analysis.hpp"
 #include "drivetrain_stiffness/core/rig_config.hpp"
 
 namespace drivetrain_stiffness {

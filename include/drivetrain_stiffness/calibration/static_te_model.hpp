@@ -14,8 +14,8 @@
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
 
-#include "drivetrain_stiffness/core/anti_backlash_mesh.hpp"
-#include "drivetrain_stiffness/core/bearing_support.hpp"
+#include "drivetrain_stiffness/core/gear/anti_backlash_mesh.hpp"
+#include "drivetrain_stiffness/core/bearing/bearing_support.hpp"
 #include "drivetrain_stiffness/core/rig_config.hpp"
 
 namespace drivetrain_stiffness {

@@ -3,8 +3,8 @@
 
 #include <nlohmann/json.hpp>
 
-#include "drivetrain_stiffness/core/anti_backlash_mesh.hpp"
-#include "drivetrain_stiffness/core/bearing_support.hpp"
+#include "drivetrain_stiffness/core/gear/anti_backlash_mesh.hpp"
+#include "drivetrain_stiffness/core/bearing/bearing_support.hpp"
 
 namespace drivetrain_stiffness {
 

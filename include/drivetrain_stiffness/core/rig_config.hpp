@@ -5,9 +5,9 @@
 #include <string>
 #include <vector>
 
-#include "drivetrain_stiffness/core/bearing_support.hpp"
-#include "drivetrain_stiffness/core/anti_backlash_mesh.hpp"
-#include "drivetrain_stiffness/core/gear_geometry.hpp"
+#include "drivetrain_stiffness/core/bearing/bearing_support.hpp"
+#include "drivetrain_stiffness/core/gear/anti_backlash_mesh.hpp"
+#include "drivetrain_stiffness/core/gear/gear_geometry.hpp"
 
 namespace drivetrain_stiffness {
 

@@ -4,8 +4,8 @@
 #include <array>
 #include <string_view>
 
-#include "drivetrain_stiffness/core/anti_backlash_mesh.hpp"
-#include "drivetrain_stiffness/core/gear_rotor_model.hpp"
+#include "drivetrain_stiffness/core/gear/anti_backlash_mesh.hpp"
+#include "drivetrain_stiffness/core/dynamics/gear_rotor_model.hpp"
 #include "drivetrain_stiffness/core/rig_config.hpp"
 
 namespace drivetrain_stiffness {

@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "drivetrain_stiffness/core/dynamics_estimator.hpp"
+#include "drivetrain_stiffness/core/dynamics/dynamics_estimator.hpp"
 #include "drivetrain_stiffness/core/stiffness_estimator.hpp"
 #include "drivetrain_stiffness/pipeline/pipeline_options.hpp"
 #include "drivetrain_stiffness/pipeline/pipeline_outputs.hpp"

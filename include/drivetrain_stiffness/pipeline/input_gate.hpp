@@ -7,7 +7,7 @@
 #include <string>
 #include <string_view>
 
-#include "drivetrain_stiffness/core/motion.hpp"
+#include "drivetrain_stiffness/core/dynamics/motion.hpp"
 #include "drivetrain_stiffness/pipeline/input_types.hpp"
 #include "drivetrain_stiffness/pipeline/pipeline_options.hpp"
 #include "drivetrain_stiffness/pipeline/pipeline_outputs.hpp"

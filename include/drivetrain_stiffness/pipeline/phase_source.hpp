@@ -5,7 +5,7 @@
 #include <optional>
 
 #include "drivetrain_stiffness/core/constants.hpp"
-#include "drivetrain_stiffness/core/motion.hpp"
+#include "drivetrain_stiffness/core/dynamics/motion.hpp"
 #include "drivetrain_stiffness/pipeline/input_types.hpp"
 #include "drivetrain_stiffness/pipeline/pipeline_options.hpp"
 #include "drivetrain_stiffness/pipeline/stage_counters.hpp"

@@ -8,8 +8,8 @@
 #include <vector>
 
 #include "drivetrain_stiffness/calibration/calibrator.hpp"
-#include "drivetrain_stiffness/core/dynamics_estimator.hpp"
-#include "drivetrain_stiffness/core/modal_analysis.hpp"
+#include "drivetrain_stiffness/core/dynamics/dynamics_estimator.hpp"
+#include "drivetrain_stiffness/core/resonance/modal_analysis.hpp"
 #include "drivetrain_stiffness/core/stiffness_estimator.hpp"
 #include "drivetrain_stiffness/pipeline/input_types.hpp"
 #include "drivetrain_stiffness/pipeline/modal_identification.hpp"

@@ -5,7 +5,7 @@
 #include <array>
 #include <optional>
 
-#include "drivetrain_stiffness/core/dynamics_estimator.hpp"
+#include "drivetrain_stiffness/core/dynamics/dynamics_estimator.hpp"
 #include "drivetrain_stiffness/core/rig_model.hpp"
 #include "drivetrain_stiffness/core/stiffness_estimator.hpp"
 #include "drivetrain_stiffness/pipeline/calibration_stage.hpp"

@@ -16,7 +16,7 @@
 #include <vector>
 
 #include "drivetrain_stiffness/core/errors.hpp"
-#include "drivetrain_stiffness/core/motion.hpp"
+#include "drivetrain_stiffness/core/dynamics/motion.hpp"
 #include "drivetrain_stiffness/core/stiffness_estimator.hpp"
 #include "drivetrain_stiffness/pipeline/calibration_stage.hpp"
 #include "drivetrain_stiffness/pipeline/dynamics_stage.hpp"
@@ -35,6 +35,25 @@
 #include "drivetrain_stiffness/pipeline/vibration_input.hpp"
 
 namespace drivetrain_stiffness {
+
+/// The dynamics as /diagnostics and summary.json report them.
+struct DynamicsDiagnostics {
+  Fidelity fidelity = Fidelity::kFull;
+  double output_interval = 0.0;  ///< [s]
+  DynamicsWork work;
+};
+
+/// What /diagnostics, summary.json and the run summary read of a pipeline, as one value; its
+/// references stay valid until the pipeline's next call.
+struct PipelineDiagnostics {
+  const PipelineCounters& counters;
+  const RefusalTally& refusals;
+  const char* phase_source;               ///< PhaseSource::name
+  std::optional<double> encoder_silence;  ///< [s] since the last reading, at the caller's clock
+  const std::vector<std::string>& unknown_vibration_channels;
+  std::size_t unnumbered_publishers;            ///< whose drops cannot be seen
+  std::optional<DynamicsDiagnostics> dynamics;  ///< none without ~dynamics
+};
 
 class RigPipeline {
  public:
@@ -85,6 +104,8 @@ class RigPipeline {
   /// Every stage's counters merged under the keys of namedCounters, with the last event of any
   /// stage. Valid until the next call; no allocation unless the last event's text grew.
   const PipelineCounters& counters() const;
+  /// Every figure /diagnostics and the replay's summary report, `now` the caller's clock.
+  PipelineDiagnostics diagnostics(Stamp now) const;
   /// Every refused input by stream and reason.
   const RefusalTally& refusals() const { return gate_->refusals(); }
   const PipelineOptions& options() const { return options_; }

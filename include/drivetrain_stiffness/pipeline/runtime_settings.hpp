@@ -1,7 +1,7 @@
 // The settings a user may change while the estimator runs: docs/ros_api.md "dynamic_reconfigure".
 #pragma once
 
-#include "drivetrain_stiffness/core/reduced_models.hpp"
+#include "drivetrain_stiffness/core/dynamics/reduced_models.hpp"
 #include "drivetrain_stiffness/core/rig_config.hpp"
 
 namespace drivetrain_stiffness {

@@ -1,7 +1,7 @@
 // The interface of the stages fed by the dynamics' output samples (docs/pipeline.md "Stages").
 #pragma once
 
-#include "drivetrain_stiffness/core/dynamics_estimator.hpp"
+#include "drivetrain_stiffness/core/dynamics/dynamics_estimator.hpp"
 #include "drivetrain_stiffness/pipeline/input_types.hpp"
 #include "drivetrain_stiffness/pipeline/pipeline_outputs.hpp"
 

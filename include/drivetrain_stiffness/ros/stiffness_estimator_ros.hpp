@@ -71,11 +71,12 @@ class StiffnessEstimatorRos {
   void summarizeSinceLastReport(diagnostic_updater::DiagnosticStatusWrapper& status,
                                 const PipelineCounters& c);
   void addInputStatus(diagnostic_updater::DiagnosticStatusWrapper& status,
-                      const PipelineCounters& c);
-  void addProcessStatus(diagnostic_updater::DiagnosticStatusWrapper& status);
+                      const PipelineDiagnostics& d);
+  void addProcessStatus(diagnostic_updater::DiagnosticStatusWrapper& status,
+                        const PipelineDiagnostics& d);
   void addCalibrationStatus(diagnostic_updater::DiagnosticStatusWrapper& status);
   void addDynamicsStatus(diagnostic_updater::DiagnosticStatusWrapper& status,
-                         const PipelineCounters& c);
+                         const PipelineDiagnostics& d);
 
   std::mutex mutex_;  // callbacks may run on several threads (nodelet, multi-threaded spinners)
   std::unique_ptr<RigPipeline> pipeline_;

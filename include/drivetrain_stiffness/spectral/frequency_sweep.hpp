@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "drivetrain_stiffness/core/reduced_models.hpp"
+#include "drivetrain_stiffness/core/dynamics/reduced_models.hpp"
 #include "drivetrain_stiffness/core/rig_config.hpp"
 #include "drivetrain_stiffness/spectral/spectrum.hpp"
 

@@ -6,7 +6,7 @@
 
 #include "drivetrain_stiffness/config/json_report.hpp"
 #include "drivetrain_stiffness/config/yaml_config.hpp"
-#include "drivetrain_stiffness/core/bearing_support.hpp"
+#include "drivetrain_stiffness/core/bearing/bearing_support.hpp"
 #include "subcommand.hpp"
 
 namespace drivetrain_stiffness::cli {

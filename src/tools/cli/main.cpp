@@ -18,7 +18,7 @@
 #include <iostream>
 #include <vector>
 
-#include "drivetrain_stiffness/core/integrators.hpp"
+#include "drivetrain_stiffness/core/dynamics/integrators.hpp"
 #include "drivetrain_stiffness/core/validation.hpp"
 #include "subcommand.hpp"
 

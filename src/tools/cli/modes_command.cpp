@@ -8,7 +8,7 @@
 #include <nlohmann/json.hpp>
 
 #include "drivetrain_stiffness/config/yaml_config.hpp"
-#include "drivetrain_stiffness/core/operating_point_modes.hpp"
+#include "drivetrain_stiffness/core/resonance/operating_point_modes.hpp"
 #include "drivetrain_stiffness/core/validation.hpp"
 #include "subcommand.hpp"
 

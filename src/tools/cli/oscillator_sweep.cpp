@@ -8,7 +8,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "drivetrain_stiffness/core/scenes.hpp"
+#include "drivetrain_stiffness/core/scenes/scenes.hpp"
 #include "drivetrain_stiffness/core/validation.hpp"
 #include "drivetrain_stiffness/spectral/frequency_sweep.hpp"
 #include "simulate_options.hpp"

@@ -11,9 +11,9 @@
 #include <nlohmann/json.hpp>
 
 #include "drivetrain_stiffness/config/yaml_config.hpp"
-#include "drivetrain_stiffness/core/integrators.hpp"
-#include "drivetrain_stiffness/core/reduced_models.hpp"
-#include "drivetrain_stiffness/core/scenes.hpp"
+#include "drivetrain_stiffness/core/dynamics/integrators.hpp"
+#include "drivetrain_stiffness/core/dynamics/reduced_models.hpp"
+#include "drivetrain_stiffness/core/scenes/scenes.hpp"
 #include "drivetrain_stiffness/core/validation.hpp"
 #include "simulate_options.hpp"
 #include "subcommand.hpp"

@@ -23,8 +23,8 @@
 #include <yaml-cpp/yaml.h>
 
 #include "drivetrain_stiffness/Preload.h"
-#include "drivetrain_stiffness/core/dynamics_estimator.hpp"
-#include "drivetrain_stiffness/core/sliced_modal_propagator.hpp"
+#include "drivetrain_stiffness/core/dynamics/dynamics_estimator.hpp"
+#include "drivetrain_stiffness/core/dynamics/sliced_modal_propagator.hpp"
 #include "drivetrain_stiffness/core/validation.hpp"
 #include "drivetrain_stiffness/config/yaml_config.hpp"
 #include "drivetrain_stiffness/ros/node_parameters.hpp"
@@ -161,8 +161,7 @@ std::string jsonText(const nlohmann::json& j) {
 /// decompositions (general: by Eigen's eigensolver), contact changes located, and steps cut where
 /// the regime bound could not clear them; at the nominal phase after a change, the stretches the
 /// interval maps took and the intervals made (docs/model.md).
-nlohmann::json dynamicsWorkJson(const DynamicsEstimator& d) {
-  const DynamicsWork w = d.work();
+nlohmann::json dynamicsWorkJson(const DynamicsWork& w) {
   nlohmann::json work = {{"model_updates", w.rebuilds},
                          {"dopri5_intervals", w.fallback_intervals},
                          {"mapped_stretches", w.mapped_stretches},
@@ -420,14 +419,16 @@ nlohmann::json summaryJson(const ReplayOptions& o, const RigConfig& rig, const J
   summary["vibration"] = {{"topic", printableText(o.vibration_topic)},
                           {"channels", mapped},
                           {"unknown_channels", vibration.unknownNames()}};
-  summary["counters"] = countersJson(pipeline.counters());
+  // At the last stamp read: the encoders' silence then (not reported here) is the bag's own.
+  const PipelineDiagnostics diagnostics =
+      pipeline.diagnostics(span.last ? fromRosTime(*span.last) : Stamp{});
+  summary["counters"] = countersJson(diagnostics.counters);
   summary["calibration"] = calibrationJson(pipeline);
   // The per-mesh-period statistics over the bag (a campaign's row): speed, torque, TE RMS, force.
   summary["mesh_periods"] = writer.meshPeriodTotals().json();
   // The modal identifications over the bag (a campaign's row): per mode, the last identified.
   summary["modal"] = writer.modalTotals().json();
-  if (const DynamicsEstimator* d = pipeline.dynamics())
-    summary["dynamics_work"] = dynamicsWorkJson(*d);
+  if (diagnostics.dynamics) summary["dynamics_work"] = dynamicsWorkJson(diagnostics.dynamics->work);
   if (const auto& r = pipeline.lastResonance()) {
     for (const Mode& mode : r->modes)
       summary["final_resonance_hz"].push_back(mode.natural_frequency);

@@ -5,7 +5,8 @@
 namespace drivetrain_stiffness {
 namespace {
 
-/// The model's coordinates, as PredictedMode.dominant names them (core/modal_analysis.cpp).
+/// The model's coordinates, as PredictedMode.dominant names them
+/// (core/resonance/modal_analysis.cpp).
 constexpr const char* kCoordinates[3] = {"x_p", "x_g", "x"};
 
 int coordinate(const std::string& name) {

@@ -11,7 +11,7 @@
 
 #include "drivetrain_stiffness/core/constants.hpp"
 #include "drivetrain_stiffness/core/errors.hpp"
-#include "drivetrain_stiffness/core/gear_geometry.hpp"
+#include "drivetrain_stiffness/core/gear/gear_geometry.hpp"
 #include "drivetrain_stiffness/core/rig_model.hpp"
 #include "drivetrain_stiffness/core/stiffness_estimator.hpp"
 #include "drivetrain_stiffness/core/validation.hpp"

@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "drivetrain_stiffness/core/rig_config.hpp"
-#include "drivetrain_stiffness/core/speed_profile.hpp"
+#include "drivetrain_stiffness/core/dynamics/speed_profile.hpp"
 #include "scenarios/rig_scenarios.hpp"  // NOLINT(build/include_subdir)
 
 namespace drivetrain_stiffness {

@@ -3,8 +3,8 @@
 
 #include <optional>
 
-#include "drivetrain_stiffness/core/motion.hpp"
-#include "drivetrain_stiffness/core/speed_profile.hpp"
+#include "drivetrain_stiffness/core/dynamics/motion.hpp"
+#include "drivetrain_stiffness/core/dynamics/speed_profile.hpp"
 
 namespace drivetrain_stiffness {
 

@@ -6,7 +6,7 @@
 #include <limits>
 
 #include "drivetrain_stiffness/core/constants.hpp"
-#include "drivetrain_stiffness/core/speed_profile.hpp"
+#include "drivetrain_stiffness/core/dynamics/speed_profile.hpp"
 #include "drivetrain_stiffness/core/validation.hpp"
 #include "rig_encoder.hpp"  // NOLINT(build/include_subdir)
 

@@ -6,9 +6,9 @@
 #include <string>
 #include <vector>
 
-#include "drivetrain_stiffness/core/motion.hpp"
+#include "drivetrain_stiffness/core/dynamics/motion.hpp"
 #include "drivetrain_stiffness/core/rig_config.hpp"
-#include "drivetrain_stiffness/core/speed_profile.hpp"
+#include "drivetrain_stiffness/core/dynamics/speed_profile.hpp"
 #include "drivetrain_stiffness/core/stiffness_estimator.hpp"
 
 namespace drivetrain_stiffness {

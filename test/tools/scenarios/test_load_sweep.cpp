@@ -20,8 +20,8 @@
 
 #include "drivetrain_stiffness/calibration/static_te_model.hpp"
 #include "drivetrain_stiffness/config/yaml_config.hpp"
-#include "drivetrain_stiffness/core/anti_backlash_mesh.hpp"
-#include "drivetrain_stiffness/core/bearing_support.hpp"
+#include "drivetrain_stiffness/core/gear/anti_backlash_mesh.hpp"
+#include "drivetrain_stiffness/core/bearing/bearing_support.hpp"
 #include "drivetrain_stiffness/core/constants.hpp"
 #include "drivetrain_stiffness/core/stiffness_estimator.hpp"
 #include "drivetrain_stiffness/core/validation.hpp"
