@@ -65,7 +65,7 @@ MeshPeriodStatistics MeshPeriodStage::close(Stamp stamp, const DynamicsSample& s
   const double inertia =
       dynamics_.fidelity() == Fidelity::kQuasiStatic
           ? 0.0
-          : dynamics_.model().equivalentMass() * (s.state[5] - a.start_velocity) / d;
+          : dynamics_.rotorModel().equivalentMass() * (s.state[5] - a.start_velocity) / d;
   out.mesh_force_mean = drive - inertia;
   out.mesh_force_rms = std::sqrt(std::max(0.0, a.force_sq / d - force_dev * force_dev));
   out.mesh_force_peak_to_peak = a.force_max - a.force_min;

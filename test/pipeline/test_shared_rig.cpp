@@ -43,7 +43,7 @@ TEST(SharedRig, OneRigAndOneMeshTableForThePipeline) {
   EXPECT_EQ(&p.dynamics()->rig(), &p.rig());
   EXPECT_EQ(&p.calibrator()->rig(), &p.rig());
   // The calibration's drawing-scale table is the estimator's (scale 1), as is the dynamics'.
-  EXPECT_EQ(&p.calibrator()->model().unitMesh(), &p.estimator().mesh());
+  EXPECT_EQ(&p.calibrator()->teModel().unitMesh(), &p.estimator().mesh());
   EXPECT_EQ(&p.dynamics()->mesh(), &p.estimator().mesh());
   EXPECT_EQ(p.rig().dynamics.speed_rpm,
             PipelineOptions{}.pinion_speed_rpm);  // the options' speed, set once

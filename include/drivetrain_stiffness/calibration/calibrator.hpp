@@ -77,8 +77,8 @@ class Calibrator {
   /// "When no window updates"), led by the count of records of natural frequencies that did; empty
   /// once a window has. Allocates.
   std::string waitingReason() const;
-  const RigConfig& rig() const { return *rig_; }         ///< the calibrated rig
-  const StaticTeModel& model() const { return model_; }  ///< the windows' TE model
+  const RigConfig& rig() const { return *rig_; }           ///< the calibrated rig
+  const StaticTeModel& teModel() const { return model_; }  ///< the windows' static TE model
   const CalibrationVector& parameters() const { return estimate_.value; }  ///< the estimate's value
   /// The parameters' reported covariance (under the model error the windows show).
   const CalibrationMatrix& covariance() const { return covariance_; }

@@ -114,13 +114,13 @@ TEST(DynamicsEstimator, MatchesOfflineDopri5AcrossATorqueChange) {
   o.max_step = 1e-4;
   std::vector<double> reference;
   auto keep = [&](double t, const State6& y) {
-    if (t > 0.0) reference.push_back(offline.model().forces(t, y).delta);
+    if (t > 0.0) reference.push_back(offline.rotorModel().forces(t, y).delta);
   };
-  const State6 mid = integrate(offline.model(), IntegratorMethod::kDopri5, o, 0.0, offline.state(),
-                               0.03, 1e-3, keep);
+  const State6 mid = integrate(offline.rotorModel(), IntegratorMethod::kDopri5, o, 0.0,
+                               offline.state(), 0.03, 1e-3, keep);
   offline.setTorque(0.4);
   bool first = true;
-  integrate(offline.model(), IntegratorMethod::kDopri5, o, 0.03, mid, 0.06, 1e-3,
+  integrate(offline.rotorModel(), IntegratorMethod::kDopri5, o, 0.03, mid, 0.06, 1e-3,
             [&](double t, const State6& y) {
               if (!first) keep(t, y);
               first = false;
@@ -174,8 +174,10 @@ TEST(DynamicsEstimator, TorqueTakesEffectAtItsStampInsideAnInterval) {
       while (t < to - 1e-12) {
         const double grid = std::floor(t * 1000.0 + 1e-9) / 1000.0 + 1e-3,
                      next = std::min(grid, to);
-        y = integrate(offline.model(), IntegratorMethod::kDopri5, o, t, y, next, next - t, nullptr);
-        if (std::abs(next - grid) < 1e-12) out.push_back(offline.model().forces(next, y).delta);
+        y = integrate(offline.rotorModel(), IntegratorMethod::kDopri5, o, t, y, next, next - t,
+                      nullptr);
+        if (std::abs(next - grid) < 1e-12)
+          out.push_back(offline.rotorModel().forces(next, y).delta);
         t = next;
       }
       if (i < history.size()) offline.setTorque(history[i].second);
@@ -270,9 +272,9 @@ TEST(DynamicsEstimator, BearingStiffnessTakesEffectAtItsStamp) {
   auto reference = [&](double change) {
     std::vector<double> out;
     State6 y = start;
-    integrate(est.model(), IntegratorMethod::kDopri5, o, 0.0, y, 0.030, 1e-3,
+    integrate(est.rotorModel(), IntegratorMethod::kDopri5, o, 0.0, y, 0.030, 1e-3,
               [&](double t, const State6& s) {
-                if (t > 0.0) out.push_back(est.model().forces(t, s).delta);
+                if (t > 0.0) out.push_back(est.rotorModel().forces(t, s).delta);
                 y = s;
               });
     double t = 0.030;
@@ -327,7 +329,7 @@ TEST(DynamicsEstimator, NearTheKneeEveryFlankChangeIsIntegrated) {
     EXPECT_EQ(est.followingMotion(), moved) << torque << " N m";
     EXPECT_EQ(est.work().fallback_intervals, 0) << torque << " N m";
     const GearRotorModel sliced = slicedModel(1.2e8, f, torque);
-    const GearRotorModel& model = moved ? sliced : est.model();
+    const GearRotorModel& model = moved ? sliced : est.rotorModel();
     integrate(model, IntegratorMethod::kDopri5, o, 0.0, start, 0.02, est.outputInterval(),
               [&](double t, const State6& y) {
                 if (t > 0.0) reference.push_back(model.forces(t, y).delta);
@@ -356,7 +358,7 @@ TEST(DynamicsEstimator, NearTheKneeEveryFlankChangeIsIntegrated) {
 TEST(DynamicsEstimator, ClosedStepRefusesAStartWithAFlankLifted) {
   DynamicsEstimator est(rig(), {1.2e8, 1.2e8}, 10000.0);
   est.reset(0.0, -1.0);
-  const GearRotorModel& model = est.model();
+  const GearRotorModel& model = est.rotorModel();
   const PeriodicExponentialPropagator propagator(model, 0.0, est.outputInterval());
   // The states of a dopri5 run at -1 N m, one per sample over 10 ms.
   IntegratorOptions o;
@@ -511,7 +513,7 @@ TEST(DynamicsEstimator, FollowsAMeasuredRunUpExactly) {
       std::make_shared<const AntiBacklashMesh>(rig().gears, rig().anti_backlash, rig().mesh_model,
                                                rig().mesh_samples),
       256);
-  const GearRotorParameters p = est.model().parameters();
+  const GearRotorParameters p = est.rotorModel().parameters();
   GearRotorModel model(p, std::make_shared<const SlicedExcitation>(
                               slices, 1e-6, 0.0, 1.0 / p.pinion_base_radius, 0.0));
   model.setTorqueInput(0.1);
@@ -587,7 +589,7 @@ TEST(DynamicsEstimator, FollowsTheMotionThroughAFlankThatLifts) {
       std::make_shared<const AntiBacklashMesh>(rig().gears, rig().anti_backlash, rig().mesh_model,
                                                rig().mesh_samples),
       256);
-  const GearRotorParameters p = est.model().parameters();
+  const GearRotorParameters p = est.rotorModel().parameters();
   GearRotorModel model(p, std::make_shared<const SlicedExcitation>(
                               slices, 1e-6, 0.0, 1.0 / p.pinion_base_radius, 0.0));
   model.setTorqueInput(10.0);
@@ -694,10 +696,10 @@ TEST(DynamicsEstimator, TheNominalPhaseAfterABearingChangeStreamsIntervalMaps) {
   DynamicsEstimator est(rig(), {1.2e8, 1.2e8}, 1000.0);
   est.reset(0.0, 0.1);
   est.advanceTo(0.010, nullptr);
-  const PeriodicExponentialPropagator table(est.model(), 0.0, est.outputInterval(), 1.0, true);
+  const PeriodicExponentialPropagator table(est.rotorModel(), 0.0, est.outputInterval(), 1.0, true);
   ASSERT_GT(table.settleGain(), 0.0);
   const SlicedModalPropagator exact(
-      est.model().parameters(),
+      est.rotorModel().parameters(),
       std::make_shared<const SlicedMesh>(std::make_shared<const AntiBacklashMesh>(rig()), 256),
       rig().dynamics.transmission_error_amplitude, rig().dynamics.backlash);
   EXPECT_NEAR(exact.loadedSwingGain() / table.settleGain(), 1.0, 0.05);
@@ -796,7 +798,7 @@ TEST(DynamicsEstimator, QuasiStaticFollowsTheMeasuredMotion) {
   }
   ASSERT_TRUE(est.followingMotion());
   std::vector<State6> nominal;
-  integrateReduced(est.model(), Fidelity::kQuasiStatic, 0.0, y0, 0.039, est.outputInterval(),
+  integrateReduced(est.rotorModel(), Fidelity::kQuasiStatic, 0.0, y0, 0.039, est.outputInterval(),
                    [&](double, const State6& y) { nominal.push_back(y); });
   ASSERT_GE(nominal.size(), online.size() + 1);
   for (std::size_t i = 0; i < online.size(); ++i) {
@@ -807,7 +809,7 @@ TEST(DynamicsEstimator, QuasiStaticFollowsTheMeasuredMotion) {
     EXPECT_NEAR(a[3], b[3], 1e-9 * std::abs(b[0]) * 5e4)
         << "v_p at sample " << i;  // velocities against x w_n
     // The mesh deflection: static at both (slicing error of the stiffness, docs/model.md: ~1e-5).
-    EXPECT_NEAR(online[i].dynamic_te, est.model().forces(online[i].t, b).delta,
+    EXPECT_NEAR(online[i].dynamic_te, est.rotorModel().forces(online[i].t, b).delta,
                 2e-3 * std::abs(online[i].dynamic_te));
   }
   // Standing still: the static equilibrium of the full model at that phase (K y = F, closed form).
@@ -819,7 +821,7 @@ TEST(DynamicsEstimator, QuasiStaticFollowsTheMeasuredMotion) {
       std::make_shared<const AntiBacklashMesh>(rig().gears, rig().anti_backlash, rig().mesh_model,
                                                rig().mesh_samples),
       256);
-  const GearRotorParameters p = est.model().parameters();
+  const GearRotorParameters p = est.rotorModel().parameters();
   const auto standing = std::make_shared<const SlicedExcitation>(
       slices, 1e-6, 0.0, 1.0 / p.pinion_base_radius, 0.0, MeshMotion{0.0, phase, 0.0}, 0.1);
   const State6 eq = staticEquilibrium(GearRotorModel(p, standing), 0.0);
@@ -879,7 +881,7 @@ TEST(DynamicsEstimator, LinearModalFollowsTheMeasuredMotion) {
       k_mean += (c.k1 + c.k_chain) * w / 4096.0;
     }
   }
-  const double force = 0.1 / est.model().parameters().pinion_base_radius;
+  const double force = 0.1 / est.rotorModel().parameters().pinion_base_radius;
   EXPECT_NEAR(fit[2], force / k_mean, 1e-6 * force / k_mean);
 }
 

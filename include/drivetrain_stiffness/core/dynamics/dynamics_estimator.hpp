@@ -93,7 +93,8 @@ class DynamicsEstimator {
   DynamicsWork work() const;
   const RigConfig& rig() const { return *model_.rig; }
   const AntiBacklashMesh& mesh() const { return *model_.mesh; }
-  const GearRotorModel& model() const { return *model_.nominal; }
+  /// The 3-DOF rotor model at the nominal phase (its parameters, forces and integrators).
+  const GearRotorModel& rotorModel() const { return *model_.nominal; }
   /// 1 - max |Floquet multiplier| in the regime now; false in none.
   bool floquetMargin(double* margin) const;
   const State6& state() const { return ws_.y; }
