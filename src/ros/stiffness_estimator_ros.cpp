@@ -153,8 +153,8 @@ StiffnessEstimatorRos::StiffnessEstimatorRos(ros::NodeHandle nh, ros::NodeHandle
 StiffnessEstimatorRos::~StiffnessEstimatorRos() = default;
 
 int StiffnessEstimatorRos::readNodeLimits(const ros::NodeHandle& pnh, double& master_check_period) {
-  deadline_ = readParam(pnh, "deadline", deadline_);
-  requirePositive("~deadline", deadline_);
+  load_.deadline = readParam(pnh, "deadline", load_.deadline);
+  requirePositive("~deadline", load_.deadline);
   const int queue = readParam(pnh, "torque_queue_size", 1000);
   if (queue < 1 || queue > 1000000) {
     throw InvalidInput("~torque_queue_size = " + std::to_string(queue) +
@@ -253,15 +253,15 @@ void StiffnessEstimatorRos::finishInput(const ros::WallTime& start, double cpu_s
                                         const char* topic) {
   const double took = (ros::WallTime::now() - start).toSec();
   const double cpu = threadCpuSeconds() - cpu_start;
-  processing_s_ += took;
-  max_processing_s_ = std::max(max_processing_s_, took);
-  if (cpu > max_processing_cpu_s_) {
-    max_processing_cpu_s_ = cpu;
-    max_processing_cpu_topic_ = topic;
+  load_.processing_s += took;
+  load_.max_processing_s = std::max(load_.max_processing_s, took);
+  if (cpu > load_.max_processing_cpu_s) {
+    load_.max_processing_cpu_s = cpu;
+    load_.max_processing_cpu_topic = topic;
   }
-  ++processed_;
-  if (took > deadline_) ++missed_deadlines_;
-  if (cpu > deadline_) ++missed_deadlines_cpu_;
+  ++load_.processed;
+  if (took > load_.deadline) ++load_.missed_deadlines;
+  if (cpu > load_.deadline) ++load_.missed_deadlines_cpu;
 }
 
 template <typename Take>
@@ -374,52 +374,52 @@ void StiffnessEstimatorRos::summarizeSinceLastReport(
   const std::uint64_t dropped = c.dropped_torque + c.dropped_preload + c.dropped_motion;
   const std::uint64_t resets = c.clock_resets + c.stamp_resets + c.gap_restarts;
   status.summary(diagnostic_msgs::DiagnosticStatus::OK, "estimating");
-  if (rejected > rejected_at_last_report_) {
+  if (rejected > reported_.rejected) {
     status.summaryf(
         diagnostic_msgs::DiagnosticStatus::WARN, "%llu inputs rejected since last report; last: %s",
-        static_cast<unsigned long long>(rejected - rejected_at_last_report_), c.last_event.c_str());
+        static_cast<unsigned long long>(rejected - reported_.rejected), c.last_event.c_str());
   }
-  if (resets > resets_at_last_report_) {
+  if (resets > reported_.resets) {
     status.mergeSummaryf(diagnostic_msgs::DiagnosticStatus::WARN, "estimator reset: %s",
                          c.last_event.c_str());
   }
-  if (dropped > dropped_at_last_report_) {
+  if (dropped > reported_.dropped) {
     status.mergeSummaryf(diagnostic_msgs::DiagnosticStatus::WARN,
                          "%llu inputs dropped on the way since last report",
-                         static_cast<unsigned long long>(dropped - dropped_at_last_report_));
+                         static_cast<unsigned long long>(dropped - reported_.dropped));
   }
-  if (c.motion_timeouts > motion_timeouts_at_last_report_) {
+  if (c.motion_timeouts > reported_.motion_timeouts) {
     status.mergeSummaryf(diagnostic_msgs::DiagnosticStatus::WARN,
                          "encoders silent for ~motion_timeout: phase from ~pinion_speed_rpm");
   }
-  if (c.gear_ratio_mismatches > ratio_mismatches_at_last_report_) {
+  if (c.gear_ratio_mismatches > reported_.ratio_mismatches) {
     status.mergeSummaryf(diagnostic_msgs::DiagnosticStatus::WARN,
                          "gear angle off the tooth ratio: %s", c.last_event.c_str());
   }
-  if (c.calibration_errors > calibration_errors_at_last_report_) {
+  if (c.calibration_errors > reported_.calibration_errors) {
     status.mergeSummaryf(
         diagnostic_msgs::DiagnosticStatus::WARN,
         "%llu calibration errors since last report; last: %s",
-        static_cast<unsigned long long>(c.calibration_errors - calibration_errors_at_last_report_),
+        static_cast<unsigned long long>(c.calibration_errors - reported_.calibration_errors),
         c.last_event.c_str());
   }
-  calibration_errors_at_last_report_ = c.calibration_errors;
-  motion_timeouts_at_last_report_ = c.motion_timeouts;
-  ratio_mismatches_at_last_report_ = c.gear_ratio_mismatches;
-  if (c.stiffness_shed > shed_at_last_report_) {
+  reported_.calibration_errors = c.calibration_errors;
+  reported_.motion_timeouts = c.motion_timeouts;
+  reported_.ratio_mismatches = c.gear_ratio_mismatches;
+  if (c.stiffness_shed > reported_.shed) {
     status.mergeSummaryf(diagnostic_msgs::DiagnosticStatus::WARN,
                          "overloaded: %llu torque inputs shed since last report",
-                         static_cast<unsigned long long>(c.stiffness_shed - shed_at_last_report_));
+                         static_cast<unsigned long long>(c.stiffness_shed - reported_.shed));
   }
   if (starts_ > 1 && !restart_reported_) {
     status.mergeSummaryf(diagnostic_msgs::DiagnosticStatus::WARN,
                          "restarted (start %d under this master)", starts_);
     restart_reported_ = true;
   }
-  rejected_at_last_report_ = rejected;
-  resets_at_last_report_ = resets;
-  dropped_at_last_report_ = dropped;
-  shed_at_last_report_ = c.stiffness_shed;
+  reported_.rejected = rejected;
+  reported_.resets = resets;
+  reported_.dropped = dropped;
+  reported_.shed = c.stiffness_shed;
 }
 
 void StiffnessEstimatorRos::addInputStatus(diagnostic_updater::DiagnosticStatusWrapper& status,
@@ -451,25 +451,25 @@ void StiffnessEstimatorRos::addProcessStatus(diagnostic_updater::DiagnosticStatu
                                              const PipelineDiagnostics& d) {
   status.add("process_restarts", starts_ - 1);
   status.add("unnumbered_publishers", d.unnumbered_publishers);
-  status.add("missed_deadlines", missed_deadlines_);
-  status.add("missed_deadlines_cpu", missed_deadlines_cpu_);
-  status.add("deadline [s]", deadline_);
-  status.add("mean_processing [s]", processed_ ? processing_s_ / processed_ : 0.0);
-  status.add("max_processing [s]", max_processing_s_);
-  status.add("max_processing_cpu [s]", max_processing_cpu_s_);
-  status.add("max_processing_cpu_topic", max_processing_cpu_topic_);
+  status.add("missed_deadlines", load_.missed_deadlines);
+  status.add("missed_deadlines_cpu", load_.missed_deadlines_cpu);
+  status.add("deadline [s]", load_.deadline);
+  status.add("mean_processing [s]", load_.processed ? load_.processing_s / load_.processed : 0.0);
+  status.add("max_processing [s]", load_.max_processing_s);
+  status.add("max_processing_cpu [s]", load_.max_processing_cpu_s);
+  status.add("max_processing_cpu_topic", load_.max_processing_cpu_topic);
   status.add("resident_memory [kB]", residentMemoryKb());
   status.add("heap_in_use [B]", heapInUseBytes());
   status.add("reconfigurations", reconfigurations_);
   for (const SupportEstimate& s : pipeline_->estimator().current().supports) {
     status.add(s.name + ".radial_stiffness [N/m]", s.solution.radialStiffness());
   }
-  if (missed_deadlines_ > late_at_last_report_) {
+  if (load_.missed_deadlines > reported_.late) {
     status.mergeSummaryf(diagnostic_msgs::DiagnosticStatus::WARN,
                          "%llu inputs took longer than ~deadline since last report",
-                         static_cast<unsigned long long>(missed_deadlines_ - late_at_last_report_));
+                         static_cast<unsigned long long>(load_.missed_deadlines - reported_.late));
   }
-  late_at_last_report_ = missed_deadlines_;
+  reported_.late = load_.missed_deadlines;
 }
 
 void StiffnessEstimatorRos::addCalibrationStatus(
@@ -514,7 +514,7 @@ void StiffnessEstimatorRos::addDynamicsStatus(diagnostic_updater::DiagnosticStat
     status.add("dynamics_dopri5_intervals", work.fallback_intervals);
     status.add("dynamics_rebuilds", work.rebuilds);
     // Real-time factor: model time integrated per second of processing.
-    const double rtf = processing_s_ > 0.0 ? d.counters.simulated_s / processing_s_ : 0.0;
+    const double rtf = load_.processing_s > 0.0 ? d.counters.simulated_s / load_.processing_s : 0.0;
     status.add("realtime_factor", rtf);
     if (rtf > 0.0 && rtf < 1.0)
       status.mergeSummary(diagnostic_msgs::DiagnosticStatus::WARN, "slower than real time");

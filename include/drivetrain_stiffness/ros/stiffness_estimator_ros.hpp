@@ -94,21 +94,24 @@ class StiffnessEstimatorRos {
   std::optional<drivetrain_stiffness::EstimatorConfig>
       applied_config_;  // the last accepted settings
   std::string gearbox_config_;
-  double deadline_ = 1e-3;  // [s] processing time per input beyond which it counts as late
-  std::uint64_t missed_deadlines_ = 0, missed_deadlines_cpu_ = 0, reconfigurations_ = 0;
-  double max_processing_cpu_s_ = 0.0;
-  const char* max_processing_cpu_topic_ = "";  // the input topic of max_processing_cpu_s_
-  std::uint64_t rejected_at_last_report_ = 0, resets_at_last_report_ = 0, late_at_last_report_ = 0;
-  double processing_s_ = 0.0, max_processing_s_ = 0.0;
-  std::uint64_t processed_ = 0;
+  /// What each input cost, for /diagnostics.
+  struct ProcessingLoad {
+    double deadline = 1e-3;  // [s] processing time per input beyond which it counts as late
+    std::uint64_t missed_deadlines = 0, missed_deadlines_cpu = 0, processed = 0;
+    double processing_s = 0.0, max_processing_s = 0.0, max_processing_cpu_s = 0.0;
+    const char* max_processing_cpu_topic = "";  // the input topic of max_processing_cpu_s
+  } load_;
+  /// The counts at the last /diagnostics report, so that it says what is new since.
+  struct ReportedSoFar {
+    std::uint64_t rejected = 0, resets = 0, late = 0, dropped = 0, shed = 0;
+    std::uint64_t motion_timeouts = 0, ratio_mismatches = 0, calibration_errors = 0;
+  } reported_;
+  std::uint64_t reconfigurations_ = 0;
   double diagnostic_period_ = 1.0;  // [s] wall time between /diagnostics publications
   ros::WallTime last_diagnostic_wall_;
   double shed_queue_age_ = 0.01;  // [s] queue wait beyond which a torque input is shed; 0 = never
   int starts_ = 1;                // of this node under this master (respawns included)
   bool restart_reported_ = false;
-  std::uint64_t dropped_at_last_report_ = 0, shed_at_last_report_ = 0;
-  std::uint64_t motion_timeouts_at_last_report_ = 0, ratio_mismatches_at_last_report_ = 0;
-  std::uint64_t calibration_errors_at_last_report_ = 0;
   std::string private_namespace_;
   XmlRpc::XmlRpcValue parameters_;  // the private parameters at start-up, for a restarted master
   std::unique_ptr<MasterWatch> master_watch_;
