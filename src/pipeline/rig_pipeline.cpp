@@ -96,15 +96,14 @@ const PipelineCounters& RigPipeline::counters() const {
   static_cast<ModalCounters&>(m) = modal_->counters();
   m.vibration = vibration_->counters();
   m.dynamics_errors = m.model_errors + m.resonance_errors;
-  // The last event is the latest of any stage's.
+  // The last event is the latest of any stage's (null: a stage that is not running).
   const EventLog* last = &events_;
-  for (const EventLog* e : {&gate_->events(), &phase_->events(), &resonance_->events(),
-                            &calibration_->events(), &modal_->events()}) {
-    if (e->order() > last->order()) last = e;
+  for (const EventLog* e :
+       {&gate_->events(), &phase_->events(), &resonance_->events(), &calibration_->events(),
+        &modal_->events(), dynamics_ ? &dynamics_->events() : nullptr,
+        mesh_periods_ ? &mesh_periods_->events() : nullptr}) {
+    if (e && e->order() > last->order()) last = e;
   }
-  if (dynamics_ && dynamics_->events().order() > last->order()) last = &dynamics_->events();
-  if (mesh_periods_ && mesh_periods_->events().order() > last->order())
-    last = &mesh_periods_->events();
   m.last_event = last->last();
   return m;
 }
